@@ -1,0 +1,1 @@
+"""Inbetrieb's simulated NC: pure, deterministic, cycle-exact. No I/O, no clock."""

@@ -1,0 +1,112 @@
+"""Raw (parameter-list) units <-> engineering units, in one place.
+
+The controller's lists use internal units [004 §3.2]: position 0.1 µm or 0.0001°, velocity
+µm/s or 0.001°/s, acceleration mm/s² or °/s², time µs, kv 0.01/s, weights 0.1 %.
+The kernel computes in float64 mm, °, s. Each parameter names a `Quantity`; the axis kind
+(linear or rotary/spindle) picks the unit text.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+RPM_TO_DEG_S = 6.0  # 1 rpm = 360°/60 s
+MM_MIN_PER_MM_S = 60.0
+
+
+class AxisKind(StrEnum):
+    """What the manuals call axis type T (translatory), R (rotary) and S (spindle)."""
+
+    LINEAR = "T"
+    ROTARY = "R"
+    SPINDLE = "S"
+
+
+class Quantity(StrEnum):
+    """The physical meaning of a raw parameter value."""
+
+    NONE = "none"
+    POSITION = "position"  # 0.1 µm | 0.0001°
+    VELOCITY = "velocity"  # µm/s | 0.001°/s
+    ACCELERATION = "acceleration"  # mm/s² | °/s²
+    TIME = "time"  # µs
+    KV = "kv"  # 0.01/s
+    PERMILLE = "permille"  # 0.1 %
+    PERCENT = "percent"  # %
+    RPM = "rpm"  # channel gear table, rpm
+    INCREMENTS = "increments"
+    CURVE_B1 = "curve_b1"  # curve coefficients, stored as given
+    CURVE_B2 = "curve_b2"
+    CURVE_B3 = "curve_b3"
+    DA_DIGITS = "da_digits"
+
+
+# factor raw -> kernel engineering unit (mm, °, s based)
+_TO_ENG: dict[Quantity, float] = {
+    Quantity.NONE: 1.0,
+    Quantity.POSITION: 1e-4,
+    Quantity.VELOCITY: 1e-3,
+    Quantity.ACCELERATION: 1.0,
+    Quantity.TIME: 1e-6,
+    Quantity.KV: 1e-2,
+    Quantity.PERMILLE: 1e-3,
+    Quantity.PERCENT: 1e-2,
+    Quantity.RPM: 1.0,
+    Quantity.INCREMENTS: 1.0,
+    Quantity.CURVE_B1: 1.0,
+    Quantity.CURVE_B2: 1.0,
+    Quantity.CURVE_B3: 1.0,
+    Quantity.DA_DIGITS: 1.0,
+}
+
+
+def raw_unit(q: Quantity, kind: AxisKind) -> str:
+    """Unit text of the raw value as the parameter list holds it."""
+    linear = kind is AxisKind.LINEAR
+    return {
+        Quantity.NONE: "",
+        Quantity.POSITION: "0.1 µm" if linear else "0.0001°",
+        Quantity.VELOCITY: "µm/s" if linear else "0.001°/s",
+        Quantity.ACCELERATION: "mm/s²" if linear else "°/s²",
+        Quantity.TIME: "µs",
+        Quantity.KV: "0.01/s",
+        Quantity.PERMILLE: "0.1 %",
+        Quantity.PERCENT: "%",
+        Quantity.RPM: "rpm",
+        Quantity.INCREMENTS: "incr.",
+        Quantity.CURVE_B1: "1/s",
+        Quantity.CURVE_B2: "1/°",
+        Quantity.CURVE_B3: "s/°²",
+        Quantity.DA_DIGITS: "digits",
+    }[q]
+
+
+def eng_unit(q: Quantity, kind: AxisKind) -> str:
+    """Unit text of the kernel's engineering value."""
+    linear = kind is AxisKind.LINEAR
+    return {
+        Quantity.POSITION: "mm" if linear else "°",
+        Quantity.VELOCITY: "mm/s" if linear else "°/s",
+        Quantity.ACCELERATION: "mm/s²" if linear else "°/s²",
+        Quantity.TIME: "s",
+        Quantity.KV: "1/s",
+        Quantity.PERMILLE: "1",
+        Quantity.PERCENT: "1",
+    }.get(q, raw_unit(q, kind))
+
+
+def to_eng(q: Quantity, raw: float) -> float:
+    """Convert a raw list value to the kernel's engineering unit."""
+    return raw * _TO_ENG[q]
+
+
+def to_raw(q: Quantity, eng: float) -> float:
+    """Convert an engineering value back to the raw list unit."""
+    return eng / _TO_ENG[q]
+
+
+def display_velocity(v_eng: float, kind: AxisKind) -> tuple[float, str]:
+    """Velocity as an engineer reads it: mm/min for linear axes, rpm for spindles, °/min else."""
+    if kind is AxisKind.SPINDLE:
+        return v_eng / RPM_TO_DEG_S, "rpm"
+    return v_eng * MM_MIN_PER_MM_S, "mm/min" if kind is AxisKind.LINEAR else "°/min"
