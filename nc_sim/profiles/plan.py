@@ -120,8 +120,15 @@ def velocity_change(
 ) -> int:
     """Append segments that take (v0, a0) to (v1, 0); returns the new segment count."""
     if v0 * v1 < 0.0:  # through zero: brake with the braking set, then accelerate
-        k = velocity_change(seg, k, v0, a0, 0.0, lim, cycle_s)
-        return velocity_change(seg, k, 0.0, 0.0, v1, lim, cycle_s)
+        k = _change_one_sign(seg, k, v0, a0, 0.0, lim, cycle_s)
+        return _change_one_sign(seg, k, 0.0, 0.0, v1, lim, cycle_s)
+    return _change_one_sign(seg, k, v0, a0, v1, lim, cycle_s)
+
+
+@njit(cache=True)
+def _change_one_sign(
+    seg: np.ndarray, k: int, v0: float, a0: float, v1: float, lim: np.ndarray, cycle_s: float
+) -> int:
     speeding_up = abs(v1) > abs(v0)
     if speeding_up:
         a_max = lim[LIM_A_ACC]
@@ -222,17 +229,27 @@ def position_move(
     d = 1.0 if dist > 0.0 else -1.0
     if v0 * d < 0.0 or (v0 == 0.0 and a0 * d < 0.0):
         # moving away from the target: stop first, then a move from rest
-        tmp = np.empty_like(seg)
-        n2 = position_move(tmp, 0.0, 0.0, 0.0, dist, v_max, lim, cycle_s)
-        for i in range(n2):
-            for c in range(SEG_COLS):
-                seg[k_stop + i, c] = tmp[i, c]
-        return k_stop + n2
-    need = p1 - p0
+        return _move_toward(seg, k_stop, 0.0, 0.0, dist, v_max, lim, cycle_s)
+    return _move_toward(seg, 0, v0, a0, p1 - p0, v_max, lim, cycle_s)
+
+
+@njit(cache=True)
+def _move_toward(
+    seg: np.ndarray,
+    k0: int,
+    v0: float,
+    a0: float,
+    need: float,
+    v_max: float,
+    lim: np.ndarray,
+    cycle_s: float,
+) -> int:
+    """Segments from index k0: reach a peak speed towards the target, cruise, brake to rest."""
+    d = 1.0 if need > 0.0 else -1.0
     scratch = np.empty_like(seg)
     d_full = _move_distance(scratch, v0, a0, d * v_max, lim, cycle_s)
     if (d_full - need) * d <= 0.0:
-        k = velocity_change(seg, 0, v0, a0, d * v_max, lim, cycle_s)
+        k = velocity_change(seg, k0, v0, a0, d * v_max, lim, cycle_s)
         k = _push(seg, k, (need - d_full) / (d * v_max), 0.0, 0.0, SHAPE_LINEAR)
         return velocity_change(seg, k, d * v_max, 0.0, 0.0, lim, cycle_s)
     lo = 0.0
@@ -245,7 +262,7 @@ def position_move(
             lo = mid
         else:
             hi = mid
-    k = velocity_change(seg, 0, v0, a0, d * lo, lim, cycle_s)
+    k = velocity_change(seg, k0, v0, a0, d * lo, lim, cycle_s)
     d_lo = _move_distance(scratch, v0, a0, d * lo, lim, cycle_s)
     if lo > 0.0:  # absorb the last rounding residue in a tiny cruise
         k = _push(seg, k, (need - d_lo) / (d * lo), 0.0, 0.0, SHAPE_LINEAR)

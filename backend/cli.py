@@ -1,0 +1,42 @@
+"""The `inbetrieb` command: `sim` runs a scenario headless, `serve` starts the service."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from nc_sim.errors import NcUsageError
+from nc_sim.params import ParamListError
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="inbetrieb", description=__doc__)
+    sub = parser.add_subparsers(dest="cmd", required=True)
+    p_sim = sub.add_parser("sim", help="run a TOML scenario as fast as possible")
+    p_sim.add_argument("scenario", type=Path)
+    p_sim.add_argument("--out", type=Path, default=Path("out"))
+    p_srv = sub.add_parser("serve", help="start the web service")
+    p_srv.add_argument("--host", default="127.0.0.1")
+    p_srv.add_argument("--port", type=int, default=8000)
+    args = parser.parse_args(argv)
+    if args.cmd == "sim":
+        from backend.headless import run_file
+
+        try:
+            result = run_file(args.scenario, args.out)
+        except (ParamListError, NcUsageError, OSError, ValueError) as e:
+            print(f"inbetrieb sim: {e}", file=sys.stderr)
+            return 2
+        errors = [e for e in result.events if e.error]
+        rows = len(next(iter(result.columns.values())))
+        print(f"{rows} cycles, {len(result.events)} events ({len(errors)} errors) -> {args.out}")
+        return 0
+    import uvicorn
+
+    uvicorn.run("backend.main:app", host=args.host, port=args.port)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,232 @@
+"""Single NC blocks in DIN syntax and axis-specific syntax.
+
+    G01 X10 F500            G00 Z-5          G74 X1 Z2        #SLOPE[TYPE=TRAPEZ]
+    M3 S1000                M19 S.POS=90 M4  M40 S650         M8
+    S[M3 REV1000]           S1[M19 REV200 POS100]             S[G74]   S[M5]
+
+A bad block raises `BlockError` with the 1-based column of the offending character.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}
+_NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+
+
+class BlockError(ValueError):
+    """A block that cannot be parsed; `column` is 1-based."""
+
+    def __init__(self, message: str, column: int) -> None:
+        self.column = column
+        self.detail = message
+        super().__init__(f"column {column}: {message}")
+
+
+@dataclass
+class SpindleCmd:
+    """What one block asks of one spindle."""
+
+    spindle: str  # "S" for the main spindle or a configured name
+    m: int | None = None  # 3, 4, 5, 19
+    speed_rpm: float | None = None
+    pos_deg: float | None = None
+    direction: int | None = None  # M19 with M3 (+1) or M4 (-1)
+    g: list[int] = field(default_factory=list)  # 74, 135, 136, 137, 167
+    ff_weight: float | None = None  # G136 weighting
+    default_dynamics: bool = False
+
+
+@dataclass
+class Block:
+    """A parsed block."""
+
+    text: str
+    number: int | None = None
+    motion: int | None = None  # 0 or 1
+    absolute: bool | None = None  # G90 / G91
+    homing: dict[str, int] = field(default_factory=dict)  # G74: axis -> order
+    axes: dict[str, float] = field(default_factory=dict)
+    feed: float | None = None  # mm/min
+    m_functions: list[int] = field(default_factory=list)
+    gear: int | None = None  # 40..45
+    spindles: list[SpindleCmd] = field(default_factory=list)
+    slope_type: int | None = None
+    g_other: list[int] = field(default_factory=list)
+
+
+_TOKEN = re.compile(
+    r"\s*(?:"
+    r"(?P<comment>\(.*?\)|;.*$)"
+    r"|(?P<slope>#SLOPE\s*\[(?P<slope_body>[^\]]*)\])"
+    r"|(?P<spec>(?P<spec_name>[A-Z][A-Z0-9]*)\[(?P<spec_body>[^\]]*)\])"
+    r"|(?P<pos>(?P<pos_name>S\d*)\.POS\s*=?\s*(?P<pos_val>" + _NUM + "))"
+    r"|(?P<word>(?P<letter>[A-Z][A-Z]*\d*?)(?P<val>" + _NUM + "))"
+    r")",
+    re.IGNORECASE,
+)
+
+
+def _spindle_ref(name: str, spindles: Iterable[str], col: int) -> str:
+    name = name.upper()
+    if name == "S" or name in spindles:
+        return name
+    raise BlockError(f"unknown spindle '{name}'", col)
+
+
+def _parse_specific(body: str, spindle: str, col: int) -> SpindleCmd:
+    cmd = SpindleCmd(spindle)
+    for m in re.finditer(r"\S+", body):
+        tok = m.group(0).upper()
+        c = col + m.start()
+        if mm := re.fullmatch(r"M0*(3|4|5|19)", tok):
+            _spindle_m(cmd, int(mm.group(1)), c)
+        elif mm := re.fullmatch(r"REV=?(" + _NUM + ")", tok):
+            cmd.speed_rpm = float(mm.group(1))
+        elif mm := re.fullmatch(r"POS=?(" + _NUM + ")", tok):
+            cmd.pos_deg = float(mm.group(1))
+        elif mm := re.fullmatch(r"G0*(74|135|137|167)", tok):
+            cmd.g.append(int(mm.group(1)))
+        elif mm := re.fullmatch(r"G136(?:=?(" + _NUM + "))?", tok):
+            cmd.g.append(136)
+            cmd.ff_weight = float(mm.group(1)) if mm.group(1) else None
+        elif tok == "DEFAULT_DYNAMIC_DATA":
+            cmd.default_dynamics = True
+        else:
+            raise BlockError(f"'{m.group(0)}' is not allowed in {spindle}[...]", c)
+    return cmd
+
+
+def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) -> Block:
+    """Parse one block; `axes` are the channel's axis names, `spindles` the spindle names."""
+    axes = {a.upper() for a in axes}
+    spindles = {s.upper() for s in spindles}
+    block = Block(text)
+    main = SpindleCmd("S")
+    pos = 0
+    line = text.rstrip("\n")
+    while pos < len(line):
+        if not line[pos:].strip():
+            break
+        m = _TOKEN.match(line, pos)
+        col = pos + 1 + (len(line[pos:]) - len(line[pos:].lstrip()))
+        if m is None or m.end() == pos:
+            raise BlockError(f"unexpected '{line[col - 1]}'", col)
+        pos = m.end()
+        if m.group("comment"):
+            continue
+        if m.group("slope"):
+            body = m.group("slope_body").replace(" ", "").upper()
+            sm = re.fullmatch(r"TYPE=(\w+)", body)
+            if not sm or sm.group(1) not in SLOPE_TYPES:
+                raise BlockError(
+                    f"#SLOPE needs TYPE= one of {', '.join(SLOPE_TYPES)}", m.start("slope_body") + 1
+                )
+            block.slope_type = SLOPE_TYPES[sm.group(1)]
+            continue
+        if m.group("spec"):
+            name = _spindle_ref(m.group("spec_name"), spindles, col)
+            block.spindles.append(
+                _parse_specific(m.group("spec_body"), name, m.start("spec_body") + 1)
+            )
+            continue
+        if m.group("pos"):
+            name = _spindle_ref(m.group("pos_name"), spindles, col)
+            target = main if name == "S" else _named(block, name)
+            target.pos_deg = float(m.group("pos_val"))
+            continue
+        letter = m.group("letter").upper()
+        val_text = m.group("val")
+        value = float(val_text)
+        _word(block, main, letter, value, val_text, col, axes, spindles)
+    if main.m is not None or main.speed_rpm is not None or main.pos_deg is not None or main.g:
+        block.spindles.insert(0, main)
+    if 74 in block.g_other and block.motion is not None:
+        raise BlockError("G74 cannot be combined with G00/G01", 1)
+    if 74 in block.g_other:
+        block.homing.update({a: int(v) for a, v in block.axes.items()})
+        block.axes.clear()
+    return block
+
+
+def _named(block: Block, name: str) -> SpindleCmd:
+    for s in block.spindles:
+        if s.spindle == name:
+            return s
+    cmd = SpindleCmd(name)
+    block.spindles.append(cmd)
+    return cmd
+
+
+def _spindle_m(cmd: SpindleCmd, m: int, col: int) -> None:
+    """M3/M4 next to M19 give the positioning direction [000 §2.3.2]."""
+    if cmd.m is None:
+        cmd.m = m
+    elif cmd.m == 19 and m in (3, 4) and cmd.direction is None:
+        cmd.direction = 1 if m == 3 else -1
+    elif cmd.m in (3, 4) and m == 19 and cmd.direction is None:
+        cmd.direction = 1 if cmd.m == 3 else -1
+        cmd.m = 19
+    else:
+        raise BlockError("two spindle M functions for one spindle in one block", col)
+
+
+def _int_word(letter: str, value: float, text: str, col: int) -> int:
+    if value != int(value) or "." in text:
+        raise BlockError(f"{letter} takes a whole number, not {text}", col + len(letter))
+    return int(value)
+
+
+def _word(
+    block: Block,
+    main: SpindleCmd,
+    letter: str,
+    value: float,
+    text: str,
+    col: int,
+    axes: set[str],
+    spindles: set[str],
+) -> None:
+    if letter == "N":
+        block.number = _int_word(letter, value, text, col)
+    elif letter == "G":
+        g = _int_word(letter, value, text, col)
+        if g in (0, 1):
+            if block.motion is not None:
+                raise BlockError("two motion G codes in one block", col)
+            block.motion = g
+        elif g in (90, 91):
+            block.absolute = g == 90
+        elif g == 74:
+            block.g_other.append(74)
+        elif g in (135, 136, 137, 167):
+            main.g.append(g)
+        elif g in (200, 201):
+            block.g_other.append(g)
+        else:
+            raise BlockError(f"G{g} is not supported in MDI", col)
+    elif letter == "M":
+        mval = _int_word(letter, value, text, col)
+        if mval in (3, 4, 5, 19):
+            _spindle_m(main, mval, col)
+        elif 40 <= mval <= 45:
+            block.gear = mval
+        else:
+            block.m_functions.append(mval)
+    elif letter == "F":
+        if value <= 0:
+            raise BlockError("F must be positive", col + 1)
+        block.feed = value
+    elif letter == "S":
+        main.speed_rpm = value
+    elif letter in axes:
+        if letter in block.axes:
+            raise BlockError(f"axis {letter} twice in one block", col)
+        block.axes[letter] = value
+    elif letter in spindles:
+        raise BlockError(f"spindle {letter} is programmed as {letter}[...]", col)
+    else:
+        raise BlockError(f"unknown address '{letter}'", col)

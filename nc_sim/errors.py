@@ -1,0 +1,88 @@
+"""Job errors and events: numbered as the manuals number them, ours where they give none.
+
+Expected outcomes (a refused command, a monitor that trips) are `JobError` values in the
+HLI and the event log; misuse of the API raises `NcUsageError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+
+class Code(IntEnum):
+    """Error and event numbers. 6xxxx/7xxxx from the spindle manual, 9xxxx ours."""
+
+    SPINDLE_PREFERRED_DIRECTION = 60254  # [000 §2.6] commanded direction violates vorz_richtung
+    SPINDLE_SENSORLESS_M19 = 70252  # [000 §2.2.4] a sensorless spindle cannot be positioned
+    NO_ENABLES = 90001
+    LAG_MONITORING = 90002
+    SOFTWARE_LIMIT = 90003
+    PLC_ACK_TIMEOUT = 90004
+    EMERGENCY_STOP = 90005
+    AXIS_BUSY = 90006
+    DRIVE_NOT_READY = 90007
+    ENABLES_LOST = 90008
+    BLOCK_SYNTAX = 90010
+    UNKNOWN_AXIS = 90011
+    NOT_SUPPORTED = 90012
+    NOT_HOMED = 90013
+    FEED_MISSING = 90014
+    CHANNEL_ERROR_STATE = 90015
+    SPINDLE_NOT_IMPLEMENTED = 90016
+    # events (information, not errors)
+    EV_BLOCK_DONE = 10
+    EV_M_OUTPUT = 11
+    EV_M_ACK = 12
+    EV_HOMED = 13
+    EV_RESET = 14
+    EV_SPEED_REACHED = 15
+    EV_HLI = 16
+    EV_PLC_MODE = 17
+    EV_MOTION_DONE = 18
+
+
+MESSAGES: dict[Code, str] = {
+    Code.SPINDLE_PREFERRED_DIRECTION: "commanded direction of rotation violates the preferred "
+    "direction (P-AXIS-00224/P-AXIS-00031)",
+    Code.SPINDLE_SENSORLESS_M19: "a sensorless spindle cannot be positioned (M19)",
+    Code.NO_ENABLES: "drive enables missing: motion refused",
+    Code.LAG_MONITORING: "lag monitoring: position lag exceeds its limit (getriebe[i].lag_max)",
+    Code.SOFTWARE_LIMIT: "target beyond the software limit (P-AXIS-00177/P-AXIS-00178)",
+    Code.PLC_ACK_TIMEOUT: "the PLC did not acknowledge the M function in time",
+    Code.EMERGENCY_STOP: "emergency stop",
+    Code.AXIS_BUSY: "axis is moving: command refused",
+    Code.DRIVE_NOT_READY: "drive not ready for power on",
+    Code.ENABLES_LOST: "drive enables removed during motion",
+    Code.BLOCK_SYNTAX: "NC block syntax error",
+    Code.UNKNOWN_AXIS: "no such axis or spindle in the channel",
+    Code.NOT_SUPPORTED: "command not supported",
+    Code.NOT_HOMED: "axis not homed",
+    Code.FEED_MISSING: "G01 needs a feed F > 0",
+    Code.CHANNEL_ERROR_STATE: "channel in error state: reset first",
+    Code.SPINDLE_NOT_IMPLEMENTED: "spindle function parsed but not yet executed",
+}
+
+
+def is_error(code: int) -> bool:
+    """True for job errors, false for informational events."""
+    return code >= 60000
+
+
+@dataclass(frozen=True)
+class JobError:
+    """One error or event: when, where, what."""
+
+    cycle: int
+    t_s: float
+    axis: str
+    code: int
+    message: str
+
+    @property
+    def error(self) -> bool:
+        return is_error(self.code)
+
+
+class NcUsageError(ValueError):
+    """Misuse of the simulation API (not a machine condition)."""

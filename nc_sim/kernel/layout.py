@@ -1,0 +1,87 @@
+"""Column layout of the kernel's arrays: one row (slot) per axis or spindle of every machine.
+
+`st` float state, `pr` float parameters (engineering units), `ist` integer state,
+`seg` the active setpoint plan per slot, `rec` one sample row per cycle and slot.
+Module-level integers are compile-time constants for numba.
+"""
+
+from __future__ import annotations
+
+# --- st: float state ---------------------------------------------------------------------
+S_P_CMD = 0  # commanded position (mm | °)
+S_V_CMD = 1  # commanded velocity (unit/s)
+S_A_CMD = 2  # commanded acceleration (unit/s²)
+S_P_ACT = 3  # actual position as the NC sees it (after encoder, sign, offset)
+S_V_ACT = 4  # actual velocity from the encoder difference
+S_LAG = 5  # p_cmd - p_act
+S_X_MOTOR = 6  # physical position of the load (true, before encoder)
+S_V_MOTOR = 7  # physical velocity
+S_U = 8  # velocity command of the position controller (unit/s)
+S_DA = 9  # manipulated variable at the D/A (digits)
+S_SEG_TAU = 10  # time into the current segment (s)
+S_SEG_P0 = 11  # position at the start of the current segment
+S_SEG_V0 = 12  # velocity at the start of the current segment
+S_TARGET = 13  # target of a position plan, NaN for a velocity plan
+S_LAG_MODEL = 14  # lag an ideal loop would have (dynamic lag monitoring)
+S_V_GOAL = 15  # speed the spindle is commanded to reach (for speed reached), unit/s
+S_COLS = 16
+
+# --- pr: float parameters (engineering units) -----------------------------------------------
+P_KV = 0  # 1/s
+P_FF = 1  # velocity feedforward weight 0..1
+P_MG = 2  # NC multi_gain: digits for 1 m/min or 1000 °/min
+P_DRV_GAIN = 3  # the drive's true digits for 1 m/min or 1000 °/min
+P_DA_MAX = 4  # D/A limit, digits
+P_SIGN_CMD = 5  # -1 when vz_stellgr
+P_SIGN_FB = 6  # -1 when vz_istw
+P_MOTOR_SIGN = 7  # -1 when the motor is wired inverted
+P_ENC_SIGN = 8  # -1 when the encoder counts inverted
+P_DRV_T = 9  # drive velocity-loop time constant (s)
+P_DRV_A_MAX = 10  # drive acceleration limit (unit/s²), 0 = none
+P_ENC_INC = 11  # encoder increment (mm | °), 0 = ideal
+P_LAG_MAX = 12  # allowed deviation from the modelled lag
+P_SWE_NEG = 13  # software limits (NC position), checked when P_LIMITS_ON
+P_SWE_POS = 14
+P_CAM_POS = 15  # physical position of the reference cam edge
+P_ENC_OFFSET = 16  # NC position = sign·encoder + offset (set by homing)
+P_SPEED_BAND = 17  # speed reached band as a fraction (vb_prozent · 0.001)
+P_V_ZERO = 18  # spindle stopped below this speed (unit/s)
+P_COLS = 19
+
+# --- ist: integer state -----------------------------------------------------------------
+I_PLAN_N = 0  # segments in the active plan (0 = none: hold velocity)
+I_PLAN_K = 1  # current segment
+I_STATE = 2  # AxisState, written by the Python layer
+I_EVENTS = 3  # EV_* bits raised in this batch, cleared by the Python layer
+I_ENABLED = 4  # 1 when the drive enables are all present
+I_JOB_ERROR = 5  # active job error code (0 none)
+I_OPEN_LOOP = 6  # 1: speed control, position loop open
+I_CAM = 7  # reference cam signal
+I_HOMED = 8
+I_LIMITS_ON = 9  # software limits monitored (linear axes once homed)
+I_GEAR = 10  # active gear stage 1..6
+I_SPEED_REACHED = 11
+I_STOPPED = 12
+I_COLS = 13
+
+# --- events (bits in ist[:, I_EVENTS]) ---------------------------------------------------
+EV_PLAN_DONE = 1
+EV_LAG = 2
+EV_SWLIMIT = 4
+EV_CAM = 8
+EV_SPEED_REACHED = 16
+
+# --- rec: one row per cycle and slot --------------------------------------------------------
+R_P_CMD = 0
+R_P_ACT = 1
+R_LAG = 2
+R_V_CMD = 3
+R_V_ACT = 4
+R_A_CMD = 5
+R_STATE = 6
+R_JOB_ERROR = 7
+R_SPEED_REACHED = 8
+R_STOPPED = 9
+R_GEAR = 10
+R_DA = 11
+R_COLS = 12

@@ -1,0 +1,262 @@
+"""The compiled cycle: setpoint, position loop, drive, encoder and monitors for every slot.
+
+`run_cycles` advances all slots by up to `n` cycles in one call and returns early, after the
+cycle in which any slot raised an event, so the Python layer reacts within the same cycle.
+One axis, one cycle [DOMAIN §2]:
+
+    setpoint plan -> p_cmd, v_cmd, a_cmd
+    u  = kv·(p_cmd - p_act) + ff·v_cmd             (P controller + velocity feedforward)
+    da = u · 0.06 · multi_gain · sign(vz_stellgr)   (digits for 1 m/min or 1000 °/min), clipped
+    drive: v_motor -> da / (0.06 · true gain) as a first-order lag with acceleration limit
+    encoder: x quantised to one increment, sign(vz_istw) -> p_act
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from nc_sim.kernel.layout import (
+    EV_CAM,
+    EV_LAG,
+    EV_PLAN_DONE,
+    EV_SPEED_REACHED,
+    EV_SWLIMIT,
+    I_CAM,
+    I_ENABLED,
+    I_EVENTS,
+    I_GEAR,
+    I_JOB_ERROR,
+    I_LIMITS_ON,
+    I_OPEN_LOOP,
+    I_PLAN_K,
+    I_PLAN_N,
+    I_SPEED_REACHED,
+    I_STATE,
+    I_STOPPED,
+    P_CAM_POS,
+    P_DA_MAX,
+    P_DRV_A_MAX,
+    P_DRV_GAIN,
+    P_DRV_T,
+    P_ENC_INC,
+    P_ENC_OFFSET,
+    P_ENC_SIGN,
+    P_FF,
+    P_KV,
+    P_LAG_MAX,
+    P_MG,
+    P_MOTOR_SIGN,
+    P_SIGN_CMD,
+    P_SIGN_FB,
+    P_SPEED_BAND,
+    P_SWE_NEG,
+    P_SWE_POS,
+    P_V_ZERO,
+    R_A_CMD,
+    R_DA,
+    R_GEAR,
+    R_JOB_ERROR,
+    R_LAG,
+    R_P_ACT,
+    R_P_CMD,
+    R_SPEED_REACHED,
+    R_STATE,
+    R_STOPPED,
+    R_V_ACT,
+    R_V_CMD,
+    S_A_CMD,
+    S_DA,
+    S_LAG,
+    S_LAG_MODEL,
+    S_P_ACT,
+    S_P_CMD,
+    S_SEG_P0,
+    S_SEG_TAU,
+    S_SEG_V0,
+    S_TARGET,
+    S_U,
+    S_V_ACT,
+    S_V_CMD,
+    S_V_GOAL,
+    S_V_MOTOR,
+    S_X_MOTOR,
+)
+from nc_sim.profiles.plan import SEG_A0, SEG_J, SEG_SHAPE, SEG_T, seg_eval
+
+V_ACT_FILTER_S = 0.005  # time constant of the actual-speed filter
+PER_M_MIN = 0.06  # 1 m/min = 1000 mm / 60 s, so digits = u[mm/s] · 0.06 · multi_gain
+
+
+@njit(cache=True)
+def _advance_setpoint(st: np.ndarray, ist: np.ndarray, seg: np.ndarray, s: int, dt: float) -> int:
+    """Move the setpoint of slot s by dt along its plan; returns EV_PLAN_DONE when it ends."""
+    n = ist[s, I_PLAN_N]
+    if n == 0:  # no plan: hold the commanded velocity
+        st[s, S_P_CMD] += st[s, S_V_CMD] * dt
+        st[s, S_A_CMD] = 0.0
+        return 0
+    left = dt
+    k = ist[s, I_PLAN_K]
+    while True:
+        T = seg[s, k, SEG_T]
+        tau = st[s, S_SEG_TAU]
+        a0 = seg[s, k, SEG_A0]
+        j = seg[s, k, SEG_J]
+        shape = seg[s, k, SEG_SHAPE]
+        if tau + left < T:
+            tau += left
+            p, v, a = seg_eval(st[s, S_SEG_P0], st[s, S_SEG_V0], a0, j, shape, T, tau)
+            st[s, S_SEG_TAU] = tau
+            st[s, S_P_CMD] = p
+            st[s, S_V_CMD] = v
+            st[s, S_A_CMD] = a
+            return 0
+        left -= T - tau
+        p, v, a = seg_eval(st[s, S_SEG_P0], st[s, S_SEG_V0], a0, j, shape, T, T)
+        k += 1
+        st[s, S_SEG_P0] = p
+        st[s, S_SEG_V0] = v
+        st[s, S_SEG_TAU] = 0.0
+        ist[s, I_PLAN_K] = k
+        if k >= n:
+            ist[s, I_PLAN_N] = 0
+            target = st[s, S_TARGET]
+            if not math.isnan(target):  # position plan: end exactly on the target, at rest
+                st[s, S_P_CMD] = target
+                st[s, S_V_CMD] = 0.0
+            else:  # velocity plan: keep the final speed
+                st[s, S_P_CMD] = p + v * left
+                st[s, S_V_CMD] = v
+            st[s, S_A_CMD] = 0.0
+            return EV_PLAN_DONE
+
+
+@njit(cache=True)
+def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
+    """Position controller, D/A, drive and encoder of slot s for one cycle."""
+    v_m = st[s, S_V_MOTOR]
+    # the lag the controller acts on (and the HLI shows): this cycle's command against the
+    # position read at the start of the cycle
+    lag = st[s, S_P_CMD] - st[s, S_P_ACT]
+    st[s, S_LAG] = lag
+    if ist[s, I_ENABLED] == 1:
+        if ist[s, I_OPEN_LOOP] == 1:
+            u = st[s, S_V_CMD]
+        else:
+            u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
+        da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
+        lim = pr[s, P_DA_MAX]
+        da = min(max(da, -lim), lim)
+        v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
+        T = pr[s, P_DRV_T]
+        dv = v_target - v_m if T <= 0.0 else (v_target - v_m) * (1.0 - math.exp(-dt / T))
+        a_lim = pr[s, P_DRV_A_MAX]
+        if a_lim > 0.0:
+            dv = min(max(dv, -a_lim * dt), a_lim * dt)
+        st[s, S_U] = u
+        st[s, S_DA] = da
+    else:  # no enables: holding brake, the NC follows the actual position
+        dv = -v_m
+        st[s, S_U] = 0.0
+        st[s, S_DA] = 0.0
+    v_new = v_m + dv
+    st[s, S_X_MOTOR] += 0.5 * (v_m + v_new) * dt
+    st[s, S_V_MOTOR] = v_new
+    x = st[s, S_X_MOTOR]
+    inc = pr[s, P_ENC_INC]
+    counts = x if inc <= 0.0 else math.floor(x / inc + 0.5) * inc
+    p_prev = st[s, S_P_ACT]
+    p_act = pr[s, P_ENC_SIGN] * pr[s, P_SIGN_FB] * counts + pr[s, P_ENC_OFFSET]
+    st[s, S_P_ACT] = p_act
+    # actual speed from the encoder difference, smoothed as a drive's speed filter would be
+    alpha = dt / (dt + V_ACT_FILTER_S)
+    st[s, S_V_ACT] += ((p_act - p_prev) / dt - st[s, S_V_ACT]) * alpha
+    if ist[s, I_ENABLED] == 0:
+        st[s, S_P_CMD] = p_act
+        st[s, S_V_CMD] = 0.0
+        st[s, S_A_CMD] = 0.0
+        st[s, S_LAG] = 0.0
+
+
+@njit(cache=True)
+def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> int:
+    """Lag, software limits, reference cam and speed monitoring; returns event bits."""
+    ev = 0
+    kv = pr[s, P_KV]
+    # the lag an ideal loop with this kv and feedforward would have, as a first-order model
+    decay = math.exp(-kv * dt)
+    goal = (1.0 - pr[s, P_FF]) * st[s, S_V_CMD] / kv if kv > 0.0 else 0.0
+    st[s, S_LAG_MODEL] = st[s, S_LAG_MODEL] * decay + goal * (1.0 - decay)
+    if ist[s, I_ENABLED] == 1 and ist[s, I_OPEN_LOOP] == 0:
+        if abs(st[s, S_LAG] - st[s, S_LAG_MODEL]) > pr[s, P_LAG_MAX]:
+            ev |= EV_LAG
+    else:
+        st[s, S_LAG_MODEL] = st[s, S_LAG]
+    if ist[s, I_LIMITS_ON] == 1:
+        p = st[s, S_P_CMD]
+        if p < pr[s, P_SWE_NEG] - 1e-9 or p > pr[s, P_SWE_POS] + 1e-9:
+            ev |= EV_SWLIMIT
+    cam = 1 if st[s, S_X_MOTOR] >= pr[s, P_CAM_POS] else 0
+    if cam != ist[s, I_CAM]:
+        ist[s, I_CAM] = cam
+        ev |= EV_CAM
+    v_act = abs(st[s, S_V_ACT])
+    stopped = 1 if v_act < pr[s, P_V_ZERO] else 0
+    ist[s, I_STOPPED] = stopped
+    goal_v = st[s, S_V_GOAL]
+    reached = 0
+    if goal_v != 0.0:
+        band = pr[s, P_SPEED_BAND] * abs(goal_v)
+        if abs(st[s, S_V_ACT] - goal_v) <= band:
+            reached = 1
+    if reached == 1 and ist[s, I_SPEED_REACHED] == 0:
+        ev |= EV_SPEED_REACHED
+    ist[s, I_SPEED_REACHED] = reached
+    return ev
+
+
+@njit(cache=True)
+def run_cycles(
+    st: np.ndarray,
+    pr: np.ndarray,
+    ist: np.ndarray,
+    seg: np.ndarray,
+    rec: np.ndarray,
+    n: int,
+    dt: float,
+) -> int:
+    """Advance every slot by up to n cycles; stop after a cycle that raised an event.
+
+    `rec` (cycles × slots × R_COLS) receives one sample per cycle when it has room
+    (pass an array with zero rows to record nothing). Returns the cycles done.
+    """
+    slots = st.shape[0]
+    record = rec.shape[0] >= n and rec.shape[1] == slots
+    for c in range(n):
+        any_event = 0
+        for s in range(slots):
+            ev = _advance_setpoint(st, ist, seg, s, dt)
+            _loop_and_drive(st, pr, ist, s, dt)
+            ev |= _monitors(st, pr, ist, s, dt)
+            if ev != 0:
+                ist[s, I_EVENTS] |= ev
+                any_event = 1
+            if record:
+                rec[c, s, R_P_CMD] = st[s, S_P_CMD]
+                rec[c, s, R_P_ACT] = st[s, S_P_ACT]
+                rec[c, s, R_LAG] = st[s, S_LAG]
+                rec[c, s, R_V_CMD] = st[s, S_V_CMD]
+                rec[c, s, R_V_ACT] = st[s, S_V_ACT]
+                rec[c, s, R_A_CMD] = st[s, S_A_CMD]
+                rec[c, s, R_STATE] = ist[s, I_STATE]
+                rec[c, s, R_JOB_ERROR] = ist[s, I_JOB_ERROR]
+                rec[c, s, R_SPEED_REACHED] = ist[s, I_SPEED_REACHED]
+                rec[c, s, R_STOPPED] = ist[s, I_STOPPED]
+                rec[c, s, R_GEAR] = ist[s, I_GEAR]
+                rec[c, s, R_DA] = st[s, S_DA]
+        if any_event == 1:
+            return c + 1
+    return n

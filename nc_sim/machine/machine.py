@@ -1,0 +1,638 @@
+"""One simulated machine: a channel with axes and spindles, its HLI and its PLC.
+
+The Python layer of the NC: commands check their preconditions and either plan a motion for
+the kernel or end as a job error; kernel events (plan done, lag, limits, cam) drive the
+sequences (homing, blocks) forward. Nothing here reads a clock: time is `cycle · cycle_s`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from nc_sim.blocks import Block, BlockError, parse_block
+from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError
+from nc_sim.kernel import Kernel
+from nc_sim.kernel import layout as L
+from nc_sim.machine.axis import Axis, AxisState, HomingPhase, power_on, push_params
+from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.dynamics import (
+    Motion,
+    emergency_limits,
+    feedhold_limits,
+    motion_limits,
+    velocity_limit,
+)
+from nc_sim.plc import PlcMode, SimPlc
+from nc_sim.profiles.plan import new_plan, position_move, velocity_change
+from nc_sim.units import RPM_TO_DEG_S, AxisKind
+
+CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
+AXIS_UNITS = (
+    "override",
+    "override_valid",
+    "DriveOn",
+    "TorquePermission",
+    "ReleaseFeedhold",
+    "reduced_speed",
+    "spindle_stop_at_program_end",
+    "spindle_reset",
+)
+_FAR = 1e9  # jog target of an axis whose software limits are not yet active
+
+
+@dataclass
+class Ack:
+    """Acknowledgement of a command on the external command channel."""
+
+    id: int
+    ok: bool
+    code: int = 0
+    message: str = ""
+    column: int | None = None
+
+
+@dataclass
+class _BlockRun:
+    id: int
+    text: str
+    block: Block | None = None
+    started: bool = False
+    waiting_m: int = 0
+
+
+class Machine:
+    """A channel with its axes on a shared kernel."""
+
+    def __init__(self, cfg: MachineConfig, kernel: Kernel) -> None:
+        if abs(cfg.cycle_s - kernel.cycle_s) > 1e-12:
+            raise NcUsageError("machine cycle time differs from the kernel's")
+        self.cfg = cfg
+        self.k = kernel
+        self.cycle = 0
+        slots = kernel.claim(len(cfg.axes))
+        self.axes = [Axis(a, s) for a, s in zip(cfg.axes, slots, strict=True)]
+        self.by_name = {a.name: a for a in self.axes}
+        self.main_spindle = cfg.main_spindle
+        self.channel_units = {"override": 1000, "feedhold": 0, "reduced_acceleration": 0}
+        self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
+        self.events: list[JobError] = []
+        self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
+        self._queue: deque[_BlockRun] = deque()
+        self._next_id = 1
+        self.acks: list[Ack] = []
+        self.estop = False
+        self._m_out: dict[int, int] = {}  # cycle an M function was output -> block id
+        for ax in self.axes:
+            ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
+            push_params(kernel, ax)
+            power_on(kernel, ax)
+
+    # --- time ---------------------------------------------------------------------------
+    def _cycles(self, seconds: float) -> int:
+        return max(0, round(seconds / self.k.cycle_s))
+
+    @property
+    def t_s(self) -> float:
+        return self.cycle * self.k.cycle_s
+
+    def next_wakeup(self) -> int | None:
+        """The next cycle at which the machine must act without a kernel event."""
+        times = [self.plc.power_on_cycle] if self.cycle < self.plc.power_on_cycle else []
+        due = self.plc.next_due()
+        if due is not None:
+            times.append(due)
+        timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
+        times += [c + timeout for c in self._m_out]
+        return min(times) if times else None
+
+    # --- events -------------------------------------------------------------------------
+    def log(self, code: Code, axis: str = "", detail: str = "") -> JobError:
+        msg = MESSAGES.get(code, code.name.lower().replace("_", " "))
+        if detail:
+            msg = f"{msg}: {detail}" if code in MESSAGES else detail
+        ev = JobError(self.cycle, self.t_s, axis, int(code), msg)
+        self.events.append(ev)
+        return ev
+
+    def _fail(self, ax: Axis | None, code: Code, detail: str = "") -> JobError:
+        ev = self.log(code, ax.name if ax else "", detail)
+        if ax is not None:
+            ax.job_error = int(code)
+            self.k.ist[ax.slot, L.I_JOB_ERROR] = int(code)
+        return ev
+
+    # --- lookup -------------------------------------------------------------------------
+    def axis(self, name: str) -> Axis:
+        """Axis by name; the main spindle also answers to S."""
+        if name == "S" and self.main_spindle:
+            name = self.main_spindle
+        ax = self.by_name.get(name)
+        if ax is None:
+            raise NcUsageError(f"no axis or spindle '{name}'")
+        return ax
+
+    # --- motion primitives --------------------------------------------------------------
+    def _set_state(self, ax: Axis, state: AxisState) -> None:
+        ax.state = state
+        self.k.ist[ax.slot, L.I_STATE] = int(state)
+
+    def _override(self, ax: Axis, motion: Motion | None) -> float:
+        """Override in force as a fraction: axis override for spindles, channel override else."""
+        if ax.kind is AxisKind.SPINDLE:
+            cap = ax.cfg.eng("kenngr.max_vb_override")
+            ovr = ax.units["override"] * 1e-3 if ax.units["override_valid"] else 1.0
+        else:
+            cap = self.cfg.channel_eng("max_vb_override")
+            ovr = self.channel_units["override"] * 1e-3
+        return min(ovr, cap)
+
+    def _limits(self, ax: Axis, motion: Motion) -> np.ndarray:
+        reduced = bool(self.channel_units["reduced_acceleration"])
+        return motion_limits(ax.cfg, ax.gear, motion, ax.slope, reduced)
+
+    def _vmax(self, ax: Axis, motion: Motion) -> float:
+        v = velocity_limit(ax.cfg, ax.gear, motion, ax.feed) * self._override(ax, motion)
+        if ax.units["reduced_speed"]:
+            red = ax.cfg.eng(
+                "getriebe.rapid_speed_red" if motion is Motion.RAPID else "getriebe.vb_max_red",
+                ax.gear,
+            ) or ax.cfg.eng("getriebe.vb_max_red", ax.gear)
+            if red > 0:
+                v = min(v, red)
+        return v
+
+    def _plan_move(self, ax: Axis, limits: np.ndarray, v_max: float) -> None:
+        s = ax.slot
+        st = self.k.st
+        seg = new_plan()
+        n = position_move(
+            seg,
+            st[s, L.S_P_CMD],
+            st[s, L.S_V_CMD],
+            st[s, L.S_A_CMD],
+            ax.target,
+            v_max,
+            limits,
+            self.k.cycle_s,
+        )
+        self.k.load_plan(s, seg, n, ax.target)
+
+    def _plan_velocity(self, ax: Axis, v: float, limits: np.ndarray) -> None:
+        s = ax.slot
+        st = self.k.st
+        seg = new_plan()
+        n = velocity_change(seg, 0, st[s, L.S_V_CMD], st[s, L.S_A_CMD], v, limits, self.k.cycle_s)
+        self.k.load_plan(s, seg, n, math.nan)
+
+    def _replan(self, ax: Axis) -> None:
+        """Re-plan the active motion from the current state (override, feedhold release)."""
+        if ax.motion is None or ax.state in (AxisState.STOPPING, AxisState.ERROR):
+            return
+        if ax.hold or (self.channel_units["feedhold"] and ax.kind is not AxisKind.SPINDLE):
+            return
+        if ax.state is AxisState.ENDLESS:
+            v_max = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear)
+            v = max(-v_max, min(v_max, ax.speed_prog * self._override(ax, ax.motion)))
+            self._plan_velocity(ax, v, self._limits(ax, ax.motion))
+            self.k.st[ax.slot, L.S_V_GOAL] = v
+            return
+        self._plan_move(ax, self._limits(ax, ax.motion), self._vmax(ax, ax.motion))
+
+    def _check_motion(self, ax: Axis) -> JobError | None:
+        if self.estop:
+            return self._fail(ax, Code.CHANNEL_ERROR_STATE, "emergency stop active")
+        if ax.state is AxisState.ERROR:
+            return self._fail(ax, Code.CHANNEL_ERROR_STATE, f"{ax.name} in error state")
+        if not ax.enables_ok():
+            return self._fail(
+                ax, Code.NO_ENABLES, f"{ax.name} lacks {', '.join(ax.missing_enables())}"
+            )
+        return None
+
+    def _within_limits(self, ax: Axis, target: float) -> JobError | None:
+        if ax.kind is AxisKind.SPINDLE or not ax.homed:
+            return None
+        lo, hi = self.k.pr[ax.slot, L.P_SWE_NEG], self.k.pr[ax.slot, L.P_SWE_POS]
+        if not lo - 1e-9 <= target <= hi + 1e-9:
+            return self._fail(
+                ax,
+                Code.SOFTWARE_LIMIT,
+                f"{ax.name} target {target:.4f} outside {lo:.4f} … {hi:.4f}",
+            )
+        return None
+
+    def _start_move(
+        self,
+        ax: Axis,
+        target: float,
+        motion: Motion,
+        feed: float | None,
+        block_id: int | None = None,
+    ) -> JobError | None:
+        err = self._check_motion(ax) or self._within_limits(ax, target)
+        if err:
+            return err
+        ax.target, ax.motion, ax.feed, ax.block_id = target, motion, feed, block_id
+        ax.slope = self.slope if motion is not Motion.MANUAL else 1
+        if motion is Motion.FEED and not feed:
+            return self._fail(ax, Code.FEED_MISSING)
+        self._set_state(ax, AxisState.MOVING)
+        self._replan(ax)
+        return None
+
+    # --- commands: axes -----------------------------------------------------------------
+    def move(
+        self, axis: str, target: float, rapid: bool = True, feed_mm_min: float | None = None
+    ) -> JobError | None:
+        """Single-axis G00/G01 move to an absolute position (mm | °)."""
+        ax = self.axis(axis)
+        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        return self._start_move(ax, target, Motion.RAPID if rapid else Motion.FEED, feed)
+
+    def jog_start(
+        self, axis: str, direction: int, feed_mm_min: float | None = None
+    ) -> JobError | None:
+        """Continuous jog (G200 dynamics) towards the software limit until `jog_stop`."""
+        ax = self.axis(axis)
+        d = 1.0 if direction > 0 else -1.0
+        if ax.homed and ax.kind is not AxisKind.SPINDLE:
+            target = self.k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
+        else:
+            target = self.k.st[ax.slot, L.S_P_CMD] + d * _FAR
+        err = self._start_move(
+            ax, target, Motion.MANUAL, feed_mm_min / 60.0 if feed_mm_min else None
+        )
+        if err is None:
+            self._set_state(ax, AxisState.JOG)
+        return err
+
+    def jog_stop(self, axis: str) -> None:
+        """Release of the jog key: brake with the manual-mode deceleration."""
+        ax = self.axis(axis)
+        if ax.state is AxisState.JOG:
+            self._stop(ax, self._limits(ax, Motion.MANUAL))
+
+    def jog_step(
+        self, axis: str, distance: float, feed_mm_min: float | None = None
+    ) -> JobError | None:
+        """Incremental jog by `distance` (mm | °) with G200 dynamics."""
+        ax = self.axis(axis)
+        if ax.state is not AxisState.STANDSTILL:
+            return self._fail(ax, Code.AXIS_BUSY)
+        target = self.k.st[ax.slot, L.S_P_CMD] + distance
+        return self._start_move(
+            ax, target, Motion.MANUAL, feed_mm_min / 60.0 if feed_mm_min else None
+        )
+
+    def home(self, axis: str, block_id: int | None = None) -> JobError | None:
+        """CNC-controlled homing G74: to the cam, off it slowly, zero at the edge, to ref_pos."""
+        ax = self.axis(axis)
+        err = self._check_motion(ax)
+        if err:
+            return err
+        ax.motion, ax.block_id, ax.slope, ax.homed = Motion.HOMING, block_id, 1, False
+        self.k.ist[ax.slot, L.I_HOMED] = 0
+        self.k.ist[ax.slot, L.I_LIMITS_ON] = 0
+        self._set_state(ax, AxisState.HOMING)
+        d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
+        on_cam = bool(self.k.ist[ax.slot, L.I_CAM]) == (d > 0)
+        if on_cam:
+            self._homing_off_cam(ax)
+        else:
+            ax.homing = HomingPhase.TO_CAM
+            v = ax.cfg.eng("getriebe.vb_refmax", ax.gear)
+            self._plan_velocity(ax, d * v, self._limits(ax, Motion.HOMING))
+        return None
+
+    def _homing_off_cam(self, ax: Axis) -> None:
+        d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
+        ax.homing = HomingPhase.OFF_CAM
+        self._plan_velocity(
+            ax, -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), self._limits(ax, Motion.HOMING)
+        )
+
+    def _homing_edge(self, ax: Axis) -> None:
+        """Cam edge with zero pulse: the position here becomes ref_pos."""
+        s = ax.slot
+        pr = self.k.pr
+        # the zero pulse latches the position at the edge itself, not one cycle later
+        latched = (
+            pr[s, L.P_ENC_SIGN] * pr[s, L.P_SIGN_FB] * pr[s, L.P_CAM_POS] + pr[s, L.P_ENC_OFFSET]
+        )
+        shift = ax.cfg.eng("kenngr.ref_pos") - latched
+        self.k.pr[s, L.P_ENC_OFFSET] += shift
+        for col in (L.S_P_ACT, L.S_P_CMD, L.S_SEG_P0):
+            self.k.st[s, col] += shift
+        ax.homed = True
+        self.k.ist[s, L.I_HOMED] = 1
+        self.k.ist[s, L.I_LIMITS_ON] = int(ax.kind is AxisKind.LINEAR)
+        ax.homing = HomingPhase.TO_REF
+        ax.target = ax.cfg.eng("kenngr.ref_pos")
+        ax.feed = ax.cfg.eng("getriebe.vb_reflow", ax.gear)
+        self._plan_move(ax, self._limits(ax, Motion.HOMING), ax.feed)
+
+    def _stop(self, ax: Axis, limits: np.ndarray) -> None:
+        self._plan_velocity(ax, 0.0, limits)
+        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self._set_state(ax, AxisState.STOPPING)
+
+    # --- commands: spindle (endless rotation; the full spindle is the next issue) ---------
+    def spindle(self, name: str, m: int, speed_rpm: float | None = None) -> JobError | None:
+        """M3/M4 with speed (rpm) or M5, with a_beschl/a_brems of the active gear."""
+        ax = self.axis(name)
+        if ax.kind is not AxisKind.SPINDLE:
+            raise NcUsageError(f"{name} is not a spindle")
+        if m == 5:
+            if ax.state in (AxisState.ENDLESS, AxisState.STOPPING):
+                self._stop(ax, self._limits(ax, Motion.FEED))
+            return None
+        err = self._check_motion(ax)
+        if err:
+            return err
+        rpm = speed_rpm if speed_rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
+        ax.speed_prog = (1.0 if m == 3 else -1.0) * rpm * RPM_TO_DEG_S
+        ax.motion, ax.slope = Motion.FEED, 1
+        self._set_state(ax, AxisState.ENDLESS)
+        self._replan(ax)
+        return None
+
+    # --- HLI ----------------------------------------------------------------------------
+    def hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
+        """Write a control unit of the channel (axis=None) or of an axis."""
+        if axis is None:
+            if unit not in CHANNEL_UNITS:
+                raise NcUsageError(f"unknown channel control unit '{unit}'")
+            self._channel_unit(unit, int(value))
+            return
+        ax = self.axis(axis)
+        if unit not in AXIS_UNITS:
+            raise NcUsageError(f"unknown axis control unit '{unit}'")
+        if unit == "override":
+            value = max(0, min(int(value), 2000))
+        if unit == "spindle_reset" and value:
+            self._reset_axis(ax)
+            return
+        ax.units[unit] = int(value)
+        self.log(Code.EV_HLI, ax.name, f"{unit} = {int(value)}")
+        if unit in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
+            self._enables_changed(ax)
+        elif unit in ("override", "override_valid", "reduced_speed"):
+            self._replan(ax)
+
+    def _channel_unit(self, unit: str, value: int) -> None:
+        old = self.channel_units[unit]
+        self.channel_units[unit] = max(0, min(value, 2000)) if unit == "override" else value
+        self.log(Code.EV_HLI, "", f"channel {unit} = {value}")
+        if unit == "feedhold" and value and not old:
+            use_set = bool(self.cfg.channel_raw("use_drive_curr_limit"))
+            for ax in self.axes:
+                if (
+                    ax.kind is not AxisKind.SPINDLE
+                    and ax.state in (AxisState.MOVING, AxisState.JOG, AxisState.HOMING)
+                    and ax.motion is not None
+                ):
+                    ax.hold = True
+                    lim = feedhold_limits(ax.cfg, ax.gear, ax.motion, ax.slope, use_set)
+                    self._plan_move(ax, lim, 0.0)
+        elif unit == "feedhold" and not value and old:
+            for ax in self.axes:
+                if ax.hold:
+                    ax.hold = False
+                    self._replan(ax)
+        else:
+            for ax in self.axes:
+                if ax.kind is not AxisKind.SPINDLE:
+                    self._replan(ax)
+
+    def _enables_changed(self, ax: Axis) -> None:
+        ok = ax.enables_ok()
+        self.k.ist[ax.slot, L.I_ENABLED] = int(ok)
+        if not ok and ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
+            self.k.ist[ax.slot, L.I_PLAN_N] = 0
+            self._abort_block(ax)
+            self._fail(ax, Code.ENABLES_LOST, f"{ax.name}: {', '.join(ax.missing_enables())} off")
+            self._set_state(ax, AxisState.ERROR)
+
+    # --- reset, emergency stop ----------------------------------------------------------
+    def _reset_axis(self, ax: Axis) -> None:
+        moving = ax.state not in (AxisState.STANDSTILL, AxisState.ERROR)
+        keep = ax.kind is AxisKind.SPINDLE and ax.cfg.flag("kenngr.spdl_no_stop_at_reset")
+        ax.job_error = 0
+        self.k.ist[ax.slot, L.I_JOB_ERROR] = 0
+        ax.hold, ax.homing, ax.block_id = False, HomingPhase.NONE, None
+        if moving and not (keep and ax.state is AxisState.ENDLESS):
+            self._stop(ax, self._limits(ax, ax.motion or Motion.FEED))
+        elif ax.state is AxisState.ERROR:
+            self._set_state(ax, AxisState.STANDSTILL)
+
+    def reset(self) -> None:
+        """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455)."""
+        self.estop = False
+        self._queue.clear()
+        self._m_out.clear()
+        self.plc.clear()
+        for ax in self.axes:
+            self._reset_axis(ax)
+        self.log(Code.EV_RESET)
+
+    def emergency_stop(self) -> None:
+        """Step-shaped braking of every axis at a_emergency; the channel stays in error."""
+        self.estop = True
+        self._queue.clear()
+        for ax in self.axes:
+            if ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
+                self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
+                self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+            ax.motion, ax.hold, ax.homing = None, False, HomingPhase.NONE
+            self._set_state(ax, AxisState.ERROR)
+            ax.job_error = int(Code.EMERGENCY_STOP)
+            self.k.ist[ax.slot, L.I_JOB_ERROR] = ax.job_error
+        self.log(Code.EMERGENCY_STOP)
+
+    # --- PLC ----------------------------------------------------------------------------
+    def plc_mode(self, mode: str, delay_s: float | None = None) -> None:
+        self.plc.set_mode(
+            PlcMode(mode), self.cycle, None if delay_s is None else self._cycles(delay_s)
+        )
+        self.log(Code.EV_PLC_MODE, "", f"PLC {mode}")
+
+    def plc_acknowledge(self, m: int | None = None) -> int:
+        """Manual acknowledgement; returns how many M functions were acknowledged."""
+        acked = self.plc.acknowledge(m)
+        for p in acked:
+            self._m_acked(p.m, p.out_cycle)
+        return len(acked)
+
+    def _m_acked(self, m: int, out_cycle: int) -> None:
+        self.log(Code.EV_M_ACK, "", f"M{m} acknowledged")
+        block = self._m_out.pop(out_cycle, None)
+        if block is not None and self._queue and self._queue[0].id == block:
+            self._queue[0].waiting_m -= 1
+
+    # --- MDI and the external command channel -------------------------------------------
+    def mdi(self, text: str) -> Ack:
+        """Queue one block; a bad block is refused at once with the column of the error."""
+        bid = self._next_id
+        self._next_id += 1
+        names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
+        spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
+        try:
+            block = parse_block(text, names, spindles)
+        except BlockError as e:
+            self.log(Code.BLOCK_SYNTAX, "", f"{e.detail} (column {e.column}) in '{text}'")
+            ack = Ack(bid, False, int(Code.BLOCK_SYNTAX), e.detail, e.column)
+            self.acks.append(ack)
+            return ack
+        self._queue.append(_BlockRun(bid, text, block))
+        ack = Ack(bid, True)
+        self.acks.append(ack)
+        self._pump()
+        return ack
+
+    def _abort_block(self, ax: Axis) -> None:
+        if ax.block_id is not None and self._queue and self._queue[0].id == ax.block_id:
+            self._queue.popleft()
+        ax.block_id = None
+
+    def _pump(self) -> None:
+        """Start the head block when possible; finish it when its motions and Ms are done."""
+        while self._queue:
+            run = self._queue[0]
+            if not run.started:
+                run.started = True
+                if not self._start_block(run):
+                    self._queue.popleft()
+                    continue
+            busy = any(a.block_id == run.id for a in self.axes)
+            if busy or run.waiting_m > 0:
+                return
+            self._queue.popleft()
+            self.log(Code.EV_BLOCK_DONE, "", run.text)
+
+    def _start_block(self, run: _BlockRun) -> bool:
+        b = run.block
+        assert b is not None
+        if b.slope_type is not None:
+            self.slope = b.slope_type
+        for m in b.m_functions:
+            self._m_output(m, "", run)
+        for sc in b.spindles:
+            ax = self.axis(sc.spindle)
+            if sc.m in (3, 4, 5):
+                err = self.spindle(ax.name, sc.m, sc.speed_rpm)
+                if err:
+                    return False
+                if self._synch_plc(ax, sc.m):
+                    self._m_output(sc.m, ax.name, run)
+            elif sc.m is not None or sc.g or sc.pos_deg is not None:
+                self._fail(ax, Code.SPINDLE_NOT_IMPLEMENTED, f"'{run.text}'")
+                return False
+        if b.gear is not None:
+            self._fail(None, Code.SPINDLE_NOT_IMPLEMENTED, f"M{b.gear} in '{run.text}'")
+            return False
+        for name in sorted(b.homing, key=lambda n: b.homing[n]):
+            if self.home(name, run.id):
+                return False
+        if b.axes:
+            motion = Motion.RAPID if (b.motion or 0) == 0 else Motion.FEED
+            feed = b.feed / 60.0 if b.feed else None
+            for name, value in b.axes.items():
+                ax = self.axis(name)
+                target = value if b.absolute is not False else self.k.st[ax.slot, L.S_P_CMD] + value
+                if self._start_move(ax, target, motion, feed, run.id):
+                    return False
+        return True
+
+    def _synch_plc(self, ax: Axis, m: int) -> bool:
+        i = next(
+            (i for i in range(6) if self.cfg.channel.get(f"spindel[{i}].bezeichnung") == ax.name),
+            None,
+        )
+        if i is None:
+            return False
+        return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & 0x20000)
+
+    def _m_output(self, m: int, axis: str, run: _BlockRun) -> None:
+        p = self.plc.output(m, axis, self.cycle)
+        while p.out_cycle in self._m_out:  # one key per output
+            p.out_cycle += 1
+        self._m_out[p.out_cycle] = run.id
+        run.waiting_m += 1
+        self.log(Code.EV_M_OUTPUT, axis, f"M{m} output to the PLC")
+
+    # --- the cycle boundary --------------------------------------------------------------
+    def on_cycle(self, cycle: int) -> None:
+        """Handle kernel events and timers after the kernel reached `cycle`."""
+        self.cycle = cycle
+        if cycle >= self.plc.power_on_cycle and not getattr(self, "_powered", False):
+            self._powered = True
+            for ax in self.axes:  # the PLC program switches the drives on at start-up
+                for u in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
+                    ax.units[u] = 1
+                self._enables_changed(ax)
+        for p in self.plc.due(cycle):
+            self._m_acked(p.m, p.out_cycle)
+        timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
+        for out, bid in list(self._m_out.items()):
+            if cycle - out >= timeout:
+                del self._m_out[out]
+                self._fail(
+                    None,
+                    Code.PLC_ACK_TIMEOUT,
+                    f"no acknowledgement after {timeout * self.k.cycle_s:g} s",
+                )
+                if self._queue and self._queue[0].id == bid:
+                    self._queue.popleft()
+        for ax in self.axes:
+            ev = int(self.k.ist[ax.slot, L.I_EVENTS])
+            if ev:
+                self.k.ist[ax.slot, L.I_EVENTS] = 0
+                self._axis_events(ax, ev)
+        self._pump()
+
+    def _axis_events(self, ax: Axis, ev: int) -> None:
+        if ev & L.EV_LAG:
+            self._fail(ax, Code.LAG_MONITORING, f"{ax.name} lag {self.k.st[ax.slot, L.S_LAG]:.4f}")
+            self._halt(ax)
+            return
+        if ev & L.EV_SWLIMIT and ax.state is not AxisState.ERROR:
+            self._fail(ax, Code.SOFTWARE_LIMIT, f"{ax.name} at {self.k.st[ax.slot, L.S_P_CMD]:.4f}")
+            self._abort_block(ax)
+            self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
+            self._set_state(ax, AxisState.ERROR)
+        if ev & L.EV_CAM and ax.state is AxisState.HOMING:
+            cam = bool(self.k.ist[ax.slot, L.I_CAM])
+            d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
+            if ax.homing is HomingPhase.TO_CAM and cam == (d > 0):
+                self._homing_off_cam(ax)
+            elif ax.homing is HomingPhase.OFF_CAM and cam != (d > 0):
+                self._homing_edge(ax)
+        if ev & L.EV_SPEED_REACHED and ax.kind is AxisKind.SPINDLE:
+            self.log(Code.EV_SPEED_REACHED, ax.name)
+        if ev & L.EV_PLAN_DONE:
+            self._plan_done(ax)
+
+    def _halt(self, ax: Axis) -> None:
+        """Error reaction: servo off, axis in error, its block aborted."""
+        self.k.ist[ax.slot, L.I_PLAN_N] = 0
+        self.k.ist[ax.slot, L.I_ENABLED] = 0
+        ax.units["TorquePermission"] = 0
+        self._abort_block(ax)
+        ax.motion = None
+        self._set_state(ax, AxisState.ERROR)
+
+    def _plan_done(self, ax: Axis) -> None:
+        if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS):
+            return
+        if ax.state is AxisState.HOMING:
+            if ax.homing is not HomingPhase.TO_REF:
+                return
+            ax.homing = HomingPhase.NONE
+            self.log(Code.EV_HOMED, ax.name, f"{ax.name} homed")
+        self._set_state(ax, AxisState.STANDSTILL)
+        ax.motion, ax.block_id = None, None
+        self.log(Code.EV_MOTION_DONE, ax.name)

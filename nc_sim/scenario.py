@@ -1,0 +1,131 @@
+"""Scripted experiments: parameter overrides and timed actions on one machine.
+
+The scenario is the parsed TOML as a dict (see README, `examples/`). `run_scenario` is pure:
+it returns the trace columns and the event list; writing files is the caller's business.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from nc_sim.errors import JobError, NcUsageError
+from nc_sim.kernel import layout as L
+from nc_sim.machine.config import MachineConfig, apply_overrides
+from nc_sim.machine.machine import Machine
+from nc_sim.params import Scope, resolve
+from nc_sim.params.listfile import parse_value
+from nc_sim.sim import Simulation
+from nc_sim.units import RPM_TO_DEG_S, AxisKind
+
+
+@dataclass
+class ScenarioResult:
+    columns: dict[str, np.ndarray]
+    events: list[JobError]
+    machine: Machine
+
+
+def _value(scope: Scope, name: str, value: Any) -> float | int | str:
+    d = resolve(scope, name)
+    return (
+        value
+        if isinstance(value, int | float) and d.is_numeric
+        else parse_value(d, name, str(value))
+    )
+
+
+def apply_parameters(cfg: MachineConfig, params: Mapping[str, Mapping[str, Any]]) -> None:
+    """Apply `[parameters.channel]` and `[parameters.<axis>]` tables (native list names)."""
+    for target, table in params.items():
+        scope = Scope.CHANNEL if target == "channel" else Scope.AXIS
+        values = {name: _value(scope, name, v) for name, v in table.items()}
+        apply_overrides(cfg, scope, target, values)
+
+
+def _act(m: Machine, action: Mapping[str, Any]) -> None:
+    if "mdi" in action:
+        m.mdi(str(action["mdi"]))
+    elif "hli" in action:
+        h = action["hli"]
+        m.hli_write(str(h["unit"]), int(h["value"]), h.get("axis"))
+    elif "plc" in action:
+        p = action["plc"]
+        if "ack" in p:
+            m.plc_acknowledge(None if p["ack"] == "all" else int(p["ack"]))
+        else:
+            m.plc_mode(str(p["mode"]), p.get("delay_s"))
+    elif "jog" in action:
+        j = action["jog"]
+        axis = str(j["axis"])
+        if j.get("stop"):
+            m.jog_stop(axis)
+        elif "step" in j:
+            m.jog_step(axis, float(j["step"]), j.get("feed_mm_min"))
+        else:
+            m.jog_start(axis, int(j.get("direction", 1)), j.get("feed_mm_min"))
+    elif "move" in action:
+        mv = action["move"]
+        m.move(
+            str(mv["axis"]), float(mv["target"]), bool(mv.get("rapid", True)), mv.get("feed_mm_min")
+        )
+    elif "home" in action:
+        m.home(str(action["home"]))
+    elif action.get("reset"):
+        m.reset()
+    elif action.get("emergency_stop"):
+        m.emergency_stop()
+    else:
+        raise NcUsageError(f"unknown action {dict(action)}")
+
+
+def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.ndarray]:
+    """Named trace columns `<axis>.<signal>` in display units from a kernel record."""
+    n = rec.shape[0]
+    cols: dict[str, np.ndarray] = {"t_s": (t0_cycle + 1 + np.arange(n)) * m.k.cycle_s}
+    for ax in m.axes:
+        r = rec[:, ax.slot]
+        p = ax.name + "."
+        if ax.kind is AxisKind.SPINDLE:
+            cols[p + "speed_cmd_rpm"] = r[:, L.R_V_CMD] / RPM_TO_DEG_S
+            cols[p + "speed_act_rpm"] = r[:, L.R_V_ACT] / RPM_TO_DEG_S
+        u = "mm" if ax.kind is AxisKind.LINEAR else "deg"
+        cols[p + f"pos_cmd_{u}"] = r[:, L.R_P_CMD]
+        cols[p + f"pos_act_{u}"] = r[:, L.R_P_ACT]
+        cols[p + f"lag_{u}"] = r[:, L.R_LAG]
+        if ax.kind is not AxisKind.SPINDLE:
+            cols[p + f"vel_cmd_{u}_min"] = r[:, L.R_V_CMD] * 60.0
+            cols[p + f"vel_act_{u}_min"] = r[:, L.R_V_ACT] * 60.0
+        cols[p + ("accel_cmd_deg_s2" if u == "deg" else "acc_cmd_mm_s2")] = r[:, L.R_A_CMD]
+        if ax.kind is AxisKind.SPINDLE:
+            cols[p + "speed_reached"] = r[:, L.R_SPEED_REACHED]
+            cols[p + "stopped"] = r[:, L.R_STOPPED]
+            cols[p + "gear"] = r[:, L.R_GEAR]
+        cols[p + "da_digits"] = r[:, L.R_DA]
+        cols[p + "state"] = r[:, L.R_STATE]
+        cols[p + "job_error"] = r[:, L.R_JOB_ERROR]
+    return cols
+
+
+def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioResult:
+    """Run a scenario on a machine config (which it modifies by the parameter tables)."""
+    apply_parameters(cfg, scenario.get("parameters", {}))
+    sim = Simulation(cfg.cycle_s)
+    m = sim.add(cfg)
+    duration = float(scenario.get("duration_s", 1.0))
+    n_total = round(duration / cfg.cycle_s)
+    actions = sorted(scenario.get("actions", []), key=lambda a: float(a.get("t_s", 0.0)))
+    rec = sim.new_record(n_total)
+    done = 0
+    for action in actions:
+        at = min(n_total, round(float(action.get("t_s", 0.0)) / cfg.cycle_s))
+        if at > done:
+            sim.run(at - done, rec[done:at])
+            done = at
+        _act(m, action)
+    if n_total > done:
+        sim.run(n_total - done, rec[done:])
+    return ScenarioResult(trace_columns(m, rec, 0), list(m.events), m)

@@ -1,0 +1,76 @@
+"""`inbetrieb sim` as a user runs it: the console script on a scenario file."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run_cli(scenario: Path, out: Path) -> subprocess.CompletedProcess[str]:
+    exe = shutil.which("inbetrieb", path=str(Path(sys.executable).parent))
+    assert exe, "the console script is installed with the package"
+    return subprocess.run(
+        [exe, "sim", str(scenario), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_spindle_override_scenario(tmp_path: Path) -> None:
+    # the manual's example: M3 S1000, override 50 % -> 500 rpm [000 §2.4.1]
+    res = run_cli(ROOT / "examples" / "spindle_override.toml", tmp_path)
+    assert res.returncode == 0, res.stderr
+    rows = list(csv.DictReader((tmp_path / "trace.csv").read_text().splitlines()))
+    assert len(rows) == 6000
+    for col in (
+        "speed_cmd_rpm",
+        "speed_act_rpm",
+        "pos_cmd_deg",
+        "pos_act_deg",
+        "lag_deg",
+        "accel_cmd_deg_s2",
+        "speed_reached",
+        "stopped",
+        "gear",
+        "state",
+        "job_error",
+    ):
+        assert f"S1.{col}" in rows[0]
+    for col in ("pos_cmd_mm", "pos_act_mm", "lag_mm", "vel_cmd_mm_min", "vel_act_mm_min"):
+        assert f"X.{col}" in rows[0]
+    at = {round(float(r["t_s"]), 3): r for r in rows}
+    assert float(at[2.9]["S1.speed_cmd_rpm"]) == pytest.approx(1000.0)
+    assert float(at[2.9]["S1.lag_deg"]) == pytest.approx(600.0, rel=0.01)  # v/(kv·0.01)
+    assert at[2.9]["S1.speed_reached"] == "1"
+    assert float(at[5.9]["S1.speed_cmd_rpm"]) == pytest.approx(500.0)
+    events = [json.loads(line) for line in (tmp_path / "events.jsonl").read_text().splitlines()]
+    assert not [e for e in events if e["error"]]
+    assert {"t_s", "axis", "code", "message"} <= set(events[0])
+
+
+def test_plc_fault_scenario_ends_in_a_timeout_error(tmp_path: Path) -> None:
+    res = run_cli(ROOT / "examples" / "plc_fault.toml", tmp_path)
+    assert res.returncode == 0, res.stderr
+    events = [json.loads(line) for line in (tmp_path / "events.jsonl").read_text().splitlines()]
+    errors = [e for e in events if e["error"]]
+    assert [e["code"] for e in errors] == [90004]
+    assert errors[0]["t_s"] == pytest.approx(1.1)  # output at 0.1 s + 1 s timeout
+
+
+def test_bad_parameter_in_a_scenario_is_a_clear_error(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('duration_s = 0.1\n[parameters.X]\n"getriebe[0].kv" = 0\n')
+    res = run_cli(bad, tmp_path / "out")
+    assert res.returncode == 2
+    assert "getriebe[0].kv = 0 is out of range 1" in res.stderr
+    assert not (tmp_path / "out" / "trace.csv").exists()

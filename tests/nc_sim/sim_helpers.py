@@ -1,0 +1,38 @@
+"""Helpers for kernel tests: a demo machine in simulated time."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from nc_sim.kernel import layout as L
+from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
+from nc_sim.machine.machine import Machine
+from nc_sim.params import Scope
+from nc_sim.sim import Simulation
+
+
+def make(
+    axis_params: dict[str, dict[str, Any]] | None = None,
+    channel: dict[str, Any] | None = None,
+    settle: int = 20,
+) -> tuple[Simulation, Machine, MachineConfig]:
+    cfg = demo_machine()
+    for name, values in (axis_params or {}).items():
+        apply_overrides(cfg, Scope.AXIS, name, values)
+    if channel:
+        apply_overrides(cfg, Scope.CHANNEL, "", channel)
+    sim = Simulation(cfg.cycle_s)
+    m = sim.add(cfg)
+    sim.run(settle)  # the PLC switches the drives on
+    return sim, m, cfg
+
+
+def record(sim: Simulation, seconds: float) -> np.ndarray:
+    rec = sim.new_record(round(seconds / sim.kernel.cycle_s))
+    sim.run(rec.shape[0], rec)
+    return rec
+
+
+__all__ = ["L", "make", "record"]

@@ -1,0 +1,206 @@
+"""Position loop, monitors and enables of the demo machine, in simulated time."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nc_sim.errors import Code
+from tests.nc_sim.sim_helpers import L, make, record
+
+
+def cruise_lag(
+    kv_raw: int, feed: float, ff: int = 0, mg: tuple[int, int] = (10000, 1)
+) -> tuple[float, float]:
+    """Lag (mm) and velocity (mm/s) of X at constant speed in a long G01 move."""
+    sim, m, _ = make(
+        {
+            "X": {
+                "getriebe[0].kv": kv_raw,
+                "lr_param.ff_weight": ff,
+                "getriebe[0].multi_gain_z": mg[0],
+                "getriebe[0].multi_gain_n": mg[1],
+                "getriebe[0].lag_max": 10_000_000,
+            }
+        }
+    )
+    x = m.axis("X")
+    seconds = 2.0 + 8.0 / (kv_raw * 0.01)  # ramp, then settle for 8 time constants
+    assert m.mdi(f"G01 X{50 + feed / 60 * (seconds + 1):.3f} F{feed}").ok  # limits off: unhomed
+    rec = record(sim, seconds)
+    assert x.state.name == "MOVING"
+    return float(rec[-1, x.slot, L.R_LAG]), float(rec[-1, x.slot, L.R_V_CMD])
+
+
+@pytest.mark.parametrize("kv_raw", [300, 1000, 4000])
+@pytest.mark.parametrize("feed", [200.0, 2000.0, 6000.0])
+def test_steady_lag_is_v_over_kv(kv_raw: int, feed: float) -> None:
+    lag, v = cruise_lag(kv_raw, feed)
+    assert v == pytest.approx(feed / 60)
+    assert lag == pytest.approx(v / (kv_raw * 0.01), rel=0.01)  # [004 §3.6]
+
+
+def test_full_feedforward_removes_the_steady_lag() -> None:
+    lag, v = cruise_lag(1000, 3000.0, ff=1000)
+    assert abs(lag) < 0.01 * v / 10.0
+
+
+def test_wrong_multi_gain_changes_the_gain_by_its_factor() -> None:
+    # the manual's experiment: f = 2.286 [004 §3.6.2]; drive scaling is 10000 digits per m/min
+    lag, v = cruise_lag(400, 200.0, mg=(22860, 1))
+    k = v / lag
+    assert k == pytest.approx(4.0 * 2.286, rel=0.01)
+    f = (400 / 100) / (v / (v / (4.0 * 2.286)))
+    assert f == pytest.approx(1 / 2.286, rel=0.01)
+
+
+def test_sign_inversion_runs_away_into_lag_monitoring() -> None:
+    sim, m, _ = make({"X": {"lr_hw[0].vz_stellgr": 1}})
+    x = m.axis("X")
+    assert m.mdi("G01 X60 F1000").ok
+    rec = record(sim, 2.0)
+    errors = [e for e in m.events if e.code == Code.LAG_MONITORING]
+    assert len(errors) == 1 and errors[0].axis == "X"
+    # the position ran away (positive feedback) before the monitor tripped
+    assert np.max(np.abs(rec[:, x.slot, L.R_LAG])) > 5.0
+    assert x.state.name == "ERROR"
+
+
+def test_both_signs_inverted_on_an_inverted_machine_work() -> None:
+    sim, m, _ = make({"X": {"lr_hw[0].vz_stellgr": 1, "sim.motor_inverted": 1}})
+    assert m.mdi("G01 X60 F1000").ok
+    record(sim, 2.0)
+    assert not [e for e in m.events if e.error]
+    assert m.k.st[m.axis("X").slot, L.S_P_ACT] == pytest.approx(60.0, abs=1e-3)
+
+
+def test_no_motion_without_enables() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.hli_write("DriveOn", 0, "X")
+    p0 = m.k.st[x.slot, L.S_P_ACT]
+    ack = m.mdi("G00 X100")
+    record(sim, 0.5)
+    err = [e for e in m.events if e.error]
+    assert ack.ok and len(err) == 1 and err[0].code == Code.NO_ENABLES
+    assert "DriveOn" in err[0].message
+    assert m.k.st[x.slot, L.S_P_ACT] == p0
+
+
+def test_enables_lost_during_motion_stop_the_axis_with_an_error() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.mdi("G01 X200 F3000")
+    record(sim, 0.5)
+    m.hli_write("TorquePermission", 0, "X")
+    record(sim, 0.5)
+    assert [e.code for e in m.events if e.error] == [Code.ENABLES_LOST]
+    assert abs(m.k.st[x.slot, L.S_V_ACT]) < 1e-6
+
+
+def test_jog_stops_within_the_manual_mode_deceleration_distance() -> None:
+    # G200: d_max 2000 mm/s², ramp 20 ms: from v the stop takes v/d + tr, distance v/2 (v/d + tr)
+    sim, m, cfg = make()
+    x = m.axis("X")
+    feed = 6000.0
+    assert m.jog_start("X", +1, feed) is None
+    record(sim, 1.0)
+    v = m.k.st[x.slot, L.S_V_CMD]
+    assert v == pytest.approx(feed / 60)
+    p_release = m.k.st[x.slot, L.S_P_CMD]
+    m.jog_stop("X")
+    rec = record(sim, 0.5)
+    d = cfg.axis("X").eng("handbetrieb.hb.d_max")
+    tr = cfg.axis("X").eng("handbetrieb.hb.tr")
+    travelled = m.k.st[x.slot, L.S_P_CMD] - p_release
+    assert travelled == pytest.approx(v / 2 * (v / d + tr), rel=1e-6)
+    assert x.state.name == "STANDSTILL"
+    assert np.min(rec[:, x.slot, L.R_A_CMD]) == pytest.approx(-d)
+
+
+def test_override_scales_feed_and_is_capped_by_the_channel_limit() -> None:
+    sim, m, _cfg = make()
+    x = m.axis("X")
+    m.hli_write("override", 500)
+    m.mdi("G01 X250 F1200")
+    record(sim, 1.0)
+    assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(10.0)  # 50 % of 20 mm/s
+    m.hli_write("override", 2000)  # capped by max_vb_override 1200 [P-CHAN-00056]
+    record(sim, 1.0)
+    assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(24.0)
+
+
+def test_homing_sets_the_reference_at_the_cam_edge() -> None:
+    sim, m, cfg = make()
+    x = m.axis("X")
+    assert m.mdi("G74 X1").ok
+    record(sim, 8.0)
+    ax = cfg.axis("X")
+    assert x.homed and x.state.name == "STANDSTILL"
+    assert m.k.st[x.slot, L.S_P_ACT] == pytest.approx(ax.eng("kenngr.ref_pos"), abs=1e-3)
+    # NC position ref_pos now means the physical cam edge
+    assert m.k.st[x.slot, L.S_X_MOTOR] == pytest.approx(ax.eng("sim.ref_cam_pos"), abs=1e-3)
+    # software limits are active once homed
+    m.mdi("G00 X400")
+    assert [e.code for e in m.events if e.error] == [Code.SOFTWARE_LIMIT]
+
+
+def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
+    sim, m, cfg = make()
+    x = m.axis("X")
+    m.mdi("G01 X250 F6000")
+    record(sim, 1.0)
+    v = m.k.st[x.slot, L.S_V_CMD]
+    p = m.k.st[x.slot, L.S_P_CMD]
+    m.emergency_stop()
+    record(sim, 0.5)
+    a = cfg.axis("X").eng("getriebe.dynamik.a_emergency")
+    assert m.k.st[x.slot, L.S_P_CMD] - p == pytest.approx(v * v / (2 * a), rel=1e-6)
+    m.mdi("G00 X10")
+    assert m.events[-1].code == Code.CHANNEL_ERROR_STATE
+    m.reset()
+    assert m.mdi("G00 X10").ok
+
+
+def test_plc_acknowledges_after_its_delay_or_times_out_in_fault_mode() -> None:
+    sim, m, _ = make(channel={"plc.m_ack_timeout": 500000})
+    m.mdi("M8")
+    record(sim, 0.1)
+    out, ack = [e for e in m.events if e.code in (Code.EV_M_OUTPUT, Code.EV_M_ACK)]
+    assert round((ack.t_s - out.t_s) * 1000) == 20  # plc.m_ack_delay 20 ms
+    m.plc_mode("manual")
+    m.mdi("M9")
+    record(sim, 0.2)
+    assert m.plc.pending and m.plc_acknowledge(9) == 1
+    m.plc_mode("fault")
+    m.mdi("M10")
+    record(sim, 0.6)
+    timeouts = [e for e in m.events if e.code == Code.PLC_ACK_TIMEOUT]
+    assert len(timeouts) == 1
+
+
+def test_spindle_m3_reaches_speed_with_lag_v_over_kv() -> None:
+    sim, m, cfg = make()
+    s = m.axis("S")
+    assert m.mdi("M3 S1000").ok
+    rec = record(sim, 3.5)
+    a = cfg.axis("S1").eng("getriebe.slope_profil.a_beschl")
+    tr = cfg.axis("S1").eng("getriebe.slope_profil.tr_beschl_zu")
+    t_cmd = np.argmax(rec[:, s.slot, L.R_V_CMD] >= 6000.0 - 1e-9) * 0.001
+    ack_at = next(e.t_s for e in m.events if e.code == Code.EV_M_OUTPUT) - 0.02
+    assert t_cmd - ack_at == pytest.approx(6000.0 / a + tr, abs=0.002)
+    assert rec[-1, s.slot, L.R_LAG] == pytest.approx(6000.0 / 10.0, rel=0.01)  # 600°
+    assert rec[-1, s.slot, L.R_SPEED_REACHED] == 1
+    m.mdi("M5")
+    rec = record(sim, 3.0)
+    assert rec[-1, s.slot, L.R_STOPPED] == 1
+
+
+def test_same_scenario_same_trace() -> None:
+    traces = []
+    for _ in range(2):
+        sim, m, _ = make()
+        m.mdi("G01 X120 F3000")
+        m.mdi("M3 S700")
+        traces.append(record(sim, 1.0))
+    assert np.array_equal(traces[0], traces[1])

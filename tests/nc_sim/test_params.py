@@ -1,0 +1,103 @@
+"""Parameter registry and the native list format."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from nc_sim.machine.config import apply_overrides, demo_machine
+from nc_sim.params import ParamListError, Scope, format_list, parse_list, registry
+from nc_sim.units import AxisKind, Quantity, raw_unit, to_eng
+
+DATA = Path(__file__).parent / "data"
+DOMAIN_IDS = [
+    "P-AXIS-00001",
+    "P-AXIS-00078",
+    "P-AXIS-00079",
+    "P-AXIS-00109",
+    "P-AXIS-00202",
+    "P-AXIS-00212",
+    "P-AXIS-00216",
+    "P-AXIS-00217",
+    "P-AXIS-00220",
+    "P-AXIS-00224",
+    "P-AXIS-00320",
+    "P-AXIS-00455",
+    "P-AXIS-00767",
+    "P-CHAN-00052",
+    "P-CHAN-00056",
+    "P-CHAN-00058",
+    "P-CHAN-00071",
+    "P-CHAN-00097",
+    "P-TOOL-00013",
+]
+
+
+@pytest.mark.parametrize("pid", DOMAIN_IDS)
+def test_every_parameter_domain_names_is_registered(pid: str) -> None:
+    d = registry().by_id(pid)
+    assert d.name and d.title
+
+
+def test_manual_defaults_and_units() -> None:
+    r = registry()
+    kv = r.by_id("P-AXIS-00099")
+    assert (kv.name, kv.default, kv.per_gear) == ("getriebe[i].kv", 1000, True)
+    assert to_eng(kv.quantity, 1000) == pytest.approx(10.0)  # kv 1000 = 10/s [DOMAIN §2]
+    vb = r.by_id("P-AXIS-00212")
+    # 10000 rpm = 60000000 in 0.001 °/s [002 P-AXIS-00212]
+    assert to_eng(vb.quantity, 60_000_000) / 6.0 == pytest.approx(10000.0)
+    assert raw_unit(Quantity.VELOCITY, AxisKind.LINEAR) == "µm/s"
+    assert r.by_id("P-AXIS-00233").effect.value == "restart"  # [004 §3.4]
+
+
+@pytest.mark.parametrize(
+    ("name", "scope"),
+    [("spindle_channel_excerpt.lis", Scope.CHANNEL), ("axis_excerpt.lis", Scope.AXIS)],
+)
+def test_manual_excerpts_round_trip(name: str, scope: Scope) -> None:
+    text = (DATA / name).read_text(encoding="utf-8")
+    plist = parse_list(text, scope)
+    assert plist.text() == text  # lossless, comments and layout kept
+    again = parse_list(format_list(plist.values, scope), scope)
+    assert again.values == plist.values  # canonical writer keeps every value
+
+
+def test_values_are_typed() -> None:
+    plist = parse_list((DATA / "spindle_channel_excerpt.lis").read_text(), Scope.CHANNEL)
+    v = plist.values
+    assert v["spindel[0].m3_synch"] == 0x00020002  # PLC_INFO | MVS_SVS [000 P-CHAN-00045]
+    assert v["spindel[0].m4_synch"] == 0x00020004
+    assert v["spindel[0].m5_synch"] == 0x00020002  # hex form accepted
+    assert v["spindel[1].bezeichnung"] == "S2"
+    assert v["spindel[0].range_table[2].max_speed"] == 3360
+    axis = parse_list((DATA / "axis_excerpt.lis").read_text(), Scope.AXIS).values
+    assert axis["getriebe[0].beschl_kennlinie.b3"] == pytest.approx(-1.92901234e-10)
+    assert axis["kenngr.achs_typ"] == 4
+
+
+def test_bad_lines_are_rejected_with_line_numbers() -> None:
+    text = (
+        "getriebe[0].kv 1000\ngetriebe[0].kv 0\nfoo.bar 1\ngetriebe[7].kv 100\n"
+        "getriebe[0].slope_profil.a_beschl 5000\nkenngr.achs_typ ACHSTYP_BOGUS\n"
+    )
+    with pytest.raises(ParamListError) as exc:
+        parse_list(text, Scope.AXIS)
+    lines = {e.line: str(e) for e in exc.value.errors}
+    assert set(lines) == {2, 3, 4, 5, 6}
+    assert "range 1 … 4294967295 0.01/s" in lines[2] and "P-AXIS-00099" in lines[2]
+    assert "unknown axis parameter 'foo.bar'" in lines[3]
+    assert "index 7" in lines[4]
+    # a_beschl is capped by a_max (default 1000 mm/s²) [002 P-AXIS-00001]
+    assert "1 … 1000 mm/s²" in lines[5] and "P-AXIS-00008" in lines[5]
+
+
+def test_rejected_overrides_change_nothing() -> None:
+    cfg = demo_machine()
+    before = dict(cfg.axis("X").values)
+    with pytest.raises(ParamListError):
+        apply_overrides(
+            cfg, Scope.AXIS, "X", {"getriebe[0].kv": 3000, "getriebe[0].dynamik.a_max": 0}
+        )
+    assert cfg.axis("X").values == before
