@@ -1,0 +1,1 @@
+"""Pydantic models: the one contract for REST, websockets and the OpenAPI schema."""
