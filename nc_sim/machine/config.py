@@ -27,20 +27,21 @@ class AxisConfig:
     def is_spindle(self) -> bool:
         return self.kind is AxisKind.SPINDLE
 
+    def _lookup(self, name: str, gear: int) -> tuple[Quantity, Value]:
+        concrete = concrete_name(_gear_template(name), f"[{gear - 1}]")
+        d = resolve(Scope.AXIS, concrete)
+        return d.quantity, self.values.get(concrete, d.default)
+
     def raw(self, name: str, gear: int = 1) -> Value:
         """Raw value of a parameter (default when unset); `[i]` of gear records = gear - 1."""
-        d = resolve(Scope.AXIS, concrete_name(_gear_template(name), f"[{gear - 1}]"))
-        concrete = concrete_name(_gear_template(name), f"[{gear - 1}]")
-        return self.values.get(concrete, d.default)
+        return self._lookup(name, gear)[1]
 
     def eng(self, name: str, gear: int = 1) -> float:
         """Value in the kernel's engineering unit (mm, °, s based)."""
-        concrete = concrete_name(_gear_template(name), f"[{gear - 1}]")
-        d = resolve(Scope.AXIS, concrete)
-        raw = self.values.get(concrete, d.default)
+        quantity, raw = self._lookup(name, gear)
         if isinstance(raw, str):
             raise NcUsageError(f"{name} is not numeric")
-        return to_eng(d.quantity, float(raw))
+        return to_eng(quantity, float(raw))
 
     def flag(self, name: str, gear: int = 1) -> bool:
         return bool(self.eng(name, gear))
