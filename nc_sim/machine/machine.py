@@ -166,6 +166,9 @@ class Machine:
         return v
 
     def _plan_move(self, ax: Axis, limits: np.ndarray, v_max: float) -> None:
+        if v_max <= 0.0:  # feedhold or override 0 %: brake and hold, keep the target for later
+            self._plan_velocity(ax, 0.0, limits)
+            return
         s = ax.slot
         st = self.k.st
         seg = new_plan()
@@ -628,6 +631,9 @@ class Machine:
     def _plan_done(self, ax: Axis) -> None:
         if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS):
             return
+        away = abs(self.k.st[ax.slot, L.S_P_CMD] - ax.target) > 1e-9
+        if ax.state in (AxisState.MOVING, AxisState.JOG) and away:
+            return  # braked to a hold at override 0 %: the move resumes with the override
         if ax.state is AxisState.HOMING:
             if ax.homing is not HomingPhase.TO_REF:
                 return

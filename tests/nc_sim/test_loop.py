@@ -204,3 +204,35 @@ def test_same_scenario_same_trace() -> None:
         m.mdi("M3 S700")
         traces.append(record(sim, 1.0))
     assert np.array_equal(traces[0], traces[1])
+
+
+def test_feedhold_brakes_with_the_feedhold_set_and_resumes_to_the_target() -> None:
+    # use_drive_curr_limit = 1: a_feedh 4000 mm/s², tr_feedh 10 ms [002 P-CHAN-00097, 00053/81]
+    sim, m, cfg = make()
+    x = m.axis("X")
+    m.mdi("G01 X200 F6000")
+    record(sim, 1.0)
+    v = m.k.st[x.slot, L.S_V_CMD]
+    p = m.k.st[x.slot, L.S_P_CMD]
+    m.hli_write("feedhold", 1)
+    record(sim, 0.5)
+    a = cfg.axis("X").eng("getriebe.slope_profil.a_feedh")
+    tr = cfg.axis("X").eng("getriebe.slope_profil.tr_feedh")
+    assert m.k.st[x.slot, L.S_V_CMD] == 0.0
+    assert m.k.st[x.slot, L.S_P_CMD] - p == pytest.approx(v / 2 * (v / a + tr), rel=1e-6)
+    m.hli_write("feedhold", 0)
+    record(sim, 3.0)
+    assert m.k.st[x.slot, L.S_P_CMD] == 200.0 and x.state.name == "STANDSTILL"
+
+
+def test_override_zero_holds_the_move_and_it_resumes() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.mdi("G01 X100 F3000")
+    record(sim, 0.5)
+    m.hli_write("override", 0)
+    record(sim, 1.0)
+    assert m.k.st[x.slot, L.S_V_CMD] == 0.0 and x.state.name == "MOVING"
+    m.hli_write("override", 1000)
+    record(sim, 3.0)
+    assert m.k.st[x.slot, L.S_P_CMD] == 100.0 and x.state.name == "STANDSTILL"
