@@ -85,6 +85,7 @@ class Machine:
         self._next_id = 1
         self.acks: list[Ack] = []
         self.estop = False
+        self._powered = False  # the PLC has switched the drives on
         self._m_out: dict[int, int] = {}  # cycle an M function was output -> block id
         for ax in self.axes:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
@@ -571,7 +572,7 @@ class Machine:
     def on_cycle(self, cycle: int) -> None:
         """Handle kernel events and timers after the kernel reached `cycle`."""
         self.cycle = cycle
-        if cycle >= self.plc.power_on_cycle and not getattr(self, "_powered", False):
+        if cycle >= self.plc.power_on_cycle and not self._powered:
             self._powered = True
             for ax in self.axes:  # the PLC program switches the drives on at start-up
                 for u in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):

@@ -50,8 +50,8 @@ def test_wrong_multi_gain_changes_the_gain_by_its_factor() -> None:
     lag, v = cruise_lag(400, 200.0, mg=(22860, 1))
     k = v / lag
     assert k == pytest.approx(4.0 * 2.286, rel=0.01)
-    f = (400 / 100) / (v / (v / (4.0 * 2.286)))
-    assert f == pytest.approx(1 / 2.286, rel=0.01)
+    # the manual's correction f = (kv/100) / k brings multi_gain back to 10000 digits per m/min
+    assert 22860 * (400 / 100) / k == pytest.approx(10000, rel=0.01)
 
 
 def test_sign_inversion_runs_away_into_lag_monitoring() -> None:
