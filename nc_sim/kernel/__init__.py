@@ -45,6 +45,10 @@ class Kernel:
         self.n += count
         for s in range(first, self.n):
             self.st[s, L.S_TARGET] = math.nan
+            self.st[s, L.S_OVERRIDE] = 1.0
+            # no loop-opening speeds and no curve cap until the machine sets them
+            for col in (L.P_V_CTRL_LIMIT, L.P_V_SPEED_CTRL, L.P_A_CAP):
+                self.pr[s, col] = math.inf
         return range(first, self.n)
 
     def load_plan(self, slot: int, seg: np.ndarray, n: int, target: float) -> None:

@@ -24,7 +24,9 @@ S_SEG_V0 = 12  # velocity at the start of the current segment
 S_TARGET = 13  # target of a position plan, NaN for a velocity plan
 S_LAG_MODEL = 14  # lag an ideal loop would have (dynamic lag monitoring)
 S_V_GOAL = 15  # speed the spindle is commanded to reach (for speed reached), unit/s
-S_COLS = 16
+S_V_TARGET = 16  # end speed of a curve-controlled speed change (I_CURVE), unit/s
+S_OVERRIDE = 17  # override in force as a fraction (written by the Python layer, recorded)
+S_COLS = 18
 
 # --- pr: float parameters (engineering units) -----------------------------------------------
 P_KV = 0  # 1/s
@@ -46,7 +48,23 @@ P_CAM_POS = 15  # physical position of the reference cam edge
 P_ENC_OFFSET = 16  # NC position = sign·encoder + offset (set by homing)
 P_SPEED_BAND = 17  # speed reached band as a fraction (vb_prozent · 0.001)
 P_V_ZERO = 18  # spindle stopped below this speed (unit/s)
-P_COLS = 19
+P_V_CTRL_LIMIT = 19  # vb_regelgrenze: above it the position loop opens, reference lost
+P_V_SPEED_CTRL = 20  # P-AXIS-00767: changeover to speed control when I_SPEED_CTRL_ARMED
+P_MODULO = 21  # 360 for spindles (zero mark once per revolution), 0 for linear axes
+P_INPOS_WIN = 22  # exact-stop window around the target of a position plan
+P_SENSORLESS = 23  # 1: no encoder, actual values from the command
+P_CURVE_TYPE = 24  # beschl_kennlinie.typ: 0 none, 1 hyperbola, 2 polynomial, 3 asynchronous
+P_N_LIMIT = 25  # n_grenz (°/s)
+P_A_KONST = 26
+P_B1 = 27
+P_B2 = 28
+P_B3 = 29
+P_A_MIN = 30  # floor of every curve
+P_CURVE_A_MAX = 31  # type 3: acceleration below N1
+P_N1 = 32
+P_N2 = 33
+P_A_CAP = 34  # hard cap on curve acceleration (a_max, tool a_max)
+P_COLS = 35
 
 # --- ist: integer state -----------------------------------------------------------------
 I_PLAN_N = 0  # segments in the active plan (0 = none: hold velocity)
@@ -62,7 +80,17 @@ I_LIMITS_ON = 9  # software limits monitored (linear axes once homed)
 I_GEAR = 10  # active gear stage 1..6
 I_SPEED_REACHED = 11
 I_STOPPED = 12
-I_COLS = 13
+I_SPEED_CTRL_ARMED = 13  # M3/M4 programmed above P-AXIS-00767: open the loop when passing it
+I_CURVE = 14  # 1: curve-controlled speed change towards S_V_TARGET in progress
+I_IN_POS = 15  # position plan ended and the actual position is inside the window
+I_MON_ACTIVE = 16  # speed monitoring active (endless rotation with a commanded speed)
+I_MON_INVALID = 17  # speed monitoring invalid (speed still changing, or no valid measurement)
+I_COLS = 18
+
+# I_OPEN_LOOP values
+LOOP_CLOSED = 0
+LOOP_CONTROL_LIMIT = 1  # above vb_regelgrenze: actual values simulated, reference lost
+LOOP_SPEED_CONTROL = 2  # changeover P-AXIS-00767, or a sensorless spindle
 
 # --- events (bits in ist[:, I_EVENTS]) ---------------------------------------------------
 EV_PLAN_DONE = 1
@@ -70,6 +98,8 @@ EV_LAG = 2
 EV_SWLIMIT = 4
 EV_CAM = 8
 EV_SPEED_REACHED = 16
+EV_LOOP = 32  # the kernel opened or closed the position loop
+EV_IN_POS = 64  # exact stop reached
 
 # --- rec: one row per cycle and slot --------------------------------------------------------
 R_P_CMD = 0
@@ -84,4 +114,10 @@ R_SPEED_REACHED = 8
 R_STOPPED = 9
 R_GEAR = 10
 R_DA = 11
-R_COLS = 12
+R_OPEN_LOOP = 12
+R_HOMED = 13
+R_IN_POS = 14
+R_MON_ACTIVE = 15
+R_MON_INVALID = 16
+R_OVERRIDE = 17
+R_COLS = 18

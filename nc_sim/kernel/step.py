@@ -18,25 +18,45 @@ import math
 import numpy as np
 from numba import njit
 
+from nc_sim.kernel.curve import curve_accel
 from nc_sim.kernel.layout import (
     EV_CAM,
+    EV_IN_POS,
     EV_LAG,
+    EV_LOOP,
     EV_PLAN_DONE,
     EV_SPEED_REACHED,
     EV_SWLIMIT,
     I_CAM,
+    I_CURVE,
     I_ENABLED,
     I_EVENTS,
     I_GEAR,
+    I_HOMED,
+    I_IN_POS,
     I_JOB_ERROR,
     I_LIMITS_ON,
+    I_MON_ACTIVE,
+    I_MON_INVALID,
     I_OPEN_LOOP,
     I_PLAN_K,
     I_PLAN_N,
+    I_SPEED_CTRL_ARMED,
     I_SPEED_REACHED,
     I_STATE,
     I_STOPPED,
+    LOOP_CLOSED,
+    LOOP_CONTROL_LIMIT,
+    LOOP_SPEED_CONTROL,
+    P_A_CAP,
+    P_A_KONST,
+    P_A_MIN,
+    P_B1,
+    P_B2,
+    P_B3,
     P_CAM_POS,
+    P_CURVE_A_MAX,
+    P_CURVE_TYPE,
     P_DA_MAX,
     P_DRV_A_MAX,
     P_DRV_GAIN,
@@ -45,21 +65,35 @@ from nc_sim.kernel.layout import (
     P_ENC_OFFSET,
     P_ENC_SIGN,
     P_FF,
+    P_INPOS_WIN,
     P_KV,
     P_LAG_MAX,
     P_MG,
+    P_MODULO,
     P_MOTOR_SIGN,
+    P_N1,
+    P_N2,
+    P_N_LIMIT,
+    P_SENSORLESS,
     P_SIGN_CMD,
     P_SIGN_FB,
     P_SPEED_BAND,
     P_SWE_NEG,
     P_SWE_POS,
+    P_V_CTRL_LIMIT,
+    P_V_SPEED_CTRL,
     P_V_ZERO,
     R_A_CMD,
     R_DA,
     R_GEAR,
+    R_HOMED,
+    R_IN_POS,
     R_JOB_ERROR,
     R_LAG,
+    R_MON_ACTIVE,
+    R_MON_INVALID,
+    R_OPEN_LOOP,
+    R_OVERRIDE,
     R_P_ACT,
     R_P_CMD,
     R_SPEED_REACHED,
@@ -71,6 +105,7 @@ from nc_sim.kernel.layout import (
     S_DA,
     S_LAG,
     S_LAG_MODEL,
+    S_OVERRIDE,
     S_P_ACT,
     S_P_CMD,
     S_SEG_P0,
@@ -82,6 +117,7 @@ from nc_sim.kernel.layout import (
     S_V_CMD,
     S_V_GOAL,
     S_V_MOTOR,
+    S_V_TARGET,
     S_X_MOTOR,
 )
 from nc_sim.profiles.plan import SEG_A0, SEG_J, SEG_SHAPE, SEG_T, seg_eval
@@ -91,9 +127,50 @@ PER_M_MIN = 0.06  # 1 m/min = 1000 mm / 60 s, so digits = u[mm/s] · 0.06 · mul
 
 
 @njit(cache=True)
-def _advance_setpoint(st: np.ndarray, ist: np.ndarray, seg: np.ndarray, s: int, dt: float) -> int:
+def _advance_curve(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> int:
+    """Speed change of an endlessly rotating spindle along its acceleration curve a(n).
+
+    The acceleration is the curve's at the speed at the start of the cycle (never above the
+    cap), so the speed never gains more than a(n)·dt in a cycle; returns EV_PLAN_DONE at the
+    target speed.
+    """
+    v = st[s, S_V_CMD]
+    goal = st[s, S_V_TARGET]
+    a = curve_accel(
+        int(pr[s, P_CURVE_TYPE]),
+        v,
+        pr[s, P_N_LIMIT],
+        pr[s, P_A_KONST],
+        pr[s, P_B1],
+        pr[s, P_B2],
+        pr[s, P_B3],
+        pr[s, P_A_MIN],
+        pr[s, P_CURVE_A_MAX],
+        pr[s, P_N1],
+        pr[s, P_N2],
+    )
+    a = min(a, pr[s, P_A_CAP])
+    step = a * dt
+    dv = min(max(goal - v, -step), step)
+    v_new = v + dv
+    st[s, S_P_CMD] += 0.5 * (v + v_new) * dt
+    st[s, S_V_CMD] = v_new
+    st[s, S_A_CMD] = dv / dt
+    if v_new == goal:
+        ist[s, I_CURVE] = 0
+        st[s, S_A_CMD] = 0.0
+        return EV_PLAN_DONE
+    return 0
+
+
+@njit(cache=True)
+def _advance_setpoint(
+    st: np.ndarray, pr: np.ndarray, ist: np.ndarray, seg: np.ndarray, s: int, dt: float
+) -> int:
     """Move the setpoint of slot s by dt along its plan; returns EV_PLAN_DONE when it ends."""
     n = ist[s, I_PLAN_N]
+    if n == 0 and ist[s, I_CURVE] == 1:
+        return _advance_curve(st, pr, ist, s, dt)
     if n == 0:  # no plan: hold the commanded velocity
         st[s, S_P_CMD] += st[s, S_V_CMD] * dt
         st[s, S_A_CMD] = 0.0
@@ -143,7 +220,7 @@ def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt:
     lag = st[s, S_P_CMD] - st[s, S_P_ACT]
     st[s, S_LAG] = lag
     if ist[s, I_ENABLED] == 1:
-        if ist[s, I_OPEN_LOOP] == 1:
+        if ist[s, I_OPEN_LOOP] != LOOP_CLOSED:  # speed control: the command speed goes out
             u = st[s, S_V_CMD]
         else:
             u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
@@ -174,6 +251,24 @@ def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt:
     # actual speed from the encoder difference, smoothed as a drive's speed filter would be
     alpha = dt / (dt + V_ACT_FILTER_S)
     st[s, S_V_ACT] += ((p_act - p_prev) / dt - st[s, S_V_ACT]) * alpha
+    mode = ist[s, I_OPEN_LOOP]
+    if pr[s, P_SENSORLESS] == 1.0:  # no encoder: the actual values are the command's
+        st[s, S_P_ACT] = st[s, S_P_CMD]
+        st[s, S_V_ACT] = st[s, S_V_CMD]
+    elif mode == LOOP_CONTROL_LIMIT:
+        # no valid measurement: actual position simulated from the lag; the encoder is
+        # re-based onto it, so counting resumes from here when the loop closes
+        p_sim = st[s, S_P_CMD] - st[s, S_LAG_MODEL]
+        pr[s, P_ENC_OFFSET] += p_sim - p_act
+        st[s, S_P_ACT] = p_sim
+        st[s, S_V_ACT] = st[s, S_V_CMD]
+    elif mode == LOOP_SPEED_CONTROL:
+        # the command position is not considered in speed control; keep it where position
+        # control would have it, so the switch-back needs no standstill [001 §2.3]
+        shift = p_act + st[s, S_LAG_MODEL] - st[s, S_P_CMD]
+        st[s, S_P_CMD] += shift
+        st[s, S_SEG_P0] += shift
+        st[s, S_LAG] = st[s, S_LAG_MODEL]
     if ist[s, I_ENABLED] == 0:
         st[s, S_P_CMD] = p_act
         st[s, S_V_CMD] = 0.0
@@ -190,32 +285,77 @@ def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float
     decay = math.exp(-kv * dt)
     goal = (1.0 - pr[s, P_FF]) * st[s, S_V_CMD] / kv if kv > 0.0 else 0.0
     st[s, S_LAG_MODEL] = st[s, S_LAG_MODEL] * decay + goal * (1.0 - decay)
-    if ist[s, I_ENABLED] == 1 and ist[s, I_OPEN_LOOP] == 0:
-        if abs(st[s, S_LAG] - st[s, S_LAG_MODEL]) > pr[s, P_LAG_MAX]:
-            ev |= EV_LAG
-    else:
+    if ist[s, I_ENABLED] == 0:
         st[s, S_LAG_MODEL] = st[s, S_LAG]
+    elif (
+        ist[s, I_OPEN_LOOP] == LOOP_CLOSED
+        and abs(st[s, S_LAG] - st[s, S_LAG_MODEL]) > pr[s, P_LAG_MAX]
+    ):
+        ev |= EV_LAG
     if ist[s, I_LIMITS_ON] == 1:
         p = st[s, S_P_CMD]
         if p < pr[s, P_SWE_NEG] - 1e-9 or p > pr[s, P_SWE_POS] + 1e-9:
             ev |= EV_SWLIMIT
-    cam = 1 if st[s, S_X_MOTOR] >= pr[s, P_CAM_POS] else 0
+    mod = pr[s, P_MODULO]
+    if mod > 0.0:  # spindle: the encoder's zero mark passes once per revolution
+        cam = math.floor((st[s, S_X_MOTOR] - pr[s, P_CAM_POS]) / mod)
+    else:
+        cam = 1 if st[s, S_X_MOTOR] >= pr[s, P_CAM_POS] else 0
     if cam != ist[s, I_CAM]:
         ist[s, I_CAM] = cam
         ev |= EV_CAM
-    v_act = abs(st[s, S_V_ACT])
+    v_meas = st[s, S_V_ACT]
+    v_act = abs(v_meas)
     stopped = 1 if v_act < pr[s, P_V_ZERO] else 0
     ist[s, I_STOPPED] = stopped
     goal_v = st[s, S_V_GOAL]
     reached = 0
     if goal_v != 0.0:
         band = pr[s, P_SPEED_BAND] * abs(goal_v)
-        if abs(st[s, S_V_ACT] - goal_v) <= band:
+        if abs(v_meas - goal_v) <= band:
             reached = 1
     if reached == 1 and ist[s, I_SPEED_REACHED] == 0:
         ev |= EV_SPEED_REACHED
     ist[s, I_SPEED_REACHED] = reached
+    changing = ist[s, I_PLAN_N] > 0 or ist[s, I_CURVE] == 1
+    ist[s, I_MON_INVALID] = (
+        1
+        if ist[s, I_MON_ACTIVE] == 1 and (changing or ist[s, I_OPEN_LOOP] == LOOP_CONTROL_LIMIT)
+        else 0
+    )
+    target = st[s, S_TARGET]
+    in_pos = 0
+    if not changing and not math.isnan(target):
+        in_pos = 1 if abs(target - st[s, S_P_ACT]) <= pr[s, P_INPOS_WIN] else 0
+    if in_pos == 1 and ist[s, I_IN_POS] == 0:
+        ev |= EV_IN_POS
+    ist[s, I_IN_POS] = in_pos
     return ev
+
+
+@njit(cache=True)
+def _loop_mode(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int) -> int:
+    """Open the position loop above the control limit or the changeover speed; close it
+    again below the control limit [000 §2.4.2, 001 §2.3]. Returns EV_LOOP on a change."""
+    mode = ist[s, I_OPEN_LOOP]
+    if pr[s, P_SENSORLESS] == 1.0:
+        ist[s, I_OPEN_LOOP] = LOOP_SPEED_CONTROL
+        return 0 if mode == LOOP_SPEED_CONTROL else EV_LOOP
+    v = abs(st[s, S_V_CMD])
+    new = mode
+    if v > pr[s, P_V_CTRL_LIMIT]:
+        new = LOOP_CONTROL_LIMIT
+    elif mode == LOOP_CONTROL_LIMIT:
+        armed = ist[s, I_SPEED_CTRL_ARMED] == 1 and v > pr[s, P_V_SPEED_CTRL]
+        new = LOOP_SPEED_CONTROL if armed else LOOP_CLOSED
+    elif mode == LOOP_CLOSED and ist[s, I_SPEED_CTRL_ARMED] == 1 and v > pr[s, P_V_SPEED_CTRL]:
+        new = LOOP_SPEED_CONTROL
+    if new == mode:
+        return 0
+    ist[s, I_OPEN_LOOP] = new
+    if new == LOOP_CONTROL_LIMIT:
+        ist[s, I_HOMED] = 0  # the measuring system lost track: reference lost
+    return EV_LOOP
 
 
 @njit(cache=True)
@@ -238,7 +378,8 @@ def run_cycles(
     for c in range(n):
         any_event = 0
         for s in range(slots):
-            ev = _advance_setpoint(st, ist, seg, s, dt)
+            ev = _advance_setpoint(st, pr, ist, seg, s, dt)
+            ev |= _loop_mode(st, pr, ist, s)
             _loop_and_drive(st, pr, ist, s, dt)
             ev |= _monitors(st, pr, ist, s, dt)
             if ev != 0:
@@ -257,6 +398,12 @@ def run_cycles(
                 rec[c, s, R_STOPPED] = ist[s, I_STOPPED]
                 rec[c, s, R_GEAR] = ist[s, I_GEAR]
                 rec[c, s, R_DA] = st[s, S_DA]
+                rec[c, s, R_OPEN_LOOP] = ist[s, I_OPEN_LOOP]
+                rec[c, s, R_HOMED] = ist[s, I_HOMED]
+                rec[c, s, R_IN_POS] = ist[s, I_IN_POS]
+                rec[c, s, R_MON_ACTIVE] = ist[s, I_MON_ACTIVE]
+                rec[c, s, R_MON_INVALID] = ist[s, I_MON_INVALID]
+                rec[c, s, R_OVERRIDE] = st[s, S_OVERRIDE]
         if any_event == 1:
             return c + 1
     return n

@@ -29,6 +29,9 @@ class AxisState(IntEnum):
     HOMING = 3
     ENDLESS = 4  # spindle M3/M4
     STOPPING = 5
+    POSITIONING = 6  # spindle M19
+    OPEN_LOOP = 7  # spindle rotating above the control limit vb_regelgrenze
+    GEAR_CHANGE = 8  # spindle at the change position, waiting for the PLC
     ERROR = 9
 
 
@@ -37,6 +40,16 @@ class HomingPhase(IntEnum):
     TO_CAM = 1
     OFF_CAM = 2
     TO_REF = 3
+    ZERO_MARK = 4  # spindle: rotate until the encoder's zero mark passes
+
+
+@dataclass
+class ToolLimits:
+    """Tool-related spindle dynamics [000 §2.8.5]: °/s, °/s²; None = not limited."""
+
+    vb_min: float = 0.0
+    vb_max: float | None = None
+    a_max: float | None = None
 
 
 @dataclass
@@ -57,6 +70,12 @@ class Axis:
     homed: bool = False
     job_error: int = 0
     block_id: int | None = None  # MDI block this motion belongs to
+    # spindle only
+    override_suppressed: bool = False  # G167 until the next S[REV..]
+    ff_weight: float = 0.0  # G135/G136/G137 feedforward weight 0..1
+    tool: ToolLimits = field(default_factory=ToolLimits)  # in force
+    tool_pending: ToolLimits | None = None  # adopted at the next start from standstill
+    speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767
     units: dict[str, int] = field(
         default_factory=lambda: {
             "override": 1000,
@@ -65,6 +84,7 @@ class Axis:
             "TorquePermission": 0,
             "ReleaseFeedhold": 0,
             "reduced_speed": 0,
+            "spindle_stop_at_program_end": 0,
         }
     )
 
@@ -91,10 +111,12 @@ def push_params(k: Kernel, ax: Axis) -> None:
     """Write the axis' active gear record and loop parameters into the kernel row."""
     c, g, s = ax.cfg, ax.gear, ax.slot
     pr = k.pr
+    spindle = ax.kind is AxisKind.SPINDLE
     pr[s, L.P_KV] = c.eng("getriebe.kv", g)
-    pr[s, L.P_FF] = c.eng("lr_param.ff_weight")
+    pr[s, L.P_FF] = ax.ff_weight if spindle else c.eng("lr_param.ff_weight")
     pr[s, L.P_MG] = c.eng("getriebe.multi_gain_z", g) / c.eng("getriebe.multi_gain_n", g)
-    pr[s, L.P_DRV_GAIN] = c.eng("sim.drive_gain")
+    # the plant's true gain follows the mechanical gear stage
+    pr[s, L.P_DRV_GAIN] = c.eng("sim.getriebe[i].drive_gain", g) or c.eng("sim.drive_gain")
     pr[s, L.P_DA_MAX] = c.eng("lr_hw.da_max")
     pr[s, L.P_SIGN_CMD] = -1.0 if c.flag("lr_hw.vz_stellgr") else 1.0
     pr[s, L.P_SIGN_FB] = -1.0 if c.flag("lr_hw.vz_istw") else 1.0
@@ -105,14 +127,41 @@ def push_params(k: Kernel, ax: Axis) -> None:
     # one increment = wegaufn/wegaufz in 0.1 µm or 0.0001°
     pr[s, L.P_ENC_INC] = c.eng("getriebe.wegaufn", g) / c.eng("getriebe.wegaufz", g)
     pr[s, L.P_LAG_MAX] = c.eng("getriebe.lag_max", g)
-    if ax.kind is AxisKind.SPINDLE:
+    if spindle:
         pr[s, L.P_SWE_NEG], pr[s, L.P_SWE_POS] = -math.inf, math.inf
     else:
         pr[s, L.P_SWE_NEG] = c.eng("kenngr.swe_neg")
         pr[s, L.P_SWE_POS] = c.eng("kenngr.swe_pos")
     pr[s, L.P_CAM_POS] = c.eng("sim.ref_cam_pos")
-    pr[s, L.P_SPEED_BAND] = c.eng("kenngr.vb_prozent") if ax.kind is AxisKind.SPINDLE else 0.1
+    pr[s, L.P_SPEED_BAND] = c.eng("kenngr.vb_prozent") if spindle else 0.1
     pr[s, L.P_V_ZERO] = c.eng("getriebe.vb_min_null", g)
+    pr[s, L.P_INPOS_WIN] = c.eng("kenngr.exact_stop_window")
+    pr[s, L.P_MODULO] = 360.0 if spindle else 0.0
+    pr[s, L.P_V_CTRL_LIMIT] = (
+        (c.eng("getriebe.vb_regelgrenze", g) or math.inf) if spindle else math.inf
+    )
+    pr[s, L.P_V_SPEED_CTRL] = (
+        c.eng("antr.sai_op_mode_change.v_velocity_control_on") if spindle else math.inf
+    )
+    pr[s, L.P_SENSORLESS] = float(spindle and c.flag("sim.sensorless"))
+    curve = "getriebe.beschl_kennlinie."
+    pr[s, L.P_CURVE_TYPE] = c.raw(curve + "typ", g) if spindle else 0
+    for col, name in (
+        (L.P_N_LIMIT, "n_grenz"),
+        (L.P_A_KONST, "a_konst"),
+        (L.P_B1, "b1"),
+        (L.P_B2, "b2"),
+        (L.P_B3, "b3"),
+        (L.P_A_MIN, "a_min"),
+        (L.P_CURVE_A_MAX, "a_max"),
+        (L.P_N1, "n1"),
+        (L.P_N2, "n2"),
+    ):
+        pr[s, col] = c.eng(curve + name, g)
+    a_cap = c.eng("getriebe.dynamik.a_max", g)
+    if ax.tool.a_max is not None:
+        a_cap = min(a_cap, ax.tool.a_max)
+    pr[s, L.P_A_CAP] = a_cap
     k.ist[s, L.I_GEAR] = g
 
 
@@ -125,4 +174,6 @@ def power_on(k: Kernel, ax: Axis) -> None:
     counts = round(k.st[s, L.S_X_MOTOR] / inc) * inc if inc > 0 else k.st[s, L.S_X_MOTOR]
     p = k.pr[s, L.P_ENC_SIGN] * k.pr[s, L.P_SIGN_FB] * counts
     k.st[s, L.S_P_ACT] = k.st[s, L.S_P_CMD] = p
-    k.ist[s, L.I_CAM] = int(k.st[s, L.S_X_MOTOR] >= k.pr[s, L.P_CAM_POS])
+    x, cam, mod = k.st[s, L.S_X_MOTOR], k.pr[s, L.P_CAM_POS], k.pr[s, L.P_MODULO]
+    k.ist[s, L.I_CAM] = math.floor((x - cam) / mod) if mod > 0 else int(x >= cam)
+    k.st[s, L.S_OVERRIDE] = 1.0

@@ -1266,6 +1266,18 @@ DEFINITIONS: list[ParamDef] = [
         source="inbetrieb",
         title="Spindle has no encoder",
     ),
+    _p(
+        "INB-SIM-0009",
+        "sim.getriebe[i].drive_gain",
+        A,
+        R64,
+        Quantity.DA_DIGITS,
+        0,
+        0,
+        1e12,
+        source="inbetrieb",
+        title="True digits of the drive in this gear stage (0 = sim.drive_gain): the gear ratio",
+    ),
     # --- channel ---------------------------------------------------------------------------
     _p(
         "P-CHAN-00056",

@@ -1,0 +1,56 @@
+"""Speed-dependent spindle acceleration a(n) [000 §2.8.4, DOMAIN §4.1], speeds n in °/s.
+
+    typ 1 hyperbola:   a = b1 / (1 + b2·ν²·(1 + b3·ν²)),  ν = n / n_limit   (n > n_limit)
+    typ 2 polynomial:  a = b3·Δn³ + b2·Δn² + b1·Δn + a_konst,  Δn = n - n_limit
+    typ 3 asynchronous: a_max below N1, a_max·N1/n up to N2, a_max·N1/n·N2/n above
+Below n_limit types 1 and 2 give a_konst; every type is floored at a_min.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+CURVE_NONE = 0
+CURVE_HYPERBOLA = 1
+CURVE_POLYNOMIAL = 2
+CURVE_ASYNC = 3
+
+
+@njit(cache=True)
+def curve_accel(
+    typ: int,
+    n: float,
+    n_limit: float,
+    a_konst: float,
+    b1: float,
+    b2: float,
+    b3: float,
+    a_min: float,
+    a_max3: float,
+    n1: float,
+    n2: float,
+) -> float:
+    """Acceleration (°/s²) the curve allows at speed |n| (°/s)."""
+    n = abs(n)
+    if typ == CURVE_HYPERBOLA:
+        if n <= n_limit or n_limit <= 0.0:
+            a = a_konst
+        else:
+            nu2 = (n / n_limit) ** 2
+            a = b1 / (1.0 + b2 * nu2 * (1.0 + b3 * nu2))
+    elif typ == CURVE_POLYNOMIAL:
+        if n <= n_limit:
+            a = a_konst
+        else:
+            dn = n - n_limit
+            a = ((b3 * dn + b2) * dn + b1) * dn + a_konst
+    elif typ == CURVE_ASYNC:
+        if n <= n1:
+            a = a_max3
+        elif n <= n2 or n2 <= 0.0:
+            a = a_max3 * n1 / n
+        else:
+            a = a_max3 * n1 / n * n2 / n
+    else:
+        a = a_konst
+    return max(a, a_min)
