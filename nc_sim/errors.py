@@ -29,7 +29,12 @@ class Code(IntEnum):
     NOT_HOMED = 90013
     FEED_MISSING = 90014
     CHANNEL_ERROR_STATE = 90015
-    SPINDLE_NOT_IMPLEMENTED = 90016
+    GEAR_NO_RANGE = 90017
+    GEAR_WRONG_STAGE = 90018
+    GEAR_NOT_PROGRAMMED = 90019
+    GEAR_CHANGE_OFF = 90020
+    SPINDLE_NOT_HOMED = 90021
+    NOT_A_SPINDLE = 90022
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -40,6 +45,13 @@ class Code(IntEnum):
     EV_HLI = 16
     EV_PLC_MODE = 17
     EV_MOTION_DONE = 18
+    EV_LOOP_OPENED = 19
+    EV_LOOP_CLOSED = 20
+    EV_REFERENCE_LOST = 21
+    EV_GEAR_CHANGED = 22
+    EV_IN_POSITION = 23
+    EV_TOOL_DYNAMICS = 24
+    EV_PROGRAM_END = 25
 
 
 MESSAGES: dict[Code, str] = {
@@ -60,7 +72,14 @@ MESSAGES: dict[Code, str] = {
     Code.NOT_HOMED: "axis not homed",
     Code.FEED_MISSING: "G01 needs a feed F > 0",
     Code.CHANNEL_ERROR_STATE: "channel in error state: reset first",
-    Code.SPINDLE_NOT_IMPLEMENTED: "spindle function parsed but not yet executed",
+    Code.GEAR_NO_RANGE: "speed too high / no gear stage holds the speed",
+    Code.GEAR_WRONG_STAGE: "wrong gear stage: S is outside the programmed M40-M45 range",
+    Code.GEAR_NOT_PROGRAMMED: "no gear stage programmed: S is outside the current range",
+    Code.GEAR_CHANGE_OFF: "gear change M40-M45 is not enabled (P-CHAN-00052) or not the "
+    "main spindle",
+    Code.SPINDLE_NOT_HOMED: "spindle not homed and automatic homing is off "
+    "(ACHSMODE_KEINE_AUTO_RPF): home with G74 first",
+    Code.NOT_A_SPINDLE: "spindle command to an axis that is not a spindle",
 }
 
 

@@ -55,6 +55,7 @@ class Block:
     gear: int | None = None  # 40..45
     spindles: list[SpindleCmd] = field(default_factory=list)
     slope_type: int | None = None
+    tool: int | None = None  # D word: tool dynamic data [000 §2.8.5]
     g_other: list[int] = field(default_factory=list)
 
 
@@ -222,6 +223,8 @@ def _word(
         block.feed = value
     elif letter == "S":
         main.speed_rpm = value
+    elif letter == "D":
+        block.tool = _int_word(letter, value, text, col)
     elif letter in axes:
         if letter in block.axes:
             raise BlockError(f"axis {letter} twice in one block", col)

@@ -56,6 +56,7 @@ class Kernel:
         self.seg[slot, :n] = seg[:n]
         self.ist[slot, L.I_PLAN_N] = n
         self.ist[slot, L.I_PLAN_K] = 0
+        self.ist[slot, L.I_CURVE] = 0
         self.st[slot, L.S_SEG_TAU] = 0.0
         self.st[slot, L.S_SEG_P0] = self.st[slot, L.S_P_CMD]
         self.st[slot, L.S_SEG_V0] = self.st[slot, L.S_V_CMD]
@@ -63,6 +64,13 @@ class Kernel:
         if n == 0 and not math.isnan(target):
             self.st[slot, L.S_P_CMD] = target
             self.st[slot, L.S_V_CMD] = 0.0
+
+    def load_curve(self, slot: int, v_target: float) -> None:
+        """Start a curve-controlled speed change (pr P_CURVE_*) towards v_target."""
+        self.ist[slot, L.I_PLAN_N] = 0
+        self.ist[slot, L.I_CURVE] = 1
+        self.st[slot, L.S_V_TARGET] = v_target
+        self.st[slot, L.S_TARGET] = math.nan
 
     def run(self, n: int, rec: np.ndarray | None = None) -> int:
         """Advance all slots by up to n cycles (fewer when an event is raised)."""

@@ -43,6 +43,28 @@ class HomingPhase(IntEnum):
     ZERO_MARK = 4  # spindle: rotate until the encoder's zero mark passes
 
 
+class TaskPhase(IntEnum):
+    DECEL = 1  # down to the switch-back speed before position control resumes
+    SEEK_MARK = 2  # rotating until the zero mark passes (homing, automatic homing)
+    POSITION = 3  # position plan to the target, then exact stop
+    STOP = 4  # braking to standstill (gear change without positioning)
+    WAIT_PLC = 5  # gear change: M40-M45 output, waiting for the PLC
+
+
+@dataclass
+class SpindleTask:
+    """A spindle sequence in progress: M19, G74 or a gear change."""
+
+    kind: str  # "M19", "G74", "gear"
+    pos_deg: float  # target angle 0..360
+    direction: int | None  # +1 M3, -1 M4, None = shortest way
+    speed: float  # positioning speed before override (°/s)
+    phase: TaskPhase = TaskPhase.DECEL
+    gear: int = 0  # gear change: the new stage
+    resume: tuple[int, float] | None = None  # gear change: (M3|M4, rpm) to run afterwards
+    latched: bool = False  # G74: the zero mark has been seen
+
+
 @dataclass
 class ToolLimits:
     """Tool-related spindle dynamics [000 §2.8.5]: °/s, °/s²; None = not limited."""
@@ -76,6 +98,8 @@ class Axis:
     tool: ToolLimits = field(default_factory=ToolLimits)  # in force
     tool_pending: ToolLimits | None = None  # adopted at the next start from standstill
     speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767
+    ff_set: float = 1.0  # weighting for G135, set by G136
+    task: SpindleTask | None = None
     units: dict[str, int] = field(
         default_factory=lambda: {
             "override": 1000,

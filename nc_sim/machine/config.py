@@ -63,6 +63,7 @@ class MachineConfig:
     name: str
     channel: dict[str, Value]
     axes: list[AxisConfig]
+    tools: dict[str, Value] = field(default_factory=dict)  # wz[i].* tool dynamic data
 
     def channel_raw(self, name: str) -> Value:
         d = resolve(Scope.CHANNEL, name)
@@ -71,6 +72,12 @@ class MachineConfig:
     def channel_eng(self, name: str) -> float:
         d = resolve(Scope.CHANNEL, name)
         raw = self.channel.get(name, d.default)
+        return to_eng(d.quantity, float(raw)) if not isinstance(raw, str) else 0.0
+
+    def tool_eng(self, name: str) -> float:
+        """Tool parameter `wz[i].*` in engineering units (default when unset)."""
+        d = resolve(Scope.TOOL, name)
+        raw = self.tools.get(name, d.default)
         return to_eng(d.quantity, float(raw)) if not isinstance(raw, str) else 0.0
 
     @property
@@ -107,9 +114,10 @@ def _axis_numbers(channel: Mapping[str, Value]) -> list[tuple[str, int, bool]]:
 
 
 def machine_from_lists(
-    name: str, channel_text: str, axis_texts: Mapping[int, str]
+    name: str, channel_text: str, axis_texts: Mapping[int, str], tool_text: str = ""
 ) -> MachineConfig:
-    """Build a machine from a channel list and axis lists keyed by logical axis number.
+    """Build a machine from a channel list, axis lists keyed by logical axis number and an
+    optional tool list (dynamic data wz[i].*).
 
     Raises ParamListError (with line numbers) for a bad list, NcUsageError for a channel that
     names an axis with no list.
@@ -126,7 +134,8 @@ def machine_from_lists(
         if spindle and axis_kind_of(values) is not AxisKind.SPINDLE:
             raise NcUsageError(f"{ax_name}: spindel[] entry needs kenngr.achs_typ ACHSTYP_SPINDEL")
         axes.append(AxisConfig(ax_name, values))
-    return MachineConfig(name, channel, axes)
+    tools = parse_list(tool_text, Scope.TOOL).values if tool_text else {}
+    return MachineConfig(name, channel, axes, tools)
 
 
 def demo_lists() -> tuple[str, dict[int, str]]:
@@ -143,7 +152,8 @@ def demo_lists() -> tuple[str, dict[int, str]]:
 def demo_machine() -> MachineConfig:
     """The demo lathe: main spindle S1 with six gear ranges, linear axes X and Z."""
     channel, axes = demo_lists()
-    return machine_from_lists("demo", channel, axes)
+    tools = (resources.files("nc_sim.machine") / "demo" / "tools.lis").read_text(encoding="utf-8")
+    return machine_from_lists("demo", channel, axes, tools)
 
 
 def apply_overrides(

@@ -17,7 +17,7 @@ from nc_sim.blocks import Block, BlockError, parse_block
 from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import Axis, AxisState, HomingPhase, power_on, push_params
+from nc_sim.machine.axis import Axis, AxisState, HomingPhase, ToolLimits, power_on, push_params
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.dynamics import (
     Motion,
@@ -26,9 +26,10 @@ from nc_sim.machine.dynamics import (
     motion_limits,
     velocity_limit,
 )
+from nc_sim.machine.spindle import SpindleControl
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.units import RPM_TO_DEG_S, AxisKind
+from nc_sim.units import AxisKind
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
 AXIS_UNITS = (
@@ -86,7 +87,9 @@ class Machine:
         self.acks: list[Ack] = []
         self.estop = False
         self._powered = False  # the PLC has switched the drives on
-        self._m_out: dict[int, int] = {}  # cycle an M function was output -> block id
+        self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
+        self._m_gear: dict[int, Axis] = {}  # ... -> spindle waiting for its gear change
+        self.sp = SpindleControl(self)
         for ax in self.axes:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
@@ -144,12 +147,9 @@ class Machine:
     def _override(self, ax: Axis, motion: Motion | None) -> float:
         """Override in force as a fraction: axis override for spindles, channel override else."""
         if ax.kind is AxisKind.SPINDLE:
-            cap = ax.cfg.eng("kenngr.max_vb_override")
-            ovr = ax.units["override"] * 1e-3 if ax.units["override_valid"] else 1.0
-        else:
-            cap = self.cfg.channel_eng("max_vb_override")
-            ovr = self.channel_units["override"] * 1e-3
-        return min(ovr, cap)
+            return self.sp.override(ax)
+        cap = self.cfg.channel_eng("max_vb_override")
+        return min(self.channel_units["override"] * 1e-3, cap)
 
     def _limits(self, ax: Axis, motion: Motion) -> np.ndarray:
         reduced = bool(self.channel_units["reduced_acceleration"])
@@ -194,15 +194,12 @@ class Machine:
 
     def _replan(self, ax: Axis) -> None:
         """Re-plan the active motion from the current state (override, feedhold release)."""
+        if ax.kind is AxisKind.SPINDLE:
+            self.sp.replan(ax)
+            return
         if ax.motion is None or ax.state in (AxisState.STOPPING, AxisState.ERROR):
             return
-        if ax.hold or (self.channel_units["feedhold"] and ax.kind is not AxisKind.SPINDLE):
-            return
-        if ax.state is AxisState.ENDLESS:
-            v_max = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear)
-            v = max(-v_max, min(v_max, ax.speed_prog * self._override(ax, ax.motion)))
-            self._plan_velocity(ax, v, self._limits(ax, ax.motion))
-            self.k.st[ax.slot, L.S_V_GOAL] = v
+        if ax.hold or self.channel_units["feedhold"]:
             return
         self._plan_move(ax, self._limits(ax, ax.motion), self._vmax(ax, ax.motion))
 
@@ -295,6 +292,8 @@ class Machine:
     def home(self, axis: str, block_id: int | None = None) -> JobError | None:
         """CNC-controlled homing G74: to the cam, off it slowly, zero at the edge, to ref_pos."""
         ax = self.axis(axis)
+        if ax.kind is AxisKind.SPINDLE:
+            return self.sp.home(ax, block_id)
         err = self._check_motion(ax)
         if err:
             return err
@@ -340,29 +339,76 @@ class Machine:
         self._plan_move(ax, self._limits(ax, Motion.HOMING), ax.feed)
 
     def _stop(self, ax: Axis, limits: np.ndarray) -> None:
+        if ax.kind is AxisKind.SPINDLE:
+            self.sp.stop(ax)
+            return
         self._plan_velocity(ax, 0.0, limits)
         self.k.st[ax.slot, L.S_V_GOAL] = 0.0
         self._set_state(ax, AxisState.STOPPING)
 
-    # --- commands: spindle (endless rotation; the full spindle is the next issue) ---------
-    def spindle(self, name: str, m: int, speed_rpm: float | None = None) -> JobError | None:
-        """M3/M4 with speed (rpm) or M5, with a_beschl/a_brems of the active gear."""
+    # --- commands: spindle [000] ---------------------------------------------------------
+    def _spindle(self, name: str) -> Axis:
         ax = self.axis(name)
         if ax.kind is not AxisKind.SPINDLE:
             raise NcUsageError(f"{name} is not a spindle")
-        if m == 5:
-            if ax.state in (AxisState.ENDLESS, AxisState.STOPPING):
-                self._stop(ax, self._limits(ax, Motion.FEED))
-            return None
-        err = self._check_motion(ax)
-        if err:
-            return err
-        rpm = speed_rpm if speed_rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
-        ax.speed_prog = (1.0 if m == 3 else -1.0) * rpm * RPM_TO_DEG_S
-        ax.motion, ax.slope = Motion.FEED, 1
-        self._set_state(ax, AxisState.ENDLESS)
-        self._replan(ax)
+        return ax
+
+    def spindle_index(self, ax: Axis) -> int | None:
+        """Index i of spindel[i] in the channel list for this spindle."""
+        for i in range(6):
+            if self.cfg.channel.get(f"spindel[{i}].bezeichnung") == ax.name:
+                return i
         return None
+
+    def spindle(
+        self, name: str, m: int, speed_rpm: float | None = None, gear: int | None = None
+    ) -> JobError | None:
+        """M3/M4 with speed (rpm) and optional gear stage M40-M45, or M5."""
+        ax = self._spindle(name)
+        if m == 5:
+            self.sp.stop(ax)
+            return None
+        return self.sp.endless(ax, m, speed_rpm, gear)
+
+    def spindle_position(
+        self,
+        name: str,
+        pos_deg: float,
+        direction: int | None = None,
+        speed_rpm: float | None = None,
+    ) -> JobError | None:
+        """M19 S.POS=pos_deg with M3 (+1) / M4 (-1) or the shortest way (None)."""
+        return self.sp.position(self._spindle(name), pos_deg, direction, speed_rpm)
+
+    def spindle_gear(self, name: str, m: int) -> JobError | None:
+        """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
+        if not 40 <= m <= 45:
+            raise NcUsageError("gear stage M40..M45")
+        return self.sp.gear_only(self._spindle(name), m - 39, None)
+
+    def tool(self, number: int) -> None:
+        """D word: the tool's dynamic limits go to its spindle at the next start [000 §2.8.5]."""
+        pre = f"wz[{number}]."
+        nr = int(self.cfg.tools.get(pre + "log_ax_nr_spdl", 0))
+        self.log(Code.EV_TOOL_DYNAMICS, "", f"D{number}")
+        if nr == 0:  # the tool carries no spindle dynamics
+            return
+        target = None
+        for ax in self.axes:
+            if ax.kind is AxisKind.SPINDLE and int(ax.cfg.raw("kopf.achs_nr")) == nr:
+                target = ax
+        if target is None:
+            return
+        vb_max = self.cfg.tool_eng(pre + "vb_max")
+        a_max = self.cfg.tool_eng(pre + "a_max")
+        target.tool_pending = ToolLimits(self.cfg.tool_eng(pre + "vb_min"), vb_max, a_max)
+
+    def program_end(self) -> None:
+        """M30/M2: spindles stop only with the HLI flag "spindle stop at program end"."""
+        self.log(Code.EV_PROGRAM_END)
+        for ax in self.axes:
+            if ax.kind is AxisKind.SPINDLE and ax.units["spindle_stop_at_program_end"]:
+                self.sp.stop(ax)
 
     # --- HLI ----------------------------------------------------------------------------
     def hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
@@ -417,18 +463,25 @@ class Machine:
         self.k.ist[ax.slot, L.I_ENABLED] = int(ok)
         if not ok and ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
             self.k.ist[ax.slot, L.I_PLAN_N] = 0
+            self.k.ist[ax.slot, L.I_CURVE] = 0
+            self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
             self._abort_block(ax)
+            ax.task = None
             self._fail(ax, Code.ENABLES_LOST, f"{ax.name}: {', '.join(ax.missing_enables())} off")
             self._set_state(ax, AxisState.ERROR)
 
     # --- reset, emergency stop ----------------------------------------------------------
     def _reset_axis(self, ax: Axis) -> None:
         moving = ax.state not in (AxisState.STANDSTILL, AxisState.ERROR)
-        keep = ax.kind is AxisKind.SPINDLE and ax.cfg.flag("kenngr.spdl_no_stop_at_reset")
+        spindle = ax.kind is AxisKind.SPINDLE
+        keep = spindle and ax.cfg.flag("kenngr.spdl_no_stop_at_reset")
         ax.job_error = 0
         self.k.ist[ax.slot, L.I_JOB_ERROR] = 0
-        ax.hold, ax.homing, ax.block_id = False, HomingPhase.NONE, None
-        if moving and not (keep and ax.state is AxisState.ENDLESS):
+        ax.hold, ax.homing, ax.block_id, ax.task = False, HomingPhase.NONE, None, None
+        if spindle:
+            self.sp.switch_back(ax)  # a CNC reset returns to position control [001 §2.3]
+        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
+        if moving and not (keep and rotating):
             self._stop(ax, self._limits(ax, ax.motion or Motion.FEED))
         elif ax.state is AxisState.ERROR:
             self._set_state(ax, AxisState.STANDSTILL)
@@ -438,6 +491,7 @@ class Machine:
         self.estop = False
         self._queue.clear()
         self._m_out.clear()
+        self._m_gear.clear()
         self.plc.clear()
         for ax in self.axes:
             self._reset_axis(ax)
@@ -451,7 +505,8 @@ class Machine:
             if ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
                 self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
                 self.k.st[ax.slot, L.S_V_GOAL] = 0.0
-            ax.motion, ax.hold, ax.homing = None, False, HomingPhase.NONE
+            ax.motion, ax.hold, ax.homing, ax.task = None, False, HomingPhase.NONE, None
+            self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
             self._set_state(ax, AxisState.ERROR)
             ax.job_error = int(Code.EMERGENCY_STOP)
             self.k.ist[ax.slot, L.I_JOB_ERROR] = ax.job_error
@@ -476,6 +531,9 @@ class Machine:
         block = self._m_out.pop(out_cycle, None)
         if block is not None and self._queue and self._queue[0].id == block:
             self._queue[0].waiting_m -= 1
+        spindle = self._m_gear.pop(out_cycle, None)
+        if spindle is not None:
+            self.sp.gear_acknowledged(spindle)
 
     # --- MDI and the external command channel -------------------------------------------
     def mdi(self, text: str) -> Ack:
@@ -522,22 +580,31 @@ class Machine:
         assert b is not None
         if b.slope_type is not None:
             self.slope = b.slope_type
+        if b.tool is not None:
+            self.tool(b.tool)
         for m in b.m_functions:
+            if m in (2, 30):
+                self.program_end()
             self._m_output(m, "", run)
+        gear = b.gear - 39 if b.gear is not None else None
+        main_done = False
         for sc in b.spindles:
             ax = self.axis(sc.spindle)
-            if sc.m in (3, 4, 5):
-                err = self.spindle(ax.name, sc.m, sc.speed_rpm)
-                if err:
-                    return False
-                if self._synch_plc(ax, sc.m):
-                    self._m_output(sc.m, ax.name, run)
-            elif sc.m is not None or sc.g or sc.pos_deg is not None:
-                self._fail(ax, Code.SPINDLE_NOT_IMPLEMENTED, f"'{run.text}'")
+            is_main = ax.name == self.main_spindle
+            main_done |= is_main
+            if ax.kind is not AxisKind.SPINDLE:
+                self._fail(ax, Code.NOT_A_SPINDLE, f"'{run.text}'")
                 return False
-        if b.gear is not None:
-            self._fail(None, Code.SPINDLE_NOT_IMPLEMENTED, f"M{b.gear} in '{run.text}'")
-            return False
+            if not self.sp.block(ax, sc, gear if is_main else None, run.id):
+                return False
+            if sc.m is not None and self._synch_plc(ax, sc.m):
+                self._m_output(sc.m, ax.name, run)
+        if gear is not None and not main_done:
+            if self.main_spindle is None:
+                self._fail(None, Code.GEAR_CHANGE_OFF, f"'{run.text}'")
+                return False
+            if self.sp.gear_only(self.axis(self.main_spindle), gear, run.id):
+                return False
         for name in sorted(b.homing, key=lambda n: b.homing[n]):
             if self.home(name, run.id):
                 return False
@@ -552,21 +619,25 @@ class Machine:
         return True
 
     def _synch_plc(self, ax: Axis, m: int) -> bool:
-        i = next(
-            (i for i in range(6) if self.cfg.channel.get(f"spindel[{i}].bezeichnung") == ax.name),
-            None,
-        )
-        if i is None:
+        """M3/M4/M5/M19 with the PLC_INFO bit are output to the PLC [000 §2.5]."""
+        i = self.spindle_index(ax)
+        if i is None or m not in (3, 4, 5, 19):
             return False
         return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & 0x20000)
 
-    def _m_output(self, m: int, axis: str, run: _BlockRun) -> None:
+    def _m_output(self, m: int, axis: str, run: _BlockRun | None) -> int:
         p = self.plc.output(m, axis, self.cycle)
         while p.out_cycle in self._m_out:  # one key per output
             p.out_cycle += 1
-        self._m_out[p.out_cycle] = run.id
-        run.waiting_m += 1
+        self._m_out[p.out_cycle] = run.id if run else None
+        if run:
+            run.waiting_m += 1
         self.log(Code.EV_M_OUTPUT, axis, f"M{m} output to the PLC")
+        return p.out_cycle
+
+    def _m_output_gear(self, m: int, ax: Axis) -> None:
+        """M40-M45 of a gear change; its acknowledgement continues the change."""
+        self._m_gear[self._m_output(m, ax.name, None)] = ax
 
     # --- the cycle boundary --------------------------------------------------------------
     def on_cycle(self, cycle: int) -> None:
@@ -584,11 +655,14 @@ class Machine:
         for out, bid in list(self._m_out.items()):
             if cycle - out >= timeout:
                 del self._m_out[out]
+                spindle = self._m_gear.pop(out, None)
                 self._fail(
-                    None,
+                    spindle,
                     Code.PLC_ACK_TIMEOUT,
                     f"no acknowledgement after {timeout * self.k.cycle_s:g} s",
                 )
+                if spindle is not None:
+                    self.sp.gear_timeout(spindle)
                 if self._queue and self._queue[0].id == bid:
                     self._queue.popleft()
         for ax in self.axes:
@@ -608,15 +682,18 @@ class Machine:
             self._abort_block(ax)
             self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
             self._set_state(ax, AxisState.ERROR)
-        if ev & L.EV_CAM and ax.state is AxisState.HOMING:
+        if ax.kind is AxisKind.SPINDLE:
+            if ev & L.EV_SPEED_REACHED:
+                self.log(Code.EV_SPEED_REACHED, ax.name)
+            if self.sp.on_events(ax, ev):
+                return
+        elif ev & L.EV_CAM and ax.state is AxisState.HOMING:
             cam = bool(self.k.ist[ax.slot, L.I_CAM])
             d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
             if ax.homing is HomingPhase.TO_CAM and cam == (d > 0):
                 self._homing_off_cam(ax)
             elif ax.homing is HomingPhase.OFF_CAM and cam != (d > 0):
                 self._homing_edge(ax)
-        if ev & L.EV_SPEED_REACHED and ax.kind is AxisKind.SPINDLE:
-            self.log(Code.EV_SPEED_REACHED, ax.name)
         if ev & L.EV_PLAN_DONE:
             self._plan_done(ax)
 
@@ -626,11 +703,12 @@ class Machine:
         self.k.ist[ax.slot, L.I_ENABLED] = 0
         ax.units["TorquePermission"] = 0
         self._abort_block(ax)
-        ax.motion = None
+        ax.motion, ax.task = None, None
+        self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
         self._set_state(ax, AxisState.ERROR)
 
     def _plan_done(self, ax: Axis) -> None:
-        if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS):
+        if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS, AxisState.OPEN_LOOP):
             return
         away = abs(self.k.st[ax.slot, L.S_P_CMD] - ax.target) > 1e-9
         if ax.state in (AxisState.MOVING, AxisState.JOG) and away:
@@ -640,6 +718,9 @@ class Machine:
                 return
             ax.homing = HomingPhase.NONE
             self.log(Code.EV_HOMED, ax.name, f"{ax.name} homed")
+        if ax.state is AxisState.STANDSTILL:
+            return
         self._set_state(ax, AxisState.STANDSTILL)
+        self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
         ax.motion, ax.block_id = None, None
         self.log(Code.EV_MOTION_DONE, ax.name)

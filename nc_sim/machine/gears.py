@@ -1,0 +1,74 @@
+"""Gear stage selection for the main spindle [000 §2.8.2, DOMAIN §4.2].
+
+Gear stage g (1..6) is M(39+g), range_table[g-1] and gear record getriebe[g-1].
+Pure functions: the machine turns the result into a change sequence or a job error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from nc_sim.errors import Code
+
+
+@dataclass(frozen=True)
+class GearRange:
+    min_rpm: float
+    max_rpm: float
+
+    @property
+    def used(self) -> bool:
+        return self.max_rpm > 0
+
+    def holds(self, rpm: float) -> bool:
+        return self.used and self.min_rpm <= rpm <= self.max_rpm
+
+
+@dataclass(frozen=True)
+class GearChoice:
+    """The gear stage to run S in, or the error that refuses it."""
+
+    gear: int | None
+    error: Code | None = None
+    detail: str = ""
+
+
+def m_of(gear: int) -> int:
+    return 39 + gear
+
+
+def select_gear(
+    table: list[GearRange],
+    current: int,
+    rpm: float,
+    automatic: bool,
+    range_way: int,
+    programmed: int | None,
+) -> GearChoice:
+    """Gear stage for speed `rpm` (absolute) given the current stage and an optional M4x.
+
+    Automatic: keep the current stage when it holds S, else search bottom-up (range_way 0)
+    or top-down for the first holding range; a programmed M4x is checked against S.
+    Manual: M4x must come with S inside its range; S alone must fit the current stage.
+    """
+    rpm = abs(rpm)
+    if programmed is not None:
+        r = table[programmed - 1]
+        if not r.holds(rpm):
+            return GearChoice(
+                None,
+                Code.GEAR_WRONG_STAGE,
+                f"S{rpm:g} is outside M{m_of(programmed)} ({r.min_rpm:g}-{r.max_rpm:g} rpm)",
+            )
+        return GearChoice(programmed)
+    if table[current - 1].holds(rpm) or rpm == 0:
+        return GearChoice(current)
+    if not automatic:
+        holding = [g for g in range(1, 7) if table[g - 1].holds(rpm)]
+        hint = f" (M{m_of(holding[0])})" if holding else ""
+        return GearChoice(None, Code.GEAR_NOT_PROGRAMMED, f"S{rpm:g} needs a gear stage{hint}")
+    order = range(1, 7) if range_way == 0 else range(6, 0, -1)
+    for g in order:
+        if table[g - 1].holds(rpm):
+            return GearChoice(g)
+    return GearChoice(None, Code.GEAR_NO_RANGE, f"S{rpm:g}: no gear stage holds this speed")

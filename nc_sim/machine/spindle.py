@@ -1,0 +1,557 @@
+"""Spindle behaviours [000, 001, DOMAIN §4]: M3/M4/M5, M19, G74, gear change M40-M45.
+
+Endless rotation runs on the planner (a_beschl/a_brems) or on the speed-dependent curve.
+M19, G74 and the gear change are sequences (`SpindleTask`) advanced by kernel events:
+
+    back to position control (decelerate to P-AXIS-00768 if the loop is open)
+    -> zero mark (homing, or automatic homing before M19 on analogue drives)
+    -> position plan to the target in the required direction -> exact stop
+    -> gear change only: M4x to the PLC, its acknowledgement, the new gear record, resume
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from nc_sim.blocks import SpindleCmd
+from nc_sim.errors import Code, JobError
+from nc_sim.kernel import layout as L
+from nc_sim.machine.axis import (
+    Axis,
+    AxisState,
+    SpindleTask,
+    TaskPhase,
+    ToolLimits,
+    push_params,
+)
+from nc_sim.machine.dynamics import Motion
+from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
+from nc_sim.profiles.plan import (
+    LIM_A_ACC,
+    LIM_A_ACC2,
+    LIM_A_DEC,
+    LIM_A_DEC2,
+    new_plan,
+    plan_distance,
+    position_move,
+    velocity_change,
+)
+from nc_sim.units import RPM_TO_DEG_S
+
+if TYPE_CHECKING:
+    from nc_sim.machine.machine import Machine
+
+ACHSMODE_KEINE_AUTO_RPF = 0x100  # P-AXIS-00015: no automatic homing before M19
+DIGITAL_DRIVES = (2, 8)  # SERCOS, CANopen: drive-controlled homing only [000 §2.3]
+_V_EPS = 1e-9
+
+
+def _sign(x: float) -> int:
+    return 1 if x > 0 else -1
+
+
+class SpindleControl:
+    """The spindle part of a machine's NC: commands, sequences and their kernel events."""
+
+    def __init__(self, machine: Machine) -> None:
+        self.m = machine
+
+    # --- configuration ------------------------------------------------------------------
+    def preferred(self, ax: Axis) -> int | None:
+        """+1/-1 when only one direction is allowed (P-AXIS-00224, P-AXIS-00031)."""
+        if not ax.cfg.flag("kenngr.vorz_richtung"):
+            return None
+        return 1 if ax.cfg.flag("kenngr.beweg_richt") else -1
+
+    def auto_homing(self, ax: Axis) -> bool:
+        """Analogue drives home automatically before M19; digital ones only by G74."""
+        mode = int(ax.cfg.raw("kenngr.achs_mode"))
+        drive = int(ax.cfg.raw("kenngr.antr_typ"))
+        return not mode & ACHSMODE_KEINE_AUTO_RPF and drive not in DIGITAL_DRIVES
+
+    def gear_table(self, ax: Axis) -> tuple[int, list[GearRange]] | None:
+        """(spindel index, ranges) when gear change applies to this spindle."""
+        cfg = self.m.cfg
+        if not cfg.channel_raw("main_spindle_gear_change") or ax.name != self.m.main_spindle:
+            return None
+        i = self.m.spindle_index(ax)
+        if i is None:
+            return None
+        pre = f"spindel[{i}].range_table"
+        table = [
+            GearRange(
+                float(cfg.channel_raw(f"{pre}[{g}].min_speed")),
+                float(cfg.channel_raw(f"{pre}[{g}].max_speed")),
+            )
+            for g in range(6)
+        ]
+        return i, table
+
+    def v_max(self, ax: Axis) -> float:
+        v = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear)
+        return min(v, ax.tool.vb_max) if ax.tool.vb_max is not None else v
+
+    def override(self, ax: Axis) -> float:
+        if ax.override_suppressed or not ax.units["override_valid"]:
+            ovr = 1.0
+        else:
+            ovr = ax.units["override"] * 1e-3
+        return min(ovr, ax.cfg.eng("kenngr.max_vb_override"))
+
+    def commanded(self, ax: Axis) -> float:
+        """Signed command speed (°/s): programmed × override within the tool and gear limits."""
+        v = min(abs(ax.speed_prog) * self.override(ax), self.v_max(ax))
+        if v > 0:
+            v = max(v, ax.tool.vb_min)
+        return math.copysign(v, ax.speed_prog)
+
+    def limits(self, ax: Axis) -> np.ndarray:
+        lim = self.m._limits(ax, Motion.FEED)
+        if ax.tool.a_max is not None:
+            for col in (LIM_A_ACC, LIM_A_DEC, LIM_A_ACC2, LIM_A_DEC2):
+                if lim[col] > 0:
+                    lim[col] = min(lim[col], ax.tool.a_max)
+        return lim
+
+    # --- primitives ---------------------------------------------------------------------
+    def velocity(self, ax: Axis, v: float) -> None:
+        """Speed change: along the acceleration curve when one is set, else planned."""
+        if int(ax.cfg.raw("getriebe.beschl_kennlinie.typ", ax.gear)) != 0:
+            self.m.k.load_curve(ax.slot, v)
+        else:
+            self.m._plan_velocity(ax, v, self.limits(ax))
+
+    def _state(self, ax: Axis, state: AxisState, monitoring: bool = False) -> None:
+        self.m._set_state(ax, state)
+        self.m.k.ist[ax.slot, L.I_MON_ACTIVE] = int(monitoring)
+        if not monitoring:
+            self.m.k.st[ax.slot, L.S_V_GOAL] = 0.0
+
+    def _adopt_tool(self, ax: Axis) -> None:
+        """Tool dynamics take effect on the transition from standstill [000 §2.8.5]."""
+        if ax.tool_pending is None or ax.state is not AxisState.STANDSTILL:
+            return
+        ax.tool, ax.tool_pending = ax.tool_pending, None
+        push_params(self.m.k, ax)
+        self.m.log(Code.EV_TOOL_DYNAMICS, ax.name, f"{ax.name} tool dynamics {ax.tool}")
+
+    def _direction_ok(self, ax: Axis, d: int) -> JobError | None:
+        pref = self.preferred(ax)
+        if pref is None or d == pref:
+            return None
+        err = self.m._fail(
+            ax, Code.SPINDLE_PREFERRED_DIRECTION, f"{ax.name}: M{3 if d > 0 else 4} refused"
+        )
+        self.cancel_task(ax)
+        if ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
+            self.velocity(ax, 0.0)
+        self._state(ax, AxisState.ERROR)
+        return err
+
+    def cancel_task(self, ax: Axis) -> None:
+        if ax.task is not None:
+            ax.task = None
+            self.m._abort_block(ax)
+
+    def switch_back(self, ax: Axis) -> None:
+        """Back to position control from the changeover's speed control [001 §2.3]."""
+        ax.speed_ctrl = False
+        ist = self.m.k.ist
+        ist[ax.slot, L.I_SPEED_CTRL_ARMED] = 0
+        if ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL and not ax.cfg.flag(
+            "sim.sensorless"
+        ):
+            ist[ax.slot, L.I_OPEN_LOOP] = L.LOOP_CLOSED
+            self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
+
+    # --- gear selection -----------------------------------------------------------------
+    def _gear_for(self, ax: Axis, rpm: float, programmed: int | None) -> GearChoice:
+        gt = self.gear_table(ax)
+        if gt is None:
+            if programmed is not None:
+                return GearChoice(None, Code.GEAR_CHANGE_OFF, f"M{m_of(programmed)}")
+            return GearChoice(ax.gear)
+        i, table = gt
+        automatic = bool(self.m.cfg.channel_raw(f"spindel[{i}].autom_range"))
+        way = int(self.m.cfg.channel_raw(f"spindel[{i}].range_way"))
+        return select_gear(table, ax.gear, rpm, automatic, way, programmed)
+
+    # --- M3/M4/M5 and S -----------------------------------------------------------------
+    def endless(
+        self,
+        ax: Axis,
+        m: int,
+        rpm: float | None,
+        gear: int | None = None,
+        block_id: int | None = None,
+    ) -> JobError | None:
+        """M3/M4 with S (rpm; None keeps the programmed speed), optionally with M40-M45."""
+        err = self.m._check_motion(ax)
+        if err:
+            return err
+        d = 1 if m == 3 else -1
+        err = self._direction_ok(ax, d)
+        if err:
+            return err
+        rpm = abs(rpm) if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
+        choice = self._gear_for(ax, rpm, gear)
+        if choice.error is not None:
+            return self.m._fail(ax, choice.error, choice.detail)
+        self.cancel_task(ax)
+        ax.speed_prog = d * rpm * RPM_TO_DEG_S
+        assert choice.gear is not None
+        if choice.gear != ax.gear:
+            self.start_gear(ax, choice.gear, (m, rpm), block_id)
+            return None
+        self.run_endless(ax)
+        return None
+
+    def run_endless(self, ax: Axis) -> None:
+        """(Re)plan endless rotation at the commanded speed."""
+        self._adopt_tool(ax)
+        k = self.m.k
+        v = self.commanded(ax)
+        v_change = ax.cfg.eng("antr.sai_op_mode_change.v_velocity_control_on")
+        in_speed_ctrl = k.ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL
+        # once changed over, a lower speed does not switch back [001 §2.3]
+        ax.speed_ctrl = abs(v) > v_change or (ax.speed_ctrl and in_speed_ctrl)
+        k.ist[ax.slot, L.I_SPEED_CTRL_ARMED] = int(ax.speed_ctrl)
+        ax.motion, ax.slope = Motion.FEED, 1
+        open_loop = k.ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_CONTROL_LIMIT
+        self._state(ax, AxisState.OPEN_LOOP if open_loop else AxisState.ENDLESS, True)
+        k.st[ax.slot, L.S_V_GOAL] = v
+        k.st[ax.slot, L.S_OVERRIDE] = self.override(ax)
+        self.velocity(ax, v)
+
+    def speed(
+        self, ax: Axis, rpm: float, gear: int | None, block_id: int | None
+    ) -> JobError | None:
+        """S word alone (or S[REV..]): new speed, with a gear change when the table asks."""
+        choice = self._gear_for(ax, abs(rpm), gear)
+        if choice.error is not None:
+            return self.m._fail(ax, choice.error, choice.detail)
+        assert choice.gear is not None
+        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
+        ax.speed_prog = math.copysign(abs(rpm) * RPM_TO_DEG_S, ax.speed_prog or 1.0)
+        if choice.gear != ax.gear:
+            resume = (3 if ax.speed_prog > 0 else 4, abs(rpm)) if rotating else None
+            err = self.m._check_motion(ax)
+            if err:
+                return err
+            self.start_gear(ax, choice.gear, resume, block_id)
+        elif rotating:
+            self.run_endless(ax)
+        return None
+
+    def stop(self, ax: Axis) -> None:
+        """M5: brake to standstill (curve or a_brems)."""
+        self.cancel_task(ax)
+        if ax.state in (AxisState.STANDSTILL, AxisState.ERROR):
+            return
+        self._state(ax, AxisState.STOPPING)
+        self.velocity(ax, 0.0)
+
+    # --- M19, G74, gear change ----------------------------------------------------------
+    def position(
+        self,
+        ax: Axis,
+        pos_deg: float,
+        direction: int | None,
+        rpm: float | None,
+        block_id: int | None = None,
+    ) -> JobError | None:
+        """M19: position to `pos_deg` (0..360) in `direction` (+1 M3, -1 M4, None)."""
+        if ax.cfg.flag("sim.sensorless"):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder")
+        err = self.m._check_motion(ax)
+        if err:
+            return err
+        if direction is not None:
+            err = self._direction_ok(ax, direction)
+            if err:
+                return err
+        else:
+            direction = self.preferred(ax)
+        speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
+        self.cancel_task(ax)
+        ax.task = SpindleTask("M19", pos_deg % 360.0, direction, abs(speed))
+        ax.block_id = block_id
+        self.advance(ax)
+        return None
+
+    def home(self, ax: Axis, block_id: int | None = None) -> JobError | None:
+        """G74: rotate to the zero mark, take ref_pos there, stop on it with exact stop."""
+        if ax.cfg.flag("sim.sensorless"):
+            return self.m._fail(
+                ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder to home"
+            )
+        err = self.m._check_motion(ax)
+        if err:
+            return err
+        v = self.m.k.st[ax.slot, L.S_V_CMD]
+        d = self.preferred(ax) or (
+            _sign(v) if abs(v) > _V_EPS else (1 if ax.cfg.flag("kenngr.ref_richt") else -1)
+        )
+        self.cancel_task(ax)
+        ref = ax.cfg.eng("kenngr.ref_pos") % 360.0
+        ax.task = SpindleTask("G74", ref, d, ax.cfg.eng("getriebe.vb_refmax", ax.gear))
+        ax.block_id = block_id
+        ax.homed = False
+        self.m.k.ist[ax.slot, L.I_HOMED] = 0
+        self.advance(ax)
+        return None
+
+    def start_gear(
+        self, ax: Axis, gear: int, resume: tuple[int, float] | None, block_id: int | None
+    ) -> None:
+        """Gear change: to the change position at vb_eilgang, M4x to the PLC, wait, adopt."""
+        self.cancel_task(ax)
+        pos = ax.cfg.eng("getriebe.getr_schalt_pos", ax.gear) % 360.0
+        speed = ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
+        ax.task = SpindleTask("gear", pos, self.preferred(ax), speed, gear=gear, resume=resume)
+        ax.block_id = block_id
+        self.m.log(Code.EV_HLI, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
+        if not (ax.homed or self.auto_homing(ax)) or ax.cfg.flag("sim.sensorless"):
+            # no position to go to: change at standstill where the spindle stops
+            ax.task.phase = TaskPhase.STOP
+            self._state(ax, AxisState.GEAR_CHANGE)
+            self.velocity(ax, 0.0)
+            return
+        self.advance(ax)
+
+    def advance(self, ax: Axis) -> None:
+        """Take the task in progress to its next phase."""
+        t = ax.task
+        if t is None:
+            return
+        k = self.m.k
+        s = ax.slot
+        state = AxisState.HOMING if t.kind == "G74" else AxisState.POSITIONING
+        if t.kind == "gear":
+            state = AxisState.GEAR_CHANGE
+        self._adopt_tool(ax)
+        self.switch_back(ax)
+        v = k.st[s, L.S_V_CMD]
+        if k.ist[s, L.I_OPEN_LOOP] == L.LOOP_CONTROL_LIMIT:
+            # decelerate below the control limit and to the switch-back speed [001 §4.2]
+            v_close = min(
+                ax.cfg.eng("antr.sai_op_mode_change.v_position_control_on"),
+                ax.cfg.eng("getriebe.vb_regelgrenze", ax.gear),
+            )
+            t.phase = TaskPhase.DECEL
+            self._state(ax, state)
+            self.velocity(ax, math.copysign(v_close, v))
+            return
+        if not ax.homed and (t.kind == "G74" or self.auto_homing(ax)):
+            t.phase = TaskPhase.SEEK_MARK
+            self._state(ax, state)
+            d = t.direction or (_sign(v) if abs(v) > _V_EPS else 1)
+            v_seek = ax.cfg.eng("getriebe.vb_refmax", ax.gear)
+            if v * d > _V_EPS:  # already turning the right way: pass the mark at speed
+                v_seek = max(v_seek, min(abs(v), t.speed * self.override(ax)))
+            self.velocity(ax, d * v_seek)
+            return
+        if not ax.homed:
+            self.m._fail(ax, Code.SPINDLE_NOT_HOMED, f"{ax.name}: M19 needs a reference")
+            self.cancel_task(ax)
+            self.velocity(ax, 0.0)
+            self._state(ax, AxisState.ERROR)
+            return
+        t.phase = TaskPhase.POSITION
+        self._state(ax, state)
+        ax.target = self.target(ax, t.pos_deg, t.direction)
+        self.plan_position(ax)
+
+    def target(self, ax: Axis, pos_deg: float, direction: int | None) -> float:
+        """Absolute target for an angle [000 §2.3.2]: shortest way from standstill, else
+        the first such angle the spindle can still stop at in the required direction."""
+        st = self.m.k.st[ax.slot]
+        p, v, a = st[L.S_P_CMD], st[L.S_V_CMD], st[L.S_A_CMD]
+        standing = abs(v) <= _V_EPS and abs(a) <= _V_EPS
+        if standing and direction is None:
+            return float(p + ((pos_deg - p + 180.0) % 360.0 - 180.0))
+        d = direction if direction is not None else _sign(v)
+        seg = new_plan()
+        n = velocity_change(seg, 0, v, a, 0.0, self.limits(ax), self.m.k.cycle_s)
+        brake, _v = plan_distance(seg, 0, n, v)
+        p_stop = p + brake
+        delta = (d * (pos_deg - p_stop)) % 360.0
+        if v * d < -_V_EPS and delta < 1e-9:  # after a reversal, still approach in d
+            delta = 360.0
+        return float(p_stop + d * delta)
+
+    def plan_position(self, ax: Axis) -> None:
+        """Position plan to ax.target at the task speed × override."""
+        t = ax.task
+        assert t is not None
+        k = self.m.k
+        st = k.st[ax.slot]
+        v_max = min(t.speed * self.override(ax), ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear))
+        if ax.tool.vb_max is not None:
+            v_max = min(v_max, ax.tool.vb_max)
+        k.st[ax.slot, L.S_OVERRIDE] = self.override(ax)
+        if v_max <= 0:  # override 0 %: hold; the move resumes with the override
+            self.m._plan_velocity(ax, 0.0, self.limits(ax))
+            return
+        seg = new_plan()
+        n = position_move(
+            seg,
+            st[L.S_P_CMD],
+            st[L.S_V_CMD],
+            st[L.S_A_CMD],
+            ax.target,
+            v_max,
+            self.limits(ax),
+            k.cycle_s,
+        )
+        k.load_plan(ax.slot, seg, n, ax.target)
+
+    def replan(self, ax: Axis) -> None:
+        """Override or override_valid changed."""
+        if ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
+            self.run_endless(ax)
+        elif ax.task is not None and ax.task.phase is TaskPhase.POSITION:
+            self.plan_position(ax)
+
+    def _latch_zero_mark(self, ax: Axis) -> None:
+        """The zero mark just passed: the position there becomes ref_pos."""
+        k = self.m.k
+        s = ax.slot
+        pr = k.pr
+        cam = pr[s, L.P_CAM_POS]
+        x_edge = cam + round((k.st[s, L.S_X_MOTOR] - cam) / 360.0) * 360.0
+        latched = pr[s, L.P_ENC_SIGN] * pr[s, L.P_SIGN_FB] * x_edge + pr[s, L.P_ENC_OFFSET]
+        shift = ax.cfg.eng("kenngr.ref_pos") - latched
+        pr[s, L.P_ENC_OFFSET] += shift
+        for col in (L.S_P_ACT, L.S_P_CMD, L.S_SEG_P0):
+            k.st[s, col] += shift
+        ax.homed = True
+        k.ist[s, L.I_HOMED] = 1
+        self.m.log(Code.EV_HOMED, ax.name, f"{ax.name} reference at the zero mark")
+
+    def _task_done(self, ax: Axis) -> None:
+        t = ax.task
+        assert t is not None
+        if t.kind == "gear":
+            t.phase = TaskPhase.WAIT_PLC
+            self._state(ax, AxisState.GEAR_CHANGE)
+            self.m._m_output_gear(m_of(t.gear), ax)
+            return
+        ax.task = None
+        self._state(ax, AxisState.STANDSTILL)
+        ax.motion, ax.block_id = None, None
+        self.m.log(Code.EV_IN_POSITION, ax.name, f"{ax.name} at {t.pos_deg:g}° ({t.kind})")
+
+    def gear_acknowledged(self, ax: Axis) -> None:
+        """The PLC has changed the gear: adopt the new record and resume."""
+        t = ax.task
+        if t is None or t.kind != "gear":
+            return
+        old = ax.gear
+        ax.gear = t.gear
+        push_params(self.m.k, ax)
+        self.m.log(Code.EV_GEAR_CHANGED, ax.name, f"{ax.name} gear {old} -> {ax.gear}")
+        ax.task = None
+        ax.block_id = None
+        self._state(ax, AxisState.STANDSTILL)
+        if t.resume is not None:
+            m, rpm = t.resume
+            self.endless(ax, m, rpm)
+
+    def gear_timeout(self, ax: Axis) -> None:
+        if ax.task is not None and ax.task.kind == "gear":
+            self.cancel_task(ax)
+            self._state(ax, AxisState.ERROR)
+
+    # --- kernel events ------------------------------------------------------------------
+    def on_events(self, ax: Axis, ev: int) -> bool:
+        """Spindle reactions; returns True when the plan-done event was consumed here."""
+        k = self.m.k
+        s = ax.slot
+        if ev & L.EV_LOOP:
+            mode = int(k.ist[s, L.I_OPEN_LOOP])
+            if mode == L.LOOP_CONTROL_LIMIT:
+                ax.homed = False
+                self.m.log(Code.EV_LOOP_OPENED, ax.name, f"{ax.name} above the control limit")
+                self.m.log(Code.EV_REFERENCE_LOST, ax.name)
+                if ax.state is AxisState.ENDLESS:
+                    self._state(ax, AxisState.OPEN_LOOP, True)
+            elif mode == L.LOOP_SPEED_CONTROL:
+                self.m.log(Code.EV_LOOP_OPENED, ax.name, f"{ax.name} speed control")
+            else:
+                self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
+                if ax.state is AxisState.OPEN_LOOP:
+                    self._state(ax, AxisState.ENDLESS, True)
+                elif ax.task is not None and ax.task.phase is TaskPhase.DECEL:
+                    self.advance(ax)
+        t = ax.task
+        if t is None:
+            return False
+        if ev & L.EV_CAM and t.phase is TaskPhase.SEEK_MARK:
+            self._latch_zero_mark(ax)
+            t.latched = True
+            self.advance(ax)
+            return True
+        if ev & L.EV_PLAN_DONE:
+            if t.phase is TaskPhase.DECEL and k.ist[s, L.I_OPEN_LOOP] != L.LOOP_CONTROL_LIMIT:
+                self.advance(ax)
+            elif t.phase is TaskPhase.STOP:
+                self._task_done(ax)
+        if ev & L.EV_IN_POS and t.phase is TaskPhase.POSITION:
+            self._task_done(ax)
+        return True
+
+    # --- blocks -------------------------------------------------------------------------
+    def block(self, ax: Axis, sc: SpindleCmd, gear: int | None, block_id: int) -> bool:
+        """One spindle's part of an MDI block; False when it ended in a job error."""
+        for g in sc.g:
+            if g == 167:  # override off until the next S[REV..] [000 §2.4.1]
+                ax.override_suppressed = True
+            elif g == 135:
+                ax.ff_weight = ax.ff_set
+            elif g == 136:
+                if sc.ff_weight is not None:
+                    ax.ff_set = max(0.0, min(sc.ff_weight, 100.0)) / 100.0
+                if ax.ff_weight > 0:
+                    ax.ff_weight = ax.ff_set
+            elif g == 137:
+                ax.ff_weight = 0.0
+            self.m.k.pr[ax.slot, L.P_FF] = ax.ff_weight
+        if sc.speed_rpm is not None and 167 not in sc.g and sc.m != 19:
+            ax.override_suppressed = False
+        if sc.default_dynamics:
+            ax.tool_pending = ToolLimits()
+            self.m.log(Code.EV_TOOL_DYNAMICS, ax.name, f"{ax.name} default dynamics pending")
+        err: JobError | None = None
+        if sc.m in (3, 4):
+            err = self.endless(ax, sc.m, sc.speed_rpm, gear, block_id)
+        elif sc.m == 5:
+            self.stop(ax)
+        elif sc.m == 19:
+            err = self.position(ax, sc.pos_deg or 0.0, sc.direction, sc.speed_rpm, block_id)
+        elif 74 in sc.g:
+            err = self.home(ax, block_id)
+        elif sc.speed_rpm is not None:
+            err = self.speed(ax, sc.speed_rpm, gear, block_id)
+        elif gear is not None:
+            err = self.gear_only(ax, gear, block_id)
+        elif 167 in sc.g or sc.g:
+            self.replan(ax)
+        return err is None
+
+    def gear_only(self, ax: Axis, gear: int, block_id: int | None) -> JobError | None:
+        """M40-M45 without S: change to that stage (the speed is checked with the next S)."""
+        if self.gear_table(ax) is None:
+            return self.m._fail(ax, Code.GEAR_CHANGE_OFF, f"M{m_of(gear)}")
+        if gear == ax.gear:
+            return None
+        err = self.m._check_motion(ax)
+        if err:
+            return err
+        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
+        resume = (3 if ax.speed_prog > 0 else 4, abs(ax.speed_prog) / 6.0) if rotating else None
+        self.start_gear(ax, gear, resume, block_id)
+        return None
