@@ -80,6 +80,10 @@ MESSAGES: dict[Code, str] = {
     Code.SPINDLE_NOT_HOMED: "spindle not homed and automatic homing is off "
     "(ACHSMODE_KEINE_AUTO_RPF): home with G74 first",
     Code.NOT_A_SPINDLE: "spindle command to an axis that is not a spindle",
+    Code.EV_SPEED_REACHED: "speed reached",
+    Code.EV_REFERENCE_LOST: "reference lost above the control limit: the spindle is homed "
+    "again before positioning",
+    Code.EV_PROGRAM_END: "program end",
 }
 
 

@@ -26,7 +26,8 @@ S_LAG_MODEL = 14  # lag an ideal loop would have (dynamic lag monitoring)
 S_V_GOAL = 15  # speed the spindle is commanded to reach (for speed reached), unit/s
 S_V_TARGET = 16  # end speed of a curve-controlled speed change (I_CURVE), unit/s
 S_OVERRIDE = 17  # override in force as a fraction (written by the Python layer, recorded)
-S_COLS = 18
+S_V_MODEL = 18  # drive speed of the ideal loop the lag monitoring compares with
+S_COLS = 19
 
 # --- pr: float parameters (engineering units) -----------------------------------------------
 P_KV = 0  # 1/s

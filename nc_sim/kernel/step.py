@@ -116,6 +116,7 @@ from nc_sim.kernel.layout import (
     S_V_ACT,
     S_V_CMD,
     S_V_GOAL,
+    S_V_MODEL,
     S_V_MOTOR,
     S_V_TARGET,
     S_X_MOTOR,
@@ -255,10 +256,12 @@ def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt:
     if pr[s, P_SENSORLESS] == 1.0:  # no encoder: the actual values are the command's
         st[s, S_P_ACT] = st[s, S_P_CMD]
         st[s, S_V_ACT] = st[s, S_V_CMD]
+        st[s, S_LAG] = 0.0
     elif mode == LOOP_CONTROL_LIMIT:
         # no valid measurement: actual position simulated from the lag; the encoder is
         # re-based onto it, so counting resumes from here when the loop closes
-        p_sim = st[s, S_P_CMD] - st[s, S_LAG_MODEL]
+        # (one cycle ahead, as S_LAG compares the next command with this position)
+        p_sim = st[s, S_P_CMD] + st[s, S_V_CMD] * dt - st[s, S_LAG_MODEL]
         pr[s, P_ENC_OFFSET] += p_sim - p_act
         st[s, S_P_ACT] = p_sim
         st[s, S_V_ACT] = st[s, S_V_CMD]
@@ -281,17 +284,24 @@ def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float
     """Lag, software limits, reference cam and speed monitoring; returns event bits."""
     ev = 0
     kv = pr[s, P_KV]
-    # the lag an ideal loop with this kv and feedforward would have, as a first-order model
-    decay = math.exp(-kv * dt)
-    goal = (1.0 - pr[s, P_FF]) * st[s, S_V_CMD] / kv if kv > 0.0 else 0.0
-    st[s, S_LAG_MODEL] = st[s, S_LAG_MODEL] * decay + goal * (1.0 - decay)
+    # the lag an ideal loop would have: this kv and feedforward, a drive with the same time
+    # constant but exactly the gain the NC assumes (so a wrong multi_gain or sign shows)
     if ist[s, I_ENABLED] == 0:
         st[s, S_LAG_MODEL] = st[s, S_LAG]
-    elif (
-        ist[s, I_OPEN_LOOP] == LOOP_CLOSED
-        and abs(st[s, S_LAG] - st[s, S_LAG_MODEL]) > pr[s, P_LAG_MAX]
-    ):
-        ev |= EV_LAG
+        st[s, S_V_MODEL] = st[s, S_V_ACT]
+    else:
+        # the model holds this cycle's lag (command step of this cycle minus the motion the
+        # modelled drive made in the last one), like S_LAG
+        if (
+            ist[s, I_OPEN_LOOP] == LOOP_CLOSED
+            and abs(st[s, S_LAG] - st[s, S_LAG_MODEL]) > pr[s, P_LAG_MAX]
+        ):
+            ev |= EV_LAG
+        u_m = kv * st[s, S_LAG_MODEL] + pr[s, P_FF] * st[s, S_V_CMD]
+        T = pr[s, P_DRV_T]
+        v_m = st[s, S_V_MODEL]
+        st[s, S_V_MODEL] = u_m if T <= 0.0 else v_m + (u_m - v_m) * (1.0 - math.exp(-dt / T))
+        st[s, S_LAG_MODEL] += (st[s, S_V_CMD] - 0.5 * (v_m + st[s, S_V_MODEL])) * dt
     if ist[s, I_LIMITS_ON] == 1:
         p = st[s, S_P_CMD]
         if p < pr[s, P_SWE_NEG] - 1e-9 or p > pr[s, P_SWE_POS] + 1e-9:

@@ -566,7 +566,10 @@ class Machine:
             run = self._queue[0]
             if not run.started:
                 run.started = True
-                if not self._start_block(run):
+                ok = self._start_block(run)
+                if not self._queue or self._queue[0] is not run:
+                    continue  # aborted while starting
+                if not ok:
                     self._queue.popleft()
                     continue
             busy = any(a.block_id == run.id for a in self.axes)

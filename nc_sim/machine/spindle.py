@@ -333,18 +333,24 @@ class SpindleControl:
         if t.kind == "gear":
             state = AxisState.GEAR_CHANGE
         self._adopt_tool(ax)
-        self.switch_back(ax)
+        ax.speed_ctrl = False  # M19 and G74 run position-controlled [001 §2.3]
+        k.ist[s, L.I_SPEED_CTRL_ARMED] = 0
         v = k.st[s, L.S_V_CMD]
-        if k.ist[s, L.I_OPEN_LOOP] == L.LOOP_CONTROL_LIMIT:
-            # decelerate below the control limit and to the switch-back speed [001 §4.2]
+        mode = k.ist[s, L.I_OPEN_LOOP]
+        if mode != L.LOOP_CLOSED:
+            # decelerate to the switch-back speed P-AXIS-00768 (and below the control limit)
+            # before position control resumes [001 §4.2]
             v_close = min(
                 ax.cfg.eng("antr.sai_op_mode_change.v_position_control_on"),
-                ax.cfg.eng("getriebe.vb_regelgrenze", ax.gear),
+                ax.cfg.eng("getriebe.vb_regelgrenze", ax.gear) or math.inf,
             )
-            t.phase = TaskPhase.DECEL
-            self._state(ax, state)
-            self.velocity(ax, math.copysign(v_close, v))
-            return
+            if abs(v) > v_close + _V_EPS or mode == L.LOOP_CONTROL_LIMIT:
+                t.phase = TaskPhase.DECEL
+                self._state(ax, state)
+                if abs(v) > v_close + _V_EPS:
+                    self.velocity(ax, math.copysign(v_close, v))
+                return  # the control limit closes in the kernel: EV_LOOP continues
+            self.switch_back(ax)
         if not ax.homed and (t.kind == "G74" or self.auto_homing(ax)):
             t.phase = TaskPhase.SEEK_MARK
             self._state(ax, state)
@@ -498,6 +504,7 @@ class SpindleControl:
         if ev & L.EV_PLAN_DONE:
             if t.phase is TaskPhase.DECEL and k.ist[s, L.I_OPEN_LOOP] != L.LOOP_CONTROL_LIMIT:
                 self.advance(ax)
+                return True
             elif t.phase is TaskPhase.STOP:
                 self._task_done(ax)
         if ev & L.EV_IN_POS and t.phase is TaskPhase.POSITION:
