@@ -171,7 +171,7 @@ def test_preferred_direction_refuses_the_other_with_60254_until_reset() -> None:
     m.reset()
     m.mdi("M3 S500")
     record(sim, 2.0)
-    assert s.state is AxisState.ENDLESS
+    assert m.axis(S).state is AxisState.ENDLESS
     m.mdi("M5")
     record(sim, 2.0)
     rec = _m19(m, sim, "M19 S.POS=300")[:, s.slot]  # no direction given: the preferred one
