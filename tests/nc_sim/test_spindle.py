@@ -480,7 +480,7 @@ def test_gear_change_errors_and_plc_timeout() -> None:
     m.mdi("M40 M3 S300")
     record(sim, 3.0)
     assert Code.PLC_ACK_TIMEOUT in codes(m)
-    assert s.gear == 3 and s.state is AxisState.ERROR
+    assert s.gear == 3 and m.axis(S).state is AxisState.ERROR
     m.reset()
     assert s.state is AxisState.STANDSTILL
 
