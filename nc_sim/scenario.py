@@ -74,6 +74,15 @@ def _act(m: Machine, action: Mapping[str, Any]) -> None:
         )
     elif "home" in action:
         m.home(str(action["home"]))
+    elif "spindle" in action:
+        sp = action["spindle"]
+        name = str(sp.get("name", "S"))
+        if "pos_deg" in sp:
+            m.spindle_position(name, float(sp["pos_deg"]), sp.get("direction"), sp.get("rpm"))
+        elif "gear" in sp:
+            m.spindle_gear(name, int(sp["gear"]))
+        else:
+            m.spindle(name, int(sp["m"]), sp.get("rpm"))
     elif action.get("reset"):
         m.reset()
     elif action.get("emergency_stop"):
@@ -104,6 +113,12 @@ def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.nd
             cols[p + "speed_reached"] = r[:, L.R_SPEED_REACHED]
             cols[p + "stopped"] = r[:, L.R_STOPPED]
             cols[p + "gear"] = r[:, L.R_GEAR]
+            cols[p + "speed_monitoring_active"] = r[:, L.R_MON_ACTIVE]
+            cols[p + "speed_monitoring_invalid"] = r[:, L.R_MON_INVALID]
+            cols[p + "open_loop"] = r[:, L.R_OPEN_LOOP]  # 1 control limit, 2 speed control
+            cols[p + "override_pct"] = r[:, L.R_OVERRIDE] * 100.0
+        cols[p + "homed"] = r[:, L.R_HOMED]
+        cols[p + "in_position"] = r[:, L.R_IN_POS]
         cols[p + "da_digits"] = r[:, L.R_DA]
         cols[p + "state"] = r[:, L.R_STATE]
         cols[p + "job_error"] = r[:, L.R_JOB_ERROR]

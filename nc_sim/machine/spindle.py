@@ -123,6 +123,8 @@ class SpindleControl:
             self.m.k.load_curve(ax.slot, v)
         else:
             self.m._plan_velocity(ax, v, self.limits(ax))
+            if self.m.k.ist[ax.slot, L.I_PLAN_N] == 0:  # already there: done at once
+                self.m._axis_events(ax, L.EV_PLAN_DONE)
 
     def _state(self, ax: Axis, state: AxisState, monitoring: bool = False) -> None:
         self.m._set_state(ax, state)

@@ -74,3 +74,30 @@ def test_bad_parameter_in_a_scenario_is_a_clear_error(tmp_path: Path) -> None:
     assert res.returncode == 2
     assert "getriebe[0].kv = 0 is out of range 1" in res.stderr
     assert not (tmp_path / "out" / "trace.csv").exists()
+
+
+def test_spindle_sequences_scenario_exposes_the_spindle_signals(tmp_path: Path) -> None:
+    res = run_cli(ROOT / "examples" / "gear_change_m19.toml", tmp_path)
+    assert res.returncode == 0, res.stderr
+    rows = list(csv.DictReader((tmp_path / "trace.csv").read_text().splitlines()))
+    for col in (
+        "speed_monitoring_active",
+        "speed_monitoring_invalid",
+        "open_loop",
+        "override_pct",
+        "homed",
+        "in_position",
+    ):
+        assert f"S1.{col}" in rows[0]
+    at = {round(float(r["t_s"]), 3): r for r in rows}
+    assert at[3.9]["S1.gear"] == "2" and float(at[3.9]["S1.speed_cmd_rpm"]) == 650.0
+    assert at[7.9]["S1.gear"] == "3" and float(at[7.9]["S1.speed_cmd_rpm"]) == 950.0
+    assert at[7.9]["S1.speed_monitoring_active"] == "1"
+    assert at[11.9]["S1.in_position"] == "1" and at[11.9]["S1.homed"] == "1"
+    assert abs((float(at[11.9]["S1.pos_act_deg"]) - 90.0 + 180) % 360 - 180) <= 0.1
+    events = [json.loads(line) for line in (tmp_path / "events.jsonl").read_text().splitlines()]
+    messages = [e["message"] for e in events]
+    assert "S1 gear 3 -> 2" in messages and "S1 gear 2 -> 3" in messages
+    assert any(m.startswith("M41 output") for m in messages)
+    assert sum(m == "S1 at 90° (M19)" for m in messages) == 1
+    assert not [e for e in events if e["error"]]
