@@ -49,6 +49,7 @@ class Kernel:
             # no loop-opening speeds and no curve cap until the machine sets them
             for col in (L.P_V_CTRL_LIMIT, L.P_V_SPEED_CTRL, L.P_A_CAP):
                 self.pr[s, col] = math.inf
+            self.pr[s, L.P_DRV_ALPHA] = 1.0  # an ideal drive
         return range(first, self.n)
 
     def load_plan(self, slot: int, seg: np.ndarray, n: int, target: float) -> None:

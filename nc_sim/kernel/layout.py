@@ -39,7 +39,7 @@ P_SIGN_CMD = 5  # -1 when vz_stellgr
 P_SIGN_FB = 6  # -1 when vz_istw
 P_MOTOR_SIGN = 7  # -1 when the motor is wired inverted
 P_ENC_SIGN = 8  # -1 when the encoder counts inverted
-P_DRV_T = 9  # drive velocity-loop time constant (s)
+P_DRV_ALPHA = 9  # drive velocity loop: 1 - exp(-cycle/T), the share of a step per cycle
 P_DRV_A_MAX = 10  # drive acceleration limit (unit/s²), 0 = none
 P_ENC_INC = 11  # encoder increment (mm | °), 0 = ideal
 P_LAG_MAX = 12  # allowed deviation from the modelled lag
@@ -86,7 +86,8 @@ I_CURVE = 14  # 1: curve-controlled speed change towards S_V_TARGET in progress
 I_IN_POS = 15  # position plan ended and the actual position is inside the window
 I_MON_ACTIVE = 16  # speed monitoring active (endless rotation with a commanded speed)
 I_MON_INVALID = 17  # speed monitoring invalid (speed still changing, or no valid measurement)
-I_COLS = 18
+I_MARK_ARMED = 18  # spindle: report the zero mark (homing waits for it)
+I_COLS = 19
 
 # I_OPEN_LOOP values
 LOOP_CLOSED = 0

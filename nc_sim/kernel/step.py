@@ -36,6 +36,7 @@ from nc_sim.kernel.layout import (
     I_IN_POS,
     I_JOB_ERROR,
     I_LIMITS_ON,
+    I_MARK_ARMED,
     I_MON_ACTIVE,
     I_MON_INVALID,
     I_OPEN_LOOP,
@@ -59,8 +60,8 @@ from nc_sim.kernel.layout import (
     P_CURVE_TYPE,
     P_DA_MAX,
     P_DRV_A_MAX,
+    P_DRV_ALPHA,
     P_DRV_GAIN,
-    P_DRV_T,
     P_ENC_INC,
     P_ENC_OFFSET,
     P_ENC_SIGN,
@@ -229,8 +230,7 @@ def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt:
         lim = pr[s, P_DA_MAX]
         da = min(max(da, -lim), lim)
         v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
-        T = pr[s, P_DRV_T]
-        dv = v_target - v_m if T <= 0.0 else (v_target - v_m) * (1.0 - math.exp(-dt / T))
+        dv = (v_target - v_m) * pr[s, P_DRV_ALPHA]
         a_lim = pr[s, P_DRV_A_MAX]
         if a_lim > 0.0:
             dv = min(max(dv, -a_lim * dt), a_lim * dt)
@@ -298,9 +298,8 @@ def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float
         ):
             ev |= EV_LAG
         u_m = kv * st[s, S_LAG_MODEL] + pr[s, P_FF] * st[s, S_V_CMD]
-        T = pr[s, P_DRV_T]
         v_m = st[s, S_V_MODEL]
-        st[s, S_V_MODEL] = u_m if T <= 0.0 else v_m + (u_m - v_m) * (1.0 - math.exp(-dt / T))
+        st[s, S_V_MODEL] = v_m + (u_m - v_m) * pr[s, P_DRV_ALPHA]
         st[s, S_LAG_MODEL] += (st[s, S_V_CMD] - 0.5 * (v_m + st[s, S_V_MODEL])) * dt
     if ist[s, I_LIMITS_ON] == 1:
         p = st[s, S_P_CMD]
@@ -313,7 +312,9 @@ def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float
         cam = 1 if st[s, S_X_MOTOR] >= pr[s, P_CAM_POS] else 0
     if cam != ist[s, I_CAM]:
         ist[s, I_CAM] = cam
-        ev |= EV_CAM
+        # a turning spindle passes its mark every revolution: report it only when asked
+        if mod <= 0.0 or ist[s, I_MARK_ARMED] == 1:
+            ev |= EV_CAM
     v_meas = st[s, S_V_ACT]
     v_act = abs(v_meas)
     stopped = 1 if v_act < pr[s, P_V_ZERO] else 0

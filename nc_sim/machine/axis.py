@@ -146,7 +146,8 @@ def push_params(k: Kernel, ax: Axis) -> None:
     pr[s, L.P_SIGN_FB] = -1.0 if c.flag("lr_hw.vz_istw") else 1.0
     pr[s, L.P_MOTOR_SIGN] = -1.0 if c.flag("sim.motor_inverted") else 1.0
     pr[s, L.P_ENC_SIGN] = -1.0 if c.flag("sim.encoder_inverted") else 1.0
-    pr[s, L.P_DRV_T] = c.eng("sim.drive_t")
+    t_drive = c.eng("sim.drive_t")
+    pr[s, L.P_DRV_ALPHA] = 1.0 - math.exp(-k.cycle_s / t_drive) if t_drive > 0 else 1.0
     pr[s, L.P_DRV_A_MAX] = c.eng("sim.drive_a_max")
     # one increment = wegaufn/wegaufz in 0.1 µm or 0.0001°
     pr[s, L.P_ENC_INC] = c.eng("getriebe.wegaufn", g) / c.eng("getriebe.wegaufz", g)

@@ -478,6 +478,7 @@ class Machine:
         ax.job_error = 0
         self.k.ist[ax.slot, L.I_JOB_ERROR] = 0
         ax.hold, ax.homing, ax.block_id, ax.task = False, HomingPhase.NONE, None, None
+        self.k.ist[ax.slot, L.I_MARK_ARMED] = 0
         if spindle:
             self.sp.switch_back(ax)  # a CNC reset returns to position control [001 §2.3]
         rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)

@@ -154,6 +154,7 @@ class SpindleControl:
         return err
 
     def cancel_task(self, ax: Axis) -> None:
+        self.m.k.ist[ax.slot, L.I_MARK_ARMED] = 0
         if ax.task is not None:
             ax.task = None
             self.m._abort_block(ax)
@@ -355,6 +356,7 @@ class SpindleControl:
             self.switch_back(ax)
         if not ax.homed and (t.kind == "G74" or self.auto_homing(ax)):
             t.phase = TaskPhase.SEEK_MARK
+            k.ist[s, L.I_MARK_ARMED] = 1
             self._state(ax, state)
             d = t.direction or (_sign(v) if abs(v) > _V_EPS else 1)
             v_seek = ax.cfg.eng("getriebe.vb_refmax", ax.gear)
@@ -438,6 +440,7 @@ class SpindleControl:
             k.st[s, col] += shift
         ax.homed = True
         k.ist[s, L.I_HOMED] = 1
+        k.ist[s, L.I_MARK_ARMED] = 0
         self.m.log(Code.EV_HOMED, ax.name, f"{ax.name} reference at the zero mark")
 
     def _task_done(self, ax: Axis) -> None:
