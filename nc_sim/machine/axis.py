@@ -62,7 +62,6 @@ class SpindleTask:
     phase: TaskPhase = TaskPhase.DECEL
     gear: int = 0  # gear change: the new stage
     resume: tuple[int, float] | None = None  # gear change: (M3|M4, rpm) to run afterwards
-    latched: bool = False  # G74: the zero mark has been seen
 
 
 @dataclass

@@ -503,7 +503,6 @@ class SpindleControl:
             return False
         if ev & L.EV_CAM and t.phase is TaskPhase.SEEK_MARK:
             self._latch_zero_mark(ax)
-            t.latched = True
             self.advance(ax)
             return True
         if ev & L.EV_PLAN_DONE:
@@ -550,7 +549,7 @@ class SpindleControl:
             err = self.speed(ax, sc.speed_rpm, gear, block_id)
         elif gear is not None:
             err = self.gear_only(ax, gear, block_id)
-        elif 167 in sc.g or sc.g:
+        elif sc.g:  # G135-G137, G167 alone: the new weighting or override now
             self.replan(ax)
         return err is None
 
@@ -564,6 +563,8 @@ class SpindleControl:
         if err:
             return err
         rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
-        resume = (3 if ax.speed_prog > 0 else 4, abs(ax.speed_prog) / 6.0) if rotating else None
+        resume = (
+            (3 if ax.speed_prog > 0 else 4, abs(ax.speed_prog) / RPM_TO_DEG_S) if rotating else None
+        )
         self.start_gear(ax, gear, resume, block_id)
         return None
