@@ -191,6 +191,8 @@ class Machine:
         seg = new_plan()
         n = velocity_change(seg, 0, st[s, L.S_V_CMD], st[s, L.S_A_CMD], v, limits, self.k.cycle_s)
         self.k.load_plan(s, seg, n, math.nan)
+        if n == 0:  # already at that speed: the kernel has no plan to finish, done at once
+            self._axis_events(ax, L.EV_PLAN_DONE)
 
     def _replan(self, ax: Axis) -> None:
         """Re-plan the active motion from the current state (override, feedhold release)."""

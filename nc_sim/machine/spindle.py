@@ -123,8 +123,6 @@ class SpindleControl:
             self.m.k.load_curve(ax.slot, v)
         else:
             self.m._plan_velocity(ax, v, self.limits(ax))
-            if self.m.k.ist[ax.slot, L.I_PLAN_N] == 0:  # already there: done at once
-                self.m._axis_events(ax, L.EV_PLAN_DONE)
 
     def _state(self, ax: Axis, state: AxisState, monitoring: bool = False) -> None:
         self.m._set_state(ax, state)
@@ -237,15 +235,13 @@ class SpindleControl:
         if choice.error is not None:
             return self.m._fail(ax, choice.error, choice.detail)
         assert choice.gear is not None
-        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
         ax.speed_prog = math.copysign(abs(rpm) * RPM_TO_DEG_S, ax.speed_prog or 1.0)
         if choice.gear != ax.gear:
-            resume = (3 if ax.speed_prog > 0 else 4, abs(rpm)) if rotating else None
             err = self.m._check_motion(ax)
             if err:
                 return err
-            self.start_gear(ax, choice.gear, resume, block_id)
-        elif rotating:
+            self.start_gear(ax, choice.gear, self._resume(ax), block_id)
+        elif ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
             self.run_endless(ax)
         return None
 
@@ -399,9 +395,7 @@ class SpindleControl:
         assert t is not None
         k = self.m.k
         st = k.st[ax.slot]
-        v_max = min(t.speed * self.override(ax), ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear))
-        if ax.tool.vb_max is not None:
-            v_max = min(v_max, ax.tool.vb_max)
+        v_max = min(t.speed * self.override(ax), self.v_max(ax))
         k.st[ax.slot, L.S_OVERRIDE] = self.override(ax)
         if v_max <= 0:  # override 0 %: hold; the move resumes with the override
             self.m._plan_velocity(ax, 0.0, self.limits(ax))
@@ -562,9 +556,11 @@ class SpindleControl:
         err = self.m._check_motion(ax)
         if err:
             return err
-        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
-        resume = (
-            (3 if ax.speed_prog > 0 else 4, abs(ax.speed_prog) / RPM_TO_DEG_S) if rotating else None
-        )
-        self.start_gear(ax, gear, resume, block_id)
+        self.start_gear(ax, gear, self._resume(ax), block_id)
         return None
+
+    def _resume(self, ax: Axis) -> tuple[int, float] | None:
+        """What a rotating spindle runs again after a gear change: (M3|M4, rpm)."""
+        if ax.state not in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
+            return None
+        return (3 if ax.speed_prog > 0 else 4, abs(ax.speed_prog) / RPM_TO_DEG_S)

@@ -6,6 +6,10 @@ import numpy as np
 import pytest
 
 from nc_sim.errors import Code
+from nc_sim.machine.axis import Axis
+from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.machine import Machine
+from nc_sim.sim import Simulation
 from tests.nc_sim.sim_helpers import L, make, record
 
 
@@ -145,13 +149,17 @@ def test_homing_sets_the_reference_at_the_cam_edge() -> None:
     assert [e.code for e in m.events if e.error] == [Code.SOFTWARE_LIMIT]
 
 
-def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
+def cruising_x(block: str) -> tuple[Simulation, Machine, MachineConfig, Axis, float, float]:
+    """X one second into `block`: the machine, and X's commanded speed and position there."""
     sim, m, cfg = make()
     x = m.axis("X")
-    m.mdi("G01 X250 F6000")
+    m.mdi(block)
     record(sim, 1.0)
-    v = m.k.st[x.slot, L.S_V_CMD]
-    p = m.k.st[x.slot, L.S_P_CMD]
+    return sim, m, cfg, x, m.k.st[x.slot, L.S_V_CMD], m.k.st[x.slot, L.S_P_CMD]
+
+
+def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
+    sim, m, cfg, x, v, p = cruising_x("G01 X250 F6000")
     m.emergency_stop()
     record(sim, 0.5)
     a = cfg.axis("X").eng("getriebe.dynamik.a_emergency")
@@ -208,12 +216,7 @@ def test_same_scenario_same_trace() -> None:
 
 def test_feedhold_brakes_with_the_feedhold_set_and_resumes_to_the_target() -> None:
     # use_drive_curr_limit = 1: a_feedh 4000 mm/s², tr_feedh 10 ms [002 P-CHAN-00097, 00053/81]
-    sim, m, cfg = make()
-    x = m.axis("X")
-    m.mdi("G01 X200 F6000")
-    record(sim, 1.0)
-    v = m.k.st[x.slot, L.S_V_CMD]
-    p = m.k.st[x.slot, L.S_P_CMD]
+    sim, m, cfg, x, v, p = cruising_x("G01 X200 F6000")
     m.hli_write("feedhold", 1)
     record(sim, 0.5)
     a = cfg.axis("X").eng("getriebe.slope_profil.a_feedh")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -12,6 +13,8 @@ from nc_sim.kernel.curve import curve_accel
 from nc_sim.kernel.step import V_ACT_FILTER_S
 from nc_sim.machine.axis import AxisState
 from nc_sim.machine.gears import GearRange, select_gear
+from nc_sim.machine.machine import Machine
+from nc_sim.sim import Simulation
 from tests.nc_sim.sim_helpers import L, make, record
 
 DT = 0.001
@@ -19,8 +22,8 @@ RPM = 6.0  # °/s per rpm
 S = "S1"
 
 
-def codes(m: object) -> list[int]:
-    return [e.code for e in m.events]  # type: ignore[attr-defined]
+def codes(m: Machine) -> list[int]:
+    return [e.code for e in m.events]
 
 
 def first(mask: np.ndarray) -> int:
@@ -100,9 +103,9 @@ def test_override_example_g167_and_rev_from_the_manual() -> None:
 
 
 # --- M19 --------------------------------------------------------------------------------------
-def _m19(m: object, sim: object, text: str, seconds: float = 6.0) -> np.ndarray:
-    assert m.mdi(text).ok  # type: ignore[attr-defined]
-    return record(sim, seconds)  # type: ignore[arg-type]
+def _m19(m: Machine, sim: Simulation, text: str, seconds: float = 6.0) -> np.ndarray:
+    assert m.mdi(text).ok
+    return record(sim, seconds)
 
 
 def _approach_sign(r: np.ndarray) -> float:
@@ -334,10 +337,10 @@ def _curve_spindle(params: dict[str, float]) -> dict[str, object]:
     return base
 
 
-def _ramp_time(a_of_n: object, v: float) -> float:
+def _ramp_time(a_of_n: Callable[[float], float], v: float) -> float:
     """∫ dn / a(n) from 0 to v, independent of the kernel (fine trapezoid rule)."""
     n = np.linspace(0.0, v, 200001)
-    a = np.array([a_of_n(x) for x in n])  # type: ignore[operator]
+    a = np.array([a_of_n(x) for x in n])
     return float(np.sum(0.5 * (1 / a[1:] + 1 / a[:-1]) * np.diff(n)))
 
 

@@ -84,11 +84,10 @@ def _session(seed: int) -> None:
     if curve:
         rotating = np.isin(r[:, L.R_STATE], (AxisState.ENDLESS, AxisState.STOPPING))
         both = rotating[1:] & rotating[:-1]
+        n_limit = POLY["n_grenz"] * 1e-3  # 0.001 °/s -> °/s
+        ak, b1, b2, b3, a_min = (POLY[k] for k in ("a_konst", "b1", "b2", "b3", "a_min"))
         allowed = np.array(
-            [
-                curve_accel(2, x, 12000.0, 3000.0, -0.1, 1e-6, -1e-11, 800.0, 0.0, 0.0, 0.0)
-                for x in v[:-1]
-            ]
+            [curve_accel(2, x, n_limit, ak, b1, b2, b3, a_min, 0.0, 0.0, 0.0) for x in v[:-1]]
         )
         assert np.all(np.abs(a[1:][both]) <= allowed[both] + 1e-6), "above the curve"
     errors = {e.code for e in m.events if is_error(e.code)}
