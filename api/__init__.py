@@ -1,1 +1,1 @@
-"""Pydantic models: the one contract for REST, websockets and the OpenAPI schema."""
+"""The API contract: pydantic models for REST, websocket messages and the OpenAPI schema."""

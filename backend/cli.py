@@ -19,6 +19,8 @@ def main(argv: list[str] | None = None) -> int:
     p_srv = sub.add_parser("serve", help="start the web service")
     p_srv.add_argument("--host", default="127.0.0.1")
     p_srv.add_argument("--port", type=int, default=8000)
+    p_srv.add_argument("--db", type=Path, help="SQLite file (default var/inbetrieb.sqlite)")
+    p_srv.add_argument("--no-demo", action="store_true", help="no demo machine in a new store")
     args = parser.parse_args(argv)
     if args.cmd == "sim":
         from backend.headless import run_file
@@ -34,7 +36,16 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     import uvicorn
 
-    uvicorn.run("backend.main:app", host=args.host, port=args.port)
+    from backend.main import create_app
+    from backend.settings import Settings
+
+    overrides: dict[str, object] = {}
+    if args.db:
+        overrides["db_path"] = args.db
+    if args.no_demo:
+        overrides["demo"] = False
+    settings = Settings.model_validate(overrides)
+    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level="warning")
     return 0
 
 

@@ -1,36 +1,46 @@
-"""The web service (issue 4 builds it out). For now: health and the parameter registry."""
+"""The FastAPI application: wiring only (routes in backend/routes, logic in backend/services)."""
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
 
-from fastapi import FastAPI
+from fastapi import FastAPI, Request
+from fastapi.responses import JSONResponse
 
-from nc_sim.params import registry
+from backend.deps import Services
+from backend.errors import ApiError
+from backend.routes import commands, machines, parameters, service, telemetry
+from backend.settings import Settings
 
-app = FastAPI(title="Inbetrieb", version="0.1.0")
-
-
-@app.get("/api/health")
-def health() -> dict[str, str]:
-    return {"status": "ok"}
+VERSION = "0.2.0"
 
 
-@app.get("/api/parameters")
-def parameters() -> list[dict[str, Any]]:
-    """Every parameter the simulated NC knows, with range, unit kind and default."""
-    return [
-        {
-            "id": d.id,
-            "name": d.name,
-            "scope": d.scope.value,
-            "dtype": d.dtype.value,
-            "quantity": d.quantity.value,
-            "default": d.default,
-            "effect": d.effect.value,
-            "per_gear": d.per_gear,
-            "title": d.title,
-            "source": d.source,
-        }
-        for d in registry()
-    ]
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """The service with its real-time loop and telemetry hub started by the lifespan."""
+    cfg = settings or Settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        app.state.services = Services.start(cfg)
+        yield
+        await app.state.services.stop()
+
+    app = FastAPI(
+        title="Inbetrieb",
+        version=VERSION,
+        description="Commissioning HMI for a simulated NC: machines, commands, parameters, "
+        "live telemetry.",
+        lifespan=lifespan,
+    )
+
+    @app.exception_handler(ApiError)
+    async def api_error(_request: Request, exc: ApiError) -> JSONResponse:
+        return JSONResponse(status_code=exc.status, content={"detail": exc.detail})
+
+    for module in (service, machines, commands, parameters, telemetry):
+        app.include_router(module.router)
+    return app
+
+
+app = create_app()

@@ -13,13 +13,12 @@ from typing import Any
 import numpy as np
 
 from nc_sim.errors import JobError, NcUsageError
-from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig, apply_overrides
 from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope, resolve
 from nc_sim.params.listfile import parse_value
+from nc_sim.signals import machine_signals, signal_columns
 from nc_sim.sim import Simulation
-from nc_sim.units import RPM_TO_DEG_S, AxisKind
 
 
 @dataclass
@@ -92,36 +91,13 @@ def _act(m: Machine, action: Mapping[str, Any]) -> None:
 
 
 def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.ndarray]:
-    """Named trace columns `<axis>.<signal>` in display units from a kernel record."""
+    """Named trace columns `t_s` and `<axis>.<signal>` (nc_sim.signals) from a kernel record."""
     n = rec.shape[0]
     cols: dict[str, np.ndarray] = {"t_s": (t0_cycle + 1 + np.arange(n)) * m.k.cycle_s}
-    for ax in m.axes:
-        r = rec[:, ax.slot]
-        p = ax.name + "."
-        if ax.kind is AxisKind.SPINDLE:
-            cols[p + "speed_cmd_rpm"] = r[:, L.R_V_CMD] / RPM_TO_DEG_S
-            cols[p + "speed_act_rpm"] = r[:, L.R_V_ACT] / RPM_TO_DEG_S
-        u = "mm" if ax.kind is AxisKind.LINEAR else "deg"
-        cols[p + f"pos_cmd_{u}"] = r[:, L.R_P_CMD]
-        cols[p + f"pos_act_{u}"] = r[:, L.R_P_ACT]
-        cols[p + f"lag_{u}"] = r[:, L.R_LAG]
-        if ax.kind is not AxisKind.SPINDLE:
-            cols[p + f"vel_cmd_{u}_min"] = r[:, L.R_V_CMD] * 60.0
-            cols[p + f"vel_act_{u}_min"] = r[:, L.R_V_ACT] * 60.0
-        cols[p + ("accel_cmd_deg_s2" if u == "deg" else "acc_cmd_mm_s2")] = r[:, L.R_A_CMD]
-        if ax.kind is AxisKind.SPINDLE:
-            cols[p + "speed_reached"] = r[:, L.R_SPEED_REACHED]
-            cols[p + "stopped"] = r[:, L.R_STOPPED]
-            cols[p + "gear"] = r[:, L.R_GEAR]
-            cols[p + "speed_monitoring_active"] = r[:, L.R_MON_ACTIVE]
-            cols[p + "speed_monitoring_invalid"] = r[:, L.R_MON_INVALID]
-            cols[p + "open_loop"] = r[:, L.R_OPEN_LOOP]  # 1 control limit, 2 speed control
-            cols[p + "override_pct"] = r[:, L.R_OVERRIDE] * 100.0
-        cols[p + "homed"] = r[:, L.R_HOMED]
-        cols[p + "in_position"] = r[:, L.R_IN_POS]
-        cols[p + "da_digits"] = r[:, L.R_DA]
-        cols[p + "state"] = r[:, L.R_STATE]
-        cols[p + "job_error"] = r[:, L.R_JOB_ERROR]
+    sigs = machine_signals(m)
+    data = signal_columns(sigs, rec)
+    for i, s in enumerate(sigs):
+        cols[s.name] = data[i]
     return cols
 
 

@@ -113,6 +113,22 @@ class Machine:
         times += [c + timeout for c in self._m_out]
         return min(times) if times else None
 
+    def refresh_params(self) -> None:
+        """Re-read the configuration after a parameter change (values that apply now)."""
+        self.plc.delay_cycles = self._cycles(self.cfg.channel_eng("plc.m_ack_delay"))
+        for ax in self.axes:
+            push_params(self.k, ax)
+
+    @property
+    def powered(self) -> bool:
+        """The PLC has switched the drives on."""
+        return self._powered
+
+    @property
+    def queued_blocks(self) -> int:
+        """MDI blocks waiting or running."""
+        return len(self._queue)
+
     # --- events -------------------------------------------------------------------------
     def log(self, code: Code, axis: str = "", detail: str = "") -> JobError:
         msg = MESSAGES.get(code, code.name.lower().replace("_", " "))

@@ -43,10 +43,18 @@ _INDEX_LIMITS = {
 class ParamError(ValueError):
     """One rejected parameter value: names the line (if any), the parameter and the range."""
 
-    def __init__(self, message: str, *, name: str = "", line: int | None = None) -> None:
+    def __init__(
+        self,
+        message: str,
+        *,
+        name: str = "",
+        line: int | None = None,
+        limits: tuple[float, float, str] | None = None,
+    ) -> None:
         self.name = name
         self.line = line
         self.detail = message
+        self.limits = limits  # (lo, hi, unit) for a value out of range
         super().__init__(f"line {line}: {message}" if line is not None else message)
 
 
@@ -221,7 +229,9 @@ def check_range(
         refs = [b for b in (d.lo, d.hi) if isinstance(b, str)]
         why = f" (limited by {', '.join(refs)})" if refs else ""
         raise ParamError(
-            f"{name} = {_fmt(float(value))} is out of range {span}{why} ({d.id})", name=name
+            f"{name} = {_fmt(float(value))} is out of range {span}{why} ({d.id})",
+            name=name,
+            limits=(lo, hi, unit),
         )
 
 
@@ -252,7 +262,7 @@ def validate_values(
             check_range(resolve(scope, name, reg), name, value, values, kind, reg)
         except ParamError as e:
             e.line = (lines or {}).get(name)
-            errors.append(ParamError(e.detail, name=name, line=e.line))
+            errors.append(ParamError(e.detail, name=name, line=e.line, limits=e.limits))
     return errors
 
 

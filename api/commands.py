@@ -1,0 +1,162 @@
+"""Commands to a machine: one model per command, one union the route accepts."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, Field
+
+AxisName = Annotated[str, Field(min_length=1, max_length=16, description="axis or spindle name")]
+SpindleName = Annotated[
+    str, Field(min_length=1, max_length=16, description="spindle name; S is the main spindle")
+]
+Feed = Annotated[float, Field(gt=0, le=1e6, description="feed, mm/min (°/min for rotary)")]
+
+
+class MdiCommand(BaseModel):
+    """One NC block for the MDI channel, e.g. `M3 S1000` or `G01 X10 F500`."""
+
+    type: Literal["mdi"] = "mdi"
+    block: str = Field(min_length=1, max_length=256)
+
+
+class SpindleCommand(BaseModel):
+    """M3/M4 with a speed, or M5."""
+
+    type: Literal["spindle"] = "spindle"
+    spindle: SpindleName = "S"
+    m: Literal[3, 4, 5]
+    speed_rpm: float | None = Field(None, ge=0, le=1e6, description="S word, rpm")
+
+
+class SpindlePositionCommand(BaseModel):
+    """M19 S.POS: orient the spindle, M3 (+1) / M4 (-1) direction or the shortest way."""
+
+    type: Literal["spindle_position"] = "spindle_position"
+    spindle: SpindleName = "S"
+    position_deg: float = Field(ge=-1e9, le=1e9)
+    direction: Literal[-1, 1] | None = None
+    speed_rpm: float | None = Field(None, gt=0, le=1e6)
+
+
+class GearCommand(BaseModel):
+    """M40-M45: gear stage change of the main spindle."""
+
+    type: Literal["gear"] = "gear"
+    spindle: SpindleName = "S"
+    m: int = Field(ge=40, le=45)
+
+
+class HomeCommand(BaseModel):
+    """G74 homing of an axis or a spindle."""
+
+    type: Literal["home"] = "home"
+    axis: AxisName
+
+
+class JogCommand(BaseModel):
+    """Jog: continuous `start`/`stop`, or an incremental `step` of `distance` (mm | °)."""
+
+    type: Literal["jog"] = "jog"
+    axis: AxisName
+    action: Literal["start", "stop", "step"]
+    direction: Literal[-1, 1] = 1
+    distance: float | None = Field(None, ge=-1e6, le=1e6, description="step, mm | °")
+    feed_mm_min: Feed | None = None
+
+
+class MoveCommand(BaseModel):
+    """Single-axis G0 (rapid) or G1 (feed) move to an absolute position."""
+
+    type: Literal["move"] = "move"
+    axis: AxisName
+    target: float = Field(ge=-1e9, le=1e9, description="mm | °")
+    rapid: bool = True
+    feed_mm_min: Feed | None = None
+
+
+class OverrideCommand(BaseModel):
+    """Override of the channel (path axes) or of one axis or spindle, in percent."""
+
+    type: Literal["override"] = "override"
+    axis: AxisName | None = Field(None, description="null: the channel's path override")
+    percent: float = Field(ge=0, le=200)
+
+
+HliUnit = Literal[
+    "DriveOn",
+    "TorquePermission",
+    "ReleaseFeedhold",
+    "reduced_speed",
+    "spindle_stop_at_program_end",
+    "spindle_reset",
+    "override_valid",
+    "feedhold",
+    "reduced_acceleration",
+]
+
+
+class HliCommand(BaseModel):
+    """Write an HLI control unit of an axis (`axis` set) or of the channel."""
+
+    type: Literal["hli"] = "hli"
+    unit: HliUnit
+    value: int = Field(ge=0, le=1)
+    axis: AxisName | None = None
+
+
+class PlcModeCommand(BaseModel):
+    """PLC behaviour for M functions: auto acknowledge, manual, or fault (never answers)."""
+
+    type: Literal["plc_mode"] = "plc_mode"
+    mode: Literal["auto", "manual", "fault"]
+    delay_s: float | None = Field(None, ge=0, le=60, description="auto acknowledge delay, s")
+
+
+class PlcAckCommand(BaseModel):
+    """Manual acknowledgement of one pending M function, or of all (m = null)."""
+
+    type: Literal["plc_ack"] = "plc_ack"
+    m: int | None = Field(None, ge=0, le=999)
+
+
+class ResetCommand(BaseModel):
+    """CNC reset: clears job errors and the block queue, stops motion."""
+
+    type: Literal["reset"] = "reset"
+
+
+class EmergencyStopCommand(BaseModel):
+    """Emergency stop: every axis brakes at a_emergency, the channel stays in error."""
+
+    type: Literal["emergency_stop"] = "emergency_stop"
+
+
+Command = Annotated[
+    MdiCommand
+    | SpindleCommand
+    | SpindlePositionCommand
+    | GearCommand
+    | HomeCommand
+    | JogCommand
+    | MoveCommand
+    | OverrideCommand
+    | HliCommand
+    | PlcModeCommand
+    | PlcAckCommand
+    | ResetCommand
+    | EmergencyStopCommand,
+    Field(discriminator="type"),
+]
+
+
+class CommandResult(BaseModel):
+    """The acknowledgement of an accepted command."""
+
+    accepted: bool = True
+    cycle: int = Field(description="cycle at which the command took effect")
+    block_id: int | None = Field(None, description="MDI block number")
+    acknowledged: int | None = Field(None, description="M functions acknowledged (plc_ack)")
+    state: dict[str, str] = Field(
+        default_factory=dict, description="state of every axis after the command"
+    )

@@ -1,0 +1,44 @@
+"""Shared models: job errors and events, refusals."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, Field
+
+
+class JobErrorModel(BaseModel):
+    """One job error or event of a machine, numbered as the manuals number them."""
+
+    cycle: int = Field(description="cycle in which it happened")
+    t_s: float = Field(description="simulated time, s")
+    axis: str = Field(description="axis or spindle, empty for the channel")
+    code: int = Field(description="job error (≥ 60000) or event number")
+    message: str
+    error: bool = Field(description="true for a job error, false for an information event")
+
+
+class Refusal(BaseModel):
+    """Why a request was not carried out (HTTP 4xx body under `detail`)."""
+
+    message: str
+    code: int | None = Field(None, description="job error number when the NC refused it")
+    column: int | None = Field(None, description="1-based column of a bad NC block")
+    error: JobErrorModel | None = None
+
+
+class ParameterProblem(BaseModel):
+    """A rejected parameter value: which parameter, its range and unit, and why."""
+
+    parameter: str = Field(description="list name, e.g. getriebe[0].kv")
+    id: str | None = Field(None, description="manual ID, e.g. P-AXIS-00099")
+    target: str | None = Field(None, description="axis name, or null for the channel list")
+    message: str
+    line: int | None = Field(None, description="line of an imported list")
+    min: float | None = None
+    max: float | None = None
+    unit: str | None = None
+
+
+class RefusalBody(BaseModel):
+    """HTTP body of a refusal."""
+
+    detail: Refusal

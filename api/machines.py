@@ -1,0 +1,33 @@
+"""Creating machines and pacing their simulation."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+
+class MachineCreate(BaseModel):
+    """A new machine: the demo lathe, or from native parameter lists."""
+
+    id: str = Field(pattern=r"^[a-z0-9][a-z0-9_-]{0,31}$", description="URL name")
+    name: str = Field("", max_length=80)
+    demo: bool = Field(False, description="the shipped demo lathe (lists ignored)")
+    channel_list: str = Field("", max_length=1_000_000)
+    axis_lists: dict[int, str] = Field(
+        default_factory=dict, description="axis lists by logical axis number (log_achs_nr)"
+    )
+    tool_list: str = Field("", max_length=1_000_000)
+
+
+class SimulationControl(BaseModel):
+    """Run in real time, pause, or run as fast as possible (optionally up to a cycle)."""
+
+    mode: Literal["run", "pause", "fast"]
+    until_cycle: int | None = Field(None, ge=0, description="fast: pause at this cycle")
+
+
+class StepRequest(BaseModel):
+    """Single-step a paused machine by whole cycles."""
+
+    cycles: int = Field(1, ge=1, le=10_000_000)

@@ -1,0 +1,87 @@
+"""Parameters: registry entries, values of a machine, writes and their audit trail."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+ScopeName = Literal["axis", "channel", "tool"]
+Value = float | int | str
+
+
+class ParameterDef(BaseModel):
+    """A registry entry as the manuals define it."""
+
+    id: str
+    name: str = Field(description="list name with [i]/[j] placeholders")
+    scope: ScopeName
+    dtype: str
+    quantity: str
+    default: float | str
+    min: float | str | None = Field(description="number, or the list name that bounds it")
+    max: float | str | None
+    effect: Literal["now", "reset", "restart"]
+    per_gear: bool
+    title: str
+    source: str
+
+
+class ParameterValue(BaseModel):
+    """One concrete parameter of one list of a machine."""
+
+    scope: ScopeName
+    target: str | None = Field(description="axis name, null for the channel and tool lists")
+    name: str = Field(description="concrete list name, e.g. getriebe[2].kv")
+    id: str
+    value: Value = Field(description="value in force")
+    default: Value
+    set: bool = Field(description="written in the list (not a default)")
+    unit: str = Field(description="unit of the value in the list")
+    effect: Literal["now", "reset", "restart"]
+    gear: int | None = Field(None, description="gear stage 1..6 of a getriebe[i] entry")
+    pending: Value | None = Field(None, description="written, takes effect at reset/restart")
+
+
+class ParameterChange(BaseModel):
+    scope: ScopeName
+    target: str | None = Field(None, description="axis name; null for channel and tool")
+    name: str = Field(min_length=1, max_length=120)
+    value: Value
+
+
+class ParameterWrite(BaseModel):
+    """One or many values, checked together: all are applied or none."""
+
+    changes: list[ParameterChange] = Field(min_length=1, max_length=5000)
+    comment: str = Field("", max_length=200)
+
+
+class AppliedChange(BaseModel):
+    scope: ScopeName
+    target: str | None
+    name: str
+    old: Value | None
+    new: Value
+    effect: Literal["now", "reset", "restart"]
+    pending: bool = Field(description="stored, waits for reset/restart")
+
+
+class ParameterWriteResult(BaseModel):
+    changes: list[AppliedChange]
+
+
+class AuditEntry(BaseModel):
+    """One accepted parameter change as stored in the audit trail."""
+
+    seq: int
+    time_unix: float
+    machine: str
+    actor: str
+    scope: ScopeName
+    target: str | None
+    name: str
+    old: Value | None
+    new: Value
+    effect: Literal["now", "reset", "restart"]
+    comment: str

@@ -1,0 +1,108 @@
+"""Status snapshots: a machine with its axes, HLI and PLC, and the service itself."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+from api.common import JobErrorModel
+
+SimMode = Literal["run", "pause", "fast"]
+
+
+class AxisStatus(BaseModel):
+    """One axis or spindle: state, actual values and its HLI objects."""
+
+    name: str
+    kind: Literal["linear", "rotary", "spindle"]
+    state: str = Field(description="STANDSTILL, MOVING, JOG, HOMING, ENDLESS, ... ERROR")
+    unit: str = Field(description="mm or deg")
+    pos_cmd: float
+    pos_act: float
+    lag: float = Field(description="position lag, same unit as the position")
+    vel_cmd: float = Field(description="unit/min (mm/min, °/min); rpm for spindles")
+    vel_act: float
+    homed: bool
+    in_position: bool
+    enabled: bool = Field(description="all drive enables present")
+    missing_enables: list[str]
+    control_units: dict[str, int] = Field(description="HLI control units as written")
+    override_pct: float
+    job_error: int = Field(description="active job error code, 0 none")
+    gear: int | None = Field(None, description="active gear stage 1..6 (spindles)")
+    speed_reached: bool | None = None
+    stopped: bool | None = None
+    speed_monitoring_active: bool | None = None
+    speed_monitoring_invalid: bool | None = None
+    loop: Literal["closed", "control_limit", "speed_control"]
+
+
+class PendingM(BaseModel):
+    m: int
+    axis: str
+    out_cycle: int
+
+
+class PlcStatus(BaseModel):
+    mode: Literal["auto", "manual", "fault"]
+    ack_delay_s: float
+    drives_powered: bool
+    pending: list[PendingM]
+
+
+class SimulationStatus(BaseModel):
+    """How the machine's simulated time is paced."""
+
+    mode: SimMode
+    cycle: int
+    t_s: float = Field(description="simulated time, s")
+    cycle_s: float
+    rt_factor: float = Field(description="simulated seconds per wall second, last ~1 s")
+    until_cycle: int | None = Field(None, description="fast mode pauses at this cycle")
+    t0_unix: float = Field(description="wall time (Unix s) of cycle 0 while running")
+
+
+class MachineStatus(BaseModel):
+    """A full snapshot of one machine."""
+
+    id: str
+    name: str
+    simulation: SimulationStatus
+    channel_units: dict[str, int] = Field(description="override (‰), feedhold, ...")
+    emergency_stop: bool
+    queued_blocks: int
+    axes: list[AxisStatus]
+    plc: PlcStatus
+    job_errors: list[JobErrorModel] = Field(description="active job errors, one per axis")
+    recent_events: list[JobErrorModel] = Field(description="last 50 events and errors")
+
+
+class MachineSummary(BaseModel):
+    id: str
+    name: str
+    source: Literal["demo", "lists"]
+    axes: list[str]
+    mode: SimMode
+    cycle: int
+
+
+class LoopStatus(BaseModel):
+    """The real-time loop that paces every running machine."""
+
+    period_s: float = Field(description="loop period, s (it steps every due cycle per tick)")
+    ticks: int
+    overruns: int = Field(description="ticks whose work ran past the next deadline")
+    missed_deadlines: int = Field(description="deadlines skipped after overruns")
+    work_p50_ms: float
+    work_p99_ms: float
+    work_max_ms: float
+    wake_late_p99_ms: float = Field(description="how late the loop woke, 99th percentile")
+
+
+class ServiceStatus(BaseModel):
+    version: str
+    uptime_s: float
+    loop: LoopStatus
+    clients: int = Field(description="telemetry websockets connected")
+    machines: dict[str, SimulationStatus]

@@ -1,0 +1,94 @@
+"""Live telemetry over a websocket: JSON control messages and binary sample frames.
+
+A binary frame is `b"INBT"`, a little-endian u32 header length, the JSON `FrameHeader` (padded
+with spaces so the samples start 8-byte aligned), then `count` float64 samples of each signal
+in turn (signal-major). Sample k of a frame belongs to cycle `first_cycle + k * stride`; its
+nominal wall time is `t0_unix + cycle * cycle_s`.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, Field
+
+from api.common import JobErrorModel
+
+MAGIC = b"INBT"
+
+
+class SignalInfo(BaseModel):
+    name: str = Field(description="`<axis>.<signal>`, e.g. S1.speed_act_rpm")
+    axis: str
+    unit: str
+    kind: Literal["float", "bool", "enum"]
+
+
+class Subscribe(BaseModel):
+    """Client → server: which signals to stream (replaces any earlier subscription)."""
+
+    type: Literal["subscribe"] = "subscribe"
+    signals: list[str] = Field(min_length=1, max_length=256)
+    max_rate_hz: float | None = Field(
+        None, gt=0, description="decimate to at most this many samples per second"
+    )
+
+
+class Hello(BaseModel):
+    """Server → client on connect: the machine and every signal it records."""
+
+    type: Literal["hello"] = "hello"
+    machine: str
+    cycle: int
+    cycle_s: float
+    signals: list[SignalInfo]
+
+
+class Subscribed(BaseModel):
+    type: Literal["subscribed"] = "subscribed"
+    signals: list[str]
+    first_cycle: int = Field(description="frames start at the cycle after this one")
+    stride: int
+
+
+class EventMessage(BaseModel):
+    type: Literal["event"] = "event"
+    event: JobErrorModel
+
+
+class ErrorMessage(BaseModel):
+    type: Literal["error"] = "error"
+    message: str
+
+
+class FrameHeader(BaseModel):
+    machine: str
+    first_cycle: int
+    count: int = Field(description="samples per signal")
+    stride: int = Field(description="cycles between samples (1: every cycle)")
+    cycle_s: float
+    t0_unix: float = Field(description="wall time of cycle 0 in the current run")
+    signals: list[str]
+    decimated: bool = Field(description="stride > 1 because the client fell behind")
+    skipped_cycles: int = Field(description="cycles lost since the previous frame")
+
+
+def encode_frame(header: FrameHeader, data: np.ndarray) -> bytes:
+    """Binary frame of a header and a signals × count float64 array."""
+    text = header.model_dump_json().encode()
+    pad = (-(8 + len(text))) % 8
+    body = np.ascontiguousarray(data, dtype="<f8").tobytes()
+    return MAGIC + struct.pack("<I", len(text) + pad) + text + b" " * pad + body
+
+
+def decode_frame(buf: bytes) -> tuple[FrameHeader, np.ndarray]:
+    """Header and signals × count samples of a binary frame."""
+    if buf[:4] != MAGIC:
+        raise ValueError("not a telemetry frame")
+    (n,) = struct.unpack_from("<I", buf, 4)
+    header = FrameHeader.model_validate(json.loads(buf[8 : 8 + n]))
+    data = np.frombuffer(buf, dtype="<f8", offset=8 + n)
+    return header, data.reshape(len(header.signals), header.count)

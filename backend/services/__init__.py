@@ -1,0 +1,1 @@
+"""The service's parts: machines, real-time loop, telemetry, storage, authorization."""

@@ -1,0 +1,282 @@
+"""Parameters of a hosted machine: read with metadata, write validated and audited, import
+and export the native list format, and apply pending values at reset or restart.
+
+A write is all or nothing: every value is checked against its range with the bounds taken
+from the list as it would stand afterwards; a rejection names parameter, range and unit.
+Values that take effect now go to the running machine at once; the others are stored and
+shown as pending until reset (`Effect.RESET`) or restart (`Effect.RESTART`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Mapping
+
+from api.auth import Action
+from api.common import ParameterProblem
+from api.parameters import (
+    AppliedChange,
+    AuditEntry,
+    ParameterChange,
+    ParameterValue,
+    ParameterWriteResult,
+)
+from backend.errors import ApiError
+from backend.services.auth import Actor, authorize
+from backend.services.host import MachineHost, Pending
+from backend.services.store import Store, StoredChange
+from nc_sim.errors import NcUsageError
+from nc_sim.machine.config import MachineConfig
+from nc_sim.params import (
+    Effect,
+    ParamDef,
+    ParamError,
+    ParamListError,
+    Scope,
+    Value,
+    format_list,
+    parse_list,
+    registry,
+    resolve,
+    validate_values,
+)
+from nc_sim.params.listfile import axis_kind_of, parse_value
+from nc_sim.units import AxisKind
+
+Key = tuple[str, str, str]  # scope, target ('' for channel and tool), name
+_GEAR = "getriebe[i]."
+_KIND_LETTER = {AxisKind.LINEAR: "T", AxisKind.ROTARY: "R", AxisKind.SPINDLE: "S"}
+
+
+def list_values(cfg: MachineConfig, scope: Scope, target: str) -> dict[str, Value]:
+    """The live dict of written values of one list (channel, tool, or an axis)."""
+    if scope is Scope.CHANNEL:
+        return cfg.channel
+    if scope is Scope.TOOL:
+        return cfg.tools
+    return cfg.axis(target).values
+
+
+def _target(host: MachineHost, scope: Scope, target: str | None) -> str:
+    if scope is not Scope.AXIS:
+        return ""
+    names = [ax.name for ax in host.machine.axes]
+    if target not in names:
+        raise ApiError(
+            422, {"message": f"axis parameters need a target, one of {', '.join(names)}"}
+        )
+    return target
+
+
+def _problem(e: ParamError, scope: Scope, target: str, line: int | None = None) -> ParameterProblem:
+    d = None
+    with contextlib.suppress(ParamError):
+        d = resolve(scope, e.name)
+    lo, hi, unit = e.limits if e.limits else (None, None, None)
+    return ParameterProblem(
+        parameter=e.name,
+        id=d.id if d else None,
+        target=target or None,
+        message=e.detail,
+        line=line if line is not None else e.line,
+        min=lo,
+        max=hi,
+        unit=unit,
+    )
+
+
+def _rejected(problems: list[ParameterProblem]) -> ApiError:
+    first = problems[0].message if problems else "rejected"
+    return ApiError(
+        422,
+        {
+            "message": f"{len(problems)} parameter value(s) rejected, nothing applied: {first}",
+            "problems": [p.model_dump() for p in problems],
+        },
+    )
+
+
+def _parse(d: ParamDef, name: str, value: Value) -> Value:
+    if isinstance(value, int | float) and d.is_numeric and not isinstance(value, bool):
+        return parse_value(d, name, repr(value) if isinstance(value, float) else str(value))
+    return parse_value(d, name, str(value))
+
+
+def _effective(host: MachineHost, scope: Scope, target: str) -> dict[str, Value]:
+    """A list as it stands with pending values: what the next restart would load."""
+    values = dict(list_values(host.machine.cfg, scope, target))
+    for (s, t, n), p in host.pending.items():
+        if s == scope.value and t == target:
+            values[n] = p.value
+    return values
+
+
+def write(
+    actor: Actor,
+    host: MachineHost,
+    store: Store,
+    changes: list[ParameterChange],
+    comment: str = "",
+    lines: Mapping[str, int] | None = None,
+) -> ParameterWriteResult:
+    """Validate all changes together, then store, audit and apply them."""
+    authorize(actor, Action.CONFIGURE, host.id)
+    with host.lock:
+        problems: list[ParameterProblem] = []
+        parsed: list[tuple[Scope, str, ParamDef, str, Value]] = []
+        for c in changes:
+            scope = Scope(c.scope)
+            target = _target(host, scope, c.target)
+            try:
+                d = resolve(scope, c.name)
+                parsed.append((scope, target, d, c.name, _parse(d, c.name, c.value)))
+            except ParamError as e:
+                problems.append(_problem(e, scope, target, (lines or {}).get(c.name)))
+        lists: dict[tuple[Scope, str], dict[str, Value]] = {}
+        for scope, target, _d, name, value in parsed:
+            lists.setdefault((scope, target), _effective(host, scope, target))[name] = value
+        for (scope, target), values in lists.items():
+            for err in validate_values(scope, values):
+                problems.append(_problem(err, scope, target, (lines or {}).get(err.name)))
+        if problems:
+            raise _rejected(problems)
+        applied: list[AppliedChange] = []
+        stored: list[StoredChange] = []
+        for scope, target, d, name, value in parsed:
+            key: Key = (scope.value, target, name)
+            old = host.pending[key].value if key in host.pending else None
+            if old is None:
+                old = list_values(host.machine.cfg, scope, target).get(name)
+            stored.append(StoredChange(scope.value, target, name, old, value, d.effect.value))
+            applied.append(
+                AppliedChange(
+                    scope=scope.value,
+                    target=target or None,
+                    name=name,
+                    old=old,
+                    new=value,
+                    effect=d.effect.value,
+                    pending=d.effect is not Effect.NOW,
+                )
+            )
+        store.write(host.id, actor.name, comment, stored)
+        for scope, target, d, name, value in parsed:
+            if d.effect is Effect.NOW:
+                list_values(host.machine.cfg, scope, target)[name] = value
+            else:
+                host.pending[(scope.value, target, name)] = Pending(value, d.effect.value)
+        host.machine.refresh_params()
+        return ParameterWriteResult(changes=applied)
+
+
+def apply_pending(host: MachineHost, effects: set[str]) -> int:
+    """Move pending values with these effects into the running machine (at reset)."""
+    with host.lock:
+        keys = [k for k, p in host.pending.items() if p.effect in effects]
+        for scope, target, name in keys:
+            list_values(host.machine.cfg, Scope(scope), target)[name] = host.pending.pop(
+                (scope, target, name)
+            ).value
+        if keys:
+            host.machine.refresh_params()
+        return len(keys)
+
+
+def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) -> list[str]:
+    letter = _KIND_LETTER[kind]
+    names: list[str] = []
+    for d in registry():
+        if d.scope is not scope or (scope is Scope.AXIS and letter not in d.axis_types):
+            continue
+        if d.name.startswith(_GEAR) and "[" not in d.name[len(_GEAR) :]:
+            names += [f"getriebe[{g}].{d.name[len(_GEAR) :]}" for g in range(6)]
+        elif "[" not in d.name:
+            names.append(d.name)
+    return names + sorted(n for n in written if n not in set(names))
+
+
+def read(host: MachineHost, scope: Scope, target: str | None) -> list[ParameterValue]:
+    """Every parameter of one list with value, default, unit, effect and pending value."""
+    with host.lock:
+        tgt = _target(host, scope, target)
+        written = list_values(host.machine.cfg, scope, tgt)
+        kind = axis_kind_of(written) if scope is Scope.AXIS else AxisKind.LINEAR
+        out = []
+        for name in _concrete_names(scope, kind, written):
+            d = resolve(scope, name)
+            pending = host.pending.get((scope.value, tgt, name))
+            gear = int(name[9]) + 1 if name.startswith("getriebe[") else None
+            out.append(
+                ParameterValue(
+                    scope=scope.value,
+                    target=tgt or None,
+                    name=name,
+                    id=d.id,
+                    value=written.get(name, d.default),
+                    default=d.default,
+                    set=name in written,
+                    unit=d.raw_unit(kind),
+                    effect=d.effect.value,
+                    gear=gear,
+                    pending=pending.value if pending else None,
+                )
+            )
+        return out
+
+
+def export_list(host: MachineHost, scope: Scope, target: str | None) -> str:
+    """The list in native format as the next restart would load it (pending included)."""
+    with host.lock:
+        tgt = _target(host, scope, target)
+        values = _effective(host, scope, tgt)
+    where = f" axis {tgt}" if tgt else ""
+    title = f"Inbetrieb export: machine {host.id}, {scope.value} list{where}"
+    return format_list(values, scope, [title])
+
+
+def import_list(
+    actor: Actor, host: MachineHost, store: Store, scope: Scope, target: str | None, text: str
+) -> ParameterWriteResult:
+    """Parse a native list (errors with line numbers) and write its values as one change."""
+    authorize(actor, Action.CONFIGURE, host.id)
+    tgt = _target(host, scope, target)
+    try:
+        plist = parse_list(text, scope)
+    except ParamListError as e:
+        raise _rejected([_problem(p, scope, tgt) for p in e.errors]) from None
+    if not plist.values:
+        raise ApiError(422, {"message": "the list holds no parameter values"})
+    lines = {ln.name: i for i, ln in enumerate(plist.lines, start=1) if ln.name}
+    changes = [
+        ParameterChange(scope=scope.value, target=tgt or None, name=n, value=v)
+        for n, v in plist.values.items()
+    ]
+    return write(actor, host, store, changes, f"import {scope.value} list", lines)
+
+
+def audit(store: Store, mid: str, limit: int) -> list[AuditEntry]:
+    return [
+        AuditEntry(
+            seq=r.seq,
+            time_unix=r.time,
+            machine=r.machine,
+            actor=r.actor,
+            scope=r.change.scope,
+            target=r.change.target or None,
+            name=r.change.name,
+            old=r.change.old,
+            new=r.change.new,
+            effect=r.change.effect,
+            comment=r.comment,
+        )
+        for r in store.audit(mid, limit)
+    ]
+
+
+def apply_stored(cfg: MachineConfig, stored: list[tuple[str, str, str, Value]]) -> None:
+    """Layer stored values over a machine's base lists (at start-up and restart)."""
+    for scope, target, name, value in stored:
+        try:
+            list_values(cfg, Scope(scope), target)[name] = value
+        except NcUsageError:
+            continue  # an axis that the base lists no longer define

@@ -1,0 +1,166 @@
+"""Telemetry fan-out: every frame period, each subscriber gets the samples of every cycle
+since its last frame, as one binary frame, and the new events as JSON messages.
+
+One hub task builds frames; each subscriber has at most one send in flight. A subscriber still
+busy sending when its next frame is due is skipped for that period (it never holds up the loop
+or anyone else) and later gets the larger range, decimated when it exceeds
+`max_frame_samples`; cycles that left the ring meanwhile are reported as skipped. Subscribers
+with the same signals and range share one encoded frame.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+from dataclasses import dataclass, field
+
+from fastapi import WebSocket
+
+from api.telemetry import EventMessage, FrameHeader, encode_frame
+from backend.services.commands import job_error_model
+from backend.services.host import MachineHost
+from nc_sim.signals import Signal
+
+
+@dataclass(frozen=True)
+class Built:
+    """An encoded frame and where its subscribers continue."""
+
+    frame: bytes
+    next_cursor: int
+
+
+@dataclass(eq=False)
+class Subscriber:
+    """One websocket watching one machine."""
+
+    ws: WebSocket
+    host: MachineHost
+    signals: list[Signal] = field(default_factory=list)
+    min_stride: int = 1
+    cursor: int = 0  # next cycle to send
+    event_index: int = 0
+    epoch: int = 0
+    control: list[str] = field(default_factory=list)  # JSON replies, sent before the next frame
+    sending: asyncio.Task[None] | None = None
+    busy_periods: int = 0
+    closed: bool = False
+
+    def subscribe(self, signals: list[Signal], max_rate_hz: float | None) -> None:
+        """Start streaming these signals from the current cycle (also after a reconnect)."""
+        with self.host.lock:
+            self.signals = signals
+            rate = max_rate_hz or math.inf
+            self.min_stride = max(1, math.ceil(1.0 / (self.host.cycle_s * rate)))
+            self.cursor = self.host.cycle + 1
+            self.epoch = self.host.epoch
+
+
+class TelemetryHub:
+    """Builds and sends frames for every subscriber."""
+
+    def __init__(self, frame_s: float, max_frame_samples: int) -> None:
+        self.frame_s = frame_s
+        self.max_frame_samples = max_frame_samples
+        self.subscribers: set[Subscriber] = set()
+        self.frames_sent = 0
+        self._task: asyncio.Task[None] | None = None
+
+    def add(self, ws: WebSocket, host: MachineHost) -> Subscriber:
+        with host.lock:
+            sub = Subscriber(ws, host, cursor=host.cycle + 1, event_index=len(host.machine.events))
+            sub.epoch = host.epoch
+        self.subscribers.add(sub)
+        return sub
+
+    def remove(self, sub: Subscriber) -> None:
+        sub.closed = True
+        self.subscribers.discard(sub)
+
+    def start(self) -> None:
+        self._task = asyncio.get_running_loop().create_task(self._run(), name="telemetry-hub")
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+
+    async def _run(self) -> None:
+        loop = asyncio.get_running_loop()
+        t0 = loop.time()
+        k = 0
+        while True:
+            k += 1
+            delay = t0 + k * self.frame_s - loop.time()
+            if delay < 0:  # the event loop was held up: continue from now
+                t0, k = loop.time(), 0
+            else:
+                await asyncio.sleep(delay)
+            self.tick()
+
+    def tick(self) -> None:
+        """Build and dispatch one period's messages."""
+        cache: dict[tuple[object, ...], Built] = {}
+        for sub in list(self.subscribers):
+            if sub.sending is not None and not sub.sending.done():
+                sub.busy_periods += 1
+                continue
+            messages = self._messages(sub, cache)
+            if messages:
+                sub.sending = asyncio.get_running_loop().create_task(self._send(sub, messages))
+
+    def _messages(
+        self, sub: Subscriber, cache: dict[tuple[object, ...], Built]
+    ) -> list[str | bytes]:
+        host = sub.host
+        out: list[str | bytes] = list(sub.control)
+        sub.control.clear()
+        with host.lock:
+            if sub.epoch != host.epoch:  # the machine was restarted: follow it from cycle 1
+                sub.epoch, sub.cursor, sub.event_index = host.epoch, 1, 0
+            head = host.cycle
+            events = host.machine.events[sub.event_index :]
+            sub.event_index += len(events)
+            if sub.signals and head >= sub.cursor:
+                out.append(self._frame(sub, head, cache))
+        out += [EventMessage(event=job_error_model(e)).model_dump_json() for e in events]
+        return out
+
+    def _frame(self, sub: Subscriber, head: int, cache: dict[tuple[object, ...], Built]) -> bytes:
+        """The frame of cycles cursor..head (caller holds the host lock); advances the cursor."""
+        host = sub.host
+        span = head - sub.cursor + 1
+        stride = max(sub.min_stride, math.ceil(span / self.max_frame_samples))
+        key = (host.id, host.epoch, tuple(s.name for s in sub.signals), sub.cursor, head, stride)
+        built = cache.get(key)
+        if built is None:
+            data, start = host.samples(sub.signals, sub.cursor, head, stride)
+            header = FrameHeader(
+                machine=host.id,
+                first_cycle=start,
+                count=data.shape[1],
+                stride=stride,
+                cycle_s=host.cycle_s,
+                t0_unix=host.t0_unix(),
+                signals=[s.name for s in sub.signals],
+                decimated=stride > sub.min_stride,
+                skipped_cycles=start - sub.cursor,
+            )
+            built = cache[key] = Built(encode_frame(header, data), start + data.shape[1] * stride)
+        sub.cursor = built.next_cursor
+        return built.frame
+
+    async def _send(self, sub: Subscriber, messages: list[str | bytes]) -> None:
+        try:
+            for msg in messages:
+                if sub.closed:
+                    return
+                if isinstance(msg, bytes):
+                    await sub.ws.send_bytes(msg)
+                    self.frames_sent += 1
+                else:
+                    await sub.ws.send_text(msg)
+        except Exception:  # the client went away: its route handler removes it
+            sub.closed = True

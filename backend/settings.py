@@ -1,0 +1,22 @@
+"""Service settings: environment variables `INBETRIEB_*` or the `inbetrieb serve` options."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from api.auth import Role
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="INBETRIEB_")
+
+    db_path: Path = Field(Path("var/inbetrieb.sqlite"), description="SQLite file")
+    demo: bool = Field(True, description="create the demo lathe in a fresh store")
+    loop_period_s: float = Field(0.002, gt=0, le=0.1, description="real-time loop period")
+    frame_s: float = Field(0.02, gt=0, le=1, description="telemetry frame period")
+    max_frame_samples: int = Field(1000, ge=10, description="decimate beyond this per frame")
+    user: str = Field("local", description="who requests act as until login exists")
+    role: Role = Field(Role.INSTRUCTOR, description="role of that user")

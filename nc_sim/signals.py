@@ -1,0 +1,89 @@
+"""The signals a machine records every cycle, by name: `<axis>.<signal>` in display units.
+
+One table serves the headless trace (CSV columns) and live telemetry (websocket frames), so a
+name means the same thing everywhere. Each signal is a column of the kernel record scaled to
+its display unit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nc_sim.kernel import layout as L
+from nc_sim.machine.machine import Machine
+from nc_sim.units import RPM_TO_DEG_S, AxisKind
+
+
+@dataclass(frozen=True)
+class Signal:
+    """One recorded signal: which kernel slot and record column, and how to scale it."""
+
+    name: str
+    axis: str
+    slot: int
+    column: int
+    scale: float
+    unit: str
+    kind: str  # "float", "bool" or "enum" (state, gear, loop mode, job error code)
+
+
+def _axis_signals(name: str, kind: AxisKind, slot: int) -> list[Signal]:
+    u = "mm" if kind is AxisKind.LINEAR else "deg"
+    spindle = kind is AxisKind.SPINDLE
+    rows: list[tuple[str, int, float, str, str]] = []
+    if spindle:
+        rows += [
+            ("speed_cmd_rpm", L.R_V_CMD, 1.0 / RPM_TO_DEG_S, "rpm", "float"),
+            ("speed_act_rpm", L.R_V_ACT, 1.0 / RPM_TO_DEG_S, "rpm", "float"),
+        ]
+    rows += [
+        (f"pos_cmd_{u}", L.R_P_CMD, 1.0, u, "float"),
+        (f"pos_act_{u}", L.R_P_ACT, 1.0, u, "float"),
+        (f"lag_{u}", L.R_LAG, 1.0, u, "float"),
+    ]
+    if not spindle:
+        rows += [
+            (f"vel_cmd_{u}_min", L.R_V_CMD, 60.0, f"{u}/min", "float"),
+            (f"vel_act_{u}_min", L.R_V_ACT, 60.0, f"{u}/min", "float"),
+        ]
+    if u == "deg":
+        rows.append(("accel_cmd_deg_s2", L.R_A_CMD, 1.0, "deg/s²", "float"))
+    else:
+        rows.append(("acc_cmd_mm_s2", L.R_A_CMD, 1.0, "mm/s²", "float"))
+    if spindle:
+        rows += [
+            ("speed_reached", L.R_SPEED_REACHED, 1.0, "", "bool"),
+            ("stopped", L.R_STOPPED, 1.0, "", "bool"),
+            ("gear", L.R_GEAR, 1.0, "", "enum"),
+            ("speed_monitoring_active", L.R_MON_ACTIVE, 1.0, "", "bool"),
+            ("speed_monitoring_invalid", L.R_MON_INVALID, 1.0, "", "bool"),
+            ("open_loop", L.R_OPEN_LOOP, 1.0, "", "enum"),  # 1 control limit, 2 speed control
+            ("override_pct", L.R_OVERRIDE, 100.0, "%", "float"),
+        ]
+    rows += [
+        ("homed", L.R_HOMED, 1.0, "", "bool"),
+        ("in_position", L.R_IN_POS, 1.0, "", "bool"),
+        ("da_digits", L.R_DA, 1.0, "digits", "float"),
+        ("state", L.R_STATE, 1.0, "", "enum"),
+        ("job_error", L.R_JOB_ERROR, 1.0, "", "enum"),
+    ]
+    return [Signal(f"{name}.{s}", name, slot, c, f, unit, k) for s, c, f, unit, k in rows]
+
+
+def machine_signals(m: Machine) -> list[Signal]:
+    """Every signal of a machine, axis by axis, in a stable order."""
+    out: list[Signal] = []
+    for ax in m.axes:
+        out += _axis_signals(ax.name, ax.kind, ax.slot)
+    return out
+
+
+def signal_columns(signals: list[Signal], rec: np.ndarray) -> np.ndarray:
+    """Samples of the given signals from a kernel record (cycles × slots × R_COLS), as a
+    signals × cycles float64 array in display units."""
+    out = np.empty((len(signals), rec.shape[0]))
+    for i, s in enumerate(signals):
+        np.multiply(rec[:, s.slot, s.column], s.scale, out=out[i])
+    return out

@@ -1,0 +1,83 @@
+"""A real service for integration tests: `inbetrieb serve` in a subprocess on a free port."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class Server:
+    """One uvicorn process serving the app with its own SQLite file."""
+
+    def __init__(self, db: Path, *extra: str) -> None:
+        self.db = db
+        self.extra = extra
+        self.port = free_port()
+        self.base = f"http://127.0.0.1:{self.port}"
+        self.ws_base = f"ws://127.0.0.1:{self.port}"
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.http = httpx.Client(base_url=self.base, timeout=10)
+
+    def start(self) -> Server:
+        cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(self.port)]
+        cmd += ["--db", str(self.db), *self.extra]
+        self.proc = subprocess.Popen(cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            try:
+                if self.http.get("/api/health").status_code == 200:
+                    return self
+            except httpx.TransportError:
+                time.sleep(0.1)
+        raise RuntimeError("service did not come up")
+
+    def stop(self) -> None:
+        if self.proc is not None:
+            self.proc.send_signal(signal.SIGTERM)
+            self.proc.wait(timeout=20)
+            self.proc = None
+
+    def close(self) -> None:
+        self.stop()
+        self.http.close()
+
+    # --- helpers ----------------------------------------------------------------------------
+    def command(self, mid: str, body: dict[str, Any]) -> httpx.Response:
+        return self.http.post(f"/api/machines/{mid}/commands", json=body)
+
+    def status(self, mid: str = "demo") -> dict[str, Any]:
+        r = self.http.get(f"/api/machines/{mid}/status")
+        r.raise_for_status()
+        data: dict[str, Any] = r.json()
+        return data
+
+    def axis(self, name: str, mid: str = "demo") -> dict[str, Any]:
+        return next(a for a in self.status(mid)["axes"] if a["name"] == name)
+
+    def pace(self, mid: str, **body: Any) -> dict[str, Any]:
+        r = self.http.post(f"/api/machines/{mid}/simulation", json=body)
+        r.raise_for_status()
+        data: dict[str, Any] = r.json()
+        return data
+
+    def step(self, mid: str, cycles: int) -> dict[str, Any]:
+        r = self.http.post(f"/api/machines/{mid}/simulation/step", json={"cycles": cycles})
+        r.raise_for_status()
+        data: dict[str, Any] = r.json()
+        return data
