@@ -34,18 +34,14 @@ def main(argv: list[str] | None = None) -> int:
         rows = len(next(iter(result.columns.values())))
         print(f"{rows} cycles, {len(result.events)} events ({len(errors)} errors) -> {args.out}")
         return 0
-    import uvicorn
-
-    from backend.main import create_app
-    from backend.settings import Settings
+    from backend.server import serve
 
     overrides: dict[str, object] = {}
     if args.db:
         overrides["db_path"] = args.db
     if args.no_demo:
         overrides["demo"] = False
-    settings = Settings.model_validate(overrides)
-    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level="warning")
+    serve(args.host, args.port, overrides)
     return 0
 
 

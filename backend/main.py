@@ -8,12 +8,11 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI, Request
 from fastapi.responses import JSONResponse
 
+from backend import VERSION
 from backend.deps import Services
 from backend.errors import ApiError
 from backend.routes import commands, machines, parameters, service, telemetry
 from backend.settings import Settings
-
-VERSION = "0.2.0"
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:

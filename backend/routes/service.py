@@ -7,6 +7,7 @@ import time
 from fastapi import APIRouter
 
 from api.status import ServiceStatus
+from backend import VERSION
 from backend.deps import ServicesDep
 from backend.services.status import simulation_status
 
@@ -21,8 +22,6 @@ def health() -> dict[str, str]:
 @router.get("/service/status")
 def service_status(services: ServicesDep) -> ServiceStatus:
     """Loop timing and overruns, telemetry clients, and each machine's real-time factor."""
-    from backend.main import VERSION
-
     return ServiceStatus(
         version=VERSION,
         uptime_s=time.time() - services.started,

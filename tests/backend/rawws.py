@@ -1,0 +1,55 @@
+"""A websocket client on a plain socket that reads only when told to.
+
+Library clients read the socket in the background and buffer without bound, so they never
+push back on the server; this one leaves the bytes in the kernel, as a stalled browser tab
+on a slow link does.
+"""
+
+from __future__ import annotations
+
+import base64
+import os
+import socket
+import struct
+
+
+class RawWebSocket:
+    def __init__(self, host: str, port: int, path: str, rcvbuf: int = 4096) -> None:
+        self.sock = socket.socket()
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+        self.sock.connect((host, port))
+        key = base64.b64encode(os.urandom(16)).decode()
+        self.sock.sendall(
+            (
+                f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+                f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                "Sec-WebSocket-Version: 13\r\n\r\n"
+            ).encode()
+        )
+        head = b""
+        while b"\r\n\r\n" not in head:
+            head += self.sock.recv(1)
+        if b" 101 " not in head.split(b"\r\n")[0]:
+            raise ConnectionError(head.decode(errors="replace"))
+
+    def _exact(self, n: int) -> bytes:
+        buf = b""
+        while len(buf) < n:
+            chunk = self.sock.recv(n - len(buf))
+            if not chunk:
+                raise ConnectionError("closed")
+            buf += chunk
+        return buf
+
+    def recv(self) -> tuple[int, bytes]:
+        """(opcode, payload) of the next unfragmented message from the server."""
+        b0, b1 = self._exact(2)
+        n = b1 & 0x7F
+        if n == 126:
+            (n,) = struct.unpack(">H", self._exact(2))
+        elif n == 127:
+            (n,) = struct.unpack(">Q", self._exact(8))
+        return b0 & 0x0F, self._exact(n)
+
+    def close(self) -> None:
+        self.sock.close()
