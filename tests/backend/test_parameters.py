@@ -1,0 +1,171 @@
+"""Parameters over real HTTP: validated writes, pending values, audit in SQLite, import and
+export of the native list format, and everything surviving a restart of the service."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from nc_sim.params import registry
+from tests.backend.server import Server
+
+DATA = Path(__file__).resolve().parents[1] / "nc_sim" / "data"
+KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    s = Server(tmp_path_factory.mktemp("par") / "params.sqlite").start()
+    yield s
+    s.close()
+
+
+def values(srv: Server, target: str | None = "X", scope: str = "axis") -> dict[str, Any]:
+    params: dict[str, Any] = {"scope": scope}
+    if target:
+        params["target"] = target
+    r = srv.http.get("/api/machines/demo/parameters", params=params)
+    r.raise_for_status()
+    return {p["name"]: p for p in r.json()}
+
+
+def write(srv: Server, *changes: tuple[str, str | None, str, Any]) -> Any:
+    body = {"changes": [{"scope": s, "target": t, "name": n, "value": v} for s, t, n, v in changes]}
+    return srv.http.patch("/api/machines/demo/parameters", json=body)
+
+
+def lag_at_feed(srv: Server, feed_mm_min: float) -> float:
+    """Steady position lag of X in a G1 move (machine paused and stepped in simulated time)."""
+    srv.pace("demo", mode="pause")
+    x0 = srv.axis("X")["pos_cmd"]
+    r = srv.command(
+        "demo",
+        {
+            "type": "move",
+            "axis": "X",
+            "target": x0 + 50,
+            "rapid": False,
+            "feed_mm_min": feed_mm_min,
+        },
+    )
+    assert r.status_code == 200, r.text
+    srv.step("demo", 2000)
+    lag = float(srv.axis("X")["lag"])
+    srv.step("demo", 6000)
+    srv.pace("demo", mode="run")
+    return lag
+
+
+def test_registry_and_values_per_gear_record(srv: Server) -> None:
+    defs = {d["id"]: d for d in srv.http.get("/api/parameters").json()}
+    assert defs["P-AXIS-00099"]["name"] == "getriebe[i].kv"
+    assert defs["P-AXIS-00099"]["per_gear"]
+    v = values(srv, "S1")
+    assert [v[f"getriebe[{g}].kv"]["gear"] for g in range(6)] == [1, 2, 3, 4, 5, 6]
+    x = values(srv)["getriebe[0].kv"]
+    assert x["value"] == 2000 and x["set"] and x["unit"] == "0.01/s"
+    assert x["effect"] == "now" and x["id"] == "P-AXIS-00099"
+
+
+def test_write_applies_now_and_the_loop_follows(srv: Server) -> None:
+    """kv 20/s -> 10/s: at 10 mm/s the steady lag doubles from 0.5 to 1.0 mm (lag = v/kv)."""
+    assert lag_at_feed(srv, 600) == pytest.approx(0.5, rel=1e-3)
+    r = write(srv, ("axis", "X", "getriebe[0].kv", 1000))
+    assert r.status_code == 200, r.text
+    change = r.json()["changes"][0]
+    assert (change["old"], change["new"], change["pending"]) == (2000, 1000, False)
+    assert lag_at_feed(srv, 600) == pytest.approx(1.0, rel=1e-3)
+
+
+def test_out_of_range_is_422_with_range_and_unit_and_nothing_changes(srv: Server) -> None:
+    before = values(srv)
+    r = write(srv, ("axis", "X", "getriebe[0].lag_max", 60000), ("axis", "X", "getriebe[0].kv", 0))
+    assert r.status_code == 422
+    detail = r.json()["detail"]
+    (problem,) = detail["problems"]
+    assert problem["parameter"] == "getriebe[0].kv" and problem["id"] == "P-AXIS-00099"
+    assert (problem["min"], problem["unit"]) == (KV.lo, "0.01/s")
+    assert "out of range" in problem["message"]
+    after = values(srv)
+    assert after["getriebe[0].kv"]["value"] == before["getriebe[0].kv"]["value"]
+    assert after["getriebe[0].lag_max"]["value"] == before["getriebe[0].lag_max"]["value"]
+    r = write(srv, ("axis", "X", "getriebe[0].nonsense", 1))
+    assert r.status_code == 422 and "nonsense" in r.text
+    r = write(srv, ("axis", "Q", "getriebe[0].kv", 1000))
+    assert r.status_code == 422 and "X, Z, S1" in r.text
+
+
+def test_reset_effect_is_pending_until_reset(srv: Server) -> None:
+    r = write(srv, ("axis", "X", "kenngr.swe_pos", 2500000))
+    assert r.json()["changes"][0]["pending"]
+    p = values(srv)["kenngr.swe_pos"]
+    assert (p["value"], p["pending"], p["effect"]) == (3000000, 2500000, "reset")
+    srv.command("demo", {"type": "reset"})
+    p = values(srv)["kenngr.swe_pos"]
+    assert (p["value"], p["pending"]) == (2500000, None)
+
+
+def test_restart_effect_is_pending_until_restart(srv: Server) -> None:
+    write(srv, ("axis", "X", "getriebe[0].wegaufz", 2))
+    srv.command("demo", {"type": "reset"})
+    assert values(srv)["getriebe[0].wegaufz"]["pending"] == 2
+    r = srv.http.post("/api/machines/demo/restart")
+    assert r.status_code == 200 and r.json()["cycle"] < 1000
+    p = values(srv)["getriebe[0].wegaufz"]
+    assert (p["value"], p["pending"]) == (2, None)
+    write(srv, ("axis", "X", "getriebe[0].wegaufz", 1))
+    srv.http.post("/api/machines/demo/restart")
+
+
+def test_import_manual_excerpt_and_reject_bad_line(srv: Server) -> None:
+    text = (DATA / "axis_excerpt.lis").read_text()
+    r = srv.http.post(
+        "/api/machines/demo/parameters/import",
+        params={"scope": "axis", "target": "S1"},
+        content=text,
+        headers={"content-type": "text/plain"},
+    )
+    assert r.status_code == 200, r.text
+    v = values(srv, "S1")
+    assert v["getriebe[0].beschl_kennlinie.typ"]["value"] == 2  # polynomial
+    assert v["getriebe[0].beschl_kennlinie.b3"]["value"] == pytest.approx(-1.92901234e-10)
+    lines = text.splitlines()
+    lines.insert(4, "getriebe[0].dynamik.a_max   banana")
+    r = srv.http.post(
+        "/api/machines/demo/parameters/import",
+        params={"scope": "axis", "target": "S1"},
+        content="\n".join(lines),
+        headers={"content-type": "text/plain"},
+    )
+    assert r.status_code == 422
+    assert r.json()["detail"]["problems"][0]["line"] == 5
+
+
+def test_export_round_trips(srv: Server) -> None:
+    r = srv.http.get("/api/machines/demo/parameters/export", params={"target": "X"})
+    assert r.status_code == 200 and r.headers["content-type"].startswith("text/plain")
+    assert any(line.split()[:2] == ["getriebe[0].kv", "1000"] for line in r.text.splitlines())
+    r2 = srv.http.post(
+        "/api/machines/demo/parameters/import",
+        params={"scope": "axis", "target": "X"},
+        content=r.text,
+        headers={"content-type": "text/plain"},
+    )
+    assert r2.status_code == 200, r2.text
+
+
+def test_audit_trail_and_restart_of_the_service(srv: Server) -> None:
+    audit = srv.http.get("/api/machines/demo/parameters/audit").json()
+    kv = [a for a in audit if a["name"] == "getriebe[0].kv" and a["target"] == "X"]
+    assert (kv[0]["old"], kv[0]["new"], kv[0]["actor"]) == (2000, 1000, "local")
+    assert any(a["comment"] == "import axis list" for a in audit)
+    srv.stop()
+    srv.start()
+    assert values(srv)["getriebe[0].kv"]["value"] == 1000
+    assert values(srv)["kenngr.swe_pos"]["value"] == 2500000
+    assert values(srv, "S1")["getriebe[0].beschl_kennlinie.typ"]["value"] == 2
+    assert srv.http.get("/api/machines/demo/parameters/audit").json() == audit
+    assert lag_at_feed(srv, 600) == pytest.approx(1.0, rel=1e-3)
