@@ -28,6 +28,8 @@ test: lint
 
 bench: $(STAMP)
 	$(PY) bench/kernel.py
+	$(PY) bench/api.py
+	$(PY) bench/telemetry.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache *.egg-info

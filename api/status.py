@@ -87,6 +87,14 @@ class MachineSummary(BaseModel):
     cycle: int
 
 
+class OverrunRecord(BaseModel):
+    """One overrun: whether the loop woke late (held up) or its work took long."""
+
+    time_unix: float
+    wake_late_ms: float
+    work_ms: float
+
+
 class LoopStatus(BaseModel):
     """The real-time loop that paces every running machine."""
 
@@ -98,6 +106,7 @@ class LoopStatus(BaseModel):
     work_p99_ms: float
     work_max_ms: float
     wake_late_p99_ms: float = Field(description="how late the loop woke, 99th percentile")
+    recent_overruns: list[OverrunRecord] = Field(description="the last 20 overruns")
 
 
 class ServiceStatus(BaseModel):

@@ -15,6 +15,7 @@ from backend.services.loop import RealtimeLoop
 from backend.services.machines import MachineService
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
+from backend.services.warmup import warm_up
 from backend.settings import Settings
 
 
@@ -34,8 +35,9 @@ class Services:
         store = Store(settings.db_path)
         machines = MachineService(store)
         machines.load(create_demo=settings.demo)
-        for host in machines.hosts():  # compiled kernel loaded: start every clock from now
-            host.warm_up()
+        warm_up()
+        for host in machines.hosts():  # start every clock from now
+            host.set_mode(host.pacing.mode, host.pacing.until_cycle)
         loop = RealtimeLoop(machines.hosts, settings.loop_period_s)
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples)
         loop.start()

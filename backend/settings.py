@@ -15,7 +15,7 @@ class Settings(BaseSettings):
 
     db_path: Path = Field(Path("var/inbetrieb.sqlite"), description="SQLite file")
     demo: bool = Field(True, description="create the demo lathe in a fresh store")
-    loop_period_s: float = Field(0.005, gt=0, le=0.1, description="real-time loop period")
+    loop_period_s: float = Field(0.01, gt=0, le=0.1, description="real-time loop period")
     frame_s: float = Field(0.02, gt=0, le=1, description="telemetry frame period")
     max_frame_samples: int = Field(1000, ge=10, description="decimate beyond this per frame")
     send_buffer_bytes: int = Field(

@@ -67,11 +67,6 @@ class MachineHost:
             self.pacing.anchor_mono = time.monotonic()
             self.pacing.history.clear()
 
-    def warm_up(self) -> None:
-        """Load the compiled kernel (a call of zero cycles) and restart the clock from now."""
-        self.sim.kernel.run(0)
-        self.set_mode(self.pacing.mode, self.pacing.until_cycle)
-
     # --- time ----------------------------------------------------------------------------
     @property
     def cycle(self) -> int:

@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
-from api.status import LoopStatus
+from api.status import LoopStatus, OverrunRecord
 from backend.services.host import MachineHost
 
 
@@ -34,6 +34,9 @@ class RealtimeLoop:
         self.missed = 0
         self.work_s: deque[float] = deque(maxlen=5000)
         self.late_s: deque[float] = deque(maxlen=5000)
+        self.recent: deque[tuple[float, float, float]] = deque(
+            maxlen=20
+        )  # overruns: when, late, work
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="realtime-loop", daemon=True)
 
@@ -66,6 +69,7 @@ class RealtimeLoop:
             next_deadline = t0 + i * self.period_s
             if done > next_deadline:
                 self.overruns += 1
+                self.recent.append((time.time(), wake - deadline, done - wake))
                 skip = int((done - next_deadline) / self.period_s)
                 self.missed += skip
                 i += skip
@@ -82,4 +86,8 @@ class RealtimeLoop:
             work_p99_ms=float(np.percentile(work, 99)),
             work_max_ms=float(work.max()),
             wake_late_p99_ms=float(np.percentile(late, 99)),
+            recent_overruns=[
+                OverrunRecord(time_unix=t, wake_late_ms=lt * 1e3, work_ms=w * 1e3)
+                for t, lt, w in self.recent
+            ],
         )

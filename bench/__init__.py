@@ -1,0 +1,1 @@
+"""Benchmark scripts that print figures (run them as files: python bench/<name>.py)."""
