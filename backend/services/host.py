@@ -53,6 +53,7 @@ class MachineHost:
         self.lock = threading.RLock()
         self.pending: dict[tuple[str, str, str], Pending] = {}
         self.pacing = Pacing()
+        self.deleted = False  # telemetry closes its subscribers
         self.build(cfg)
 
     def build(self, cfg: MachineConfig) -> None:

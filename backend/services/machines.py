@@ -98,7 +98,8 @@ class MachineService:
 
     def delete(self, actor: Actor, mid: str) -> None:
         authorize(actor, Action.ADMINISTER, mid)
-        self.get(mid)
+        host = self.get(mid)
         with self._lock:
             del self._hosts[mid]
+        host.deleted = True
         self.store.delete_machine(mid)

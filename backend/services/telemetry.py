@@ -107,6 +107,10 @@ class TelemetryHub:
             if sub.sending is not None and not sub.sending.done():
                 sub.busy_periods += 1
                 continue
+            if sub.host.deleted:
+                self.remove(sub)
+                sub.sending = asyncio.get_running_loop().create_task(sub.ws.close(code=4404))
+                continue
             messages = self._messages(sub, cache)
             if messages:
                 sub.sending = asyncio.get_running_loop().create_task(self._send(sub, messages))

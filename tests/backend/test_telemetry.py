@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import ConnectionClosed
 
 from api.telemetry import FrameHeader, decode_frame
 from tests.backend.rawws import RawWebSocket
@@ -158,3 +159,19 @@ def test_slow_client_is_decimated_and_never_delays_others(srv: Server) -> None:
     assert np.all(np.diff(_cycles(fast_frames[1:])) == 1)
     late = [h for h, _ in slow_frames if h.decimated]
     assert late and all(h.stride > 1 and h.count <= 1000 for h in late)
+
+
+def test_deleting_a_machine_closes_its_subscribers(srv: Server) -> None:
+    assert srv.http.post("/api/machines", json={"id": "gone", "demo": True}).status_code == 201
+
+    async def run() -> int | None:
+        url = f"{srv.ws_base}/api/machines/gone/telemetry?signals=X.pos_act_mm"
+        async with connect(url) as ws:
+            await _json(ws, "subscribed")
+            await asyncio.to_thread(srv.http.delete, "/api/machines/gone")
+            with pytest.raises(ConnectionClosed):
+                while True:
+                    await ws.recv()
+            return ws.close_code
+
+    assert asyncio.run(run()) == 4404
