@@ -61,6 +61,7 @@ class SimulationStatus(BaseModel):
     rt_factor: float = Field(description="simulated seconds per wall second, last ~1 s")
     until_cycle: int | None = Field(None, description="fast mode pauses at this cycle")
     t0_unix: float = Field(description="wall time (Unix s) of cycle 0 while running")
+    slips: int = Field(description="times the machine fell over 1 s behind and was re-anchored")
 
 
 class MachineStatus(BaseModel):

@@ -1,6 +1,6 @@
 """One hosted machine: its simulation, a ring buffer of every cycle's samples, and its pacing.
 
-The real-time loop thread calls `tick`; request handlers call `locked` to act between kernel
+The real-time loop thread calls `tick`; request handlers take `lock` to act between kernel
 batches. Every cycle the kernel steps is recorded, so telemetry never has gaps unless a client
 falls behind by more than the ring holds.
 """
@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nc_sim.errors import JobError
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -154,7 +153,3 @@ class MachineHost:
             first += -(-(oldest - first) // stride) * stride
         idx = np.arange(first, last + 1, stride) % RING_CYCLES
         return signal_columns(signals, self.ring[idx]), first
-
-    def events_since(self, index: int) -> list[JobError]:
-        with self.lock:
-            return self.machine.events[index:]

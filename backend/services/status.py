@@ -49,6 +49,7 @@ def simulation_status(host: MachineHost) -> SimulationStatus:
         rt_factor=host.rt_factor(),
         until_cycle=host.pacing.until_cycle,
         t0_unix=host.t0_unix(),
+        slips=host.pacing.slips,
     )
 
 
