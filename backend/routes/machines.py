@@ -10,7 +10,12 @@ from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
 from backend.deps import ActorDep, HostDep, ServicesDep
 from backend.services.auth import authorize
-from backend.services.status import machine_status, machine_summary, simulation_status
+from backend.services.status import (
+    machine_status,
+    machine_summary,
+    signal_infos,
+    simulation_status,
+)
 
 router = APIRouter(prefix="/api/machines", tags=["machines"])
 
@@ -35,7 +40,7 @@ def status(host: HostDep) -> MachineStatus:
 @router.get("/{mid}/signals")
 def signals(host: HostDep) -> list[SignalInfo]:
     """Every signal the machine records each cycle (for telemetry subscriptions)."""
-    return [SignalInfo(name=s.name, axis=s.axis, unit=s.unit, kind=s.kind) for s in host.signals]
+    return signal_infos(host)
 
 
 @router.post("/{mid}/restart")

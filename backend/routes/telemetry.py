@@ -8,10 +8,11 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from pydantic import ValidationError
 
 from api.auth import Action
-from api.telemetry import ErrorMessage, Hello, SignalInfo, Subscribe, Subscribed
+from api.telemetry import ErrorMessage, Hello, Subscribe
 from backend.deps import ActorDep, ServicesDep
 from backend.errors import ApiError
 from backend.services.auth import authorize
+from backend.services.status import signal_infos
 
 router = APIRouter(prefix="/api/machines", tags=["telemetry"])
 
@@ -32,37 +33,19 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
     await ws.accept()
     hub = services.hub
     sub = hub.add(ws, host)
-    hello = Hello(
-        machine=host.id,
-        cycle=host.cycle,
-        cycle_s=host.cycle_s,
-        signals=[
-            SignalInfo(name=s.name, axis=s.axis, unit=s.unit, kind=s.kind) for s in host.signals
-        ],
+    sub.reply(
+        Hello(machine=host.id, cycle=host.cycle, cycle_s=host.cycle_s, signals=signal_infos(host))
     )
-    sub.control.append(hello.model_dump_json())
-
-    def subscribe(req: Subscribe) -> None:
-        unknown = [n for n in req.signals if n not in host.signal_by_name]
-        if unknown:
-            sub.control.append(
-                ErrorMessage(message=f"unknown signals: {unknown}").model_dump_json()
-            )
-            return
-        sub.subscribe([host.signal_by_name[n] for n in req.signals], req.max_rate_hz)
-        reply = Subscribed(signals=req.signals, first_cycle=sub.cursor - 1, stride=sub.min_stride)
-        sub.control.append(reply.model_dump_json())
-
     query = ws.query_params.get("signals")
     if query:
-        subscribe(Subscribe(signals=[n for n in query.split(",") if n]))
+        sub.subscribe(Subscribe(signals=[n for n in query.split(",") if n]))
     try:
         while True:
             text = await ws.receive_text()
             try:
-                subscribe(Subscribe.model_validate(json.loads(text)))
+                sub.subscribe(Subscribe.model_validate(json.loads(text)))
             except (ValidationError, ValueError) as e:
-                sub.control.append(ErrorMessage(message=f"bad message: {e}").model_dump_json())
+                sub.reply(ErrorMessage(message=f"bad message: {e}"))
     except WebSocketDisconnect:
         pass
     finally:

@@ -13,6 +13,7 @@ from api.status import (
     SimMode,
     SimulationStatus,
 )
+from api.telemetry import SignalInfo
 from backend.services.commands import job_error_model
 from backend.services.host import MachineHost
 from nc_sim.errors import JobError
@@ -114,6 +115,11 @@ def machine_status(host: MachineHost) -> MachineStatus:
             job_errors=[job_error_model(e) for e in distinct.values()],
             recent_events=[job_error_model(e) for e in m.events[-50:]],
         )
+
+
+def signal_infos(host: MachineHost) -> list[SignalInfo]:
+    """Every signal the machine records each cycle, for the catalogue and `hello`."""
+    return [SignalInfo(name=s.name, axis=s.axis, unit=s.unit, kind=s.kind) for s in host.signals]
 
 
 def machine_summary(host: MachineHost) -> MachineSummary:

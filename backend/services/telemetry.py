@@ -17,7 +17,15 @@ from dataclasses import dataclass, field
 
 from fastapi import WebSocket
 
-from api.telemetry import EventMessage, FrameHeader, encode_frame
+from api.telemetry import (
+    ErrorMessage,
+    EventMessage,
+    FrameHeader,
+    Hello,
+    Subscribe,
+    Subscribed,
+    encode_frame,
+)
 from backend.services.commands import job_error_model
 from backend.services.host import MachineHost
 from nc_sim.signals import Signal
@@ -47,14 +55,27 @@ class Subscriber:
     busy_periods: int = 0
     closed: bool = False
 
-    def subscribe(self, signals: list[Signal], max_rate_hz: float | None) -> None:
-        """Start streaming these signals from the current cycle (also after a reconnect)."""
-        with self.host.lock:
-            self.signals = signals
-            rate = max_rate_hz or math.inf
-            self.min_stride = max(1, math.ceil(1.0 / (self.host.cycle_s * rate)))
-            self.cursor = self.host.cycle + 1
-            self.epoch = self.host.epoch
+    def subscribe(self, req: Subscribe) -> None:
+        """Stream these signals from the current cycle (also after a reconnect); the reply,
+        `subscribed` or `error`, goes out before the next frame."""
+        host = self.host
+        unknown = [n for n in req.signals if n not in host.signal_by_name]
+        if unknown:
+            self.reply(ErrorMessage(message=f"unknown signals: {unknown}"))
+            return
+        with host.lock:
+            self.signals = [host.signal_by_name[n] for n in req.signals]
+            rate = req.max_rate_hz or math.inf
+            self.min_stride = max(1, math.ceil(1.0 / (host.cycle_s * rate)))
+            self.cursor = host.cycle + 1
+            self.epoch = host.epoch
+        self.reply(
+            Subscribed(signals=req.signals, first_cycle=self.cursor - 1, stride=self.min_stride)
+        )
+
+    def reply(self, msg: Hello | Subscribed | ErrorMessage) -> None:
+        """Queue a JSON control message; the hub is the only sender on the socket."""
+        self.control.append(msg.model_dump_json())
 
 
 class TelemetryHub:

@@ -8,7 +8,7 @@ exact functions of the cycle count, whatever the wall clock does.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -25,9 +25,8 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s.close()
 
 
-def wait_for(pred: object, timeout_s: float = 10.0) -> None:
+def wait_for(pred: Callable[[], object], timeout_s: float = 10.0) -> None:
     """Poll a condition of the running machine (real-time pacing, no speed judged)."""
-    assert callable(pred)
     deadline = time.monotonic() + timeout_s
     while not pred():
         if time.monotonic() > deadline:
