@@ -63,6 +63,13 @@ class JogCommand(BaseModel):
     direction: Literal[-1, 1] = 1
     distance: float | None = Field(None, ge=-1e6, le=1e6, description="step, mm | °")
     feed_mm_min: Feed | None = None
+    hold_s: float | None = Field(
+        None,
+        gt=0,
+        le=5,
+        description="dead-man for `start`: the jog stops unless started again within this "
+        "many simulated seconds (a UI renews it while the button is held)",
+    )
 
 
 class MoveCommand(BaseModel):

@@ -16,15 +16,6 @@ class JobErrorModel(BaseModel):
     error: bool = Field(description="true for a job error, false for an information event")
 
 
-class Refusal(BaseModel):
-    """Why a request was not carried out (HTTP 4xx body under `detail`)."""
-
-    message: str
-    code: int | None = Field(None, description="job error number when the NC refused it")
-    column: int | None = Field(None, description="1-based column of a bad NC block")
-    error: JobErrorModel | None = None
-
-
 class ParameterProblem(BaseModel):
     """A rejected parameter value: which parameter, its range and unit, and why."""
 
@@ -36,6 +27,18 @@ class ParameterProblem(BaseModel):
     min: float | None = None
     max: float | None = None
     unit: str | None = None
+
+
+class Refusal(BaseModel):
+    """Why a request was not carried out (HTTP 4xx body under `detail`)."""
+
+    message: str
+    code: int | None = Field(None, description="job error number when the NC refused it")
+    column: int | None = Field(None, description="1-based column of a bad NC block")
+    error: JobErrorModel | None = None
+    problems: list[ParameterProblem] = Field(
+        default_factory=list, description="rejected parameter values (nothing was applied)"
+    )
 
 
 class RefusalBody(BaseModel):

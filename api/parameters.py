@@ -41,6 +41,13 @@ class ParameterValue(BaseModel):
     effect: Literal["now", "reset", "restart"]
     gear: int | None = Field(None, description="gear stage 1..6 of a getriebe[i] entry")
     pending: Value | None = Field(None, description="written, takes effect at reset/restart")
+    title: str = Field("", description="what the manual says it is")
+    min: float | None = Field(None, description="lower bound in list units, as the list stands")
+    max: float | None = Field(None, description="upper bound in list units, as the list stands")
+    eng_factor: float | None = Field(
+        None, description="list value × eng_factor = engineering value (numeric entries)"
+    )
+    eng_unit: str = Field("", description="engineering unit, e.g. 1/s for a kv in 0.01/s")
 
 
 class ParameterChange(BaseModel):

@@ -1,4 +1,5 @@
-"""The `inbetrieb` command: `sim` runs a scenario headless, `serve` starts the service."""
+"""The `inbetrieb` command: `sim` runs a scenario headless, `serve` starts the service,
+`openapi` writes the API schema the browser's types are generated from."""
 
 from __future__ import annotations
 
@@ -21,7 +22,17 @@ def main(argv: list[str] | None = None) -> int:
     p_srv.add_argument("--port", type=int, default=8000)
     p_srv.add_argument("--db", type=Path, help="SQLite file (default var/inbetrieb.sqlite)")
     p_srv.add_argument("--no-demo", action="store_true", help="no demo machine in a new store")
+    p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
+    p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
     args = parser.parse_args(argv)
+    if args.cmd == "openapi":
+        import json
+
+        from backend.main import app
+
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(app.openapi(), indent=1) + "\n")
+        return 0
     if args.cmd == "sim":
         from backend.headless import run_file
 

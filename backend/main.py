@@ -8,7 +8,7 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI, Request
 from fastapi.responses import JSONResponse
 
-from backend import VERSION
+from backend import VERSION, frontend, openapi
 from backend.deps import Services
 from backend.errors import ApiError
 from backend.routes import commands, machines, parameters, service, telemetry
@@ -39,6 +39,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     for module in (service, machines, commands, parameters, telemetry):
         app.include_router(module.router)
+    openapi.install(app)
+    frontend.mount(app, cfg.frontend_dir)
     return app
 
 

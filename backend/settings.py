@@ -21,5 +21,9 @@ class Settings(BaseSettings):
     send_buffer_bytes: int = Field(
         131072, ge=16384, description="kernel send buffer per connection (slow-client detection)"
     )
+    frontend_dir: Path = Field(
+        Path(__file__).resolve().parents[1] / "frontend" / "dist",
+        description="built browser HMI served at / (make builds it)",
+    )
     user: str = Field("local", description="who requests act as until login exists")
     role: Role = Field(Role.INSTRUCTOR, description="role of that user")

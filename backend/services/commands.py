@@ -110,6 +110,8 @@ def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
             raise _refuse(
                 409, answer.message, code=answer.code, error=job_error_model(answer).model_dump()
             )
+        if isinstance(cmd, JogCommand) and cmd.action != "step":
+            host.hold_jog(cmd.axis, cmd.hold_s if cmd.action == "start" else None)
         if isinstance(cmd, ResetCommand):
             apply_pending(host, {"reset"})  # values that take effect at reset [params]
         return CommandResult(

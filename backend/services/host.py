@@ -53,6 +53,7 @@ class MachineHost:
         self.pending: dict[tuple[str, str, str], Pending] = {}
         self.pacing = Pacing()
         self.deleted = False  # telemetry closes its subscribers
+        self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
         self.build(cfg)
 
     def build(self, cfg: MachineConfig) -> None:
@@ -78,12 +79,32 @@ class MachineHost:
         return self.sim.kernel.cycle_s
 
     def advance(self, n: int) -> None:
-        """Step n cycles, recording each into the ring (caller holds the lock)."""
+        """Step n cycles, recording each into the ring (caller holds the lock).
+
+        A held jog whose lease runs out stops in exactly the cycle its lease ends, so the
+        dead-man works the same in real time, single steps and fast mode."""
         while n > 0:
+            self._expire_jogs()
             start = (self.sim.cycle + 1) % RING_CYCLES
             part = min(n, RING_CYCLES - start)
+            if self.jog_leases:
+                part = min(part, max(1, min(self.jog_leases.values()) - self.sim.cycle))
             self.sim.run(part, self.ring[start : start + part])
             n -= part
+        self._expire_jogs()
+
+    def hold_jog(self, axis: str, hold_s: float | None) -> None:
+        """Renew (or with None drop) the dead-man lease of a continuous jog."""
+        if hold_s is None:
+            self.jog_leases.pop(axis, None)
+        else:
+            self.jog_leases[axis] = self.sim.cycle + max(1, round(hold_s / self.cycle_s))
+
+    def _expire_jogs(self) -> None:
+        for axis, end in list(self.jog_leases.items()):
+            if self.sim.cycle >= end:
+                del self.jog_leases[axis]
+                self.machine.jog_stop(axis)
 
     def tick(self, now_mono: float, fast_budget_s: float) -> None:
         """Called by the real-time loop each period: step what is due for the mode."""

@@ -40,8 +40,8 @@ from nc_sim.params import (
     resolve,
     validate_values,
 )
-from nc_sim.params.listfile import axis_kind_of, parse_value
-from nc_sim.units import AxisKind
+from nc_sim.params.listfile import axis_kind_of, parse_value, value_range
+from nc_sim.units import AxisKind, to_eng
 
 Key = tuple[str, str, str]  # scope, target ('' for channel and tool), name
 _GEAR = "getriebe[i]."
@@ -206,6 +206,7 @@ def read(host: MachineHost, scope: Scope, target: str | None) -> list[ParameterV
             d = resolve(scope, name)
             pending = host.pending.get((scope.value, tgt, name))
             gear = int(name[9]) + 1 if name.startswith("getriebe[") else None
+            lo, hi = value_range(d, name, written) if d.is_numeric else (None, None)
             out.append(
                 ParameterValue(
                     scope=scope.value,
@@ -219,6 +220,11 @@ def read(host: MachineHost, scope: Scope, target: str | None) -> list[ParameterV
                     effect=d.effect.value,
                     gear=gear,
                     pending=pending.value if pending else None,
+                    title=d.title,
+                    min=lo,
+                    max=hi,
+                    eng_factor=to_eng(d.quantity, 1.0) if d.is_numeric else None,
+                    eng_unit=d.eng_unit(kind) if d.is_numeric else "",
                 )
             )
         return out

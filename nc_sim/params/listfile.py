@@ -206,6 +206,18 @@ def axis_kind_of(values: Mapping[str, Value]) -> AxisKind:
     return {2: AxisKind.ROTARY, 4: AxisKind.SPINDLE}.get(code, AxisKind.LINEAR)
 
 
+def value_range(
+    d: ParamDef, name: str, lookup: Mapping[str, Value], reg: Registry | None = None
+) -> tuple[float, float]:
+    """Allowed range of a numeric entry in list units, bounds that name other parameters
+    taken from `lookup` (the list as it stands), clipped to the data type's limits."""
+    reg = reg or registry()
+    lo_t, hi_t = DTYPE_LIMITS[d.dtype]
+    lo = _resolve_bound(d.lo, d, name, lookup, reg)
+    hi = _resolve_bound(d.hi, d, name, lookup, reg)
+    return (lo_t if lo is None else max(lo, lo_t)), (hi_t if hi is None else min(hi, hi_t))
+
+
 def check_range(
     d: ParamDef,
     name: str,
@@ -217,12 +229,7 @@ def check_range(
     """Raise ParamError when value is outside its range (including referenced bounds)."""
     if isinstance(value, str) or d.dtype is DType.STRING:
         return
-    reg = reg or registry()
-    lo_t, hi_t = DTYPE_LIMITS[d.dtype]
-    lo = _resolve_bound(d.lo, d, name, lookup, reg)
-    hi = _resolve_bound(d.hi, d, name, lookup, reg)
-    lo = lo_t if lo is None else max(lo, lo_t)
-    hi = hi_t if hi is None else min(hi, hi_t)
+    lo, hi = value_range(d, name, lookup, reg)
     if not lo <= float(value) <= hi:
         unit = d.raw_unit(kind)
         span = f"{_fmt(lo)} … {_fmt(hi)}" + (f" {unit}" if unit else "")

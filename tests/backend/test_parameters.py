@@ -68,6 +68,12 @@ def test_registry_and_values_per_gear_record(srv: Server) -> None:
     x = values(srv)["getriebe[0].kv"]
     assert x["value"] == 2000 and x["set"] and x["unit"] == "0.01/s"
     assert x["effect"] == "now" and x["id"] == "P-AXIS-00099"
+    # engineering value: kv 2000 × 0.01/s = 20 1/s; the manual's range 1 … 2^32-1
+    assert (x["eng_factor"] * x["value"], x["eng_unit"]) == (pytest.approx(20.0), "1/s")
+    assert (x["min"], x["max"]) == (1, 2**32 - 1)
+    # a bound that names another entry is resolved from the list: a_emergency ≤ 2·a_max
+    a_max = values(srv)["getriebe[0].dynamik.a_max"]["value"]
+    assert values(srv)["getriebe[0].dynamik.a_emergency"]["max"] == 2 * a_max
 
 
 def test_write_applies_now_and_the_loop_follows(srv: Server) -> None:

@@ -114,6 +114,23 @@ def test_jog_step_and_continuous_jog(srv: Server) -> None:
     srv.pace("demo", mode="run")
 
 
+def test_held_jog_stops_when_its_dead_man_lease_runs_out(srv: Server) -> None:
+    """A UI renews `hold_s` while the key is held; when renewals stop (released key, lost
+    connection) the jog brakes in the cycle the lease ends, in simulated time."""
+    srv.pace("demo", mode="pause")
+    hold = {"type": "jog", "axis": "Z", "action": "start", "direction": 1, "hold_s": 0.2}
+    assert srv.command("demo", hold).status_code == 200
+    srv.step("demo", 150)
+    assert srv.command("demo", hold).status_code == 200  # renewed at 150 ms: runs to 350 ms
+    srv.step("demo", 199)
+    assert srv.axis("Z")["state"] == "JOG"
+    srv.step("demo", 1)
+    assert srv.axis("Z")["state"] != "JOG"  # braking with the manual-mode deceleration
+    srv.step("demo", 3000)
+    assert srv.axis("Z")["state"] == "STANDSTILL"
+    srv.pace("demo", mode="run")
+
+
 def test_motion_without_enables_is_a_job_error(srv: Server) -> None:
     assert srv.command(
         "demo", {"type": "hli", "unit": "DriveOn", "axis": "X", "value": 0}
@@ -206,6 +223,10 @@ def test_openapi_lists_the_contract(srv: Server) -> None:
     spec = srv.http.get("/openapi.json").json()
     assert "/api/machines/{mid}/commands" in spec["paths"]
     assert "MachineStatus" in spec["components"]["schemas"]
+    # the websocket messages are part of the contract the browser's types come from
+    assert {"Hello", "Subscribe", "FrameHeader", "EventMessage"} <= set(
+        spec["components"]["schemas"]
+    )
     assert srv.http.get("/docs").status_code == 200
 
 
