@@ -3,10 +3,19 @@ PY_SYS ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.bootstrap-py
+NPM_STAMP := frontend/node_modules/.bootstrap-npm
+OPENAPI   := var/openapi.json
+SCHEMA_TS := frontend/src/api/schema.d.ts
+DIST      := frontend/dist/index.html
+CHROMIUM  := /usr/bin/chromium
+SUDO      := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+API_SRC   := $(shell find api backend -name '*.py')
+UI_SRC    := $(shell find frontend/src -type f ! -name schema.d.ts) frontend/index.html \
+             frontend/vite.config.ts frontend/tsconfig.json
 
-.PHONY: run test lint bench bootstrap clean
+.PHONY: run test lint bench bootstrap frontend clean
 
-bootstrap: $(STAMP)
+bootstrap: $(STAMP) $(NPM_STAMP)
 
 # Recreate the venv when the pinned dependencies change.
 $(STAMP): pyproject.toml constraints.txt
@@ -15,21 +24,46 @@ $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m pip install --quiet -c constraints.txt -e ".[dev]"
 	touch $(STAMP)
 
-run: $(STAMP)
+# Node packages exactly as the lock file pins them.
+$(NPM_STAMP): frontend/package.json frontend/package-lock.json
+	cd frontend && npm ci --no-audit --no-fund
+	touch $(NPM_STAMP)
+
+# The browser's types come from the service's OpenAPI schema (websocket messages included).
+$(OPENAPI): $(STAMP) $(API_SRC)
+	$(PY) -m backend.cli openapi --out $(OPENAPI)
+
+$(SCHEMA_TS): $(OPENAPI) $(NPM_STAMP)
+	cd frontend && npx openapi-typescript ../$(OPENAPI) -o src/api/schema.d.ts
+
+$(DIST): $(SCHEMA_TS) $(UI_SRC)
+	cd frontend && npx vite build --logLevel warn
+
+frontend: $(DIST)
+
+# Browser tests drive Debian's Chromium; install it when the machine has none.
+$(CHROMIUM):
+	$(SUDO) apt-get update -q
+	$(SUDO) apt-get install -y -q --no-install-recommends chromium
+
+run: $(STAMP) $(DIST)
 	$(PY) -m backend.cli serve --host 127.0.0.1 --port 8000
 
-lint: $(STAMP)
+lint: $(STAMP) $(SCHEMA_TS)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
 	$(PY) -m mypy
+	cd frontend && npx tsc --noEmit
 
-test: lint
+test: lint $(DIST) $(CHROMIUM)
 	$(PY) -m pytest -q
 
-bench: $(STAMP)
+bench: $(STAMP) $(DIST) $(CHROMIUM)
 	$(PY) bench/kernel.py
 	$(PY) bench/api.py
 	$(PY) bench/telemetry.py
+	$(PY) bench/ui.py
 
 clean:
-	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache *.egg-info
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache *.egg-info frontend/node_modules \
+	       frontend/dist $(SCHEMA_TS) $(OPENAPI)

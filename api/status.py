@@ -31,6 +31,7 @@ class AxisStatus(BaseModel):
     override_pct: float
     job_error: int = Field(description="active job error code, 0 none")
     gear: int | None = Field(None, description="active gear stage 1..6 (spindles)")
+    speed_prog_rpm: float | None = Field(None, description="programmed S, rpm (spindles)")
     speed_reached: bool | None = None
     stopped: bool | None = None
     speed_monitoring_active: bool | None = None

@@ -76,6 +76,7 @@ def _axis_status(m: Machine, ax: Axis) -> AxisStatus:
         override_pct=float(st[L.S_OVERRIDE]) * 100.0,
         job_error=ax.job_error,
         gear=ax.gear if spindle else None,
+        speed_prog_rpm=abs(ax.speed_prog) / RPM_TO_DEG_S if spindle else None,
         speed_reached=bool(ist[L.I_SPEED_REACHED]) if spindle else None,
         stopped=bool(ist[L.I_STOPPED]) if spindle else None,
         speed_monitoring_active=bool(ist[L.I_MON_ACTIVE]) if spindle else None,

@@ -1,0 +1,82 @@
+// Layout: the top bar (machine, health, connection, emergency stop) and banners always; the
+// machine view beside the workspaces (tabs).
+import { useState } from "preact/hooks";
+import { http } from "./api/http";
+import { Banner } from "./panels/Banner";
+import { EventsPanel } from "./panels/EventsPanel";
+import { HliPanel } from "./panels/HliPanel";
+import { JogPanel } from "./panels/JogPanel";
+import { MachineView } from "./panels/MachineView";
+import { MdiPanel } from "./panels/MdiPanel";
+import { Parameters } from "./panels/Parameters";
+import { Plots } from "./panels/Plots";
+import { SpindlePanel } from "./panels/SpindlePanel";
+import { TopBar } from "./panels/TopBar";
+import { machineUrl, online, status } from "./state/session";
+import { RefusalLine, useCommand } from "./ui/useCommand";
+
+const TABS = ["Operate", "Plots", "Parameters", "HLI / PLC", "Events"] as const;
+type Tab = (typeof TABS)[number];
+
+function MachineControls() {
+  const cmd = useCommand();
+  const mode = status.value?.simulation.mode;
+  return (
+    <div class="controls-apart" aria-label="reset and simulation">
+      <button type="button" class="secondary" data-testid="reset" disabled={!online.value}
+        onClick={() => void cmd.run({ type: "reset" })} title="CNC reset: clears job errors and the block queue, stops motion">
+        ⟲ Reset
+      </button>
+      <span class="hint">Simulation</span>
+      <button type="button" class="secondary" aria-pressed={mode === "run"} disabled={!online.value || mode === "run"}
+        onClick={() => void http.post(machineUrl("/simulation"), { mode: "run" })}>
+        ▶ run
+      </button>
+      <button type="button" class="secondary" aria-pressed={mode === "pause"} disabled={!online.value || mode === "pause"}
+        onClick={() => void http.post(machineUrl("/simulation"), { mode: "pause" })}>
+        ❚❚ pause
+      </button>
+      <RefusalLine refusal={cmd.refusal} />
+    </div>
+  );
+}
+
+export function App() {
+  const [tab, setTab] = useState<Tab>("Operate");
+  return (
+    <div class="app">
+      <TopBar />
+      <Banner />
+      <div class="body">
+        <aside class="side">
+          <MachineView />
+          <MachineControls />
+        </aside>
+        <main class="main">
+          <nav class="tabs" role="tablist">
+            {TABS.map((t) => (
+              <button key={t} type="button" role="tab" aria-selected={t === tab} data-testid={`tab-${t}`}
+                class={t === tab ? "active" : ""} onClick={() => setTab(t)}>
+                {t}
+              </button>
+            ))}
+          </nav>
+          <div class="workspace" role="tabpanel" aria-label={tab}>
+            {tab === "Operate" ? (
+              <div class="operate">
+                <SpindlePanel />
+                <JogPanel />
+                <MdiPanel />
+                <Plots single />
+              </div>
+            ) : null}
+            {tab === "Plots" ? <Plots /> : null}
+            {tab === "Parameters" ? <Parameters /> : null}
+            {tab === "HLI / PLC" ? <HliPanel /> : null}
+            {tab === "Events" ? <EventsPanel /> : null}
+          </div>
+        </main>
+      </div>
+    </div>
+  );
+}

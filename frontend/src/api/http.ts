@@ -1,0 +1,52 @@
+// fetch with the service's refusal bodies turned into one error type.
+import type { Refusal } from "./types";
+
+/** A request the service answered with 4xx/5xx, or could not be reached. */
+export class ApiError extends Error {
+  constructor(
+    readonly status: number, // 0: no answer (connection lost)
+    readonly refusal: Refusal,
+  ) {
+    super(refusal.message);
+  }
+}
+
+async function request<T>(method: string, url: string, body?: unknown, text = false): Promise<T> {
+  let res: Response;
+  try {
+    res = await fetch(url, {
+      method,
+      headers: body === undefined ? {} : { "content-type": text ? "text/plain" : "application/json" },
+      body: body === undefined ? undefined : text ? String(body) : JSON.stringify(body),
+    });
+  } catch {
+    throw new ApiError(0, { message: "no connection to the service", problems: [] });
+  }
+  const type = res.headers.get("content-type") ?? "";
+  const payload: unknown = type.includes("json") ? await res.json() : await res.text();
+  if (!res.ok) throw new ApiError(res.status, refusalOf(res.status, payload));
+  return payload as T;
+}
+
+function refusalOf(status: number, payload: unknown): Refusal {
+  const detail = (payload as { detail?: unknown } | null)?.detail;
+  if (detail && typeof detail === "object" && !Array.isArray(detail)) {
+    const r = detail as Partial<Refusal>;
+    return { ...r, message: r.message ?? `HTTP ${status}`, problems: r.problems ?? [] };
+  }
+  if (Array.isArray(detail)) {
+    // FastAPI's request validation: [{loc, msg}]
+    const first = detail[0] as { loc?: unknown[]; msg?: string } | undefined;
+    const where = first?.loc?.slice(1).join(".") ?? "";
+    return { message: `${where}: ${first?.msg ?? "invalid"}`, problems: [] };
+  }
+  return { message: typeof payload === "string" && payload ? payload : `HTTP ${status}`, problems: [] };
+}
+
+export const http = {
+  get: <T>(url: string) => request<T>("GET", url),
+  post: <T>(url: string, body: unknown) => request<T>("POST", url, body),
+  postText: <T>(url: string, text: string) => request<T>("POST", url, text, true),
+  patch: <T>(url: string, body: unknown) => request<T>("PATCH", url, body),
+  text: (url: string) => request<string>("GET", url),
+};

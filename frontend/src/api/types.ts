@@ -1,0 +1,38 @@
+// Names for the generated schema types; nothing here is written by hand twice.
+import type { components } from "./schema";
+
+type S = components["schemas"];
+export type MachineStatus = S["MachineStatus"];
+export type MachineSummary = S["MachineSummary"];
+export type AxisStatus = S["AxisStatus"];
+export type ServiceStatus = S["ServiceStatus"];
+export type JobError = S["JobErrorModel"];
+export type Refusal = S["Refusal"];
+export type ParameterProblem = S["ParameterProblem"];
+export type ParameterValue = S["ParameterValue"];
+export type ParameterChange = S["ParameterChange"];
+export type ParameterWriteResult = S["ParameterWriteResult"];
+export type CommandResult = S["CommandResult"];
+export type HliUnit = S["HliCommand"]["unit"];
+export type Hello = S["Hello"];
+export type Subscribe = S["Subscribe"];
+export type Subscribed = S["Subscribed"];
+export type EventMessage = S["EventMessage"];
+export type ErrorMessage = S["ErrorMessage"];
+export type FrameHeader = S["FrameHeader"];
+export type SignalInfo = S["SignalInfo"];
+export type Command =
+  | S["MdiCommand"]
+  | S["SpindleCommand"]
+  | S["SpindlePositionCommand"]
+  | S["GearCommand"]
+  | S["HomeCommand"]
+  | S["JogCommand"]
+  | S["MoveCommand"]
+  | S["OverrideCommand"]
+  | S["HliCommand"]
+  | S["PlcModeCommand"]
+  | S["PlcAckCommand"]
+  | S["ResetCommand"]
+  | S["EmergencyStopCommand"];
+export type Scope = ParameterValue["scope"];

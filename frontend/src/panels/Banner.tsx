@@ -1,0 +1,23 @@
+// Connection loss and the newest job error, until acknowledged.
+import { acknowledgeBanner, bannerError } from "../state/events";
+import { connection } from "../state/session";
+import { fmt } from "../ui/format";
+
+export function Banner() {
+  const err = bannerError.value;
+  return (
+    <div class="banners">
+      {connection.value === "lost" ? (
+        <div class="banner lost" role="alert" data-testid="banner-connection">
+          ⚠ Connection to the service lost: controls are locked and jog keys released. Reconnecting…
+        </div>
+      ) : null}
+      {err ? (
+        <div class="banner error" role="alert" data-testid="banner-error">
+          ✖ Job error <b>{err.code}</b> {err.axis ? `[${err.axis}]` : ""} at t = {fmt(err.t_s, 3)} s: {err.message}
+          <button onClick={acknowledgeBanner}>Acknowledge</button>
+        </div>
+      ) : null}
+    </div>
+  );
+}

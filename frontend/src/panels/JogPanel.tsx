@@ -1,0 +1,133 @@
+// Jog: axis choice, press-and-hold +/−, incremental steps, jog feed, feed override, homing.
+import { useEffect, useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { Refusal } from "../api/types";
+import { holdJog, jogListeners, releaseJog } from "../state/jog";
+import { numbers, paramsVersion } from "../state/params";
+import { machineId, online, status } from "../state/session";
+import { Panel } from "../ui/Panel";
+import { fmt } from "../ui/format";
+import { RefusalLine, useCommand } from "../ui/useCommand";
+
+const STEPS = [0.001, 0.01, 0.1, 1, 10];
+
+function JogKey(props: { axis: string; dir: 1 | -1; feed: number | null; active: boolean; onRefused: (r: Refusal) => void }) {
+  const start = () =>
+    holdJog(props.axis, props.dir, props.feed, (e) =>
+      props.onRefused(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
+    );
+  return (
+    <button
+      type="button"
+      class={`jogkey ${props.active ? "held" : ""}`}
+      data-testid={`jog-${props.dir > 0 ? "plus" : "minus"}`}
+      disabled={!online.value}
+      aria-pressed={props.active}
+      title="Hold to jog; release stops"
+      onPointerDown={(e) => {
+        (e.currentTarget as HTMLElement).setPointerCapture(e.pointerId);
+        start();
+      }}
+      onPointerUp={releaseJog}
+      onPointerCancel={releaseJog}
+      onLostPointerCapture={releaseJog}
+      onKeyDown={(e) => {
+        if ((e.key === " " || e.key === "Enter") && !e.repeat) {
+          e.preventDefault();
+          start();
+        }
+      }}
+      onKeyUp={(e) => (e.key === " " || e.key === "Enter") && releaseJog()}
+      onBlur={releaseJog}
+      onContextMenu={(e) => e.preventDefault()}
+    >
+      {props.dir > 0 ? "+" : "−"} {props.axis}
+    </button>
+  );
+}
+
+export function JogPanel() {
+  const axes = status.value?.axes ?? [];
+  const [name, setName] = useState("X");
+  const ax = axes.find((a) => a.name === name) ?? axes[0];
+  const [feed, setFeed] = useState("");
+  const [step, setStep] = useState(1);
+  const [heldAxis, setHeldAxis] = useState<string | null>(null);
+  const [jogRefusal, setJogRefusal] = useState<Refusal | null>(null);
+  const cmd = useCommand();
+  const [overrideMax, setOverrideMax] = useState(100);
+  useEffect(() => {
+    jogListeners.add(setHeldAxis);
+    return () => jogListeners.delete(setHeldAxis);
+  }, []);
+  useEffect(() => {
+    // the channel's max_vb_override (0.1 %) bounds the feed override
+    void numbers("channel", null).then((v) => setOverrideMax((v.get("max_vb_override") ?? 1000) / 10), () => undefined);
+  }, [machineId.value, paramsVersion.value]);
+  if (!ax) return <Panel title="Jog" id="jog">Waiting for the service…</Panel>;
+  const unit = ax.unit === "deg" ? "°" : "mm";
+  const feedNum = feed.trim() === "" ? null : Number(feed);
+  const feedOk = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
+  const dis = !online.value;
+  const pathOverride = (status.value?.channel_units.override ?? 1000) / 10;
+  return (
+    <Panel title="Jog" id="jog">
+      <div class="row" role="radiogroup" aria-label="axis">
+        {axes.map((a) => (
+          <label key={a.name} class={`axis-choice ${a.name === ax.name ? "active" : ""}`}>
+            <input type="radio" name="jog-axis" value={a.name} checked={a.name === ax.name}
+              onChange={() => setName(a.name)} data-testid={`jog-axis-${a.name}`} />
+            {a.name}
+          </label>
+        ))}
+        <span class="readout">
+          {ax.name} = <b data-testid="jog-pos">{fmt(ax.pos_act, 3)}</b> {unit}
+        </span>
+      </div>
+      <div class="row">
+        <JogKey axis={ax.name} dir={-1} feed={feedOk ? feedNum : null} active={heldAxis === ax.name} onRefused={setJogRefusal} />
+        <JogKey axis={ax.name} dir={1} feed={feedOk ? feedNum : null} active={heldAxis === ax.name} onRefused={setJogRefusal} />
+        <label>
+          Jog feed <input data-testid="jog-feed" inputMode="decimal" placeholder="G200 default" size={9} value={feed}
+            aria-invalid={!feedOk} onInput={(e) => setFeed((e.target as HTMLInputElement).value)} />{" "}
+          {unit}/min
+        </label>
+      </div>
+      <div class="row">
+        <label>
+          Increment{" "}
+          <select data-testid="jog-step-size" value={String(step)} onChange={(e) => setStep(Number((e.target as HTMLSelectElement).value))}>
+            {STEPS.map((s) => (
+              <option key={s} value={String(s)}>
+                {s} {unit}
+              </option>
+            ))}
+          </select>
+        </label>
+        {([-1, 1] as const).map((d) => (
+          <button key={d} type="button" data-testid={`jog-step-${d > 0 ? "plus" : "minus"}`} disabled={dis || !feedOk}
+            onClick={() => void cmd.run({ type: "jog", axis: ax.name, action: "step", direction: d, distance: step, feed_mm_min: feedNum })}>
+            {d > 0 ? "+" : "−"}
+            {step} {unit}
+          </button>
+        ))}
+      </div>
+      <div class="row">
+        <label class="slider">
+          Feed override{" "}
+          <input type="range" data-testid="feed-override" min={0} max={overrideMax} step={1} value={pathOverride} disabled={dis}
+            onChange={(e) => void cmd.run({ type: "override", axis: null, percent: Number((e.target as HTMLInputElement).value) })} />
+          <b>{fmt(pathOverride, 1)} %</b>
+        </label>
+      </div>
+      <div class="row apart">
+        <button type="button" class="secondary" data-testid="jog-home" disabled={dis}
+          onClick={() => void cmd.run({ type: "home", axis: ax.name })}>
+          G74 home {ax.name}
+        </button>
+        <span class="hint">{ax.homed ? "homed" : "not homed"}</span>
+      </div>
+      <RefusalLine refusal={cmd.refusal ?? jogRefusal} id="jog-refusal" />
+    </Panel>
+  );
+}

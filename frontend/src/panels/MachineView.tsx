@@ -1,0 +1,97 @@
+// Every axis and spindle with positions, speeds, lag, state and gear; the HLI lamps.
+import type { AxisStatus } from "../api/types";
+import { status } from "../state/session";
+import { Lamp } from "../ui/Lamp";
+import { Panel } from "../ui/Panel";
+import { fmt, velUnit } from "../ui/format";
+
+function AxisRow({ a }: { a: AxisStatus }) {
+  const spindle = a.kind === "spindle";
+  const posDec = spindle ? 2 : 3;
+  return (
+    <tr data-testid={`axis-${a.name}`} class={a.job_error ? "has-error" : ""}>
+      <th scope="row">{a.name}</th>
+      <td data-testid={`state-${a.name}`}>{a.state}</td>
+      <td class="num" data-testid={`pos-${a.name}`}>
+        {fmt(a.pos_act, posDec)}
+      </td>
+      <td class="num">{fmt(a.pos_cmd, posDec)}</td>
+      <td class="num" data-testid={`lag-${a.name}`}>
+        {fmt(a.lag, 4)}
+      </td>
+      <td class="unit">{a.unit === "deg" ? "°" : a.unit}</td>
+      <td class="num" data-testid={`vcmd-${a.name}`}>
+        {fmt(a.vel_cmd, 1)}
+      </td>
+      <td class="num" data-testid={`vact-${a.name}`}>
+        {fmt(a.vel_act, 1)}
+      </td>
+      <td class="unit">{velUnit(a.unit === "deg" ? "°" : a.unit, a.kind)}</td>
+      <td data-testid={`gear-${a.name}`}>{a.gear ? `M${39 + a.gear}` : "—"}</td>
+      <td title={a.homed ? "homed" : "not homed"}>{a.homed ? "✓" : "✗"}</td>
+    </tr>
+  );
+}
+
+export function MachineView() {
+  const s = status.value;
+  if (!s) return <Panel title="Machine" id="machine">Waiting for the service…</Panel>;
+  const spindles = s.axes.filter((a) => a.kind === "spindle");
+  const feedhold = !!s.channel_units.feedhold;
+  const allEnabled = s.axes.every((a) => a.enabled);
+  return (
+    <Panel title={`Machine ${s.name}`} id="machine">
+      <table class="axes">
+        <thead>
+          <tr>
+            <th>Axis</th>
+            <th>State</th>
+            <th class="num">Actual</th>
+            <th class="num">Command</th>
+            <th class="num">Lag</th>
+            <th />
+            <th class="num">v cmd</th>
+            <th class="num">v act</th>
+            <th />
+            <th>Gear</th>
+            <th>Homed</th>
+          </tr>
+        </thead>
+        <tbody>
+          {s.axes.map((a) => (
+            <AxisRow a={a} key={a.name} />
+          ))}
+        </tbody>
+      </table>
+      <div class="lamps" aria-label="HLI state">
+        {spindles.map((a) => (
+          <div class="lamp-row" key={a.name}>
+            <b>{a.name}</b>
+            <Lamp id={`lamp-speed-reached-${a.name}`} on={a.speed_reached} label="speed reached" />
+            <Lamp id={`lamp-stopped-${a.name}`} on={a.stopped} label="stopped" tone="info" />
+            <Lamp id={`lamp-in-position-${a.name}`} on={a.in_position} label="in position" tone="info" />
+            <Lamp
+              id={`lamp-monitoring-${a.name}`}
+              on={a.speed_monitoring_invalid}
+              label="speed monitoring invalid"
+              tone="warn"
+            />
+          </div>
+        ))}
+        <div class="lamp-row">
+          <b>Channel</b>
+          <Lamp id="lamp-job-error" on={s.job_errors.length > 0} label="job error" tone="bad" />
+          <Lamp
+            id="lamp-enables"
+            on={allEnabled}
+            label="enables"
+            title={s.axes.flatMap((a) => a.missing_enables.map((m) => `${a.name}: ${m}`)).join(", ") || "all present"}
+          />
+          <Lamp id="lamp-drive-ready" on={s.plc.drives_powered && allEnabled} label="drive ready" />
+          <Lamp id="lamp-feedhold" on={feedhold} label="feedhold" tone="warn" />
+          <Lamp id="lamp-estop" on={s.emergency_stop} label="emergency stop" tone="bad" />
+        </div>
+      </div>
+    </Panel>
+  );
+}

@@ -1,0 +1,80 @@
+// MDI: one block, a history (↑/↓), and a refused block shown with a caret under its column.
+import { useState } from "preact/hooks";
+import { online } from "../state/session";
+import { Panel } from "../ui/Panel";
+import { RefusalLine, useCommand } from "../ui/useCommand";
+
+export function MdiPanel() {
+  const [line, setLine] = useState("");
+  const [history, setHistory] = useState<string[]>([]);
+  const [pos, setPos] = useState(-1); // index into history while browsing, -1: editing
+  const [sent, setSent] = useState("");
+  const cmd = useCommand();
+
+  async function submit() {
+    const block = line.trim();
+    if (!block) return;
+    setSent(block);
+    setHistory((h) => [block, ...h.filter((b) => b !== block)].slice(0, 50));
+    setPos(-1);
+    const ok = await cmd.run({ type: "mdi", block });
+    if (ok) setLine("");
+  }
+
+  function browse(step: number) {
+    const next = Math.max(-1, Math.min(history.length - 1, pos + step));
+    setPos(next);
+    setLine(next < 0 ? "" : history[next]);
+  }
+
+  const column = cmd.refusal?.column ?? null;
+  return (
+    <Panel title="MDI" id="mdi">
+      <form
+        class="row"
+        onSubmit={(e) => {
+          e.preventDefault();
+          void submit();
+        }}
+      >
+        <input
+          class="mdi-line"
+          data-testid="mdi-input"
+          aria-label="NC block"
+          placeholder="e.g. M3 S1000   G01 X60 F600   M19 S.POS=90"
+          value={line}
+          spellcheck={false}
+          autocomplete="off"
+          disabled={!online.value}
+          onInput={(e) => setLine((e.target as HTMLInputElement).value)}
+          onKeyDown={(e) => {
+            if (e.key === "ArrowUp") (e.preventDefault(), browse(1));
+            if (e.key === "ArrowDown") (e.preventDefault(), browse(-1));
+          }}
+        />
+        <button type="submit" data-testid="mdi-send" disabled={!online.value || !line.trim()}>
+          Execute
+        </button>
+      </form>
+      {column !== null ? (
+        <pre class="mdi-error" data-testid="mdi-error" data-column={column} aria-label={`error at column ${column}`}>
+          {sent}
+          {"\n"}
+          {" ".repeat(column - 1)}^ column {column}
+        </pre>
+      ) : null}
+      <RefusalLine refusal={cmd.refusal} id="mdi-refusal" />
+      {history.length ? (
+        <ol class="history" aria-label="MDI history">
+          {history.slice(0, 8).map((b) => (
+            <li key={b}>
+              <button type="button" class="link" onClick={() => setLine(b)} title="copy to the input (does not execute)">
+                {b}
+              </button>
+            </li>
+          ))}
+        </ol>
+      ) : null}
+    </Panel>
+  );
+}

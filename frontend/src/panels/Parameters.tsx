@@ -1,0 +1,262 @@
+// The parameter editor: lists grouped by topic and gear record, search, raw and engineering
+// units, ranges, pending values; edit → Apply (on the running machine) → Keep or Revert;
+// import and export of the native list file.
+import { useEffect, useMemo, useState } from "preact/hooks";
+import { ApiError, http } from "../api/http";
+import type { ParameterProblem, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
+import { listUrl, loadList, paramsVersion } from "../state/params";
+import { machineId, machineUrl, online, status } from "../state/session";
+import { Panel } from "../ui/Panel";
+import { fmt } from "../ui/format";
+import { groupOf } from "./paramGroups";
+
+interface Target {
+  scope: Scope;
+  target: string | null;
+  label: string;
+}
+
+const num = (v: number) => (Math.abs(v) >= 1e15 ? v.toExponential(3) : String(+v.toPrecision(12)));
+
+/** Inline check of an edited value against the entry's type and range; null when fine. */
+export function checkValue(p: ParameterValue, text: string): string | null {
+  if (typeof p.default === "string") return null;
+  const v = Number(text.trim());
+  if (text.trim() === "" || !Number.isFinite(v)) return "a number is needed";
+  const unit = p.unit ? ` ${p.unit}` : "";
+  if ((p.min != null && v < p.min) || (p.max != null && v > p.max))
+    return `out of range ${num(p.min ?? -Infinity)} … ${num(p.max ?? Infinity)}${unit}`;
+  return null;
+}
+
+interface Trial {
+  applied: ParameterWriteResult["changes"];
+}
+
+export function Parameters() {
+  const axes = status.value?.axes ?? [];
+  const targets: Target[] = [
+    ...axes.map((a) => ({ scope: "axis" as const, target: a.name, label: `Axis ${a.name}` })),
+    { scope: "channel", target: null, label: "Channel" },
+    { scope: "tool", target: null, label: "Tools" },
+  ];
+  const [which, setWhich] = useState("Axis X");
+  const t = targets.find((x) => x.label === which) ?? targets[0];
+  const spindle = axes.find((a) => a.name === t?.target)?.kind === "spindle";
+  const [rows, setRows] = useState<ParameterValue[]>([]);
+  const [query, setQuery] = useState("");
+  const [group, setGroup] = useState("");
+  const [edits, setEdits] = useState<Record<string, string>>({});
+  const [problems, setProblems] = useState<ParameterProblem[]>([]);
+  const [message, setMessage] = useState("");
+  const [trial, setTrial] = useState<Trial | null>(null);
+
+  const reload = () => t && loadList(t.scope, t.target).then(setRows, () => undefined);
+  useEffect(() => {
+    setEdits({});
+    setProblems([]);
+    void reload();
+  }, [t?.label, machineId.value, paramsVersion.value]);
+
+  const groups = useMemo(() => [...new Set(rows.map((p) => groupOf(p.name, p.gear, spindle)))], [rows, spindle]);
+  const q = query.trim().toLowerCase();
+  const shownFlat = rows.filter(
+    (p) =>
+      (!group || groupOf(p.name, p.gear, spindle) === group) &&
+      (!q || p.id.toLowerCase().includes(q) || p.name.toLowerCase().includes(q) || p.title.toLowerCase().includes(q)),
+  );
+  // grouped: every group's rows together, groups in the order they first appear
+  const shownGroups = groups
+    .map((g) => ({ g, rows: shownFlat.filter((p) => groupOf(p.name, p.gear, spindle) === g) }))
+    .filter((x) => x.rows.length);
+  const byName = new Map(rows.map((p) => [p.name, p]));
+  const invalid = Object.entries(edits).filter(([n, v]) => byName.has(n) && checkValue(byName.get(n)!, v));
+  const edited = Object.keys(edits).length;
+
+  async function write(changes: { name: string; value: number | string }[], comment: string) {
+    if (!t) return null;
+    try {
+      const r = await http.patch<ParameterWriteResult>(machineUrl("/parameters"), {
+        changes: changes.map((c) => ({ scope: t.scope, target: t.target, name: c.name, value: c.value })),
+        comment,
+      });
+      setProblems([]);
+      paramsVersion.value++;
+      return r;
+    } catch (e) {
+      if (e instanceof ApiError) {
+        setProblems(e.refusal.problems ?? []);
+        setMessage(e.refusal.message);
+      }
+      return null;
+    }
+  }
+
+  async function apply() {
+    const changes = Object.entries(edits).map(([name, text]) => {
+      const p = byName.get(name)!;
+      return { name, value: typeof p.default === "string" ? text : Number(text) };
+    });
+    const r = await write(changes, "editor: apply (trial)");
+    if (r) {
+      setEdits({});
+      setTrial({ applied: r.changes });
+      setMessage("");
+    }
+  }
+
+  async function revert() {
+    if (!trial) return;
+    const back = trial.applied.filter((c) => c.old !== null).map((c) => ({ name: c.name, value: c.old as number | string }));
+    if (await write(back, "editor: revert")) {
+      setTrial(null);
+      setMessage(`Reverted ${back.length} value(s).`);
+    }
+  }
+
+  async function importFile(file: File) {
+    if (!t) return;
+    try {
+      const r = await http.postText<ParameterWriteResult>(listUrl("/import", t.scope, t.target), await file.text());
+      setProblems([]);
+      setMessage(`Imported ${file.name}: ${r.changes.length} value(s) changed.`);
+      paramsVersion.value++;
+    } catch (e) {
+      if (e instanceof ApiError) {
+        setProblems(e.refusal.problems ?? []);
+        setMessage(`${file.name}: ${e.refusal.message}`);
+      }
+    }
+  }
+
+  const problemOf = (name: string) => problems.find((p) => p.parameter === name);
+  return (
+    <Panel title="Parameters" id="parameters">
+      <div class="row param-tools">
+        <label>
+          List{" "}
+          <select data-testid="param-target" value={t?.label} onChange={(e) => setWhich((e.target as HTMLSelectElement).value)}>
+            {targets.map((x) => (
+              <option key={x.label}>{x.label}</option>
+            ))}
+          </select>
+        </label>
+        <label>
+          Group{" "}
+          <select data-testid="param-group" value={group} onChange={(e) => setGroup((e.target as HTMLSelectElement).value)}>
+            <option value="">all</option>
+            {groups.map((g) => (
+              <option key={g}>{g}</option>
+            ))}
+          </select>
+        </label>
+        <input type="search" data-testid="param-search" placeholder="Search ID, name or description" value={query}
+          onInput={(e) => setQuery((e.target as HTMLInputElement).value)} aria-label="search parameters" />
+        <a class="button secondary" href={t ? listUrl("/export", t.scope, t.target) : "#"}
+          download={`${machineId.value}-${t?.target ?? t?.scope}.lis`}>
+          Export list
+        </a>
+        <label class="button secondary">
+          Import list…
+          <input type="file" accept=".lis,.txt,text/plain" hidden
+            onChange={(e) => {
+              const f = (e.target as HTMLInputElement).files?.[0];
+              if (f) void importFile(f);
+              (e.target as HTMLInputElement).value = "";
+            }} />
+        </label>
+      </div>
+      <div class="row apply-bar">
+        <button type="button" data-testid="param-apply" disabled={!online.value || !edited || invalid.length > 0} onClick={() => void apply()}>
+          Apply {edited ? `(${edited})` : ""}
+        </button>
+        <button type="button" class="secondary" disabled={!edited} onClick={() => (setEdits({}), setProblems([]))}>
+          Discard edits
+        </button>
+        {trial ? (
+          <span class="trial" data-testid="param-trial" role="status">
+            On the machine now:{" "}
+            {trial.applied.map((c) => `${c.name} ${c.old} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`).join(", ")}
+            <button type="button" data-testid="param-keep" onClick={() => (setTrial(null), setMessage("Kept."))}>
+              Keep
+            </button>
+            <button type="button" data-testid="param-revert" class="secondary" onClick={() => void revert()}>
+              Revert
+            </button>
+          </span>
+        ) : null}
+        {message ? <span class="hint" data-testid="param-message">{message}</span> : null}
+      </div>
+      <div class="table-scroll">
+        <table class="params">
+          <thead>
+            <tr>
+              <th>ID</th>
+              <th>Name / description</th>
+              <th class="num">Value</th>
+              <th>Unit</th>
+              <th class="num">Engineering</th>
+              <th>Range</th>
+              <th class="num">Default</th>
+              <th>Takes effect</th>
+            </tr>
+          </thead>
+          {shownGroups.map(({ g, rows: groupRows }) => (
+          <tbody key={g}>
+            <tr class="group-row">
+              <th colSpan={8}>{g}</th>
+            </tr>
+            {groupRows.map((p) => {
+              const text = edits[p.name];
+              const err = text !== undefined ? checkValue(p, text) : null;
+              const server = problemOf(p.name);
+              const v = text !== undefined && !err && typeof p.value === "number" ? Number(text) : p.value;
+              return (
+                <tr key={p.name} data-testid={`param-row-${p.name}`} class={text !== undefined ? "edited" : ""}>
+                  <td class="mono">{p.id}</td>
+                  <td>
+                    <div class="mono">{p.name}</div>
+                    <div class="hint">{p.title}</div>
+                  </td>
+                  <td class="num">
+                    <input
+                      class="param-input"
+                      data-testid={`param-input-${p.name}`}
+                      aria-label={`${p.name} value`}
+                      aria-invalid={!!err || !!server}
+                      value={text ?? String(p.value)}
+                      size={10}
+                      onInput={(e) => setEdits({ ...edits, [p.name]: (e.target as HTMLInputElement).value })}
+                    />
+                    {err || server ? (
+                      <div class="inline-error" data-testid={`param-error-${p.name}`} role="alert">
+                        {err ?? server?.message}
+                      </div>
+                    ) : null}
+                  </td>
+                  <td>{p.unit}</td>
+                  <td class="num" data-testid={`param-eng-${p.name}`}>
+                    {typeof v === "number" && p.eng_factor != null && p.eng_unit !== p.unit ? `${fmt(v * p.eng_factor, 4)} ${p.eng_unit}` : ""}
+                  </td>
+                  <td class="hint">{p.min != null ? `${num(p.min)} … ${num(p.max ?? Infinity)}` : ""}</td>
+                  <td class="num">{String(p.default)}</td>
+                  <td>
+                    {p.effect}
+                    {p.pending !== null && p.pending !== undefined ? (
+                      <span class="pending" data-testid={`param-pending-${p.name}`}>
+                        pending {String(p.pending)} at {p.effect}
+                      </span>
+                    ) : null}
+                    {!p.set ? <span class="hint"> (default)</span> : null}
+                  </td>
+                </tr>
+              );
+            })}
+          </tbody>
+          ))}
+        </table>
+        {!shownFlat.length ? <p class="hint">No parameter matches.</p> : null}
+      </div>
+    </Panel>
+  );
+}

@@ -1,0 +1,184 @@
+// Spindle: S with M3/M4/M5, M19 orientation, gear stages with their range bars, override,
+// homing (kept apart from the motion buttons).
+import { useEffect, useRef, useState } from "preact/hooks";
+import { loadList, paramsVersion } from "../state/params";
+import { machineId, online, status } from "../state/session";
+import { Panel } from "../ui/Panel";
+import { fmt } from "../ui/format";
+import { RefusalLine, useCommand } from "../ui/useCommand";
+import { GearBars, type GearRange } from "./GearBars";
+
+interface SpindleParams {
+  ranges: GearRange[];
+  overrideMaxPct: number;
+}
+
+async function spindleParams(name: string): Promise<SpindleParams> {
+  const [channel, own] = await Promise.all([loadList("channel", null), loadList("axis", name)]);
+  const byName = new Map(channel.map((p) => [p.name, p.value]));
+  const idx = [0, 1, 2, 3, 4, 5, 6, 7].find((i) => byName.get(`spindel[${i}].bezeichnung`) === name);
+  const ranges: GearRange[] = [];
+  if (idx !== undefined && byName.get("main_spindle_gear_change")) {
+    for (let j = 0; j < 6; j++) {
+      const pre = `spindel[${idx}].range_table[${j}]`;
+      ranges.push({ min: Number(byName.get(`${pre}.min_speed`)), max: Number(byName.get(`${pre}.max_speed`)) });
+    }
+  }
+  const ovr = own.find((p) => p.id === "P-AXIS-00109"); // kenngr.max_vb_override, 0.1 %
+  return { ranges, overrideMaxPct: ovr ? Number(ovr.value) / 10 : 100 };
+}
+
+export function SpindlePanel() {
+  const spindles = status.value?.axes.filter((a) => a.kind === "spindle") ?? [];
+  const [name, setName] = useState("");
+  const sp = spindles.find((a) => a.name === name) ?? spindles[0];
+  const [params, setParams] = useState<SpindleParams | null>(null);
+  const [speed, setSpeed] = useState("1000");
+  const [angle, setAngle] = useState("90");
+  const [dir, setDir] = useState<"0" | "1" | "-1">("0");
+  const cmd = useCommand();
+  const ovrTimer = useRef<number | null>(null);
+  const [ovr, setOvr] = useState<number | null>(null);
+
+  useEffect(() => {
+    if (sp) void spindleParams(sp.name).then(setParams, () => setParams(null));
+  }, [sp?.name, machineId.value, paramsVersion.value]);
+
+  if (!sp) return <Panel title="Spindle" id="spindle">No spindle on this machine.</Panel>;
+  const dis = !online.value;
+  const rpm = Number(speed);
+  const validS = speed.trim() !== "" && Number.isFinite(rpm) && rpm >= 0;
+
+  function sendOverride(pct: number) {
+    setOvr(pct);
+    if (ovrTimer.current !== null) return; // at most one write per 100 ms while dragging
+    ovrTimer.current = window.setTimeout(() => {
+      ovrTimer.current = null;
+    }, 100);
+    void cmd.run({ type: "override", axis: sp!.name, percent: pct });
+  }
+
+  const overridePct = ovr ?? sp.override_pct;
+  return (
+    <Panel
+      title={`Spindle ${sp.name}`}
+      id="spindle"
+      actions={
+        spindles.length > 1 ? (
+          <select value={sp.name} onChange={(e) => setName((e.target as HTMLSelectElement).value)}>
+            {spindles.map((a) => (
+              <option key={a.name}>{a.name}</option>
+            ))}
+          </select>
+        ) : null
+      }
+    >
+      <div class="readouts">
+        <span>
+          S prog <b data-testid="spindle-prog">{fmt(sp.speed_prog_rpm, 0)}</b> rpm
+        </span>
+        <span>
+          n act <b data-testid="spindle-speed">{fmt(sp.vel_act, 1)}</b> rpm
+        </span>
+        <span>
+          position <b data-testid="spindle-pos">{fmt(sp.pos_act, 2)}</b>°
+        </span>
+        <span>
+          state <b>{sp.state}</b>
+        </span>
+      </div>
+      <form
+        class="row"
+        onSubmit={(e) => {
+          e.preventDefault();
+          if (validS) void cmd.run({ type: "spindle", spindle: sp.name, m: 3, speed_rpm: rpm });
+        }}
+      >
+        <label>
+          S <input data-testid="s-input" inputMode="decimal" value={speed} size={7} aria-invalid={!validS}
+            onInput={(e) => setSpeed((e.target as HTMLInputElement).value)} /> rpm
+        </label>
+        <button type="submit" data-testid="m3" disabled={dis || !validS} title="M3: clockwise">
+          M3 ⟳
+        </button>
+        <button type="button" data-testid="m4" disabled={dis || !validS} title="M4: counter-clockwise"
+          onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 4, speed_rpm: rpm })}>
+          M4 ⟲
+        </button>
+        <button type="button" data-testid="m5" class="stop" disabled={dis}
+          onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 5 })}>
+          M5 stop
+        </button>
+      </form>
+      <form
+        class="row"
+        onSubmit={(e) => {
+          e.preventDefault();
+          const deg = Number(angle);
+          if (!Number.isFinite(deg)) return;
+          void cmd.run({
+            type: "spindle_position",
+            spindle: sp.name,
+            position_deg: deg,
+            direction: dir === "0" ? null : (Number(dir) as 1 | -1),
+          });
+        }}
+      >
+        <label>
+          M19 to <input data-testid="m19-angle" inputMode="decimal" value={angle} size={6}
+            onInput={(e) => setAngle((e.target as HTMLInputElement).value)} />°
+        </label>
+        <select aria-label="M19 direction" value={dir} onChange={(e) => setDir((e.target as HTMLSelectElement).value as "0")}>
+          <option value="0">shortest way</option>
+          <option value="1">M3 direction (+)</option>
+          <option value="-1">M4 direction (−)</option>
+        </select>
+        <button type="submit" data-testid="m19" disabled={dis}>
+          M19 orient
+        </button>
+      </form>
+      <div class="gears">
+        <div class="row">
+          <span>
+            Gear stage <b data-testid="spindle-gear">{sp.gear ? `M${39 + sp.gear}` : "—"}</b>
+          </span>
+          {params?.ranges.map((_, i) => (
+            <button key={i} type="button" data-testid={`gear-m${40 + i}`} class={sp.gear === i + 1 ? "active" : ""}
+              disabled={dis} aria-pressed={sp.gear === i + 1}
+              onClick={() => void cmd.run({ type: "gear", spindle: sp.name, m: 40 + i })}>
+              M{40 + i}
+            </button>
+          ))}
+        </div>
+        {params?.ranges.length ? (
+          <GearBars ranges={params.ranges} active={sp.gear ?? null} speed={sp.speed_prog_rpm ?? null} />
+        ) : (
+          <p class="hint">No gear change on this spindle.</p>
+        )}
+      </div>
+      <div class="row">
+        <label class="slider">
+          Override{" "}
+          <input type="range" data-testid="spindle-override" min={0} max={params?.overrideMaxPct ?? 100} step={0.1}
+            value={overridePct} disabled={dis}
+            onInput={(e) => sendOverride(Number((e.target as HTMLInputElement).value))}
+            onChange={(e) => {
+              const pct = Number((e.target as HTMLInputElement).value);
+              setOvr(null);
+              void cmd.run({ type: "override", axis: sp.name, percent: pct });
+            }} />
+          <b>{fmt(overridePct, 1)} %</b>
+          <span class="hint">max {fmt(params?.overrideMaxPct, 1)} % (P-AXIS-00109)</span>
+        </label>
+      </div>
+      <div class="row apart">
+        <button type="button" data-testid="spindle-home" class="secondary" disabled={dis}
+          onClick={() => void cmd.run({ type: "home", axis: sp.name })}>
+          G74 home spindle
+        </button>
+        <span class="hint">{sp.homed ? "homed" : "not homed"}</span>
+      </div>
+      <RefusalLine refusal={cmd.refusal} id="spindle-refusal" />
+    </Panel>
+  );
+}

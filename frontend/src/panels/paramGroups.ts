@@ -1,0 +1,23 @@
+// Topic groups of the parameter editor, from the list names' first segment.
+const TOPICS: Record<string, string> = {
+  kenngr: "Characteristics (kenngr)",
+  handbetrieb: "Manual mode / jog (handbetrieb)",
+  antr: "Drive (antr)",
+  lr_hw: "Position control hardware (lr_hw)",
+  lr_param: "Position control (lr_param)",
+  sim: "Simulated drive (sim)",
+  kopf: "Header (kopf)",
+  spindel: "Spindles (spindel)",
+  achse: "Path axes (achse)",
+  vector: "Path dynamics (vector)",
+  prog_start: "Program start (prog_start)",
+  plc: "PLC",
+  wz: "Tools (wz)",
+};
+
+/** The group a concrete list name belongs to, e.g. "Gear record 3 (M42)". */
+export function groupOf(name: string, gear: number | null | undefined, spindle: boolean): string {
+  if (gear) return spindle ? `Gear record ${gear} (M${39 + gear})` : `Gear record ${gear}`;
+  const head = name.split(/[.[]/)[0];
+  return TOPICS[head] ?? "General";
+}

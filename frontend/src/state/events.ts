@@ -1,0 +1,44 @@
+// The event log: job errors and information events, from status snapshots and the socket.
+import { computed, effect, signal } from "@preact/signals";
+import type { JobError } from "../api/types";
+import { machineId, status } from "./session";
+
+const MAX_EVENTS = 500;
+export const events = signal<JobError[]>([]);
+const seen = new Set<string>();
+/** Key of the newest error the operator acknowledged (banner hidden up to it). */
+export const acknowledged = signal("");
+
+export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
+
+export function addEvents(list: JobError[]): void {
+  const fresh = list.filter((e) => !seen.has(keyOf(e)));
+  if (!fresh.length) return;
+  fresh.forEach((e) => seen.add(keyOf(e)));
+  const all = [...events.value, ...fresh].sort((a, b) => a.cycle - b.cycle);
+  events.value = all.slice(-MAX_EVENTS);
+}
+
+/** The newest job error not yet acknowledged: the banner shows it. */
+export const bannerError = computed(() => {
+  const errs = events.value.filter((e) => e.error);
+  const last = errs[errs.length - 1];
+  return last && keyOf(last) !== acknowledged.value ? last : null;
+});
+
+export function acknowledgeBanner(): void {
+  const e = bannerError.value;
+  if (e) acknowledged.value = keyOf(e);
+}
+
+effect(() => {
+  const s = status.value;
+  if (s) addEvents(s.recent_events);
+});
+
+effect(() => {
+  void machineId.value; // a new machine: a new log
+  events.value = [];
+  seen.clear();
+  acknowledged.value = "";
+});

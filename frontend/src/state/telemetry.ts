@@ -1,0 +1,113 @@
+// The telemetry websocket: the hello's signal catalogue, one subscription (the union of what
+// the plots want), binary frames decoded into the rings, events into the log. Reconnects by
+// itself; while it is down the session counts as lost (jog keys release on that).
+import { effect, signal } from "@preact/signals";
+import type { ErrorMessage, EventMessage, FrameHeader, Hello, SignalInfo, Subscribed } from "../api/types";
+import { addEvents } from "./events";
+import { Rings } from "./rings";
+import { machineId, socket } from "./session";
+
+const MAGIC = 0x54424e49; // "INBT" little-endian
+export const RING_SECONDS = 30;
+const RECONNECT_MS = 1000;
+
+export const catalogue = signal<SignalInfo[]>([]);
+/** Rings of the current subscription (replaced when the subscription changes). */
+export const rings = signal<Rings>(new Rings([], 1));
+export const frames = { received: 0, decimated: 0, skippedCycles: 0 };
+
+const wants = new Map<string, string[]>();
+let ws: WebSocket | null = null;
+let cycleS = 0.001;
+let subscribedKey = "";
+
+/** Ask for signals on behalf of `owner` (a plot); the socket streams the union. */
+export function want(owner: string, names: string[]): void {
+  wants.set(owner, names);
+  resubscribe();
+}
+
+export function unwant(owner: string): void {
+  wants.delete(owner);
+  resubscribe();
+}
+
+function union(): string[] {
+  const known = new Set(catalogue.value.map((s) => s.name));
+  const all = new Set<string>();
+  wants.forEach((names) => names.forEach((n) => known.has(n) && all.add(n)));
+  return [...all].sort();
+}
+
+function resubscribe(): void {
+  const names = union();
+  const key = names.join(",");
+  if (!ws || ws.readyState !== WebSocket.OPEN || key === subscribedKey || !names.length) return;
+  subscribedKey = key;
+  ws.send(JSON.stringify({ type: "subscribe", signals: names }));
+  rings.value = new Rings(names, Math.round(RING_SECONDS / cycleS));
+}
+
+export function decodeFrame(buf: ArrayBuffer): { header: FrameHeader; data: Float64Array } | null {
+  const view = new DataView(buf);
+  if (buf.byteLength < 8 || view.getUint32(0, true) !== MAGIC) return null;
+  const n = view.getUint32(4, true);
+  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 8, n))) as FrameHeader;
+  return { header, data: new Float64Array(buf, 8 + n, header.count * header.signals.length) };
+}
+
+function onFrame(buf: ArrayBuffer): void {
+  const f = decodeFrame(buf);
+  if (!f) return;
+  const { header: h, data } = f;
+  const r = rings.value;
+  if (h.signals.join(",") !== r.names.join(",")) return; // a frame of the old subscription
+  const times = new Float64Array(h.count);
+  for (let k = 0; k < h.count; k++) times[k] = (h.first_cycle + k * h.stride) * h.cycle_s;
+  r.append(times, data, h.count);
+  frames.received++;
+  if (h.decimated) frames.decimated++;
+  frames.skippedCycles += h.skipped_cycles;
+}
+
+function onMessage(text: string): void {
+  const msg = JSON.parse(text) as Hello | Subscribed | EventMessage | ErrorMessage;
+  switch (msg.type) {
+    case "hello":
+      cycleS = msg.cycle_s;
+      catalogue.value = msg.signals;
+      socket.value = "online";
+      subscribedKey = "";
+      resubscribe();
+      break;
+    case "event":
+      addEvents([msg.event]);
+      break;
+    case "error":
+      console.warn("telemetry:", msg.message);
+      break;
+  }
+}
+
+function connect(mid: string): void {
+  const proto = location.protocol === "https:" ? "wss" : "ws";
+  const sock = new WebSocket(`${proto}://${location.host}/api/machines/${encodeURIComponent(mid)}/telemetry`);
+  sock.binaryType = "arraybuffer";
+  ws = sock;
+  sock.onmessage = (ev) => (typeof ev.data === "string" ? onMessage(ev.data) : onFrame(ev.data as ArrayBuffer));
+  sock.onclose = () => {
+    if (ws !== sock) return; // replaced on purpose
+    ws = null;
+    socket.value = "lost";
+    setTimeout(() => ws === null && machineId.value === mid && connect(mid), RECONNECT_MS);
+  };
+}
+
+effect(() => {
+  const mid = machineId.value;
+  const old = ws;
+  ws = null;
+  old?.close();
+  subscribedKey = "";
+  if (mid) connect(mid);
+});

@@ -1,0 +1,11 @@
+import { defineConfig } from "vite";
+import preact from "@preact/preset-vite";
+
+// `npm run dev` proxies the API to a service started with `make run`.
+export default defineConfig({
+  plugins: [preact()],
+  server: {
+    proxy: { "/api": { target: "http://127.0.0.1:8000", ws: true } },
+  },
+  build: { outDir: "dist", emptyOutDir: true, sourcemap: true },
+});

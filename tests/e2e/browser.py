@@ -1,0 +1,66 @@
+"""Headless Debian Chromium through Playwright, and the screenshots the browser tests keep."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from playwright.sync_api import Browser, Page, expect, sync_playwright
+
+CHROMIUM = "/usr/bin/chromium"  # Debian's package; Playwright never downloads a browser here
+ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
+SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768)}
+SHOTS = Path(__file__).resolve().parent / "screenshots"
+DIST = Path(__file__).resolve().parents[2] / "frontend" / "dist" / "index.html"
+
+
+@contextmanager
+def chromium() -> Iterator[Browser]:
+    """A headless browser for the duration of a test module."""
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        try:
+            yield browser
+        finally:
+            browser.close()
+
+
+def open_hmi(browser: Browser, base: str, size: str = "desktop") -> Page:
+    """A fresh page on the HMI, connected to the service."""
+    w, h = SIZES[size]
+    page = browser.new_page(viewport={"width": w, "height": h})
+    page.set_default_timeout(15_000)
+    page.goto(base + "/")
+    expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    return page
+
+
+def shot(page: Page, name: str) -> Path:
+    SHOTS.mkdir(exist_ok=True)
+    path = SHOTS / f"{name}.png"
+    page.screenshot(path=str(path))
+    return path
+
+
+def number(page: Page, test_id: str) -> float:
+    """A numeric readout as shown (the HMI writes − for minus)."""
+    text = page.get_by_test_id(test_id).inner_text().replace("−", "-").strip()
+    return float(text) if text not in ("", "—") else float("nan")
+
+
+def poll(fn: Callable[[], bool], what: str, timeout_s: float = 15.0) -> None:
+    """Wait for a condition of the live UI (a machine running in real time)."""
+    deadline = time.monotonic() + timeout_s
+    while not fn():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        time.sleep(0.05)

@@ -1,0 +1,26 @@
+"""Browser tests: one real service and one headless Chromium per test module."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import pytest
+from playwright.sync_api import Browser
+
+from tests.backend.server import Server
+from tests.e2e.browser import DIST, chromium
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    if not DIST.is_file():
+        pytest.fail("the frontend is not built: run `make test`, which builds it")
+    s = Server(tmp_path_factory.mktemp("e2e") / "e2e.sqlite").start()
+    yield s
+    s.close()
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Browser]:
+    with chromium() as b:
+        yield b

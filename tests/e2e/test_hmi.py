@@ -1,0 +1,172 @@
+"""The HMI in headless Chromium against the real service, driven through the UI only.
+
+The machine runs in real time; the tests wait for states and judge values against the
+manuals and physics (speeds, gear ranges, lag = v/kv), never against wall-clock speed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import pytest
+from playwright.sync_api import Browser, Page, expect
+
+from tests.backend.server import Server
+from tests.e2e.browser import number, open_hmi, poll, shot
+
+# The demo's gear range table is the manual's example [000 §2.8.2], rpm per stage M40..M45.
+GEAR_RANGES = [(50, 560), (400, 800), (700, 3500), (3501, 4000), (3800, 5500), (5400, 7000)]
+KV_X = 20.0  # 1/s: getriebe[0].kv 2000 in 0.01/s
+
+
+@pytest.fixture
+def page(browser: Browser, srv: Server) -> Iterator[Page]:
+    p = open_hmi(browser, srv.base)
+    yield p
+    p.get_by_test_id("reset").click()  # leave the machine still for the next test
+    p.close()
+
+
+def latest(page: Page, signal: str) -> float:
+    return number(page, f"latest-{signal}")
+
+
+def mdi(page: Page, block: str) -> None:
+    page.get_by_test_id("mdi-input").fill(block)
+    page.get_by_test_id("mdi-send").click()
+
+
+def test_m3_speed_rises_to_s_and_m5_stops(page: Page) -> None:
+    page.get_by_test_id("s-input").fill("1000")
+    page.get_by_test_id("m3").click()
+    reached = page.get_by_test_id("lamp-speed-reached-S1")
+    expect(reached).to_have_attribute("data-on", "1")
+    # the plot's actual-speed trace has risen to the programmed 1000 rpm
+    poll(lambda: abs(latest(page, "S1.speed_act_rpm") - 1000) < 1.0, "plot at 1000 rpm")
+    assert latest(page, "S1.speed_cmd_rpm") == pytest.approx(1000, abs=1e-6)
+    assert page.get_by_test_id("lamp-stopped-S1").get_attribute("data-on") == "0"
+    shot(page, "spindle-running-desktop")
+    page.get_by_test_id("m5").click()
+    expect(page.get_by_test_id("lamp-stopped-S1")).to_have_attribute("data-on", "1")
+    assert reached.get_attribute("data-on") == "0"
+    assert abs(number(page, "vact-S1")) < 1.0
+
+
+def test_m19_orients_to_90_degrees_within_the_window(page: Page, srv: Server) -> None:
+    window_deg = 1e-4 * float(  # kenngr.exact_stop_window in 0.1 µ°
+        next(
+            p["value"]
+            for p in srv.http.get("/api/machines/demo/parameters?target=S1").json()
+            if p["name"] == "kenngr.exact_stop_window"
+        )
+    )
+    page.get_by_test_id("m19-angle").fill("90")
+    page.get_by_test_id("m19").click()
+    expect(page.get_by_test_id("lamp-in-position-S1")).to_have_attribute("data-on", "1")
+    poll(lambda: page.get_by_test_id("state-S1").inner_text() == "STANDSTILL", "M19 done")
+    pos = number(page, "pos-S1") % 360.0
+    assert abs(pos - 90.0) <= window_deg + 0.005  # the readout shows two decimals
+    shot(page, "spindle-m19-desktop")
+
+
+def test_s950_selects_the_gear_stage_that_holds_it(page: Page) -> None:
+    def stage_for(rpm: float) -> int:  # automatic selection, range_way 0: bottom-up
+        return next(g for g, (lo, hi) in enumerate(GEAR_RANGES, 1) if lo <= rpm <= hi)
+
+    page.get_by_test_id("s-input").fill("300")
+    page.get_by_test_id("m3").click()
+    expect(page.get_by_test_id("spindle-gear")).to_have_text(f"M{39 + stage_for(300)}")
+    page.get_by_test_id("s-input").fill("950")
+    page.get_by_test_id("m3").click()
+    g = stage_for(950)
+    expect(page.get_by_test_id("spindle-gear")).to_have_text(f"M{39 + g}")
+    expect(page.get_by_test_id(f"gear-bar-{g}")).to_have_attribute("data-active", "1")
+    expect(page.get_by_test_id("gear-mark")).to_have_attribute("data-rpm", "950")
+    assert page.get_by_test_id(f"gear-bar-{g}").get_attribute("data-holds") == "1"
+    assert page.get_by_test_id("gear-bar-1").get_attribute("data-holds") == "0"
+    shot(page, "spindle-gears-desktop")
+    page.get_by_test_id("m5").click()
+
+
+def test_kv_apply_changes_the_lag_and_revert_restores_it(page: Page) -> None:
+    feed_mm_min = 600.0
+    v = feed_mm_min / 60.0
+    mdi(page, f"G01 X250 F{feed_mm_min:g}")  # 20 s at 10 mm/s: constant speed meanwhile
+
+    def lag_settles_at(expected: float) -> None:
+        poll(lambda: abs(number(page, "lag-X") - expected) < 2e-3, f"lag {expected} mm")
+
+    lag_settles_at(v / KV_X)  # 0.5 mm
+    page.get_by_test_id("tab-Parameters").click()
+    page.get_by_test_id("param-search").fill("P-AXIS-00099")
+    field = page.get_by_test_id("param-input-getriebe[0].kv")
+    field.fill("1000")
+    expect(page.get_by_test_id("param-eng-getriebe[0].kv")).to_have_text("10.0000 1/s")
+    page.get_by_test_id("param-apply").click()
+    expect(page.get_by_test_id("param-trial")).to_be_visible()
+    lag_settles_at(v / (1000 * 0.01))  # 1.0 mm: lag = v / (kv · 0.01)
+    shot(page, "parameters-trial-desktop")
+    page.get_by_test_id("param-revert").click()
+    expect(page.get_by_test_id("param-trial")).to_be_hidden()
+    lag_settles_at(v / KV_X)
+    expect(field).to_have_value("2000")
+
+    # out of range: the range is shown inline, Apply stays disabled, nothing changes
+    field.fill("0")
+    error = page.get_by_test_id("param-error-getriebe[0].kv")
+    expect(error).to_contain_text("out of range 1 … 4294967295 0.01/s")
+    expect(page.get_by_test_id("param-apply")).to_be_disabled()
+    lag_settles_at(v / KV_X)
+    shot(page, "parameters-invalid-desktop")
+
+
+def test_bad_mdi_block_shows_the_error_under_its_column(page: Page) -> None:
+    block = "G01 X10 F500 &"
+    mdi(page, block)
+    err = page.get_by_test_id("mdi-error")
+    expect(err).to_be_visible()
+    column = block.index("&") + 1
+    assert err.get_attribute("data-column") == str(column)
+    caret_line = err.inner_text().splitlines()[1]
+    assert caret_line.index("^") == column - 1  # the caret sits under the bad character
+    expect(page.get_by_test_id("mdi-refusal")).to_contain_text("90010")
+    shot(page, "mdi-error-desktop")
+
+
+def test_job_error_is_shown_as_a_banner_until_acknowledged(page: Page) -> None:
+    page.get_by_test_id("tab-HLI / PLC").click()
+    drive_on = page.get_by_test_id("hli-X-DriveOn").locator("input")
+    drive_on.click()  # the switch shows the HLI as the NC reports it back
+    expect(drive_on).not_to_be_checked()
+    expect(page.get_by_test_id("lamp-enables")).to_have_attribute("data-on", "0")
+    page.get_by_test_id("tab-Operate").click()
+    page.get_by_test_id("jog-axis-X").check()
+    page.get_by_test_id("jog-step-plus").click()
+    refusal = page.get_by_test_id("jog-refusal")
+    expect(refusal).to_contain_text("90001")  # drive enables missing [job error table]
+    banner = page.get_by_test_id("banner-error")
+    expect(banner).to_contain_text("90001")
+    shot(page, "job-error-banner-desktop")
+    banner.get_by_role("button", name="Acknowledge").click()
+    expect(banner).to_be_hidden()
+    page.get_by_test_id("tab-HLI / PLC").click()
+    drive_on.click()
+    expect(drive_on).to_be_checked()
+    expect(page.get_by_test_id("lamp-enables")).to_have_attribute("data-on", "1")
+
+
+@pytest.mark.parametrize("size", ["desktop", "tablet"])
+def test_every_panel_fits_and_is_captured(browser: Browser, srv: Server, size: str) -> None:
+    """Screenshots of every workspace at 1920×1080 and 1024×768; nothing overflows sideways."""
+    page = open_hmi(browser, srv.base, size)
+    for tab in ["Operate", "Plots", "Parameters", "HLI / PLC", "Events"]:
+        page.get_by_test_id(f"tab-{tab}").click()
+        page.wait_for_timeout(300)
+        overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
+        assert overflow <= 0, f"{tab} at {size} is {overflow} px too wide"
+        shot(page, f"{tab.replace(' / ', '-').lower()}-{size}")
+    # the emergency stop is on screen whatever the workspace
+    box = page.get_by_test_id("estop").bounding_box()
+    assert box is not None and box["y"] >= 0 and not math.isnan(box["x"])
+    page.close()
