@@ -12,7 +12,7 @@ import { Parameters } from "./panels/Parameters";
 import { Plots } from "./panels/Plots";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
-import { machineUrl, online, status } from "./state/session";
+import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
 const TABS = ["Operate", "Plots", "Parameters", "HLI / PLC", "Events"] as const;
@@ -44,7 +44,7 @@ function MachineControls() {
 export function App() {
   const [tab, setTab] = useState<Tab>("Operate");
   return (
-    <div class="app">
+    <div class={connection.value === "lost" ? "app stale" : "app"}>
       <TopBar />
       <Banner />
       <div class="body">

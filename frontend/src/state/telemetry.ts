@@ -15,6 +15,8 @@ export const catalogue = signal<SignalInfo[]>([]);
 /** Rings of the current subscription (replaced when the subscription changes). */
 export const rings = signal<Rings>(new Rings([], 1));
 export const frames = { received: 0, decimated: 0, skippedCycles: 0 };
+/** Called after every appended frame (bench/ui.py times click-to-motion with it). */
+export const frameListeners = new Set<(r: Rings) => void>();
 
 const wants = new Map<string, string[]>();
 let ws: WebSocket | null = null;
@@ -68,6 +70,7 @@ function onFrame(buf: ArrayBuffer): void {
   frames.received++;
   if (h.decimated) frames.decimated++;
   frames.skippedCycles += h.skipped_cycles;
+  frameListeners.forEach((f) => f(r));
 }
 
 function onMessage(text: string): void {
