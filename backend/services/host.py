@@ -65,6 +65,7 @@ class MachineHost:
             self.signal_by_name = {s.name: s for s in self.signals}
             self.ring = np.zeros((RING_CYCLES, self.sim.kernel.n, L.R_COLS))
             self.epoch = getattr(self, "epoch", 0) + 1  # telemetry cursors restart with it
+            self.jog_leases.clear()  # a power cycle ends every held jog
             self.pacing.anchor_mono = time.monotonic()
             self.pacing.history.clear()
 
