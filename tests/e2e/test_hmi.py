@@ -6,14 +6,13 @@ manuals and physics (speeds, gear ranges, lag = v/kv), never against wall-clock 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 
 import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import number, open_hmi, poll, shot
+from tests.e2e.browser import SIZES, number, open_hmi, poll, shot
 
 # The demo's gear range table is the manual's example [000 §2.8.2], rpm per stage M40..M45.
 GEAR_RANGES = [(50, 560), (400, 800), (700, 3500), (3501, 4000), (3800, 5500), (5400, 7000)]
@@ -166,7 +165,9 @@ def test_every_panel_fits_and_is_captured(browser: Browser, srv: Server, size: s
         overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
         assert overflow <= 0, f"{tab} at {size} is {overflow} px too wide"
         shot(page, f"{tab.replace(' / ', '-').lower()}-{size}")
-    # the emergency stop is on screen whatever the workspace
-    box = page.get_by_test_id("estop").bounding_box()
-    assert box is not None and box["y"] >= 0 and not math.isnan(box["x"])
+        # the emergency stop is fully on screen whatever the workspace
+        box = page.get_by_test_id("estop").bounding_box()
+        w, h = SIZES[size]
+        assert box is not None and box["x"] >= 0 and box["y"] >= 0
+        assert box["x"] + box["width"] <= w and box["y"] + box["height"] <= h
     page.close()

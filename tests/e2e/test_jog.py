@@ -39,6 +39,7 @@ def test_hold_moves_x_and_release_stops_it(page: Page, srv: Server) -> None:
     time.sleep(3 * HOLD_S)  # held longer than one lease: the UI keeps renewing it
     assert x_state(srv) == "JOG"
     assert key.get_attribute("aria-pressed") == "true"
+    assert page.get_by_test_id("jog-minus").get_attribute("aria-pressed") == "false"
     shot(page, "jog-held-desktop")
     page.mouse.up()
     poll(lambda: x_state(srv) == "STANDSTILL", "X stopped after release")

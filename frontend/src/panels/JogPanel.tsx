@@ -2,7 +2,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
-import { holdJog, jogListeners, releaseJog } from "../state/jog";
+import { heldKey, holdJog, keyName, releaseJog } from "../state/jog";
 import { numbers, paramsVersion } from "../state/params";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
@@ -11,7 +11,8 @@ import { RefusalLine, useCommand } from "../ui/useCommand";
 
 const STEPS = [0.001, 0.01, 0.1, 1, 10];
 
-function JogKey(props: { axis: string; dir: 1 | -1; feed: number | null; active: boolean; onRefused: (r: Refusal) => void }) {
+function JogKey(props: { axis: string; dir: 1 | -1; feed: number | null; onRefused: (r: Refusal) => void }) {
+  const active = heldKey.value === keyName(props.axis, props.dir);
   const start = () =>
     holdJog(props.axis, props.dir, props.feed, (e) =>
       props.onRefused(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
@@ -19,10 +20,10 @@ function JogKey(props: { axis: string; dir: 1 | -1; feed: number | null; active:
   return (
     <button
       type="button"
-      class={`jogkey ${props.active ? "held" : ""}`}
+      class={`jogkey ${active ? "held" : ""}`}
       data-testid={`jog-${props.dir > 0 ? "plus" : "minus"}`}
       disabled={!online.value}
-      aria-pressed={props.active}
+      aria-pressed={active}
       title="Hold to jog; release stops"
       onPointerDown={(e) => {
         (e.currentTarget as HTMLElement).setPointerCapture(e.pointerId);
@@ -52,14 +53,9 @@ export function JogPanel() {
   const ax = axes.find((a) => a.name === name) ?? axes[0];
   const [feed, setFeed] = useState("");
   const [step, setStep] = useState(1);
-  const [heldAxis, setHeldAxis] = useState<string | null>(null);
   const [jogRefusal, setJogRefusal] = useState<Refusal | null>(null);
   const cmd = useCommand();
   const [overrideMax, setOverrideMax] = useState(100);
-  useEffect(() => {
-    jogListeners.add(setHeldAxis);
-    return () => jogListeners.delete(setHeldAxis);
-  }, []);
   useEffect(() => {
     // the channel's max_vb_override (0.1 %) bounds the feed override
     void numbers("channel", null).then((v) => setOverrideMax((v.get("max_vb_override") ?? 1000) / 10), () => undefined);
@@ -85,8 +81,8 @@ export function JogPanel() {
         </span>
       </div>
       <div class="row">
-        <JogKey axis={ax.name} dir={-1} feed={feedOk ? feedNum : null} active={heldAxis === ax.name} onRefused={setJogRefusal} />
-        <JogKey axis={ax.name} dir={1} feed={feedOk ? feedNum : null} active={heldAxis === ax.name} onRefused={setJogRefusal} />
+        <JogKey axis={ax.name} dir={-1} feed={feedOk ? feedNum : null} onRefused={setJogRefusal} />
+        <JogKey axis={ax.name} dir={1} feed={feedOk ? feedNum : null} onRefused={setJogRefusal} />
         <label>
           Jog feed <input data-testid="jog-feed" inputMode="decimal" placeholder="G200 default" size={9} value={feed}
             aria-invalid={!feedOk} onInput={(e) => setFeed((e.target as HTMLInputElement).value)} />{" "}

@@ -1,7 +1,7 @@
 // Press-and-hold jog with a dead-man: while a key is held the start command is renewed every
 // RENEW_MS with a lease of HOLD_S (simulated seconds); the service stops the jog when renewals
 // stop. Releasing, leaving the window, hiding the tab and losing the connection all release.
-import { effect } from "@preact/signals";
+import { effect, signal } from "@preact/signals";
 import { online, send } from "./session";
 
 export const HOLD_S = 0.5;
@@ -12,11 +12,10 @@ interface Held {
   timer: number;
 }
 let held: Held | null = null;
-export const jogListeners = new Set<(axis: string | null) => void>();
+/** The key held now, e.g. "X+" (null: none); the jog keys show it. */
+export const heldKey = signal<string | null>(null);
 
-function notify(): void {
-  jogListeners.forEach((f) => f(held?.axis ?? null));
-}
+export const keyName = (axis: string, direction: 1 | -1) => `${axis}${direction > 0 ? "+" : "−"}`;
 
 /** Start holding a jog key; any earlier hold is released first. */
 export function holdJog(axis: string, direction: 1 | -1, feed: number | null, onRefused: (e: unknown) => void): void {
@@ -36,7 +35,7 @@ export function holdJog(axis: string, direction: 1 | -1, feed: number | null, on
     });
   held = { axis, timer: window.setInterval(renew, RENEW_MS) };
   void renew();
-  notify();
+  heldKey.value = keyName(axis, direction);
 }
 
 /** Release the held key: stop renewing and tell the service to brake now. */
@@ -45,7 +44,7 @@ export function releaseJog(): void {
   const { axis, timer } = held;
   clearInterval(timer);
   held = null;
-  notify();
+  heldKey.value = null;
   send({ type: "jog", axis, action: "stop", direction: 1 }).catch(() => undefined); // the lease ends it anyway
 }
 
