@@ -52,6 +52,7 @@ class Code(IntEnum):
     EV_IN_POSITION = 23
     EV_TOOL_DYNAMICS = 24
     EV_PROGRAM_END = 25
+    EV_M_START = 26  # a spindle M function begins; it acts from the next cycle on
 
 
 MESSAGES: dict[Code, str] = {

@@ -202,6 +202,7 @@ class SpindleControl:
         if choice.error is not None:
             return self.m._fail(ax, choice.error, choice.detail)
         self.cancel_task(ax)
+        self.m.log(Code.EV_M_START, ax.name, f"M{m} S{rpm:g}")
         ax.speed_prog = d * rpm * RPM_TO_DEG_S
         assert choice.gear is not None
         if choice.gear != ax.gear:
@@ -248,6 +249,7 @@ class SpindleControl:
     def stop(self, ax: Axis) -> None:
         """M5: brake to standstill (curve or a_brems)."""
         self.cancel_task(ax)
+        self.m.log(Code.EV_M_START, ax.name, "M5")
         if ax.state in (AxisState.STANDSTILL, AxisState.ERROR):
             return
         self._state(ax, AxisState.STOPPING)
@@ -276,6 +278,7 @@ class SpindleControl:
             direction = self.preferred(ax)
         speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         self.cancel_task(ax)
+        self.m.log(Code.EV_M_START, ax.name, f"M19 S.POS={pos_deg:g}")
         ax.task = SpindleTask("M19", pos_deg % 360.0, direction, abs(speed))
         ax.block_id = block_id
         self.advance(ax)
@@ -312,6 +315,7 @@ class SpindleControl:
         speed = ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         ax.task = SpindleTask("gear", pos, self.preferred(ax), speed, gear=gear, resume=resume)
         ax.block_id = block_id
+        self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}")
         self.m.log(Code.EV_HLI, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
         if not (ax.homed or self.auto_homing(ax)) or ax.cfg.flag("sim.sensorless"):
             # no position to go to: change at standstill where the spindle stops

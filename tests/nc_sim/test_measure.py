@@ -1,0 +1,55 @@
+"""Step-response measurements against analytic responses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nc_sim.measure import measure
+
+TAU = 0.05  # s
+
+
+def test_first_order_step_rise_and_settling_times() -> None:
+    t = np.arange(0, 1.0, 1e-4)
+    y = 2.0 * (1 - np.exp(-t / TAU))
+    m = measure(t, y, band_pct=2.0)
+    assert m.final == pytest.approx(2.0, abs=1e-6)
+    assert m.rise_time_s == pytest.approx(TAU * math.log(9), abs=2e-4)  # 10 → 90 %
+    assert m.settling_time_s == pytest.approx(TAU * math.log(50), abs=2e-4)  # into ±2 %
+    assert m.overshoot_pct == pytest.approx(0.0, abs=1e-4)
+
+
+@pytest.mark.parametrize("zeta", [0.2, 0.5, 0.7])
+def test_second_order_overshoot(zeta: float) -> None:
+    wn = 60.0
+    wd = wn * math.sqrt(1 - zeta**2)
+    t = np.arange(0, 2.0, 1e-5)
+    phi = math.acos(zeta)
+    y = 1 - np.exp(-zeta * wn * t) * np.sin(wd * t + phi) / math.sqrt(1 - zeta**2)
+    m = measure(t, y)
+    expected = 100 * math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2))
+    assert m.overshoot_pct == pytest.approx(expected, rel=1e-3)
+    assert m.t_max_abs_s == pytest.approx(math.pi / wd, abs=1e-4)  # the peak time
+
+
+def test_falling_step_settling_from_a_reference_and_absolute_band() -> None:
+    t = np.arange(0, 1.0, 1e-3)
+    y = np.where(t < 0.2, 5.0, 5.0 * np.exp(-(t - 0.2) / TAU))
+    m = measure(t, y, band_abs=0.05, t_ref_s=0.2)
+    assert m.overshoot_pct == pytest.approx(0.0, abs=1e-3)
+    assert m.band == 0.05
+    # |y - final| ≤ 0.05 once 5 e^{-x/τ} ≤ 0.05 + final (final ≈ 0)
+    assert m.settling_time_s == pytest.approx(TAU * math.log(5.0 / 0.05), abs=1.5e-3)
+    assert m.max_abs == 5.0 and m.minimum >= 0.0
+
+
+def test_never_settling_and_flat_signals() -> None:
+    t = np.arange(0, 1.0, 1e-3)
+    ramp = measure(t, t * 10)
+    assert ramp.settling_time_s is None
+    flat = measure(t, np.full(t.size, 0.5))
+    assert flat.rise_time_s is None and flat.overshoot_pct is None
+    assert flat.settling_time_s == 0.0 and flat.mean == 0.5
