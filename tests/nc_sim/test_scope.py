@@ -50,7 +50,8 @@ class Rig:
     def column(self, name: str) -> np.ndarray:
         """The signal over every recorded cycle (index 0 is cycle base + 1)."""
         rec = np.concatenate(self.full)
-        return signal_columns([self.sig[name]], rec)[0]
+        out: np.ndarray = signal_columns([self.sig[name]], rec)[0]
+        return out
 
     def span(self, name: str, first: int, count: int) -> np.ndarray:
         """The signal of cycles first … first + count - 1."""
