@@ -13,8 +13,11 @@ from backend.services.auth import Actor
 from backend.services.host import MachineHost
 from backend.services.loop import RealtimeLoop
 from backend.services.machines import MachineService
+from backend.services.recorder import Recorders
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
+from backend.services.traces import TraceService
+from backend.services.viewer import RerunViewer
 from backend.services.warmup import warm_up
 from backend.settings import Settings
 
@@ -28,6 +31,9 @@ class Services:
     machines: MachineService
     loop: RealtimeLoop
     hub: TelemetryHub
+    traces: TraceService
+    recorders: Recorders
+    viewer: RerunViewer
     started: float
 
     @classmethod
@@ -40,12 +46,19 @@ class Services:
             host.set_mode(host.pacing.mode, host.pacing.until_cycle)
         loop = RealtimeLoop(machines.hosts, settings.loop_period_s)
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples)
+        tdir = settings.traces_path
+        traces = TraceService(store, tdir, machines)
+        recorders = Recorders(tdir / "recordings")
+        viewer = RerunViewer(tdir / "rerun-viewer.log")
         loop.start()
         hub.start()
-        return cls(settings, store, machines, loop, hub, time.time())
+        recorders.start()
+        return cls(settings, store, machines, loop, hub, traces, recorders, viewer, time.time())
 
     async def stop(self) -> None:
         await self.hub.stop()
+        self.recorders.stop()
+        self.viewer.stop()
         self.loop.stop()
         self.store.close()
 

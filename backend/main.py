@@ -11,7 +11,16 @@ from fastapi.responses import JSONResponse
 from backend import VERSION, frontend, openapi
 from backend.deps import Services
 from backend.errors import ApiError
-from backend.routes import commands, machines, parameters, service, telemetry
+from backend.routes import (
+    commands,
+    machines,
+    parameters,
+    scope,
+    service,
+    telemetry,
+    traces,
+    viewer,
+)
 from backend.settings import Settings
 
 
@@ -37,7 +46,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def api_error(_request: Request, exc: ApiError) -> JSONResponse:
         return JSONResponse(status_code=exc.status, content={"detail": exc.detail})
 
-    for module in (service, machines, commands, parameters, telemetry):
+    for module in (service, machines, commands, parameters, telemetry, scope, traces, viewer):
         app.include_router(module.router)
     openapi.install(app)
     frontend.mount(app, cfg.frontend_dir)

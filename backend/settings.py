@@ -21,9 +21,16 @@ class Settings(BaseSettings):
     send_buffer_bytes: int = Field(
         131072, ge=16384, description="kernel send buffer per connection (slow-client detection)"
     )
+    trace_dir: Path | None = Field(
+        None, description="trace library files and recordings (default: traces/ beside the db)"
+    )
     frontend_dir: Path = Field(
         Path(__file__).resolve().parents[1] / "frontend" / "dist",
         description="built browser HMI served at / (make builds it)",
     )
     user: str = Field("local", description="who requests act as until login exists")
     role: Role = Field(Role.INSTRUCTOR, description="role of that user")
+
+    @property
+    def traces_path(self) -> Path:
+        return self.trace_dir or self.db_path.parent / "traces"

@@ -216,10 +216,15 @@ class Scope:
             self._write(signal_columns(list(setup.channels), history[-keep:]), head - keep + 1)
         self._trigger_cycle, self._forced = None, False
         self._search_from = head + 1
-        self._primed = False
         self._event_index = len(events)
         trig = setup.trigger
         self._level_column = [trig.signal] if isinstance(trig, LevelTrigger) else []
+        # a crossing in the first cycle after arming counts when the cycle before was below
+        self._primed = False
+        if isinstance(trig, LevelTrigger) and keep:
+            x = float(signal_columns([trig.signal], history[-1:])[0, 0])
+            v, s = (x, trig.level) if trig.rising else (-x, -trig.level)
+            self._primed = v < s - trig.hysteresis
         self.state = ScopeState.ROLL if setup.mode is ScopeMode.ROLL else ScopeState.ARMED
 
     def stop(self) -> None:

@@ -9,20 +9,28 @@ from __future__ import annotations
 
 import threading
 import time
+import uuid
 from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from api.scope import ScopeSetupModel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
+from nc_sim.params import Value
+from nc_sim.scope import Record, Scope
 from nc_sim.signals import Signal, machine_signals, signal_columns
 from nc_sim.sim import Simulation
 
 RING_CYCLES = 1 << 14  # 16.4 s at 1 kHz
 FAST_CHUNK = 2000  # cycles per kernel call in fast mode
 MAX_CATCH_UP_S = 1.0  # behind by more than this: re-anchor instead of racing to catch up
+RECENT_CAPTURES = 16  # completed captures kept in memory until saved to the library
+
+# The written parameter lists at capture time: (scope, target) -> {name: value}
+ParamSnapshot = dict[tuple[str, str], dict[str, Value]]
 
 
 @dataclass
@@ -31,6 +39,16 @@ class Pending:
 
     value: float | int | str
     effect: str
+
+
+@dataclass
+class Capture:
+    """A completed scope record with what the machine was at the time."""
+
+    id: str
+    record: Record
+    params: ParamSnapshot
+    created_unix: float
 
 
 @dataclass
@@ -54,6 +72,8 @@ class MachineHost:
         self.pacing = Pacing()
         self.deleted = False  # telemetry closes its subscribers
         self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
+        self.captures: deque[Capture] = deque(maxlen=RECENT_CAPTURES)  # newest last
+        self.scope_setup: ScopeSetupModel | None = None  # as the client asked for it
         self.build(cfg)
 
     def build(self, cfg: MachineConfig) -> None:
@@ -64,6 +84,7 @@ class MachineHost:
             self.signals: list[Signal] = machine_signals(self.machine)
             self.signal_by_name = {s.name: s for s in self.signals}
             self.ring = np.zeros((RING_CYCLES, self.sim.kernel.n, L.R_COLS))
+            self.scope = Scope(self.sim.kernel.cycle_s)  # a power cycle stops the scope
             self.epoch = getattr(self, "epoch", 0) + 1  # telemetry cursors restart with it
             self.jog_leases.clear()  # a power cycle ends every held jog
             self.pacing.anchor_mono = time.monotonic()
@@ -86,13 +107,34 @@ class MachineHost:
         dead-man works the same in real time, single steps and fast mode."""
         while n > 0:
             self._expire_jogs()
-            start = (self.sim.cycle + 1) % RING_CYCLES
+            start_cycle = self.sim.cycle + 1
+            start = start_cycle % RING_CYCLES
             part = min(n, RING_CYCLES - start)
             if self.jog_leases:
                 part = min(part, max(1, min(self.jog_leases.values()) - self.sim.cycle))
             self.sim.run(part, self.ring[start : start + part])
+            if self.scope.active:
+                self.scope.feed(self.ring[start : start + part], start_cycle, self.machine.events)
+                if self.scope.completed:
+                    self._take_captures()
             n -= part
         self._expire_jogs()
+
+    def _take_captures(self) -> None:
+        """Keep completed records with the parameter lists as written now (cheap copies)."""
+        cfg = self.machine.cfg
+        params: ParamSnapshot = {("channel", ""): dict(cfg.channel), ("tool", ""): dict(cfg.tools)}
+        for a in cfg.axes:
+            params[("axis", a.name)] = dict(a.values)
+        for rec in self.scope.completed:
+            self.captures.append(Capture(uuid.uuid4().hex[:12], rec, params, time.time()))
+        self.scope.completed.clear()
+
+    def history(self, cycles: int) -> np.ndarray:
+        """Kernel records of the newest `cycles` cycles the ring holds, oldest first."""
+        n = min(cycles, self.sim.cycle, RING_CYCLES - 1)
+        idx = np.arange(self.sim.cycle - n + 1, self.sim.cycle + 1) % RING_CYCLES
+        return self.ring[idx]
 
     def hold_jog(self, axis: str, hold_s: float | None) -> None:
         """Renew (or with None drop) the dead-man lease of a continuous jog."""

@@ -46,6 +46,14 @@ CREATE TABLE IF NOT EXISTS audit (
     effect TEXT NOT NULL,
     comment TEXT NOT NULL
 );
+CREATE TABLE IF NOT EXISTS traces (
+    id TEXT PRIMARY KEY,
+    machine TEXT NOT NULL,
+    created REAL NOT NULL,
+    name TEXT NOT NULL,
+    notes TEXT NOT NULL,
+    meta TEXT NOT NULL             -- JSON TraceDetail (its name and notes live in the columns)
+);
 """
 
 
@@ -191,3 +199,41 @@ class Store:
             )
             for r in reversed(rows)
         ]
+
+    # --- the trace library (samples live in files next to the database) -----------------------
+    def add_trace(
+        self, tid: str, machine: str, created: float, name: str, notes: str, meta: str
+    ) -> None:
+        with self._lock:
+            self._db.execute(
+                "INSERT INTO traces VALUES (?, ?, ?, ?, ?, ?)",
+                (tid, machine, created, name, notes, meta),
+            )
+
+    def traces(self, machine: str | None = None) -> list[tuple[str, str, str, str]]:
+        """(id, name, notes, meta JSON) of stored traces, newest first."""
+        q = "SELECT id, name, notes, meta FROM traces"
+        args: tuple[str, ...] = ()
+        if machine is not None:
+            q, args = q + " WHERE machine = ?", (machine,)
+        with self._lock:
+            rows = self._db.execute(q + " ORDER BY created DESC", args).fetchall()
+        return [(r[0], r[1], r[2], r[3]) for r in rows]
+
+    def trace(self, tid: str) -> tuple[str, str, str, str] | None:
+        with self._lock:
+            r = self._db.execute(
+                "SELECT id, name, notes, meta FROM traces WHERE id = ?", (tid,)
+            ).fetchone()
+        return (r[0], r[1], r[2], r[3]) if r else None
+
+    def update_trace(self, tid: str, name: str, notes: str) -> None:
+        with self._lock:
+            self._db.execute(
+                "UPDATE traces SET name = ?, notes = ? WHERE id = ?", (name, notes, tid)
+            )
+
+    def delete_trace(self, tid: str) -> bool:
+        with self._lock:
+            cur = self._db.execute("DELETE FROM traces WHERE id = ?", (tid,))
+        return cur.rowcount > 0

@@ -170,6 +170,18 @@ def test_a_level_already_beyond_the_edge_at_arming_waits_for_a_real_crossing() -
     assert rig.scope.completed == [] and rig.scope.state is ScopeState.ARMED
 
 
+def test_a_crossing_in_the_first_cycle_after_arming_counts() -> None:
+    rig = Rig()
+    rig.run(500)
+    sig = rig.sig["X.vel_cmd_mm_min"]
+    rig.arm(ScopeSetup([sig], 300, 10.0, ScopeMode.SINGLE, LevelTrigger(sig, 1.0)))
+    at = rig.sim.cycle
+    assert rig.m.move("X", 75.0, rapid=False, feed_mm_min=600) is None
+    rig.run(400)
+    (rec,) = rig.scope.completed
+    assert rec.trigger_cycle == at + 1 and rec.data[0][30] > 1.0 and rec.data[0][29] == 0.0
+
+
 def test_force_takes_the_newest_cycle_and_roll_keeps_the_newest_window() -> None:
     rig = Rig()
     rig.run(400)

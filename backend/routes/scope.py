@@ -1,0 +1,100 @@
+"""A machine's scope (setup, arm, force, stop, roll data) and its continuous recording."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+from urllib.parse import quote
+
+from fastapi import APIRouter, Query, Request
+from fastapi.responses import FileResponse, RedirectResponse, Response
+
+from api.auth import Action
+from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
+from backend.deps import ActorDep, HostDep, ServicesDep
+from backend.services import scope
+from backend.services.auth import authorize
+
+router = APIRouter(prefix="/api", tags=["scope"])
+BINARY: dict[int | str, dict[str, Any]] = {
+    200: {"content": {"application/octet-stream": {}}, "description": "binary frame"}
+}
+
+
+@router.get("/machines/{mid}/scope")
+def scope_status(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+    """State of the scope, its setup and the recent captures (newest first)."""
+    authorize(actor, Action.OBSERVE, host.id)
+    return scope.status(host, services.traces, services.recorders)
+
+
+@router.put("/machines/{mid}/scope", responses={422: {"description": "bad setup"}})
+def scope_arm(
+    req: ScopeSetupModel, host: HostDep, services: ServicesDep, actor: ActorDep
+) -> ScopeStatus:
+    """Arm (or start rolling) with this setup; the pre-trigger fills from recent history."""
+    authorize(actor, Action.OBSERVE, host.id)
+    scope.arm(host, req)
+    return scope.status(host, services.traces, services.recorders)
+
+
+@router.post("/machines/{mid}/scope/force")
+def scope_force(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+    """Trigger now (an armed scope only)."""
+    authorize(actor, Action.OBSERVE, host.id)
+    with host.lock:
+        host.scope.force()
+    return scope.status(host, services.traces, services.recorders)
+
+
+@router.post("/machines/{mid}/scope/stop")
+def scope_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+    authorize(actor, Action.OBSERVE, host.id)
+    with host.lock:
+        host.scope.stop()
+    return scope.status(host, services.traces, services.recorders)
+
+
+@router.get("/machines/{mid}/scope/roll", response_class=Response, responses=BINARY)
+def scope_roll(
+    host: HostDep,
+    actor: ActorDep,
+    max_points: Annotated[int, Query(ge=100, le=200_000)] = 5000,
+) -> Response:
+    """The newest record length of a running scope (every stride-th cycle)."""
+    authorize(actor, Action.OBSERVE, host.id)
+    return Response(scope.roll_frame(host, max_points), media_type="application/octet-stream")
+
+
+@router.post("/machines/{mid}/recording", status_code=201)
+def recording_start(
+    req: RecordingStart, host: HostDep, services: ServicesDep, actor: ActorDep
+) -> RecordingInfo:
+    """Record these signals every cycle into a Rerun .rrd until stopped."""
+    authorize(actor, Action.OBSERVE, host.id)
+    return services.recorders.begin(host, req.signals)
+
+
+@router.delete("/machines/{mid}/recording")
+def recording_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> RecordingInfo:
+    authorize(actor, Action.OBSERVE, host.id)
+    return services.recorders.end(host.id)
+
+
+@router.get("/recordings/{rid}/rrd", response_class=FileResponse)
+def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
+    """The recording as a Rerun .rrd file (so far, while it runs)."""
+    path = services.recorders.path(rid)
+    return FileResponse(path, media_type="application/octet-stream", filename=f"{rid}.rrd")
+
+
+@router.get("/recordings/{rid}/viewer", response_class=RedirectResponse)
+def recording_viewer(rid: str, request: Request, services: ServicesDep) -> RedirectResponse:
+    """Open the recording in the bundled Rerun web viewer."""
+    services.recorders.path(rid)
+    return RedirectResponse(viewer_url(request, f"/api/recordings/{rid}/rrd"))
+
+
+def viewer_url(request: Request, rrd_path: str) -> str:
+    """The viewer page (through the service) that loads an .rrd of the service."""
+    base = str(request.base_url).rstrip("/")
+    return f"/rerun/?url={quote(base + rrd_path, safe='')}"

@@ -1,0 +1,169 @@
+"""Continuous recording: chosen signals of a machine, every cycle, into a Rerun .rrd file.
+
+A recorder reads the host's sample ring behind a cursor (like a telemetry subscriber) and one
+thread writes every recorder's new cycles every `period_s`, outside the host lock, so the
+real-time loop only ever waits for the copy out of the ring. A power cycle of the machine ends
+its recording (simulated time starts again at zero).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from api.scope import RecordingInfo
+from backend.errors import ApiError, not_found
+from backend.services import rrd
+from backend.services.host import MachineHost
+
+
+@dataclass
+class Recording:
+    id: str
+    host: MachineHost
+    signals: list[str]
+    path: Path
+    writer: rrd.RrdWriter
+    epoch: int
+    first_cycle: int
+    cursor: int  # next cycle to write
+    started_unix: float
+    active: bool = True
+    skipped: int = 0  # cycles lost because the writer fell a whole ring behind
+    events_from: int = 0
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def info(self) -> RecordingInfo:
+        return RecordingInfo(
+            id=self.id,
+            machine=self.host.id,
+            signals=self.signals,
+            active=self.active,
+            first_cycle=self.first_cycle,
+            cycles=self.cursor - self.first_cycle,
+            bytes=self.path.stat().st_size if self.path.exists() else 0,
+            started_unix=self.started_unix,
+        )
+
+    def pump(self) -> None:
+        """Write the cycles stepped since the last pump."""
+        with self.lock:
+            if not self.active:
+                return
+            host = self.host
+            sigs = [host.signal_by_name[n] for n in self.signals]
+            with host.lock:
+                if host.epoch != self.epoch:
+                    head, data, start, events = self.cursor - 1, None, self.cursor, []
+                else:
+                    head = host.cycle
+                    data, start = (None, self.cursor)
+                    if head >= self.cursor:
+                        data, start = host.samples(sigs, self.cursor, head, 1)
+                    events = host.machine.events[self.events_from :]
+                    self.events_from += len(events)
+            if data is not None:
+                self.skipped += start - self.cursor
+                self.writer.block(start, data)
+            self.writer.events(events)
+            self.cursor = head + 1
+            if host.epoch != self.epoch:
+                self._close()
+
+    def stop(self) -> None:
+        self.pump()
+        with self.lock:
+            self._close()
+
+    def _close(self) -> None:
+        if self.active:
+            self.active = False
+            rrd.close_stream(self.writer.stream)
+
+
+class Recorders:
+    """Every continuous recording of the service, written by one thread."""
+
+    def __init__(self, directory: Path, period_s: float = 0.25) -> None:
+        self.dir = directory
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self.period_s = period_s
+        self.all: dict[str, Recording] = {}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="recorders", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+        for r in list(self.all.values()):
+            r.stop()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.period_s):
+            self.pump()
+
+    def pump(self) -> None:
+        for r in list(self.all.values()):
+            r.pump()
+
+    def begin(self, host: MachineHost, signals: list[str]) -> RecordingInfo:
+        """Start recording from the next cycle; 409 when the machine already records."""
+        bad = [n for n in signals if n not in host.signal_by_name]
+        if bad:
+            raise ApiError(422, {"message": f"recording: unknown signals {bad}"})
+        if self.active(host.id) is not None:
+            raise ApiError(409, {"message": f"{host.id} is already recording: stop it first"})
+        rid = uuid.uuid4().hex[:12]
+        path = self.dir / f"{rid}.rrd"
+        about = f"# continuous recording of {host.name} ({host.id})\n- signals: " + ", ".join(
+            signals
+        )
+        stream = rrd.open_stream(path, rid, host.id, about)
+        with host.lock:
+            first = host.cycle + 1
+            rec = Recording(
+                rid,
+                host,
+                list(signals),
+                path,
+                rrd.RrdWriter(stream, host.id, signals, host.cycle_s),
+                host.epoch,
+                first,
+                first,
+                time.time(),
+                events_from=len(host.machine.events),
+            )
+        self.all[rid] = rec
+        return rec.info()
+
+    def active(self, mid: str) -> Recording | None:
+        return next((r for r in self.all.values() if r.host.id == mid and r.active), None)
+
+    def info(self, mid: str) -> RecordingInfo | None:
+        """The machine's running recording, else its newest finished one."""
+        mine = [r for r in self.all.values() if r.host.id == mid]
+        act = [r for r in mine if r.active]
+        pick = act[0] if act else (mine[-1] if mine else None)
+        return pick.info() if pick else None
+
+    def end(self, mid: str) -> RecordingInfo:
+        rec = self.active(mid)
+        if rec is None:
+            raise ApiError(409, {"message": f"{mid} is not recording"})
+        rec.stop()
+        return rec.info()
+
+    def path(self, rid: str) -> Path:
+        rec = self.all.get(rid)
+        if rec is None:
+            raise not_found(f"recording {rid}")
+        if rec.active:
+            rec.pump()
+            rec.writer.stream.flush()
+        return rec.path

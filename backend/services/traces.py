@@ -1,0 +1,287 @@
+"""Traces: the recent captures of every machine and the library (SQLite rows + .npy files).
+
+A capture stays in memory (the newest few per machine) until it is saved; then its samples go
+to `<trace_dir>/<id>.npy` and its description to the `traces` table. Recordings in Rerun
+format are made on demand and cached next to the samples.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from api.scope import (
+    ChannelInfo,
+    MeasurementsModel,
+    ParamCompare,
+    ParamValueAt,
+    TraceCompare,
+    TraceDetail,
+    TraceInfo,
+    TracePatch,
+    TraceSave,
+)
+from api.telemetry import FrameHeader, encode_frame
+from backend.errors import ApiError, not_found
+from backend.services import rrd
+from backend.services.commands import job_error_model
+from backend.services.host import Capture, MachineHost, ParamSnapshot
+from backend.services.machines import MachineService
+from backend.services.store import Store
+from nc_sim.errors import JobError
+from nc_sim.measure import measure
+from nc_sim.params import ParamError, Scope
+from nc_sim.params.listfile import resolve
+
+
+@dataclass
+class Trace:
+    """A trace's description and its samples (channels × count, one per cycle)."""
+
+    detail: TraceDetail
+    data: np.ndarray
+
+    def times_s(self) -> np.ndarray:
+        """Sample times relative to the trigger (to the first sample without one)."""
+        d = self.detail
+        ref = d.trigger_cycle if d.trigger_cycle is not None else d.first_cycle
+        return (np.arange(d.count) + d.first_cycle - ref) * d.cycle_s
+
+    def events(self) -> list[JobError]:
+        return [JobError(e.cycle, e.t_s, e.axis, e.code, e.message) for e in self.detail.events]
+
+
+def param_diff(snapshot: ParamSnapshot) -> list[ParamValueAt]:
+    """The written values that differ from the manuals' defaults."""
+    out = []
+    for (scope, target), values in snapshot.items():
+        for name, value in sorted(values.items()):
+            try:
+                default = resolve(Scope(scope), name).default
+            except ParamError:
+                default = None
+            if value != default:
+                row = {"scope": scope, "target": target, "name": name}
+                out.append(ParamValueAt(**row, value=value, default=default))
+    return out
+
+
+def _info(detail: TraceDetail) -> TraceInfo:
+    return TraceInfo.model_validate(detail.model_dump(exclude={"params", "events"}))
+
+
+class TraceService:
+    """Finds traces by id wherever they are; saves, lists, renames, deletes, compares."""
+
+    def __init__(self, store: Store, directory: Path, machines: MachineService) -> None:
+        self.store = store
+        self.dir = directory
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self.machines = machines
+        self._lock = threading.Lock()
+        self._cache: dict[str, Trace] = {}  # recent captures, converted once
+
+    # --- finding ----------------------------------------------------------------------------
+    def _from_capture(self, host: MachineHost, cap: Capture) -> Trace:
+        with self._lock:
+            hit = self._cache.get(cap.id)
+            if hit is not None:
+                return hit
+        rec = cap.record
+        params = param_diff(cap.params)
+        detail = TraceDetail(
+            id=cap.id,
+            machine=host.id,
+            machine_name=host.name,
+            name="",
+            notes="",
+            source="capture",
+            stored=False,
+            trigger=rec.trigger,
+            forced=rec.forced,
+            created_unix=cap.created_unix,
+            first_cycle=rec.first_cycle,
+            trigger_cycle=rec.trigger_cycle,
+            count=rec.count,
+            cycle_s=rec.cycle_s,
+            channels=[ChannelInfo(name=s.name, unit=s.unit, kind=s.kind) for s in rec.channels],
+            params_changed=len(params),
+            params=params,
+            events=[job_error_model(e) for e in rec.events],
+        )
+        trace = Trace(detail, rec.data)
+        with self._lock:
+            self._cache[cap.id] = trace
+            live = {c.id for h in self.machines.hosts() for c in h.captures}
+            for k in [k for k in self._cache if k not in live]:
+                del self._cache[k]
+        return trace
+
+    def recent(self, host: MachineHost) -> list[TraceInfo]:
+        """The machine's recent captures, newest first."""
+        with host.lock:
+            caps = list(host.captures)
+        return [_info(self._from_capture(host, c).detail) for c in reversed(caps)]
+
+    def get(self, tid: str) -> Trace:
+        """A recent capture or a stored trace; 404 when neither."""
+        row = self.store.trace(tid)
+        if row is not None:
+            _, name, notes, meta = row
+            detail = TraceDetail.model_validate_json(meta)
+            detail.name, detail.notes = name, notes
+            return Trace(detail, np.load(self.dir / f"{tid}.npy"))
+        for host in self.machines.hosts():
+            with host.lock:
+                cap = next((c for c in host.captures if c.id == tid), None)
+            if cap is not None:
+                return self._from_capture(host, cap)
+        raise not_found(f"trace {tid}")
+
+    # --- the library ------------------------------------------------------------------------
+    def library(self, machine: str | None = None) -> list[TraceInfo]:
+        out = []
+        for _, name, notes, meta in self.store.traces(machine):
+            info = TraceInfo.model_validate_json(meta)
+            info.name, info.notes = name, notes
+            out.append(info)
+        return out
+
+    def add(self, trace: Trace) -> TraceInfo:
+        """Store a trace (a capture being saved, or an import)."""
+        d = trace.detail
+        d.stored = True
+        np.save(self.dir / f"{d.id}.npy", trace.data)
+        meta = d.model_dump_json()  # name and notes: the columns are the live ones
+        self.store.add_trace(d.id, d.machine, d.created_unix, d.name, d.notes, meta)
+        return _info(d)
+
+    def save(self, tid: str, req: TraceSave) -> TraceInfo:
+        trace = self.get(tid)
+        if trace.detail.stored:
+            raise ApiError(409, {"message": f"trace {tid} is already in the library"})
+        detail = trace.detail.model_copy(deep=True)
+        detail.name = req.name or f"{detail.trigger or 'capture'} {detail.id[:6]}"
+        detail.notes = req.notes
+        info = self.add(Trace(detail, trace.data))
+        trace.detail.stored = True
+        return info
+
+    def patch(self, tid: str, req: TracePatch) -> TraceInfo:
+        trace = self.get(tid)
+        if not trace.detail.stored:
+            raise ApiError(409, {"message": f"trace {tid} is not in the library: save it first"})
+        d = trace.detail
+        name = d.name if req.name is None else req.name
+        self.store.update_trace(tid, name, d.notes if req.notes is None else req.notes)
+        return _info(self.get(tid).detail)
+
+    def delete(self, tid: str) -> None:
+        if not self.store.delete_trace(tid):
+            raise not_found(f"stored trace {tid}")
+        for suffix in (".npy", ".rrd"):
+            (self.dir / f"{tid}{suffix}").unlink(missing_ok=True)
+
+    def compare(self, a: str, b: str) -> TraceCompare:
+        ta, tb = self.get(a).detail, self.get(b).detail
+        pa = {(p.scope, p.target, p.name): p.value for p in ta.params}
+        pb = {(p.scope, p.target, p.name): p.value for p in tb.params}
+        rows = []
+        for key in sorted(set(pa) | set(pb)):
+            va, vb = pa.get(key), pb.get(key)
+            if va != vb:
+                s, t, n = key
+                rows.append(ParamCompare(scope=s, target=t, name=n, a=va, b=vb))
+        names_b = {c.name for c in tb.channels}
+        common = [c.name for c in ta.channels if c.name in names_b]
+        return TraceCompare(a=_info(ta), b=_info(tb), params=rows, common_channels=common)
+
+    # --- reading ----------------------------------------------------------------------------
+    def frame(self, tid: str) -> bytes:
+        """The samples as one binary frame (api/telemetry.py format, stride 1)."""
+        trace = self.get(tid)
+        d = trace.detail
+        header = FrameHeader(
+            machine=d.machine,
+            first_cycle=d.first_cycle,
+            count=d.count,
+            stride=1,
+            cycle_s=d.cycle_s,
+            t0_unix=0.0,
+            signals=[c.name for c in d.channels],
+            decimated=False,
+            skipped_cycles=0,
+        )
+        return encode_frame(header, trace.data)
+
+    def measure(
+        self,
+        tid: str,
+        channel: str,
+        t0_s: float | None,
+        t1_s: float | None,
+        band_pct: float,
+        band_abs: float | None,
+    ) -> MeasurementsModel:
+        trace = self.get(tid)
+        names = [c.name for c in trace.detail.channels]
+        if channel not in names:
+            raise ApiError(422, {"message": f"channel {channel} is not in trace {tid}: {names}"})
+        k = names.index(channel)
+        t = trace.times_s()
+        lo = t[0] if t0_s is None else t0_s
+        hi = t[-1] if t1_s is None else t1_s
+        sel = (t >= lo - 1e-12) & (t <= hi + 1e-12)
+        if np.count_nonzero(sel) < 2:
+            raise ApiError(422, {"message": f"window {lo:g} … {hi:g} s holds fewer than 2 samples"})
+        ref = 0.0 if trace.detail.trigger_cycle is not None and lo <= 0.0 <= hi else None
+        m = measure(t[sel], trace.data[k][sel], band_pct, band_abs, ref)
+        return MeasurementsModel(
+            channel=channel,
+            unit=trace.detail.channels[k].unit,
+            t0_s=float(t[sel][0]),
+            t1_s=float(t[sel][-1]),
+            **m.__dict__,
+        )
+
+    def rrd_path(self, tid: str) -> Path:
+        """The trace as a Rerun recording (made once, then cached)."""
+        trace = self.get(tid)
+        path = self.dir / f"{tid}.rrd"
+        if not path.exists():
+            d = trace.detail
+            about = _about(d)
+            rrd.write_capture(
+                path,
+                tid,
+                d.machine,
+                about,
+                [c.name for c in d.channels],
+                d.first_cycle,
+                d.cycle_s,
+                trace.data,
+                trace.events(),
+            )
+        return path
+
+
+def _about(d: TraceDetail) -> str:
+    """A markdown description logged statically into the recording."""
+    lines = [
+        f"# {d.name or d.trigger or 'capture'}",
+        f"- machine: {d.machine_name} ({d.machine})",
+        f"- trigger: {d.trigger or '—'} at cycle {d.trigger_cycle}",
+        f"- cycles {d.first_cycle} … {d.first_cycle + d.count - 1}, cycle time {d.cycle_s:g} s",
+    ]
+    if d.notes:
+        lines.append(f"- notes: {d.notes}")
+    if d.params:
+        lines += ["", "| parameter | value | default |", "|---|---|---|"]
+        lines += [
+            f"| {p.target + ' ' if p.target else ''}{p.name} | {p.value} | {p.default} |"
+            for p in d.params
+        ]
+    return "\n".join(lines)

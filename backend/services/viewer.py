@@ -1,0 +1,81 @@
+"""The Rerun web viewer that rerun-sdk bundles, run on loopback and reached through the service.
+
+The viewer has no authentication, so it listens on 127.0.0.1 only (its own HTTP port and the
+gRPC port it also opens); the service forwards `/rerun/…` to it. It is started on first use.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+from backend.errors import ApiError
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def rerun_cli() -> str:
+    """The `rerun` executable of this environment."""
+    local = Path(sys.executable).with_name("rerun")
+    return str(local) if local.exists() else (shutil.which("rerun") or "rerun")
+
+
+class RerunViewer:
+    """One viewer process for the service."""
+
+    def __init__(self, log_path: Path) -> None:
+        self.log_path = log_path
+        self.port: int | None = None
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._lock = threading.Lock()
+
+    def ensure(self, timeout_s: float = 20.0) -> int:
+        """The viewer's HTTP port on 127.0.0.1, starting it when needed."""
+        with self._lock:
+            if self._proc is not None and self._proc.poll() is None and self.port is not None:
+                return self.port
+            web, grpc = _free_port(), _free_port()
+            cmd = [rerun_cli(), "--serve-web", "--bind", "127.0.0.1"]
+            cmd += ["--web-viewer-port", str(web), "--port", str(grpc)]
+            self.log_path.parent.mkdir(parents=True, exist_ok=True)
+            with self.log_path.open("ab") as log:
+                self._proc = subprocess.Popen(
+                    cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+                )
+            deadline = time.monotonic() + timeout_s
+            while time.monotonic() < deadline:
+                if self._proc.poll() is not None:
+                    break
+                with (
+                    contextlib.suppress(OSError),
+                    socket.create_connection(("127.0.0.1", web), timeout=0.2),
+                ):
+                    self.port = web
+                    return web
+                time.sleep(0.1)
+            self.stop_locked()
+            msg = f"the Rerun viewer did not start (see {self.log_path})"
+            raise ApiError(503, {"message": msg})
+
+    def stop(self) -> None:
+        with self._lock:
+            self.stop_locked()
+
+    def stop_locked(self) -> None:
+        if self._proc is not None and self._proc.poll() is None:
+            self._proc.terminate()
+            try:
+                self._proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self._proc.kill()
+        self._proc, self.port = None, None

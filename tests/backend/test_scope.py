@@ -1,0 +1,277 @@
+"""Scope and traces over real HTTP: triggered captures, the library in SQLite, CSV, Rerun .rrd
+read by the real `rerun` CLI, the loopback-only Rerun web viewer, continuous recording."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+from collections import Counter
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from api.telemetry import decode_frame
+from backend.services.viewer import rerun_cli
+from nc_sim.machine.axis import AxisState
+from tests.backend.server import Server
+
+CH = ["S1.speed_cmd_rpm", "S1.pos_act_deg", "S1.lag_deg", "S1.state"]
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    s = Server(tmp_path_factory.mktemp("scope") / "scope.sqlite").start()
+    s.pace("demo", mode="pause")
+    s.step("demo", 500)
+    yield s
+    s.close()
+
+
+def arm(srv: Server, **setup: Any) -> dict[str, Any]:
+    r = srv.http.put("/api/machines/demo/scope", json=setup)
+    assert r.status_code == 200, r.text
+    data: dict[str, Any] = r.json()
+    return data
+
+
+def scope(srv: Server) -> dict[str, Any]:
+    data: dict[str, Any] = srv.http.get("/api/machines/demo/scope").json()
+    return data
+
+
+def samples(srv: Server, tid: str) -> tuple[Any, np.ndarray]:
+    r = srv.http.get(f"/api/traces/{tid}/data")
+    r.raise_for_status()
+    return decode_frame(r.content)
+
+
+def cycle(srv: Server) -> int:
+    return int(scope(srv)["cycle"])
+
+
+def m19_capture(srv: Server) -> dict[str, Any]:
+    trig = {"type": "event", "event": "m_start", "axis": "S1", "m": 19}
+    st = arm(srv, channels=CH, length_s=0.5, pretrigger_pct=40, mode="single", trigger=trig)
+    assert st["state"] == "armed" and st["pre_cycles"] == 200 and st["length_cycles"] == 500
+    srv.step("demo", 37)
+    at = cycle(srv)
+    r = srv.command("demo", {"type": "spindle_position", "spindle": "S1", "position_deg": 90})
+    assert r.status_code == 200, r.text
+    srv.step("demo", 600)
+    st = scope(srv)
+    assert st["state"] == "done"
+    cap: dict[str, Any] = st["captures"][0]
+    assert cap["trigger_cycle"] == at + 1
+    return cap
+
+
+def test_m19_capture_has_the_asked_pretrigger_and_its_trigger_at_the_first_m19_cycle(
+    srv: Server,
+) -> None:
+    cap = m19_capture(srv)
+    assert cap["first_cycle"] == cap["trigger_cycle"] - 200 and cap["count"] == 500
+    assert cap["trigger"] == "M19 start on S1" and not cap["stored"]
+    header, data = samples(srv, cap["id"])
+    assert header.signals == CH and header.first_cycle == cap["first_cycle"]
+    state = data[3]
+    assert state[200] == AxisState.POSITIONING and state[199] != AxisState.POSITIONING
+    detail = srv.http.get(f"/api/traces/{cap['id']}").json()
+    assert any(e["message"].startswith("M19") for e in detail["events"])
+
+
+def test_level_trigger_fires_once_in_single_mode(srv: Server) -> None:
+    trig = {"type": "level", "signal": "S1.speed_cmd_rpm", "level": 300, "edge": "rising"}
+    before = len(scope(srv)["captures"])
+    arm(srv, channels=["S1.speed_cmd_rpm"], length_s=0.2, pretrigger_pct=50, trigger=trig)
+    for m in (3, 5, 3, 5):
+        srv.command("demo", {"type": "spindle", "spindle": "S1", "m": m, "speed_rpm": 600})
+        srv.step("demo", 1500)
+    st = scope(srv)
+    assert st["state"] == "done" and len(st["captures"]) == before + 1
+    _, data = samples(srv, st["captures"][0]["id"])
+    assert data[0][100] >= 300 > data[0][99]  # the trigger sample is the first one above
+
+
+def test_bad_setups_are_refused_with_what_is_wrong(srv: Server) -> None:
+    r = srv.http.put("/api/machines/demo/scope", json={"channels": ["S1.nope"]})
+    assert r.status_code == 422 and "S1.nope" in r.text
+    r = srv.http.put("/api/machines/demo/scope", json={"channels": CH, "length_s": 61})
+    assert r.status_code == 422 and "length_s" in r.text
+    r = srv.http.put("/api/machines/demo/scope", json={"channels": CH, "mode": "normal"})
+    assert r.status_code == 422 and "needs a trigger" in r.text
+    r = srv.http.put("/api/machines/demo/scope", json={"channels": CH * 5})
+    assert r.status_code == 422 and "channels" in r.text
+
+
+def rrd_chunks(path: Path) -> Counter[str]:
+    """Rows per entity path as the real `rerun rrd print` reports them."""
+    out = subprocess.run(
+        [rerun_cli(), "rrd", "print", str(path)], capture_output=True, text=True, check=True
+    ).stdout
+    rows: Counter[str] = Counter()
+    for m in re.finditer(r"with (\d+) rows .*? - (/\S+) - data columns", out):
+        rows[m[2]] += int(m[1])
+    return rows
+
+
+def test_capture_as_rrd_read_by_the_rerun_cli(srv: Server, tmp_path: Path) -> None:
+    cap = m19_capture(srv)
+    r = srv.http.get(f"/api/traces/{cap['id']}/rrd")
+    assert r.status_code == 200
+    path = tmp_path / "m19.rrd"
+    path.write_bytes(r.content)
+    rows = rrd_chunks(path)
+    for name in CH[:3]:
+        assert rows["/demo/" + name.replace(".", "/")] == 500  # one row per cycle
+    _, data = samples(srv, cap["id"])
+    changes = 1 + int(np.count_nonzero(np.diff(data[3])))
+    assert rows["/demo/S1/state"] == changes  # the state as text at each change
+    detail = srv.http.get(f"/api/traces/{cap['id']}").json()
+    assert rows["/demo/events"] == len(detail["events"]) > 0
+    stats = subprocess.run(
+        [rerun_cli(), "rrd", "stats", str(path)], capture_output=True, text=True, check=True
+    ).stdout
+    assert "num_entity_paths = 6" in stats  # demo, 4 channels, events
+    verbose = subprocess.run(
+        [rerun_cli(), "rrd", "print", "-vv", str(path)], capture_output=True, text=True
+    ).stdout
+    assert "sim_time" in verbose and "cycle" in verbose
+
+
+def test_csv_round_trip_is_exact(srv: Server) -> None:
+    cap = m19_capture(srv)
+    text = srv.http.get(f"/api/traces/{cap['id']}/csv").text
+    r = srv.http.post(
+        "/api/traces/import",
+        params={"name": "m19 again"},
+        content=text.encode(),
+        headers={"content-type": "text/csv"},
+    )
+    assert r.status_code == 201, r.text
+    imp = r.json()
+    assert imp["source"] == "import" and imp["stored"] and imp["name"] == "m19 again"
+    h1, d1 = samples(srv, cap["id"])
+    h2, d2 = samples(srv, imp["id"])
+    assert h2.signals == h1.signals and h2.first_cycle == h1.first_cycle
+    assert d1.tobytes() == d2.tobytes()  # bit for bit
+    again = srv.http.get(f"/api/traces/{imp['id']}/csv").text
+    assert again.split("\n")[2:] == text.split("\n")[2:]  # same header and rows
+    bad = srv.http.post("/api/traces/import", content=b"cycle,a\n1,x\n2,3\n")
+    assert bad.status_code == 422 and "not a number" in bad.text
+
+
+def test_library_keeps_parameters_renames_compares_deletes(srv: Server, tmp_path: Path) -> None:
+    kv = "getriebe[2].kv"  # S1 runs in M42
+    first = m19_capture(srv)
+    saved = srv.http.post(f"/api/traces/{first['id']}/save", json={"name": "kv default"}).json()
+    assert saved["stored"] and saved["name"] == "kv default"
+    body = {"changes": [{"scope": "axis", "target": "S1", "name": kv, "value": 1500}]}
+    assert srv.http.patch("/api/machines/demo/parameters", json=body).status_code == 200
+    second = m19_capture(srv)
+    srv.http.post(f"/api/traces/{second['id']}/save", json={"notes": "kv 15/s"})
+    detail = srv.http.get(f"/api/traces/{second['id']}").json()
+    at_capture = {(p["scope"], p["target"], p["name"]): p["value"] for p in detail["params"]}
+    assert at_capture[("axis", "S1", kv)] == 1500
+    cmp = srv.http.get("/api/traces/compare", params={"a": first["id"], "b": second["id"]}).json()
+    assert [(p["name"], p["b"]) for p in cmp["params"]] == [(kv, 1500)]
+    assert cmp["common_channels"] == CH
+
+    r = srv.http.patch(f"/api/traces/{first['id']}", json={"name": "before", "notes": "kv 20"})
+    assert r.json()["name"] == "before"
+    lib = srv.http.get("/api/traces", params={"machine": "demo"}).json()
+    names = {t["id"]: t["name"] for t in lib}
+    assert names[first["id"]] == "before" and second["id"] in names
+    assert srv.http.delete(f"/api/traces/{second['id']}").status_code == 204
+    assert srv.http.get(f"/api/traces/{second['id']}").status_code in (200, 404)
+    assert second["id"] not in {t["id"] for t in srv.http.get("/api/traces").json()}
+    assert not (srv.db.parent / "traces" / f"{second['id']}.npy").exists()
+    body["changes"][0]["value"] = 2000  # back to the demo's value
+    srv.http.patch("/api/machines/demo/parameters", json=body)
+
+
+def test_measurements_of_a_feed_move_match_v_over_kv(srv: Server) -> None:
+    trig = {"type": "level", "signal": "X.vel_cmd_mm_min", "level": 1, "edge": "rising"}
+    arm(srv, channels=["X.lag_mm", "X.vel_act_mm_min"], length_s=3, pretrigger_pct=5, trigger=trig)
+    x = srv.axis("X")["pos_cmd"]
+    srv.command(
+        "demo", {"type": "move", "axis": "X", "target": x + 25, "rapid": False, "feed_mm_min": 600}
+    )
+    srv.step("demo", 3500)
+    cap = scope(srv)["captures"][0]
+    m = srv.http.get(
+        f"/api/traces/{cap['id']}/measure", params={"channel": "X.lag_mm", "t1_s": 2.0}
+    ).json()
+    # steady lag of a position loop without feedforward: v/kv = (600/60 mm/s)/(20/s)
+    assert m["final"] == pytest.approx(0.5, abs=0.002)
+    assert m["unit"] == "mm" and m["t0_s"] == pytest.approx(-0.15)
+    v = srv.http.get(
+        f"/api/traces/{cap['id']}/measure",
+        params={"channel": "X.vel_act_mm_min", "t0_s": 0, "t1_s": 2.0},
+    ).json()
+    assert v["final"] == pytest.approx(600, rel=1e-3)
+    assert v["rise_time_s"] is not None and 0 < v["rise_time_s"] < 1.0
+    r = srv.http.get(f"/api/traces/{cap['id']}/measure", params={"channel": "Z.lag_mm"})
+    assert r.status_code == 422 and "Z.lag_mm" in r.text
+
+
+def test_roll_mode_gives_the_newest_window(srv: Server) -> None:
+    arm(srv, channels=["X.pos_act_mm"], length_s=2, mode="roll")
+    srv.step("demo", 2500)
+    now = cycle(srv)
+    header, data = decode_frame(srv.http.get("/api/machines/demo/scope/roll").content)
+    assert header.first_cycle == now - 1999 and data.shape == (1, 2000)
+    header, data = decode_frame(
+        srv.http.get("/api/machines/demo/scope/roll", params={"max_points": 500}).content
+    )
+    assert header.stride == 4 and data.shape == (1, 500)
+    srv.http.post("/api/machines/demo/scope/stop")
+
+
+def test_continuous_recording_writes_every_cycle(srv: Server, tmp_path: Path) -> None:
+    sigs = [s["name"] for s in srv.http.get("/api/machines/demo/signals").json()][:16]
+    r = srv.http.post("/api/machines/demo/recording", json={"signals": sigs})
+    assert r.status_code == 201, r.text
+    assert srv.http.post("/api/machines/demo/recording", json={"signals": sigs}).status_code == 409
+    srv.command("demo", {"type": "spindle", "spindle": "S1", "m": 3, "speed_rpm": 800})
+    srv.step("demo", 5000)
+    info = srv.http.delete("/api/machines/demo/recording").json()
+    assert not info["active"] and info["cycles"] == 5000
+    path = tmp_path / "rec.rrd"
+    path.write_bytes(srv.http.get(f"/api/recordings/{info['id']}/rrd").content)
+    rows = rrd_chunks(path)
+    numeric = [s for s in sigs if not s.endswith(".state")]
+    for s in numeric:
+        assert rows["/demo/" + s.replace(".", "/")] == 5000
+    srv.command("demo", {"type": "spindle", "spindle": "S1", "m": 5})
+
+
+def listening(port: int) -> list[str]:
+    """Local addresses of listening TCP sockets on `port` (from /proc/net/tcp and tcp6)."""
+    out = []
+    for f in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for line in Path(f).read_text().splitlines()[1:]:
+            local, state = line.split()[1], line.split()[3]
+            addr, p = local.split(":")
+            if state == "0A" and int(p, 16) == port:
+                out.append(addr)
+    return out
+
+
+def test_rerun_viewer_is_served_through_the_service_and_listens_on_loopback_only(
+    srv: Server,
+) -> None:
+    cap = m19_capture(srv)
+    r = srv.http.get(f"/api/traces/{cap['id']}/viewer", follow_redirects=False)
+    assert r.status_code == 307 and r.headers["location"].startswith("/rerun/?url=")
+    page = srv.http.get(r.headers["location"], timeout=60)
+    assert page.status_code == 200 and "re_viewer.js" in page.text
+    wasm = srv.http.get("/rerun/re_viewer_bg.wasm", timeout=60)
+    assert wasm.status_code == 200 and wasm.content[:4] == b"\0asm"
+    log = (srv.db.parent / "traces" / "rerun-viewer.log").read_text()
+    ports = {int(p) for p in re.findall(r"127\.0\.0\.1:(\d+)", log)}
+    assert len(ports) >= 2  # the web viewer and its gRPC server
+    for port in ports:
+        assert listening(port) == ["0100007F"], f"port {port} is not loopback-only"
