@@ -7,7 +7,8 @@ A capture of `length` cycles with `pre` pre-trigger cycles holds cycles
 `trigger - pre … trigger - pre + length - 1`, so the trigger sample sits at index `pre`.
 On arming, the pre-trigger history is filled at once from the owner's recent samples, so a
 trigger right after arming still gets its full pre-trigger; a trigger that comes before `pre`
-cycles of history exist is ignored (the scope waits for the next one).
+cycles of history exist is ignored (the scope waits for the next one), except within the
+first `pre` cycles after power-on, where it is taken with the history there is.
 
 Modes: `roll` records continuously without a trigger; `normal` re-arms after each capture;
 `single` stops after one. Triggers: a level crossing of any signal (rising or falling, with
@@ -295,9 +296,13 @@ class Scope:
         return max(self._oldest, self._trigger_cycle - self.setup.pre_cycles)
 
     def _accepts(self, t: int) -> bool:
-        """A trigger counts once the full pre-trigger history exists for it."""
+        """A trigger counts once the full pre-trigger history exists for it, or when the
+        history reaches back to power-on (cycle 1): no more can ever exist, and an event just
+        after start-up is better caught with a shorter pre-trigger than missed."""
         assert self.setup is not None
-        return t >= self._search_from and t - self.setup.pre_cycles >= self._oldest
+        if t < self._search_from:
+            return False
+        return t - self.setup.pre_cycles >= self._oldest or self._oldest <= 1
 
     def _find_trigger(
         self,

@@ -80,7 +80,7 @@ def recording_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> Rec
     return services.recorders.end(host.id)
 
 
-@router.get("/recordings/{rid}/rrd", response_class=FileResponse)
+@router.get("/recordings/{rid}/recording.rrd", response_class=FileResponse)
 def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
     """The recording as a Rerun .rrd file (so far, while it runs)."""
     path = services.recorders.path(rid)
@@ -91,10 +91,10 @@ def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
 def recording_viewer(rid: str, request: Request, services: ServicesDep) -> RedirectResponse:
     """Open the recording in the bundled Rerun web viewer."""
     services.recorders.path(rid)
-    return RedirectResponse(viewer_url(request, f"/api/recordings/{rid}/rrd"))
+    return RedirectResponse(viewer_url(request, f"/api/recordings/{rid}/recording.rrd"))
 
 
 def viewer_url(request: Request, rrd_path: str) -> str:
     """The viewer page (through the service) that loads an .rrd of the service."""
     base = str(request.base_url).rstrip("/")
-    return f"/rerun/?url={quote(base + rrd_path, safe='')}"
+    return f"/rerun/?hide_welcome_screen&url={quote(base + rrd_path, safe='')}"

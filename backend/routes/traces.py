@@ -69,7 +69,7 @@ def csv(tid: str, services: ServicesDep) -> PlainTextResponse:
     )
 
 
-@router.get("/{tid}/rrd", response_class=FileResponse)
+@router.get("/{tid}/trace.rrd", response_class=FileResponse)
 def rrd(tid: str, services: ServicesDep) -> FileResponse:
     """The trace as a Rerun recording."""
     path = services.traces.rrd_path(tid)
@@ -80,7 +80,7 @@ def rrd(tid: str, services: ServicesDep) -> FileResponse:
 def viewer(tid: str, request: Request, services: ServicesDep) -> RedirectResponse:
     """Open the trace in the bundled Rerun web viewer."""
     services.traces.get(tid)
-    return RedirectResponse(viewer_url(request, f"/api/traces/{tid}/rrd"))
+    return RedirectResponse(viewer_url(request, f"/api/traces/{tid}/trace.rrd"))
 
 
 @router.get("/{tid}/measure", responses={422: {"description": "unknown channel, empty window"}})

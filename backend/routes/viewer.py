@@ -13,6 +13,9 @@ from backend.errors import ApiError
 
 router = APIRouter(include_in_schema=False)
 _PASS = ("content-type", "content-encoding", "content-length", "cache-control", "etag")
+# The viewer page may talk to this service only: no usage telemetry, release checks or web
+# fonts leave a commissioning network from the engineer's browser.
+_CSP = "connect-src 'self'; font-src 'self' data:; style-src 'self' 'unsafe-inline'"
 
 
 @router.get("/rerun")
@@ -39,6 +42,7 @@ async def rerun_asset(path: str, request: Request, services: ServicesDep) -> Str
         await client.aclose()
 
     headers = {k: v for k, v in upstream.headers.items() if k.lower() in _PASS}
+    headers["content-security-policy"] = _CSP
     return StreamingResponse(
         upstream.aiter_raw(),
         status_code=upstream.status_code,

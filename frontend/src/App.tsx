@@ -10,12 +10,13 @@ import { MachineView } from "./panels/MachineView";
 import { MdiPanel } from "./panels/MdiPanel";
 import { Parameters } from "./panels/Parameters";
 import { Plots } from "./panels/Plots";
+import { Scope } from "./panels/Scope";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
 import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
-const TABS = ["Operate", "Plots", "Parameters", "HLI / PLC", "Events"] as const;
+const TABS = ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events"] as const;
 type Tab = (typeof TABS)[number];
 
 function MachineControls() {
@@ -71,6 +72,7 @@ export function App() {
               </div>
             ) : null}
             {tab === "Plots" ? <Plots /> : null}
+            {tab === "Scope" ? <Scope /> : null}
             {tab === "Parameters" ? <Parameters /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}

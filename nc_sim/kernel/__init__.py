@@ -62,6 +62,9 @@ class Kernel:
         self.st[slot, L.S_SEG_P0] = self.st[slot, L.S_P_CMD]
         self.st[slot, L.S_SEG_V0] = self.st[slot, L.S_V_CMD]
         self.st[slot, L.S_TARGET] = target
+        # a new target is not yet confirmed: the in-position edge (EV_IN_POS) comes again even
+        # when the axis already stands there (M19 twice to the same angle)
+        self.ist[slot, L.I_IN_POS] = 0
         if n == 0 and not math.isnan(target):
             self.st[slot, L.S_P_CMD] = target
             self.st[slot, L.S_V_CMD] = 0.0

@@ -119,7 +119,7 @@ def rrd_chunks(path: Path) -> Counter[str]:
 
 def test_capture_as_rrd_read_by_the_rerun_cli(srv: Server, tmp_path: Path) -> None:
     cap = m19_capture(srv)
-    r = srv.http.get(f"/api/traces/{cap['id']}/rrd")
+    r = srv.http.get(f"/api/traces/{cap['id']}/trace.rrd")
     assert r.status_code == 200
     path = tmp_path / "m19.rrd"
     path.write_bytes(r.content)
@@ -240,7 +240,7 @@ def test_continuous_recording_writes_every_cycle(srv: Server, tmp_path: Path) ->
     info = srv.http.delete("/api/machines/demo/recording").json()
     assert not info["active"] and info["cycles"] == 5000
     path = tmp_path / "rec.rrd"
-    path.write_bytes(srv.http.get(f"/api/recordings/{info['id']}/rrd").content)
+    path.write_bytes(srv.http.get(f"/api/recordings/{info['id']}/recording.rrd").content)
     rows = rrd_chunks(path)
     numeric = [s for s in sigs if not s.endswith(".state")]
     for s in numeric:
@@ -265,9 +265,10 @@ def test_rerun_viewer_is_served_through_the_service_and_listens_on_loopback_only
 ) -> None:
     cap = m19_capture(srv)
     r = srv.http.get(f"/api/traces/{cap['id']}/viewer", follow_redirects=False)
-    assert r.status_code == 307 and r.headers["location"].startswith("/rerun/?url=")
+    assert r.status_code == 307 and r.headers["location"].startswith("/rerun/?")
     page = srv.http.get(r.headers["location"], timeout=60)
     assert page.status_code == 200 and "re_viewer.js" in page.text
+    assert "connect-src 'self'" in page.headers["content-security-policy"]
     wasm = srv.http.get("/rerun/re_viewer_bg.wasm", timeout=60)
     assert wasm.status_code == 200 and wasm.content[:4] == b"\0asm"
     log = (srv.db.parent / "traces" / "rerun-viewer.log").read_text()

@@ -159,7 +159,7 @@ def test_job_error_is_shown_as_a_banner_until_acknowledged(page: Page) -> None:
 def test_every_panel_fits_and_is_captured(browser: Browser, srv: Server, size: str) -> None:
     """Screenshots of every workspace at 1920×1080 and 1024×768; nothing overflows sideways."""
     page = open_hmi(browser, srv.base, size)
-    for tab in ["Operate", "Plots", "Parameters", "HLI / PLC", "Events"]:
+    for tab in ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events"]:
         page.get_by_test_id(f"tab-{tab}").click()
         page.wait_for_timeout(300)
         overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")

@@ -182,6 +182,40 @@ def test_a_crossing_in_the_first_cycle_after_arming_counts() -> None:
     assert rec.trigger_cycle == at + 1 and rec.data[0][30] > 1.0 and rec.data[0][29] == 0.0
 
 
+def test_a_trigger_soon_after_power_on_keeps_the_history_back_to_cycle_1() -> None:
+    sim, m, _ = make(settle=0)
+    scope = Scope(sim.kernel.cycle_s)
+    sig = machine_signals(m)
+    trig = EventTrigger(EventKind.M_START, "S1", 3)
+    scope.arm(ScopeSetup(sig[:2], 1000, 50.0, ScopeMode.SINGLE, trig), 0, sim.new_record(0), [])
+    rec = sim.new_record(100)
+    sim.run(100, rec)
+    scope.feed(rec, 1, m.events)
+    m.spindle("S1", 3, 100.0)
+    rec = sim.new_record(1000)
+    sim.run(1000, rec)
+    scope.feed(rec, 101, m.events)
+    (r,) = scope.completed
+    assert r.trigger_cycle == 101 and r.first_cycle == 1 and r.pre_cycles == 100
+    assert r.count == 1000
+
+
+def test_a_trigger_before_the_pretrigger_is_filled_is_ignored() -> None:
+    rig = Rig()  # its history starts after power-on (the settle cycles are not kept)
+    rig.run(100)
+    sig = rig.sig["S1.speed_cmd_rpm"]
+    trig = EventTrigger(EventKind.M_START, "S1")
+    rig.arm(ScopeSetup([sig], 1000, 50.0, ScopeMode.SINGLE, trig))
+    rig.m.spindle("S1", 3, 100.0)  # 100 cycles of history, 500 asked: ignored
+    rig.run(600)
+    assert rig.scope.completed == [] and rig.scope.state is ScopeState.ARMED
+    at = rig.sim.cycle
+    rig.m.spindle("S1", 3, 200.0)  # now the history is there
+    rig.run(600)
+    (r,) = rig.scope.completed
+    assert r.trigger_cycle == at + 1 and r.pre_cycles == 500
+
+
 def test_force_takes_the_newest_cycle_and_roll_keeps_the_newest_window() -> None:
     rig = Rig()
     rig.run(400)

@@ -565,3 +565,17 @@ def test_program_end_stops_only_with_the_hli_flag(flag: int) -> None:
     m.mdi("M30")
     rec = record(sim, 3.0)[:, s.slot]
     assert (rec[-1, L.R_V_CMD] / RPM) == pytest.approx(0.0 if flag else 1000.0)
+
+
+def test_m19_to_the_angle_the_spindle_stands_at_completes_at_once() -> None:
+    """A repeated M19 must not hang in POSITIONING: the in-position edge comes again."""
+    sim, m, _ = make()
+    assert m.spindle_position("S1", 90.0) is None
+    sim.run(6000)
+    ax = m.by_name["S1"]
+    assert ax.state is AxisState.STANDSTILL
+    assert m.spindle_position("S1", 90.0) is None
+    sim.run(2)
+    assert ax.state is AxisState.STANDSTILL
+    done = [e for e in m.events if e.code == Code.EV_IN_POSITION]
+    assert len(done) == 2 and done[-1].cycle == 6021

@@ -47,6 +47,8 @@ export const http = {
   get: <T>(url: string) => request<T>("GET", url),
   post: <T>(url: string, body: unknown) => request<T>("POST", url, body),
   postText: <T>(url: string, text: string) => request<T>("POST", url, text, true),
+  put: <T>(url: string, body: unknown) => request<T>("PUT", url, body),
   patch: <T>(url: string, body: unknown) => request<T>("PATCH", url, body),
+  del: <T>(url: string) => request<T>("DELETE", url),
   text: (url: string) => request<string>("GET", url),
 };

@@ -36,3 +36,12 @@ export type Command =
   | S["ResetCommand"]
   | S["EmergencyStopCommand"];
 export type Scope = ParameterValue["scope"];
+export type ScopeStatus = S["ScopeStatus"];
+export type ScopeSetup = S["ScopeSetupModel"];
+export type LevelTrigger = S["LevelTriggerModel"];
+export type EventTrigger = S["EventTriggerModel"];
+export type TraceInfo = S["TraceInfo"];
+export type TraceDetail = S["TraceDetail"];
+export type TraceCompare = S["TraceCompare"];
+export type Measurements = S["MeasurementsModel"];
+export type RecordingInfo = S["RecordingInfo"];

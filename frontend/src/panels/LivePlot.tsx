@@ -6,8 +6,9 @@ import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { catalogue, rings, unwant, want } from "../state/telemetry";
 import { fmt } from "../ui/format";
+import { SignalPicker } from "../ui/SignalPicker";
 
-const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
 export const fps = { frames: 0, draws: 0 }; // read by bench/ui.py through window.inbetrieb
 let instances = 0;
 
@@ -96,40 +97,10 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
     setYRange(yRange || !y || y.min == null || y.max == null ? null : [y.min, y.max]); // freeze as shown
   }
 
-  const names = catalogue.value;
-  const axesOf = [...new Set(names.map((s) => s.axis))];
   return (
     <div class="liveplot" data-testid={`plot-${config.id}`}>
       <div class="plot-tools">
-        <details class="signal-picker">
-          <summary>Signals ({config.signals.length})</summary>
-          <div class="picker-body">
-            {axesOf.map((a) => (
-              <fieldset key={a}>
-                <legend>{a}</legend>
-                {names
-                  .filter((s) => s.axis === a)
-                  .map((s) => (
-                    <label key={s.name}>
-                      <input
-                        type="checkbox"
-                        checked={config.signals.includes(s.name)}
-                        onChange={(e) =>
-                          props.onChange({
-                            ...config,
-                            signals: (e.target as HTMLInputElement).checked
-                              ? [...config.signals, s.name]
-                              : config.signals.filter((n) => n !== s.name),
-                          })
-                        }
-                      />
-                      {s.name.slice(a.length + 1)}
-                    </label>
-                  ))}
-              </fieldset>
-            ))}
-          </div>
-        </details>
+        <SignalPicker chosen={config.signals} onChange={(signals) => props.onChange({ ...config, signals })} />
         <label>
           Window{" "}
           <input type="range" min={1} max={30} step={1} value={config.windowS} aria-label="window in seconds"

@@ -1,0 +1,201 @@
+// Scope setup: channels, record length, pre-trigger, mode, trigger (level or event); arm,
+// force, stop; the scope's state; continuous recording of the channels to a Rerun .rrd.
+import { useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { EventTrigger, LevelTrigger, RecordingInfo, ScopeSetup as Setup } from "../api/types";
+import { arm, force, loadDraft, MAX_CHANNELS, saveDraft, scopeStatus, startRecording, stop, stopRecording } from "../state/scope";
+import { online, status } from "../state/session";
+import { catalogue } from "../state/telemetry";
+import { Panel } from "../ui/Panel";
+import { SignalPicker } from "../ui/SignalPicker";
+
+const EVENTS: [EventTrigger["event"], string][] = [
+  ["m_start", "M function start"],
+  ["m19_done", "M19 done"],
+  ["gear_change", "gear change"],
+  ["job_error", "job error"],
+  ["speed_reached", "speed reached"],
+];
+const M_FUNCTIONS = [3, 4, 5, 19, 40, 41, 42, 43, 44, 45];
+const STATE_TEXT: Record<string, string> = {
+  idle: "idle",
+  roll: "rolling",
+  armed: "armed: waiting for the trigger",
+  triggered: "triggered: recording",
+  done: "done",
+};
+
+function kib(n: number): string {
+  return n > 1 << 20 ? `${(n / (1 << 20)).toFixed(1)} MiB` : `${Math.round(n / 1024)} KiB`;
+}
+
+export function ScopeSetup() {
+  const [draft, setDraftState] = useState<Setup>(loadDraft);
+  const [error, setError] = useState("");
+  const [recording, setRecording] = useState<RecordingInfo | null>(null);
+  const st = scopeStatus.value;
+  const rec = st?.recording ?? recording;
+  const setDraft = (d: Setup) => {
+    setDraftState(d);
+    saveDraft(d);
+  };
+  const trig = draft.trigger ?? null;
+  const level: LevelTrigger =
+    trig?.type === "level" ? trig : { type: "level", signal: draft.channels[0] ?? "", level: 0, edge: "rising", hysteresis: 0 };
+  const event: EventTrigger = trig?.type === "event" ? trig : { type: "event", event: "m_start", axis: null, m: null };
+  const axes = status.value?.axes.map((a) => a.name) ?? [];
+
+  async function run(f: () => Promise<unknown>) {
+    setError("");
+    try {
+      await f();
+    } catch (e) {
+      setError(e instanceof ApiError ? e.refusal.message : String(e));
+    }
+  }
+
+  const num = (e: Event) => Number((e.target as HTMLInputElement).value);
+  const state = st?.state ?? "idle";
+  const fill = st && st.length_cycles ? Math.min(1, st.filled_cycles / st.length_cycles) : 0;
+
+  return (
+    <Panel title="Scope" id="scope-setup">
+      <div class="scope-form">
+        <SignalPicker chosen={draft.channels} max={MAX_CHANNELS} testid="scope-channels"
+          onChange={(channels) => setDraft({ ...draft, channels })} />
+        <label>
+          Record length
+          <input type="number" min={0.01} max={60} step={0.1} value={draft.length_s} data-testid="scope-length"
+            onInput={(e) => setDraft({ ...draft, length_s: num(e) })} /> s
+        </label>
+        <label>
+          Pre-trigger
+          <input type="number" min={0} max={100} step={5} value={draft.pretrigger_pct} data-testid="scope-pretrigger"
+            onInput={(e) => setDraft({ ...draft, pretrigger_pct: num(e) })} /> %
+        </label>
+        <label>
+          Mode
+          <select value={draft.mode} data-testid="scope-mode"
+            onChange={(e) => setDraft({ ...draft, mode: (e.target as HTMLSelectElement).value as Setup["mode"] })}>
+            <option value="single">single</option>
+            <option value="normal">normal (re-arms)</option>
+            <option value="roll">roll (free running)</option>
+          </select>
+        </label>
+        <fieldset class="trigger" disabled={draft.mode === "roll"}>
+          <legend>Trigger</legend>
+          <label>
+            <input type="radio" name="trigger-type" checked={trig?.type !== "level"} data-testid="trigger-event"
+              onChange={() => setDraft({ ...draft, trigger: event })} /> event
+          </label>
+          <label>
+            <input type="radio" name="trigger-type" checked={trig?.type === "level"} data-testid="trigger-level"
+              onChange={() => setDraft({ ...draft, trigger: level })} /> level
+          </label>
+          {trig?.type === "level" ? (
+            <div class="trigger-fields">
+              <select value={level.signal} data-testid="trigger-signal"
+                onChange={(e) => setDraft({ ...draft, trigger: { ...level, signal: (e.target as HTMLSelectElement).value } })}>
+                {catalogue.value.map((s) => (
+                  <option key={s.name} value={s.name}>{s.name}</option>
+                ))}
+              </select>
+              <select value={level.edge} data-testid="trigger-edge"
+                onChange={(e) => setDraft({ ...draft, trigger: { ...level, edge: (e.target as HTMLSelectElement).value as LevelTrigger["edge"] } })}>
+                <option value="rising">↗ rising</option>
+                <option value="falling">↘ falling</option>
+              </select>
+              <label>
+                level <input type="number" step="any" value={level.level} data-testid="trigger-value"
+                  onInput={(e) => setDraft({ ...draft, trigger: { ...level, level: num(e) } })} />
+              </label>
+              <label>
+                hysteresis <input type="number" min={0} step="any" value={level.hysteresis} data-testid="trigger-hysteresis"
+                  onInput={(e) => setDraft({ ...draft, trigger: { ...level, hysteresis: num(e) } })} />
+              </label>
+            </div>
+          ) : (
+            <div class="trigger-fields">
+              <select value={event.event} data-testid="trigger-kind"
+                onChange={(e) => setDraft({ ...draft, trigger: { ...event, event: (e.target as HTMLSelectElement).value as EventTrigger["event"] } })}>
+                {EVENTS.map(([v, text]) => (
+                  <option key={v} value={v}>{text}</option>
+                ))}
+              </select>
+              <select value={event.axis ?? ""} data-testid="trigger-axis" aria-label="axis"
+                onChange={(e) => setDraft({ ...draft, trigger: { ...event, axis: (e.target as HTMLSelectElement).value || null } })}>
+                <option value="">any axis</option>
+                {axes.map((a) => (
+                  <option key={a} value={a}>{a}</option>
+                ))}
+              </select>
+              {event.event === "m_start" ? (
+                <select value={event.m ?? ""} data-testid="trigger-m" aria-label="M function"
+                  onChange={(e) => {
+                    const v = (e.target as HTMLSelectElement).value;
+                    setDraft({ ...draft, trigger: { ...event, m: v ? Number(v) : null } });
+                  }}>
+                  <option value="">any M</option>
+                  {M_FUNCTIONS.map((m) => (
+                    <option key={m} value={m}>M{m}</option>
+                  ))}
+                </select>
+              ) : null}
+            </div>
+          )}
+        </fieldset>
+        <div class="scope-buttons">
+          <button type="button" class="primary" data-testid="scope-arm" disabled={!online.value || !draft.channels.length}
+            onClick={() => void run(() => arm(draft.mode === "roll" ? { ...draft, trigger: null } : draft))}>
+            {draft.mode === "roll" ? "▶ Roll" : "◉ Arm"}
+          </button>
+          <button type="button" data-testid="scope-force" disabled={state !== "armed"} onClick={() => void run(force)}>
+            ⚡ Force
+          </button>
+          <button type="button" data-testid="scope-stop" disabled={state === "idle" || state === "done"} onClick={() => void run(stop)}>
+            ■ Stop
+          </button>
+        </div>
+        <div class="scope-state" data-testid="scope-state" data-state={state}>
+          <b>{STATE_TEXT[state]}</b>
+          {st?.setup && state !== "idle" ? (
+            <span>
+              {" "}· {st.length_cycles} cycles, {st.pre_cycles} before the trigger
+              {state === "armed" || state === "roll" ? ` · history ${Math.round(fill * 100)} %` : ""}
+            </span>
+          ) : null}
+        </div>
+        {error ? (
+          <p class="refusal" role="alert" data-testid="scope-error">{error}</p>
+        ) : null}
+        <fieldset class="recording">
+          <legend>Continuous recording (.rrd)</legend>
+          {rec?.active ? (
+            <>
+              <span data-testid="recording-state">
+                ● recording {rec.signals.length} signals · {(rec.cycles / 1000).toFixed(1)} k cycles · {kib(rec.bytes)}
+              </span>
+              <button type="button" data-testid="recording-stop" onClick={() => void run(async () => setRecording(await stopRecording()))}>
+                ■ Stop recording
+              </button>
+            </>
+          ) : (
+            <>
+              <button type="button" data-testid="recording-start" disabled={!online.value || !draft.channels.length}
+                onClick={() => void run(async () => setRecording(await startRecording(draft.channels)))}>
+                ● Record the channels
+              </button>
+              {rec ? (
+                <span>
+                  last: {rec.cycles} cycles, {kib(rec.bytes)} ·{" "}
+                  <a href={`/api/recordings/${rec.id}/recording.rrd`} download>.rrd</a> ·{" "}
+                  <a href={`/api/recordings/${rec.id}/viewer`} target="_blank" rel="noreferrer">Rerun viewer</a>
+                </span>
+              ) : null}
+            </>
+          )}
+        </fieldset>
+      </div>
+    </Panel>
+  );
+}

@@ -1,0 +1,43 @@
+// A drop-down of every signal grouped by axis, with a checkbox each (plots and the scope).
+import { catalogue } from "../state/telemetry";
+
+export function SignalPicker(props: { chosen: string[]; onChange: (names: string[]) => void; max?: number; testid?: string }) {
+  const { chosen, max } = props;
+  const names = catalogue.value;
+  const axes = [...new Set(names.map((s) => s.axis))];
+  const full = max !== undefined && chosen.length >= max;
+  return (
+    <details class="signal-picker" data-testid={props.testid}>
+      <summary>
+        Signals ({chosen.length}
+        {max !== undefined ? ` of ≤ ${max}` : ""})
+      </summary>
+      <div class="picker-body">
+        {axes.map((a) => (
+          <fieldset key={a}>
+            <legend>{a}</legend>
+            {names
+              .filter((s) => s.axis === a)
+              .map((s) => {
+                const on = chosen.includes(s.name);
+                return (
+                  <label key={s.name}>
+                    <input
+                      type="checkbox"
+                      data-signal={s.name}
+                      checked={on}
+                      disabled={!on && full}
+                      onChange={(e) =>
+                        props.onChange((e.target as HTMLInputElement).checked ? [...chosen, s.name] : chosen.filter((n) => n !== s.name))
+                      }
+                    />
+                    {s.name.slice(a.length + 1)}
+                  </label>
+                );
+              })}
+          </fieldset>
+        ))}
+      </div>
+    </details>
+  );
+}

@@ -1,0 +1,136 @@
+"""The scope in the browser: arm a single trigger on M19 start, issue M19 from the UI, and the
+capture appears with its trigger marker, cursors and measurements; save, import a CSV and
+overlay it; open a capture in the bundled Rerun web viewer."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from playwright.sync_api import Browser, Page, Request, expect
+
+from tests.backend.server import Server
+from tests.e2e.browser import number, open_hmi, shot
+
+LENGTH_S = 4.0
+PRE_PCT = 25.0
+
+
+def arm_on_m19(page: Page) -> None:
+    page.get_by_test_id("tab-Scope").click()
+    page.get_by_test_id("scope-length").fill(str(LENGTH_S))
+    page.get_by_test_id("scope-pretrigger").fill(str(PRE_PCT))
+    page.get_by_test_id("scope-mode").select_option("single")
+    page.get_by_test_id("trigger-event").check()
+    page.get_by_test_id("trigger-kind").select_option("m_start")
+    page.get_by_test_id("trigger-axis").select_option("S1")
+    page.get_by_test_id("trigger-m").select_option("19")
+    page.get_by_test_id("scope-arm").click()
+    state = page.get_by_test_id("scope-state")
+    expect(state).to_have_attribute("data-state", "armed")
+    expect(state).to_contain_text("history 100 %", timeout=10_000)  # the pre-trigger is there
+
+
+def capture_m19(page: Page) -> str:
+    arm_on_m19(page)
+    page.get_by_test_id("tab-Operate").click()
+    page.get_by_test_id("m19-angle").fill("90")
+    page.get_by_test_id("m19").click()
+    page.get_by_test_id("tab-Scope").click()
+    view = page.get_by_test_id("capture-view")
+    expect(view).to_be_visible(timeout=LENGTH_S * 1000 + 10_000)
+    expect(page.get_by_test_id("scope-state")).to_have_attribute("data-state", "done")
+    return str(view.get_attribute("data-trace"))
+
+
+def test_single_trigger_on_m19_start_shows_the_capture_with_marker_and_measurements(
+    browser: Browser, srv: Server
+) -> None:
+    page = open_hmi(browser, srv.base)
+    tid = capture_m19(page)
+    expect(page.get_by_test_id("capture-trigger")).to_have_text("M19 start on S1")
+    # the pre-trigger asked for: 25 % of 4 s
+    expect(page.get_by_test_id("capture-pre")).to_have_text(f"{LENGTH_S * PRE_PCT / 100:.3f} s")
+    marker = page.get_by_test_id("trigger-marker")
+    expect(marker).to_be_visible()
+    assert marker.get_attribute("data-t") == "0"
+    # the marker sits a quarter of the way across the plotting area (whole record shown)
+    chart = page.locator("[data-testid=capture-chart] .u-over").bounding_box()
+    m = marker.bounding_box()
+    assert chart is not None and m is not None
+    assert abs((m["x"] - chart["x"]) / chart["width"] - PRE_PCT / 100) < 0.01
+
+    # the trigger is the first cycle in POSITIONING, as the server's record says
+    detail = srv.http.get(f"/api/traces/{tid}").json()
+    assert detail["first_cycle"] == detail["trigger_cycle"] - round(LENGTH_S * PRE_PCT * 10)
+
+    # measurements of the spindle position: it ends at 90° (kenngr.exact_stop_window 0.1°)
+    page.get_by_test_id("meas-channel").select_option("S1.pos_act_deg")
+    expect(page.get_by_test_id("meas-final")).to_contain_text("deg")
+    final = float(page.get_by_test_id("meas-final").inner_text().split()[0].replace("−", "-"))
+    assert abs(final % 360 - 90) <= 0.1
+    page.get_by_test_id("meas-channel").select_option("S1.lag_deg")
+    expect(page.get_by_test_id("meas-max-abs")).not_to_have_text("—")
+
+    # two cursors: Δt is B − A as read at the cursors
+    box = chart
+    page.mouse.click(box["x"] + box["width"] * 0.3, box["y"] + box["height"] / 2)
+    page.keyboard.down("Shift")
+    page.mouse.click(box["x"] + box["width"] * 0.6, box["y"] + box["height"] / 2)
+    page.keyboard.up("Shift")
+    expect(page.get_by_test_id("cursor-b")).to_be_visible()
+    ta, tb = number(page, "cursor-a-t"), number(page, "cursor-b-t")
+    assert abs((tb - ta) - 0.3 * LENGTH_S) < 0.02
+    dt_ms = float(page.get_by_test_id("cursor-dt").inner_text().split()[0])
+    assert abs(dt_ms - (tb - ta) * 1000) < 0.11
+    expect(page.get_by_test_id("meas-window")).to_contain_text(f"{ta:.3f}")
+    shot(page, "scope-m19-desktop")
+    page.close()
+
+
+def test_save_import_csv_and_overlay(browser: Browser, srv: Server, tmp_path: Path) -> None:
+    page = open_hmi(browser, srv.base)
+    tid = capture_m19(page)
+    page.get_by_test_id("save-name").fill("M19 kv default")
+    page.get_by_test_id("save-trace").click()
+    row = page.get_by_test_id(f"trace-{tid}")
+    expect(row).to_contain_text("M19 kv default")
+
+    csv = tmp_path / "m19-before.csv"
+    csv.write_text(srv.http.get(f"/api/traces/{tid}/csv").text)
+    page.get_by_test_id("trace-import").set_input_files(str(csv))
+    imported = page.locator("tr", has_text="m19-before")
+    expect(imported).to_be_visible()
+    compare = page.get_by_test_id("compare")
+    expect(compare).to_contain_text("m19-before")
+    expect(compare).to_contain_text("same parameters")
+    expect(page.locator(".u-legend")).to_contain_text("m19-before: S1.pos_act_deg")
+    shot(page, "scope-overlay-desktop")
+    page.close()
+
+
+def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server) -> None:
+    page = open_hmi(browser, srv.base)
+    tid = capture_m19(page)
+    viewer = browser.new_page(viewport={"width": 1280, "height": 800})
+    elsewhere: list[str] = []  # requests for other hosts, and why they failed
+
+    def failed(r: Request) -> None:
+        if not r.url.startswith(srv.base):
+            elsewhere.append(f"{r.url} {r.failure}")
+
+    viewer.on("requestfailed", failed)
+    slow = 60_000  # a 43 MB wasm, compiled in a software-rendering browser
+    with (
+        viewer.expect_response(lambda r: r.url.endswith(".wasm"), timeout=slow) as wasm,
+        viewer.expect_response(lambda r: r.url.endswith("/trace.rrd"), timeout=slow) as rrd,
+    ):
+        viewer.goto(f"{srv.base}/api/traces/{tid}/viewer", timeout=slow)
+    assert viewer.url.startswith(f"{srv.base}/rerun/?")
+    assert wasm.value.status == 200  # the viewer itself, through the service
+    assert rrd.value.status == 200 and tid in rrd.value.url  # it loaded the capture
+    expect(viewer.locator("canvas")).to_be_attached()
+    # web fonts (and usage telemetry, once the viewer asks) are stopped by our CSP
+    assert elsewhere and all(e.endswith(" csp") for e in elsewhere), elsewhere
+    shot(viewer, "rerun-viewer")
+    viewer.close()
+    page.close()
