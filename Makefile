@@ -63,6 +63,7 @@ bench: $(STAMP) $(DIST) $(CHROMIUM)
 	$(PY) bench/api.py
 	$(PY) bench/telemetry.py
 	$(PY) bench/ui.py
+	$(PY) bench/trace.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache *.egg-info frontend/node_modules \
