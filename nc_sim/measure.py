@@ -2,7 +2,9 @@
 
 All work on samples `y` at times `t` (s) of a window. The step goes from the initial value
 (the first sample) to the final value (the mean of the last 10 % of the window, at least one
-sample). Crossing times are interpolated linearly between samples.
+sample). A signal that returns to where it started (a pulse, the lag of a finished move) has no
+step: no rise time or overshoot, and its settling band is relative to its largest excursion.
+Crossing times are interpolated linearly between samples.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 FINAL_SHARE = 0.1  # the final value is the mean of this last share of the window
+PULSE_SHARE = 0.05  # a step smaller than this share of the excursion counts as none
 
 
 @dataclass(frozen=True)
@@ -53,15 +56,18 @@ def measure(
     t_ref_s: float | None = None,
 ) -> Measurements:
     """Measurements of y(t). The settling band is `band_abs` when given, else `band_pct` % of
-    the step (of |final| when there is no step); settling is timed from `t_ref_s` (default:
-    the window start, e.g. pass the trigger time)."""
+    the step (of the largest excursion from the final value when there is no step); settling
+    is timed from `t_ref_s` (default: the window start, e.g. pass the trigger time)."""
     if t.size == 0 or t.size != y.size:
         raise ValueError("measure: t and y need the same non-zero length")
     n_final = max(1, round(y.size * FINAL_SHARE))
     initial, final = float(y[0]), float(np.mean(y[-n_final:]))
     step = final - initial
+    if abs(step) < PULSE_SHARE * float(np.max(np.abs(y - initial))):
+        step = 0.0  # it came back (a pulse, a move's lag): no step to rise or overshoot
     i_abs = int(np.argmax(np.abs(y)))
-    scale = abs(step) if step != 0 else abs(final)
+    # without a step (a pulse, a speed back to zero) the band is relative to the excursion
+    scale = abs(step) if step != 0 else float(np.max(np.abs(y - final)))
     band = band_abs if band_abs is not None else scale * band_pct / 100.0
     overshoot = rise = None
     if step != 0:

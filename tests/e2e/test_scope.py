@@ -4,6 +4,7 @@ overlay it; open a capture in the bundled Rerun web viewer."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from playwright.sync_api import Browser, Page, Request, expect
@@ -133,4 +134,29 @@ def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server) ->
     assert elsewhere and all(e.endswith(" csp") for e in elsewhere), elsewhere
     shot(viewer, "rerun-viewer")
     viewer.close()
+    page.close()
+
+
+def test_roll_mode_runs_free_and_a_capture_fits_a_tablet(browser: Browser, srv: Server) -> None:
+    page = open_hmi(browser, srv.base, "tablet")
+    page.get_by_test_id("tab-Scope").click()
+    page.get_by_test_id("scope-mode").select_option("roll")
+    page.get_by_test_id("scope-length").fill("2")
+    page.get_by_test_id("scope-arm").click()
+    expect(page.get_by_test_id("scope-state")).to_have_attribute("data-state", "roll")
+    chart = page.get_by_test_id("roll-chart")
+    expect(chart).to_be_visible()
+    # the window reaches back one record length from the newest sample, and moves on
+    info = page.get_by_test_id("roll-info")
+    expect(info).to_have_attribute("data-span-s", re.compile(r"^1\.99"))
+    first = int(info.get_attribute("data-last-cycle") or 0)
+    expect(info).not_to_have_attribute("data-last-cycle", str(first))
+    assert int(info.get_attribute("data-last-cycle") or 0) > first
+    page.get_by_test_id("scope-stop").click()
+    expect(page.get_by_test_id("scope-state")).to_have_attribute("data-state", "idle")
+    capture_m19(page)
+    page.get_by_test_id("capture-view").scroll_into_view_if_needed()
+    overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
+    assert overflow <= 0
+    shot(page, "scope-capture-tablet")
     page.close()

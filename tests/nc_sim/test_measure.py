@@ -46,6 +46,14 @@ def test_falling_step_settling_from_a_reference_and_absolute_band() -> None:
     assert m.max_abs == 5.0 and m.minimum >= 0.0
 
 
+def test_a_pulse_settles_into_a_band_relative_to_its_peak() -> None:
+    t = np.arange(0, 2.0, 1e-3)
+    y = np.where(t < 0.5, 100.0 * t / 0.5, 100.0 * np.exp(-(t - 0.5) / TAU))  # up, then decays
+    m = measure(t, y, band_pct=2.0)
+    assert m.band == pytest.approx(2.0, rel=1e-3)  # 2 % of the 100 peak
+    assert m.settling_time_s == pytest.approx(0.5 + TAU * math.log(50), abs=1.5e-3)
+
+
 def test_never_settling_and_flat_signals() -> None:
     t = np.arange(0, 1.0, 1e-3)
     ramp = measure(t, t * 10)

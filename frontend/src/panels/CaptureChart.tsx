@@ -52,16 +52,22 @@ export function CaptureChart(props: {
   cb.current = props;
 
   const overlaid = props.overlay ? props.series.filter((s) => props.overlay?.channels.has(s.name)) : [];
-
-  useEffect(() => {
-    const el = box.current;
-    if (!el) return;
+  const aligned = (): uPlot.AlignedData => {
     const { t, series, overlay } = props;
-    const data: uPlot.AlignedData = [
+    return [
       t as unknown as number[],
       ...series.map((s) => s.data as unknown as number[]),
       ...overlaid.map((s) => onGrid(t, overlay!.t, overlay!.channels.get(s.name)!)),
     ];
+  };
+  const structure = `${props.series.map((s) => s.name).join(",")}|${overlaid.length}`;
+
+  // (re)build the chart when its series change; new samples of the same series only replace
+  // the data (a rolling scope, the next capture of a normal-mode scope)
+  useEffect(() => {
+    const el = box.current;
+    if (!el) return;
+    const { series, overlay } = props;
     const marks = document.createElement("div");
     marks.className = "chart-marks";
     const line = (cls: string, testid: string, title: string) => {
@@ -122,7 +128,7 @@ export function CaptureChart(props: {
         ],
       },
     };
-    const u = new uPlot(opts, data, el);
+    const u = new uPlot(opts, aligned(), el);
     plot.current = u;
 
     // click: cursor A (shift: B), unless the click ended a drag-zoom
@@ -170,7 +176,11 @@ export function CaptureChart(props: {
       u.destroy();
       plot.current = null;
     };
-  }, [props.t, props.series.map((s) => s.name).join(","), props.overlay]);
+  }, [structure, props.overlay]);
+
+  useEffect(() => {
+    plot.current?.setData(aligned());
+  }, [props.t]);
 
   // cursors and the trigger marker move without rebuilding the chart
   useEffect(() => {

@@ -14,6 +14,7 @@ import {
   scopeStatus,
   shownId,
   type LoadedTrace,
+  type RollData,
 } from "../state/scope";
 import { catalogue } from "../state/telemetry";
 import { fmt } from "../ui/format";
@@ -210,7 +211,7 @@ function CaptureView() {
 }
 
 function RollView() {
-  const [data, setData] = useState<{ t: Float64Array; channels: Map<string, Float64Array> } | null>(null);
+  const [data, setData] = useState<RollData | null>(null);
   const [cursors, setCursors] = useState<Cursors>([null, null]);
   useEffect(() => {
     let alive = true;
@@ -227,6 +228,10 @@ function RollView() {
   const series = [...data.channels].map(([name, y]) => ({ name, unit: unit(name), data: y }));
   return (
     <Panel title="Roll" id="roll">
+      <p class="hint" data-testid="roll-info" data-last-cycle={data.lastCycle} data-span-s={data.t.length ? -data.t[0] : 0}>
+        newest cycle {data.lastCycle} · {fmt(data.t.length ? -data.t[0] : 0, 3)} s shown
+        {data.stride > 1 ? ` · every ${data.stride}th cycle drawn` : ""}
+      </p>
       <CaptureChart t={data.t} series={series} overlay={null} trigger={false} cursors={cursors} onCursors={setCursors}
         onRange={() => undefined} testid="roll-chart" />
     </Panel>

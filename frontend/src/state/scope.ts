@@ -110,7 +110,14 @@ export async function loadTrace(id: string): Promise<LoadedTrace> {
 }
 
 /** The newest window of a rolling scope, times relative to its newest sample. */
-export async function loadRoll(maxPoints: number): Promise<{ t: Float64Array; channels: Map<string, Float64Array> } | null> {
+export interface RollData {
+  t: Float64Array;
+  channels: Map<string, Float64Array>;
+  lastCycle: number;
+  stride: number;
+}
+
+export async function loadRoll(maxPoints: number): Promise<RollData | null> {
   const res = await fetch(machineUrl(`/scope/roll?max_points=${Math.max(100, Math.round(maxPoints))}`));
   if (!res.ok) return null;
   const f = decodeFrame(await res.arrayBuffer());
@@ -121,5 +128,5 @@ export async function loadRoll(maxPoints: number): Promise<{ t: Float64Array; ch
   for (let k = 0; k < h.count; k++) t[k] = (h.first_cycle + k * h.stride - last) * h.cycle_s;
   const channels = new Map<string, Float64Array>();
   h.signals.forEach((name, i) => channels.set(name, data.subarray(i * h.count, (i + 1) * h.count)));
-  return { t, channels };
+  return { t, channels, lastCycle: last, stride: h.stride };
 }
