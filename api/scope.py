@@ -168,6 +168,9 @@ class RecordingInfo(BaseModel):
     first_cycle: int
     cycles: int = Field(description="cycles written so far")
     bytes: int = Field(description="size of the .rrd file so far")
+    skipped_cycles: int = Field(
+        description="cycles lost because writing fell more than the service's ring behind"
+    )
     started_unix: float
 
 

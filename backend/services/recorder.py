@@ -3,7 +3,7 @@
 A recorder reads the host's sample ring behind a cursor (like a telemetry subscriber) and one
 thread writes every recorder's new cycles every `period_s`, outside the host lock, so the
 real-time loop only ever waits for the copy out of the ring. A power cycle of the machine ends
-its recording (simulated time starts again at zero).
+its recording (simulated time starts again at zero), and so does deleting the machine.
 """
 
 from __future__ import annotations
@@ -45,6 +45,7 @@ class Recording:
             first_cycle=self.first_cycle,
             cycles=self.cursor - self.first_cycle,
             bytes=self.path.stat().st_size if self.path.exists() else 0,
+            skipped_cycles=self.skipped,
             started_unix=self.started_unix,
         )
 
@@ -55,8 +56,9 @@ class Recording:
                 return
             host = self.host
             sigs = [host.signal_by_name[n] for n in self.signals]
+            ended = host.deleted or host.epoch != self.epoch
             with host.lock:
-                if host.epoch != self.epoch:
+                if ended:
                     head, data, start, events = self.cursor - 1, None, self.cursor, []
                 else:
                     head = host.cycle
@@ -70,7 +72,7 @@ class Recording:
                 self.writer.block(start, data)
             self.writer.events(events)
             self.cursor = head + 1
-            if host.epoch != self.epoch:
+            if ended:
                 self._close()
 
     def stop(self) -> None:

@@ -16,6 +16,7 @@ import time
 import uuid
 
 import numpy as np
+from pydantic import ValidationError
 
 from api.scope import ChannelInfo, TraceDetail
 from backend.errors import ApiError
@@ -49,19 +50,24 @@ def from_csv(text: str, name: str = "") -> Trace:
     body: list[str] = []
     for line in text.splitlines():
         if line.startswith("# meta: "):
-            meta = TraceDetail.model_validate_json(line[len("# meta: ") :])
+            try:
+                meta = TraceDetail.model_validate_json(line[len("# meta: ") :])
+            except ValidationError as e:
+                why = e.errors()[0]["msg"]
+                raise _bad(f"the # meta line is not a trace description: {why}") from None
         elif not line.startswith("#") and line.strip():
             body.append(line)
     rows = list(csv.reader(body))
     if len(rows) < 3:
         raise _bad("needs a header row and at least two data rows")
     header = [h.strip() for h in rows[0]]
+    ragged = next((i for i, r in enumerate(rows) if len(r) != len(header)), None)
+    if ragged is not None:
+        raise _bad(f"data row {ragged} has {len(rows[ragged])} columns, the header {len(header)}")
     try:
         values = np.array([[float(v) for v in r] for r in rows[1:]])
     except ValueError as e:
         raise _bad(f"not a number: {e}") from None
-    if values.shape[1] != len(header):
-        raise _bad(f"{len(header)} columns in the header, {values.shape[1]} in the rows")
     cols = {h: i for i, h in enumerate(header)}
     data_idx = [i for i, h in enumerate(header) if h not in ("cycle", "t_s")]
     if not data_idx:

@@ -118,6 +118,7 @@ class TraceService:
             live = {c.id for h in self.machines.hosts() for c in h.captures}
             for k in [k for k in self._cache if k not in live]:
                 del self._cache[k]
+                (self.dir / "recent" / f"{k}.rrd").unlink(missing_ok=True)
         return trace
 
     def recent(self, host: MachineHost) -> list[TraceInfo]:
@@ -250,8 +251,10 @@ class TraceService:
     def rrd_path(self, tid: str) -> Path:
         """The trace as a Rerun recording (made once, then cached)."""
         trace = self.get(tid)
-        path = self.dir / f"{tid}.rrd"
+        # a capture not (yet) saved gets its recording beside the recent ones, dropped with it
+        path = self.dir / ("" if trace.detail.stored else "recent") / f"{tid}.rrd"
         if not path.exists():
+            path.parent.mkdir(exist_ok=True)
             d = trace.detail
             about = _about(d)
             rrd.write_capture(

@@ -276,3 +276,19 @@ def test_rerun_viewer_is_served_through_the_service_and_listens_on_loopback_only
     assert len(ports) >= 2  # the web viewer and its gRPC server
     for port in ports:
         assert listening(port) == ["0100007F"], f"port {port} is not loopback-only"
+
+
+def test_a_foreign_csv_is_read_from_its_header_and_bad_ones_are_refused(srv: Server) -> None:
+    rows = ["t_s,X.lag_mm [mm],note"] + [f"{(k - 2) * 0.002!r},{k * 0.1!r},{k}" for k in range(6)]
+    r = srv.http.post("/api/traces/import", content="\n".join(rows).encode())
+    assert r.status_code == 201, r.text
+    info = r.json()
+    assert info["cycle_s"] == 0.002 and info["trigger_cycle"] == 2  # the row at t = 0
+    assert [c["name"] for c in info["channels"]] == ["X.lag_mm", "note"]
+    assert info["channels"][0]["unit"] == "mm"
+    _, data = samples(srv, info["id"])
+    assert data[0].tolist() == [k * 0.1 for k in range(6)]
+    ragged = srv.http.post("/api/traces/import", content=b"cycle,a\n1,2\n2,3,4\n3,4\n")
+    assert ragged.status_code == 422 and "data row 2 has 3 columns" in ragged.text
+    meta = srv.http.post("/api/traces/import", content=b"# meta: {}\ncycle,a\n1,2\n2,3\n")
+    assert meta.status_code == 422 and "# meta line" in meta.text
