@@ -288,8 +288,13 @@ class Scope:
         self._oldest = max(self._oldest, self._head - n + 1)
 
     def _read(self, first: int, last: int) -> np.ndarray:
-        idx = np.arange(first, last + 1) % self._ring.shape[1]
-        return self._ring[:, idx]
+        """A copy of cycles first … last: one or two contiguous slices of the ring (a 60 s
+        record completes inside the real-time loop, so no index arrays)."""
+        n = self._ring.shape[1]
+        a, b = first % n, last % n
+        if a <= b and last - first < n:
+            return self._ring[:, a : b + 1].copy()
+        return np.concatenate((self._ring[:, a:], self._ring[:, : b + 1]), axis=1)
 
     def _record_first(self) -> int:
         assert self.setup is not None and self._trigger_cycle is not None
@@ -364,7 +369,7 @@ class Scope:
         self.completed.append(
             Record(
                 list(setup.channels),
-                self._read(first, end).copy(),
+                self._read(first, end),
                 first,
                 self.cycle_s,
                 self._trigger_cycle,
