@@ -13,10 +13,10 @@ first `pre` cycles after power-on, where it is taken with the history there is.
 Modes: `roll` records continuously without a trigger; `normal` re-arms after each capture;
 `single` stops after one. Triggers: a level crossing of any signal (rising or falling, with
 hysteresis: the signal must first be beyond `level ∓ hysteresis` before a crossing counts) or
-an event of the NC. Event triggers fire in the first cycle that shows the event: a command (an
-M function starting) or a PLC acknowledgement (gear changed) acts from the cycle after the
-one in which it was raised; kernel events (speed reached, in position, monitors) are raised in
-the cycle they happen.
+an event of the NC. Event triggers fire in the first cycle whose samples show the event: what
+the NC raises between two cycles (an M function starting, a PLC acknowledgement changing the
+gear, a job error) shows from the cycle after the last one completed; what the kernel detects
+within a cycle (speed reached, the in-position edge that ends M19) shows in that cycle.
 """
 
 from __future__ import annotations
@@ -105,7 +105,7 @@ class EventTrigger:
             return ev.cycle if ok else None
         if self.kind is EventKind.SPEED_REACHED:
             return ev.cycle if ev.code == Code.EV_SPEED_REACHED else None
-        return ev.cycle if is_error(ev.code) else None
+        return ev.cycle + 1 if is_error(ev.code) else None
 
 
 Trigger = LevelTrigger | EventTrigger

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -272,3 +274,45 @@ def test_hysteresis_ignores_ripple_around_the_level(
     )
     scope.feed(rec, 1, [])
     assert [r.trigger_cycle for r in scope.completed] == expected
+
+
+def _first_rise(rig: Rig, name: str, after: int) -> int:
+    """First cycle after `after` where the signal changes from the cycle before."""
+    x = rig.column(name)
+    i = after - rig.base  # index of cycle after + 1
+    return next(rig.base + 1 + k for k in range(i, x.size) if x[k] != x[k - 1])
+
+
+def test_event_triggers_fire_in_the_cycle_the_record_shows_the_event() -> None:
+    def capture(kind: EventKind, act: Callable[[Rig], None], run: int = 6000) -> tuple[Rig, int]:
+        rig = Rig(block=50)
+        rig.run(2000)
+        sig = rig.signals("S1.speed_reached", "S1.gear", "S1.in_position", "X.job_error")
+        rig.arm(ScopeSetup(sig, 200, 50.0, ScopeMode.SINGLE, EventTrigger(kind)))
+        at = rig.sim.cycle
+        act(rig)
+        rig.run(run)
+        (r,) = rig.scope.completed
+        assert r.trigger_cycle is not None
+        return rig, at
+
+    # speed reached: the first cycle the speed_reached bit is set
+    rig, at = capture(EventKind.SPEED_REACHED, lambda r: r.m.spindle("S1", 3, 1000.0))
+    t = rig.scope.completed[0].trigger_cycle
+    assert t == _first_rise(rig, "S1.speed_reached", at)
+    # gear change: the first cycle in the new gear stage (S300 needs M40 from M42)
+    rig, at = capture(EventKind.GEAR_CHANGE, lambda r: r.m.spindle("S1", 3, 300.0), 9000)
+    assert rig.scope.completed[0].trigger_cycle == _first_rise(rig, "S1.gear", at)
+    # M19 done: the cycle the spindle comes into its exact-stop window for good
+    rig, at = capture(EventKind.M19_DONE, lambda r: r.m.spindle_position("S1", 90.0), 9000)
+    t = rig.scope.completed[0].trigger_cycle
+    pos = rig.column("S1.in_position")
+    assert pos[t - rig.base - 1] == 1 and pos[t - rig.base - 2] == 0
+
+    # job error (a step without enables): the first cycle with X's job error set
+    def refused(r: Rig) -> None:
+        r.m.hli_write("DriveOn", 0, "X")
+        r.m.jog_step("X", 1.0)
+
+    rig, at = capture(EventKind.JOB_ERROR, refused, 300)
+    assert rig.scope.completed[0].trigger_cycle == _first_rise(rig, "X.job_error", at) == at + 1
