@@ -1,12 +1,15 @@
 """The Rerun web viewer that rerun-sdk bundles, run on loopback and reached through the service.
 
 The viewer has no authentication, so it listens on 127.0.0.1 only (its own HTTP port and the
-gRPC port it also opens); the service forwards `/rerun/…` to it. It is started on first use.
+gRPC port it also opens); the service forwards `/rerun/…` to it. It is started on first use,
+with its own configuration folder in which its usage analytics are switched off.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
+import os
 import shutil
 import socket
 import subprocess
@@ -35,6 +38,7 @@ class RerunViewer:
 
     def __init__(self, log_path: Path) -> None:
         self.log_path = log_path
+        self.home = log_path.parent / "rerun-home"  # XDG folders of the viewer process
         self.port: int | None = None
         self._proc: subprocess.Popen[bytes] | None = None
         self._lock = threading.Lock()
@@ -44,13 +48,14 @@ class RerunViewer:
         with self._lock:
             if self._proc is not None and self._proc.poll() is None and self.port is not None:
                 return self.port
+            env = self._quiet_env()
             web, grpc = _free_port(), _free_port()
             cmd = [rerun_cli(), "--serve-web", "--bind", "127.0.0.1"]
             cmd += ["--web-viewer-port", str(web), "--port", str(grpc)]
             self.log_path.parent.mkdir(parents=True, exist_ok=True)
             with self.log_path.open("ab") as log:
                 self._proc = subprocess.Popen(
-                    cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+                    cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env
                 )
             deadline = time.monotonic() + timeout_s
             while time.monotonic() < deadline:
@@ -66,6 +71,27 @@ class RerunViewer:
             self.stop_locked()
             msg = f"the Rerun viewer did not start (see {self.log_path})"
             raise ApiError(503, {"message": msg})
+
+    def analytics_config(self) -> Path:
+        return self.home / "config" / "rerun" / "analytics.json"
+
+    def _quiet_env(self) -> dict[str, str]:
+        """Environment of the viewer: its own config and data folders, analytics off."""
+        env = {
+            **os.environ,
+            "XDG_CONFIG_HOME": str(self.home / "config"),
+            "XDG_DATA_HOME": str(self.home / "data"),
+        }
+        cfg = self.analytics_config()
+        try:
+            off = not json.loads(cfg.read_text())["analytics_enabled"]
+        except (OSError, ValueError, KeyError):
+            off = False
+        if not off:
+            subprocess.run(
+                [rerun_cli(), "analytics", "disable"], env=env, capture_output=True, timeout=30
+            )
+        return env
 
     def stop(self) -> None:
         with self._lock:

@@ -3,6 +3,7 @@ read by the real `rerun` CLI, the loopback-only Rerun web viewer, continuous rec
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 from collections import Counter
@@ -276,6 +277,9 @@ def test_rerun_viewer_is_served_through_the_service_and_listens_on_loopback_only
     assert len(ports) >= 2  # the web viewer and its gRPC server
     for port in ports:
         assert listening(port) == ["0100007F"], f"port {port} is not loopback-only"
+    # the viewer runs with its own configuration, in which its usage analytics are off
+    cfg = srv.db.parent / "traces" / "rerun-home" / "config" / "rerun" / "analytics.json"
+    assert json.loads(cfg.read_text())["analytics_enabled"] is False
 
 
 def test_a_foreign_csv_is_read_from_its_header_and_bad_ones_are_refused(srv: Server) -> None:

@@ -84,6 +84,13 @@ def test_single_trigger_on_m19_start_shows_the_capture_with_marker_and_measureme
     dt_ms = float(page.get_by_test_id("cursor-dt").inner_text().split()[0])
     assert abs(dt_ms - (tb - ta) * 1000) < 0.11
     expect(page.get_by_test_id("meas-window")).to_contain_text(f"{ta:.3f}")
+    # the record's events: M19 is raised after the cycle before the trigger, which is the
+    # first cycle under M19
+    page.get_by_test_id("capture-events").locator("summary").click()
+    expect(page.get_by_test_id("capture-events")).to_contain_text("M19 S.POS=90")
+    expect(
+        page.get_by_test_id("capture-events").locator("tr", has_text="M19 S.POS")
+    ).to_contain_text("−0.001 s")
     shot(page, "scope-m19-desktop")
     page.close()
 

@@ -2,7 +2,7 @@
 // window), with cursors, measurements, an overlaid stored trace and the parameter differences.
 import { useEffect, useMemo, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
-import type { TraceCompare } from "../api/types";
+import type { TraceCompare, TraceDetail } from "../api/types";
 import {
   followNewest,
   loadRoll,
@@ -98,6 +98,49 @@ function SaveForm(props: { id: string; onSaved: () => void }) {
   );
 }
 
+/** The events in the record and the parameters as they were, below the chart. */
+function RecordFacts(props: { detail: TraceDetail }) {
+  const d = props.detail;
+  const ref = d.trigger_cycle ?? d.first_cycle;
+  return (
+    <div class="record-facts">
+      <details data-testid="capture-events">
+        <summary>Events in the record ({d.events.length})</summary>
+        <table class="param-diff">
+          <tbody>
+            {d.events.map((e) => (
+              <tr key={`${e.cycle}:${e.code}:${e.axis}`} class={e.error ? "error" : ""}>
+                <td>{fmt((e.cycle - ref) * d.cycle_s, 3)} s</td>
+                <td>{e.code}</td>
+                <td>{e.axis}</td>
+                <td>{e.message}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+      </details>
+      <details data-testid="capture-params">
+        <summary>Parameters at capture time: {d.params_changed} differ from the defaults</summary>
+        <table class="param-diff">
+          <thead>
+            <tr><th>list</th><th>parameter</th><th>value</th><th>default</th></tr>
+          </thead>
+          <tbody>
+            {d.params.map((p) => (
+              <tr key={`${p.scope}${p.target}${p.name}`}>
+                <td>{p.target || p.scope}</td>
+                <td>{p.name}</td>
+                <td>{String(p.value)}</td>
+                <td>{p.default === null ? "—" : String(p.default)}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+      </details>
+    </div>
+  );
+}
+
 function CaptureView() {
   const [trace, setTrace] = useState<LoadedTrace | null>(null);
   const [overlay, setOverlay] = useState<LoadedTrace | null>(null);
@@ -176,6 +219,7 @@ function CaptureView() {
             <CursorTable trace={trace} cursors={cursors} />
             <Measurements detail={d} cursors={cursors} range={range} />
           </div>
+          <RecordFacts detail={d} />
           {overlay ? (
             <div class="compare" data-testid="compare">
               Overlay: <b>{overlay.detail.name || overlay.detail.trigger}</b> (dashed){" "}
