@@ -8,9 +8,11 @@ with its own configuration folder in which its usage analytics are switched off.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import json
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -28,7 +30,13 @@ def _free_port() -> int:
 
 
 def rerun_cli() -> str:
-    """The `rerun` executable of this environment."""
+    """The `rerun` executable of this environment: the binary rerun-sdk ships (its `rerun`
+    script would run it as a grandchild, out of reach of terminate)."""
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.origin is not None:
+        binary = Path(spec.origin).with_name("rerun")
+        if binary.exists():
+            return str(binary)
     local = Path(sys.executable).with_name("rerun")
     return str(local) if local.exists() else (shutil.which("rerun") or "rerun")
 
@@ -55,7 +63,12 @@ class RerunViewer:
             self.log_path.parent.mkdir(parents=True, exist_ok=True)
             with self.log_path.open("ab") as log:
                 self._proc = subprocess.Popen(
-                    cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env
+                    cmd,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    stdin=subprocess.DEVNULL,
+                    env=env,
+                    start_new_session=True,  # its own process group: stop ends all of it
                 )
             deadline = time.monotonic() + timeout_s
             while time.monotonic() < deadline:
@@ -99,9 +112,10 @@ class RerunViewer:
 
     def stop_locked(self) -> None:
         if self._proc is not None and self._proc.poll() is None:
-            self._proc.terminate()
+            os.killpg(self._proc.pid, signal.SIGTERM)
             try:
                 self._proc.wait(timeout=5)
             except subprocess.TimeoutExpired:
-                self._proc.kill()
+                os.killpg(self._proc.pid, signal.SIGKILL)
+                self._proc.wait(timeout=5)
         self._proc, self.port = None, None

@@ -296,3 +296,15 @@ def test_a_foreign_csv_is_read_from_its_header_and_bad_ones_are_refused(srv: Ser
     assert ragged.status_code == 422 and "data row 2 has 3 columns" in ragged.text
     meta = srv.http.post("/api/traces/import", content=b"# meta: {}\ncycle,a\n1,2\n2,3\n")
     assert meta.status_code == 422 and "# meta line" in meta.text
+
+
+def test_the_viewer_stops_with_the_service(tmp_path: Path) -> None:
+    s = Server(tmp_path / "viewer.sqlite").start()
+    try:
+        assert s.http.get("/rerun/", timeout=60).status_code == 200
+        log = (tmp_path / "traces" / "rerun-viewer.log").read_text()
+        ports = {int(p) for p in re.findall(r"127\.0\.0\.1:(\d+)", log)}
+        assert ports and all(listening(p) for p in ports)
+    finally:
+        s.close()
+    assert not any(listening(p) for p in ports)  # no viewer left behind
