@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from typing import Annotated, Any
-from urllib.parse import quote
 
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import FileResponse, RedirectResponse, Response
@@ -13,6 +12,7 @@ from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatu
 from backend.deps import ActorDep, HostDep, ServicesDep
 from backend.services import scope
 from backend.services.auth import authorize
+from backend.services.viewer import viewer_url
 
 router = APIRouter(prefix="/api", tags=["scope"])
 BINARY: dict[int | str, dict[str, Any]] = {
@@ -41,16 +41,14 @@ def scope_arm(
 def scope_force(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """Trigger now (an armed scope only)."""
     authorize(actor, Action.OBSERVE, host.id)
-    with host.lock:
-        host.scope.force()
+    scope.force(host)
     return scope.status(host, services.traces, services.recorders)
 
 
 @router.post("/machines/{mid}/scope/stop")
 def scope_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     authorize(actor, Action.OBSERVE, host.id)
-    with host.lock:
-        host.scope.stop()
+    scope.stop(host)
     return scope.status(host, services.traces, services.recorders)
 
 
@@ -92,9 +90,3 @@ def recording_viewer(rid: str, request: Request, services: ServicesDep) -> Redir
     """Open the recording in the bundled Rerun web viewer."""
     services.recorders.path(rid)
     return RedirectResponse(viewer_url(request, f"/api/recordings/{rid}/recording.rrd"))
-
-
-def viewer_url(request: Request, rrd_path: str) -> str:
-    """The viewer page (through the service) that loads an .rrd of the service."""
-    base = str(request.base_url).rstrip("/")
-    return f"/rerun/?hide_welcome_screen&url={quote(base + rrd_path, safe='')}"

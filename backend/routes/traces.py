@@ -11,9 +11,10 @@ from api.auth import Action
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
 from backend.deps import ActorDep, ServicesDep
 from backend.errors import ApiError
-from backend.routes.scope import BINARY, viewer_url
+from backend.routes.scope import BINARY
 from backend.services.auth import authorize
 from backend.services.trace_csv import from_csv, to_csv
+from backend.services.viewer import viewer_url
 
 router = APIRouter(prefix="/api/traces", tags=["traces"])
 MAX_CSV_BYTES = 64 * 1024 * 1024

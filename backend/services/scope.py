@@ -61,6 +61,18 @@ def arm(host: MachineHost, req: ScopeSetupModel) -> None:
         host.scope.arm(setup, host.cycle, host.history(setup.length_cycles), host.machine.events)
 
 
+def force(host: MachineHost) -> None:
+    """Trigger an armed scope now."""
+    with host.lock:
+        host.scope.force()
+
+
+def stop(host: MachineHost) -> None:
+    """Stop recording; a capture in progress is dropped."""
+    with host.lock:
+        host.scope.stop()
+
+
 def status(host: MachineHost, traces: TraceService, recorders: Recorders) -> ScopeStatus:
     with host.lock:
         sc = host.scope

@@ -19,8 +19,17 @@ import sys
 import threading
 import time
 from pathlib import Path
+from urllib.parse import quote
+
+from fastapi import Request
 
 from backend.errors import ApiError
+
+
+def viewer_url(request: Request, rrd_path: str) -> str:
+    """The viewer page (through the service) that loads an .rrd the service serves."""
+    base = str(request.base_url).rstrip("/")
+    return f"/rerun/?hide_welcome_screen&url={quote(base + rrd_path, safe='')}"
 
 
 def _free_port() -> int:
