@@ -125,7 +125,12 @@ class TraceService:
         """The machine's recent captures, newest first."""
         with host.lock:
             caps = list(host.captures)
-        return [_info(self._from_capture(host, c).detail) for c in reversed(caps)]
+        out = []
+        for c in reversed(caps):
+            info = _info(self._from_capture(host, c).detail)
+            info.stored = self.store.trace(c.id) is not None  # the library is the one record
+            out.append(info)
+        return out
 
     def get(self, tid: str) -> Trace:
         """A recent capture or a stored trace; 404 when neither."""
@@ -167,9 +172,7 @@ class TraceService:
         detail = trace.detail.model_copy(deep=True)
         detail.name = req.name or f"{detail.trigger or 'capture'} {detail.id[:6]}"
         detail.notes = req.notes
-        info = self.add(Trace(detail, trace.data))
-        trace.detail.stored = True
-        return info
+        return self.add(Trace(detail, trace.data))
 
     def patch(self, tid: str, req: TracePatch) -> TraceInfo:
         trace = self.get(tid)

@@ -186,7 +186,10 @@ def test_library_keeps_parameters_renames_compares_deletes(srv: Server, tmp_path
     names = {t["id"]: t["name"] for t in lib}
     assert names[first["id"]] == "before" and second["id"] in names
     assert srv.http.delete(f"/api/traces/{second['id']}").status_code == 204
-    assert srv.http.get(f"/api/traces/{second['id']}").status_code in (200, 404)
+    again = srv.http.get(f"/api/traces/{second['id']}")  # still one of the recent captures
+    assert again.status_code == 200 and again.json()["stored"] is False
+    recent = {c["id"]: c["stored"] for c in scope(srv)["captures"]}
+    assert recent[second["id"]] is False and recent[first["id"]] is True
     assert second["id"] not in {t["id"] for t in srv.http.get("/api/traces").json()}
     assert not (srv.db.parent / "traces" / f"{second['id']}.npy").exists()
     body["changes"][0]["value"] = 2000  # back to the demo's value
