@@ -26,7 +26,9 @@ class SpindleCommand(BaseModel):
     type: Literal["spindle"] = "spindle"
     spindle: SpindleName = "S"
     m: Literal[3, 4, 5]
-    speed_rpm: float | None = Field(None, ge=0, le=1e6, description="S word, rpm")
+    speed_rpm: float | None = Field(
+        None, ge=0, allow_inf_nan=False, description="S word, rpm (the NC checks its maximum)"
+    )
 
 
 class SpindlePositionCommand(BaseModel):
@@ -36,7 +38,9 @@ class SpindlePositionCommand(BaseModel):
     spindle: SpindleName = "S"
     position_deg: float = Field(ge=-1e9, le=1e9)
     direction: Literal[-1, 1] | None = None
-    speed_rpm: float | None = Field(None, gt=0, le=1e6)
+    speed_rpm: float | None = Field(
+        None, gt=0, allow_inf_nan=False, description="rpm (the NC checks its maximum)"
+    )
 
 
 class GearCommand(BaseModel):

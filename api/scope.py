@@ -123,6 +123,13 @@ class MeasurementsModel(BaseModel):
         description="from the trigger (or window start) until it stays in final ± band"
     )
     band: float = Field(description="settling band half-width, channel unit")
+    noise: float = Field(
+        description="standard deviation of the sample-to-sample noise, channel unit"
+    )
+    step_found: bool = Field(
+        description="a step stands out of the noise (10 σ) and stays: overshoot and rise "
+        "time are defined"
+    )
 
 
 class ParamCompare(BaseModel):

@@ -53,6 +53,7 @@ class Code(IntEnum):
     EV_TOOL_DYNAMICS = 24
     EV_PROGRAM_END = 25
     EV_M_START = 26  # a spindle M function begins; it acts from the next cycle on
+    EV_GEAR_CHANGE_START = 27  # a gear change begins (to the change position, then M4x)
 
 
 MESSAGES: dict[Code, str] = {
@@ -81,11 +82,28 @@ MESSAGES: dict[Code, str] = {
     Code.SPINDLE_NOT_HOMED: "spindle not homed and automatic homing is off "
     "(ACHSMODE_KEINE_AUTO_RPF): home with G74 first",
     Code.NOT_A_SPINDLE: "spindle command to an axis that is not a spindle",
+    Code.EV_BLOCK_DONE: "block done",
+    Code.EV_M_OUTPUT: "M function output to the PLC",
+    Code.EV_M_ACK: "M function acknowledged by the PLC",
+    Code.EV_HOMED: "homed",
+    Code.EV_RESET: "CNC reset",
     Code.EV_SPEED_REACHED: "speed reached",
+    Code.EV_HLI: "HLI control unit written",
+    Code.EV_PLC_MODE: "PLC mode changed",
+    Code.EV_MOTION_DONE: "motion done",
+    Code.EV_LOOP_OPENED: "position loop opened",
+    Code.EV_LOOP_CLOSED: "position loop closed",
     Code.EV_REFERENCE_LOST: "reference lost above the control limit: the spindle is homed "
     "again before positioning",
+    Code.EV_GEAR_CHANGED: "gear stage changed",
+    Code.EV_IN_POSITION: "in position",
+    Code.EV_TOOL_DYNAMICS: "tool dynamics",
     Code.EV_PROGRAM_END: "program end",
+    Code.EV_M_START: "spindle M function started",
+    Code.EV_GEAR_CHANGE_START: "gear change started",
 }
+"""What each code means, in the operator's words; every code has one (the event log shows it
+when an event carries no detail of its own)."""
 
 
 def is_error(code: int) -> bool:

@@ -4,17 +4,21 @@ All work on samples `y` at times `t` (s) of a window. The step goes from the ini
 (the first sample) to the final value (the mean of the last 10 % of the window, at least one
 sample). A signal that returns to where it started (a pulse, the lag of a finished move) has no
 step: no rise time or overshoot, and its settling band is relative to its largest excursion.
+Neither has a signal whose step does not stand out of its noise (NOISE_FACTOR standard
+deviations): noise alone would read as hundreds of % overshoot and a rise time of one sample.
 Crossing times are interpolated linearly between samples.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 FINAL_SHARE = 0.1  # the final value is the mean of this last share of the window
 PULSE_SHARE = 0.05  # a step smaller than this share of the excursion counts as none
+NOISE_FACTOR = 10.0  # a step must exceed this many noise standard deviations
 
 
 @dataclass(frozen=True)
@@ -33,6 +37,18 @@ class Measurements:
     rise_time_s: float | None  # 10 % → 90 % of the step
     settling_time_s: float | None  # from `t_ref_s` until y stays inside final ± band
     band: float  # absolute half-width of the settling band used
+    noise: float  # standard deviation of the sample-to-sample noise
+    step_found: bool  # a step stands out of the noise and does not come back
+
+
+def noise_std(y: np.ndarray) -> float:
+    """Standard deviation of white noise on y, from the differences of neighbouring samples
+    (median absolute deviation): steps, ramps and slow responses hardly change it."""
+    if y.size < 3:
+        return 0.0
+    d = np.diff(y)
+    mad = float(np.median(np.abs(d - np.median(d))))
+    return mad / 0.6745 / math.sqrt(2.0)  # MAD of a normal = 0.6745 σ; a difference: √2 σ
 
 
 def _crossing(t: np.ndarray, y: np.ndarray, level: float, rising: bool) -> float | None:
@@ -63,8 +79,11 @@ def measure(
     n_final = max(1, round(y.size * FINAL_SHARE))
     initial, final = float(y[0]), float(np.mean(y[-n_final:]))
     step = final - initial
+    noise = noise_std(y)
     if abs(step) < PULSE_SHARE * float(np.max(np.abs(y - initial))):
         step = 0.0  # it came back (a pulse, a move's lag): no step to rise or overshoot
+    if abs(step) <= NOISE_FACTOR * noise:
+        step = 0.0  # not told from the noise
     i_abs = int(np.argmax(np.abs(y)))
     # without a step (a pulse, a speed back to zero) the band is relative to the excursion
     scale = abs(step) if step != 0 else float(np.max(np.abs(y - final)))
@@ -100,4 +119,6 @@ def measure(
         rise_time_s=rise,
         settling_time_s=settling,
         band=float(band),
+        noise=noise,
+        step_found=step != 0,
     )

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nc_sim.blocks import Block, BlockError, parse_block
-from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError
+from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError, is_error
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import Axis, AxisState, HomingPhase, ToolLimits, power_on, push_params
@@ -131,9 +131,11 @@ class Machine:
 
     # --- events -------------------------------------------------------------------------
     def log(self, code: Code, axis: str = "", detail: str = "") -> JobError:
-        msg = MESSAGES.get(code, code.name.lower().replace("_", " "))
+        """Record an error (its meaning, then the detail) or an event (its detail, which
+        reads as a message of its own, else the meaning)."""
+        msg = MESSAGES[code]
         if detail:
-            msg = f"{msg}: {detail}" if code in MESSAGES else detail
+            msg = f"{msg}: {detail}" if is_error(code) else detail
         ev = JobError(self.cycle, self.t_s, axis, int(code), msg)
         self.events.append(ev)
         return ev
@@ -506,29 +508,37 @@ class Machine:
             self._set_state(ax, AxisState.STANDSTILL)
 
     def reset(self) -> None:
-        """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455)."""
-        self.estop = False
+        """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
+        After an emergency stop the PLC switches the drives on again."""
+        estop, self.estop = self.estop, False
         self._queue.clear()
         self._m_out.clear()
         self._m_gear.clear()
         self.plc.clear()
         for ax in self.axes:
             self._reset_axis(ax)
+        if estop and self._powered:
+            self._switch_drives_on()
         self.log(Code.EV_RESET)
 
     def emergency_stop(self) -> None:
-        """Step-shaped braking of every axis at a_emergency; the channel stays in error."""
+        """Step-shaped braking of every axis at a_emergency; the channel stays in error and
+        the PLC removes each axis' enables (DriveOn, TorquePermission) once it has braked and
+        settled (stop category 1)."""
         self.estop = True
         self._queue.clear()
         for ax in self.axes:
-            if ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
-                self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
-                self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+            moving = ax.state not in (AxisState.STANDSTILL, AxisState.ERROR)
             ax.motion, ax.hold, ax.homing, ax.task = None, False, HomingPhase.NONE, None
             self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
             self._set_state(ax, AxisState.ERROR)
             ax.job_error = int(Code.EMERGENCY_STOP)
             self.k.ist[ax.slot, L.I_JOB_ERROR] = ax.job_error
+            if moving:
+                self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
+                self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+            else:
+                self._estop_power_off(ax)  # at rest (or servo already off): at once
         self.log(Code.EMERGENCY_STOP)
 
     # --- PLC ----------------------------------------------------------------------------
@@ -667,10 +677,7 @@ class Machine:
         self.cycle = cycle
         if cycle >= self.plc.power_on_cycle and not self._powered:
             self._powered = True
-            for ax in self.axes:  # the PLC program switches the drives on at start-up
-                for u in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
-                    ax.units[u] = 1
-                self._enables_changed(ax)
+            self._switch_drives_on()
         for p in self.plc.due(cycle):
             self._m_acked(p.m, p.out_cycle)
         timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
@@ -692,6 +699,8 @@ class Machine:
             if ev:
                 self.k.ist[ax.slot, L.I_EVENTS] = 0
                 self._axis_events(ax, ev)
+        if self.estop:
+            self._estop_settled()
         self._pump()
 
     def _axis_events(self, ax: Axis, ev: int) -> None:
@@ -728,6 +737,34 @@ class Machine:
         ax.motion, ax.task = None, None
         self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
         self._set_state(ax, AxisState.ERROR)
+
+    def _switch_drives_on(self) -> None:
+        """The PLC program's enables: at start-up, and at the reset that ends an E-stop."""
+        for ax in self.axes:
+            for u in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
+                ax.units[u] = 1
+            self._enables_changed(ax)
+
+    def _estop_power_off(self, ax: Axis) -> None:
+        """E-stop, stop category 1: once the axis has braked, the PLC takes its enables."""
+        for u in ("DriveOn", "TorquePermission"):
+            ax.units[u] = 0
+        self._enables_changed(ax)
+
+    def _estop_settled(self) -> None:
+        """During an E-stop: take the enables of every axis whose braking has ended and whose
+        position loop has settled (lag inside kenngr.exact_stop_window)."""
+        st, ist, pr = self.k.st, self.k.ist, self.k.pr
+        for ax in self.axes:
+            s = ax.slot
+            if not ax.enables_ok() or ist[s, L.I_PLAN_N] > 0:
+                continue
+            if ist[s, L.I_OPEN_LOOP] == L.LOOP_CLOSED:
+                settled = abs(st[s, L.S_LAG]) <= pr[s, L.P_INPOS_WIN]
+            else:  # speed control: no lag to settle, the drive has stopped turning
+                settled = abs(st[s, L.S_V_ACT]) <= pr[s, L.P_INPOS_WIN]
+            if settled:
+                self._estop_power_off(ax)
 
     def _plan_done(self, ax: Axis) -> None:
         if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS, AxisState.OPEN_LOOP):

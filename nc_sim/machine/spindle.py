@@ -174,11 +174,23 @@ class SpindleControl:
         if gt is None:
             if programmed is not None:
                 return GearChoice(None, Code.GEAR_CHANGE_OFF, f"M{m_of(programmed)}")
-            return GearChoice(ax.gear)
+            return self._within_vb_max(ax, rpm) or GearChoice(ax.gear)
         i, table = gt
         automatic = bool(self.m.cfg.channel_raw(f"spindel[{i}].autom_range"))
         way = int(self.m.cfg.channel_raw(f"spindel[{i}].range_way"))
         return select_gear(table, ax.gear, rpm, automatic, way, programmed)
+
+    def _within_vb_max(self, ax: Axis, rpm: float) -> GearChoice | None:
+        """The refusal of a speed above the active gear record's maximum (P-AXIS-00212)."""
+        top_rpm = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear) / RPM_TO_DEG_S
+        if abs(rpm) <= top_rpm + 1e-9:
+            return None
+        return GearChoice(
+            None,
+            Code.GEAR_NO_RANGE,
+            f"S{abs(rpm):.10g} rpm is above the maximum speed of {ax.name}, {top_rpm:.10g} rpm "
+            f"(getriebe[{ax.gear - 1}].dynamik.vb_max, P-AXIS-00212)",
+        )
 
     # --- M3/M4/M5 and S -----------------------------------------------------------------
     def endless(
@@ -276,6 +288,9 @@ class SpindleControl:
                 return err
         else:
             direction = self.preferred(ax)
+        too_fast = self._within_vb_max(ax, rpm) if rpm else None
+        if too_fast is not None:
+            return self.m._fail(ax, Code.GEAR_NO_RANGE, too_fast.detail)
         speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         self.cancel_task(ax)
         self.m.log(Code.EV_M_START, ax.name, f"M19 S.POS={pos_deg:g}")
@@ -316,7 +331,7 @@ class SpindleControl:
         ax.task = SpindleTask("gear", pos, self.preferred(ax), speed, gear=gear, resume=resume)
         ax.block_id = block_id
         self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}")
-        self.m.log(Code.EV_HLI, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
+        self.m.log(Code.EV_GEAR_CHANGE_START, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
         if not (ax.homed or self.auto_homing(ax)) or ax.cfg.flag("sim.sensorless"):
             # no position to go to: change at standstill where the spindle stops
             ax.task.phase = TaskPhase.STOP

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -161,7 +163,7 @@ def cruising_x(block: str) -> tuple[Simulation, Machine, MachineConfig, Axis, fl
 def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
     sim, m, cfg, x, v, p = cruising_x("G01 X250 F6000")
     m.emergency_stop()
-    record(sim, 0.5)
+    record(sim, 0.2)  # braked (20 ms), the loop still settling with the enables on
     a = cfg.axis("X").eng("getriebe.dynamik.a_emergency")
     assert m.k.st[x.slot, L.S_P_CMD] - p == pytest.approx(v * v / (2 * a), rel=1e-6)
     m.mdi("G00 X10")
@@ -239,3 +241,27 @@ def test_override_zero_holds_the_move_and_it_resumes() -> None:
     m.hli_write("override", 1000)
     record(sim, 3.0)
     assert m.k.st[x.slot, L.S_P_CMD] == 100.0 and x.state.name == "STANDSTILL"
+
+
+def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back() -> None:
+    """Stop category 1: brake under control, then the PLC removes DriveOn/TorquePermission."""
+    sim, m, cfg, x, v, _ = cruising_x("G01 X250 F6000")
+    z = m.axis("Z")  # at rest: its enables go at once
+    m.emergency_stop()
+    assert z.missing_enables() and not z.enables_ok()
+    assert x.enables_ok()  # X still brakes under position control
+    a = cfg.axis("X").eng("getriebe.dynamik.a_emergency")
+    record(sim, 0.9 * v / a)
+    assert x.enables_ok() and m.k.st[x.slot, L.S_V_CMD] > 0
+    record(sim, 0.2 * v / a)
+    assert m.k.st[x.slot, L.S_V_CMD] == 0.0 and x.enables_ok()  # braked, lag still settling
+    kv = cfg.axis("X").eng("getriebe.kv", 1)
+    window = cfg.axis("X").eng("kenngr.exact_stop_window")
+    lag = abs(m.k.st[x.slot, L.S_LAG])
+    record(sim, math.log(lag / window) / kv + 0.05)  # the lag decays as e^(-kv t)
+    assert abs(m.k.st[x.slot, L.S_LAG]) <= window
+    assert set(x.missing_enables()) >= {"DriveOn", "TorquePermission"}
+    assert not [e for e in m.events if e.code == Code.ENABLES_LOST]  # no error of its own
+    m.reset()
+    assert x.enables_ok() and z.enables_ok()
+    assert m.mdi("G00 X10").ok

@@ -61,3 +61,40 @@ def test_never_settling_and_flat_signals() -> None:
     flat = measure(t, np.full(t.size, 0.5))
     assert flat.rise_time_s is None and flat.overshoot_pct is None
     assert flat.settling_time_s == 0.0 and flat.mean == 0.5
+
+
+def test_noise_alone_has_no_step_overshoot_or_rise() -> None:
+    """White noise (σ = 0.01) around zero: no step to speak of, whatever the first sample."""
+    rng = np.random.default_rng(7)
+    t = np.arange(0, 1.0, 1e-3)
+    sigma = 0.01
+    y = rng.normal(0.0, sigma, t.size)
+    y[0] = 3 * sigma  # an unlucky first sample: the 'step' would be 3 σ
+    m = measure(t, y)
+    assert not m.step_found
+    assert m.overshoot_pct is None and m.rise_time_s is None
+    assert m.noise == pytest.approx(sigma, rel=0.1)
+
+
+def test_a_step_with_noise_is_measured_and_its_noise_estimated() -> None:
+    """Second-order step (ζ = 0.5) plus white noise of 0.1 % of the step."""
+    rng = np.random.default_rng(11)
+    zeta, wn = 0.5, 60.0
+    wd = wn * math.sqrt(1 - zeta**2)
+    t = np.arange(0, 2.0, 1e-4)
+    y = 1 - np.exp(-zeta * wn * t) * np.sin(wd * t + math.acos(zeta)) / math.sqrt(1 - zeta**2)
+    sigma = 1e-3
+    m = measure(t, y + rng.normal(0.0, sigma, t.size))
+    assert m.step_found
+    assert m.noise == pytest.approx(sigma, rel=0.1)
+    expected = 100 * math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2))  # 16.3 %
+    assert m.overshoot_pct == pytest.approx(expected, abs=0.5)  # noise peaks: 4 σ ≈ 0.4 %
+    assert m.rise_time_s is not None and m.rise_time_s > 0.01  # not one sample
+
+
+def test_a_step_smaller_than_ten_noise_deviations_is_not_a_step() -> None:
+    rng = np.random.default_rng(3)
+    t = np.arange(0, 1.0, 1e-3)
+    noise = rng.normal(0.0, 0.01, t.size)
+    assert not measure(t, np.where(t < 0.5, 0.0, 0.05) + noise).step_found  # 5 σ
+    assert measure(t, np.where(t < 0.5, 0.0, 0.2) + noise).step_found  # 20 σ
