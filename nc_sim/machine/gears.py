@@ -52,17 +52,6 @@ def select_gear(
     Manual: M4x must come with S inside its range; S alone must fit the current stage.
     """
     rpm = abs(rpm)
-    used = [g for g in range(1, 7) if table[g - 1].used]
-    if used:
-        top = max(used, key=lambda g: table[g - 1].max_rpm)
-        top_rpm = table[top - 1].max_rpm
-        if rpm > top_rpm:  # no stage can hold it: name the machine's own limit
-            return GearChoice(
-                None,
-                Code.GEAR_NO_RANGE,
-                f"S{rpm:.10g} rpm is above the highest gear stage, M{m_of(top)} up to "
-                f"{top_rpm:.10g} rpm (range_table[{top - 1}].max_speed, P-CHAN-00055)",
-            )
     if programmed is not None:
         r = table[programmed - 1]
         if not r.holds(rpm):
@@ -82,4 +71,14 @@ def select_gear(
     for g in order:
         if table[g - 1].holds(rpm):
             return GearChoice(g)
-    return GearChoice(None, Code.GEAR_NO_RANGE, f"S{rpm:g}: no gear stage holds this speed")
+    used = [g for g in range(1, 7) if table[g - 1].used]
+    top = max(used, key=lambda g: table[g - 1].max_rpm) if used else None
+    if top is not None and rpm > table[top - 1].max_rpm:  # name the machine's own limit
+        return GearChoice(
+            None,
+            Code.GEAR_NO_RANGE,
+            f"S{rpm:.10g} rpm is above the highest gear stage, M{m_of(top)} up to "
+            f"{table[top - 1].max_rpm:.10g} rpm (range_table[{top - 1}].max_speed, "
+            "P-CHAN-00055)",
+        )
+    return GearChoice(None, Code.GEAR_NO_RANGE, f"S{rpm:.10g} rpm: no gear stage holds it")
