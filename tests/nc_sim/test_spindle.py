@@ -584,12 +584,12 @@ def test_m19_to_the_angle_the_spindle_stands_at_completes_at_once() -> None:
 def test_a_speed_above_the_machine_limit_is_refused_naming_the_limit() -> None:
     """S above the highest gear stage (M45 up to 7000 rpm, P-CHAN-00055) or, without gear
     change, above the gear record's vb_max (P-AXIS-00212: 3500 rpm in M42) is refused."""
-    sim, m, _ = make()
+    _, m, _ = make()
     err = m.spindle("S", 3, 2_000_000)
     assert err is not None and err.code == Code.GEAR_NO_RANGE
     assert "7000 rpm" in err.message and "P-CHAN-00055" in err.message
     assert "S2000000 rpm" in err.message
-    sim, m, _ = make(channel={"main_spindle_gear_change": 0})
+    _, m, _ = make(channel={"main_spindle_gear_change": 0})
     err = m.spindle("S", 3, 3600)
     assert err is not None and err.code == Code.GEAR_NO_RANGE
     assert "3500 rpm" in err.message and "P-AXIS-00212" in err.message
