@@ -13,6 +13,7 @@ import { Plots } from "./panels/Plots";
 import { Scope } from "./panels/Scope";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
+import { TrialBar } from "./panels/TrialBar";
 import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
@@ -62,6 +63,7 @@ export function App() {
               </button>
             ))}
           </nav>
+          <TrialBar />
           <div class="workspace" role="tabpanel" aria-label={tab}>
             {tab === "Operate" ? (
               <div class="operate">

@@ -55,7 +55,7 @@ def test_single_trigger_on_m19_start_shows_the_capture_with_marker_and_measureme
     expect(marker).to_be_visible()
     assert marker.get_attribute("data-t") == "0"
     # the marker sits a quarter of the way across the plotting area (whole record shown)
-    chart = page.locator("[data-testid=capture-chart] .u-over").bounding_box()
+    chart = page.get_by_test_id("capture-chart").locator(".u-over").bounding_box()
     m = marker.bounding_box()
     assert chart is not None and m is not None
     assert abs((m["x"] - chart["x"]) / chart["width"] - PRE_PCT / 100) < 0.01
@@ -106,12 +106,14 @@ def test_save_import_csv_and_overlay(browser: Browser, srv: Server, tmp_path: Pa
     csv = tmp_path / "m19-before.csv"
     csv.write_text(srv.http.get(f"/api/traces/{tid}/csv").text)
     page.get_by_test_id("trace-import").set_input_files(str(csv))
-    imported = page.locator("tr", has_text="m19-before")
+    # scoped to the library: the chart's legend rows name the overlay too
+    imported = page.get_by_test_id("panel-trace-library").locator("tr", has_text="m19-before")
     expect(imported).to_be_visible()
     compare = page.get_by_test_id("compare")
     expect(compare).to_contain_text("m19-before")
     expect(compare).to_contain_text("same parameters")
-    expect(page.locator(".u-legend")).to_contain_text("m19-before: S1.pos_act_deg")
+    legend = page.get_by_test_id("capture-chart").locator(".u-legend")
+    expect(legend).to_contain_text("m19-before: S1.pos_act_deg")
     shot(page, "scope-overlay-desktop")
     page.close()
 

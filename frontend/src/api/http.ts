@@ -37,7 +37,8 @@ function refusalOf(status: number, payload: unknown): Refusal {
   if (Array.isArray(detail)) {
     // FastAPI's request validation: [{loc, msg}]
     const first = detail[0] as { loc?: unknown[]; msg?: string } | undefined;
-    const where = first?.loc?.slice(1).join(".") ?? "";
+    // the field's own name, not the path through the request body and union tags
+    const where = String(first?.loc?.slice(-1)[0] ?? "");
     return { message: `${where}: ${first?.msg ?? "invalid"}`, problems: [] };
   }
   return { message: typeof payload === "string" && payload ? payload : `HTTP ${status}`, problems: [] };

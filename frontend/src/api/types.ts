@@ -10,6 +10,7 @@ export type JobError = S["JobErrorModel"];
 export type Refusal = S["Refusal"];
 export type ParameterProblem = S["ParameterProblem"];
 export type ParameterValue = S["ParameterValue"];
+export type ParameterDef = S["ParameterDef"];
 export type ParameterChange = S["ParameterChange"];
 export type ParameterWriteResult = S["ParameterWriteResult"];
 export type CommandResult = S["CommandResult"];

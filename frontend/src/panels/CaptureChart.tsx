@@ -4,7 +4,7 @@
 import { useEffect, useRef } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
-import { fmt } from "../ui/format";
+import { fmt, tickLabels } from "../ui/format";
 import { COLOURS } from "./LivePlot";
 
 export interface Series {
@@ -115,7 +115,17 @@ export function CaptureChart(props: {
         })),
       ],
       scales: { x: { time: false } },
-      axes: [{ label: "time from trigger [s]" }, { size: 64 }],
+      axes: [
+        { label: "time from trigger [s]", values: (_u, splits) => tickLabels(splits) },
+        {
+          size: 64,
+          values: (u, splits) => {
+            const labels = tickLabels(splits);
+            u.root.dataset.yTicks = labels.join(" | "); // what the axis reads, for tests
+            return labels;
+          },
+        },
+      ],
       cursor: { drag: { x: true, y: false } },
       legend: { live: true },
       hooks: {

@@ -4,16 +4,25 @@ import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { heldKey, holdJog, keyName, releaseJog } from "../state/jog";
 import { numbers, paramsVersion } from "../state/params";
-import { machineId, online, status } from "../state/session";
+import { machineId, motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
 const STEPS = [0.001, 0.01, 0.1, 1, 10];
 
-function JogKey(props: { axis: string; dir: 1 | -1; feed: number | null; onRefused: (r: Refusal) => void }) {
+function JogKey(props: {
+  axis: string;
+  dir: 1 | -1;
+  feed: number | null;
+  disabled: boolean;
+  title: string;
+  onRefused: (r: Refusal) => void;
+}) {
   const active = heldKey.value === keyName(props.axis, props.dir);
+  // Chromium delivers pointer events to disabled buttons too: a locked key must not jog
   const start = () =>
+    !props.disabled &&
     holdJog(props.axis, props.dir, props.feed, (e) =>
       props.onRefused(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
     );
@@ -22,9 +31,9 @@ function JogKey(props: { axis: string; dir: 1 | -1; feed: number | null; onRefus
       type="button"
       class={`jogkey ${active ? "held" : ""}`}
       data-testid={`jog-${props.dir > 0 ? "plus" : "minus"}`}
-      disabled={!online.value}
+      disabled={props.disabled}
       aria-pressed={active}
-      title="Hold to jog; release stops"
+      title={props.title}
       onPointerDown={(e) => {
         (e.currentTarget as HTMLElement).setPointerCapture(e.pointerId);
         start();
@@ -58,6 +67,7 @@ export function JogPanel() {
   const [overrideMax, setOverrideMax] = useState(100);
   useEffect(() => {
     // the channel's max_vb_override (0.1 %) bounds the feed override
+    if (!machineId.value) return;
     void numbers("channel", null).then((v) => setOverrideMax((v.get("max_vb_override") ?? 1000) / 10), () => undefined);
   }, [machineId.value, paramsVersion.value]);
   if (!ax) return <Panel title="Jog" id="jog">Waiting for the service…</Panel>;
@@ -65,6 +75,9 @@ export function JogPanel() {
   const feedNum = feed.trim() === "" ? null : Number(feed);
   const feedOk = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
   const dis = !online.value;
+  // a jog feed that is not a positive number jogs nowhere (never at the default instead)
+  const noMotion = motionLocked.value || !feedOk;
+  const why = status.value?.emergency_stop ? "emergency stop: reset first" : !feedOk ? "jog feed must be a number > 0" : "";
   const pathOverride = (status.value?.channel_units.override ?? 1000) / 10;
   return (
     <Panel title="Jog" id="jog">
@@ -81,13 +94,20 @@ export function JogPanel() {
         </span>
       </div>
       <div class="row">
-        <JogKey axis={ax.name} dir={-1} feed={feedOk ? feedNum : null} onRefused={setJogRefusal} />
-        <JogKey axis={ax.name} dir={1} feed={feedOk ? feedNum : null} onRefused={setJogRefusal} />
+        {([-1, 1] as const).map((d) => (
+          <JogKey key={d} axis={ax.name} dir={d} feed={feedNum} disabled={noMotion} onRefused={setJogRefusal}
+            title={why || "Hold to jog; release stops"} />
+        ))}
         <label>
           Jog feed <input data-testid="jog-feed" inputMode="decimal" placeholder="G200 default" size={9} value={feed}
             aria-invalid={!feedOk} onInput={(e) => setFeed((e.target as HTMLInputElement).value)} />{" "}
           {unit}/min
         </label>
+        {!feedOk ? (
+          <span class="inline-error" role="alert" data-testid="jog-feed-error">
+            a feed &gt; 0 is needed (empty: the G200 default)
+          </span>
+        ) : null}
       </div>
       <div class="row">
         <label>
@@ -101,7 +121,7 @@ export function JogPanel() {
           </select>
         </label>
         {([-1, 1] as const).map((d) => (
-          <button key={d} type="button" data-testid={`jog-step-${d > 0 ? "plus" : "minus"}`} disabled={dis || !feedOk}
+          <button key={d} type="button" data-testid={`jog-step-${d > 0 ? "plus" : "minus"}`} disabled={noMotion} title={why}
             onClick={() => void cmd.run({ type: "jog", axis: ax.name, action: "step", direction: d, distance: step, feed_mm_min: feedNum })}>
             {d > 0 ? "+" : "−"}
             {step} {unit}
@@ -117,7 +137,8 @@ export function JogPanel() {
         </label>
       </div>
       <div class="row apart">
-        <button type="button" class="secondary" data-testid="jog-home" disabled={dis}
+        <button type="button" class="secondary" data-testid="jog-home" disabled={motionLocked.value}
+          title={status.value?.emergency_stop ? "emergency stop: reset first" : ""}
           onClick={() => void cmd.run({ type: "home", axis: ax.name })}>
           G74 home {ax.name}
         </button>

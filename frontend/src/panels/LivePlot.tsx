@@ -5,7 +5,7 @@ import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { catalogue, rings, unwant, want } from "../state/telemetry";
-import { fmt } from "../ui/format";
+import { fmt, tickLabels } from "../ui/format";
 import { SignalPicker } from "../ui/SignalPicker";
 
 export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
@@ -56,7 +56,10 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
         })),
       ],
       scales: { x: { time: false }, y: yRange ? { auto: false, range: yRange } : { auto: true } },
-      axes: [{ label: "simulated time [s]" }, { size: 60 }],
+      axes: [
+        { label: "simulated time [s]", values: (_u, splits) => tickLabels(splits) },
+        { size: 60, values: (_u, splits) => tickLabels(splits) },
+      ],
       cursor: { drag: { x: true, y: false } },
       legend: { live: true },
       hooks: {

@@ -1,6 +1,6 @@
 // MDI: one block, a history (↑/↓), and a refused block shown with a caret under its column.
 import { useState } from "preact/hooks";
-import { online } from "../state/session";
+import { motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
@@ -52,7 +52,8 @@ export function MdiPanel() {
             if (e.key === "ArrowDown") (e.preventDefault(), browse(-1));
           }}
         />
-        <button type="submit" data-testid="mdi-send" disabled={!online.value || !line.trim()}>
+        <button type="submit" data-testid="mdi-send" disabled={motionLocked.value || !line.trim()}
+          title={status.value?.emergency_stop ? "emergency stop: reset first" : ""}>
           Execute
         </button>
       </form>

@@ -69,8 +69,16 @@ export function Measurements(props: { detail: TraceDetail; cursors: Cursors; ran
           <tbody>
             {row("window", "window", `${fmt(m.t0_s, 3)} … ${fmt(m.t1_s, 3)} s (${m.samples} samples)`)}
             {row("max |value|", "max-abs", `${fmt(m.max_abs, 4)} ${u} at ${fmt(m.t_max_abs_s, 3)} s`, "e.g. the maximum lag")}
+            {m.step_found ? null : (
+              <tr>
+                <td colSpan={2} class="hint" data-testid="meas-no-step">
+                  no step stands out of the noise here (or it comes back): no overshoot or rise time
+                </td>
+              </tr>
+            )}
             {row("overshoot", "overshoot", m.overshoot_pct === null ? "—" : `${fmt(m.overshoot_pct, 2)} %`, "beyond the final value, in % of the step")}
             {row("rise time 10–90 %", "rise", m.rise_time_s === null ? "—" : `${fmt(m.rise_time_s * 1000, 1)} ms`)}
+            {row("noise σ", "noise", `${fmt(m.noise, 6)} ${u}`, "from neighbouring samples; a step must exceed 10 σ")}
             {row(`settling (±${fmt(m.band, 4)} ${u})`, "settling", m.settling_time_s === null ? "not settled" : `${fmt(m.settling_time_s * 1000, 1)} ms`, "from the trigger until it stays in the band")}
             {row("steady mean", "final", `${fmt(m.final, 4)} ${u}`, "mean of the last 10 % of the window")}
             {row("min / max", "minmax", `${fmt(m.minimum, 4)} / ${fmt(m.maximum, 4)} ${u}`)}

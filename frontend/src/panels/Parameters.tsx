@@ -1,11 +1,11 @@
 // The parameter editor: lists grouped by topic and gear record, search, raw and engineering
 // units, ranges, pending values; edit → Apply (on the running machine) → Keep or Revert;
-// import and export of the native list file.
+// import and export of the native list file. The trial bar (Keep/Revert) is TrialBar.
 import { useEffect, useMemo, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { ParameterProblem, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
-import { listUrl, loadList, paramsVersion } from "../state/params";
-import { machineId, machineUrl, online, status } from "../state/session";
+import { dtypes, listUrl, loadList, loadRegistry, paramsVersion, trial, trialMessage, writeChanges } from "../state/params";
+import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 import { groupOf } from "./paramGroups";
@@ -18,20 +18,25 @@ interface Target {
 
 const num = (v: number) => (Math.abs(v) >= 1e15 ? v.toExponential(3) : String(+v.toPrecision(12)));
 
-/** Inline check of an edited value against the entry's type and range; null when fine. */
-export function checkValue(p: ParameterValue, text: string): string | null {
-  if (typeof p.default === "string") return null;
+const INTEGER_TYPES = new Set(["UNS16", "UNS32", "SGN16", "SGN32", "BOOLEAN"]);
+/** Symbols and text the service parses itself (enums, flags, strings). */
+const TEXT_TYPES = new Set(["STRING", "ENUM", "FLAGS"]);
+
+/** Inline check of an edited value against the entry's registry type and range; null when
+ * fine. `dtype` is the registry's data type (UNS32, REAL64, …). */
+export function checkValue(p: ParameterValue, text: string, dtype: string | undefined): string | null {
+  if (typeof p.default === "string" || (dtype && TEXT_TYPES.has(dtype))) return null;
   const v = Number(text.trim());
   if (text.trim() === "" || !Number.isFinite(v)) return "a number is needed";
+  if (dtype && INTEGER_TYPES.has(dtype) && !Number.isInteger(v)) return `${dtype} takes whole numbers`;
   const unit = p.unit ? ` ${p.unit}` : "";
   if ((p.min != null && v < p.min) || (p.max != null && v > p.max))
     return `out of range ${num(p.min ?? -Infinity)} … ${num(p.max ?? Infinity)}${unit}`;
   return null;
 }
 
-interface Trial {
-  applied: ParameterWriteResult["changes"];
-}
+/** "line 3: getriebe[0].kv: …" for an import's problems (the API gives the line). */
+const problemLine = (p: ParameterProblem) => `${p.line != null ? `line ${p.line}: ` : ""}${p.message}`;
 
 export function Parameters() {
   const axes = status.value?.axes ?? [];
@@ -49,9 +54,11 @@ export function Parameters() {
   const [edits, setEdits] = useState<Record<string, string>>({});
   const [problems, setProblems] = useState<ParameterProblem[]>([]);
   const [message, setMessage] = useState("");
-  const [trial, setTrial] = useState<Trial | null>(null);
+  const types = dtypes.value;
+  useEffect(() => void loadRegistry(), []);
+  const check = (p: ParameterValue, text: string) => checkValue(p, text, types.get(p.id));
 
-  const reload = () => t && loadList(t.scope, t.target).then(setRows, () => undefined);
+  const reload = () => t && machineId.value && loadList(t.scope, t.target).then(setRows, () => undefined);
   useEffect(() => {
     setEdits({});
     setProblems([]);
@@ -70,18 +77,14 @@ export function Parameters() {
     .map((g) => ({ g, rows: shownFlat.filter((p) => groupOf(p.name, p.gear, spindle) === g) }))
     .filter((x) => x.rows.length);
   const byName = new Map(rows.map((p) => [p.name, p]));
-  const invalid = Object.entries(edits).filter(([n, v]) => byName.has(n) && checkValue(byName.get(n)!, v));
+  const invalid = Object.entries(edits).filter(([n, v]) => byName.has(n) && check(byName.get(n)!, v));
   const edited = Object.keys(edits).length;
 
   async function write(changes: { name: string; value: number | string }[], comment: string) {
     if (!t) return null;
     try {
-      const r = await http.patch<ParameterWriteResult>(machineUrl("/parameters"), {
-        changes: changes.map((c) => ({ scope: t.scope, target: t.target, name: c.name, value: c.value })),
-        comment,
-      });
+      const r = await writeChanges(t.scope, t.target, changes, comment);
       setProblems([]);
-      paramsVersion.value++;
       return r;
     } catch (e) {
       if (e instanceof ApiError) {
@@ -98,19 +101,11 @@ export function Parameters() {
       return { name, value: typeof p.default === "string" ? text : Number(text) };
     });
     const r = await write(changes, "editor: apply (trial)");
-    if (r) {
+    if (r && t) {
       setEdits({});
-      setTrial({ applied: r.changes });
+      trial.value = { machine: machineId.value, scope: t.scope, target: t.target, applied: r.changes };
+      trialMessage.value = "";
       setMessage("");
-    }
-  }
-
-  async function revert() {
-    if (!trial) return;
-    const back = trial.applied.filter((c) => c.old !== null).map((c) => ({ name: c.name, value: c.old as number | string }));
-    if (await write(back, "editor: revert")) {
-      setTrial(null);
-      setMessage(`Reverted ${back.length} value(s).`);
     }
   }
 
@@ -123,8 +118,10 @@ export function Parameters() {
       paramsVersion.value++;
     } catch (e) {
       if (e instanceof ApiError) {
-        setProblems(e.refusal.problems ?? []);
-        setMessage(`${file.name}: ${e.refusal.message}`);
+        const problems = e.refusal.problems ?? [];
+        setProblems(problems);
+        // every rejected line with its number: the rows below show only this list's entries
+        setMessage(`${file.name}: ${problems.length ? problems.map(problemLine).join("; ") : e.refusal.message}`);
       }
     }
   }
@@ -152,7 +149,7 @@ export function Parameters() {
         </label>
         <input type="search" data-testid="param-search" placeholder="Search ID, name or description" value={query}
           onInput={(e) => setQuery((e.target as HTMLInputElement).value)} aria-label="search parameters" />
-        <a class="button secondary" href={t ? listUrl("/export", t.scope, t.target) : "#"}
+        <a class="button secondary" href={t && machineId.value ? listUrl("/export", t.scope, t.target) : "#"}
           download={`${machineId.value}-${t?.target ?? t?.scope}.lis`}>
           Export list
         </a>
@@ -173,18 +170,6 @@ export function Parameters() {
         <button type="button" class="secondary" disabled={!edited} onClick={() => (setEdits({}), setProblems([]))}>
           Discard edits
         </button>
-        {trial ? (
-          <span class="trial" data-testid="param-trial" role="status">
-            On the machine now:{" "}
-            {trial.applied.map((c) => `${c.name} ${c.old} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`).join(", ")}
-            <button type="button" data-testid="param-keep" onClick={() => (setTrial(null), setMessage("Kept."))}>
-              Keep
-            </button>
-            <button type="button" data-testid="param-revert" class="secondary" onClick={() => void revert()}>
-              Revert
-            </button>
-          </span>
-        ) : null}
         {message ? <span class="hint" data-testid="param-message">{message}</span> : null}
       </div>
       <div class="table-scroll">
@@ -208,7 +193,7 @@ export function Parameters() {
             </tr>
             {groupRows.map((p) => {
               const text = edits[p.name];
-              const err = text !== undefined ? checkValue(p, text) : null;
+              const err = text !== undefined ? check(p, text) : null;
               const server = problemOf(p.name);
               const v = text !== undefined && !err && typeof p.value === "number" ? Number(text) : p.value;
               return (
@@ -230,7 +215,7 @@ export function Parameters() {
                     />
                     {err || server ? (
                       <div class="inline-error" data-testid={`param-error-${p.name}`} role="alert">
-                        {err ?? server?.message}
+                        {err ?? (server ? problemLine(server) : null)}
                       </div>
                     ) : null}
                   </td>

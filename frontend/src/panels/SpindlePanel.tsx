@@ -2,7 +2,7 @@
 // homing (kept apart from the motion buttons).
 import { useEffect, useRef, useState } from "preact/hooks";
 import { loadList, paramsVersion } from "../state/params";
-import { machineId, online, status } from "../state/session";
+import { machineId, motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
@@ -46,8 +46,12 @@ export function SpindlePanel() {
 
   if (!sp) return <Panel title="Spindle" id="spindle">No spindle on this machine.</Panel>;
   const dis = !online.value;
+  const locked = motionLocked.value; // offline or emergency stop: nothing may start moving
+  const lockedWhy = status.value?.emergency_stop ? "emergency stop: reset first" : "";
   const rpm = Number(speed);
   const validS = speed.trim() !== "" && Number.isFinite(rpm) && rpm >= 0;
+  const deg = Number(angle);
+  const validAngle = angle.trim() !== "" && Number.isFinite(deg); // "" would be 0°
 
   function sendOverride(pct: number) {
     setOvr(pct);
@@ -91,17 +95,17 @@ export function SpindlePanel() {
         class="row"
         onSubmit={(e) => {
           e.preventDefault();
-          if (validS) void cmd.run({ type: "spindle", spindle: sp.name, m: 3, speed_rpm: rpm });
+          if (validS && !locked) void cmd.run({ type: "spindle", spindle: sp.name, m: 3, speed_rpm: rpm });
         }}
       >
         <label>
           S <input data-testid="s-input" inputMode="decimal" value={speed} size={7} aria-invalid={!validS}
             onInput={(e) => setSpeed((e.target as HTMLInputElement).value)} /> rpm
         </label>
-        <button type="submit" data-testid="m3" disabled={dis || !validS} title="M3: clockwise">
+        <button type="submit" data-testid="m3" disabled={locked || !validS} title={lockedWhy || "M3: clockwise"}>
           M3 ⟳
         </button>
-        <button type="button" data-testid="m4" disabled={dis || !validS} title="M4: counter-clockwise"
+        <button type="button" data-testid="m4" disabled={locked || !validS} title={lockedWhy || "M4: counter-clockwise"}
           onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 4, speed_rpm: rpm })}>
           M4 ⟲
         </button>
@@ -114,8 +118,7 @@ export function SpindlePanel() {
         class="row"
         onSubmit={(e) => {
           e.preventDefault();
-          const deg = Number(angle);
-          if (!Number.isFinite(deg)) return;
+          if (!validAngle || locked) return;
           void cmd.run({
             type: "spindle_position",
             spindle: sp.name,
@@ -125,15 +128,20 @@ export function SpindlePanel() {
         }}
       >
         <label>
-          M19 to <input data-testid="m19-angle" inputMode="decimal" value={angle} size={6}
+          M19 to <input data-testid="m19-angle" inputMode="decimal" value={angle} size={6} aria-invalid={!validAngle}
             onInput={(e) => setAngle((e.target as HTMLInputElement).value)} />°
         </label>
+        {!validAngle ? (
+          <span class="inline-error" role="alert" data-testid="m19-angle-error">
+            an angle in degrees is needed
+          </span>
+        ) : null}
         <select aria-label="M19 direction" value={dir} onChange={(e) => setDir((e.target as HTMLSelectElement).value as "0")}>
           <option value="0">shortest way</option>
           <option value="1">M3 direction (+)</option>
           <option value="-1">M4 direction (−)</option>
         </select>
-        <button type="submit" data-testid="m19" disabled={dis}>
+        <button type="submit" data-testid="m19" disabled={locked || !validAngle} title={lockedWhy}>
           M19 orient
         </button>
       </form>
@@ -144,7 +152,7 @@ export function SpindlePanel() {
           </span>
           {params?.ranges.map((_, i) => (
             <button key={i} type="button" data-testid={`gear-m${40 + i}`} class={sp.gear === i + 1 ? "active" : ""}
-              disabled={dis} aria-pressed={sp.gear === i + 1}
+              disabled={locked} title={lockedWhy} aria-pressed={sp.gear === i + 1}
               onClick={() => void cmd.run({ type: "gear", spindle: sp.name, m: 40 + i })}>
               M{40 + i}
             </button>
@@ -172,7 +180,7 @@ export function SpindlePanel() {
         </label>
       </div>
       <div class="row apart">
-        <button type="button" data-testid="spindle-home" class="secondary" disabled={dis}
+        <button type="button" data-testid="spindle-home" class="secondary" disabled={locked} title={lockedWhy}
           onClick={() => void cmd.run({ type: "home", axis: sp.name })}>
           G74 home spindle
         </button>

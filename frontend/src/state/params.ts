@@ -1,9 +1,11 @@
-// Reading parameter lists, and a version that bumps after every write so panels that show
-// parameter-derived things (gear ranges, override limit) reload them.
-import { signal } from "@preact/signals";
+// Reading parameter lists, the registry's data types, and a version that bumps after every
+// write so panels that show parameter-derived things (gear ranges, override limit) reload
+// them. The trial (Apply → Keep or Revert) lives here, not in the editor, so it survives
+// switching workspaces to test the values.
+import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
-import type { ParameterValue, Scope } from "../api/types";
-import { machineUrl } from "./session";
+import type { ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
+import { machineId, machineUrl } from "./session";
 
 export const paramsVersion = signal(0);
 
@@ -13,7 +15,7 @@ export function listUrl(path: string, scope: Scope, target: string | null): stri
   return machineUrl(`/parameters${path}?${q}`);
 }
 
-export function loadList(scope: Scope, target: string | null): Promise<ParameterValue[]> {
+export async function loadList(scope: Scope, target: string | null): Promise<ParameterValue[]> {
   return http.get<ParameterValue[]>(listUrl("", scope, target));
 }
 
@@ -23,3 +25,66 @@ export async function numbers(scope: Scope, target: string | null): Promise<Map<
   for (const p of await loadList(scope, target)) if (typeof p.value === "number") out.set(p.name, p.value);
   return out;
 }
+
+/** Data type (UNS32, REAL64, …) of every registry entry by its ID, loaded once. */
+export const dtypes = signal<Map<string, string>>(new Map());
+let registryLoad: Promise<void> | null = null;
+export function loadRegistry(): Promise<void> {
+  registryLoad ??= http.get<ParameterDef[]>("/api/parameters").then(
+    (defs) => void (dtypes.value = new Map(defs.map((d) => [d.id, d.dtype]))),
+    () => void (registryLoad = null), // try again next time
+  );
+  return registryLoad;
+}
+
+export interface Trial {
+  machine: string;
+  scope: Scope;
+  target: string | null;
+  applied: ParameterWriteResult["changes"];
+}
+
+/** Values applied on trial, waiting for Keep or Revert (one trial at a time). */
+export const trial = signal<Trial | null>(null);
+/** The trial of the machine on screen (another machine's trial waits for its machine). */
+export const shownTrial = computed(() => (trial.value?.machine === machineId.value ? trial.value : null));
+/** What the last Keep/Revert did (or why Revert failed). */
+export const trialMessage = signal("");
+
+export async function writeChanges(
+  scope: Scope,
+  target: string | null,
+  changes: { name: string; value: number | string }[],
+  comment: string,
+): Promise<ParameterWriteResult> {
+  const r = await http.patch<ParameterWriteResult>(machineUrl("/parameters"), {
+    changes: changes.map((c) => ({ scope, target, name: c.name, value: c.value })),
+    comment,
+  });
+  paramsVersion.value++;
+  return r;
+}
+
+export function keepTrial(): void {
+  trial.value = null;
+  trialMessage.value = "Kept.";
+}
+
+/** Write the old values back; the trial stays when that is refused. */
+export async function revertTrial(): Promise<void> {
+  const t = trial.value;
+  if (!t) return;
+  const back = t.applied.filter((c) => c.old !== null).map((c) => ({ name: c.name, value: c.old as number | string }));
+  try {
+    await writeChanges(t.scope, t.target, back, "editor: revert");
+    trial.value = null;
+    trialMessage.value = `Reverted ${back.length} value(s).`;
+  } catch (e) {
+    trialMessage.value = `Revert refused: ${e instanceof Error ? e.message : String(e)}`;
+  }
+}
+
+effect(() => {
+  void machineId.value; // a message belongs to the machine it was about
+  trialMessage.value = "";
+});

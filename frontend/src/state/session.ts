@@ -24,9 +24,14 @@ const SERVICE_PERIOD_MS = 1000;
 
 export const axis = (name: string) => status.value?.axes.find((a) => a.name === name) ?? null;
 
+/** A machine's route; throws while no machine is chosen (never `/api/machines//…`). */
 export function machineUrl(path = ""): string {
+  if (!machineId.value) throw new Error("no machine chosen yet");
   return `/api/machines/${encodeURIComponent(machineId.value)}${path}`;
 }
+
+/** Motion commands are refused in an emergency stop until reset: their buttons say so. */
+export const motionLocked = computed(() => !online.value || !!status.value?.emergency_stop);
 
 async function pollStatus(): Promise<void> {
   if (!machineId.value) return;

@@ -1,0 +1,28 @@
+// Values applied on trial stay on screen in every workspace until Keep or Revert, so the
+// engineer can switch to Operate, test them, and still revert.
+import { keepTrial, revertTrial, shownTrial, trialMessage } from "../state/params";
+import { online } from "../state/session";
+
+export function TrialBar() {
+  const t = shownTrial.value;
+  const msg = trialMessage.value;
+  if (!t && !msg) return null;
+  return (
+    <div class="trial-bar" data-testid="trial-bar">
+      {t ? (
+        <span class="trial" data-testid="param-trial" role="status">
+          Parameters on trial{t.target ? ` (${t.target})` : ` (${t.scope})`}:{" "}
+          {t.applied.map((c) => `${c.name} ${c.old} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`).join(", ")}
+          <button type="button" data-testid="param-keep" onClick={keepTrial}>
+            Keep
+          </button>
+          <button type="button" data-testid="param-revert" class="secondary" disabled={!online.value}
+            onClick={() => void revertTrial()}>
+            Revert
+          </button>
+        </span>
+      ) : null}
+      {msg ? <span class="hint" data-testid="trial-message">{msg}</span> : null}
+    </div>
+  );
+}
