@@ -239,3 +239,27 @@ def test_noise_has_no_step_and_its_axis_ticks_differ(page: Page, tmp_path: Path)
     final = meas.get_by_test_id("meas-final").inner_text().split()[0].replace("−", "-")
     assert float(final) == pytest.approx(0.0, abs=1e-5)
     shot(page, "scope-noise-desktop")
+
+
+def test_the_new_bars_and_messages_fit_a_tablet(browser: Browser, srv: Server) -> None:
+    """Trial bar, inline errors and the E-stop lock at 1024×768: nothing overflows sideways."""
+    page = open_hmi(browser, srv.base, "tablet")
+    page.get_by_test_id("tab-Parameters").click()
+    params = panel(page, "parameters")
+    params.get_by_test_id("param-search").fill("P-AXIS-00099")
+    params.get_by_test_id("param-input-getriebe[0].kv").fill("1500")
+    params.get_by_test_id("param-apply").click()
+    bar = page.get_by_test_id("trial-bar")
+    expect(bar.get_by_test_id("param-trial")).to_be_visible()
+    page.get_by_test_id("tab-Operate").click()
+    panel(page, "spindle").get_by_test_id("m19-angle").fill("")
+    panel(page, "jog").get_by_test_id("jog-feed").fill("-1000")
+    page.get_by_test_id("estop").click()
+    expect(panel(page, "machine").get_by_test_id("lamp-enables")).to_have_attribute("data-on", "0")
+    overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
+    assert overflow <= 0
+    shot(page, "checks-operate-tablet")
+    bar.get_by_test_id("param-revert").click()
+    expect(bar.get_by_test_id("param-trial")).to_be_hidden()
+    page.get_by_test_id("reset").click()
+    page.close()
