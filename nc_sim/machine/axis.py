@@ -9,6 +9,7 @@ from enum import IntEnum
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import AxisConfig
+from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion
 from nc_sim.units import AxisKind
 
@@ -99,6 +100,7 @@ class Axis:
     speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767
     ff_set: float = 1.0  # weighting for G135, set by G136
     task: SpindleTask | None = None
+    drive: DriveStatus = field(default_factory=lambda: DriveStatus((), 0, 0))
     units: dict[str, int] = field(
         default_factory=lambda: {
             "override": 1000,
@@ -128,6 +130,18 @@ class Axis:
 
     def missing_enables(self) -> list[str]:
         return [u for u in self.required_enables if not self.units[u]]
+
+    def drive_follows(self) -> bool:
+        """The drive obeys the NC: every enable set and every reported status present."""
+        return self.enables_ok() and not self.drive.missing()
+
+
+def drive_status(cfg: AxisConfig, cycle_s: float) -> DriveStatus:
+    """The drive's status model for its type, with the simulated drive's start-up times."""
+    signals = STATUS_BY_DRIVE.get(int(cfg.raw("kenngr.antr_typ")), ())
+    boot = max(0, round(cfg.eng("sim.drive_boot_time") / cycle_s))
+    power_up = max(0, round(cfg.eng("sim.drive_power_up_time") / cycle_s))
+    return DriveStatus(signals, boot, power_up)
 
 
 def push_params(k: Kernel, ax: Axis) -> None:

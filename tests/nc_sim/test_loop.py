@@ -121,6 +121,44 @@ def test_no_motion_without_enables() -> None:
     assert m.k.st[x.slot, L.S_P_ACT] == p0
 
 
+def test_power_on_sequence_follows_the_drive_status() -> None:
+    """[004 §4]: a SERCOS drive boots (ready_for_power_on), the PLC sets DriveOn, the power
+    stage comes up (ready_for_control_loop_on), then TorquePermission and ReleaseFeedhold;
+    a terminal drive reports no status and is switched on when the PLC starts."""
+    times = {"sim.drive_boot_time": 20000, "sim.drive_power_up_time": 30000}  # 20 ms, 30 ms
+    sim, m, _ = make({"X": times, "Z": times}, settle=0)
+    x, spindle = m.axis("X"), m.axis("S1")
+    assert x.drive.missing() == ["ready_for_power_on", "ready_for_control_loop_on"]
+    assert spindle.drive.reported() == {}  # terminal drive [004 §4.2]
+    assert m.move("X", 60.0) is not None  # nothing moves before the drives are on
+    assert m.events[-1].code == Code.NO_ENABLES
+    sim.run(19)
+    assert not x.units["DriveOn"] and spindle.drive_follows()  # the PLC ran at its start
+    sim.run(1)  # 20 ms: booted, the PLC switches the power stage on
+    assert x.units["DriveOn"] and x.drive.reported()["ready_for_power_on"]
+    assert not x.units["TorquePermission"] and not m.powered
+    sim.run(29)
+    assert not x.drive.reported()["ready_for_control_loop_on"]
+    sim.run(1)  # 30 ms after DriveOn
+    assert x.drive.missing() == [] and x.enables_ok() and m.powered
+    assert [e.cycle for e in m.events if e.code == Code.EV_POWERED] == [50]
+    assert m.move("X", 60.0) is None
+
+
+def test_motion_refused_with_90007_while_the_drive_is_not_ready() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.hli_write("DriveOn", 0, "X")
+    record(sim, 0.1)
+    m.hli_write("DriveOn", 1, "X")  # the power stage needs its power-up time again
+    assert x.enables_ok()
+    err = m.move("X", 60.0)
+    assert err is not None and err.code == Code.DRIVE_NOT_READY
+    assert "ready_for_control_loop_on" in err.message
+    record(sim, x.cfg.eng("sim.drive_power_up_time"))
+    assert m.move("X", 60.0) is None
+
+
 def test_enables_lost_during_motion_stop_the_axis_with_an_error() -> None:
     sim, m, _ = make()
     x = m.axis("X")
