@@ -136,6 +136,16 @@ class Axis:
         return self.enables_ok() and not self.drive.missing()
 
 
+def target_and_distance(k: Kernel, ax: Axis) -> tuple[float | None, float | None]:
+    """HLI target position and distance to go [000 §2.9]: the target of the position plan and
+    what the command still has to travel to it; None for speed motions (M3/M4, homing
+    searches) and continuous jog, which have no target."""
+    target = float(k.st[ax.slot, L.S_TARGET])
+    if math.isnan(target) or ax.state is AxisState.JOG:
+        return None, None
+    return target, target - float(k.st[ax.slot, L.S_P_CMD])
+
+
 def drive_status(cfg: AxisConfig, cycle_s: float) -> DriveStatus:
     """The drive's status model for its type, with the simulated drive's start-up times."""
     signals = STATUS_BY_DRIVE.get(int(cfg.raw("kenngr.antr_typ")), ())
