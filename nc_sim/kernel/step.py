@@ -84,6 +84,7 @@ from nc_sim.kernel.layout import (
     P_SWE_NEG,
     P_SWE_POS,
     P_V_CTRL_LIMIT,
+    P_V_RESO,
     P_V_SPEED_CTRL,
     P_V_ZERO,
     R_A_CMD,
@@ -275,7 +276,10 @@ def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, 
             if inc > 0.0:
                 lag = math.floor(lag / inc + 0.5) * inc
             u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
-        da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
+        if pr[s, P_V_RESO] > 0.0:  # speed-controlled spindle: the v_reso scaling [000 §2.2.4]
+            da = u * pr[s, P_V_RESO] * pr[s, P_SIGN_CMD]
+        else:
+            da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
         lim = pr[s, P_DA_MAX]
         da = min(max(da, -lim), lim)
         v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
@@ -376,7 +380,7 @@ def _loop_mode(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int) -> int:
     """Open the position loop above the control limit or the changeover speed; close it
     again below the control limit [000 §2.4.2, 001 §2.3]. Returns EV_LOOP on a change."""
     mode = ist[s, I_OPEN_LOOP]
-    if pr[s, P_SENSORLESS] == 1.0:
+    if pr[s, P_SENSORLESS] == 1.0 or pr[s, P_V_RESO] > 0.0:  # never position-controlled
         ist[s, I_OPEN_LOOP] = LOOP_SPEED_CONTROL
         return 0 if mode == LOOP_SPEED_CONTROL else EV_LOOP
     v = abs(st[s, S_V_CMD])
