@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from nc_sim.errors import Code
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -81,7 +83,7 @@ def test_the_readme_scenario_runs_as_written(tmp_path: Path) -> None:
     lines = (tmp_path / "out" / "events.jsonl").read_text().splitlines()
     events = [json.loads(line) for line in lines]
     assert not [e for e in events if e["error"]]  # no 90001/90007 at t = 0
-    started = [e for e in events if e["code"] == 26]  # the M3 begins at time 0
+    started = [e for e in events if e["code"] == Code.EV_M_START]  # the M3 begins at time 0
     assert started and started[0]["t_s"] == pytest.approx(0.0)
     rows = list(csv.DictReader((tmp_path / "out" / "trace.csv").read_text().splitlines()))
     assert float(rows[0]["t_s"]) == pytest.approx(0.001)
