@@ -53,7 +53,8 @@ class Code(IntEnum):
     EV_TOOL_DYNAMICS = 24
     EV_PROGRAM_END = 25
     EV_M_START = 26  # a spindle M function begins; it acts from the next cycle on
-    EV_GEAR_CHANGE_START = 27  # a gear change begins (to the change position, then M4x)
+    EV_POWERED = 27  # power-on done: every drive switched on and reporting ready
+    EV_GEAR_CHANGE_START = 28  # a gear change begins (to the change position, then M4x)
 
 
 MESSAGES: dict[Code, str] = {
@@ -66,7 +67,7 @@ MESSAGES: dict[Code, str] = {
     Code.PLC_ACK_TIMEOUT: "the PLC did not acknowledge the M function in time",
     Code.EMERGENCY_STOP: "emergency stop",
     Code.AXIS_BUSY: "axis is moving: command refused",
-    Code.DRIVE_NOT_READY: "drive not ready for power on",
+    Code.DRIVE_NOT_READY: "drive not ready (drive status): motion refused",
     Code.ENABLES_LOST: "drive enables removed during motion",
     Code.BLOCK_SYNTAX: "NC block syntax error",
     Code.UNKNOWN_AXIS: "no such axis or spindle in the channel",
@@ -100,6 +101,7 @@ MESSAGES: dict[Code, str] = {
     Code.EV_TOOL_DYNAMICS: "tool dynamics",
     Code.EV_PROGRAM_END: "program end",
     Code.EV_M_START: "spindle M function started",
+    Code.EV_POWERED: "machine ready: the PLC has switched every drive on",
     Code.EV_GEAR_CHANGE_START: "gear change started",
 }
 """What each code means, in the operator's words; every code has one (the event log shows it

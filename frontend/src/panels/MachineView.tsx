@@ -39,6 +39,11 @@ export function MachineView() {
   const spindles = s.axes.filter((a) => a.kind === "spindle");
   const feedhold = !!s.channel_units.feedhold;
   const allEnabled = s.axes.every((a) => a.enabled);
+  // the drives' own status [004 §4.2] (null: the drive type does not report that signal)
+  const driveMissing = s.axes.flatMap((a) => [
+    ...(a.ready_for_power_on === false ? [`${a.name}: ready_for_power_on`] : []),
+    ...(a.ready_for_control_loop_on === false ? [`${a.name}: ready_for_control_loop_on`] : []),
+  ]);
   return (
     <Panel title={`Machine ${s.name}`} id="machine">
       <table class="axes">
@@ -87,7 +92,8 @@ export function MachineView() {
             label="enables"
             title={s.axes.flatMap((a) => a.missing_enables.map((m) => `${a.name}: ${m}`)).join(", ") || "all present"}
           />
-          <Lamp id="lamp-drive-ready" on={s.plc.drives_powered && allEnabled} label="drive ready" />
+          <Lamp id="lamp-drive-ready" on={s.plc.drives_powered && !driveMissing.length} label="drive ready"
+            title={driveMissing.join(", ") || "every drive reports ready"} />
           <Lamp id="lamp-feedhold" on={feedhold} label="feedhold" tone="warn" />
           <Lamp id="lamp-estop" on={s.emergency_stop} label="emergency stop" tone="bad" />
         </div>
