@@ -75,7 +75,7 @@ MESSAGES: dict[Code, str] = {
     Code.NOT_HOMED: "axis not homed",
     Code.FEED_MISSING: "G01 needs a feed F > 0",
     Code.CHANNEL_ERROR_STATE: "channel in error state: reset first",
-    Code.GEAR_NO_RANGE: "speed too high / no gear stage holds the speed",
+    Code.GEAR_NO_RANGE: "spindle speed out of reach",
     Code.GEAR_WRONG_STAGE: "wrong gear stage: S is outside the programmed M40-M45 range",
     Code.GEAR_NOT_PROGRAMMED: "no gear stage programmed: S is outside the current range",
     Code.GEAR_CHANGE_OFF: "gear change M40-M45 is not enabled (P-CHAN-00052) or not the "

@@ -81,4 +81,4 @@ def select_gear(
             f"{table[top - 1].max_rpm:.10g} rpm (range_table[{top - 1}].max_speed, "
             "P-CHAN-00055)",
         )
-    return GearChoice(None, Code.GEAR_NO_RANGE, f"S{rpm:.10g} rpm: no gear stage holds it")
+    return GearChoice(None, Code.GEAR_NO_RANGE, f"no gear stage's range holds S{rpm:.10g} rpm")
