@@ -734,8 +734,8 @@ class Machine:
             ax.drive.update(self.cycle, bool(ax.units["DriveOn"]))
             if ax.drive.missing() != before:
                 self._enables_changed(ax)
-        if self._powered or self.cycle < self.plc.power_on_cycle:
-            return
+        if self._powered or self.estop or self.cycle < self.plc.power_on_cycle:
+            return  # (no start-up during an E-stop: the reset resumes it)
         for ax in self.axes:
             units = ax.units
             if not units["DriveOn"] and READY_FOR_POWER_ON not in ax.drive.missing():

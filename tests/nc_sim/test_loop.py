@@ -337,3 +337,14 @@ def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back(
     assert x.enables_ok() and z.enables_ok()
     assert m.events[-1].code == Code.EV_POWERED
     mdi(m, "G00 X10")
+
+
+def test_an_emergency_stop_during_power_up_holds_the_start_up_until_reset() -> None:
+    sim, m, _ = make(settle=0)
+    m.emergency_stop()  # before the PLC has switched anything on
+    record(sim, 0.2)
+    assert not any(ax.enables_ok() for ax in m.axes)
+    assert not m.powered
+    m.reset()
+    record(sim, 0.2)
+    assert m.powered and all(ax.enables_ok() for ax in m.axes)
