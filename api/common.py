@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 
 class JobErrorModel(BaseModel):
     """One job error or event of a machine, numbered as the manuals number them."""
+
+    model_config = ConfigDict(allow_inf_nan=False)
 
     cycle: int = Field(description="cycle in which it happened")
     t_s: float = Field(description="simulated time, s")
