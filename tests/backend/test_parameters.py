@@ -175,3 +175,71 @@ def test_audit_trail_and_restart_of_the_service(srv: Server) -> None:
     assert values(srv, "S1")["getriebe[0].beschl_kennlinie.typ"]["value"] == 2
     assert srv.http.get("/api/machines/demo/parameters/audit").json() == audit
     assert lag_at_feed(srv, 600) == pytest.approx(1.0, rel=1e-3)
+
+
+def import_list(srv: Server, body: bytes, target: str = "X") -> Any:
+    return srv.http.post(
+        "/api/machines/demo/parameters/import",
+        params={"scope": "axis", "target": target},
+        content=body,
+        headers={"content-type": "text/plain"},
+    )
+
+
+@pytest.mark.parametrize(
+    "value",
+    [True, "２０００", "2_000", "M3", 10**400, "9" * 400, "0x" + "F" * 300],
+    ids=["true", "full-width", "grouped", "text", "int-400-digits", "400-digits", "hex-300"],
+)
+def test_loose_and_huge_values_are_422_and_change_nothing(srv: Server, value: Any) -> None:
+    before = values(srv)["getriebe[0].kv"]["value"]
+    r = write(srv, ("axis", "X", "getriebe[0].kv", value))
+    assert r.status_code == 422, r.text
+    assert len(r.content) < 4000  # the echo of a 400-digit value is cut
+    assert values(srv)["getriebe[0].kv"]["value"] == before
+
+
+def test_huge_integers_name_the_types_range(srv: Server) -> None:
+    r = write(srv, ("axis", "X", "getriebe[0].kv", 10**400))
+    (problem,) = r.json()["detail"]["problems"]
+    assert "out of range" in problem["message"]
+    assert (problem["min"], problem["max"]) == (0, 4294967295)  # UNS32 [004 P-AXIS-00099]
+
+
+def test_a_name_twice_in_one_write_or_list_is_refused(srv: Server) -> None:
+    before = values(srv)["getriebe[0].kv"]["value"]
+    kv = ("axis", "X", "getriebe[0].kv")
+    r = write(srv, (*kv, 1500), (*kv, 1600))
+    assert r.status_code == 422 and "twice" in r.json()["detail"]["problems"][0]["message"]
+    r = import_list(srv, b"getriebe[0].kv 1500\ngetriebe[0].kv 1600\n")
+    assert r.status_code == 422
+    (problem,) = r.json()["detail"]["problems"]
+    assert problem["line"] == 2 and "already set in line 1" in problem["message"]
+    assert values(srv)["getriebe[0].kv"]["value"] == before
+
+
+@pytest.mark.parametrize(
+    ("body", "why"),
+    [
+        (b"getriebe[0].kv 2000\n# K\xfchlung\n", "not UTF-8 text (byte 23 is 0xfc)"),
+        ("getriebe[0].kv ２０００\n".encode(), "is not a number"),
+        (b"getriebe[0].kv 2_000\n", "is not a number"),
+        (b"getriebe[0].kv " + b"9" * 400 + b"\n", "out of range"),
+        (b"getriebe[0].kv 0x" + b"F" * 300 + b"\n", "out of range"),
+    ],
+    ids=["latin-1", "full-width", "grouped", "400-digits", "hex-300"],
+)
+def test_bad_list_files_are_422_naming_the_problem(srv: Server, body: bytes, why: str) -> None:
+    r = import_list(srv, body)
+    assert r.status_code == 422, r.text
+    assert why in r.text
+
+
+def test_a_refused_50_mb_body_is_not_echoed(srv: Server) -> None:
+    # a name far over its 120 characters: pydantic reports the input with the problem
+    body = {"changes": [{"scope": "axis", "target": "X", "name": "n" * 50_000_000, "value": 1}]}
+    r = srv.http.patch("/api/machines/demo/parameters", json=body, timeout=120)
+    assert r.status_code == 422
+    assert len(r.content) < 2000
+    (issue,) = r.json()["detail"]
+    assert issue["loc"] == ["body", "changes", 0, "name"] and issue["input"].endswith("…")

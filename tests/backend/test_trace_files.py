@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from backend.services import traces as traces_module
 from backend.services.machines import MachineService
 from backend.services.store import Store
 from backend.services.trace_csv import from_csv
@@ -42,7 +41,7 @@ def test_the_row_is_committed_after_the_file_is_synced_in_place(
         seen["data"], seen["synced"] = np.load(path), len(synced)
         real_add(tid, *args)
 
-    monkeypatch.setattr(traces_module.os, "fsync", fsync)
+    monkeypatch.setattr(os, "fsync", fsync)
     monkeypatch.setattr(library.store, "add_trace", add_trace)
     info = library.add(trace)
     assert seen["data"].tolist() == [[2, 3, 5], [3, 4, 6]]  # whole at its name
@@ -66,7 +65,7 @@ def test_a_failed_save_leaves_no_file_and_no_row(
         raise OSError(28, "No space left on device")
 
     monkeypatch.undo()
-    monkeypatch.setattr(traces_module.np, "save", half_written)
+    monkeypatch.setattr(np, "save", half_written)
     with pytest.raises(OSError):
         library.add(from_csv("cycle,a\n1,2\n2,3\n"))
     assert list(library.dir.iterdir()) == [] and library.library() == []
