@@ -94,3 +94,20 @@ def test_every_operation_answers_as_its_schema_says(srv: Server) -> None:
                 failures.append(found)
     assert len(operations) > 30  # the whole HTTP API was fuzzed
     assert not failures, "\n\n".join(failures)
+
+
+def test_the_schema_names_one_error_body_and_the_real_media_types(srv: Server) -> None:
+    doc = srv.http.get("/openapi.json").json()
+    assert "HTTPValidationError" not in doc["components"]["schemas"]
+    ops = doc["paths"]
+    csv = ops["/api/traces/{tid}/csv"]["get"]["responses"]
+    assert list(csv["200"]["content"]) == ["text/csv"]
+    assert list(ops["/api/traces/import"]["post"]["requestBody"]["content"]) == ["text/csv"]
+    for path, methods in ops.items():
+        for method, op in methods.items():
+            for code, answer in op["responses"].items():
+                if code.startswith(("4", "5")):
+                    schema = answer["content"]["application/json"]["schema"]
+                    assert schema == {"$ref": "#/components/schemas/ErrorBody"}, (path, method)
+            if "{mid}" in path and path != "/api/machines/{mid}/parameters/audit":
+                assert "404" in op["responses"], (method, path)
