@@ -65,8 +65,8 @@ class Recording:
                     data, start = (None, self.cursor)
                     if head >= self.cursor:
                         data, start = host.samples(sigs, self.cursor, head, 1)
-                    events = host.machine.events[self.events_from :]
-                    self.events_from += len(events)
+                    read = host.machine.events.since(self.events_from)
+                    events, self.events_from = read.entries, read.cursor
             if data is not None:
                 self.skipped += start - self.cursor
                 self.writer.block(start, data)
@@ -139,7 +139,7 @@ class Recorders:
                 first,
                 first,
                 time.time(),
-                events_from=len(host.machine.events),
+                events_from=host.machine.events.cursor,
             )
         self.all[rid] = rec
         return rec.info()
