@@ -13,7 +13,7 @@ from backend.deps import ActorDep, ServicesDep
 from backend.errors import ApiError
 from backend.services.auth import authorize
 from backend.services.status import signal_infos
-from backend.services.telemetry import Subscriber
+from backend.services.telemetry import CLOSE_POLICY, Subscriber
 
 CLOSE_UNSUPPORTED = 1003  # binary frame (RFC 6455 7.4.1)
 CLOSE_INVALID = 1007  # payload we cannot take apart
@@ -51,6 +51,8 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
             if msg["type"] == "websocket.disconnect":
                 break
             code, reason = _read(sub, msg.get("text"))
+            if not code and sub.flooding:
+                code, reason = CLOSE_POLICY, "client sends without reading the replies"
             if code:
                 await hub.end(sub, code, reason)
                 break

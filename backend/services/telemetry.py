@@ -194,6 +194,9 @@ class TelemetryHub:
         loop = asyncio.get_running_loop()
         cache: dict[tuple[object, ...], Built] = {}
         for sub in list(self.subscribers):
+            if sub.flooding:
+                self.drop(sub, CLOSE_POLICY, "client sends without reading the replies")
+                continue
             if sub.sending is not None and not sub.sending.done():
                 sub.busy_periods += 1
                 if loop.time() - sub.send_started > self.stall_s:
@@ -202,9 +205,6 @@ class TelemetryHub:
             if sub.host.deleted:
                 self.remove(sub)
                 sub.sending = loop.create_task(self._close(sub.ws, 4404, "machine deleted"))
-                continue
-            if sub.flooding:
-                self.drop(sub, CLOSE_POLICY, "client sends without reading the replies")
                 continue
             try:
                 messages = self._messages(sub, cache)
