@@ -39,6 +39,7 @@ def mid(srv: Server, request: pytest.FixtureRequest) -> Iterator[str]:
     name = re.sub(r"[^a-z0-9]+", "-", request.node.name.removeprefix("test_"))[:32].strip("-")
     assert srv.http.post("/api/machines", json={"id": name, "demo": True}).status_code == 201
     srv.pace(name, mode="pause")
+    srv.step(name, 100)  # the PLC switches the drives on
     yield name
     srv.http.delete(f"/api/machines/{name}")
 
