@@ -192,7 +192,7 @@ def test_slow_client_is_decimated_and_never_delays_others(srv: Server, mid: str)
 
     fast_frames, first = asyncio.run(watch())
     last = srv.status(mid)["simulation"]["cycle"]
-    slow_frames = []
+    slow_frames: list[tuple[FrameHeader, np.ndarray]] = []
     slow.sock.settimeout(30)
     while not slow_frames or _end(slow_frames[-1][0]) <= last:
         op, payload = slow.recv()
