@@ -112,6 +112,7 @@ class LoopStatus(BaseModel):
     host_failures: int = Field(
         description="machine ticks that raised; the machine was paused, the loop went on"
     )
+    restarts: int = Field(description="times the loop itself failed and was restarted")
 
 
 class TelemetryStatus(BaseModel):

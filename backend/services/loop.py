@@ -6,7 +6,8 @@ it ran over are counted as missed and skipped, and the hosts catch up the cycles
 tick (their samples are never lost, only late).
 
 The loop is supervised: a machine whose tick raises is logged and paused (it would fail again
-every period), and the loop goes on pacing the others. Its statistics are appended by the loop
+every period), and the loop goes on pacing the others; a failure of the loop itself is logged
+and the loop restarts. Its statistics are appended by the loop
 thread and copied under a lock by `status`, which request threads call at any time.
 """
 
@@ -40,6 +41,7 @@ class RealtimeLoop:
         self.overruns = 0
         self.missed = 0
         self.host_failures = 0
+        self.restarts = 0
         self._stats = threading.Lock()  # the deques below: appended here, copied by status()
         self.work_s: deque[float] = deque(maxlen=5000)
         self.late_s: deque[float] = deque(maxlen=5000)
@@ -60,6 +62,15 @@ class RealtimeLoop:
         self._thread.join(timeout=5)
 
     def _run(self) -> None:
+        """Pace until stopped; should the loop's own code fail, log it and pace on from now."""
+        while not self._stop.is_set():
+            try:
+                self._pace()
+            except Exception:
+                self.restarts += 1
+                log.exception("real-time loop failed; restarting it")
+
+    def _pace(self) -> None:
         t0 = time.monotonic()
         i = 0
         while not self._stop.is_set():
@@ -113,4 +124,5 @@ class RealtimeLoop:
                 for t, lt, w in recent
             ],
             host_failures=self.host_failures,
+            restarts=self.restarts,
         )

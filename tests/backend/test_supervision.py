@@ -1,6 +1,6 @@
-"""Background work is supervised: the telemetry hub and the real-time loop survive a failure,
-and the loop's figures can be read while it appends to them. In process, machines stepped by
-hand (no clock judged)."""
+"""Background work is supervised: the telemetry hub, the real-time loop and the recorders
+survive a failure, and the loop's figures can be read while it appends to them. In process,
+machines stepped by hand (no clock judged)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any, cast
 
 import pytest
@@ -17,6 +18,7 @@ from fastapi import WebSocket
 from api.telemetry import decode_frame
 from backend.services.host import MachineHost
 from backend.services.loop import RealtimeLoop
+from backend.services.recorder import Recorders
 from backend.services.telemetry import CLOSE_INTERNAL, Subscriber, TelemetryHub
 from nc_sim.machine.config import demo_machine
 
@@ -178,3 +180,46 @@ def test_loop_status_while_the_loop_appends() -> None:
         assert st.overruns > 20 and len(st.recent_overruns) == 20
     finally:
         loop.stop()
+
+
+def test_the_loop_restarts_when_its_own_code_fails(host: MachineHost) -> None:
+    calls = iter([True])
+
+    def hosts() -> list[MachineHost]:
+        if next(calls, False):
+            raise RuntimeError("loop bug")
+        return [host]
+
+    host.set_mode("run")
+    loop = RealtimeLoop(hosts, 0.002)
+    loop.start()
+    try:
+        c0 = host.cycle
+        for _ in range(5000):
+            if host.cycle > c0 + 50:
+                break
+            threading.Event().wait(0.002)
+        assert loop.restarts == 1 and host.cycle > c0 + 50  # paced on after the failure
+    finally:
+        loop.stop()
+
+
+def test_a_failing_recording_ends_and_the_others_go_on(
+    host: MachineHost, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    other = MachineHost("o", "o", "demo", demo_machine())
+    other.set_mode("pause")
+    recorders = Recorders(tmp_path)
+    bad = recorders.begin(host, ["X.pos_act_mm"]).id
+    good = recorders.begin(other, ["X.pos_act_mm"]).id
+
+    def fail(*_: object) -> None:
+        raise OSError("disk full")
+
+    monkeypatch.setattr(recorders.all[bad].writer, "block", fail)
+    host.step(100)
+    other.step(100)
+    recorders.pump()  # no exception escapes into the recorders' thread
+    assert not recorders.all[bad].active
+    assert recorders.all[good].active and recorders.all[good].info().cycles == 100
+    recorders.end(other.id)
