@@ -149,6 +149,7 @@ class MachineHost:
                     self._take_captures()
             n -= part
         self._expire_jogs()
+        self.event_index.update(self.machine.events)  # before the bounded log drops any
 
     def _take_captures(self) -> None:
         """Keep completed records with the parameter lists as written now (cheap copies)."""

@@ -21,26 +21,9 @@ from backend.services.loop import RealtimeLoop
 from backend.services.recorder import Recorders
 from backend.services.telemetry import CLOSE_INTERNAL, Subscriber, TelemetryHub
 from nc_sim.machine.config import demo_machine
+from tests.backend.fakews import FakeSocket
 
 FRAME_S = 0.005
-
-
-class FakeSocket:
-    """Records what the hub sends; never blocks."""
-
-    def __init__(self) -> None:
-        self.frames: list[bytes] = []
-        self.texts: list[str] = []
-        self.close_code: int | None = None
-
-    async def send_bytes(self, data: bytes) -> None:
-        self.frames.append(data)
-
-    async def send_text(self, data: str) -> None:
-        self.texts.append(data)
-
-    async def close(self, code: int = 1000, reason: str = "") -> None:
-        self.close_code = code
 
 
 def _subscribe(hub: TelemetryHub, host: MachineHost) -> tuple[Subscriber, FakeSocket]:
