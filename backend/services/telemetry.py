@@ -77,7 +77,8 @@ class Subscriber:
         host = self.host
         unknown = [n for n in req.signals if n not in host.signal_by_name]
         if unknown:
-            self.reply(ErrorMessage(message=f"unknown signals: {unknown}"))
+            more = f" and {len(unknown) - 10} more" if len(unknown) > 10 else ""
+            self.reply(ErrorMessage(message=f"unknown signals: {unknown[:10]}{more}"))
             return
         with host.lock:
             self.signals = [host.signal_by_name[n] for n in req.signals]

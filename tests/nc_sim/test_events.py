@@ -6,6 +6,8 @@ import pytest
 
 from nc_sim.errors import Code
 from nc_sim.events import ACK_LOG_LEN, EVENT_LOG_LEN, EventLog
+from nc_sim.machine.config import demo_machine
+from nc_sim.scenario import run_scenario
 from tests.nc_sim.sim_helpers import make
 
 
@@ -51,3 +53,15 @@ def test_machine_events_and_acknowledgements_stay_bounded() -> None:
     read = m.events.since(start)
     assert read.dropped == 500 and len(read.entries) == EVENT_LOG_LEN
     assert all(e.code == Code.BLOCK_SYNTAX for e in read.entries)
+
+
+def test_a_scenario_result_keeps_every_event_the_machine_log_dropped() -> None:
+    """The headless runner collects events as it goes: a run with more events than the
+    machine's log holds returns all of them, in order."""
+    n = EVENT_LOG_LEN + 300
+    actions = [{"t_s": 0.001 * (i // 100), "mdi": "G1 X"} for i in range(n)]  # refused each
+    result = run_scenario(demo_machine(), {"duration_s": 0.2, "actions": actions})
+    refused = [e for e in result.events if e.code == Code.BLOCK_SYNTAX]
+    assert len(refused) == n
+    assert [e.cycle for e in result.events] == sorted(e.cycle for e in result.events)
+    assert len(result.machine.events) == EVENT_LOG_LEN  # the machine itself stayed bounded
