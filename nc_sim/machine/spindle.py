@@ -25,7 +25,9 @@ from nc_sim.machine.axis import (
     SpindleTask,
     TaskPhase,
     ToolLimits,
+    changeover_speeds,
     push_params,
+    speed_controlled,
 )
 from nc_sim.machine.dynamics import Motion
 from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
@@ -51,6 +53,12 @@ _V_EPS = 1e-9
 
 def _sign(x: float) -> int:
     return 1 if x > 0 else -1
+
+
+def _why_not_positioned(ax: Axis) -> str:
+    if ax.cfg.flag("sim.sensorless"):
+        return f"{ax.name} has no encoder"
+    return f"{ax.name} is speed-controlled (OPEN_POSITION_LOOP_MODE, P-AXIS-00320)"
 
 
 class SpindleControl:
@@ -162,9 +170,7 @@ class SpindleControl:
         ax.speed_ctrl = False
         ist = self.m.k.ist
         ist[ax.slot, L.I_SPEED_CTRL_ARMED] = 0
-        if ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL and not ax.cfg.flag(
-            "sim.sensorless"
-        ):
+        if ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL and not speed_controlled(ax.cfg):
             ist[ax.slot, L.I_OPEN_LOOP] = L.LOOP_CLOSED
             self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
 
@@ -216,7 +222,7 @@ class SpindleControl:
         self._adopt_tool(ax)
         k = self.m.k
         v = self.commanded(ax)
-        v_change = ax.cfg.eng("antr.sai_op_mode_change.v_velocity_control_on")
+        v_change = changeover_speeds(ax.cfg)[0]
         in_speed_ctrl = k.ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL
         # once changed over, a lower speed does not switch back [001 §2.3]
         ax.speed_ctrl = abs(v) > v_change or (ax.speed_ctrl and in_speed_ctrl)
@@ -265,8 +271,8 @@ class SpindleControl:
         block_id: int | None = None,
     ) -> JobError | None:
         """M19: position to `pos_deg` (0..360) in `direction` (+1 M3, -1 M4, None)."""
-        if ax.cfg.flag("sim.sensorless"):
-            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder")
+        if speed_controlled(ax.cfg):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -286,10 +292,8 @@ class SpindleControl:
 
     def home(self, ax: Axis, block_id: int | None = None) -> JobError | None:
         """G74: rotate to the zero mark, take ref_pos there, stop on it with exact stop."""
-        if ax.cfg.flag("sim.sensorless"):
-            return self.m._fail(
-                ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder to home"
-            )
+        if speed_controlled(ax.cfg):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -317,7 +321,7 @@ class SpindleControl:
         ax.block_id = block_id
         self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}")
         self.m.log(Code.EV_HLI, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
-        if not (ax.homed or self.auto_homing(ax)) or ax.cfg.flag("sim.sensorless"):
+        if not (ax.homed or self.auto_homing(ax)) or speed_controlled(ax.cfg):
             # no position to go to: change at standstill where the spindle stops
             ax.task.phase = TaskPhase.STOP
             self._state(ax, AxisState.GEAR_CHANGE)
@@ -344,7 +348,7 @@ class SpindleControl:
             # decelerate to the switch-back speed P-AXIS-00768 (and below the control limit)
             # before position control resumes [001 §4.2]
             v_close = min(
-                ax.cfg.eng("antr.sai_op_mode_change.v_position_control_on"),
+                changeover_speeds(ax.cfg)[1],
                 ax.cfg.eng("getriebe.vb_regelgrenze", ax.gear) or math.inf,
             )
             if abs(v) > v_close + _V_EPS or mode == L.LOOP_CONTROL_LIMIT:

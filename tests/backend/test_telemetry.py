@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import re
 from collections.abc import Iterator
 from typing import Any
 
@@ -52,14 +51,10 @@ def _end(h: FrameHeader) -> int:
 
 
 @pytest.fixture
-def mid(srv: Server, request: pytest.FixtureRequest) -> Iterator[str]:
-    """A paused demo machine of the test's own: it moves only when the test steps it."""
-    name = re.sub(r"[^a-z0-9]+", "-", request.node.name.removeprefix("test_"))[:32].strip("-")
-    assert srv.http.post("/api/machines", json={"id": name, "demo": True}).status_code == 201
-    srv.pace(name, mode="pause")
-    srv.step(name, 100)  # the PLC switches the drives on
-    yield name
-    srv.http.delete(f"/api/machines/{name}")
+def mid(srv: Server, mid: str) -> str:
+    """The test's own machine, paused: it moves only when the test steps it."""
+    srv.pace(mid, mode="pause")
+    return mid
 
 
 async def _until_cycle(

@@ -8,7 +8,6 @@ watches its own demo machine, paused and stepped, so nothing depends on how fast
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager, suppress
@@ -34,14 +33,10 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
 
 
 @pytest.fixture
-def mid(srv: Server, request: pytest.FixtureRequest) -> Iterator[str]:
-    """A paused demo machine of the test's own."""
-    name = re.sub(r"[^a-z0-9]+", "-", request.node.name.removeprefix("test_"))[:32].strip("-")
-    assert srv.http.post("/api/machines", json={"id": name, "demo": True}).status_code == 201
-    srv.pace(name, mode="pause")
-    srv.step(name, 100)  # the PLC switches the drives on
-    yield name
-    srv.http.delete(f"/api/machines/{name}")
+def mid(srv: Server, mid: str) -> str:
+    """The test's own machine, paused: it moves only when the test steps it."""
+    srv.pace(mid, mode="pause")
+    return mid
 
 
 def _telemetry(srv: Server) -> dict[str, Any]:
