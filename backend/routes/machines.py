@@ -66,7 +66,8 @@ def pace(req: SimulationControl, host: HostDep, actor: ActorDep) -> SimulationSt
 
 @router.post("/{mid}/simulation/step", responses=responses(403, 404, 422))
 def step(req: StepRequest, host: HostDep, actor: ActorDep) -> SimulationStatus:
-    """Pause and advance exactly `cycles` cycles."""
+    """Pause and advance `cycles` cycles; an emergency stop, a pacing change or a restart
+    meanwhile ends the step early (the answer's `cycle` says where it stopped)."""
     authorize(actor, Action.SIMULATE, host.id)
     host.step(req.cycles)
     return simulation_status(host)

@@ -15,6 +15,7 @@ import numpy as np
 
 from nc_sim.blocks import Block, BlockError, parse_block
 from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError
+from nc_sim.events import ACK_LOG_LEN, EVENT_LOG_LEN, EventLog
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import (
@@ -92,11 +93,11 @@ class Machine:
         self.main_spindle = cfg.main_spindle
         self.channel_units = {"override": 1000, "feedhold": 0, "reduced_acceleration": 0}
         self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
-        self.events: list[JobError] = []
+        self.events: EventLog[JobError] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
         self._queue: deque[_BlockRun] = deque()
         self._next_id = 1
-        self.acks: list[Ack] = []
+        self.acks: EventLog[Ack] = EventLog(ACK_LOG_LEN)
         self.estop = False
         self._powered = False  # power-on done: the PLC has switched every drive on
         self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
@@ -208,6 +209,39 @@ def test_fast_mode_stops_exactly_at_the_cycle(srv: Server, mid: str) -> None:
     wait_for(lambda: srv.status(mid)["simulation"]["mode"] == "pause")
     assert srv.status(mid)["simulation"]["cycle"] == c0 + 30000
     srv.pace(mid, mode="run")
+
+
+def test_emergency_stop_ends_a_long_step_instead_of_waiting_for_it(srv: Server, mid: str) -> None:
+    """A step of a million cycles runs in one request thread; status and an emergency stop
+    from another thread get in while it runs: the stop acts at a cycle inside the step's span
+    and the step ends there."""
+    srv.pace(mid, mode="pause")
+    srv.command(mid, {"type": "mdi", "block": "M3 S1000"})  # something to simulate
+    c0 = srv.status(mid)["simulation"]["cycle"]
+    n = 1_000_000
+    with ThreadPoolExecutor(1) as pool:
+        stepping = pool.submit(
+            srv.http.post, f"/api/machines/{mid}/simulation/step", json={"cycles": n}
+        )
+        # status answers between the step's slices (before: only after the whole step)
+        wait_for(lambda: srv.status(mid)["simulation"]["cycle"] > c0)
+        stop = srv.command(mid, {"type": "emergency_stop"})
+        assert stop.status_code == 200, stop.text
+        stepped = stepping.result(timeout=120)
+    assert stepped.status_code == 200, stepped.text
+    stop_cycle, end_cycle = stop.json()["cycle"], stepped.json()["cycle"]
+    assert c0 < stop_cycle < c0 + n  # the stop acted inside the step's span ...
+    assert end_cycle < c0 + n  # ... and ended the step
+    st = srv.status(mid)
+    assert st["emergency_stop"] and st["simulation"]["mode"] == "pause"
+    assert st["simulation"]["cycle"] == end_cycle
+
+
+def test_a_step_longer_than_one_request_may_take_is_422(srv: Server, mid: str) -> None:
+    r = srv.http.post(f"/api/machines/{mid}/simulation/step", json={"cycles": 1_000_001})
+    assert r.status_code == 422
+    assert "cycles" in r.text and "1000000" in r.text
+    assert srv.status(mid)["simulation"]["mode"] == "run"  # nothing happened
 
 
 def test_create_from_lists_and_delete(srv: Server) -> None:
