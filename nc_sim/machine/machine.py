@@ -200,6 +200,8 @@ class Machine:
             self.k.cycle_s,
         )
         self.k.load_plan(s, seg, n, ax.target)
+        if n == 0:  # already on the target at rest: no plan to finish, done at once
+            self._axis_events(ax, L.EV_PLAN_DONE)
 
     def _plan_velocity(self, ax: Axis, v: float, limits: np.ndarray) -> None:
         s = ax.slot
@@ -251,6 +253,7 @@ class Machine:
         motion: Motion,
         feed: float | None,
         block_id: int | None = None,
+        state: AxisState = AxisState.MOVING,
     ) -> JobError | None:
         err = self._check_motion(ax) or self._within_limits(ax, target)
         if err:
@@ -259,7 +262,7 @@ class Machine:
         ax.slope = self.slope if motion is not Motion.MANUAL else 1
         if motion is Motion.FEED and not feed:
             return self._fail(ax, Code.FEED_MISSING)
-        self._set_state(ax, AxisState.MOVING)
+        self._set_state(ax, state)
         self._replan(ax)
         return None
 
@@ -282,12 +285,8 @@ class Machine:
             target = self.k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
         else:
             target = self.k.st[ax.slot, L.S_P_CMD] + d * _FAR
-        err = self._start_move(
-            ax, target, Motion.MANUAL, feed_mm_min / 60.0 if feed_mm_min else None
-        )
-        if err is None:
-            self._set_state(ax, AxisState.JOG)
-        return err
+        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        return self._start_move(ax, target, Motion.MANUAL, feed, state=AxisState.JOG)
 
     def jog_stop(self, axis: str) -> None:
         """Release of the jog key: brake with the manual-mode deceleration."""
@@ -357,12 +356,13 @@ class Machine:
         self._plan_move(ax, self._limits(ax, Motion.HOMING), ax.feed)
 
     def _stop(self, ax: Axis, limits: np.ndarray) -> None:
-        if ax.kind is AxisKind.SPINDLE:
+        if ax.kind is AxisKind.SPINDLE and ax.state not in (AxisState.MOVING, AxisState.JOG):
             self.sp.stop(ax)
             return
-        self._plan_velocity(ax, 0.0, limits)
-        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        # STOPPING first: an axis already at rest ends the stop within _plan_velocity
         self._set_state(ax, AxisState.STOPPING)
+        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self._plan_velocity(ax, 0.0, limits)
 
     # --- commands: spindle [000] ---------------------------------------------------------
     def _spindle(self, name: str) -> Axis:
