@@ -539,7 +539,8 @@ class Machine:
         self.log(Code.EV_PLC_MODE, "", f"PLC {mode}")
 
     def plc_acknowledge(self, m: int | None = None) -> int:
-        """Manual acknowledgement; returns how many M functions were acknowledged."""
+        """Manual acknowledgement; returns how many M functions were acknowledged (0 when
+        none was pending, e.g. after its 90004 timeout)."""
         acked = self.plc.acknowledge(m)
         for p in acked:
             self._m_acked(p.m, p.out_cycle)
@@ -677,6 +678,7 @@ class Machine:
         for out, bid in list(self._m_out.items()):
             if cycle - out >= timeout:
                 del self._m_out[out]
+                self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
                 spindle = self._m_gear.pop(out, None)
                 self._fail(
                     spindle,

@@ -48,3 +48,18 @@ def test_jog_renewed_at_the_software_limit_then_released_stands_still(release: s
     record(sim, 2.0)
     assert m.k.st[x.slot, L.S_P_CMD] == pytest.approx(swe_pos - 1.0)
     assert Code.AXIS_BUSY not in codes(m)
+
+
+# --- item 9: timed out means gone --------------------------------------------------------------
+def test_a_late_acknowledgement_after_the_timeout_acknowledges_nothing() -> None:
+    sim, m, cfg = make(channel={"plc.m_ack_timeout": 300000})
+    m.plc_mode("manual")
+    assert m.mdi("M8").ok
+    record(sim, 0.1)
+    assert [p.m for p in m.plc.pending] == [8]
+    record(sim, cfg.channel_eng("plc.m_ack_timeout"))
+    assert Code.PLC_ACK_TIMEOUT in codes(m)
+    assert m.plc.pending == [] and m.queued_blocks == 0  # no longer pending anywhere
+    assert m.plc_acknowledge(8) == 0
+    assert m.plc_acknowledge(None) == 0
+    assert Code.EV_M_ACK not in codes(m)
