@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -63,6 +63,7 @@ class _BlockRun:
     block: Block | None = None
     started: bool = False
     waiting_m: int = 0
+    homing: list[list[str]] = field(default_factory=list)  # G74 order groups still to start
 
 
 class Machine:
@@ -592,8 +593,13 @@ class Machine:
                 if not ok:
                     self._queue.popleft()
                     continue
-            busy = any(a.block_id == run.id for a in self.axes)
-            if busy or run.waiting_m > 0:
+            mine = [a for a in self.axes if a.block_id == run.id]
+            if run.homing and all(a.kind is AxisKind.SPINDLE for a in mine):
+                # the previous order group is homed (a spindle homes unsynchronised [000 §2.7])
+                if not self._home_next(run):
+                    self._queue.popleft()
+                continue
+            if mine or run.waiting_m > 0:
                 return
             self._queue.popleft()
             self.log(Code.EV_BLOCK_DONE, "", run.text)
@@ -628,8 +634,11 @@ class Machine:
                 return False
             if self.sp.gear_only(self.axis(self.main_spindle), gear, run.id):
                 return False
-        for name in sorted(b.homing, key=lambda n: b.homing[n]):
-            if self.home(name, run.id):
+        if b.homing:
+            # G74 X2 Z1 S1: the lowest order digit first, equal digits together [000 §2.7]
+            orders = sorted(set(b.homing.values()))
+            run.homing = [[n for n, o in b.homing.items() if o == order] for order in orders]
+            if not self._home_next(run):
                 return False
         if b.axes:
             motion = Motion.RAPID if (b.motion or 0) == 0 else Motion.FEED
@@ -640,6 +649,10 @@ class Machine:
                 if self._start_move(ax, target, motion, feed, run.id):
                     return False
         return True
+
+    def _home_next(self, run: _BlockRun) -> bool:
+        """Start the next G74 order group of a block; False when one of them is refused."""
+        return all(self.home(name, run.id) is None for name in run.homing.pop(0))
 
     def _synch_plc(self, ax: Axis, m: int) -> bool:
         """M3/M4/M5/M19 with the PLC_INFO bit are output to the PLC [000 §2.5]."""

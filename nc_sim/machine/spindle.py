@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from nc_sim.blocks import SpindleCmd
-from nc_sim.errors import Code, JobError
+from nc_sim.errors import Code, JobError, NcUsageError
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import (
     Axis,
@@ -51,6 +51,13 @@ _V_EPS = 1e-9
 
 def _sign(x: float) -> int:
     return 1 if x > 0 else -1
+
+
+def _check_rpm(rpm: float | None) -> None:
+    """One meaning for a negative S everywhere: refused. M3/M4 (or M19's M3/M4) give the
+    direction; only G63 tapping reverses with a negative S [000 §2.8.6], which we lack."""
+    if rpm is not None and rpm < 0:
+        raise NcUsageError(f"S{rpm:g}: the speed must not be negative (M3/M4 give the direction)")
 
 
 class SpindleControl:
@@ -190,6 +197,7 @@ class SpindleControl:
         block_id: int | None = None,
     ) -> JobError | None:
         """M3/M4 with S (rpm; None keeps the programmed speed), optionally with M40-M45."""
+        _check_rpm(rpm)
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -197,7 +205,7 @@ class SpindleControl:
         err = self._direction_ok(ax, d)
         if err:
             return err
-        rpm = abs(rpm) if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
+        rpm = rpm if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
         choice = self._gear_for(ax, rpm, gear)
         if choice.error is not None:
             return self.m._fail(ax, choice.error, choice.detail)
@@ -232,11 +240,12 @@ class SpindleControl:
         self, ax: Axis, rpm: float, gear: int | None, block_id: int | None
     ) -> JobError | None:
         """S word alone (or S[REV..]): new speed, with a gear change when the table asks."""
-        choice = self._gear_for(ax, abs(rpm), gear)
+        _check_rpm(rpm)
+        choice = self._gear_for(ax, rpm, gear)
         if choice.error is not None:
             return self.m._fail(ax, choice.error, choice.detail)
         assert choice.gear is not None
-        ax.speed_prog = math.copysign(abs(rpm) * RPM_TO_DEG_S, ax.speed_prog or 1.0)
+        ax.speed_prog = math.copysign(rpm * RPM_TO_DEG_S, ax.speed_prog or 1.0)
         if choice.gear != ax.gear:
             err = self.m._check_motion(ax)
             if err:
@@ -265,6 +274,7 @@ class SpindleControl:
         block_id: int | None = None,
     ) -> JobError | None:
         """M19: position to `pos_deg` (0..360) in `direction` (+1 M3, -1 M4, None)."""
+        _check_rpm(rpm)
         if ax.cfg.flag("sim.sensorless"):
             return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder")
         err = self.m._check_motion(ax)
@@ -279,7 +289,7 @@ class SpindleControl:
         speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         self.cancel_task(ax)
         self.m.log(Code.EV_M_START, ax.name, f"M19 S.POS={pos_deg:g}")
-        ax.task = SpindleTask("M19", pos_deg % 360.0, direction, abs(speed))
+        ax.task = SpindleTask("M19", pos_deg % 360.0, direction, speed)
         ax.block_id = block_id
         self.advance(ax)
         return None

@@ -3,9 +3,10 @@ rule, spindle jog and move, automatic homing on M5, watchdogs and bounds (issue 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from nc_sim.errors import Code
+from nc_sim.errors import Code, NcUsageError
 from nc_sim.machine.axis import AxisState
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation
@@ -63,3 +64,54 @@ def test_a_late_acknowledgement_after_the_timeout_acknowledges_nothing() -> None
     assert m.plc_acknowledge(8) == 0
     assert m.plc_acknowledge(None) == 0
     assert Code.EV_M_ACK not in codes(m)
+
+
+# --- item 3: G74 order digits and G74 S1 -------------------------------------------------------
+def _first_motion(rec: np.ndarray, slot: int) -> int:
+    moving = np.flatnonzero(np.abs(rec[:, slot, L.R_V_CMD]) > 0)
+    assert moving.size
+    return int(moving[0])
+
+
+def test_g74_homes_in_the_order_of_its_digits() -> None:
+    sim, m, _ = make()
+    x, z = m.axis("X"), m.axis("Z")
+    assert m.mdi("G74 X1 Z2").ok
+    c0 = m.cycle
+    rec = record(sim, 30.0)
+    x_homed = next(e.cycle for e in m.events if e.code == Code.EV_MOTION_DONE and e.axis == "X")
+    # Z starts only after X has finished homing [000 §2.7]
+    assert _first_motion(rec, z.slot) + c0 + 1 > x_homed
+    assert _first_motion(rec, x.slot) == 0
+    assert x.homed and z.homed and m.queued_blocks == 0
+
+
+def test_g74_s1_homes_the_spindle_with_its_group_and_is_no_speed() -> None:
+    sim, m, cfg = make()
+    s, x = m.axis(S), m.axis("X")
+    assert m.mdi("G74 X2 S1").ok
+    c0 = m.cycle
+    rec = record(sim, 15.0)
+    assert Code.GEAR_NO_RANGE not in codes(m) and Code.GEAR_WRONG_STAGE not in codes(m)
+    assert s.homed and x.homed and m.queued_blocks == 0
+    window = cfg.axis(S).eng("kenngr.exact_stop_window")
+    ref = cfg.axis(S).eng("kenngr.ref_pos")
+    assert abs((m.k.st[s.slot, L.S_P_ACT] - ref + 180) % 360 - 180) <= window
+    # the spindle is not synchronised with the axes: X (order 2) need not wait for it
+    s_homed = next(e.cycle for e in m.events if e.code == Code.EV_IN_POSITION and e.axis == S)
+    assert _first_motion(rec, x.slot) + c0 + 1 < s_homed
+
+
+# --- item 11: a negative S is refused everywhere -----------------------------------------------
+def test_negative_speed_is_refused_by_mdi_and_by_the_command_api() -> None:
+    sim, m, _ = make()
+    s = m.axis(S)
+    for block in ("M3 S-1000", "S[M4 REV-500]", "M19 S.POS=90 S-100"):
+        ack = m.mdi(block)
+        assert not ack.ok and ack.code == Code.BLOCK_SYNTAX and "negative" in ack.message
+    with pytest.raises(NcUsageError, match="negative"):
+        m.spindle("S", 3, -1000.0)
+    with pytest.raises(NcUsageError, match="negative"):
+        m.spindle_position("S", 90.0, None, -100.0)
+    record(sim, 0.5)
+    assert s.state is AxisState.STANDSTILL and m.k.st[s.slot, L.S_V_CMD] == 0.0
