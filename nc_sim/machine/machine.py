@@ -403,7 +403,16 @@ class Machine:
         """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
         if not 40 <= m <= 45:
             raise NcUsageError("gear stage M40..M45")
-        return self.sp.gear_only(self._spindle(name), m - 39, None)
+        ax = self._spindle(name)
+        if not self.gear_change_enabled:  # then M40-M45 are free M functions
+            self._m_output(m, "", None)
+            return None
+        return self.sp.gear_only(ax, m - 39, None)
+
+    @property
+    def gear_change_enabled(self) -> bool:
+        """P-CHAN-00052: M40-M45 change the main spindle's gear; else they are free M functions."""
+        return bool(self.cfg.channel_raw("main_spindle_gear_change"))
 
     def tool(self, number: int) -> None:
         """D word: the tool's dynamic limits go to its spindle at the next start [000 §2.8.5]."""
@@ -615,7 +624,12 @@ class Machine:
             if m in (2, 30):
                 self.program_end()
             self._m_output(m, "", run)
-        gear = b.gear - 39 if b.gear is not None else None
+        gear = None
+        if b.gear is not None:
+            if self.gear_change_enabled:
+                gear = b.gear - 39
+            else:  # M40-M45 are free M functions without gear change (P-CHAN-00052)
+                self._m_output(b.gear, "", run)
         main_done = False
         for sc in b.spindles:
             ax = self.axis(sc.spindle)

@@ -562,15 +562,22 @@ class SpindleControl:
         return err is None
 
     def gear_only(self, ax: Axis, gear: int, block_id: int | None) -> JobError | None:
-        """M40-M45 without S: change to that stage (the speed is checked with the next S)."""
+        """M40-M45 without S (MDI or the gear buttons): the stage is checked against the speed
+        it will run with, as `M4x S..` is: the programmed S of a rotating spindle; at
+        standstill there is none, the next S is checked."""
         if self.gear_table(ax) is None:
             return self.m._fail(ax, Code.GEAR_CHANGE_OFF, f"M{m_of(gear)}")
+        resume = self._resume(ax)
+        if resume is not None:
+            choice = self._gear_for(ax, resume[1], gear)
+            if choice.error is not None:
+                return self.m._fail(ax, choice.error, choice.detail)
         if gear == ax.gear:
             return None
         err = self.m._check_motion(ax)
         if err:
             return err
-        self.start_gear(ax, gear, self._resume(ax), block_id)
+        self.start_gear(ax, gear, resume, block_id)
         return None
 
     def _resume(self, ax: Axis) -> tuple[int, float] | None:

@@ -115,3 +115,41 @@ def test_negative_speed_is_refused_by_mdi_and_by_the_command_api() -> None:
         m.spindle_position("S", 90.0, None, -100.0)
     record(sim, 0.5)
     assert s.state is AxisState.STANDSTILL and m.k.st[s.slot, L.S_V_CMD] == 0.0
+
+
+# --- item 6: M40-M45 without gear change are free M functions ----------------------------------
+def test_m40_to_m45_are_free_m_functions_when_gear_change_is_off() -> None:
+    sim, m, _ = make(channel={"main_spindle_gear_change": 0, "spindel[0].m3_synch": 0})
+    s = m.axis(S)
+    gear = s.gear
+    assert m.mdi("M41").ok
+    assert m.mdi("M3 S500 M43").ok  # S500 runs in the current stage, M43 goes to the PLC
+    assert m.spindle_gear("S", 44) is None  # the gear buttons send the same M function
+    record(sim, 3.0)
+    outputs = [e.message for e in m.events if e.code == Code.EV_M_OUTPUT]
+    assert sorted(o.split()[0] for o in outputs) == ["M41", "M43", "M44"]
+    assert codes(m).count(Code.EV_M_ACK) == 3 and m.queued_blocks == 0
+    assert Code.GEAR_CHANGE_OFF not in codes(m)
+    assert s.gear == gear and s.state is AxisState.ENDLESS
+    assert m.k.st[s.slot, L.S_V_CMD] == pytest.approx(500 * RPM)
+
+
+# --- item 10: gear buttons and MDI follow one rule ---------------------------------------------
+def test_a_gear_stage_is_checked_against_the_running_speed_by_buttons_and_mdi() -> None:
+    """M43 while S500 runs is M43 with S500: outside 3501-4000 rpm, refused as M41 S2000 is."""
+    sim, m, _ = make(channel={"spindel[0].m3_synch": 0})
+    s = m.axis(S)
+    assert m.mdi("M3 S500").ok
+    record(sim, 4.0)
+    assert s.gear == 1 and s.state is AxisState.ENDLESS
+    err = m.spindle_gear("S", 43)
+    assert err is not None and err.code == Code.GEAR_WRONG_STAGE
+    assert m.mdi("M43").ok and m.mdi("M41 S2000").ok
+    record(sim, 4.0)
+    assert codes(m).count(Code.GEAR_WRONG_STAGE) == 3
+    assert s.gear == 1 and s.state is AxisState.ENDLESS  # no change to M43 and back
+    assert m.spindle_gear("S", 41) is None  # M41 (400-800 rpm) holds S500: changes, stays
+    record(sim, 6.0)
+    assert s.gear == 2 and s.state is AxisState.ENDLESS
+    assert m.k.st[s.slot, L.S_V_CMD] == pytest.approx(500 * RPM)
+    assert codes(m).count(Code.EV_GEAR_CHANGED) == 2  # M40 for S500, then M41
