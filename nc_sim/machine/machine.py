@@ -161,9 +161,15 @@ class Machine:
         ax.state = state
         self.k.ist[ax.slot, L.I_STATE] = int(state)
 
+    def _as_axis(self, ax: Axis) -> bool:
+        """Moves like an axis: a linear axis, or a spindle jogged or moved as a rotary axis
+        [003 "jogging a spindle"]; then feed override, feedhold and G200 dynamics apply."""
+        return ax.kind is not AxisKind.SPINDLE or ax.state in (AxisState.MOVING, AxisState.JOG)
+
     def _override(self, ax: Axis, motion: Motion | None) -> float:
-        """Override in force as a fraction: axis override for spindles, channel override else."""
-        if ax.kind is AxisKind.SPINDLE:
+        """Override in force as a fraction: the spindle override in spindle mode, the
+        channel (feed) override for axes and for a spindle moving as a rotary axis."""
+        if not self._as_axis(ax):
             return self.sp.override(ax)
         cap = self.cfg.channel_eng("max_vb_override")
         return min(self.channel_units["override"] * 1e-3, cap)
@@ -215,7 +221,7 @@ class Machine:
 
     def _replan(self, ax: Axis) -> None:
         """Re-plan the active motion from the current state (override, feedhold release)."""
-        if ax.kind is AxisKind.SPINDLE:
+        if not self._as_axis(ax):
             self.sp.replan(ax)
             return
         if ax.motion is None or ax.state in (AxisState.STOPPING, AxisState.ERROR):
@@ -257,6 +263,8 @@ class Machine:
         state: AxisState = AxisState.MOVING,
     ) -> JobError | None:
         err = self._check_motion(ax) or self._within_limits(ax, target)
+        if err is None and ax.kind is AxisKind.SPINDLE:
+            err = self.sp.as_rotary_axis(ax)
         if err:
             return err
         ax.target, ax.motion, ax.feed, ax.block_id = target, motion, feed, block_id
@@ -271,9 +279,12 @@ class Machine:
     def move(
         self, axis: str, target: float, rapid: bool = True, feed_mm_min: float | None = None
     ) -> JobError | None:
-        """Single-axis G00/G01 move to an absolute position (mm | °)."""
+        """Single-axis G00/G01 move to an absolute position (mm | °); a spindle moves as a
+        modulo rotary axis to the angle, the shortest way."""
         ax = self.axis(axis)
         feed = feed_mm_min / 60.0 if feed_mm_min else None
+        if ax.kind is AxisKind.SPINDLE and ax.state is AxisState.STANDSTILL:
+            target = self.sp.target(ax, target % 360.0, None)
         return self._start_move(ax, target, Motion.RAPID if rapid else Motion.FEED, feed)
 
     def jog_start(
@@ -357,7 +368,7 @@ class Machine:
         self._plan_move(ax, self._limits(ax, Motion.HOMING), ax.feed)
 
     def _stop(self, ax: Axis, limits: np.ndarray) -> None:
-        if ax.kind is AxisKind.SPINDLE and ax.state not in (AxisState.MOVING, AxisState.JOG):
+        if not self._as_axis(ax):
             self.sp.stop(ax)
             return
         # STOPPING first: an axis already at rest ends the stop within _plan_velocity
@@ -469,7 +480,7 @@ class Machine:
             use_set = bool(self.cfg.channel_raw("use_drive_curr_limit"))
             for ax in self.axes:
                 if (
-                    ax.kind is not AxisKind.SPINDLE
+                    self._as_axis(ax)
                     and ax.state in (AxisState.MOVING, AxisState.JOG, AxisState.HOMING)
                     and ax.motion is not None
                 ):
@@ -483,7 +494,7 @@ class Machine:
                     self._replan(ax)
         else:
             for ax in self.axes:
-                if ax.kind is not AxisKind.SPINDLE:
+                if self._as_axis(ax):
                     self._replan(ax)
 
     def _enables_changed(self, ax: Axis) -> None:

@@ -175,6 +175,20 @@ class SpindleControl:
             ist[ax.slot, L.I_OPEN_LOOP] = L.LOOP_CLOSED
             self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
 
+    def as_rotary_axis(self, ax: Axis) -> JobError | None:
+        """A spindle jogged or moved like a rotary axis [003 "jogging a spindle"]: from
+        standstill (or renewing its jog), position-controlled, so it needs its encoder."""
+        if ax.cfg.flag("sim.sensorless"):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder")
+        if ax.task is not None or ax.state not in (
+            AxisState.STANDSTILL,
+            AxisState.MOVING,
+            AxisState.JOG,
+        ):
+            return self.m._fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
+        self.switch_back(ax)
+        return None
+
     # --- gear selection -----------------------------------------------------------------
     def _gear_for(self, ax: Axis, rpm: float, programmed: int | None) -> GearChoice:
         gt = self.gear_table(ax)

@@ -153,3 +153,46 @@ def test_a_gear_stage_is_checked_against_the_running_speed_by_buttons_and_mdi() 
     assert s.gear == 2 and s.state is AxisState.ENDLESS
     assert m.k.st[s.slot, L.S_V_CMD] == pytest.approx(500 * RPM)
     assert codes(m).count(Code.EV_GEAR_CHANGED) == 2  # M40 for S500, then M41
+
+
+# --- item 4: a spindle jogs and moves like a rotary axis ---------------------------------------
+def test_spindle_incremental_jog_turns_by_the_step_and_ends() -> None:
+    sim, m, cfg = make()
+    s = m.axis(S)
+    p0 = m.k.st[s.slot, L.S_P_CMD]
+    assert m.jog_step(S, 90.0) is None
+    rec = record(sim, 3.0)[:, s.slot]
+    assert s.state is AxisState.STANDSTILL and m.k.st[s.slot, L.S_P_CMD] == p0 + 90.0
+    v_jog = cfg.axis(S).eng("handbetrieb.hb.vb_max")  # G200 dynamics, as a rotary axis
+    assert 0 < rec[:, L.R_V_CMD].max() <= v_jog + 1e-9
+    window = cfg.axis(S).eng("kenngr.exact_stop_window")
+    assert abs(rec[-1, L.R_P_ACT] - (p0 + 90.0)) <= window
+
+
+def test_spindle_continuous_jog_turns_at_jog_speed_until_released() -> None:
+    sim, m, cfg = make()
+    s = m.axis(S)
+    assert m.jog_start(S, -1) is None
+    rec = record(sim, 2.0)[:, s.slot]
+    v_jog = cfg.axis(S).eng("handbetrieb.hb.vb_max")
+    assert s.state is AxisState.JOG and rec[-1, L.R_V_CMD] == pytest.approx(-v_jog)
+    m.jog_stop(S)
+    record(sim, 2.0)
+    assert s.state is AxisState.STANDSTILL and m.k.st[s.slot, L.S_V_CMD] == 0.0
+
+
+def test_spindle_move_goes_to_the_angle_the_shortest_way_and_ends() -> None:
+    sim, m, _ = make()
+    s = m.axis(S)
+    p0 = m.k.st[s.slot, L.S_P_CMD]
+    target = (p0 + 100.0) % 360.0
+    assert m.move(S, target) is None
+    record(sim, 5.0)
+    assert s.state is AxisState.STANDSTILL
+    assert m.k.st[s.slot, L.S_P_CMD] == pytest.approx(p0 + 100.0)
+    assert Code.EV_MOTION_DONE in codes(m)
+    assert m.mdi("M3 S500").ok  # still a spindle afterwards
+    record(sim, 3.0)
+    assert s.state is AxisState.ENDLESS
+    assert m.jog_step(S, 10.0) is not None  # not while it rotates: 90006
+    assert codes(m)[-1] == Code.AXIS_BUSY
