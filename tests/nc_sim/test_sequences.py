@@ -178,7 +178,7 @@ def test_spindle_continuous_jog_turns_at_jog_speed_until_released() -> None:
     assert s.state is AxisState.JOG and rec[-1, L.R_V_CMD] == pytest.approx(-v_jog)
     m.jog_stop(S)
     record(sim, 2.0)
-    assert s.state is AxisState.STANDSTILL and m.k.st[s.slot, L.S_V_CMD] == 0.0
+    assert m.axis(S).state is AxisState.STANDSTILL and m.k.st[s.slot, L.S_V_CMD] == 0.0
 
 
 def test_spindle_move_goes_to_the_angle_the_shortest_way_and_ends() -> None:
@@ -193,6 +193,6 @@ def test_spindle_move_goes_to_the_angle_the_shortest_way_and_ends() -> None:
     assert Code.EV_MOTION_DONE in codes(m)
     assert m.mdi("M3 S500").ok  # still a spindle afterwards
     record(sim, 3.0)
-    assert s.state is AxisState.ENDLESS
+    assert m.axis(S).state is AxisState.ENDLESS
     assert m.jog_step(S, 10.0) is not None  # not while it rotates: 90006
     assert codes(m)[-1] == Code.AXIS_BUSY
