@@ -53,9 +53,9 @@ class TaskPhase(IntEnum):
 
 @dataclass
 class SpindleTask:
-    """A spindle sequence in progress: M19, G74 or a gear change."""
+    """A spindle sequence in progress: M19, G74, a gear change, or M5 with homing."""
 
-    kind: str  # "M19", "G74", "gear"
+    kind: str  # "M19", "G74", "gear", "M5" (stop homing on the way after the control limit)
     pos_deg: float  # target angle 0..360
     direction: int | None  # +1 M3, -1 M4, None = shortest way
     speed: float  # positioning speed before override (°/s)
@@ -99,6 +99,7 @@ class Axis:
     speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767
     ff_set: float = 1.0  # weighting for G135, set by G136
     task: SpindleTask | None = None
+    reference_lost: bool = False  # lost above the control limit: M5 homes again [000 §2.7]
     units: dict[str, int] = field(
         default_factory=lambda: {
             "override": 1000,

@@ -396,7 +396,7 @@ class Machine:
         """M3/M4 with speed (rpm) and optional gear stage M40-M45, or M5."""
         ax = self._spindle(name)
         if m == 5:
-            self.sp.stop(ax)
+            self.sp.m5(ax)
             return None
         return self.sp.endless(ax, m, speed_rpm, gear)
 

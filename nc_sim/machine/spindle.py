@@ -278,6 +278,19 @@ class SpindleControl:
         self._state(ax, AxisState.STOPPING)
         self.velocity(ax, 0.0)
 
+    def m5(self, ax: Axis) -> None:
+        """M5; after the control limit an analogue spindle homes on the way to standstill
+        [000 §2.7, Fig. 9: "Control limit exceeded -> M5 -> Homing -> Done -> Standstill"]."""
+        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP, AxisState.STOPPING)
+        if not (ax.reference_lost and rotating and self.auto_homing(ax)):
+            self.stop(ax)
+            return
+        self.cancel_task(ax)
+        self.m.log(Code.EV_M_START, ax.name, "M5 (automatic homing)")
+        v = abs(self.m.k.st[ax.slot, L.S_V_CMD])
+        ax.task = SpindleTask("M5", 0.0, None, v)  # passes the zero mark at speed
+        self.advance(ax)
+
     # --- M19, G74, gear change ----------------------------------------------------------
     def position(
         self,
@@ -356,7 +369,7 @@ class SpindleControl:
             return
         k = self.m.k
         s = ax.slot
-        state = AxisState.HOMING if t.kind == "G74" else AxisState.POSITIONING
+        state = AxisState.HOMING if t.kind in ("G74", "M5") else AxisState.POSITIONING
         if t.kind == "gear":
             state = AxisState.GEAR_CHANGE
         self._adopt_tool(ax)
@@ -387,6 +400,11 @@ class SpindleControl:
             if v * d > _V_EPS:  # already turning the right way: pass the mark at speed
                 v_seek = max(v_seek, min(abs(v), t.speed * self.override(ax)))
             self.velocity(ax, d * v_seek)
+            return
+        if t.kind == "M5":  # homed on the way: now brake to standstill
+            t.phase = TaskPhase.STOP
+            self._state(ax, AxisState.STOPPING)
+            self.velocity(ax, 0.0)
             return
         if not ax.homed:
             self.m._fail(ax, Code.SPINDLE_NOT_HOMED, f"{ax.name}: M19 needs a reference")
@@ -460,7 +478,7 @@ class SpindleControl:
         pr[s, L.P_ENC_OFFSET] += shift
         for col in (L.S_P_ACT, L.S_P_CMD, L.S_SEG_P0):
             k.st[s, col] += shift
-        ax.homed = True
+        ax.homed, ax.reference_lost = True, False
         k.ist[s, L.I_HOMED] = 1
         k.ist[s, L.I_MARK_ARMED] = 0
         self.m.log(Code.EV_HOMED, ax.name, f"{ax.name} reference at the zero mark")
@@ -476,6 +494,9 @@ class SpindleControl:
         ax.task = None
         self._state(ax, AxisState.STANDSTILL)
         ax.motion, ax.block_id = None, None
+        if t.kind == "M5":
+            self.m.log(Code.EV_MOTION_DONE, ax.name, f"{ax.name} stopped (M5)")
+            return
         self.m.log(Code.EV_IN_POSITION, ax.name, f"{ax.name} at {t.pos_deg:g}° ({t.kind})")
 
     def gear_acknowledged(self, ax: Axis) -> None:
@@ -507,7 +528,7 @@ class SpindleControl:
         if ev & L.EV_LOOP:
             mode = int(k.ist[s, L.I_OPEN_LOOP])
             if mode == L.LOOP_CONTROL_LIMIT:
-                ax.homed = False
+                ax.homed, ax.reference_lost = False, True
                 self.m.log(Code.EV_LOOP_OPENED, ax.name, f"{ax.name} above the control limit")
                 self.m.log(Code.EV_REFERENCE_LOST, ax.name)
                 if ax.state is AxisState.ENDLESS:
@@ -562,7 +583,7 @@ class SpindleControl:
         if sc.m in (3, 4):
             err = self.endless(ax, sc.m, sc.speed_rpm, gear, block_id)
         elif sc.m == 5:
-            self.stop(ax)
+            self.m5(ax)
         elif sc.m == 19:
             err = self.position(ax, sc.pos_deg or 0.0, sc.direction, sc.speed_rpm, block_id)
         elif 74 in sc.g:

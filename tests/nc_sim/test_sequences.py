@@ -196,3 +196,38 @@ def test_spindle_move_goes_to_the_angle_the_shortest_way_and_ends() -> None:
     assert m.axis(S).state is AxisState.ENDLESS
     assert m.jog_step(S, 10.0) is not None  # not while it rotates: 90006
     assert codes(m)[-1] == Code.AXIS_BUSY
+
+
+# --- item 7: M5 after the control limit homes on the way (analogue drives) ---------------------
+def _over_the_control_limit(achs_mode: int) -> tuple[Simulation, Machine, float]:
+    limit_rpm = 2000
+    sim, m, _ = make(
+        {S: {"getriebe[2].vb_regelgrenze": limit_rpm * 6000, "kenngr.achs_mode": achs_mode}},
+        {"spindel[0].m3_synch": 0, "spindel[0].m5_synch": 0},
+    )
+    assert m.mdi("M3 S3000").ok
+    record(sim, 8.0)
+    assert Code.EV_REFERENCE_LOST in codes(m) and not m.axis(S).homed
+    return sim, m, limit_rpm * RPM
+
+
+def test_m5_after_the_control_limit_homes_an_analogue_spindle_on_the_way() -> None:
+    sim, m, v_limit = _over_the_control_limit(0)
+    s = m.axis(S)
+    c0 = m.cycle
+    assert m.mdi("M5").ok
+    rec = record(sim, 8.0)[:, s.slot]
+    homed = [e for e in m.events if e.code == Code.EV_HOMED and e.cycle > c0]
+    assert len(homed) == 1 and s.homed
+    # the zero mark is taken with the loop closed, below the control limit [000 §2.4.2, §2.7]
+    i = homed[0].cycle - c0 - 1
+    assert rec[i, L.R_OPEN_LOOP] == L.LOOP_CLOSED and abs(rec[i, L.R_V_CMD]) <= v_limit
+    assert s.state is AxisState.STANDSTILL and rec[-1, L.R_V_CMD] == 0.0
+
+
+def test_m5_after_the_control_limit_does_not_home_a_digital_spindle() -> None:
+    sim, m, _ = _over_the_control_limit(0x101)  # ACHSMODE_KEINE_AUTO_RPF: G74 only
+    s = m.axis(S)
+    assert m.mdi("M5").ok
+    record(sim, 8.0)
+    assert not s.homed and s.state is AxisState.STANDSTILL
