@@ -100,6 +100,9 @@ class Axis:
     ff_set: float = 1.0  # weighting for G135, set by G136
     task: SpindleTask | None = None
     reference_lost: bool = False  # lost above the control limit: M5 homes again [000 §2.7]
+    deadline: int | None = None  # watchdog: cycle by which the current phase must have ended
+    deadline_s: float = 0.0  # ... its bound in seconds
+    deadline_what: str = ""  # ... and what it is (for the job error 90023)
     units: dict[str, int] = field(
         default_factory=lambda: {
             "override": 1000,

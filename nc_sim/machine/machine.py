@@ -27,9 +27,10 @@ from nc_sim.machine.dynamics import (
     velocity_limit,
 )
 from nc_sim.machine.spindle import SpindleControl
+from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.units import AxisKind
+from nc_sim.units import AxisKind, Quantity, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
 AXIS_UNITS = (
@@ -42,7 +43,10 @@ AXIS_UNITS = (
     "spindle_stop_at_program_end",
     "spindle_reset",
 )
-_FAR = 1e9  # jog target of an axis whose software limits are not yet active
+_FAR = 1e9  # jog target of a spindle (a modulo axis: no position range)
+# positions the NC represents: SGN32 in 0.1 µm | 0.0001° (the range of P-AXIS-00177/00178);
+# an unhomed axis may go anywhere within it, a target beyond it is meaningless (90003)
+POSITION_RANGE = to_eng(Quantity.POSITION, 2**31 - 1)
 
 
 @dataclass
@@ -112,6 +116,7 @@ class Machine:
             times.append(due)
         timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
         times += [c + timeout for c in self._m_out]
+        times += [ax.deadline for ax in self.axes if ax.deadline is not None]
         return min(times) if times else None
 
     def refresh_params(self) -> None:
@@ -160,6 +165,44 @@ class Machine:
     def _set_state(self, ax: Axis, state: AxisState) -> None:
         ax.state = state
         self.k.ist[ax.slot, L.I_STATE] = int(state)
+        if state in (AxisState.STANDSTILL, AxisState.ERROR):
+            ax.deadline = None
+
+    # --- watchdog -----------------------------------------------------------------------
+    def _watch(self, ax: Axis, expected_s: float, what: str = "", extend: bool = False) -> None:
+        """Bound the phase starting now (expected to take `expected_s`, or that much longer
+        with `extend`): unless it ended by then, it ends in job error 90023."""
+        if ax.state is AxisState.ERROR:
+            return  # the error reaction's braking: bounded by physics, nothing waits on it
+        if extend and ax.deadline is not None:
+            expected_s += (ax.deadline - self.cycle) * self.k.cycle_s
+        bound = bound_s(expected_s)
+        ax.deadline_what = what or ax.state.name.lower().replace("_", " ")
+        if not math.isfinite(bound):  # a phase that can never end fails at once
+            ax.deadline = self.cycle
+            return
+        ax.deadline = self.cycle + self._cycles(bound)
+        ax.deadline_s = bound
+
+    def _unwatch(self, ax: Axis) -> None:
+        """The phase may last: a steady state (rotation at speed) or a hold by the operator."""
+        ax.deadline = None
+
+    def _watchdog_expired(self, ax: Axis) -> None:
+        """A sequence did not progress within its bound: job error, brake, axis in error."""
+        self._fail(
+            ax,
+            Code.SEQUENCE_WATCHDOG,
+            f"{ax.name}: {ax.deadline_what} has not ended within {ax.deadline_s:g} s",
+        )
+        self._abort_block(ax)
+        if ax.kind is AxisKind.SPINDLE:
+            self.sp.cancel_task(ax)
+        ax.task, ax.motion, ax.hold, ax.homing = None, None, False, HomingPhase.NONE
+        self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
+        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self._set_state(ax, AxisState.ERROR)
+        self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
 
     def _as_axis(self, ax: Axis) -> bool:
         """Moves like an axis: a linear axis, or a spindle jogged or moved as a rotary axis
@@ -192,6 +235,7 @@ class Machine:
     def _plan_move(self, ax: Axis, limits: np.ndarray, v_max: float) -> None:
         if v_max <= 0.0:  # feedhold or override 0 %: brake and hold, keep the target for later
             self._plan_velocity(ax, 0.0, limits)
+            self._unwatch(ax)  # held by the operator, not stuck
             return
         s = ax.slot
         st = self.k.st
@@ -206,6 +250,7 @@ class Machine:
             limits,
             self.k.cycle_s,
         )
+        self._watch(ax, plan_s(seg, n))
         self.k.load_plan(s, seg, n, ax.target)
         if n == 0:  # already on the target at rest: no plan to finish, done at once
             self._axis_events(ax, L.EV_PLAN_DONE)
@@ -215,6 +260,7 @@ class Machine:
         st = self.k.st
         seg = new_plan()
         n = velocity_change(seg, 0, st[s, L.S_V_CMD], st[s, L.S_A_CMD], v, limits, self.k.cycle_s)
+        self._watch(ax, plan_s(seg, n))
         self.k.load_plan(s, seg, n, math.nan)
         if n == 0:  # already at that speed: the kernel has no plan to finish, done at once
             self._axis_events(ax, L.EV_PLAN_DONE)
@@ -242,9 +288,12 @@ class Machine:
         return None
 
     def _within_limits(self, ax: Axis, target: float) -> JobError | None:
-        if ax.kind is AxisKind.SPINDLE or not ax.homed:
+        if ax.kind is AxisKind.SPINDLE:
             return None
-        lo, hi = self.k.pr[ax.slot, L.P_SWE_NEG], self.k.pr[ax.slot, L.P_SWE_POS]
+        if not ax.homed:  # no software limits yet, but no target beyond what the NC represents
+            lo, hi = -POSITION_RANGE, POSITION_RANGE
+        else:
+            lo, hi = self.k.pr[ax.slot, L.P_SWE_NEG], self.k.pr[ax.slot, L.P_SWE_POS]
         if not lo - 1e-9 <= target <= hi + 1e-9:
             return self._fail(
                 ax,
@@ -282,6 +331,9 @@ class Machine:
         """Single-axis G00/G01 move to an absolute position (mm | °); a spindle moves as a
         modulo rotary axis to the angle, the shortest way."""
         ax = self.axis(axis)
+        err = self._homing_required(ax)
+        if err:
+            return err
         feed = feed_mm_min / 60.0 if feed_mm_min else None
         if ax.kind is AxisKind.SPINDLE and ax.state is AxisState.STANDSTILL:
             target = self.sp.target(ax, target % 360.0, None)
@@ -293,12 +345,21 @@ class Machine:
         """Continuous jog (G200 dynamics) towards the software limit until `jog_stop`."""
         ax = self.axis(axis)
         d = 1.0 if direction > 0 else -1.0
-        if ax.homed and ax.kind is not AxisKind.SPINDLE:
-            target = self.k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
-        else:
+        if ax.kind is AxisKind.SPINDLE:
             target = self.k.st[ax.slot, L.S_P_CMD] + d * _FAR
+        elif ax.homed:
+            target = self.k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
+        else:  # towards the end of the position range: far, but a move that ends
+            target = d * POSITION_RANGE
         feed = feed_mm_min / 60.0 if feed_mm_min else None
         return self._start_move(ax, target, Motion.MANUAL, feed, state=AxisState.JOG)
+
+    def _homing_required(self, ax: Axis) -> JobError | None:
+        """P-AXIS-00277: a programmed motion (G00/G01, `move`) of an unhomed axis is refused
+        with 90013; jogging and homing stay possible."""
+        if ax.homed or not ax.cfg.flag("kenngr.prog_move_requires_homing"):
+            return None
+        return self._fail(ax, Code.NOT_HOMED, f"{ax.name} is not homed (P-AXIS-00277): G74 first")
 
     def jog_stop(self, axis: str) -> None:
         """Release of the jog key: brake with the manual-mode deceleration."""
@@ -338,14 +399,20 @@ class Machine:
             ax.homing = HomingPhase.TO_CAM
             v = ax.cfg.eng("getriebe.vb_refmax", ax.gear)
             self._plan_velocity(ax, d * v, self._limits(ax, Motion.HOMING))
+            # the cam lies within the travel: search it over the whole range at vb_refmax
+            self._watch(ax, search_s(self._travel(ax), v), "homing: search for the cam", True)
         return None
+
+    def _travel(self, ax: Axis) -> float:
+        """Length of the travel between the software limits (mm)."""
+        return float(self.k.pr[ax.slot, L.P_SWE_POS] - self.k.pr[ax.slot, L.P_SWE_NEG])
 
     def _homing_off_cam(self, ax: Axis) -> None:
         d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
         ax.homing = HomingPhase.OFF_CAM
-        self._plan_velocity(
-            ax, -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), self._limits(ax, Motion.HOMING)
-        )
+        v = ax.cfg.eng("getriebe.vb_reflow", ax.gear)
+        self._plan_velocity(ax, -d * v, self._limits(ax, Motion.HOMING))
+        self._watch(ax, search_s(self._travel(ax), v), "homing: leaving the cam", True)
 
     def _homing_edge(self, ax: Axis) -> None:
         """Cam edge with zero pulse: the position here becomes ref_pos."""
@@ -671,7 +738,7 @@ class Machine:
             for name, value in b.axes.items():
                 ax = self.axis(name)
                 target = value if b.absolute is not False else self.k.st[ax.slot, L.S_P_CMD] + value
-                if self._start_move(ax, target, motion, feed, run.id):
+                if self._homing_required(ax) or self._start_move(ax, target, motion, feed, run.id):
                     return False
         return True
 
@@ -732,6 +799,8 @@ class Machine:
             if ev:
                 self.k.ist[ax.slot, L.I_EVENTS] = 0
                 self._axis_events(ax, ev)
+            if ax.deadline is not None and cycle >= ax.deadline:
+                self._watchdog_expired(ax)
         self._pump()
 
     def _axis_events(self, ax: Axis, ev: int) -> None:
@@ -770,7 +839,10 @@ class Machine:
         self._set_state(ax, AxisState.ERROR)
 
     def _plan_done(self, ax: Axis) -> None:
-        if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS, AxisState.OPEN_LOOP):
+        if ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
+            self._unwatch(ax)  # at speed: endless rotation lasts until the next command
+            return
+        if ax.hold or ax.state is AxisState.ERROR:
             return
         away = abs(self.k.st[ax.slot, L.S_P_CMD] - ax.target) > 1e-9
         if ax.state in (AxisState.MOVING, AxisState.JOG) and away:

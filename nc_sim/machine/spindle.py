@@ -29,6 +29,7 @@ from nc_sim.machine.axis import (
 )
 from nc_sim.machine.dynamics import Motion
 from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
+from nc_sim.machine.watchdog import CurveParams, curve_s, plan_s
 from nc_sim.profiles.plan import (
     LIM_A_ACC,
     LIM_A_ACC2,
@@ -126,10 +127,51 @@ class SpindleControl:
     # --- primitives ---------------------------------------------------------------------
     def velocity(self, ax: Axis, v: float) -> None:
         """Speed change: along the acceleration curve when one is set, else planned."""
-        if int(ax.cfg.raw("getriebe.beschl_kennlinie.typ", ax.gear)) != 0:
-            self.m.k.load_curve(ax.slot, v)
-        else:
+        if int(ax.cfg.raw("getriebe.beschl_kennlinie.typ", ax.gear)) == 0:
             self.m._plan_velocity(ax, v, self.limits(ax))
+            return
+        ramp = curve_s(self.curve(ax), float(self.m.k.st[ax.slot, L.S_V_CMD]), v)
+        if ramp.dead_speed is not None:
+            self._curve_refused(ax, ramp.dead_speed)
+            return
+        self.m._watch(ax, ramp.seconds, "speed change along the acceleration curve")
+        self.m.k.load_curve(ax.slot, v)
+
+    def curve(self, ax: Axis) -> CurveParams:
+        """The acceleration curve in force (the kernel's copy of the gear record)."""
+        pr = self.m.k.pr[ax.slot]
+        return CurveParams(
+            int(pr[L.P_CURVE_TYPE]),
+            *(
+                float(pr[c])
+                for c in (
+                    L.P_N_LIMIT,
+                    L.P_A_KONST,
+                    L.P_B1,
+                    L.P_B2,
+                    L.P_B3,
+                    L.P_A_MIN,
+                    L.P_CURVE_A_MAX,
+                    L.P_N1,
+                    L.P_N2,
+                    L.P_A_CAP,
+                )
+            ),
+        )
+
+    def _curve_refused(self, ax: Axis, n_deg_s: float) -> None:
+        """A curve that cannot reach the speed: job error, brake on the planner, error state."""
+        self.m._fail(
+            ax,
+            Code.CURVE_NO_ACCELERATION,
+            f"{ax.name} gear {ax.gear}: a(n) at {n_deg_s / RPM_TO_DEG_S:g} rpm is "
+            f"{self.curve(ax).accel(n_deg_s):g} °/s² (getriebe[{ax.gear - 1}].beschl_kennlinie)",
+        )
+        self.cancel_task(ax)
+        self.m._set_state(ax, AxisState.ERROR)
+        self.m.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
+        self.m.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self.m._plan_velocity(ax, 0.0, self.limits(ax))
 
     def _state(self, ax: Axis, state: AxisState, monitoring: bool = False) -> None:
         self.m._set_state(ax, state)
@@ -400,6 +442,8 @@ class SpindleControl:
             if v * d > _V_EPS:  # already turning the right way: pass the mark at speed
                 v_seek = max(v_seek, min(abs(v), t.speed * self.override(ax)))
             self.velocity(ax, d * v_seek)
+            # the mark passes once per revolution
+            self.m._watch(ax, 360.0 / v_seek, "search for the zero mark", extend=True)
             return
         if t.kind == "M5":  # homed on the way: now brake to standstill
             t.phase = TaskPhase.STOP
@@ -445,6 +489,7 @@ class SpindleControl:
         k.st[ax.slot, L.S_OVERRIDE] = self.override(ax)
         if v_max <= 0:  # override 0 %: hold; the move resumes with the override
             self.m._plan_velocity(ax, 0.0, self.limits(ax))
+            self.m._unwatch(ax)  # held by the operator, not stuck
             return
         seg = new_plan()
         n = position_move(
@@ -457,6 +502,7 @@ class SpindleControl:
             self.limits(ax),
             k.cycle_s,
         )
+        self.m._watch(ax, plan_s(seg, n), f"{t.kind}: positioning to {t.pos_deg:g}°")
         k.load_plan(ax.slot, seg, n, ax.target)
 
     def replan(self, ax: Axis) -> None:
@@ -490,6 +536,9 @@ class SpindleControl:
             t.phase = TaskPhase.WAIT_PLC
             self._state(ax, AxisState.GEAR_CHANGE)
             self.m._m_output_gear(m_of(t.gear), ax)
+            # the PLC's own timeout (90004) ends it first; this bounds it as every phase
+            timeout = self.m.cfg.channel_eng("plc.m_ack_timeout")
+            self.m._watch(ax, timeout, f"gear change: M{m_of(t.gear)} acknowledgement")
             return
         ax.task = None
         self._state(ax, AxisState.STANDSTILL)

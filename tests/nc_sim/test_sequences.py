@@ -231,3 +231,100 @@ def test_m5_after_the_control_limit_does_not_home_a_digital_spindle() -> None:
     assert m.mdi("M5").ok
     record(sim, 8.0)
     assert not s.homed and s.state is AxisState.STANDSTILL
+
+
+# --- item 13: bounds and watchdogs -------------------------------------------------------------
+def test_curve_without_acceleration_is_refused_instead_of_rotating_at_0_rpm_forever() -> None:
+    """Polynomial curve with b1..b3 = 1e308 and the defaults a_konst = n_grenz = 0: a(0) = 0."""
+    curve = {f"getriebe[2].beschl_kennlinie.{k}": 1e308 for k in ("b1", "b2", "b3")}
+    sim, m, _ = make({S: {"getriebe[2].beschl_kennlinie.typ": 2, **curve}})
+    assert m.mdi("M3 S1000").ok
+    record(sim, 1.0)
+    err = next(e for e in m.events if e.code == Code.CURVE_NO_ACCELERATION)
+    assert "at 0 rpm" in err.message
+    assert m.axis(S).state is AxisState.ERROR and m.queued_blocks == 0
+
+
+def test_curve_that_dies_above_n_grenz_is_refused_naming_the_speed() -> None:
+    """The manual's hyperbola [000 §2.8.4] with b2 = 1e308: no acceleration above n_grenz."""
+    params = {
+        "typ": 1,
+        "n_grenz": 12000000,  # 2000 rpm
+        "a_konst": 16000,
+        "b1": 2.285714e4,
+        "b2": 1e308,
+        "b3": 2.857142e-2,
+    }
+    sim, m, _ = make({S: {f"getriebe[2].beschl_kennlinie.{k}": v for k, v in params.items()}})
+    assert m.mdi("M3 S1000").ok  # below n_grenz: a_konst, fine
+    record(sim, 2.0)
+    assert m.axis(S).state is AxisState.ENDLESS
+    assert m.mdi("M3 S3000").ok
+    record(sim, 1.0)
+    err = next(e for e in m.events if e.code == Code.CURVE_NO_ACCELERATION)
+    rpm = float(err.message.split(" at ")[1].split(" rpm")[0])
+    assert 2000 < rpm <= 3000
+    assert m.axis(S).state is AxisState.ERROR
+
+
+def test_unhomed_axis_refuses_a_target_beyond_the_position_range() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    err = m.move("X", 1e249)
+    assert err is not None and err.code == Code.SOFTWARE_LIMIT
+    assert m.mdi("G00 X300000").ok  # 300 m: beyond SGN32 in 0.1 µm (±214748.3647 mm)
+    record(sim, 1.0)
+    assert codes(m).count(Code.SOFTWARE_LIMIT) == 2 and m.queued_blocks == 0
+    assert x.state is AxisState.STANDSTILL and m.k.st[x.slot, L.S_V_CMD] == 0.0
+    # within the range (SGN32 in 0.1 µm: ±214748.3647 mm) an unhomed axis still moves
+    assert m.move("X", 60.0) is None
+
+
+def test_p_axis_00277_refuses_programmed_motion_of_an_unhomed_axis_with_90013() -> None:
+    sim, m, _ = make({"X": {"kenngr.prog_move_requires_homing": 1}})
+    x = m.axis("X")
+    err = m.move("X", 100.0)
+    assert err is not None and err.code == Code.NOT_HOMED
+    assert m.mdi("G01 X100 F1000").ok
+    record(sim, 0.1)
+    assert codes(m).count(Code.NOT_HOMED) == 2 and m.queued_blocks == 0
+    assert m.jog_step("X", 1.0) is None  # jogging stays possible
+    record(sim, 2.0)
+    assert m.mdi("G74 X1").ok
+    record(sim, 10.0)
+    assert x.homed and m.move("X", 100.0) is None
+
+
+def test_homing_that_never_finds_its_cam_ends_in_the_watchdog_error() -> None:
+    """The cam lies far beyond the travel: the search runs away, bounded by travel / vb_refmax."""
+    sim, m, cfg = make({"X": {"sim.ref_cam_pos": 2000000000}})  # 200 m
+    x = m.axis("X")
+    assert m.home("X") is None
+    c0 = m.cycle
+    record(sim, 30.0)
+    err = next(e for e in m.events if e.code == Code.SEQUENCE_WATCHDOG)
+    travel = cfg.axis("X").eng("kenngr.swe_pos") - cfg.axis("X").eng("kenngr.swe_neg")
+    search_s = travel / cfg.axis("X").eng("getriebe.vb_refmax")
+    after_s = (err.cycle - c0) * sim.kernel.cycle_s
+    # not before the whole travel was searched; at most twice the search and its ramp (shorter
+    # than the search here) plus a second
+    assert search_s < after_s < 4 * search_s + 1.0
+    assert x.state is AxisState.ERROR and not x.homed
+    record(sim, 2.0)
+    assert m.k.st[x.slot, L.S_V_CMD] == 0.0  # braked
+    m.reset()
+    assert m.axis("X").state is AxisState.STANDSTILL
+
+
+def test_healthy_long_sequences_never_meet_their_bounds() -> None:
+    sim, m, _ = make(channel={"spindel[0].m3_synch": 0})
+    x, s = m.axis("X"), m.axis(S)
+    assert m.mdi("M3 S1000").ok  # endless rotation lasts until the next command
+    assert m.mdi("G01 X200 F3000").ok
+    record(sim, 1.0)
+    m.hli_write("feedhold", 1)  # the operator holds the move for a minute
+    record(sim, 60.0)
+    m.hli_write("feedhold", 0)
+    record(sim, 5.0)
+    assert Code.SEQUENCE_WATCHDOG not in codes(m)
+    assert m.k.st[x.slot, L.S_P_CMD] == 200.0 and s.state is AxisState.ENDLESS
