@@ -170,6 +170,24 @@ def test_plc_manual_acknowledgement(srv: Server) -> None:
     srv.command("demo", {"type": "plc_mode", "mode": "auto"})
 
 
+def test_plc_acknowledge_after_the_timeout_acknowledges_nothing(srv: Server) -> None:
+    """Timed out means gone: no longer pending in the status, a late ack answers 0."""
+    srv.pace("demo", mode="pause")
+    srv.command("demo", {"type": "plc_mode", "mode": "manual"})
+    srv.command("demo", {"type": "mdi", "block": "M8"})
+    srv.step("demo", 100)
+    assert [p["m"] for p in srv.status()["plc"]["pending"]] == [8]
+    srv.step("demo", 5000)  # demo plc.m_ack_timeout: 5 s
+    st = srv.status()
+    assert st["plc"]["pending"] == []
+    assert 90004 in {e["code"] for e in st["recent_events"]}
+    r = srv.command("demo", {"type": "plc_ack", "m": 8})
+    assert r.is_success and r.json()["acknowledged"] == 0
+    srv.command("demo", {"type": "plc_mode", "mode": "auto"})
+    srv.command("demo", {"type": "reset"})
+    srv.pace("demo", mode="run")
+
+
 def test_emergency_stop_and_reset(srv: Server) -> None:
     srv.command("demo", {"type": "emergency_stop"})
     st = srv.status()
