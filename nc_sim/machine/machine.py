@@ -178,11 +178,9 @@ class Machine:
             expected_s += (ax.deadline - self.cycle) * self.k.cycle_s
         bound = bound_s(expected_s)
         ax.deadline_what = what or ax.state.name.lower().replace("_", " ")
-        if not math.isfinite(bound):  # a phase that can never end fails at once
-            ax.deadline = self.cycle
-            return
-        ax.deadline = self.cycle + self._cycles(bound)
         ax.deadline_s = bound
+        # a phase that can never end (no speed to search with) fails at once
+        ax.deadline = self.cycle + self._cycles(bound) if math.isfinite(bound) else self.cycle
 
     def _unwatch(self, ax: Axis) -> None:
         """The phase may last: a steady state (rotation at speed) or a hold by the operator."""
@@ -190,11 +188,12 @@ class Machine:
 
     def _watchdog_expired(self, ax: Axis) -> None:
         """A sequence did not progress within its bound: job error, brake, axis in error."""
-        self._fail(
-            ax,
-            Code.SEQUENCE_WATCHDOG,
-            f"{ax.name}: {ax.deadline_what} has not ended within {ax.deadline_s:g} s",
+        how = (
+            f"did not end within {ax.deadline_s:g} s"
+            if math.isfinite(ax.deadline_s)
+            else "could never end"
         )
+        self._fail(ax, Code.SEQUENCE_WATCHDOG, f"{ax.name}: {ax.deadline_what} {how}")
         self._abort_block(ax)
         if ax.kind is AxisKind.SPINDLE:
             self.sp.cancel_task(ax)
@@ -335,7 +334,7 @@ class Machine:
         if err:
             return err
         feed = feed_mm_min / 60.0 if feed_mm_min else None
-        if ax.kind is AxisKind.SPINDLE and ax.state is AxisState.STANDSTILL:
+        if ax.kind is AxisKind.SPINDLE:
             target = self.sp.target(ax, target % 360.0, None)
         return self._start_move(ax, target, Motion.RAPID if rapid else Motion.FEED, feed)
 
