@@ -70,6 +70,14 @@ class Server:
     def axis(self, name: str, mid: str = "demo") -> dict[str, Any]:
         return next(a for a in self.status(mid)["axes"] if a["name"] == name)
 
+    def wait_powered(self, mid: str, timeout_s: float = 10.0) -> None:
+        """Wait until the machine's PLC has switched its drives on (real-time pacing)."""
+        deadline = time.monotonic() + timeout_s
+        while not self.status(mid)["plc"]["drives_powered"]:
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{mid}: drives not powered")
+            time.sleep(0.02)
+
     def pace(self, mid: str, **body: Any) -> dict[str, Any]:
         r = self.http.post(f"/api/machines/{mid}/simulation", json=body)
         r.raise_for_status()

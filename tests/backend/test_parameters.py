@@ -23,26 +23,35 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s.close()
 
 
-def values(srv: Server, target: str | None = "X", scope: str = "axis") -> dict[str, Any]:
+def values(srv: Server, mid: str, target: str | None = "X", scope: str = "axis") -> dict[str, Any]:
     params: dict[str, Any] = {"scope": scope}
     if target:
         params["target"] = target
-    r = srv.http.get("/api/machines/demo/parameters", params=params)
+    r = srv.http.get(f"/api/machines/{mid}/parameters", params=params)
     r.raise_for_status()
     return {p["name"]: p for p in r.json()}
 
 
-def write(srv: Server, *changes: tuple[str, str | None, str, Any]) -> Any:
+def write(srv: Server, mid: str, *changes: tuple[str, str | None, str, Any]) -> Any:
     body = {"changes": [{"scope": s, "target": t, "name": n, "value": v} for s, t, n, v in changes]}
-    return srv.http.patch("/api/machines/demo/parameters", json=body)
+    return srv.http.patch(f"/api/machines/{mid}/parameters", json=body)
 
 
-def lag_at_feed(srv: Server, feed_mm_min: float) -> float:
+def import_list(srv: Server, mid: str, target: str, text: str) -> Any:
+    return srv.http.post(
+        f"/api/machines/{mid}/parameters/import",
+        params={"scope": "axis", "target": target},
+        content=text,
+        headers={"content-type": "text/plain"},
+    )
+
+
+def lag_at_feed(srv: Server, mid: str, feed_mm_min: float) -> float:
     """Steady position lag of X in a G1 move (machine paused and stepped in simulated time)."""
-    srv.pace("demo", mode="pause")
-    x0 = srv.axis("X")["pos_cmd"]
+    srv.pace(mid, mode="pause")
+    x0 = srv.axis("X", mid)["pos_cmd"]
     r = srv.command(
-        "demo",
+        mid,
         {
             "type": "move",
             "axis": "X",
@@ -52,126 +61,121 @@ def lag_at_feed(srv: Server, feed_mm_min: float) -> float:
         },
     )
     assert r.status_code == 200, r.text
-    srv.step("demo", 2000)
-    lag = float(srv.axis("X")["lag"])
-    srv.step("demo", 6000)
-    srv.pace("demo", mode="run")
+    srv.step(mid, 2000)
+    lag = float(srv.axis("X", mid)["lag"])
+    srv.step(mid, 6000)
+    srv.pace(mid, mode="run")
     return lag
 
 
-def test_registry_and_values_per_gear_record(srv: Server) -> None:
+def test_registry_and_values_per_gear_record(srv: Server, mid: str) -> None:
     defs = {d["id"]: d for d in srv.http.get("/api/parameters").json()}
     assert defs["P-AXIS-00099"]["name"] == "getriebe[i].kv"
     assert defs["P-AXIS-00099"]["per_gear"]
-    v = values(srv, "S1")
+    v = values(srv, mid, "S1")
     assert [v[f"getriebe[{g}].kv"]["gear"] for g in range(6)] == [1, 2, 3, 4, 5, 6]
-    x = values(srv)["getriebe[0].kv"]
+    x = values(srv, mid)["getriebe[0].kv"]
     assert x["value"] == 2000 and x["set"] and x["unit"] == "0.01/s"
     assert x["effect"] == "now" and x["id"] == "P-AXIS-00099"
     # engineering value: kv 2000 × 0.01/s = 20 1/s; the manual's range 1 … 2^32-1
     assert (x["eng_factor"] * x["value"], x["eng_unit"]) == (pytest.approx(20.0), "1/s")
     assert (x["min"], x["max"]) == (1, 2**32 - 1)
     # a bound that names another entry is resolved from the list: a_emergency ≤ 2·a_max
-    a_max = values(srv)["getriebe[0].dynamik.a_max"]["value"]
-    assert values(srv)["getriebe[0].dynamik.a_emergency"]["max"] == 2 * a_max
+    a_max = values(srv, mid)["getriebe[0].dynamik.a_max"]["value"]
+    assert values(srv, mid)["getriebe[0].dynamik.a_emergency"]["max"] == 2 * a_max
 
 
-def test_write_applies_now_and_the_loop_follows(srv: Server) -> None:
+def test_write_applies_now_and_the_loop_follows(srv: Server, mid: str) -> None:
     """kv 20/s -> 10/s: at 10 mm/s the steady lag doubles from 0.5 to 1.0 mm (lag = v/kv)."""
-    assert lag_at_feed(srv, 600) == pytest.approx(0.5, rel=1e-3)
-    r = write(srv, ("axis", "X", "getriebe[0].kv", 1000))
+    assert lag_at_feed(srv, mid, 600) == pytest.approx(0.5, rel=1e-3)
+    r = write(srv, mid, ("axis", "X", "getriebe[0].kv", 1000))
     assert r.status_code == 200, r.text
     change = r.json()["changes"][0]
     assert (change["old"], change["new"], change["pending"]) == (2000, 1000, False)
-    assert lag_at_feed(srv, 600) == pytest.approx(1.0, rel=1e-3)
+    assert lag_at_feed(srv, mid, 600) == pytest.approx(1.0, rel=1e-3)
 
 
-def test_out_of_range_is_422_with_range_and_unit_and_nothing_changes(srv: Server) -> None:
-    before = values(srv)
-    r = write(srv, ("axis", "X", "getriebe[0].lag_max", 60000), ("axis", "X", "getriebe[0].kv", 0))
+def test_out_of_range_is_422_with_range_and_unit_and_nothing_changes(srv: Server, mid: str) -> None:
+    before = values(srv, mid)
+    r = write(
+        srv, mid, ("axis", "X", "getriebe[0].lag_max", 60000), ("axis", "X", "getriebe[0].kv", 0)
+    )
     assert r.status_code == 422
     detail = r.json()["detail"]
     (problem,) = detail["problems"]
     assert problem["parameter"] == "getriebe[0].kv" and problem["id"] == "P-AXIS-00099"
     assert (problem["min"], problem["unit"]) == (KV.lo, "0.01/s")
     assert "out of range" in problem["message"]
-    after = values(srv)
+    after = values(srv, mid)
     assert after["getriebe[0].kv"]["value"] == before["getriebe[0].kv"]["value"]
     assert after["getriebe[0].lag_max"]["value"] == before["getriebe[0].lag_max"]["value"]
-    r = write(srv, ("axis", "X", "getriebe[0].nonsense", 1))
+    r = write(srv, mid, ("axis", "X", "getriebe[0].nonsense", 1))
     assert r.status_code == 422 and "nonsense" in r.text
-    r = write(srv, ("axis", "Q", "getriebe[0].kv", 1000))
+    r = write(srv, mid, ("axis", "Q", "getriebe[0].kv", 1000))
     assert r.status_code == 422 and "X, Z, S1" in r.text
 
 
-def test_reset_effect_is_pending_until_reset(srv: Server) -> None:
-    r = write(srv, ("axis", "X", "kenngr.swe_pos", 2500000))
+def test_reset_effect_is_pending_until_reset(srv: Server, mid: str) -> None:
+    r = write(srv, mid, ("axis", "X", "kenngr.swe_pos", 2500000))
     assert r.json()["changes"][0]["pending"]
-    p = values(srv)["kenngr.swe_pos"]
+    p = values(srv, mid)["kenngr.swe_pos"]
     assert (p["value"], p["pending"], p["effect"]) == (3000000, 2500000, "reset")
-    srv.command("demo", {"type": "reset"})
-    p = values(srv)["kenngr.swe_pos"]
+    srv.command(mid, {"type": "reset"})
+    p = values(srv, mid)["kenngr.swe_pos"]
     assert (p["value"], p["pending"]) == (2500000, None)
 
 
-def test_restart_effect_is_pending_until_restart(srv: Server) -> None:
-    write(srv, ("axis", "X", "getriebe[0].wegaufz", 2))
-    srv.command("demo", {"type": "reset"})
-    assert values(srv)["getriebe[0].wegaufz"]["pending"] == 2
-    r = srv.http.post("/api/machines/demo/restart")
+def test_restart_effect_is_pending_until_restart(srv: Server, mid: str) -> None:
+    write(srv, mid, ("axis", "X", "getriebe[0].wegaufz", 2))
+    srv.command(mid, {"type": "reset"})
+    assert values(srv, mid)["getriebe[0].wegaufz"]["pending"] == 2
+    r = srv.http.post(f"/api/machines/{mid}/restart")
     assert r.status_code == 200 and r.json()["cycle"] < 1000
-    p = values(srv)["getriebe[0].wegaufz"]
+    p = values(srv, mid)["getriebe[0].wegaufz"]
     assert (p["value"], p["pending"]) == (2, None)
-    write(srv, ("axis", "X", "getriebe[0].wegaufz", 1))
-    srv.http.post("/api/machines/demo/restart")
 
 
-def test_import_manual_excerpt_and_reject_bad_line(srv: Server) -> None:
+def test_import_manual_excerpt_and_reject_bad_line(srv: Server, mid: str) -> None:
     text = (DATA / "axis_excerpt.lis").read_text()
-    r = srv.http.post(
-        "/api/machines/demo/parameters/import",
-        params={"scope": "axis", "target": "S1"},
-        content=text,
-        headers={"content-type": "text/plain"},
-    )
+    r = import_list(srv, mid, "S1", text)
     assert r.status_code == 200, r.text
-    v = values(srv, "S1")
+    v = values(srv, mid, "S1")
     assert v["getriebe[0].beschl_kennlinie.typ"]["value"] == 2  # polynomial
     assert v["getriebe[0].beschl_kennlinie.b3"]["value"] == pytest.approx(-1.92901234e-10)
     lines = text.splitlines()
     lines.insert(4, "getriebe[0].dynamik.a_max   banana")
-    r = srv.http.post(
-        "/api/machines/demo/parameters/import",
-        params={"scope": "axis", "target": "S1"},
-        content="\n".join(lines),
-        headers={"content-type": "text/plain"},
-    )
+    r = import_list(srv, mid, "S1", "\n".join(lines))
     assert r.status_code == 422
     assert r.json()["detail"]["problems"][0]["line"] == 5
 
 
-def test_export_round_trips(srv: Server) -> None:
-    r = srv.http.get("/api/machines/demo/parameters/export", params={"target": "X"})
+def test_export_round_trips(srv: Server, mid: str) -> None:
+    assert write(srv, mid, ("axis", "X", "getriebe[0].kv", 1500)).status_code == 200
+    r = srv.http.get(f"/api/machines/{mid}/parameters/export", params={"target": "X"})
     assert r.status_code == 200 and r.headers["content-type"].startswith("text/plain")
-    assert any(line.split()[:2] == ["getriebe[0].kv", "1000"] for line in r.text.splitlines())
-    r2 = srv.http.post(
-        "/api/machines/demo/parameters/import",
-        params={"scope": "axis", "target": "X"},
-        content=r.text,
-        headers={"content-type": "text/plain"},
-    )
+    assert any(line.split()[:2] == ["getriebe[0].kv", "1500"] for line in r.text.splitlines())
+    before = values(srv, mid)
+    r2 = import_list(srv, mid, "X", r.text)
     assert r2.status_code == 200, r2.text
+    after = values(srv, mid)
+    assert {k: v["value"] for k, v in after.items()} == {k: v["value"] for k, v in before.items()}
 
 
-def test_audit_trail_and_restart_of_the_service(srv: Server) -> None:
-    audit = srv.http.get("/api/machines/demo/parameters/audit").json()
+def test_audit_trail_and_restart_of_the_service(srv: Server, mid: str) -> None:
+    """Values written (now, at reset, by import) and their audit survive a service restart."""
+    assert write(srv, mid, ("axis", "X", "getriebe[0].kv", 1000)).status_code == 200
+    assert write(srv, mid, ("axis", "X", "kenngr.swe_pos", 2500000)).status_code == 200
+    srv.command(mid, {"type": "reset"})
+    assert import_list(srv, mid, "S1", (DATA / "axis_excerpt.lis").read_text()).is_success
+    audit = srv.http.get(f"/api/machines/{mid}/parameters/audit").json()
     kv = [a for a in audit if a["name"] == "getriebe[0].kv" and a["target"] == "X"]
     assert (kv[0]["old"], kv[0]["new"], kv[0]["actor"]) == (2000, 1000, "local")
     assert any(a["comment"] == "import axis list" for a in audit)
     srv.stop()
     srv.start()
-    assert values(srv)["getriebe[0].kv"]["value"] == 1000
-    assert values(srv)["kenngr.swe_pos"]["value"] == 2500000
-    assert values(srv, "S1")["getriebe[0].beschl_kennlinie.typ"]["value"] == 2
-    assert srv.http.get("/api/machines/demo/parameters/audit").json() == audit
-    assert lag_at_feed(srv, 600) == pytest.approx(1.0, rel=1e-3)
+    assert values(srv, mid)["getriebe[0].kv"]["value"] == 1000
+    assert values(srv, mid)["kenngr.swe_pos"]["value"] == 2500000
+    assert values(srv, mid, "S1")["getriebe[0].beschl_kennlinie.typ"]["value"] == 2
+    assert srv.http.get(f"/api/machines/{mid}/parameters/audit").json() == audit
+    srv.wait_powered(mid)
+    assert lag_at_feed(srv, mid, 600) == pytest.approx(1.0, rel=1e-3)

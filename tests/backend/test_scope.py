@@ -25,21 +25,27 @@ CH = ["S1.speed_cmd_rpm", "S1.pos_act_deg", "S1.lag_deg", "S1.state"]
 @pytest.fixture(scope="module")
 def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s = Server(tmp_path_factory.mktemp("scope") / "scope.sqlite").start()
-    s.pace("demo", mode="pause")
-    s.step("demo", 500)
     yield s
     s.close()
 
 
-def arm(srv: Server, **setup: Any) -> dict[str, Any]:
-    r = srv.http.put("/api/machines/demo/scope", json=setup)
+@pytest.fixture
+def mid(srv: Server, mid: str) -> str:
+    """The test's own machine, paused with half a second of history for pre-triggers."""
+    srv.pace(mid, mode="pause")
+    srv.step(mid, 500)
+    return mid
+
+
+def arm(srv: Server, mid: str, **setup: Any) -> dict[str, Any]:
+    r = srv.http.put(f"/api/machines/{mid}/scope", json=setup)
     assert r.status_code == 200, r.text
     data: dict[str, Any] = r.json()
     return data
 
 
-def scope(srv: Server) -> dict[str, Any]:
-    data: dict[str, Any] = srv.http.get("/api/machines/demo/scope").json()
+def scope(srv: Server, mid: str) -> dict[str, Any]:
+    data: dict[str, Any] = srv.http.get(f"/api/machines/{mid}/scope").json()
     return data
 
 
@@ -49,20 +55,20 @@ def samples(srv: Server, tid: str) -> tuple[Any, np.ndarray]:
     return decode_frame(r.content)
 
 
-def cycle(srv: Server) -> int:
-    return int(scope(srv)["cycle"])
+def cycle(srv: Server, mid: str) -> int:
+    return int(scope(srv, mid)["cycle"])
 
 
-def m19_capture(srv: Server) -> dict[str, Any]:
+def m19_capture(srv: Server, mid: str) -> dict[str, Any]:
     trig = {"type": "event", "event": "m_start", "axis": "S1", "m": 19}
-    st = arm(srv, channels=CH, length_s=0.5, pretrigger_pct=40, mode="single", trigger=trig)
+    st = arm(srv, mid, channels=CH, length_s=0.5, pretrigger_pct=40, mode="single", trigger=trig)
     assert st["state"] == "armed" and st["pre_cycles"] == 200 and st["length_cycles"] == 500
-    srv.step("demo", 37)
-    at = cycle(srv)
-    r = srv.command("demo", {"type": "spindle_position", "spindle": "S1", "position_deg": 90})
+    srv.step(mid, 37)
+    at = cycle(srv, mid)
+    r = srv.command(mid, {"type": "spindle_position", "spindle": "S1", "position_deg": 90})
     assert r.status_code == 200, r.text
-    srv.step("demo", 600)
-    st = scope(srv)
+    srv.step(mid, 600)
+    st = scope(srv, mid)
     assert st["state"] == "done"
     cap: dict[str, Any] = st["captures"][0]
     assert cap["trigger_cycle"] == at + 1
@@ -71,8 +77,9 @@ def m19_capture(srv: Server) -> dict[str, Any]:
 
 def test_m19_capture_has_the_asked_pretrigger_and_its_trigger_at_the_first_m19_cycle(
     srv: Server,
+    mid: str,
 ) -> None:
-    cap = m19_capture(srv)
+    cap = m19_capture(srv, mid)
     assert cap["first_cycle"] == cap["trigger_cycle"] - 200 and cap["count"] == 500
     assert cap["trigger"] == "M19 start on S1" and not cap["stored"]
     header, data = samples(srv, cap["id"])
@@ -83,27 +90,27 @@ def test_m19_capture_has_the_asked_pretrigger_and_its_trigger_at_the_first_m19_c
     assert any(e["message"].startswith("M19") for e in detail["events"])
 
 
-def test_level_trigger_fires_once_in_single_mode(srv: Server) -> None:
+def test_level_trigger_fires_once_in_single_mode(srv: Server, mid: str) -> None:
     trig = {"type": "level", "signal": "S1.speed_cmd_rpm", "level": 300, "edge": "rising"}
-    before = len(scope(srv)["captures"])
-    arm(srv, channels=["S1.speed_cmd_rpm"], length_s=0.2, pretrigger_pct=50, trigger=trig)
+    before = len(scope(srv, mid)["captures"])
+    arm(srv, mid, channels=["S1.speed_cmd_rpm"], length_s=0.2, pretrigger_pct=50, trigger=trig)
     for m in (3, 5, 3, 5):
-        srv.command("demo", {"type": "spindle", "spindle": "S1", "m": m, "speed_rpm": 600})
-        srv.step("demo", 1500)
-    st = scope(srv)
+        srv.command(mid, {"type": "spindle", "spindle": "S1", "m": m, "speed_rpm": 600})
+        srv.step(mid, 1500)
+    st = scope(srv, mid)
     assert st["state"] == "done" and len(st["captures"]) == before + 1
     _, data = samples(srv, st["captures"][0]["id"])
     assert data[0][100] >= 300 > data[0][99]  # the trigger sample is the first one above
 
 
-def test_bad_setups_are_refused_with_what_is_wrong(srv: Server) -> None:
-    r = srv.http.put("/api/machines/demo/scope", json={"channels": ["S1.nope"]})
+def test_bad_setups_are_refused_with_what_is_wrong(srv: Server, mid: str) -> None:
+    r = srv.http.put(f"/api/machines/{mid}/scope", json={"channels": ["S1.nope"]})
     assert r.status_code == 422 and "S1.nope" in r.text
-    r = srv.http.put("/api/machines/demo/scope", json={"channels": CH, "length_s": 61})
+    r = srv.http.put(f"/api/machines/{mid}/scope", json={"channels": CH, "length_s": 61})
     assert r.status_code == 422 and "length_s" in r.text
-    r = srv.http.put("/api/machines/demo/scope", json={"channels": CH, "mode": "normal"})
+    r = srv.http.put(f"/api/machines/{mid}/scope", json={"channels": CH, "mode": "normal"})
     assert r.status_code == 422 and "needs a trigger" in r.text
-    r = srv.http.put("/api/machines/demo/scope", json={"channels": CH * 5})
+    r = srv.http.put(f"/api/machines/{mid}/scope", json={"channels": CH * 5})
     assert r.status_code == 422 and "channels" in r.text
 
 
@@ -118,20 +125,20 @@ def rrd_chunks(path: Path) -> Counter[str]:
     return rows
 
 
-def test_capture_as_rrd_read_by_the_rerun_cli(srv: Server, tmp_path: Path) -> None:
-    cap = m19_capture(srv)
+def test_capture_as_rrd_read_by_the_rerun_cli(srv: Server, mid: str, tmp_path: Path) -> None:
+    cap = m19_capture(srv, mid)
     r = srv.http.get(f"/api/traces/{cap['id']}/trace.rrd")
     assert r.status_code == 200
     path = tmp_path / "m19.rrd"
     path.write_bytes(r.content)
     rows = rrd_chunks(path)
     for name in CH[:3]:
-        assert rows["/demo/" + name.replace(".", "/")] == 500  # one row per cycle
+        assert rows[f"/{mid}/" + name.replace(".", "/")] == 500  # one row per cycle
     _, data = samples(srv, cap["id"])
     changes = 1 + int(np.count_nonzero(np.diff(data[3])))
-    assert rows["/demo/S1/state"] == changes  # the state as text at each change
+    assert rows[f"/{mid}/S1/state"] == changes  # the state as text at each change
     detail = srv.http.get(f"/api/traces/{cap['id']}").json()
-    assert rows["/demo/events"] == len(detail["events"]) > 0
+    assert rows[f"/{mid}/events"] == len(detail["events"]) > 0
     stats = subprocess.run(
         [rerun_cli(), "rrd", "stats", str(path)], capture_output=True, text=True, check=True
     ).stdout
@@ -142,8 +149,8 @@ def test_capture_as_rrd_read_by_the_rerun_cli(srv: Server, tmp_path: Path) -> No
     assert "sim_time" in verbose and "cycle" in verbose
 
 
-def test_csv_round_trip_is_exact(srv: Server) -> None:
-    cap = m19_capture(srv)
+def test_csv_round_trip_is_exact(srv: Server, mid: str) -> None:
+    cap = m19_capture(srv, mid)
     text = srv.http.get(f"/api/traces/{cap['id']}/csv").text
     r = srv.http.post(
         "/api/traces/import",
@@ -164,14 +171,16 @@ def test_csv_round_trip_is_exact(srv: Server) -> None:
     assert bad.status_code == 422 and "not a number" in bad.text
 
 
-def test_library_keeps_parameters_renames_compares_deletes(srv: Server, tmp_path: Path) -> None:
+def test_library_keeps_parameters_renames_compares_deletes(
+    srv: Server, mid: str, tmp_path: Path
+) -> None:
     kv = "getriebe[2].kv"  # S1 runs in M42
-    first = m19_capture(srv)
+    first = m19_capture(srv, mid)
     saved = srv.http.post(f"/api/traces/{first['id']}/save", json={"name": "kv default"}).json()
     assert saved["stored"] and saved["name"] == "kv default"
     body = {"changes": [{"scope": "axis", "target": "S1", "name": kv, "value": 1500}]}
-    assert srv.http.patch("/api/machines/demo/parameters", json=body).status_code == 200
-    second = m19_capture(srv)
+    assert srv.http.patch(f"/api/machines/{mid}/parameters", json=body).status_code == 200
+    second = m19_capture(srv, mid)
     srv.http.post(f"/api/traces/{second['id']}/save", json={"notes": "kv 15/s"})
     detail = srv.http.get(f"/api/traces/{second['id']}").json()
     at_capture = {(p["scope"], p["target"], p["name"]): p["value"] for p in detail["params"]}
@@ -182,29 +191,34 @@ def test_library_keeps_parameters_renames_compares_deletes(srv: Server, tmp_path
 
     r = srv.http.patch(f"/api/traces/{first['id']}", json={"name": "before", "notes": "kv 20"})
     assert r.json()["name"] == "before"
-    lib = srv.http.get("/api/traces", params={"machine": "demo"}).json()
+    lib = srv.http.get("/api/traces", params={"machine": mid}).json()
     names = {t["id"]: t["name"] for t in lib}
     assert names[first["id"]] == "before" and second["id"] in names
     assert srv.http.delete(f"/api/traces/{second['id']}").status_code == 204
     again = srv.http.get(f"/api/traces/{second['id']}")  # still one of the recent captures
     assert again.status_code == 200 and again.json()["stored"] is False
-    recent = {c["id"]: c["stored"] for c in scope(srv)["captures"]}
+    recent = {c["id"]: c["stored"] for c in scope(srv, mid)["captures"]}
     assert recent[second["id"]] is False and recent[first["id"]] is True
     assert second["id"] not in {t["id"] for t in srv.http.get("/api/traces").json()}
     assert not (srv.db.parent / "traces" / f"{second['id']}.npy").exists()
-    body["changes"][0]["value"] = 2000  # back to the demo's value
-    srv.http.patch("/api/machines/demo/parameters", json=body)
 
 
-def test_measurements_of_a_feed_move_match_v_over_kv(srv: Server) -> None:
+def test_measurements_of_a_feed_move_match_v_over_kv(srv: Server, mid: str) -> None:
     trig = {"type": "level", "signal": "X.vel_cmd_mm_min", "level": 1, "edge": "rising"}
-    arm(srv, channels=["X.lag_mm", "X.vel_act_mm_min"], length_s=3, pretrigger_pct=5, trigger=trig)
-    x = srv.axis("X")["pos_cmd"]
-    srv.command(
-        "demo", {"type": "move", "axis": "X", "target": x + 25, "rapid": False, "feed_mm_min": 600}
+    arm(
+        srv,
+        mid,
+        channels=["X.lag_mm", "X.vel_act_mm_min"],
+        length_s=3,
+        pretrigger_pct=5,
+        trigger=trig,
     )
-    srv.step("demo", 3500)
-    cap = scope(srv)["captures"][0]
+    x = srv.axis("X", mid)["pos_cmd"]
+    srv.command(
+        mid, {"type": "move", "axis": "X", "target": x + 25, "rapid": False, "feed_mm_min": 600}
+    )
+    srv.step(mid, 3500)
+    cap = scope(srv, mid)["captures"][0]
     m = srv.http.get(
         f"/api/traces/{cap['id']}/measure", params={"channel": "X.lag_mm", "t1_s": 2.0}
     ).json()
@@ -221,35 +235,37 @@ def test_measurements_of_a_feed_move_match_v_over_kv(srv: Server) -> None:
     assert r.status_code == 422 and "Z.lag_mm" in r.text
 
 
-def test_roll_mode_gives_the_newest_window(srv: Server) -> None:
-    arm(srv, channels=["X.pos_act_mm"], length_s=2, mode="roll")
-    srv.step("demo", 2500)
-    now = cycle(srv)
-    header, data = decode_frame(srv.http.get("/api/machines/demo/scope/roll").content)
+def test_roll_mode_gives_the_newest_window(srv: Server, mid: str) -> None:
+    arm(srv, mid, channels=["X.pos_act_mm"], length_s=2, mode="roll")
+    srv.step(mid, 2500)
+    now = cycle(srv, mid)
+    header, data = decode_frame(srv.http.get(f"/api/machines/{mid}/scope/roll").content)
     assert header.first_cycle == now - 1999 and data.shape == (1, 2000)
     header, data = decode_frame(
-        srv.http.get("/api/machines/demo/scope/roll", params={"max_points": 500}).content
+        srv.http.get(f"/api/machines/{mid}/scope/roll", params={"max_points": 500}).content
     )
     assert header.stride == 4 and data.shape == (1, 500)
-    srv.http.post("/api/machines/demo/scope/stop")
+    srv.http.post(f"/api/machines/{mid}/scope/stop")
 
 
-def test_continuous_recording_writes_every_cycle(srv: Server, tmp_path: Path) -> None:
-    sigs = [s["name"] for s in srv.http.get("/api/machines/demo/signals").json()][:16]
-    r = srv.http.post("/api/machines/demo/recording", json={"signals": sigs})
+def test_continuous_recording_writes_every_cycle(srv: Server, mid: str, tmp_path: Path) -> None:
+    sigs = [s["name"] for s in srv.http.get(f"/api/machines/{mid}/signals").json()][:16]
+    r = srv.http.post(f"/api/machines/{mid}/recording", json={"signals": sigs})
     assert r.status_code == 201, r.text
-    assert srv.http.post("/api/machines/demo/recording", json={"signals": sigs}).status_code == 409
-    srv.command("demo", {"type": "spindle", "spindle": "S1", "m": 3, "speed_rpm": 800})
-    srv.step("demo", 5000)
-    info = srv.http.delete("/api/machines/demo/recording").json()
+    assert (
+        srv.http.post(f"/api/machines/{mid}/recording", json={"signals": sigs}).status_code == 409
+    )
+    srv.command(mid, {"type": "spindle", "spindle": "S1", "m": 3, "speed_rpm": 800})
+    srv.step(mid, 5000)
+    info = srv.http.delete(f"/api/machines/{mid}/recording").json()
     assert not info["active"] and info["cycles"] == 5000
     path = tmp_path / "rec.rrd"
     path.write_bytes(srv.http.get(f"/api/recordings/{info['id']}/recording.rrd").content)
     rows = rrd_chunks(path)
     numeric = [s for s in sigs if not s.endswith(".state")]
     for s in numeric:
-        assert rows["/demo/" + s.replace(".", "/")] == 5000
-    srv.command("demo", {"type": "spindle", "spindle": "S1", "m": 5})
+        assert rows[f"/{mid}/" + s.replace(".", "/")] == 5000
+    srv.command(mid, {"type": "spindle", "spindle": "S1", "m": 5})
 
 
 def listening(port: int) -> list[str]:
@@ -266,8 +282,9 @@ def listening(port: int) -> list[str]:
 
 def test_rerun_viewer_is_served_through_the_service_and_listens_on_loopback_only(
     srv: Server,
+    mid: str,
 ) -> None:
-    cap = m19_capture(srv)
+    cap = m19_capture(srv, mid)
     r = srv.http.get(f"/api/traces/{cap['id']}/viewer", follow_redirects=False)
     assert r.status_code == 307 and r.headers["location"].startswith("/rerun/?")
     page = srv.http.get(r.headers["location"], timeout=60)

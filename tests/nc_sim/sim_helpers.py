@@ -35,4 +35,13 @@ def record(sim: Simulation, seconds: float) -> np.ndarray:
     return rec
 
 
-__all__ = ["L", "make", "record"]
+def mdi(m: Machine, text: str) -> None:
+    """Start an MDI block and assert that the NC took it: accepted, and no job error raised
+    while it started (the acknowledgement alone says only that the block parsed)."""
+    seen = {id(e) for e in m.events}
+    ack = m.mdi(text)
+    errors = [e for e in m.events if id(e) not in seen and e.error]
+    assert ack.ok and not errors, (text, ack, errors)
+
+
+__all__ = ["L", "make", "mdi", "record"]

@@ -10,7 +10,7 @@ from nc_sim.machine.axis import Axis
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation
-from tests.nc_sim.sim_helpers import L, make, record
+from tests.nc_sim.sim_helpers import L, make, mdi, record
 
 
 def cruise_lag(
@@ -30,7 +30,7 @@ def cruise_lag(
     )
     x = m.axis("X")
     seconds = 2.0 + 8.0 / (kv_raw * 0.01)  # ramp, then settle for 8 time constants
-    assert m.mdi(f"G01 X{50 + feed / 60 * (seconds + 1):.3f} F{feed}").ok  # limits off: unhomed
+    mdi(m, f"G01 X{50 + feed / 60 * (seconds + 1):.3f} F{feed}")  # limits off: unhomed
     rec = record(sim, seconds)
     assert x.state.name == "MOVING"
     return float(rec[-1, x.slot, L.R_LAG]), float(rec[-1, x.slot, L.R_V_CMD])
@@ -61,7 +61,7 @@ def test_wrong_multi_gain_changes_the_gain_by_its_factor() -> None:
 def test_sign_inversion_runs_away_into_lag_monitoring() -> None:
     sim, m, _ = make({"X": {"lr_hw[0].vz_stellgr": 1}})
     x = m.axis("X")
-    assert m.mdi("G01 X60 F1000").ok
+    mdi(m, "G01 X60 F1000")
     rec = record(sim, 2.0)
     errors = [e for e in m.events if e.code == Code.LAG_MONITORING]
     assert len(errors) == 1 and errors[0].axis == "X"
@@ -72,7 +72,7 @@ def test_sign_inversion_runs_away_into_lag_monitoring() -> None:
 
 def test_both_signs_inverted_on_an_inverted_machine_work() -> None:
     sim, m, _ = make({"X": {"lr_hw[0].vz_stellgr": 1, "sim.motor_inverted": 1}})
-    assert m.mdi("G01 X60 F1000").ok
+    mdi(m, "G01 X60 F1000")
     record(sim, 2.0)
     assert not [e for e in m.events if e.error]
     assert m.k.st[m.axis("X").slot, L.S_P_ACT] == pytest.approx(60.0, abs=1e-3)
@@ -83,10 +83,10 @@ def test_no_motion_without_enables() -> None:
     x = m.axis("X")
     m.hli_write("DriveOn", 0, "X")
     p0 = m.k.st[x.slot, L.S_P_ACT]
-    ack = m.mdi("G00 X100")
+    m.mdi("G00 X100")
     record(sim, 0.5)
     err = [e for e in m.events if e.error]
-    assert ack.ok and len(err) == 1 and err[0].code == Code.NO_ENABLES
+    assert len(err) == 1 and err[0].code == Code.NO_ENABLES
     assert "DriveOn" in err[0].message
     assert m.k.st[x.slot, L.S_P_ACT] == p0
 
@@ -137,7 +137,7 @@ def test_override_scales_feed_and_is_capped_by_the_channel_limit() -> None:
 def test_homing_sets_the_reference_at_the_cam_edge() -> None:
     sim, m, cfg = make()
     x = m.axis("X")
-    assert m.mdi("G74 X1").ok
+    mdi(m, "G74 X1")
     record(sim, 8.0)
     ax = cfg.axis("X")
     assert x.homed and x.state.name == "STANDSTILL"
@@ -167,7 +167,7 @@ def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
     m.mdi("G00 X10")
     assert m.events[-1].code == Code.CHANNEL_ERROR_STATE
     m.reset()
-    assert m.mdi("G00 X10").ok
+    mdi(m, "G00 X10")
 
 
 def test_plc_acknowledges_after_its_delay_or_times_out_in_fault_mode() -> None:
@@ -190,7 +190,7 @@ def test_plc_acknowledges_after_its_delay_or_times_out_in_fault_mode() -> None:
 def test_spindle_m3_reaches_speed_with_lag_v_over_kv() -> None:
     sim, m, cfg = make()
     s = m.axis("S")
-    assert m.mdi("M3 S1000").ok
+    mdi(m, "M3 S1000")
     rec = record(sim, 3.5)
     a = cfg.axis("S1").eng("getriebe.slope_profil.a_beschl")
     tr = cfg.axis("S1").eng("getriebe.slope_profil.tr_beschl_zu")

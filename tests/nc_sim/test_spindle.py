@@ -15,7 +15,7 @@ from nc_sim.machine.axis import AxisState
 from nc_sim.machine.gears import GearRange, select_gear
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation
-from tests.nc_sim.sim_helpers import L, make, record
+from tests.nc_sim.sim_helpers import L, make, mdi, record
 
 DT = 0.001
 RPM = 6.0  # °/s per rpm
@@ -46,7 +46,7 @@ def trapezoid_time_to(v: float, a: float, tr: float) -> float:
 def test_sensorless_speed_reached_edge_is_the_commands_band_entry() -> None:
     sim, m, cfg = make({S: {"sim.sensorless": 1}}, {"spindel[0].m3_synch": 0})
     s = m.axis(S)
-    assert m.mdi("M3 S1000").ok
+    mdi(m, "M3 S1000")
     rec = record(sim, 3.0)[:, s.slot]
     a = cfg.axis(S).eng("getriebe[2].slope_profil.a_beschl", 3)
     tr = cfg.axis(S).eng("getriebe[2].slope_profil.tr_beschl_zu", 3)
@@ -104,7 +104,7 @@ def test_override_example_g167_and_rev_from_the_manual() -> None:
 
 # --- M19 --------------------------------------------------------------------------------------
 def _m19(m: Machine, sim: Simulation, text: str, seconds: float = 6.0) -> np.ndarray:
-    assert m.mdi(text).ok
+    mdi(m, text)
     return record(sim, seconds)
 
 
@@ -122,7 +122,8 @@ def test_m19_shortest_way_from_standstill_and_exact_stop() -> None:
     done = next(e for e in m.events if e.code == Code.EV_IN_POSITION)
     p_done = rec[done.cycle - 21, L.R_P_ACT]  # record starts after 20 settle cycles
     assert abs((p_done - 10.0 + 180) % 360 - 180) <= window
-    assert abs((rec[done.cycle - 22, L.R_P_ACT] - 10.0 + 180) % 360 - 180) > 0  # moving in
+    # the edge is the first sample inside the window: the one before was still outside
+    assert abs((rec[done.cycle - 22, L.R_P_ACT] - 10.0 + 180) % 360 - 180) > window
     p0 = rec[-1, L.R_P_CMD]
     rec = _m19(m, sim, "M19 S.POS=350")[:, s.slot]  # 20° back is shorter than 340° on
     assert rec[-1, L.R_P_CMD] - p0 == pytest.approx(-20.0)
@@ -168,9 +169,10 @@ def test_preferred_direction_refuses_the_other_with_60254_until_reset() -> None:
     m.mdi("M4 S500")
     record(sim, 0.1)
     assert Code.SPINDLE_PREFERRED_DIRECTION in codes(m) and s.state is AxisState.ERROR
-    assert m.mdi("M3 S500").ok
+    m.mdi("M3 S500")  # even the allowed direction is refused: error state until reset
+    assert m.events[-1].code == Code.CHANNEL_ERROR_STATE and m.events[-1].axis == S
     record(sim, 0.1)
-    assert s.state is AxisState.ERROR  # error state until reset
+    assert s.state is AxisState.ERROR
     m.reset()
     m.mdi("M3 S500")
     record(sim, 2.0)
@@ -574,8 +576,9 @@ def test_m19_to_the_angle_the_spindle_stands_at_completes_at_once() -> None:
     sim.run(6000)
     ax = m.by_name["S1"]
     assert ax.state is AxisState.STANDSTILL
+    c0 = m.cycle
     assert m.spindle_position("S1", 90.0) is None
     sim.run(2)
     assert ax.state is AxisState.STANDSTILL
     done = [e for e in m.events if e.code == Code.EV_IN_POSITION]
-    assert len(done) == 2 and done[-1].cycle == 6021
+    assert len(done) == 2 and done[-1].cycle == c0 + 1  # in position in the very next cycle

@@ -1,0 +1,25 @@
+"""Fixtures shared by the service tests: each test gets a machine of its own."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+
+import pytest
+
+from tests.backend.server import Server
+
+_serial = itertools.count(1)
+
+
+@pytest.fixture
+def mid(srv: Server) -> Iterator[str]:
+    """A fresh demo lathe on the module's server, powered on and running; deleted afterwards.
+
+    No test sees what another wrote (parameters, pacing, errors, pending M functions)."""
+    name = f"t{next(_serial)}"
+    r = srv.http.post("/api/machines", json={"id": name, "name": name, "demo": True})
+    assert r.status_code == 201, r.text
+    srv.wait_powered(name)
+    yield name
+    srv.http.delete(f"/api/machines/{name}")
