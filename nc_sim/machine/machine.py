@@ -273,6 +273,9 @@ class Machine:
             return
         if ax.hold or self.channel_units["feedhold"]:
             return
+        if ax.homing in (HomingPhase.TO_CAM, HomingPhase.OFF_CAM):  # a search has no target
+            self._homing_search(ax, ax.homing)
+            return
         self._plan_move(ax, self._limits(ax, ax.motion), self._vmax(ax, ax.motion))
 
     def _check_motion(self, ax: Axis) -> JobError | None:
@@ -392,26 +395,24 @@ class Machine:
         self._set_state(ax, AxisState.HOMING)
         d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
         on_cam = bool(self.k.ist[ax.slot, L.I_CAM]) == (d > 0)
-        if on_cam:
-            self._homing_off_cam(ax)
-        else:
-            ax.homing = HomingPhase.TO_CAM
-            v = ax.cfg.eng("getriebe.vb_refmax", ax.gear)
-            self._plan_velocity(ax, d * v, self._limits(ax, Motion.HOMING))
-            # the cam lies within the travel: search it over the whole range at vb_refmax
-            self._watch(ax, search_s(self._travel(ax), v), "homing: search for the cam", True)
+        self._homing_search(ax, HomingPhase.OFF_CAM if on_cam else HomingPhase.TO_CAM)
         return None
+
+    def _homing_search(self, ax: Axis, phase: HomingPhase) -> None:
+        """To the cam at vb_refmax, or off it at vb_reflow; also resumes after a feedhold."""
+        d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
+        ax.homing = phase
+        if phase is HomingPhase.TO_CAM:
+            v, what = d * ax.cfg.eng("getriebe.vb_refmax", ax.gear), "search for the cam"
+        else:
+            v, what = -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), "leaving the cam"
+        self._plan_velocity(ax, v, self._limits(ax, Motion.HOMING))
+        # the cam lies within the travel: a search over the whole of it finds it
+        self._watch(ax, search_s(self._travel(ax), abs(v)), f"homing: {what}", extend=True)
 
     def _travel(self, ax: Axis) -> float:
         """Length of the travel between the software limits (mm)."""
         return float(self.k.pr[ax.slot, L.P_SWE_POS] - self.k.pr[ax.slot, L.P_SWE_NEG])
-
-    def _homing_off_cam(self, ax: Axis) -> None:
-        d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
-        ax.homing = HomingPhase.OFF_CAM
-        v = ax.cfg.eng("getriebe.vb_reflow", ax.gear)
-        self._plan_velocity(ax, -d * v, self._limits(ax, Motion.HOMING))
-        self._watch(ax, search_s(self._travel(ax), v), "homing: leaving the cam", True)
 
     def _homing_edge(self, ax: Axis) -> None:
         """Cam edge with zero pulse: the position here becomes ref_pos."""
@@ -821,7 +822,7 @@ class Machine:
             cam = bool(self.k.ist[ax.slot, L.I_CAM])
             d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
             if ax.homing is HomingPhase.TO_CAM and cam == (d > 0):
-                self._homing_off_cam(ax)
+                self._homing_search(ax, HomingPhase.OFF_CAM)
             elif ax.homing is HomingPhase.OFF_CAM and cam != (d > 0):
                 self._homing_edge(ax)
         if ev & L.EV_PLAN_DONE:

@@ -328,3 +328,21 @@ def test_healthy_long_sequences_never_meet_their_bounds() -> None:
     record(sim, 5.0)
     assert Code.SEQUENCE_WATCHDOG not in codes(m)
     assert m.k.st[x.slot, L.S_P_CMD] == 200.0 and s.state is AxisState.ENDLESS
+
+
+def test_homing_held_by_feedhold_resumes_its_search_on_release() -> None:
+    """A search has no target to re-plan to: it resumes at vb_refmax and homes."""
+    sim, m, cfg = make()
+    x = m.axis("X")
+    assert m.home("X") is None
+    record(sim, 1.0)
+    m.hli_write("feedhold", 1)
+    record(sim, 1.0)
+    assert m.k.st[x.slot, L.S_V_CMD] == 0.0 and x.state is AxisState.HOMING
+    m.hli_write("feedhold", 0)
+    record(sim, 1.0)
+    assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(cfg.axis("X").eng("getriebe.vb_refmax"))
+    record(sim, 10.0)
+    assert x.homed and m.axis("X").state is AxisState.STANDSTILL
+    assert m.k.st[x.slot, L.S_P_CMD] == pytest.approx(cfg.axis("X").eng("kenngr.ref_pos"))
+    assert not any(e.error for e in m.events)
