@@ -2,7 +2,9 @@
 
 The Python layer of the NC: commands check their preconditions and either plan a motion for
 the kernel or end as a job error; kernel events (plan done, lag, limits, cam) drive the
-sequences (homing, blocks) forward. Nothing here reads a clock: time is `cycle · cycle_s`.
+sequences (homing, blocks) forward. Every phase of a sequence carries a deadline from its own
+parameters (`watchdog.py`): past it, job error 90023 instead of a hang. Nothing here reads a
+clock: time is `cycle · cycle_s`.
 """
 
 from __future__ import annotations
