@@ -25,8 +25,20 @@ class AxisStatus(BaseModel):
     vel_act: float
     homed: bool
     in_position: bool
+    target_pos: float | None = Field(
+        None, description="target position of the active or last positioning (HLI), None without"
+    )
+    distance_to_go: float | None = Field(
+        None, description="target position − commanded position (HLI), None without a target"
+    )
     enabled: bool = Field(description="all drive enables present")
     missing_enables: list[str]
+    ready_for_power_on: bool | None = Field(
+        None, description="drive status [004 §4.2]; None when the drive type does not report it"
+    )
+    ready_for_control_loop_on: bool | None = Field(
+        None, description="drive status [004 §4.2]; None when the drive type does not report it"
+    )
     control_units: dict[str, int] = Field(description="HLI control units as written")
     override_pct: float
     job_error: int = Field(description="active job error code, 0 none")
@@ -48,7 +60,9 @@ class PendingM(BaseModel):
 class PlcStatus(BaseModel):
     mode: Literal["auto", "manual", "fault"]
     ack_delay_s: float
-    drives_powered: bool
+    drives_powered: bool = Field(
+        description="power-on done: every drive switched on and reporting ready"
+    )
     pending: list[PendingM]
 
 

@@ -55,6 +55,7 @@ class Code(IntEnum):
     EV_TOOL_DYNAMICS = 24
     EV_PROGRAM_END = 25
     EV_M_START = 26  # a spindle M function begins; it acts from the next cycle on
+    EV_POWERED = 27  # power-on done: every drive switched on and reporting ready
 
 
 MESSAGES: dict[Code, str] = {
@@ -67,7 +68,7 @@ MESSAGES: dict[Code, str] = {
     Code.PLC_ACK_TIMEOUT: "the PLC did not acknowledge the M function in time",
     Code.EMERGENCY_STOP: "emergency stop",
     Code.AXIS_BUSY: "axis is moving: command refused",
-    Code.DRIVE_NOT_READY: "drive not ready for power on",
+    Code.DRIVE_NOT_READY: "drive not ready (drive status): motion refused",
     Code.ENABLES_LOST: "drive enables removed during motion",
     Code.BLOCK_SYNTAX: "NC block syntax error",
     Code.UNKNOWN_AXIS: "no such axis or spindle in the channel",
@@ -91,6 +92,7 @@ MESSAGES: dict[Code, str] = {
     Code.EV_REFERENCE_LOST: "reference lost above the control limit: the spindle is homed "
     "again before positioning",
     Code.EV_PROGRAM_END: "program end",
+    Code.EV_POWERED: "machine ready: the PLC has switched every drive on",
 }
 
 

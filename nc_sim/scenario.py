@@ -2,12 +2,15 @@
 
 The scenario is the parsed TOML as a dict (see README, `examples/`). `run_scenario` is pure:
 it returns the trace columns and the event list; writing files is the caller's business.
+Scenario time 0 is the moment the machine is ready: the runner first lets the power-on
+sequence run (drives boot, the PLC switches them on), as an engineer waits for a machine to
+come up before the first block; events of that sequence carry negative times.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -19,6 +22,8 @@ from nc_sim.params import Scope, resolve
 from nc_sim.params.listfile import parse_value
 from nc_sim.signals import machine_signals, signal_columns
 from nc_sim.sim import Simulation
+
+POWER_ON_LIMIT_S = 60.0  # a machine not ready by then has a configuration fault
 
 
 @dataclass
@@ -106,6 +111,8 @@ def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioRes
     apply_parameters(cfg, scenario.get("parameters", {}))
     sim = Simulation(cfg.cycle_s)
     m = sim.add(cfg)
+    power_on(sim, m)
+    t0 = sim.cycle
     duration = float(scenario.get("duration_s", 1.0))
     n_total = round(duration / cfg.cycle_s)
     actions = sorted(scenario.get("actions", []), key=lambda a: float(a.get("t_s", 0.0)))
@@ -119,4 +126,19 @@ def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioRes
         _act(m, action)
     if n_total > done:
         sim.run(n_total - done, rec[done:])
-    return ScenarioResult(trace_columns(m, rec, 0), list(m.events), m)
+    events = [replace(e, t_s=(e.cycle - t0) * cfg.cycle_s) for e in m.events]
+    return ScenarioResult(trace_columns(m, rec, 0), events, m)
+
+
+def power_on(sim: Simulation, m: Machine) -> None:
+    """Run the power-on sequence until the machine is ready (NcUsageError if it never is)."""
+    limit = round(POWER_ON_LIMIT_S / sim.kernel.cycle_s)
+    while not m.powered:
+        if sim.cycle >= limit:
+            waiting = {
+                ax.name: ax.missing_enables() + ax.drive.missing()
+                for ax in m.axes
+                if not ax.drive_follows()
+            }
+            raise NcUsageError(f"machine not ready after {POWER_ON_LIMIT_S:g} s: {waiting}")
+        sim.run(1)

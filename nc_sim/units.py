@@ -105,6 +105,17 @@ def to_raw(q: Quantity, eng: float) -> float:
     return eng / _TO_ENG[q]
 
 
+V_TIME_BASE_S = {0: 60.0, 1: 1.0}  # P-AXIS-00207: 0 per minute, 1 per second, 2 per cycle
+
+
+def v_reso_digits_per_unit_s(num: float, denom: float, time_base: int, cycle_s: float) -> float:
+    """Drive output per speed (mm/s | °/s) of a speed-controlled spindle [000 §2.2.4]:
+    v_reso_num (P-AXIS-00206) is output for v_reso_denom (P-AXIS-00205, µm | 0.001°) covered
+    in the time base (P-AXIS-00207). Check: 32767 for 3000 rpm = 1080000000 0.001°/min."""
+    per = cycle_s if time_base == 2 else V_TIME_BASE_S[time_base]
+    return num / denom * 1000.0 * per
+
+
 def display_velocity(v_eng: float, kind: AxisKind) -> tuple[float, str]:
     """Velocity as an engineer reads it: mm/min for linear axes, rpm for spindles, °/min else."""
     if kind is AxisKind.SPINDLE:

@@ -18,7 +18,8 @@ from backend.services.commands import job_error_model
 from backend.services.host import MachineHost
 from nc_sim.errors import JobError
 from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import Axis
+from nc_sim.machine.axis import Axis, target_and_distance
+from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.machine.machine import Machine
 from nc_sim.units import RPM_TO_DEG_S, AxisKind
 
@@ -58,6 +59,8 @@ def _axis_status(m: Machine, ax: Axis) -> AxisStatus:
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
     spindle = ax.kind is AxisKind.SPINDLE
     vel_scale = 1.0 / RPM_TO_DEG_S if spindle else 60.0
+    target, to_go = target_and_distance(m.k, ax)
+    drive = ax.drive.reported()
     return AxisStatus(
         name=ax.name,
         kind=_KIND[ax.kind],
@@ -70,8 +73,12 @@ def _axis_status(m: Machine, ax: Axis) -> AxisStatus:
         vel_act=float(st[L.S_V_ACT]) * vel_scale,
         homed=bool(ist[L.I_HOMED]),
         in_position=bool(ist[L.I_IN_POS]),
+        target_pos=target,
+        distance_to_go=to_go,
         enabled=ax.enables_ok(),
         missing_enables=ax.missing_enables(),
+        ready_for_power_on=drive.get(READY_FOR_POWER_ON),
+        ready_for_control_loop_on=drive.get(READY_FOR_CONTROL_LOOP_ON),
         control_units=dict(ax.units),
         override_pct=float(st[L.S_OVERRIDE]) * 100.0,
         job_error=ax.job_error,

@@ -65,7 +65,8 @@ P_CURVE_A_MAX = 31  # type 3: acceleration below N1
 P_N1 = 32
 P_N2 = 33
 P_A_CAP = 34  # hard cap on curve acceleration (a_max, tool a_max)
-P_COLS = 35
+P_V_RESO = 35  # speed-controlled spindle: drive digits per unit/s (v_reso), 0 = position loop
+P_COLS = 36
 
 # --- ist: integer state -----------------------------------------------------------------
 I_PLAN_N = 0  # segments in the active plan (0 = none: hold velocity)
@@ -92,7 +93,7 @@ I_COLS = 19
 # I_OPEN_LOOP values
 LOOP_CLOSED = 0
 LOOP_CONTROL_LIMIT = 1  # above vb_regelgrenze: actual values simulated, reference lost
-LOOP_SPEED_CONTROL = 2  # changeover P-AXIS-00767, or a sensorless spindle
+LOOP_SPEED_CONTROL = 2  # changeover P-AXIS-00767, a speed-controlled or sensorless spindle
 
 # --- events (bits in ist[:, I_EVENTS]) ---------------------------------------------------
 EV_PLAN_DONE = 1

@@ -5,10 +5,12 @@ cycle in which any slot raised an event, so the Python layer reacts within the s
 One axis, one cycle [DOMAIN §2]:
 
     setpoint plan -> p_cmd, v_cmd, a_cmd
-    u  = kv·(p_cmd - p_act) + ff·v_cmd             (P controller + velocity feedforward)
+    encoder: x (where the last cycle left the load) quantised to one increment,
+             sign(vz_istw) -> p_act;  lag = p_cmd - p_act (the one lag, recorded as is)
+    u  = kv·lag + ff·v_cmd                          (P controller + velocity feedforward)
     da = u · 0.06 · multi_gain · sign(vz_stellgr)   (digits for 1 m/min or 1000 °/min), clipped
-    drive: v_motor -> da / (0.06 · true gain) as a first-order lag with acceleration limit
-    encoder: x quantised to one increment, sign(vz_istw) -> p_act
+    drive: v_motor -> da / (0.06 · true gain) as a first-order lag with acceleration limit,
+           moving the load x over the cycle
 """
 
 from __future__ import annotations
@@ -82,6 +84,7 @@ from nc_sim.kernel.layout import (
     P_SWE_NEG,
     P_SWE_POS,
     P_V_CTRL_LIMIT,
+    P_V_RESO,
     P_V_SPEED_CTRL,
     P_V_ZERO,
     R_A_CMD,
@@ -214,35 +217,13 @@ def _advance_setpoint(
 
 
 @njit(cache=True)
-def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
-    """Position controller, D/A, drive and encoder of slot s for one cycle."""
-    v_m = st[s, S_V_MOTOR]
-    # the lag the controller acts on (and the HLI shows): this cycle's command against the
-    # position read at the start of the cycle
-    lag = st[s, S_P_CMD] - st[s, S_P_ACT]
-    st[s, S_LAG] = lag
-    if ist[s, I_ENABLED] == 1:
-        if ist[s, I_OPEN_LOOP] != LOOP_CLOSED:  # speed control: the command speed goes out
-            u = st[s, S_V_CMD]
-        else:
-            u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
-        da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
-        lim = pr[s, P_DA_MAX]
-        da = min(max(da, -lim), lim)
-        v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
-        dv = (v_target - v_m) * pr[s, P_DRV_ALPHA]
-        a_lim = pr[s, P_DRV_A_MAX]
-        if a_lim > 0.0:
-            dv = min(max(dv, -a_lim * dt), a_lim * dt)
-        st[s, S_U] = u
-        st[s, S_DA] = da
-    else:  # no enables: holding brake, the NC follows the actual position
-        dv = -v_m
-        st[s, S_U] = 0.0
-        st[s, S_DA] = 0.0
-    v_new = v_m + dv
-    st[s, S_X_MOTOR] += 0.5 * (v_m + v_new) * dt
-    st[s, S_V_MOTOR] = v_new
+def _measure(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
+    """Read the encoder at the start of the cycle and form this cycle's lag.
+
+    The actual position is the one the load reached at the end of the previous cycle; the
+    controller acts on `lag = p_cmd - p_act` of this very sample, and the same pair is what
+    the HLI, the traces and the scope show (one definition of the lag everywhere).
+    """
     x = st[s, S_X_MOTOR]
     inc = pr[s, P_ENC_INC]
     counts = x if inc <= 0.0 else math.floor(x / inc + 0.5) * inc
@@ -256,27 +237,65 @@ def _loop_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt:
     if pr[s, P_SENSORLESS] == 1.0:  # no encoder: the actual values are the command's
         st[s, S_P_ACT] = st[s, S_P_CMD]
         st[s, S_V_ACT] = st[s, S_V_CMD]
-        st[s, S_LAG] = 0.0
     elif mode == LOOP_CONTROL_LIMIT:
         # no valid measurement: actual position simulated from the lag; the encoder is
         # re-based onto it, so counting resumes from here when the loop closes
-        # (one cycle ahead, as S_LAG compares the next command with this position)
-        p_sim = st[s, S_P_CMD] + st[s, S_V_CMD] * dt - st[s, S_LAG_MODEL]
+        p_sim = st[s, S_P_CMD] - st[s, S_LAG_MODEL]
         pr[s, P_ENC_OFFSET] += p_sim - p_act
         st[s, S_P_ACT] = p_sim
         st[s, S_V_ACT] = st[s, S_V_CMD]
     elif mode == LOOP_SPEED_CONTROL:
         # the command position is not considered in speed control; keep it where position
-        # control would have it, so the switch-back needs no standstill [001 §2.3]
+        # control would have it against this measurement, so the switch-back needs no
+        # standstill and takes over exactly the modelled lag [001 §2.3]
         shift = p_act + st[s, S_LAG_MODEL] - st[s, S_P_CMD]
         st[s, S_P_CMD] += shift
         st[s, S_SEG_P0] += shift
-        st[s, S_LAG] = st[s, S_LAG_MODEL]
-    if ist[s, I_ENABLED] == 0:
-        st[s, S_P_CMD] = p_act
+    if ist[s, I_ENABLED] == 0:  # no enables: the NC follows the actual position
+        st[s, S_P_CMD] = st[s, S_P_ACT]
         st[s, S_V_CMD] = 0.0
         st[s, S_A_CMD] = 0.0
-        st[s, S_LAG] = 0.0
+    st[s, S_LAG] = st[s, S_P_CMD] - st[s, S_P_ACT]
+
+
+@njit(cache=True)
+def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
+    """Position controller, D/A, drive and load of slot s for one cycle."""
+    v_m = st[s, S_V_MOTOR]
+    if ist[s, I_ENABLED] == 1:
+        if ist[s, I_OPEN_LOOP] != LOOP_CLOSED:  # speed control: the command speed goes out
+            u = st[s, S_V_CMD]
+        else:
+            # the controller works in measuring-system increments: a lag below half an
+            # increment cannot be measured, so it commands nothing. A settled P loop then
+            # rests inside the increment of its command instead of hunting across an
+            # increment edge it cannot resolve (the load coasts kv·T·inc after the last count,
+            # far less than one increment).
+            lag = st[s, S_LAG]
+            inc = pr[s, P_ENC_INC]
+            if inc > 0.0:
+                lag = math.floor(lag / inc + 0.5) * inc
+            u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
+        if pr[s, P_V_RESO] > 0.0:  # speed-controlled spindle: the v_reso scaling [000 §2.2.4]
+            da = u * pr[s, P_V_RESO] * pr[s, P_SIGN_CMD]
+        else:
+            da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
+        lim = pr[s, P_DA_MAX]
+        da = min(max(da, -lim), lim)
+        v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
+        dv = (v_target - v_m) * pr[s, P_DRV_ALPHA]
+        a_lim = pr[s, P_DRV_A_MAX]
+        if a_lim > 0.0:
+            dv = min(max(dv, -a_lim * dt), a_lim * dt)
+        st[s, S_U] = u
+        st[s, S_DA] = da
+    else:  # no enables: holding brake
+        dv = -v_m
+        st[s, S_U] = 0.0
+        st[s, S_DA] = 0.0
+    v_new = v_m + dv
+    st[s, S_X_MOTOR] += 0.5 * (v_m + v_new) * dt
+    st[s, S_V_MOTOR] = v_new
 
 
 @njit(cache=True)
@@ -315,14 +334,26 @@ def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float
         # a turning spindle passes its mark every revolution: report it only when asked
         if mod <= 0.0 or ist[s, I_MARK_ARMED] == 1:
             ev |= EV_CAM
+    # speed monitoring [000 §2.6] on the filtered actual speed. A flag flips back only when the
+    # speed has moved past its threshold by more than the measurement resolves: one increment
+    # within the filter raises the filtered speed by at most inc/(dt + T_filter), so the
+    # ripple of a quantised encoder (a lone count while creeping to rest, 68 or 69 counts per
+    # cycle at speed) cannot toggle it. One edge, one event.
     v_meas = st[s, S_V_ACT]
+    inc = pr[s, P_ENC_INC]
+    resolution = inc / (dt + V_ACT_FILTER_S) if inc > 0.0 else 0.0
     v_act = abs(v_meas)
-    stopped = 1 if v_act < pr[s, P_V_ZERO] else 0
+    if ist[s, I_STOPPED] == 1:
+        stopped = 0 if v_act > pr[s, P_V_ZERO] + resolution else 1
+    else:
+        stopped = 1 if v_act < pr[s, P_V_ZERO] else 0
     ist[s, I_STOPPED] = stopped
     goal_v = st[s, S_V_GOAL]
     reached = 0
     if goal_v != 0.0:
         band = pr[s, P_SPEED_BAND] * abs(goal_v)
+        if ist[s, I_SPEED_REACHED] == 1:
+            band += resolution
         if abs(v_meas - goal_v) <= band:
             reached = 1
     if reached == 1 and ist[s, I_SPEED_REACHED] == 0:
@@ -349,7 +380,7 @@ def _loop_mode(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int) -> int:
     """Open the position loop above the control limit or the changeover speed; close it
     again below the control limit [000 §2.4.2, 001 §2.3]. Returns EV_LOOP on a change."""
     mode = ist[s, I_OPEN_LOOP]
-    if pr[s, P_SENSORLESS] == 1.0:
+    if pr[s, P_SENSORLESS] == 1.0 or pr[s, P_V_RESO] > 0.0:  # never position-controlled
         ist[s, I_OPEN_LOOP] = LOOP_SPEED_CONTROL
         return 0 if mode == LOOP_SPEED_CONTROL else EV_LOOP
     v = abs(st[s, S_V_CMD])
@@ -391,7 +422,8 @@ def run_cycles(
         for s in range(slots):
             ev = _advance_setpoint(st, pr, ist, seg, s, dt)
             ev |= _loop_mode(st, pr, ist, s)
-            _loop_and_drive(st, pr, ist, s, dt)
+            _measure(st, pr, ist, s, dt)
+            _control_and_drive(st, pr, ist, s, dt)
             ev |= _monitors(st, pr, ist, s, dt)
             if ev != 0:
                 ist[s, I_EVENTS] |= ev

@@ -9,8 +9,10 @@ from enum import IntEnum
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import AxisConfig
+from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion
-from nc_sim.units import AxisKind
+from nc_sim.params.definitions import OPMODE_SYMBOLS
+from nc_sim.units import AxisKind, v_reso_digits_per_unit_s
 
 # control units every drive type needs [004 §4.1]; others need only TorquePermission
 ENABLES_BY_DRIVE = {
@@ -103,6 +105,7 @@ class Axis:
     deadline: int | None = None  # watchdog: cycle by which the current phase must have ended
     deadline_s: float = 0.0  # ... its bound in seconds
     deadline_what: str = ""  # ... and what it is (for the job error 90023)
+    drive: DriveStatus = field(default_factory=lambda: DriveStatus((), 0, 0))
     units: dict[str, int] = field(
         default_factory=lambda: {
             "override": 1000,
@@ -132,6 +135,56 @@ class Axis:
 
     def missing_enables(self) -> list[str]:
         return [u for u in self.required_enables if not self.units[u]]
+
+    def drive_follows(self) -> bool:
+        """The drive obeys the NC: every enable set and every reported status present."""
+        return self.enables_ok() and not self.drive.missing()
+
+
+def target_and_distance(k: Kernel, ax: Axis) -> tuple[float | None, float | None]:
+    """HLI target position and distance to go [000 §2.9]: the target of the position plan and
+    what the command still has to travel to it; None for speed motions (M3/M4, homing
+    searches) and continuous jog, which have no target."""
+    target = float(k.st[ax.slot, L.S_TARGET])
+    if math.isnan(target) or ax.state is AxisState.JOG:
+        return None, None
+    return target, target - float(k.st[ax.slot, L.S_P_CMD])
+
+
+def drive_status(cfg: AxisConfig, cycle_s: float) -> DriveStatus:
+    """The drive's status model for its type, with the simulated drive's start-up times."""
+    signals = STATUS_BY_DRIVE.get(int(cfg.raw("kenngr.antr_typ")), ())
+    boot = max(0, round(cfg.eng("sim.drive_boot_time") / cycle_s))
+    power_up = max(0, round(cfg.eng("sim.drive_power_up_time") / cycle_s))
+    return DriveStatus(signals, boot, power_up)
+
+
+def open_position_loop(cfg: AxisConfig) -> bool:
+    """A spindle in operation mode OPEN_POSITION_LOOP_MODE (P-AXIS-00320) [000 §2.2.4]."""
+    mode = cfg.raw("antr.operation_mode")
+    code = OPMODE_SYMBOLS[mode] if isinstance(mode, str) else int(mode)
+    return cfg.is_spindle and code == OPMODE_SYMBOLS["OPEN_POSITION_LOOP_MODE"]
+
+
+def speed_controlled(cfg: AxisConfig) -> bool:
+    """A spindle that is never position-controlled [000 §2.2.4]: OPEN_POSITION_LOOP_MODE, or
+    no encoder at all (it cannot be positioned: 70252)."""
+    return open_position_loop(cfg) or (cfg.is_spindle and cfg.flag("sim.sensorless"))
+
+
+def changeover_speeds(cfg: AxisConfig) -> tuple[float, float]:
+    """(to speed control, back to position control) in °/s [001 §2.3]: P-AXIS-00767/00768,
+    or their old names P-AXIS-00265/00266, which keep working; each default means "never",
+    so whichever of a pair is set is in force (the lower / the higher speed if both are)."""
+    on = min(
+        cfg.eng("antr.sai_op_mode_change.v_velocity_control_on"),
+        cfg.eng("antr.velocity_position_control_on"),
+    )
+    back = max(
+        cfg.eng("antr.sai_op_mode_change.v_position_control_on"),
+        cfg.eng("antr.velocity_position_control_off"),
+    )
+    return on, back
 
 
 def push_params(k: Kernel, ax: Axis) -> None:
@@ -168,10 +221,19 @@ def push_params(k: Kernel, ax: Axis) -> None:
     pr[s, L.P_V_CTRL_LIMIT] = (
         (c.eng("getriebe.vb_regelgrenze", g) or math.inf) if spindle else math.inf
     )
-    pr[s, L.P_V_SPEED_CTRL] = (
-        c.eng("antr.sai_op_mode_change.v_velocity_control_on") if spindle else math.inf
-    )
+    pr[s, L.P_V_SPEED_CTRL] = changeover_speeds(c)[0] if spindle else math.inf
     pr[s, L.P_SENSORLESS] = float(spindle and c.flag("sim.sensorless"))
+    # a speed-controlled spindle outputs its command speed with the v_reso scaling
+    pr[s, L.P_V_RESO] = (
+        v_reso_digits_per_unit_s(
+            c.eng("antr.v_reso_num"),
+            c.eng("antr.v_reso_denom"),
+            int(c.raw("antr.v_time_base")),
+            k.cycle_s,
+        )
+        if open_position_loop(c)
+        else 0.0
+    )
     curve = "getriebe.beschl_kennlinie."
     pr[s, L.P_CURVE_TYPE] = c.raw(curve + "typ", g) if spindle else 0
     for col, name in (

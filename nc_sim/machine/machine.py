@@ -19,8 +19,17 @@ from nc_sim.blocks import Block, BlockError, parse_block
 from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import Axis, AxisState, HomingPhase, ToolLimits, power_on, push_params
+from nc_sim.machine.axis import (
+    Axis,
+    AxisState,
+    HomingPhase,
+    ToolLimits,
+    drive_status,
+    power_on,
+    push_params,
+)
 from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.drive import READY_FOR_POWER_ON
 from nc_sim.machine.dynamics import (
     Motion,
     emergency_limits,
@@ -82,7 +91,10 @@ class Machine:
         self.k = kernel
         self.cycle = 0
         slots = kernel.claim(len(cfg.axes))
-        self.axes = [Axis(a, s) for a, s in zip(cfg.axes, slots, strict=True)]
+        self.axes = [
+            Axis(a, s, drive=drive_status(a, cfg.cycle_s))
+            for a, s in zip(cfg.axes, slots, strict=True)
+        ]
         self.by_name = {a.name: a for a in self.axes}
         self.main_spindle = cfg.main_spindle
         self.channel_units = {"override": 1000, "feedhold": 0, "reduced_acceleration": 0}
@@ -93,7 +105,7 @@ class Machine:
         self._next_id = 1
         self.acks: list[Ack] = []
         self.estop = False
-        self._powered = False  # the PLC has switched the drives on
+        self._powered = False  # power-on done: the PLC has switched every drive on
         self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
         self._m_gear: dict[int, Axis] = {}  # ... -> spindle waiting for its gear change
         self.sp = SpindleControl(self)
@@ -113,6 +125,7 @@ class Machine:
     def next_wakeup(self) -> int | None:
         """The next cycle at which the machine must act without a kernel event."""
         times = [self.plc.power_on_cycle] if self.cycle < self.plc.power_on_cycle else []
+        times += [c for ax in self.axes if (c := ax.drive.next_change()) is not None]
         due = self.plc.next_due()
         if due is not None:
             times.append(due)
@@ -129,7 +142,8 @@ class Machine:
 
     @property
     def powered(self) -> bool:
-        """The PLC has switched the drives on."""
+        """Power-on is done: every drive is switched on and reports ready, so the machine
+        can move (the moment the headless runner calls time 0)."""
         return self._powered
 
     @property
@@ -288,6 +302,11 @@ class Machine:
         if not ax.enables_ok():
             return self._fail(
                 ax, Code.NO_ENABLES, f"{ax.name} lacks {', '.join(ax.missing_enables())}"
+            )
+        not_ready = ax.drive.missing()
+        if not_ready:  # enables set, but the drive has not (yet) reported ready [004 §4.2]
+            return self._fail(
+                ax, Code.DRIVE_NOT_READY, f"{ax.name} does not report {', '.join(not_ready)}"
             )
         return None
 
@@ -567,7 +586,9 @@ class Machine:
                     self._replan(ax)
 
     def _enables_changed(self, ax: Axis) -> None:
-        ok = ax.enables_ok()
+        """Enables or drive status changed: the drive follows the NC only with both."""
+        ax.drive.update(self.cycle, bool(ax.units["DriveOn"]))
+        ok = ax.drive_follows()
         self.k.ist[ax.slot, L.I_ENABLED] = int(ok)
         if not ok and ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
             self.k.ist[ax.slot, L.I_PLAN_N] = 0
@@ -773,12 +794,7 @@ class Machine:
     def on_cycle(self, cycle: int) -> None:
         """Handle kernel events and timers after the kernel reached `cycle`."""
         self.cycle = cycle
-        if cycle >= self.plc.power_on_cycle and not self._powered:
-            self._powered = True
-            for ax in self.axes:  # the PLC program switches the drives on at start-up
-                for u in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
-                    ax.units[u] = 1
-                self._enables_changed(ax)
+        self._drive_status()
         for p in self.plc.due(cycle):
             self._m_acked(p.m, p.out_cycle)
         timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
@@ -804,6 +820,31 @@ class Machine:
             if ax.deadline is not None and cycle >= ax.deadline:
                 self._watchdog_expired(ax)
         self._pump()
+
+    def _drive_status(self) -> None:
+        """Drive status at this cycle, and the PLC program's start-up [004 §4]: DriveOn once
+        a drive is ready for power on, TorquePermission and ReleaseFeedhold once it is ready
+        for the control loop (drives that report no status at the PLC's start)."""
+        for ax in self.axes:
+            before = ax.drive.missing()
+            ax.drive.update(self.cycle, bool(ax.units["DriveOn"]))
+            if ax.drive.missing() != before:
+                self._enables_changed(ax)
+        if self._powered or self.cycle < self.plc.power_on_cycle:
+            return
+        for ax in self.axes:
+            units = ax.units
+            if not units["DriveOn"] and READY_FOR_POWER_ON not in ax.drive.missing():
+                units["DriveOn"] = 1
+                self._enables_changed(ax)
+            if not ax.drive.missing() and not (
+                units["TorquePermission"] and units["ReleaseFeedhold"]
+            ):
+                units["TorquePermission"] = units["ReleaseFeedhold"] = 1
+                self._enables_changed(ax)
+        if all(ax.drive_follows() for ax in self.axes):
+            self._powered = True
+            self.log(Code.EV_POWERED)
 
     def _axis_events(self, ax: Axis, ev: int) -> None:
         if ev & L.EV_LAG:

@@ -25,7 +25,9 @@ from nc_sim.machine.axis import (
     SpindleTask,
     TaskPhase,
     ToolLimits,
+    changeover_speeds,
     push_params,
+    speed_controlled,
 )
 from nc_sim.machine.dynamics import Motion
 from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
@@ -59,6 +61,12 @@ def _check_rpm(rpm: float | None) -> None:
     direction; only G63 tapping reverses with a negative S [000 §2.8.6], which we lack."""
     if rpm is not None and rpm < 0:
         raise NcUsageError(f"S{rpm:g}: the speed must not be negative (M3/M4 give the direction)")
+
+
+def _why_not_positioned(ax: Axis) -> str:
+    if ax.cfg.flag("sim.sensorless"):
+        return f"{ax.name} has no encoder"
+    return f"{ax.name} is speed-controlled (OPEN_POSITION_LOOP_MODE, P-AXIS-00320)"
 
 
 class SpindleControl:
@@ -211,17 +219,15 @@ class SpindleControl:
         ax.speed_ctrl = False
         ist = self.m.k.ist
         ist[ax.slot, L.I_SPEED_CTRL_ARMED] = 0
-        if ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL and not ax.cfg.flag(
-            "sim.sensorless"
-        ):
+        if ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL and not speed_controlled(ax.cfg):
             ist[ax.slot, L.I_OPEN_LOOP] = L.LOOP_CLOSED
             self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
 
     def as_rotary_axis(self, ax: Axis) -> JobError | None:
         """A spindle jogged or moved like a rotary axis [003 "jogging a spindle"]: from
         standstill (or renewing its jog), position-controlled, so it needs its encoder."""
-        if ax.cfg.flag("sim.sensorless"):
-            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder")
+        if speed_controlled(ax.cfg):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
         if ax.task is not None or ax.state not in (
             AxisState.STANDSTILL,
             AxisState.MOVING,
@@ -280,7 +286,7 @@ class SpindleControl:
         self._adopt_tool(ax)
         k = self.m.k
         v = self.commanded(ax)
-        v_change = ax.cfg.eng("antr.sai_op_mode_change.v_velocity_control_on")
+        v_change = changeover_speeds(ax.cfg)[0]
         in_speed_ctrl = k.ist[ax.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL
         # once changed over, a lower speed does not switch back [001 §2.3]
         ax.speed_ctrl = abs(v) > v_change or (ax.speed_ctrl and in_speed_ctrl)
@@ -344,8 +350,8 @@ class SpindleControl:
     ) -> JobError | None:
         """M19: position to `pos_deg` (0..360) in `direction` (+1 M3, -1 M4, None)."""
         _check_rpm(rpm)
-        if ax.cfg.flag("sim.sensorless"):
-            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder")
+        if speed_controlled(ax.cfg):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -365,10 +371,8 @@ class SpindleControl:
 
     def home(self, ax: Axis, block_id: int | None = None) -> JobError | None:
         """G74: rotate to the zero mark, take ref_pos there, stop on it with exact stop."""
-        if ax.cfg.flag("sim.sensorless"):
-            return self.m._fail(
-                ax, Code.SPINDLE_SENSORLESS_M19, f"{ax.name} has no encoder to home"
-            )
+        if speed_controlled(ax.cfg):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -396,7 +400,7 @@ class SpindleControl:
         ax.block_id = block_id
         self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}")
         self.m.log(Code.EV_HLI, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
-        if not (ax.homed or self.auto_homing(ax)) or ax.cfg.flag("sim.sensorless"):
+        if not (ax.homed or self.auto_homing(ax)) or speed_controlled(ax.cfg):
             # no position to go to: change at standstill where the spindle stops
             ax.task.phase = TaskPhase.STOP
             self._state(ax, AxisState.GEAR_CHANGE)
@@ -423,7 +427,7 @@ class SpindleControl:
             # decelerate to the switch-back speed P-AXIS-00768 (and below the control limit)
             # before position control resumes [001 §4.2]
             v_close = min(
-                ax.cfg.eng("antr.sai_op_mode_change.v_position_control_on"),
+                changeover_speeds(ax.cfg)[1],
                 ax.cfg.eng("getriebe.vb_regelgrenze", ax.gear) or math.inf,
             )
             if abs(v) > v_close + _V_EPS or mode == L.LOOP_CONTROL_LIMIT:

@@ -35,7 +35,12 @@ SYNC_SYMBOLS = {
     "PLC_INFO": 0x20000,
 }
 ACHSTYP_SYMBOLS = {"ACHSTYP_TRANSLATOR": 0x1, "ACHSTYP_ROTATOR": 0x2, "ACHSTYP_SPINDEL": 0x4}
-OPMODE_SYMBOLS = {"DRIVE_DEFAULT": 0, "DRIVE_POSITION_CONTROL": 1, "CNC_POSITION_CONTROL": 2}
+OPMODE_SYMBOLS = {
+    "DRIVE_DEFAULT": 0,
+    "DRIVE_POSITION_CONTROL": 1,
+    "CNC_POSITION_CONTROL": 2,
+    "OPEN_POSITION_LOOP_MODE": 3,  # speed-controlled spindle [000 §2.2.4]
+}
 
 
 def _p(
@@ -77,7 +82,7 @@ DEFINITIONS: list[ParamDef] = [
         A,
         U32,
         VEL,
-        166666,
+        200000,
         1,
         2000000000,
         title="Maximum permissible axis velocity",
@@ -696,7 +701,7 @@ DEFINITIONS: list[ParamDef] = [
         "DRIVE_DEFAULT",
         effect=RESTART,
         symbols=OPMODE_SYMBOLS,
-        title="Position control in the drive or in the CNC",
+        title="Position control in the drive or in the CNC, or a speed-controlled spindle",
     ),
     _p(
         "P-AXIS-00205",
@@ -1077,6 +1082,31 @@ DEFINITIONS: list[ParamDef] = [
         types="S",
         title="Speed limit for changing back to position control",
     ),
+    # the names before P-AXIS-00767/00768, which "retain their functionality" [001 p.18-19]
+    _p(
+        "P-AXIS-00265",
+        "antr.velocity_position_control_on",
+        A,
+        S32,
+        VEL,
+        2000000000,
+        0,
+        2147483647,
+        types="S",
+        title="Speed limit for changing over to speed control (old name of P-AXIS-00767)",
+    ),
+    _p(
+        "P-AXIS-00266",
+        "antr.velocity_position_control_off",
+        A,
+        S32,
+        VEL,
+        0,
+        0,
+        2147483647,
+        types="S",
+        title="Speed limit for changing back to position control (old name of P-AXIS-00768)",
+    ),
     # --- ours: what the manuals describe without an ID ---------------------------------------
     _p(
         "INB-AXIS-0001",
@@ -1289,6 +1319,32 @@ DEFINITIONS: list[ParamDef] = [
         1e12,
         source="inbetrieb",
         title="True digits of the drive in this gear stage (0 = sim.drive_gain): the gear ratio",
+    ),
+    _p(
+        "INB-SIM-0010",
+        "sim.drive_boot_time",
+        A,
+        U32,
+        TIME,
+        5000,
+        0,
+        60000000,
+        effect=RESTART,
+        source="inbetrieb",
+        title="Drive start-up until it reports ready_for_power_on",
+    ),
+    _p(
+        "INB-SIM-0011",
+        "sim.drive_power_up_time",
+        A,
+        U32,
+        TIME,
+        10000,
+        0,
+        60000000,
+        effect=RESTART,
+        source="inbetrieb",
+        title="DriveOn until the drive reports ready_for_control_loop_on (power stage on)",
     ),
     # --- channel ---------------------------------------------------------------------------
     _p(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -11,14 +12,19 @@ from pathlib import Path
 
 import pytest
 
+from nc_sim.errors import Code
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def run_cli(scenario: Path, out: Path) -> subprocess.CompletedProcess[str]:
     exe = shutil.which("inbetrieb", path=str(Path(sys.executable).parent))
     assert exe, "the console script is installed with the package"
+    # the script's own folder comes first on sys.path: point it at this checkout's packages
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.run(
         [exe, "sim", str(scenario), "--out", str(out)],
+        env=env,
         capture_output=True,
         text=True,
         timeout=300,
@@ -56,6 +62,33 @@ def test_spindle_override_scenario(tmp_path: Path) -> None:
     events = [json.loads(line) for line in (tmp_path / "events.jsonl").read_text().splitlines()]
     assert not [e for e in events if e["error"]]
     assert {"t_s", "axis", "code", "message"} <= set(events[0])
+
+
+def readme_scenario() -> str:
+    """The scenario example of README.md, as printed there (the first toml block after
+    "Scenario format")."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    after = text[text.index("Scenario format (TOML):") :]
+    start = after.index("```toml\n") + len("```toml\n")
+    return after[start : after.index("```", start)]
+
+
+def test_the_readme_scenario_runs_as_written(tmp_path: Path) -> None:
+    """`t_s = 0.0, mdi = "M3 S1000"` on a fresh demo: time 0 is the moment the machine is
+    ready, so the block is accepted; override 50 % at 1.5 s gives 500 rpm [000 §2.4.1]."""
+    scenario = tmp_path / "readme.toml"
+    scenario.write_text(readme_scenario(), encoding="utf-8")
+    res = run_cli(scenario, tmp_path / "out")
+    assert res.returncode == 0, res.stderr
+    lines = (tmp_path / "out" / "events.jsonl").read_text().splitlines()
+    events = [json.loads(line) for line in lines]
+    assert not [e for e in events if e["error"]]  # no 90001/90007 at t = 0
+    started = [e for e in events if e["code"] == Code.EV_M_START]  # the M3 begins at time 0
+    assert started and started[0]["t_s"] == pytest.approx(0.0)
+    rows = list(csv.DictReader((tmp_path / "out" / "trace.csv").read_text().splitlines()))
+    assert float(rows[0]["t_s"]) == pytest.approx(0.001)
+    assert float(rows[0]["S1.speed_cmd_rpm"]) > 0.0  # accelerating from the first cycle
+    assert float(rows[-1]["S1.speed_cmd_rpm"]) == pytest.approx(500.0)
 
 
 def test_plc_fault_scenario_ends_in_a_timeout_error(tmp_path: Path) -> None:

@@ -97,6 +97,27 @@ def test_lag_of_a_feed_move_is_v_over_kv(srv: Server, mid: str) -> None:
     srv.pace(mid, mode="run")
 
 
+def test_status_has_the_hli_target_distance_to_go_and_drive_status(srv: Server, mid: str) -> None:
+    """[000 §2.9] target position and distance to go; [004 §4.2] the drive status that SERCOS
+    drives report (X) and terminal drives do not (S1)."""
+    srv.pace(mid, mode="pause")
+    x0 = srv.axis("X", mid)["pos_cmd"]
+    move = {"type": "move", "axis": "X", "target": x0 + 100, "rapid": False, "feed_mm_min": 600}
+    assert srv.command(mid, move).status_code == 200
+    srv.step(mid, 2000)
+    x = srv.axis("X", mid)
+    assert x["target_pos"] == pytest.approx(x0 + 100)
+    assert x["distance_to_go"] == pytest.approx(x0 + 100 - x["pos_cmd"])
+    assert 70.0 < x["distance_to_go"] < 90.0  # 10 mm/s for about 2 s
+    assert x["ready_for_power_on"] is True and x["ready_for_control_loop_on"] is True
+    s1 = srv.axis("S1", mid)
+    assert s1["ready_for_power_on"] is None and s1["ready_for_control_loop_on"] is None
+    srv.step(mid, 12000)
+    x = srv.axis("X", mid)
+    assert x["state"] == "STANDSTILL" and x["distance_to_go"] == 0.0
+    srv.pace(mid, mode="run")
+
+
 def test_jog_step_and_continuous_jog(srv: Server, mid: str) -> None:
     srv.pace(mid, mode="pause")
     z0 = srv.axis("Z", mid)["pos_cmd"]

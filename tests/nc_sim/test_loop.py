@@ -44,6 +44,36 @@ def test_steady_lag_is_v_over_kv(kv_raw: int, feed: float) -> None:
     assert lag == pytest.approx(v / (kv_raw * 0.01), rel=0.01)  # [004 §3.6]
 
 
+def test_lag_is_command_minus_actual_of_the_same_sample() -> None:
+    """One lag everywhere: every recorded sample has lag = pos_cmd - pos_act, and at constant
+    speed that difference is v/(kv·0.01) [004 §3.6], so k from the columns gives kv."""
+    sim, m, _ = make({"X": {"getriebe[0].kv": 2000}})  # 20/s
+    x = m.axis("X")
+    assert m.mdi("G01 X200 F1000").ok
+    rec = record(sim, 3.0)[:, x.slot]
+    assert np.array_equal(rec[:, L.R_LAG], rec[:, L.R_P_CMD] - rec[:, L.R_P_ACT])
+    v = 1000.0 / 60.0
+    assert rec[-1, L.R_V_CMD] == pytest.approx(v)
+    diff = rec[-500:, L.R_P_CMD] - rec[-500:, L.R_P_ACT]
+    assert diff.mean() == pytest.approx(v / 20.0, rel=1e-4)  # 0.8333 mm, not v/kv - v·dt
+    k = rec[-500:, L.R_V_CMD] / diff
+    assert k.mean() == pytest.approx(20.0, rel=1e-4)
+
+
+@pytest.mark.parametrize("target", [40.0, 40.0033, 40.0051])
+def test_settled_loop_rests_within_half_an_increment_without_hunting(target: float) -> None:
+    """A coarse encoder (0.01 mm per increment) and targets on and off its grid: the P loop
+    comes to rest with |lag| at most half an increment and the count stops changing."""
+    sim, m, _ = make({"X": {"getriebe[0].wegaufz": 1, "getriebe[0].wegaufn": 100}})
+    x = m.axis("X")
+    assert m.move("X", target, rapid=False, feed_mm_min=1000) is None
+    rec = record(sim, 6.0)[:, x.slot]
+    rest = rec[-1000:]
+    assert np.ptp(rest[:, L.R_P_ACT]) == 0.0
+    assert np.abs(rest[:, L.R_V_ACT]).max() < 1e-6
+    assert np.all(np.abs(rest[:, L.R_LAG]) <= 0.005 + 1e-12)
+
+
 def test_full_feedforward_removes_the_steady_lag() -> None:
     lag, v = cruise_lag(1000, 3000.0, ff=1000)
     assert abs(lag) < 0.01 * v / 10.0
@@ -89,6 +119,44 @@ def test_no_motion_without_enables() -> None:
     assert len(err) == 1 and err[0].code == Code.NO_ENABLES
     assert "DriveOn" in err[0].message
     assert m.k.st[x.slot, L.S_P_ACT] == p0
+
+
+def test_power_on_sequence_follows_the_drive_status() -> None:
+    """[004 §4]: a SERCOS drive boots (ready_for_power_on), the PLC sets DriveOn, the power
+    stage comes up (ready_for_control_loop_on), then TorquePermission and ReleaseFeedhold;
+    a terminal drive reports no status and is switched on when the PLC starts."""
+    times = {"sim.drive_boot_time": 20000, "sim.drive_power_up_time": 30000}  # 20 ms, 30 ms
+    sim, m, _ = make({"X": times, "Z": times}, settle=0)
+    x, spindle = m.axis("X"), m.axis("S1")
+    assert x.drive.missing() == ["ready_for_power_on", "ready_for_control_loop_on"]
+    assert spindle.drive.reported() == {}  # terminal drive [004 §4.2]
+    assert m.move("X", 60.0) is not None  # nothing moves before the drives are on
+    assert m.events[-1].code == Code.NO_ENABLES
+    sim.run(19)
+    assert not x.units["DriveOn"] and spindle.drive_follows()  # the PLC ran at its start
+    sim.run(1)  # 20 ms: booted, the PLC switches the power stage on
+    assert x.units["DriveOn"] and x.drive.reported()["ready_for_power_on"]
+    assert not x.units["TorquePermission"] and not m.powered
+    sim.run(29)
+    assert not x.drive.reported()["ready_for_control_loop_on"]
+    sim.run(1)  # 30 ms after DriveOn
+    assert x.drive.missing() == [] and x.enables_ok() and m.powered
+    assert [e.cycle for e in m.events if e.code == Code.EV_POWERED] == [50]
+    assert m.move("X", 60.0) is None
+
+
+def test_motion_refused_with_90007_while_the_drive_is_not_ready() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.hli_write("DriveOn", 0, "X")
+    record(sim, 0.1)
+    m.hli_write("DriveOn", 1, "X")  # the power stage needs its power-up time again
+    assert x.enables_ok()
+    err = m.move("X", 60.0)
+    assert err is not None and err.code == Code.DRIVE_NOT_READY
+    assert "ready_for_control_loop_on" in err.message
+    record(sim, x.cfg.eng("sim.drive_power_up_time"))
+    assert m.move("X", 60.0) is None
 
 
 def test_enables_lost_during_motion_stop_the_axis_with_an_error() -> None:

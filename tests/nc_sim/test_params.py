@@ -8,7 +8,7 @@ import pytest
 
 from nc_sim.machine.config import apply_overrides, demo_machine
 from nc_sim.params import ParamListError, Scope, format_list, parse_list, registry
-from nc_sim.units import AxisKind, Quantity, raw_unit, to_eng
+from nc_sim.units import AxisKind, Quantity, raw_unit, to_eng, v_reso_digits_per_unit_s
 
 DATA = Path(__file__).parent / "data"
 DOMAIN_IDS = [
@@ -48,6 +48,7 @@ def test_manual_defaults_and_units() -> None:
     vb = r.by_id("P-AXIS-00212")
     # 10000 rpm = 60000000 in 0.001 °/s [002 P-AXIS-00212]
     assert to_eng(vb.quantity, 60_000_000) / 6.0 == pytest.approx(10000.0)
+    assert (vb.default, vb.hi) == (200000, 2000000000)  # [002 p.53-54]
     assert raw_unit(Quantity.VELOCITY, AxisKind.LINEAR) == "µm/s"
     assert r.by_id("P-AXIS-00233").effect.value == "restart"  # [004 §3.4]
 
@@ -101,3 +102,33 @@ def test_rejected_overrides_change_nothing() -> None:
             cfg, Scope.AXIS, "X", {"getriebe[0].kv": 3000, "getriebe[0].dynamik.a_max": 0}
         )
     assert cfg.axis("X").values == before
+
+
+def test_speed_scaling_reproduces_the_manuals_examples() -> None:
+    """[000 §2.2.4.1] 32767 increments for 3000 rpm per minute -> 32767/1080000000;
+    [§2.2.4.2] 1 increment for 1 rpm -> 1/360000."""
+    per_deg_s = v_reso_digits_per_unit_s(32767, 1080000000, 0, 0.001)
+    assert 3000 * 6.0 * per_deg_s == pytest.approx(32767.0)
+    assert 1 * 6.0 * v_reso_digits_per_unit_s(1, 360000, 0, 0.001) == pytest.approx(1.0)
+    # per second and per sampling interval: the same output for 1/60 and 1/60000 of the path
+    assert v_reso_digits_per_unit_s(32767, 1080000000 / 60, 1, 0.001) == pytest.approx(per_deg_s)
+    per_cycle = v_reso_digits_per_unit_s(32767, 1080000000 / 60000, 2, 0.001)
+    assert per_cycle == pytest.approx(per_deg_s)
+
+
+def test_open_position_loop_mode_and_the_old_changeover_names_are_accepted() -> None:
+    """P-AXIS-00320 OPEN_POSITION_LOOP_MODE [000 §2.2.4.1]; P-AXIS-00265/00266, replaced by
+    00767/00768 but keeping their function [001 p.18-19]."""
+    text = (
+        "antr.operation_mode OPEN_POSITION_LOOP_MODE\n"
+        "antr.v_time_base 0\n"
+        "antr.v_reso_num 32767\n"
+        "antr.v_reso_denom 1080000000\n"
+        "antr.velocity_position_control_on 1200000\n"
+        "antr.velocity_position_control_off 600000\n"
+    )
+    values = parse_list(text, Scope.AXIS).values
+    assert values["antr.operation_mode"] == 3
+    assert values["antr.velocity_position_control_on"] == 1200000
+    assert registry().by_id("P-AXIS-00265").name == "antr.velocity_position_control_on"
+    assert registry().by_id("P-AXIS-00266").name == "antr.velocity_position_control_off"

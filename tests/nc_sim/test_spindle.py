@@ -82,6 +82,23 @@ def test_speed_reached_with_encoder_follows_the_loop_delay_and_stopped_below_vb_
     assert abs(rec[i, L.R_V_ACT]) < v_zero <= abs(rec[i - 1, L.R_V_ACT])
 
 
+def test_speed_monitoring_flags_have_one_edge_each() -> None:
+    """A quantised encoder's ripple must not toggle the flags: M3 S1000 gives one "speed
+    reached" edge and event; M5 one "stopped" edge, and the settled loop stops counting."""
+    sim, m, _ = make(channel={"spindel[0].m3_synch": 0, "spindel[0].m5_synch": 0})
+    s = m.axis(S)
+    m.mdi("M3 S1000")
+    rec = record(sim, 3.0)[:, s.slot]
+    assert np.count_nonzero(np.diff(rec[:, L.R_SPEED_REACHED])) == 1
+    assert codes(m).count(Code.EV_SPEED_REACHED) == 1
+    m.mdi("M5")
+    rec = record(sim, 6.0)[:, s.slot]
+    edges = np.flatnonzero(np.diff(rec[:, L.R_STOPPED]))
+    assert len(edges) == 1 and rec[edges[0] + 1, L.R_STOPPED] == 1
+    rest = rec[-2000:]  # the last 2 s: no hunting across an increment edge
+    assert np.ptp(rest[:, L.R_P_ACT]) == 0.0 and np.abs(rest[:, L.R_V_ACT]).max() < 1e-6
+
+
 def test_override_example_g167_and_rev_from_the_manual() -> None:
     """[000 §2.4.1] at 50 %: S[M3 REV1000] 500 rpm; S[G167] 1000 rpm; S[REV3000] 1500 rpm."""
     sim, m, _ = make(channel={"spindel[0].m3_synch": 0})
@@ -272,6 +289,35 @@ def test_changeover_to_speed_control_and_back_for_m19_as_in_the_manual() -> None
     assert np.abs(rec[j:, L.R_V_CMD]).max() <= 500 * RPM + 1e-6
 
 
+def test_switch_back_from_speed_control_takes_over_the_lag_without_a_step() -> None:
+    """[001 §2.3] 767 = 768 = 800 rpm: M19 after M3 S1000 decelerates to 800 rpm and closes the
+    loop at speed; the loop takes over the lag it would have had, with no jump of one
+    cycle's travel (800 rpm = 4.8° per cycle), so lag monitoring stays quiet."""
+    rpm = 800
+    sim, m, cfg = make(
+        {
+            S: {
+                "antr.sai_op_mode_change.v_velocity_control_on": rpm * 6000,
+                "antr.sai_op_mode_change.v_position_control_on": rpm * 6000,
+            }
+        },
+        {"spindel[0].m3_synch": 0},
+    )
+    s = m.axis(S)
+    window = cfg.axis(S).eng("kenngr.exact_stop_window")
+    m.mdi("M3 S1000")
+    record(sim, 3.0)
+    assert m.k.ist[s.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL
+    rec = _m19(m, sim, "M19 S.POS=180")[:, s.slot]
+    assert Code.LAG_MONITORING not in codes(m)
+    j = first(rec[:, L.R_OPEN_LOOP] == L.LOOP_CLOSED)
+    v = abs(rec[j, L.R_V_CMD])
+    assert v == pytest.approx(rpm * RPM)
+    step = abs(rec[j, L.R_LAG] - rec[j - 1, L.R_LAG])
+    assert step < 0.05 * v * DT  # far below one cycle of travel
+    assert abs((rec[-1, L.R_P_ACT] - 180.0 + 180) % 360 - 180) <= window
+
+
 def test_changeover_stays_in_speed_control_for_a_lower_speed_and_reset_switches_back() -> None:
     sim, m, _ = make(
         {S: {"antr.sai_op_mode_change.v_velocity_control_on": 1200000}},
@@ -286,6 +332,65 @@ def test_changeover_stays_in_speed_control_for_a_lower_speed_and_reset_switches_
     m.reset()
     record(sim, 0.01)
     assert m.k.ist[s.slot, L.I_OPEN_LOOP] == L.LOOP_CLOSED
+
+
+def test_old_changeover_names_p_axis_00265_00266_keep_working() -> None:
+    """[001 p.18-19]: 00767/00768 replace 00265/00266, "however, the latter retains its
+    functionality": 200 rpm / 100 rpm by the old names change over and back as the new do."""
+    sim, m, _ = make(
+        {
+            S: {
+                "antr.velocity_position_control_on": 1200000,
+                "antr.velocity_position_control_off": 600000,
+            }
+        },
+        {"spindel[0].m4_synch": 0},
+    )
+    s = m.axis(S)
+    _m19(m, sim, "M19 S.POS=0")
+    m.mdi("M4 S1000")
+    rec = record(sim, 3.0)[:, s.slot]
+    i = first(rec[:, L.R_OPEN_LOOP] == L.LOOP_SPEED_CONTROL)
+    assert abs(rec[i, L.R_V_CMD]) > 200 * RPM >= abs(rec[i - 1, L.R_V_CMD])
+    rec = _m19(m, sim, "M19 S.POS=180 M4 S500")[:, s.slot]
+    j = first(rec[:, L.R_OPEN_LOOP] == L.LOOP_CLOSED)
+    assert abs(rec[j - 1, L.R_V_CMD]) == pytest.approx(100 * RPM)  # down to 00266 first
+
+
+# the drive of the manual's example: 32767 digits (10 V) turn the motor at 3000 rpm
+DRIVE_3000 = {"sim.getriebe[2].drive_gain": 32767 / 1080, "lr_hw[0].da_max": 32767}
+SPEED_SCALING = {
+    "antr.operation_mode": "OPEN_POSITION_LOOP_MODE",
+    "antr.v_time_base": 0,
+    "antr.v_reso_num": 32767,
+    "antr.v_reso_denom": 1080000000,
+    "getriebe[2].multi_gain_z": 1,  # a position-loop scaling far off: it must not be used
+    "getriebe[2].multi_gain_n": 100000,
+}
+
+
+@pytest.mark.parametrize("sensorless", [1, 0])
+def test_speed_controlled_spindle_outputs_with_the_speed_scaling(sensorless: int) -> None:
+    """[000 §2.2.4.1]: OPEN_POSITION_LOOP_MODE outputs the command speed with v_reso: 3000 rpm
+    is 32767 digits, 1500 rpm half of it; with an encoder the spindle really turns at S."""
+    sim, m, _ = make(
+        {S: {**SPEED_SCALING, **DRIVE_3000, "sim.sensorless": sensorless}},
+        {"spindel[0].m3_synch": 0, "main_spindle_gear_change": 0},
+    )
+    s = m.axis(S)
+    assert s.gear == 3
+    m.mdi("M3 S3000")
+    rec = record(sim, 7.0)[:, s.slot]  # 500 rpm/s in this gear stage
+    assert np.all(rec[:, L.R_OPEN_LOOP] == L.LOOP_SPEED_CONTROL)
+    assert rec[-1, L.R_DA] == pytest.approx(32767.0)
+    assert rec[-1, L.R_V_ACT] / RPM == pytest.approx(3000.0, rel=1e-3)
+    assert rec[-1, L.R_SPEED_REACHED] == 1
+    m.mdi("M3 S1500")
+    rec = record(sim, 4.0)[:, s.slot]
+    assert rec[-1, L.R_DA] == pytest.approx(32767.0 / 2)
+    assert rec[-1, L.R_V_ACT] / RPM == pytest.approx(1500.0, rel=1e-3)
+    err = m.spindle_position(S, 90.0, None, None)  # no position control: cannot be positioned
+    assert err is not None and err.code == Code.SPINDLE_SENSORLESS_M19
 
 
 # --- acceleration curves ---------------------------------------------------------------------
