@@ -19,6 +19,7 @@ import numpy as np
 from nc_sim.blocks import SpindleCmd
 from nc_sim.errors import Code, JobError, NcUsageError
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.curve import CurveParams
 from nc_sim.machine.axis import (
     Axis,
     AxisState,
@@ -31,7 +32,7 @@ from nc_sim.machine.axis import (
 )
 from nc_sim.machine.dynamics import Motion
 from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
-from nc_sim.machine.watchdog import CurveParams, curve_s, plan_s
+from nc_sim.machine.watchdog import curve_s, plan_s
 from nc_sim.profiles.plan import (
     LIM_A_ACC,
     LIM_A_ACC2,

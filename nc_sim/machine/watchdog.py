@@ -19,12 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nc_sim.kernel.curve import curve_accel
+from nc_sim.kernel.curve import CurveParams
 from nc_sim.profiles.plan import plan_duration
 
 MARGIN_FACTOR = 2.0  # the bound is at least twice the expected duration ...
 MARGIN_S = 1.0  # ... plus one second for settling, lag and the drive
-_CURVE_STEPS = 256  # sub-intervals of a curve-controlled speed change
 
 
 def bound_s(expected_s: float) -> float:
@@ -45,39 +44,6 @@ def search_s(distance: float, speed: float) -> float:
 
 
 @dataclass(frozen=True)
-class CurveParams:
-    """The acceleration curve of a gear record in engineering units (°/s, °/s²)."""
-
-    typ: int
-    n_limit: float
-    a_konst: float
-    b1: float
-    b2: float
-    b3: float
-    a_min: float
-    a_max3: float
-    n1: float
-    n2: float
-    a_cap: float  # a_max (and the tool's a_max): the curve never exceeds it
-
-    def accel(self, n: float) -> float:
-        a = curve_accel(
-            self.typ,
-            n,
-            self.n_limit,
-            self.a_konst,
-            self.b1,
-            self.b2,
-            self.b3,
-            self.a_min,
-            self.a_max3,
-            self.n1,
-            self.n2,
-        )
-        return min(a, self.a_cap)
-
-
-@dataclass(frozen=True)
 class CurveTime:
     """Duration (s) of a curve-controlled speed change, or the speed (°/s) where the curve
     gives no usable acceleration (then `seconds` is inf)."""
@@ -91,15 +57,12 @@ def curve_s(curve: CurveParams, v_from: float, v_to: float) -> CurveTime:
     sub-interval taken, so the result is an upper estimate of the kernel's ramp."""
     if v_from == v_to:
         return CurveTime(0.0)
+    dead = curve.dead_speed(v_from, v_to)
+    if dead is not None:
+        return CurveTime(math.inf, dead)
+    speeds = curve.speeds(v_from, v_to)
+    accel = [curve.accel(float(n)) for n in speeds]
     t = 0.0
-    speeds = np.linspace(v_from, v_to, _CURVE_STEPS + 1)
-    a_prev = curve.accel(float(speeds[0]))
-    for k in range(_CURVE_STEPS + 1):
-        n = float(speeds[k])
-        a = curve.accel(n)
-        if not (math.isfinite(a) and a > 0.0):
-            return CurveTime(math.inf, n)
-        if k > 0:
-            t += abs(n - float(speeds[k - 1])) / min(a, a_prev)
-        a_prev = a
+    for k in range(1, len(speeds)):
+        t += abs(float(speeds[k] - speeds[k - 1])) / min(accel[k], accel[k - 1])
     return CurveTime(t)
