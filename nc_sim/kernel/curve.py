@@ -14,6 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from nc_sim.units import Quantity, to_eng
+
+# the least acceleration a curve must give: one unit of the list's accelerations (a_min,
+# a_konst, a_max are whole °/s²); below it (1e-304 °/s² from b2 = 1e308) nothing accelerates
+A_LEAST = to_eng(Quantity.ACCELERATION, 1)
 CURVE_NONE = 0
 CURVE_HYPERBOLA = 1
 CURVE_POLYNOMIAL = 2
@@ -99,9 +104,9 @@ class CurveParams:
 
     def dead_speed(self, v_from: float, v_to: float) -> float | None:
         """The first sampled speed between v_from and v_to where the curve gives no usable
-        acceleration (<= 0 or not finite), so a speed change there could never progress."""
+        acceleration (below A_LEAST or not finite): a speed change there would never end."""
         for n in self.speeds(v_from, v_to):
             a = self.accel(float(n))
-            if not (math.isfinite(a) and a > 0.0):
+            if not (math.isfinite(a) and a >= A_LEAST):
                 return float(n)
         return None

@@ -8,7 +8,7 @@ lag 1/kv, the drive), so a healthy sequence never meets it and a stuck one alway
 
 A curve-controlled speed change has no plan: its duration is the integral of dn / a(n) from
 the current to the target speed. A curve that gives no usable acceleration somewhere on the
-way (a(n) <= 0 or not finite, e.g. coefficients of 1e308) could never get there; that is
+way (below 1 °/s² or not finite, e.g. coefficients of 1e308) could never get there; that is
 refused before the change starts (90024) instead of waiting for the bound.
 """
 

@@ -9,6 +9,7 @@ import pytest
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.machine.axis import AxisState
 from nc_sim.machine.machine import Machine
+from nc_sim.params import ParamListError
 from nc_sim.sim import Simulation
 from tests.nc_sim.sim_helpers import L, make, record
 
@@ -234,18 +235,17 @@ def test_m5_after_the_control_limit_does_not_home_a_digital_spindle() -> None:
 
 
 # --- item 13: bounds and watchdogs -------------------------------------------------------------
-def test_curve_without_acceleration_is_refused_instead_of_rotating_at_0_rpm_forever() -> None:
-    """Polynomial curve with b1..b3 = 1e308 and the defaults a_konst = n_grenz = 0: a(0) = 0."""
+def test_a_curve_without_acceleration_is_refused_with_the_list() -> None:
+    """Polynomial with b1..b3 = 1e308 and the defaults a_konst = n_grenz = 0: a(0) = 0, the
+    spindle could never start; every value is in its manual range, the curve is meaningless."""
     curve = {f"getriebe[2].beschl_kennlinie.{k}": 1e308 for k in ("b1", "b2", "b3")}
-    sim, m, _ = make({S: {"getriebe[2].beschl_kennlinie.typ": 2, **curve}})
-    assert m.mdi("M3 S1000").ok
-    record(sim, 1.0)
-    err = next(e for e in m.events if e.code == Code.CURVE_NO_ACCELERATION)
-    assert "at 0 rpm" in err.message
-    assert m.axis(S).state is AxisState.ERROR and m.queued_blocks == 0
+    with pytest.raises(ParamListError) as exc:
+        make({S: {"getriebe[2].beschl_kennlinie.typ": 2, **curve}})
+    (err,) = exc.value.errors
+    assert err.name == "getriebe[2].beschl_kennlinie.typ" and "at 0 rpm" in err.detail
 
 
-def test_curve_that_dies_above_n_grenz_is_refused_naming_the_speed() -> None:
+def test_a_hyperbola_that_dies_above_n_grenz_is_refused_naming_the_speed() -> None:
     """The manual's hyperbola [000 §2.8.4] with b2 = 1e308: no acceleration above n_grenz."""
     params = {
         "typ": 1,
@@ -255,16 +255,28 @@ def test_curve_that_dies_above_n_grenz_is_refused_naming_the_speed() -> None:
         "b2": 1e308,
         "b3": 2.857142e-2,
     }
-    sim, m, _ = make({S: {f"getriebe[2].beschl_kennlinie.{k}": v for k, v in params.items()}})
-    assert m.mdi("M3 S1000").ok  # below n_grenz: a_konst, fine
-    record(sim, 2.0)
-    assert m.axis(S).state is AxisState.ENDLESS
-    assert m.mdi("M3 S3000").ok
+    _, _, cfg = make()
+    vb_max_rpm = cfg.axis(S).eng("getriebe.dynamik.vb_max", 3) / RPM
+    with pytest.raises(ParamListError) as exc:
+        make({S: {f"getriebe[2].beschl_kennlinie.{k}": v for k, v in params.items()}})
+    rpm = float(exc.value.errors[0].detail.split(" at ")[1].split(" rpm")[0])
+    assert 2000 < rpm <= 2000 + vb_max_rpm / 256  # the first speed checked above n_grenz
+    params["b2"] = 4.166666e-1  # the manual's own value accelerates everywhere
+    make({S: {f"getriebe[2].beschl_kennlinie.{k}": v for k, v in params.items()}})
+
+
+def test_the_nc_refuses_a_dead_curve_even_past_the_list_check() -> None:
+    """The kernel's copy of the curve is checked at every speed change too (90024), so a
+    curve that got in some other way ends in a job error, never in rotation at 0 rpm."""
+    sim, m, cfg = make()
+    values = cfg.axis(S).values
+    values["getriebe[2].beschl_kennlinie.typ"] = 2  # written around the validation
+    m.refresh_params()
+    assert m.mdi("M3 S1000").ok
     record(sim, 1.0)
     err = next(e for e in m.events if e.code == Code.CURVE_NO_ACCELERATION)
-    rpm = float(err.message.split(" at ")[1].split(" rpm")[0])
-    assert 2000 < rpm <= 3000
-    assert m.axis(S).state is AxisState.ERROR
+    assert "at 0 rpm" in err.message
+    assert m.axis(S).state is AxisState.ERROR and m.queued_blocks == 0
 
 
 def test_unhomed_axis_refuses_a_target_beyond_the_position_range() -> None:
