@@ -120,7 +120,7 @@ def test_a_curve_that_cannot_accelerate_is_422_naming_it_and_nothing_changes(
 ) -> None:
     """Each coefficient is within the manual's REAL64 range; the curve they make is not."""
     pre = "getriebe[2].beschl_kennlinie."
-    changes = [("axis", "S1", pre + "typ", 2)]
+    changes: list[tuple[str, str | None, str, Any]] = [("axis", "S1", pre + "typ", 2)]
     changes += [("axis", "S1", pre + b, 1e308) for b in ("b1", "b2", "b3")]
     r = write(srv, mid, *changes)
     assert r.status_code == 422, r.text
