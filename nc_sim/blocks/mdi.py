@@ -9,12 +9,13 @@ A bad block raises `BlockError` with the 1-based column of the offending charact
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}
-_NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+_NUM = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"  # ASCII digits only: `S１０００` is refused
 
 
 class BlockError(ValueError):
@@ -67,7 +68,7 @@ _TOKEN = re.compile(
     r"|(?P<pos>(?P<pos_name>S\d*)\.POS\s*=?\s*(?P<pos_val>" + _NUM + "))"
     r"|(?P<word>(?P<letter>[A-Z][A-Z]*\d*?)(?P<val>" + _NUM + "))"
     r")",
-    re.IGNORECASE,
+    re.IGNORECASE | re.ASCII,
 )
 
 
@@ -86,16 +87,17 @@ def _parse_specific(body: str, spindle: str, col: int) -> SpindleCmd:
         if mm := re.fullmatch(r"M0*(3|4|5|19)", tok):
             _spindle_m(cmd, int(mm.group(1)), c)
         elif mm := re.fullmatch(r"REV=?(" + _NUM + ")", tok):
-            if float(mm.group(1)) < 0:  # as the S word: M3/M4 give the direction
+            rev = _number(mm.group(1), c + mm.start(1))
+            if rev < 0:  # as the S word: M3/M4 give the direction
                 raise BlockError("REV must not be negative: M3/M4 give the direction", c + 3)
-            cmd.speed_rpm = float(mm.group(1))
+            cmd.speed_rpm = rev
         elif mm := re.fullmatch(r"POS=?(" + _NUM + ")", tok):
-            cmd.pos_deg = float(mm.group(1))
+            cmd.pos_deg = _number(mm.group(1), c + mm.start(1))
         elif mm := re.fullmatch(r"G0*(74|135|137|167)", tok):
             cmd.g.append(int(mm.group(1)))
         elif mm := re.fullmatch(r"G136(?:=?(" + _NUM + "))?", tok):
             cmd.g.append(136)
-            cmd.ff_weight = float(mm.group(1)) if mm.group(1) else None
+            cmd.ff_weight = _number(mm.group(1), c + mm.start(1)) if mm.group(1) else None
         elif tok == "DEFAULT_DYNAMIC_DATA":
             cmd.default_dynamics = True
         else:
@@ -118,6 +120,10 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
         m = _TOKEN.match(line, pos)
         col = pos + 1 + (len(line[pos:]) - len(line[pos:].lstrip()))
         if m is None or m.end() == pos:
+            word = line[col - 1 :].split(maxsplit=1)[0]
+            odd = next((k for k, ch in enumerate(word) if not ch.isascii()), None)
+            if odd is not None:  # e.g. full-width digits typed on a CJK keyboard
+                raise BlockError(f"'{word[odd]}' is not an NC character", col + odd)
             raise BlockError(f"unexpected '{line[col - 1]}'", col)
         pos = m.end()
         if m.group("comment"):
@@ -140,11 +146,11 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
         if m.group("pos"):
             name = _spindle_ref(m.group("pos_name"), spindles, col)
             target = main if name == "S" else _named(block, name)
-            target.pos_deg = float(m.group("pos_val"))
+            target.pos_deg = _number(m.group("pos_val"), m.start("pos_val") + 1)
             continue
         letter = m.group("letter").upper()
         val_text = m.group("val")
-        value = float(val_text)
+        value = _number(val_text, col + len(letter))
         columns.setdefault(letter, col)
         _word(block, main, letter, value, val_text, col, axes, spindles)
     if 74 in block.g_other and block.motion is not None:
@@ -169,6 +175,14 @@ def _homing_order(block: Block, main: SpindleCmd, columns: dict[str, int]) -> No
             raise BlockError(f"G74 takes a homing order 1, 2, ... for {name}", columns[name] + 1)
         block.homing[name] = int(order)
     block.axes.clear()
+
+
+def _number(text: str, col: int) -> float:
+    """The value of a number in a block; 400 digits would be inf, which no address takes."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise BlockError(f"{text[:12]}… is too large", col)
+    return value
 
 
 def _named(block: Block, name: str) -> SpindleCmd:

@@ -56,3 +56,19 @@ def test_bad_homing_order_and_negative_speed_name_the_column(text: str, column: 
     with pytest.raises(BlockError) as exc:
         parse_block(text, AXES, SPINDLES)
     assert exc.value.column == column
+
+
+@pytest.mark.parametrize(
+    ("text", "column", "why"),
+    [
+        ("M3 S１０００", 5, "'１' is not an NC character"),  # full-width digits
+        ("M3 S1_000", 6, "unexpected '_'"),  # Python's digit grouping is no NC number
+        ("G01 X" + "9" * 400, 6, "too large"),  # float() would give inf
+        ("S[M3 REV" + "9" * 400 + "]", 9, "too large"),
+        ("M19 S.POS=" + "9" * 400, 11, "too large"),
+    ],
+)
+def test_numbers_are_ascii_and_finite(text: str, column: int, why: str) -> None:
+    with pytest.raises(BlockError, match=why) as exc:
+        parse_block(text, AXES, SPINDLES)
+    assert exc.value.column == column
