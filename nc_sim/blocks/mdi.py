@@ -1,6 +1,6 @@
 """Single NC blocks in DIN syntax and axis-specific syntax.
 
-    G01 X10 F500            G00 Z-5          G74 X1 Z2        #SLOPE[TYPE=TRAPEZ]
+    G01 X10 F500            G00 Z-5          G74 X1 Z2 S1     #SLOPE[TYPE=TRAPEZ]
     M3 S1000                M19 S.POS=90 M4  M40 S650         M8
     S[M3 REV1000]           S1[M19 REV200 POS100]             S[G74]   S[M5]
 
@@ -87,7 +87,10 @@ def _parse_specific(body: str, spindle: str, col: int) -> SpindleCmd:
         if mm := re.fullmatch(r"M0*(3|4|5|19)", tok):
             _spindle_m(cmd, int(mm.group(1)), c)
         elif mm := re.fullmatch(r"REV=?(" + _NUM + ")", tok):
-            cmd.speed_rpm = _number(mm.group(1), c + mm.start(1))
+            rev = _number(mm.group(1), c + mm.start(1))
+            if rev < 0:  # as the S word: M3/M4 give the direction
+                raise BlockError("REV must not be negative: M3/M4 give the direction", c + 3)
+            cmd.speed_rpm = rev
         elif mm := re.fullmatch(r"POS=?(" + _NUM + ")", tok):
             cmd.pos_deg = _number(mm.group(1), c + mm.start(1))
         elif mm := re.fullmatch(r"G0*(74|135|137|167)", tok):
@@ -108,6 +111,7 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
     spindles = {s.upper() for s in spindles}
     block = Block(text)
     main = SpindleCmd("S")
+    columns: dict[str, int] = {}  # column of each axis word and S (G74 order digits)
     pos = 0
     line = text.rstrip("\n")
     while pos < len(line):
@@ -147,15 +151,30 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
         letter = m.group("letter").upper()
         val_text = m.group("val")
         value = _number(val_text, col + len(letter))
+        columns.setdefault(letter, col)
         _word(block, main, letter, value, val_text, col, axes, spindles)
-    if main.m is not None or main.speed_rpm is not None or main.pos_deg is not None or main.g:
-        block.spindles.insert(0, main)
     if 74 in block.g_other and block.motion is not None:
         raise BlockError("G74 cannot be combined with G00/G01", 1)
     if 74 in block.g_other:
-        block.homing.update({a: int(v) for a, v in block.axes.items()})
-        block.axes.clear()
+        _homing_order(block, main, columns)
+    if main.m is not None or main.speed_rpm is not None or main.pos_deg is not None or main.g:
+        block.spindles.insert(0, main)
     return block
+
+
+def _homing_order(block: Block, main: SpindleCmd, columns: dict[str, int]) -> None:
+    """G74 X1 Z2 S1: the digits are the homing order, S the main spindle [000 §2.7]."""
+    orders = dict(block.axes)
+    if main.speed_rpm is not None:
+        if main.m is not None or main.pos_deg is not None:
+            raise BlockError("G74 S.. homes the spindle: no spindle M function with it", 1)
+        orders["S"] = main.speed_rpm
+        main.speed_rpm = None
+    for name, order in orders.items():
+        if order != int(order) or order < 1:
+            raise BlockError(f"G74 takes a homing order 1, 2, ... for {name}", columns[name] + 1)
+        block.homing[name] = int(order)
+    block.axes.clear()
 
 
 def _number(text: str, col: int) -> float:
@@ -235,6 +254,8 @@ def _word(
             raise BlockError("F must be positive", col + 1)
         block.feed = value
     elif letter == "S":
+        if value < 0:  # a negative S reverses only under G63 tapping [000 §2.8.6], not here
+            raise BlockError("S must not be negative: M3/M4 give the direction", col + 1)
         main.speed_rpm = value
     elif letter == "D":
         block.tool = _int_word(letter, value, text, col)

@@ -115,6 +115,20 @@ def test_out_of_range_is_422_with_range_and_unit_and_nothing_changes(srv: Server
     assert r.status_code == 422 and "X, Z, S1" in r.text
 
 
+def test_a_curve_that_cannot_accelerate_is_422_naming_it_and_nothing_changes(
+    srv: Server, mid: str
+) -> None:
+    """Each coefficient is within the manual's REAL64 range; the curve they make is not."""
+    pre = "getriebe[2].beschl_kennlinie."
+    changes: list[tuple[str, str | None, str, Any]] = [("axis", "S1", pre + "typ", 2)]
+    changes += [("axis", "S1", pre + b, 1e308) for b in ("b1", "b2", "b3")]
+    r = write(srv, mid, *changes)
+    assert r.status_code == 422, r.text
+    (problem,) = r.json()["detail"]["problems"]
+    assert problem["parameter"] == pre + "typ" and "at 0 rpm" in problem["message"]
+    assert values(srv, mid, "S1")[pre + "typ"]["value"] == 0
+
+
 def test_reset_effect_is_pending_until_reset(srv: Server, mid: str) -> None:
     r = write(srv, mid, ("axis", "X", "kenngr.swe_pos", 2500000))
     assert r.json()["changes"][0]["pending"]

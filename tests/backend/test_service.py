@@ -192,6 +192,21 @@ def test_plc_manual_acknowledgement(srv: Server, mid: str) -> None:
     srv.command(mid, {"type": "plc_mode", "mode": "auto"})
 
 
+def test_plc_acknowledge_after_the_timeout_acknowledges_nothing(srv: Server, mid: str) -> None:
+    """Timed out means gone: no longer pending in the status, a late ack answers 0."""
+    srv.pace(mid, mode="pause")
+    srv.command(mid, {"type": "plc_mode", "mode": "manual"})
+    srv.command(mid, {"type": "mdi", "block": "M8"})
+    srv.step(mid, 100)
+    assert [p["m"] for p in srv.status(mid)["plc"]["pending"]] == [8]
+    srv.step(mid, 5000)  # demo plc.m_ack_timeout: 5 s
+    st = srv.status(mid)
+    assert st["plc"]["pending"] == []
+    assert 90004 in {e["code"] for e in st["recent_events"]}
+    r = srv.command(mid, {"type": "plc_ack", "m": 8})
+    assert r.is_success and r.json()["acknowledged"] == 0
+
+
 def test_emergency_stop_and_reset(srv: Server, mid: str) -> None:
     srv.command(mid, {"type": "emergency_stop"})
     st = srv.status(mid)
