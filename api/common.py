@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, Field
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
 
 
 class JobErrorModel(BaseModel):
     """One job error or event of a machine, numbered as the manuals number them."""
+
+    model_config = ConfigDict(allow_inf_nan=False)
 
     cycle: int = Field(description="cycle in which it happened")
     t_s: float = Field(description="simulated time, s")
@@ -41,7 +45,16 @@ class Refusal(BaseModel):
     )
 
 
-class RefusalBody(BaseModel):
-    """HTTP body of a refusal."""
+class ValidationIssue(BaseModel):
+    """One way a request does not match the schema (FastAPI's request validation)."""
 
-    detail: Refusal
+    loc: list[str | int] = Field(description="where: body, query, path, then field names")
+    msg: str
+    type: str = Field(description="pydantic error type, e.g. missing, literal_error")
+    input: Any = Field(None, description="the offending input; long inputs are cut and end in '…'")
+
+
+class ErrorBody(BaseModel):
+    """HTTP body of every error answer: a refusal, or the request's schema violations."""
+
+    detail: Refusal | list[ValidationIssue]

@@ -27,7 +27,16 @@ class SimulationControl(BaseModel):
     until_cycle: int | None = Field(None, ge=0, description="fast: pause at this cycle")
 
 
-class StepRequest(BaseModel):
-    """Single-step a paused machine by whole cycles."""
+MAX_STEP_CYCLES = 1_000_000  # one request; longer spans run in fast mode with until_cycle
 
-    cycles: int = Field(1, ge=1, le=10_000_000)
+
+class StepRequest(BaseModel):
+    """Single-step a paused machine by whole cycles (answered when they are done)."""
+
+    cycles: int = Field(
+        1,
+        ge=1,
+        le=MAX_STEP_CYCLES,
+        description="cycles to advance, at most 1 000 000 (1000 s at 1 ms); for longer spans "
+        "use mode fast with until_cycle",
+    )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, StrictFloat, StrictInt, StrictStr
 
 ScopeName = Literal["axis", "channel", "tool"]
 Value = float | int | str
@@ -54,7 +54,8 @@ class ParameterChange(BaseModel):
     scope: ScopeName
     target: str | None = Field(None, description="axis name; null for channel and tool")
     name: str = Field(min_length=1, max_length=120)
-    value: Value
+    # strict: `true` is not 1.0 and "2000" stays text (parsed as the list format would)
+    value: StrictFloat | StrictInt | StrictStr
 
 
 class ParameterWrite(BaseModel):

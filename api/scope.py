@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from api.common import JobErrorModel
 
@@ -59,6 +59,8 @@ class ChannelInfo(BaseModel):
 class TraceInfo(BaseModel):
     """A capture (kept in memory until saved) or a trace of the library."""
 
+    model_config = ConfigDict(allow_inf_nan=False)  # a stored NaN would break the library
+
     id: str
     machine: str
     machine_name: str
@@ -79,6 +81,8 @@ class TraceInfo(BaseModel):
 
 class ParamValueAt(BaseModel):
     """A parameter that differed from its default when the trace was captured."""
+
+    model_config = ConfigDict(allow_inf_nan=False)
 
     scope: str
     target: str

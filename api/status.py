@@ -91,7 +91,7 @@ class MachineStatus(BaseModel):
     axes: list[AxisStatus]
     plc: PlcStatus
     job_errors: list[JobErrorModel] = Field(description="active job errors, one per axis")
-    recent_events: list[JobErrorModel] = Field(description="last 50 events and errors")
+    recent_events: list[JobErrorModel] = Field(description="the newest 50 events and errors")
 
 
 class MachineSummary(BaseModel):
@@ -123,6 +123,20 @@ class LoopStatus(BaseModel):
     work_max_ms: float
     wake_late_p99_ms: float = Field(description="how late the loop woke, 99th percentile")
     recent_overruns: list[OverrunRecord] = Field(description="the last 20 overruns")
+    host_failures: int = Field(
+        description="machine ticks that raised; the machine was paused, the loop went on"
+    )
+    restarts: int = Field(description="times the loop itself failed and was restarted")
+
+
+class TelemetryStatus(BaseModel):
+    """The telemetry hub that sends frames and events to websocket clients."""
+
+    frames_sent: int
+    clients_dropped: int = Field(
+        description="clients we disconnected: not reading, flooding, bad messages, failures"
+    )
+    restarts: int = Field(description="times the hub failed and was restarted")
 
 
 class ServiceStatus(BaseModel):
@@ -130,4 +144,5 @@ class ServiceStatus(BaseModel):
     uptime_s: float
     loop: LoopStatus
     clients: int = Field(description="telemetry websockets connected")
+    telemetry: TelemetryStatus
     machines: dict[str, SimulationStatus]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import struct
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import BaseModel, Field
@@ -18,6 +18,11 @@ from pydantic import BaseModel, Field
 from api.common import JobErrorModel
 
 MAGIC = b"INBT"
+MAX_SIGNALS = 256  # per subscription
+MAX_SIGNAL_NAME = 64  # characters
+MIN_RATE_HZ = 0.1  # one sample per 10 s: slower rates make no live plot
+MAX_RATE_HZ = 1e6  # beyond any cycle rate: every cycle
+MAX_MESSAGE_BYTES = 65536  # a client message larger than this closes the connection (1009)
 
 
 class SignalInfo(BaseModel):
@@ -31,9 +36,14 @@ class Subscribe(BaseModel):
     """Client → server: which signals to stream (replaces any earlier subscription)."""
 
     type: Literal["subscribe"] = "subscribe"
-    signals: list[str] = Field(min_length=1, max_length=256)
+    signals: list[Annotated[str, Field(max_length=MAX_SIGNAL_NAME)]] = Field(
+        min_length=1, max_length=MAX_SIGNALS
+    )
     max_rate_hz: float | None = Field(
-        None, gt=0, description="decimate to at most this many samples per second"
+        None,
+        ge=MIN_RATE_HZ,
+        le=MAX_RATE_HZ,
+        description="decimate to at most this many samples per second (none: every cycle)",
     )
 
 
@@ -56,6 +66,10 @@ class Subscribed(BaseModel):
 
 class EventMessage(BaseModel):
     type: Literal["event"] = "event"
+    seq: int = Field(description="sequence number in the machine's event log (from 0 per run)")
+    missed: int = Field(
+        0, description="events before this one the bounded log dropped before they were sent"
+    )
     event: JobErrorModel
 
 

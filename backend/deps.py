@@ -45,7 +45,7 @@ class Services:
         for host in machines.hosts():  # start every clock from now
             host.set_mode(host.pacing.mode, host.pacing.until_cycle)
         loop = RealtimeLoop(machines.hosts, settings.loop_period_s)
-        hub = TelemetryHub(settings.frame_s, settings.max_frame_samples)
+        hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
         tdir = settings.traces_path
         traces = TraceService(store, tdir, machines)
         recorders = Recorders(tdir / "recordings")

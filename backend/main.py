@@ -5,12 +5,10 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
-from fastapi import FastAPI, Request
-from fastapi.responses import JSONResponse
+from fastapi import FastAPI
 
-from backend import VERSION, frontend, openapi
+from backend import VERSION, errors, frontend, openapi
 from backend.deps import Services
-from backend.errors import ApiError
 from backend.routes import (
     commands,
     machines,
@@ -42,10 +40,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         lifespan=lifespan,
     )
 
-    @app.exception_handler(ApiError)
-    async def api_error(_request: Request, exc: ApiError) -> JSONResponse:
-        return JSONResponse(status_code=exc.status, content={"detail": exc.detail})
-
+    errors.install(app)
     for module in (service, machines, commands, parameters, telemetry, scope, traces, viewer):
         app.include_router(module.router)
     openapi.install(app)

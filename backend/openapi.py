@@ -10,6 +10,7 @@ from fastapi.openapi.utils import get_openapi
 from pydantic import BaseModel
 from pydantic.json_schema import models_json_schema
 
+from api.common import ErrorBody
 from api.telemetry import (
     ErrorMessage,
     EventMessage,
@@ -19,6 +20,7 @@ from api.telemetry import (
     Subscribe,
     Subscribed,
 )
+from backend.errors import WHY
 
 WEBSOCKET_MODELS: tuple[type[BaseModel], ...] = (
     Subscribe,
@@ -47,7 +49,31 @@ def install(app: FastAPI) -> None:
                 ref_template="#/components/schemas/{model}",
             )
             doc.setdefault("components", {}).setdefault("schemas", {}).update(defs["$defs"])
+            _one_error_body(doc)
             app.openapi_schema = doc
         return app.openapi_schema
 
     app.openapi = schema  # type: ignore[method-assign]
+
+
+def _one_error_body(doc: dict[str, Any]) -> None:
+    """FastAPI documents request validation as its `HTTPValidationError`; the service answers
+    every error with `ErrorBody` (backend/errors.py), so the schema says that. FastAPI also
+    answers 400 to a JSON body it cannot decode, which every operation with a body documents."""
+    content = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
+    for operations in doc.get("paths", {}).values():
+        for op in operations.values():
+            answers = op.setdefault("responses", {})
+            answer = answers.get("422")
+            if answer and "HTTPValidationError" in str(answer.get("content")):
+                answer["content"] = content
+            if "application/json" in op.get("requestBody", {}).get("content", {}):
+                answers.setdefault("400", {"description": WHY[400], "content": content})
+    schemas = doc["components"]["schemas"]
+    if "ErrorBody" not in schemas:
+        _, defs = models_json_schema(
+            [(ErrorBody, "serialization")], ref_template="#/components/schemas/{model}"
+        )
+        schemas.update(defs["$defs"])
+    for unused in ("HTTPValidationError", "ValidationError"):
+        schemas.pop(unused, None)

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 
 import uvicorn
 
+from api.telemetry import MAX_MESSAGE_BYTES
 from backend.main import create_app
 from backend.settings import Settings
 
@@ -30,6 +31,9 @@ def serve(host: str, port: int, overrides: Mapping[str, object]) -> None:
     """Start the service and block until it is stopped (SIGINT/SIGTERM)."""
     settings = Settings.model_validate(dict(overrides))
     sock = listening_socket(host, port, settings.send_buffer_bytes)
-    config = uvicorn.Config(create_app(settings), log_level="warning")
+    # client websocket messages are small; larger ones are refused (1009) while they stream in
+    config = uvicorn.Config(
+        create_app(settings), log_level="warning", ws_max_size=MAX_MESSAGE_BYTES
+    )
     print(f"Inbetrieb at http://{host}:{port}  (API docs at /docs)", flush=True)
     uvicorn.Server(config).run(sockets=[sock])

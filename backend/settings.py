@@ -21,6 +21,9 @@ class Settings(BaseSettings):
     send_buffer_bytes: int = Field(
         131072, ge=16384, description="kernel send buffer per connection (slow-client detection)"
     )
+    client_stall_s: float = Field(
+        10.0, gt=0, description="a telemetry client whose send takes longer is disconnected"
+    )
     trace_dir: Path | None = Field(
         None, description="trace library files and recordings (default: traces/ beside the db)"
     )

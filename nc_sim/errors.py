@@ -35,6 +35,8 @@ class Code(IntEnum):
     GEAR_CHANGE_OFF = 90020
     SPINDLE_NOT_HOMED = 90021
     NOT_A_SPINDLE = 90022
+    SEQUENCE_WATCHDOG = 90023
+    CURVE_NO_ACCELERATION = 90024
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -72,7 +74,7 @@ MESSAGES: dict[Code, str] = {
     Code.BLOCK_SYNTAX: "NC block syntax error",
     Code.UNKNOWN_AXIS: "no such axis or spindle in the channel",
     Code.NOT_SUPPORTED: "command not supported",
-    Code.NOT_HOMED: "axis not homed",
+    Code.NOT_HOMED: "axis not homed: programmed motion needs homing first (P-AXIS-00277)",
     Code.FEED_MISSING: "G01 needs a feed F > 0",
     Code.CHANNEL_ERROR_STATE: "channel in error state: reset first",
     Code.GEAR_NO_RANGE: "spindle speed out of reach",
@@ -83,6 +85,10 @@ MESSAGES: dict[Code, str] = {
     Code.SPINDLE_NOT_HOMED: "spindle not homed and automatic homing is off "
     "(ACHSMODE_KEINE_AUTO_RPF): home with G74 first",
     Code.NOT_A_SPINDLE: "spindle command to an axis that is not a spindle",
+    Code.SEQUENCE_WATCHDOG: "watchdog: a sequence did not end within the bound derived from "
+    "its own parameters; it is braked and the axis is in error",
+    Code.CURVE_NO_ACCELERATION: "the acceleration curve (P-AXIS-00202) gives no usable "
+    "acceleration on the way to the commanded speed: speed change refused",
     Code.EV_BLOCK_DONE: "block done",
     Code.EV_M_OUTPUT: "M function output to the PLC",
     Code.EV_M_ACK: "M function acknowledged by the PLC",

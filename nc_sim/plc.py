@@ -59,6 +59,15 @@ class SimPlc:
             self.pending.remove(p)
         return acked
 
+    def withdraw(self, out_cycle: int) -> PendingM | None:
+        """The NC gave up waiting (timeout): the M function is no longer pending anywhere,
+        so a late acknowledgement finds nothing to acknowledge."""
+        for p in self.pending:
+            if p.out_cycle == out_cycle:
+                self.pending.remove(p)
+                return p
+        return None
+
     def due(self, now: int) -> list[PendingM]:
         """Acknowledgements the PLC gives in this cycle (auto mode)."""
         out = [p for p in self.pending if p.due_cycle is not None and p.due_cycle <= now]

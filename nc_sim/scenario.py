@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from nc_sim.errors import JobError, NcUsageError
+from nc_sim.events import EVENT_LOG_LEN
 from nc_sim.machine.config import MachineConfig, apply_overrides
 from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope, resolve
@@ -24,6 +25,8 @@ from nc_sim.signals import machine_signals, signal_columns
 from nc_sim.sim import Simulation
 
 POWER_ON_LIMIT_S = 60.0  # a machine not ready by then has a configuration fault
+# cycles run between reads of the event log: far fewer than the events it holds
+COLLECT_CYCLES = EVENT_LOG_LEN // 10
 
 
 @dataclass
@@ -117,16 +120,30 @@ def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioRes
     n_total = round(duration / cfg.cycle_s)
     actions = sorted(scenario.get("actions", []), key=lambda a: float(a.get("t_s", 0.0)))
     rec = sim.new_record(n_total)
+    events: list[JobError] = []  # every event: the machine's own log keeps only the newest
+    cursor = m.events.first_seq
     done = 0
+
+    def collect() -> None:
+        nonlocal cursor
+        read = m.events.since(cursor)
+        events.extend(read.entries)
+        cursor = read.cursor
+
+    def run_to(end: int) -> None:
+        nonlocal done
+        while done < end:
+            n = min(end - done, COLLECT_CYCLES)
+            sim.run(n, rec[done : done + n])
+            done += n
+            collect()
+
     for action in actions:
-        at = min(n_total, round(float(action.get("t_s", 0.0)) / cfg.cycle_s))
-        if at > done:
-            sim.run(at - done, rec[done:at])
-            done = at
+        run_to(min(n_total, round(float(action.get("t_s", 0.0)) / cfg.cycle_s)))
         _act(m, action)
-    if n_total > done:
-        sim.run(n_total - done, rec[done:])
-    events = [replace(e, t_s=(e.cycle - t0) * cfg.cycle_s) for e in m.events]
+        collect()
+    run_to(n_total)
+    events = [replace(e, t_s=(e.cycle - t0) * cfg.cycle_s) for e in events]
     return ScenarioResult(trace_columns(m, rec, 0), events, m)
 
 

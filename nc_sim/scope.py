@@ -28,6 +28,7 @@ from enum import StrEnum
 import numpy as np
 
 from nc_sim.errors import Code, JobError, is_error
+from nc_sim.events import EventLog
 from nc_sim.signals import Signal, signal_columns
 
 MAX_CHANNELS = 16
@@ -182,7 +183,7 @@ class Scope:
         self._forced = False
         self._search_from = 0  # triggers before this cycle do not count
         self._primed = False  # level trigger: the signal was beyond the hysteresis band
-        self._event_index = 0
+        self._event_cursor = 0  # sequence number of the next event to look at
         self._level_column: list[Signal] = []
 
     @property
@@ -203,7 +204,7 @@ class Scope:
         setup: ScopeSetup,
         head: int,
         history: np.ndarray,
-        events: Sequence[JobError],
+        events: EventLog[JobError],
     ) -> None:
         """Start recording after cycle `head`. `history` holds kernel records of the cycles
         just before (up to `head`, oldest first) to fill the pre-trigger from."""
@@ -217,7 +218,7 @@ class Scope:
             self._write(signal_columns(list(setup.channels), history[-keep:]), head - keep + 1)
         self._trigger_cycle, self._forced = None, False
         self._search_from = head + 1
-        self._event_index = len(events)
+        self._event_cursor = events.cursor
         trig = setup.trigger
         self._level_column = [trig.signal] if isinstance(trig, LevelTrigger) else []
         # a crossing in the first cycle after arming counts when the cycle before was below
@@ -239,7 +240,7 @@ class Scope:
             self._trigger_cycle, self._forced = self._head, True
             self.state = ScopeState.TRIGGERED
 
-    def feed(self, rec: np.ndarray, first_cycle: int, events: Sequence[JobError]) -> None:
+    def feed(self, rec: np.ndarray, first_cycle: int, events: EventLog[JobError]) -> None:
         """Take the kernel records of cycles first_cycle … first_cycle + len(rec) - 1."""
         if not self.active or self.setup is None or rec.shape[0] == 0:
             return
@@ -315,16 +316,17 @@ class Scope:
         first_cycle: int,
         pos: int,
         last: int,
-        events: Sequence[JobError],
+        events: EventLog[JobError],
     ) -> int | None:
         trig = self.setup.trigger if self.setup else None
         if isinstance(trig, EventTrigger):
-            while self._event_index < len(events):
-                ev = events[self._event_index]
+            read = events.since(self._event_cursor)
+            self._event_cursor = read.first_seq  # events the log dropped are gone for us too
+            for ev in read.entries:
                 t = trig.cycle_of(ev)
                 if t is not None and t > last:
                     return None  # acts in a later block: look again then
-                self._event_index += 1
+                self._event_cursor += 1
                 if t is not None and t >= pos and self._accepts(t):
                     return t
             return None
@@ -354,7 +356,7 @@ class Scope:
                 return first_cycle + i
         return None
 
-    def _complete(self, end: int, events: Sequence[JobError]) -> None:
+    def _complete(self, end: int, events: EventLog[JobError]) -> None:
         setup = self.setup
         assert setup is not None and self._trigger_cycle is not None
         first = self._record_first()

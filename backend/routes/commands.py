@@ -5,8 +5,8 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from api.commands import Command, CommandResult
-from api.common import RefusalBody
 from backend.deps import ActorDep, HostDep
+from backend.errors import responses
 from backend.services.commands import execute
 
 router = APIRouter(prefix="/api/machines", tags=["commands"])
@@ -14,10 +14,14 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
 
 @router.post(
     "/{mid}/commands",
-    responses={
-        409: {"description": "the NC refused the command (job error)", "model": RefusalBody},
-        422: {"description": "bad input (an NC block with the column of the error)"},
-    },
+    responses=responses(
+        403,
+        404,
+        why={
+            409: "the NC refused the command (job error)",
+            422: "bad input (an NC block with the column of the error)",
+        },
+    ),
 )
 def command(cmd: Command, host: HostDep, actor: ActorDep) -> CommandResult:
     """MDI block, spindle, gear, homing, jog, move, override, HLI, PLC, reset, E-stop."""

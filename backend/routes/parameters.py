@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated
 
-from fastapi import APIRouter, Body, Query
-from fastapi.responses import PlainTextResponse
+from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import PlainTextResponse, Response
 
 from api.parameters import (
     AuditEntry,
@@ -15,7 +16,9 @@ from api.parameters import (
     ParameterWriteResult,
     ScopeName,
 )
+from backend.bodies import read_text, text_answer, text_body
 from backend.deps import ActorDep, HostDep, ServicesDep
+from backend.errors import responses
 from backend.services import parameters as params
 from nc_sim.params import Scope, registry
 
@@ -23,9 +26,8 @@ router = APIRouter(prefix="/api", tags=["parameters"])
 
 ScopeQ = Annotated[ScopeName, Query(description="axis, channel or tool list")]
 TargetQ = Annotated[str | None, Query(description="axis name for the axis list")]
-_REJECTED: dict[int | str, dict[str, Any]] = {
-    422: {"description": "rejected values: parameter, range, unit (nothing applied)"}
-}
+_REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"}
+MAX_LIST_BYTES = 1_000_000
 
 
 @router.get("/parameters")
@@ -50,13 +52,13 @@ def definitions() -> list[ParameterDef]:
     ]
 
 
-@router.get("/machines/{mid}/parameters")
+@router.get("/machines/{mid}/parameters", responses=responses(404, 422))
 def values(host: HostDep, scope: ScopeQ = "axis", target: TargetQ = None) -> list[ParameterValue]:
     """Values of one list (every gear record for getriebe[i]), with pending values."""
     return params.read(host, Scope(scope), target)
 
 
-@router.patch("/machines/{mid}/parameters", responses=_REJECTED)
+@router.patch("/machines/{mid}/parameters", responses=responses(403, 404, why=_REJECTED))
 def write(
     req: ParameterWrite, host: HostDep, services: ServicesDep, actor: ActorDep
 ) -> ParameterWriteResult:
@@ -64,23 +66,34 @@ def write(
     return params.write(actor, host, services.store, req.changes, req.comment)
 
 
-@router.get("/machines/{mid}/parameters/export", response_class=PlainTextResponse)
-def export(host: HostDep, scope: ScopeQ = "axis", target: TargetQ = None) -> str:
+@router.get(
+    "/machines/{mid}/parameters/export",
+    response_class=Response,
+    responses=text_answer("text/plain", "the list") | responses(404, 422),
+)
+def export(host: HostDep, scope: ScopeQ = "axis", target: TargetQ = None) -> PlainTextResponse:
     """The list in the native format, as a restart would load it."""
-    return params.export_list(host, Scope(scope), target)
+    return PlainTextResponse(params.export_list(host, Scope(scope), target))
 
 
-@router.post("/machines/{mid}/parameters/import", responses=_REJECTED)
-def import_list(
+@router.post(
+    "/machines/{mid}/parameters/import",
+    responses=responses(403, 404, 413, why=_REJECTED),
+    openapi_extra=text_body("text/plain", MAX_LIST_BYTES, "a list in the native format"),
+)
+async def import_list(
+    request: Request,
     host: HostDep,
     services: ServicesDep,
     actor: ActorDep,
-    text: Annotated[str, Body(media_type="text/plain", max_length=1_000_000)],
     scope: ScopeQ = "axis",
     target: TargetQ = None,
 ) -> ParameterWriteResult:
-    """Import a native list (text/plain); a bad line is rejected with its line number."""
-    return params.import_list(actor, host, services.store, Scope(scope), target, text)
+    """Import a native list (text/plain, UTF-8); a bad line is rejected with its line number."""
+    text = await read_text(request, MAX_LIST_BYTES, "parameter list")
+    return await run_in_threadpool(
+        params.import_list, actor, host, services.store, Scope(scope), target, text
+    )
 
 
 @router.get("/machines/{mid}/parameters/audit")

@@ -10,6 +10,7 @@ from fastapi.responses import FileResponse, RedirectResponse, Response
 from api.auth import Action
 from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
 from backend.deps import ActorDep, HostDep, ServicesDep
+from backend.errors import responses
 from backend.services import scope
 from backend.services.auth import authorize
 from backend.services.viewer import viewer_url
@@ -20,14 +21,14 @@ BINARY: dict[int | str, dict[str, Any]] = {
 }
 
 
-@router.get("/machines/{mid}/scope")
+@router.get("/machines/{mid}/scope", responses=responses(403, 404))
 def scope_status(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """State of the scope, its setup and the recent captures (newest first)."""
     authorize(actor, Action.OBSERVE, host.id)
     return scope.status(host, services.traces, services.recorders)
 
 
-@router.put("/machines/{mid}/scope", responses={422: {"description": "bad setup"}})
+@router.put("/machines/{mid}/scope", responses=responses(403, 404, why={422: "bad setup"}))
 def scope_arm(
     req: ScopeSetupModel, host: HostDep, services: ServicesDep, actor: ActorDep
 ) -> ScopeStatus:
@@ -37,7 +38,7 @@ def scope_arm(
     return scope.status(host, services.traces, services.recorders)
 
 
-@router.post("/machines/{mid}/scope/force")
+@router.post("/machines/{mid}/scope/force", responses=responses(403, 404))
 def scope_force(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """Trigger now (an armed scope only)."""
     authorize(actor, Action.OBSERVE, host.id)
@@ -45,14 +46,18 @@ def scope_force(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeS
     return scope.status(host, services.traces, services.recorders)
 
 
-@router.post("/machines/{mid}/scope/stop")
+@router.post("/machines/{mid}/scope/stop", responses=responses(403, 404))
 def scope_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     authorize(actor, Action.OBSERVE, host.id)
     scope.stop(host)
     return scope.status(host, services.traces, services.recorders)
 
 
-@router.get("/machines/{mid}/scope/roll", response_class=Response, responses=BINARY)
+@router.get(
+    "/machines/{mid}/scope/roll",
+    response_class=Response,
+    responses=BINARY | responses(403, 404, 409, 422),
+)
 def scope_roll(
     host: HostDep,
     actor: ActorDep,
@@ -63,7 +68,7 @@ def scope_roll(
     return Response(scope.roll_frame(host, max_points), media_type="application/octet-stream")
 
 
-@router.post("/machines/{mid}/recording", status_code=201)
+@router.post("/machines/{mid}/recording", status_code=201, responses=responses(403, 404, 409, 422))
 def recording_start(
     req: RecordingStart, host: HostDep, services: ServicesDep, actor: ActorDep
 ) -> RecordingInfo:
@@ -72,20 +77,29 @@ def recording_start(
     return services.recorders.begin(host, req.signals)
 
 
-@router.delete("/machines/{mid}/recording")
+@router.delete("/machines/{mid}/recording", responses=responses(403, 404, 409))
 def recording_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> RecordingInfo:
     authorize(actor, Action.OBSERVE, host.id)
     return services.recorders.end(host.id)
 
 
-@router.get("/recordings/{rid}/recording.rrd", response_class=FileResponse)
+@router.get(
+    "/recordings/{rid}/recording.rrd",
+    response_class=FileResponse,
+    responses=BINARY | responses(404),
+)
 def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
     """The recording as a Rerun .rrd file (so far, while it runs)."""
     path = services.recorders.path(rid)
     return FileResponse(path, media_type="application/octet-stream", filename=f"{rid}.rrd")
 
 
-@router.get("/recordings/{rid}/viewer", response_class=RedirectResponse)
+@router.get(
+    "/recordings/{rid}/viewer",
+    response_class=RedirectResponse,
+    status_code=307,
+    responses=responses(404),
+)
 def recording_viewer(rid: str, request: Request, services: ServicesDep) -> RedirectResponse:
     """Open the recording in the bundled Rerun web viewer."""
     services.recorders.path(rid)

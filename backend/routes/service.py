@@ -27,5 +27,6 @@ def service_status(services: ServicesDep) -> ServiceStatus:
         uptime_s=time.time() - services.started,
         loop=services.loop.status(),
         clients=len(services.hub.subscribers),
+        telemetry=services.hub.status(),
         machines={h.id: simulation_status(h) for h in services.machines.hosts()},
     )

@@ -5,12 +5,14 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
-from fastapi.responses import FileResponse, PlainTextResponse, RedirectResponse
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import FileResponse, RedirectResponse
 
 from api.auth import Action
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
+from backend.bodies import read_text, text_answer, text_body
 from backend.deps import ActorDep, ServicesDep
-from backend.errors import ApiError
+from backend.errors import responses
 from backend.routes.scope import BINARY
 from backend.services.auth import authorize
 from backend.services.trace_csv import from_csv, to_csv
@@ -26,65 +28,75 @@ def library(services: ServicesDep, machine: str | None = None) -> list[TraceInfo
     return services.traces.library(machine)
 
 
-@router.get("/compare")
+@router.get("/compare", responses=responses(404, 422))
 def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
     """Parameters that differ between two traces, and the channels they share."""
     return services.traces.compare(a, b)
 
 
-@router.post("/import", status_code=201, responses={422: {"description": "bad CSV"}})
+@router.post(
+    "/import",
+    status_code=201,
+    responses=responses(403, 413, why={422: "bad CSV: which row or column, and why"}),
+    openapi_extra=text_body("text/csv", MAX_CSV_BYTES, "a trace as CSV, e.g. one exported"),
+)
 async def import_csv(
-    request: Request, services: ServicesDep, actor: ActorDep, name: str = ""
+    request: Request,
+    services: ServicesDep,
+    actor: ActorDep,
+    name: Annotated[str, Query(max_length=200)] = "",
 ) -> TraceInfo:
     """Store a CSV trace (body text/csv), e.g. one exported earlier, to overlay it."""
     authorize(actor, Action.OBSERVE, "")
-    body = await request.body()
-    if len(body) > MAX_CSV_BYTES:
-        raise ApiError(413, {"message": f"CSV larger than {MAX_CSV_BYTES} bytes"})
-    try:
-        text = body.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise ApiError(422, {"message": "CSV import: not UTF-8 text"}) from None
-    return services.traces.add(from_csv(text, name))
+    text = await read_text(request, MAX_CSV_BYTES, "CSV import")
+    # parsing and writing take seconds for a big file: off the event loop
+    trace = await run_in_threadpool(from_csv, text, name)
+    return await run_in_threadpool(services.traces.add, trace)
 
 
-@router.get("/{tid}")
+@router.get("/{tid}", responses=responses(404))
 def detail(tid: str, services: ServicesDep) -> TraceDetail:
     """Description, parameters that differed from defaults, and the events in the record."""
     return services.traces.get(tid).detail
 
 
-@router.get("/{tid}/data", response_class=Response, responses=BINARY)
+@router.get("/{tid}/data", response_class=Response, responses=BINARY | responses(404))
 def data(tid: str, services: ServicesDep) -> Response:
     """Every sample as one binary frame (api/telemetry.py format)."""
     return Response(services.traces.frame(tid), media_type="application/octet-stream")
 
 
-@router.get("/{tid}/csv", response_class=PlainTextResponse)
-def csv(tid: str, services: ServicesDep) -> PlainTextResponse:
+@router.get(
+    "/{tid}/csv",
+    response_class=Response,
+    responses=text_answer("text/csv", "CSV text") | responses(404),
+)
+def csv(tid: str, services: ServicesDep) -> Response:
     trace = services.traces.get(tid)
-    return PlainTextResponse(
+    return Response(
         to_csv(trace),
         media_type="text/csv",
         headers={"Content-Disposition": f'attachment; filename="{tid}.csv"'},
     )
 
 
-@router.get("/{tid}/trace.rrd", response_class=FileResponse)
+@router.get("/{tid}/trace.rrd", response_class=FileResponse, responses=BINARY | responses(404))
 def rrd(tid: str, services: ServicesDep) -> FileResponse:
     """The trace as a Rerun recording."""
     path = services.traces.rrd_path(tid)
     return FileResponse(path, media_type="application/octet-stream", filename=f"{tid}.rrd")
 
 
-@router.get("/{tid}/viewer", response_class=RedirectResponse)
+@router.get(
+    "/{tid}/viewer", response_class=RedirectResponse, status_code=307, responses=responses(404)
+)
 def viewer(tid: str, request: Request, services: ServicesDep) -> RedirectResponse:
     """Open the trace in the bundled Rerun web viewer."""
     services.traces.get(tid)
     return RedirectResponse(viewer_url(request, f"/api/traces/{tid}/trace.rrd"))
 
 
-@router.get("/{tid}/measure", responses={422: {"description": "unknown channel, empty window"}})
+@router.get("/{tid}/measure", responses=responses(404, why={422: "unknown channel, empty window"}))
 def measure(
     tid: str,
     channel: str,
@@ -98,21 +110,21 @@ def measure(
     return services.traces.measure(tid, channel, t0_s, t1_s, band_pct, band_abs)
 
 
-@router.post("/{tid}/save", status_code=201)
+@router.post("/{tid}/save", status_code=201, responses=responses(403, 404, 409, 422))
 def save(tid: str, req: TraceSave, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Keep a recent capture in the library, with a name and notes."""
     authorize(actor, Action.OBSERVE, "")
     return services.traces.save(tid, req)
 
 
-@router.patch("/{tid}")
+@router.patch("/{tid}", responses=responses(403, 404, 409, 422))
 def patch(tid: str, req: TracePatch, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Rename a stored trace or change its notes."""
     authorize(actor, Action.OBSERVE, "")
     return services.traces.patch(tid, req)
 
 
-@router.delete("/{tid}", status_code=204)
+@router.delete("/{tid}", status_code=204, responses=responses(403, 404))
 def delete(tid: str, services: ServicesDep, actor: ActorDep) -> None:
     authorize(actor, Action.OBSERVE, "")
     services.traces.delete(tid)

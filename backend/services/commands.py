@@ -93,7 +93,7 @@ def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
     authorize(actor, Action.COMMAND, host.id)
     with host.lock:
         m = host.machine
-        seen = len(m.events)
+        seen = m.events.cursor
         try:
             answer = _carry_out(m, cmd)
         except NcUsageError as e:
@@ -103,7 +103,7 @@ def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
             if not answer.ok:
                 raise _refuse(422, answer.message, code=answer.code, column=answer.column)
             # a block that cannot start is refused in the same call
-            failed = [e for e in m.events[seen:] if e.error]
+            failed = [e for e in m.events.since(seen).entries if e.error]
             if failed:
                 answer = failed[0]
         if isinstance(answer, JobError):
@@ -112,6 +112,8 @@ def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
             )
         if isinstance(cmd, JogCommand) and cmd.action != "step":
             host.hold_jog(cmd.axis, cmd.hold_s if cmd.action == "start" else None)
+        if isinstance(cmd, EmergencyStopCommand):
+            host.interrupt_steps()  # stop means stop: a long single step ends here too
         if isinstance(cmd, ResetCommand):
             apply_pending(host, {"reset"})  # values that take effect at reset [params]
         return CommandResult(

@@ -3,11 +3,14 @@
 The real-time loop thread calls `tick`; request handlers take `lock` to act between kernel
 batches. Every cycle the kernel steps is recorded, so telemetry never has gaps unless a client
 falls behind by more than the ring holds.
+
+Nothing holds the lock for long: a step advances in slices of `STEP_SLICE` cycles and hands
+the lock over between them, so an emergency stop, a reset, the real-time loop and status
+requests wait at most one slice.
 """
 
 from __future__ import annotations
 
-import threading
 import time
 import uuid
 from collections import deque
@@ -16,6 +19,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from api.scope import ScopeSetupModel
+from backend.services.handover import HandoverLock
+from nc_sim.errors import JobError
+from nc_sim.events import EventLog
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -26,6 +32,7 @@ from nc_sim.sim import Simulation
 
 RING_CYCLES = 1 << 14  # 16.4 s at 1 kHz
 FAST_CHUNK = 2000  # cycles per kernel call in fast mode
+STEP_SLICE = 1000  # cycles a step advances per turn of the lock (a few ms)
 MAX_CATCH_UP_S = 1.0  # behind by more than this: re-anchor instead of racing to catch up
 RECENT_CAPTURES = 16  # completed captures kept in memory until saved to the library
 
@@ -52,6 +59,26 @@ class Capture:
 
 
 @dataclass
+class EventIndex:
+    """The newest event of each (code, axis), brought up to date by cursor: status finds the
+    event behind each active job error without scanning the machine's event log."""
+
+    cursor: int = 0
+    latest: dict[tuple[int, str], tuple[int, JobError]] = field(default_factory=dict)
+
+    def update(self, log: EventLog[JobError]) -> None:
+        read = log.since(self.cursor)
+        for seq, e in enumerate(read.entries, read.first_seq):
+            self.latest[(e.code, e.axis)] = (seq, e)
+        self.cursor = read.cursor
+
+    def newest(self, code: int, axes: tuple[str, ...]) -> JobError | None:
+        """The newest event with this code on any of these axes ("" is channel-wide)."""
+        found = [self.latest[(code, a)] for a in axes if (code, a) in self.latest]
+        return max(found, key=lambda x: x[0])[1] if found else None
+
+
+@dataclass
 class Pacing:
     mode: str = "run"  # run | pause | fast
     until_cycle: int | None = None
@@ -67,7 +94,8 @@ class MachineHost:
         self.id = mid
         self.name = name
         self.source = source
-        self.lock = threading.RLock()
+        self.lock = HandoverLock()
+        self.step_interrupts = 0  # a step in progress ends when this changes
         self.pending: dict[tuple[str, str, str], Pending] = {}
         self.pacing = Pacing()
         self.deleted = False  # telemetry closes its subscribers
@@ -79,6 +107,7 @@ class MachineHost:
     def build(self, cfg: MachineConfig) -> None:
         """(Re)create the simulation from a config: power on at cycle 0."""
         with self.lock:
+            self.interrupt_steps()  # a step must not go on into the new machine
             self.sim = Simulation(cfg.cycle_s)
             self.machine: Machine = self.sim.add(cfg)
             self.signals: list[Signal] = machine_signals(self.machine)
@@ -86,6 +115,7 @@ class MachineHost:
             self.ring = np.zeros((RING_CYCLES, self.sim.kernel.n, L.R_COLS))
             self.scope = Scope(self.sim.kernel.cycle_s)  # a power cycle stops the scope
             self.epoch = getattr(self, "epoch", 0) + 1  # telemetry cursors restart with it
+            self.event_index = EventIndex()
             self.jog_leases.clear()  # a power cycle ends every held jog
             self.pacing.anchor_mono = time.monotonic()
             self.pacing.history.clear()
@@ -119,6 +149,7 @@ class MachineHost:
                     self._take_captures()
             n -= part
         self._expire_jogs()
+        self.event_index.update(self.machine.events)  # before the bounded log drops any
 
     def _take_captures(self) -> None:
         """Keep completed records with the parameter lists as written now (cheap copies)."""
@@ -177,17 +208,37 @@ class MachineHost:
             p.history.append((now_mono, self.sim.cycle))
 
     def set_mode(self, mode: str, until_cycle: int | None = None) -> None:
+        """Pace the machine (ends a step in progress: the new pacing applies at once)."""
         with self.lock:
+            self.interrupt_steps()
             self.pacing.mode = mode
             self.pacing.until_cycle = until_cycle if mode == "fast" else None
             self.pacing.anchor_mono = time.monotonic() - self.sim.cycle * self.cycle_s
 
-    def step(self, cycles: int) -> None:
-        """Single-step: pause, then advance exactly `cycles`."""
+    def interrupt_steps(self) -> None:
+        """End every step in progress after its current slice (emergency stop, new pacing,
+        restart)."""
+        with self.lock:
+            self.step_interrupts += 1
+
+    def step(self, cycles: int) -> int:
+        """Single-step: pause, then advance `cycles`, slice by slice with the lock handed over
+        in between. Returns the cycles advanced: fewer when an emergency stop, a pacing change
+        or a restart ended the step early. Call without holding the lock."""
         with self.lock:
             self.pacing.mode, self.pacing.until_cycle = "pause", None
-            self.advance(cycles)
-            self.pacing.anchor_mono = time.monotonic() - self.sim.cycle * self.cycle_s
+            mine = self.step_interrupts
+        done = 0
+        while done < cycles:
+            with self.lock:
+                if self.step_interrupts != mine:
+                    break
+                n = min(cycles - done, STEP_SLICE)
+                self.advance(n)
+                done += n
+                self.pacing.anchor_mono = time.monotonic() - self.sim.cycle * self.cycle_s
+            self.lock.hand_over()
+        return done
 
     def rt_factor(self) -> float:
         """Simulated seconds per wall second over about the last second."""

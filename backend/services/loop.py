@@ -4,10 +4,16 @@ Each period it wakes at `t0 + i·period`, lets every host step the cycles that a
 measures its work. A tick whose work runs past the next deadline is an overrun; the deadlines
 it ran over are counted as missed and skipped, and the hosts catch up the cycles at the next
 tick (their samples are never lost, only late).
+
+The loop is supervised: a machine whose tick raises is logged and paused (it would fail again
+every period), and the loop goes on pacing the others; a failure of the loop itself is logged
+and the loop restarts. Its statistics are appended by the loop
+thread and copied under a lock by `status`, which request threads call at any time.
 """
 
 from __future__ import annotations
 
+import logging
 import sys
 import threading
 import time
@@ -18,6 +24,8 @@ import numpy as np
 
 from api.status import LoopStatus, OverrunRecord
 from backend.services.host import MachineHost
+
+log = logging.getLogger(__name__)
 
 
 class RealtimeLoop:
@@ -32,6 +40,9 @@ class RealtimeLoop:
         self.ticks = 0
         self.overruns = 0
         self.missed = 0
+        self.host_failures = 0
+        self.restarts = 0
+        self._stats = threading.Lock()  # the deques below: appended here, copied by status()
         self.work_s: deque[float] = deque(maxlen=5000)
         self.late_s: deque[float] = deque(maxlen=5000)
         self.recent: deque[tuple[float, float, float]] = deque(
@@ -51,6 +62,15 @@ class RealtimeLoop:
         self._thread.join(timeout=5)
 
     def _run(self) -> None:
+        """Pace until stopped; should the loop's own code fail, log it and pace on from now."""
+        while not self._stop.is_set():
+            try:
+                self._pace()
+            except Exception:
+                self.restarts += 1
+                log.exception("real-time loop failed; restarting it")
+
+    def _pace(self) -> None:
         t0 = time.monotonic()
         i = 0
         while not self._stop.is_set():
@@ -60,34 +80,49 @@ class RealtimeLoop:
                 time.sleep(delay)
             wake = time.monotonic()
             for host in list(self.hosts()):
-                host.tick(deadline, self.fast_budget_s)
+                self._tick(host, deadline)
             done = time.monotonic()
-            self.ticks += 1
-            self.work_s.append(done - wake)
-            self.late_s.append(wake - deadline)
             i += 1
             next_deadline = t0 + i * self.period_s
-            if done > next_deadline:
-                self.overruns += 1
-                self.recent.append((time.time(), wake - deadline, done - wake))
-                skip = int((done - next_deadline) / self.period_s)
-                self.missed += skip
-                i += skip
+            with self._stats:
+                self.ticks += 1
+                self.work_s.append(done - wake)
+                self.late_s.append(wake - deadline)
+                if done > next_deadline:
+                    self.overruns += 1
+                    self.recent.append((time.time(), wake - deadline, done - wake))
+                    skip = int((done - next_deadline) / self.period_s)
+                    self.missed += skip
+                    i += skip
+
+    def _tick(self, host: MachineHost, deadline: float) -> None:
+        try:
+            host.tick(deadline, self.fast_budget_s)
+        except Exception:
+            self.host_failures += 1
+            log.exception("machine %s failed in the real-time loop; pausing it", host.id)
+            host.set_mode("pause")
 
     def status(self) -> LoopStatus:
-        work = np.array(self.work_s) * 1e3 if self.work_s else np.zeros(1)
-        late = np.array(self.late_s) * 1e3 if self.late_s else np.zeros(1)
+        """The loop's figures, from a consistent copy (the loop thread keeps appending)."""
+        with self._stats:
+            work_s, late_s, recent = list(self.work_s), list(self.late_s), list(self.recent)
+            ticks, overruns, missed = self.ticks, self.overruns, self.missed
+        work = np.array(work_s) * 1e3 if work_s else np.zeros(1)
+        late = np.array(late_s) * 1e3 if late_s else np.zeros(1)
         return LoopStatus(
             period_s=self.period_s,
-            ticks=self.ticks,
-            overruns=self.overruns,
-            missed_deadlines=self.missed,
+            ticks=ticks,
+            overruns=overruns,
+            missed_deadlines=missed,
             work_p50_ms=float(np.percentile(work, 50)),
             work_p99_ms=float(np.percentile(work, 99)),
             work_max_ms=float(work.max()),
             wake_late_p99_ms=float(np.percentile(late, 99)),
             recent_overruns=[
                 OverrunRecord(time_unix=t, wake_late_ms=lt * 1e3, work_ms=w * 1e3)
-                for t, lt, w in self.recent
+                for t, lt, w in recent
             ],
+            host_failures=self.host_failures,
+            restarts=self.restarts,
         )

@@ -102,4 +102,5 @@ class MachineService:
         with self._lock:
             del self._hosts[mid]
         host.deleted = True
+        host.interrupt_steps()  # a step in progress ends with the machine
         self.store.delete_machine(mid)

@@ -124,9 +124,15 @@ def write(
     with host.lock:
         problems: list[ParameterProblem] = []
         parsed: list[tuple[Scope, str, ParamDef, str, Value]] = []
+        seen: set[Key] = set()
         for c in changes:
             scope = Scope(c.scope)
             target = _target(host, scope, c.target)
+            if (scope.value, target, c.name) in seen:  # which one should win? neither
+                err = ParamError(f"{c.name} is written twice in one change", name=c.name)
+                problems.append(_problem(err, scope, target))
+                continue
+            seen.add((scope.value, target, c.name))
             try:
                 d = resolve(scope, c.name)
                 parsed.append((scope, target, d, c.name, _parse(d, c.name, c.value)))

@@ -8,6 +8,8 @@ its recording (simulated time starts again at zero), and so does deleting the ma
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import threading
 import time
 import uuid
@@ -18,6 +20,8 @@ from api.scope import RecordingInfo
 from backend.errors import ApiError, not_found
 from backend.services import rrd
 from backend.services.host import MachineHost
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -65,8 +69,8 @@ class Recording:
                     data, start = (None, self.cursor)
                     if head >= self.cursor:
                         data, start = host.samples(sigs, self.cursor, head, 1)
-                    events = host.machine.events[self.events_from :]
-                    self.events_from += len(events)
+                    read = host.machine.events.since(self.events_from)
+                    events, self.events_from = read.entries, read.cursor
             if data is not None:
                 self.skipped += start - self.cursor
                 self.writer.block(start, data)
@@ -111,8 +115,15 @@ class Recorders:
             self.pump()
 
     def pump(self) -> None:
+        """Write every active recording; one that fails is logged and ended, the others go on."""
         for r in list(self.all.values()):
-            r.pump()
+            try:
+                r.pump()
+            except Exception:
+                log.exception("recording %s failed; ending it", r.id)
+                with r.lock, contextlib.suppress(Exception):  # the stream may be what failed
+                    r._close()
+                r.active = False
 
     def begin(self, host: MachineHost, signals: list[str]) -> RecordingInfo:
         """Start recording from the next cycle; 409 when the machine already records."""
@@ -139,7 +150,7 @@ class Recorders:
                 first,
                 first,
                 time.time(),
-                events_from=len(host.machine.events),
+                events_from=host.machine.events.cursor,
             )
         self.all[rid] = rec
         return rec.info()

@@ -37,22 +37,27 @@ _KIND: dict[AxisKind, Literal["linear", "rotary", "spindle"]] = {
 }
 
 
+RECENT_EVENTS = 50  # events a status snapshot carries
+
+
 def _mode(host: MachineHost) -> SimMode:
     mode = host.pacing.mode
     return "fast" if mode == "fast" else "pause" if mode == "pause" else "run"
 
 
 def simulation_status(host: MachineHost) -> SimulationStatus:
-    return SimulationStatus(
-        mode=_mode(host),
-        cycle=host.cycle,
-        t_s=host.cycle * host.cycle_s,
-        cycle_s=host.cycle_s,
-        rt_factor=host.rt_factor(),
-        until_cycle=host.pacing.until_cycle,
-        t0_unix=host.t0_unix(),
-        slips=host.pacing.slips,
-    )
+    """Pacing and time of a machine, consistent to one cycle (the loop thread steps it)."""
+    with host.lock:
+        return SimulationStatus(
+            mode=_mode(host),
+            cycle=host.cycle,
+            t_s=host.cycle * host.cycle_s,
+            cycle_s=host.cycle_s,
+            rt_factor=host.rt_factor(),
+            until_cycle=host.pacing.until_cycle,
+            t0_unix=host.t0_unix(),
+            slips=host.pacing.slips,
+        )
 
 
 def _axis_status(m: Machine, ax: Axis) -> AxisStatus:
@@ -96,12 +101,12 @@ def machine_status(host: MachineHost) -> MachineStatus:
     """Everything the HMI shows about a machine, consistent to one cycle."""
     with host.lock:
         m = host.machine
-        active = {ax.name: ax.job_error for ax in m.axes if ax.job_error}
+        host.event_index.update(m.events)  # only the events since the last status
         latest: dict[str, JobError] = {}
-        for e in m.events:  # the event that set each axis' job error (channel-wide ones too)
-            for name, code in active.items():
-                if e.code == code and e.axis in (name, ""):
-                    latest[name] = e
+        for ax in m.axes:  # the event that set each axis' job error (channel-wide ones too)
+            e = host.event_index.newest(ax.job_error, (ax.name, "")) if ax.job_error else None
+            if e is not None:
+                latest[ax.name] = e
         # one entry per distinct error: an emergency stop is one error, not one per axis
         distinct = {(e.cycle, e.code, e.axis): e for e in latest.values()}
         return MachineStatus(
@@ -121,7 +126,7 @@ def machine_status(host: MachineHost) -> MachineStatus:
                 ],
             ),
             job_errors=[job_error_model(e) for e in distinct.values()],
-            recent_events=[job_error_model(e) for e in m.events[-50:]],
+            recent_events=[job_error_model(e) for e in m.events.tail(RECENT_EVENTS)],
         )
 
 

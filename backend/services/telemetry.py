@@ -6,17 +6,25 @@ busy sending when its next frame is due is skipped for that period (it never hol
 or anyone else) and later gets the larger range, decimated when it exceeds
 `max_frame_samples`; cycles that left the ring meanwhile are reported as skipped. Subscribers
 with the same signals and range share one encoded frame.
+
+Every client is bounded: at most `MAX_PENDING_REPLIES` control replies wait for it, and a send
+that has not finished within `stall_s` ends the connection (close code 1008), so a client that
+sends but never reads cannot grow the server's memory. The hub task is supervised: a failure
+while serving one client closes that client (1011); a failure of the hub itself is logged and
+the hub restarts, so no client can stop telemetry for the others.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import math
 from dataclasses import dataclass, field
 
 from fastapi import WebSocket
 
+from api.status import TelemetryStatus
 from api.telemetry import (
     ErrorMessage,
     EventMessage,
@@ -29,6 +37,13 @@ from api.telemetry import (
 from backend.services.commands import job_error_model
 from backend.services.host import MachineHost
 from nc_sim.signals import Signal
+
+log = logging.getLogger(__name__)
+
+MAX_PENDING_REPLIES = 16  # control replies a client may leave unread before it is dropped
+# websocket close codes (RFC 6455 7.4.1)
+CLOSE_POLICY = 1008  # does not read, or floods us with messages
+CLOSE_INTERNAL = 1011  # serving this client failed
 
 
 @dataclass(frozen=True)
@@ -48,10 +63,11 @@ class Subscriber:
     signals: list[Signal] = field(default_factory=list)
     min_stride: int = 1
     cursor: int = 0  # next cycle to send
-    event_index: int = 0
+    event_cursor: int = 0  # sequence number of the next event to send
     epoch: int = 0
     control: list[str] = field(default_factory=list)  # JSON replies, sent before the next frame
     sending: asyncio.Task[None] | None = None
+    send_started: float = 0.0  # event-loop time the send in flight began
     busy_periods: int = 0
     closed: bool = False
 
@@ -61,11 +77,12 @@ class Subscriber:
         host = self.host
         unknown = [n for n in req.signals if n not in host.signal_by_name]
         if unknown:
-            self.reply(ErrorMessage(message=f"unknown signals: {unknown}"))
+            more = f" and {len(unknown) - 10} more" if len(unknown) > 10 else ""
+            self.reply(ErrorMessage(message=f"unknown signals: {unknown[:10]}{more}"))
             return
         with host.lock:
             self.signals = [host.signal_by_name[n] for n in req.signals]
-            rate = req.max_rate_hz or math.inf
+            rate = req.max_rate_hz or math.inf  # bounded by the protocol (api/telemetry.py)
             self.min_stride = max(1, math.ceil(1.0 / (host.cycle_s * rate)))
             self.cursor = host.cycle + 1
             self.epoch = host.epoch
@@ -77,20 +94,30 @@ class Subscriber:
         """Queue a JSON control message; the hub is the only sender on the socket."""
         self.control.append(msg.model_dump_json())
 
+    @property
+    def flooding(self) -> bool:
+        """More replies wait than a reading client ever leaves: it sends but does not read."""
+        return len(self.control) > MAX_PENDING_REPLIES
+
 
 class TelemetryHub:
     """Builds and sends frames for every subscriber."""
 
-    def __init__(self, frame_s: float, max_frame_samples: int) -> None:
+    def __init__(self, frame_s: float, max_frame_samples: int, stall_s: float = 10.0) -> None:
         self.frame_s = frame_s
         self.max_frame_samples = max_frame_samples
+        self.stall_s = stall_s
         self.subscribers: set[Subscriber] = set()
         self.frames_sent = 0
+        self.clients_dropped = 0  # closed by us: not reading, flooding, bad messages, failures
+        self.restarts = 0  # times the hub task failed and was restarted
         self._task: asyncio.Task[None] | None = None
 
     def add(self, ws: WebSocket, host: MachineHost) -> Subscriber:
         with host.lock:
-            sub = Subscriber(ws, host, cursor=host.cycle + 1, event_index=len(host.machine.events))
+            sub = Subscriber(
+                ws, host, cursor=host.cycle + 1, event_cursor=host.machine.events.cursor
+            )
             sub.epoch = host.epoch
         self.subscribers.add(sub)
         return sub
@@ -99,8 +126,50 @@ class TelemetryHub:
         sub.closed = True
         self.subscribers.discard(sub)
 
+    def _detach(self, sub: Subscriber) -> bool:
+        """Stop serving a client we close: no more sends, its send in flight cancelled."""
+        if sub.closed:
+            return False
+        self.remove(sub)
+        self.clients_dropped += 1
+        if sub.sending is not None:
+            sub.sending.cancel()
+        return True
+
+    async def end(self, sub: Subscriber, code: int, reason: str) -> None:
+        """End a client's connection with this close code (from its route handler)."""
+        if self._detach(sub):
+            await self._close(sub.ws, code, reason)
+
+    def drop(self, sub: Subscriber, code: int, reason: str) -> None:
+        """`end` without waiting for the close handshake (from the hub's tick)."""
+        if self._detach(sub):
+            sub.sending = asyncio.get_running_loop().create_task(self._close(sub.ws, code, reason))
+
+    @staticmethod
+    async def _close(ws: WebSocket, code: int, reason: str) -> None:
+        with contextlib.suppress(Exception):  # already gone
+            await ws.close(code=code, reason=reason[:120])
+
+    def status(self) -> TelemetryStatus:
+        return TelemetryStatus(
+            frames_sent=self.frames_sent,
+            clients_dropped=self.clients_dropped,
+            restarts=self.restarts,
+        )
+
     def start(self) -> None:
-        self._task = asyncio.get_running_loop().create_task(self._run(), name="telemetry-hub")
+        self._task = asyncio.get_running_loop().create_task(self._supervise(), name="telemetry-hub")
+
+    async def _supervise(self) -> None:
+        """Run the hub; when it fails, log it and start it again after one frame period."""
+        while True:
+            try:
+                await self._run()
+            except Exception:
+                self.restarts += 1
+                log.exception("telemetry hub failed; restarting it")
+                await asyncio.sleep(self.frame_s)
 
     async def stop(self) -> None:
         if self._task is not None:
@@ -123,18 +192,30 @@ class TelemetryHub:
 
     def tick(self) -> None:
         """Build and dispatch one period's messages."""
+        loop = asyncio.get_running_loop()
         cache: dict[tuple[object, ...], Built] = {}
         for sub in list(self.subscribers):
+            if sub.flooding:
+                self.drop(sub, CLOSE_POLICY, "client sends without reading the replies")
+                continue
             if sub.sending is not None and not sub.sending.done():
                 sub.busy_periods += 1
+                if loop.time() - sub.send_started > self.stall_s:
+                    self.drop(sub, CLOSE_POLICY, "client does not read")
                 continue
             if sub.host.deleted:
                 self.remove(sub)
-                sub.sending = asyncio.get_running_loop().create_task(sub.ws.close(code=4404))
+                sub.sending = loop.create_task(self._close(sub.ws, 4404, "machine deleted"))
                 continue
-            messages = self._messages(sub, cache)
+            try:
+                messages = self._messages(sub, cache)
+            except Exception:  # one client's failure must not stop the others
+                log.exception("telemetry for a client failed; closing it")
+                self.drop(sub, CLOSE_INTERNAL, "telemetry failed")
+                continue
             if messages:
-                sub.sending = asyncio.get_running_loop().create_task(self._send(sub, messages))
+                sub.send_started = loop.time()
+                sub.sending = loop.create_task(self._send(sub, messages))
 
     def _messages(
         self, sub: Subscriber, cache: dict[tuple[object, ...], Built]
@@ -144,13 +225,20 @@ class TelemetryHub:
         sub.control.clear()
         with host.lock:
             if sub.epoch != host.epoch:  # the machine was restarted: follow it from cycle 1
-                sub.epoch, sub.cursor, sub.event_index = host.epoch, 1, 0
+                sub.epoch, sub.cursor, sub.event_cursor = host.epoch, 1, 0
             head = host.cycle
-            events = host.machine.events[sub.event_index :]
-            sub.event_index += len(events)
+            read = host.machine.events.since(sub.event_cursor)
+            sub.event_cursor = read.cursor
             if sub.signals and head >= sub.cursor:
                 out.append(self._frame(sub, head, cache))
-        out += [EventMessage(event=job_error_model(e)).model_dump_json() for e in events]
+        out += [
+            EventMessage(
+                seq=seq,
+                missed=read.dropped if seq == read.first_seq else 0,
+                event=job_error_model(e),
+            ).model_dump_json()
+            for seq, e in enumerate(read.entries, read.first_seq)
+        ]
         return out
 
     def _frame(self, sub: Subscriber, head: int, cache: dict[tuple[object, ...], Built]) -> bytes:

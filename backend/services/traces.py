@@ -7,11 +7,14 @@ format are made on demand and cached next to the samples.
 
 from __future__ import annotations
 
+import logging
+import os
 import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from pydantic import ValidationError
 
 from api.scope import (
     ChannelInfo,
@@ -35,6 +38,8 @@ from nc_sim.errors import JobError
 from nc_sim.measure import measure
 from nc_sim.params import ParamError, Scope
 from nc_sim.params.listfile import resolve
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -137,9 +142,14 @@ class TraceService:
         row = self.store.trace(tid)
         if row is not None:
             _, name, notes, meta = row
-            detail = TraceDetail.model_validate_json(meta)
+            try:
+                detail = TraceDetail.model_validate_json(meta)
+                data = np.load(self.dir / f"{tid}.npy")
+            except (ValidationError, OSError, ValueError) as e:
+                # a damaged row (an older version stored NaN) or lost samples: only deletable
+                raise not_found(f"readable stored trace {tid} ({type(e).__name__})") from None
             detail.name, detail.notes = name, notes
-            return Trace(detail, np.load(self.dir / f"{tid}.npy"))
+            return Trace(detail, data)
         for host in self.machines.hosts():
             with host.lock:
                 cap = next((c for c in host.captures if c.id == tid), None)
@@ -150,19 +160,29 @@ class TraceService:
     # --- the library ------------------------------------------------------------------------
     def library(self, machine: str | None = None) -> list[TraceInfo]:
         out = []
-        for _, name, notes, meta in self.store.traces(machine):
-            info = TraceInfo.model_validate_json(meta)
+        for tid, name, notes, meta in self.store.traces(machine):
+            try:
+                info = TraceInfo.model_validate_json(meta)
+            except ValidationError as e:  # one damaged row must not hide the others
+                log.warning("stored trace %s is not readable, left out: %s", tid, e)
+                continue
             info.name, info.notes = name, notes
             out.append(info)
         return out
 
     def add(self, trace: Trace) -> TraceInfo:
-        """Store a trace (a capture being saved, or an import)."""
+        """Store a trace (a capture being saved, or an import): its samples durably on disk
+        first, then its row, so a committed row never points at a missing or partial file."""
         d = trace.detail
         d.stored = True
-        np.save(self.dir / f"{d.id}.npy", trace.data)
         meta = d.model_dump_json()  # name and notes: the columns are the live ones
-        self.store.add_trace(d.id, d.machine, d.created_unix, d.name, d.notes, meta)
+        path = self.dir / f"{d.id}.npy"
+        _write_durably(path, trace.data)
+        try:
+            self.store.add_trace(d.id, d.machine, d.created_unix, d.name, d.notes, meta)
+        except BaseException:
+            path.unlink(missing_ok=True)
+            raise
         return _info(d)
 
     def save(self, tid: str, req: TraceSave) -> TraceInfo:
@@ -272,6 +292,25 @@ class TraceService:
                 trace.events(),
             )
         return path
+
+
+def _write_durably(path: Path, data: np.ndarray) -> None:
+    """Write `path` as a whole or not at all: a temporary file, fsynced, renamed into place,
+    and the directory fsynced so the rename itself survives a power cut."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        with tmp.open("wb") as f:
+            np.save(f, data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    fd = os.open(path.parent, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def _about(d: TraceDetail) -> str:

@@ -3,11 +3,16 @@
 The viewer has no authentication, so it listens on 127.0.0.1 only (its own HTTP port and the
 gRPC port it also opens); the service forwards `/rerun/…` to it. It is started on first use,
 with its own configuration folder in which its usage analytics are switched off.
+
+It dies with the service, however the service ends (even `kill -9`): Linux sends it SIGKILL
+when the thread that started it ends (PR_SET_PDEATHSIG), and that thread lives as long as the
+service.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import importlib.util
 import json
 import os
@@ -18,6 +23,8 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from urllib.parse import quote
 
@@ -30,6 +37,22 @@ def viewer_url(request: Request, rrd_path: str) -> str:
     """The viewer page (through the service) that loads an .rrd the service serves."""
     base = str(request.base_url).rstrip("/")
     return f"/rerun/?hide_welcome_screen&url={quote(base + rrd_path, safe='')}"
+
+
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+_libc = ctypes.CDLL(None, use_errno=True)  # loaded before any fork: the child only calls it
+
+
+def _die_with(parent_pid: int) -> Callable[[], None]:
+    """A `preexec_fn`: the child gets SIGKILL when the forking thread ends; if the parent is
+    already gone (it died between fork and prctl), the child ends at once."""
+
+    def arm() -> None:
+        _libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        if os.getppid() != parent_pid:
+            os.kill(os.getpid(), signal.SIGKILL)
+
+    return arm
 
 
 def _free_port() -> int:
@@ -59,6 +82,9 @@ class RerunViewer:
         self.port: int | None = None
         self._proc: subprocess.Popen[bytes] | None = None
         self._lock = threading.Lock()
+        # The parent-death signal fires when the forking *thread* ends, so the viewer is
+        # started from this one thread, which stays (request threads come and go).
+        self._spawner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rerun-spawn")
 
     def ensure(self, timeout_s: float = 20.0) -> int:
         """The viewer's HTTP port on 127.0.0.1, starting it when needed."""
@@ -71,14 +97,16 @@ class RerunViewer:
             cmd += ["--web-viewer-port", str(web), "--port", str(grpc)]
             self.log_path.parent.mkdir(parents=True, exist_ok=True)
             with self.log_path.open("ab") as log:
-                self._proc = subprocess.Popen(
+                self._proc = self._spawner.submit(
+                    subprocess.Popen,
                     cmd,
                     stdout=log,
                     stderr=subprocess.STDOUT,
                     stdin=subprocess.DEVNULL,
                     env=env,
                     start_new_session=True,  # its own process group: stop ends all of it
-                )
+                    preexec_fn=_die_with(os.getpid()),
+                ).result()
             deadline = time.monotonic() + timeout_s
             while time.monotonic() < deadline:
                 if self._proc.poll() is not None:

@@ -1,6 +1,6 @@
 """Single NC blocks in DIN syntax and axis-specific syntax.
 
-    G01 X10 F500            G00 Z-5          G74 X1 Z2        #SLOPE[TYPE=TRAPEZ]
+    G01 X10 F500            G00 Z-5          G74 X1 Z2 S1     #SLOPE[TYPE=TRAPEZ]
     M3 S1000                M19 S.POS=90 M4  M40 S650         M8
     S[M3 REV1000]           S1[M19 REV200 POS100]             S[G74]   S[M5]
 
@@ -9,12 +9,13 @@ A bad block raises `BlockError` with the 1-based column of the offending charact
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}
-_NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+_NUM = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"  # ASCII digits only: `S１０００` is refused
 
 
 class BlockError(ValueError):
@@ -67,7 +68,7 @@ _TOKEN = re.compile(
     r"|(?P<pos>(?P<pos_name>S\d*)\.POS\s*=?\s*(?P<pos_val>" + _NUM + "))"
     r"|(?P<word>(?P<letter>[A-Z][A-Z]*\d*?)(?P<val>" + _NUM + "))"
     r")",
-    re.IGNORECASE,
+    re.IGNORECASE | re.ASCII,
 )
 
 
@@ -86,14 +87,17 @@ def _parse_specific(body: str, spindle: str, col: int) -> SpindleCmd:
         if mm := re.fullmatch(r"M0*(3|4|5|19)", tok):
             _spindle_m(cmd, int(mm.group(1)), c)
         elif mm := re.fullmatch(r"REV=?(" + _NUM + ")", tok):
-            cmd.speed_rpm = float(mm.group(1))
+            rev = _number(mm.group(1), c + mm.start(1))
+            if rev < 0:  # as the S word: M3/M4 give the direction
+                raise BlockError("REV must not be negative: M3/M4 give the direction", c + 3)
+            cmd.speed_rpm = rev
         elif mm := re.fullmatch(r"POS=?(" + _NUM + ")", tok):
-            cmd.pos_deg = float(mm.group(1))
+            cmd.pos_deg = _number(mm.group(1), c + mm.start(1))
         elif mm := re.fullmatch(r"G0*(74|135|137|167)", tok):
             cmd.g.append(int(mm.group(1)))
         elif mm := re.fullmatch(r"G136(?:=?(" + _NUM + "))?", tok):
             cmd.g.append(136)
-            cmd.ff_weight = float(mm.group(1)) if mm.group(1) else None
+            cmd.ff_weight = _number(mm.group(1), c + mm.start(1)) if mm.group(1) else None
         elif tok == "DEFAULT_DYNAMIC_DATA":
             cmd.default_dynamics = True
         else:
@@ -107,6 +111,7 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
     spindles = {s.upper() for s in spindles}
     block = Block(text)
     main = SpindleCmd("S")
+    columns: dict[str, int] = {}  # column of each axis word and S (G74 order digits)
     pos = 0
     line = text.rstrip("\n")
     while pos < len(line):
@@ -115,6 +120,10 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
         m = _TOKEN.match(line, pos)
         col = pos + 1 + (len(line[pos:]) - len(line[pos:].lstrip()))
         if m is None or m.end() == pos:
+            word = line[col - 1 :].split(maxsplit=1)[0]
+            odd = next((k for k, ch in enumerate(word) if not ch.isascii()), None)
+            if odd is not None:  # e.g. full-width digits typed on a CJK keyboard
+                raise BlockError(f"'{word[odd]}' is not an NC character", col + odd)
             raise BlockError(f"unexpected '{line[col - 1]}'", col)
         pos = m.end()
         if m.group("comment"):
@@ -137,20 +146,43 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
         if m.group("pos"):
             name = _spindle_ref(m.group("pos_name"), spindles, col)
             target = main if name == "S" else _named(block, name)
-            target.pos_deg = float(m.group("pos_val"))
+            target.pos_deg = _number(m.group("pos_val"), m.start("pos_val") + 1)
             continue
         letter = m.group("letter").upper()
         val_text = m.group("val")
-        value = float(val_text)
+        value = _number(val_text, col + len(letter))
+        columns.setdefault(letter, col)
         _word(block, main, letter, value, val_text, col, axes, spindles)
-    if main.m is not None or main.speed_rpm is not None or main.pos_deg is not None or main.g:
-        block.spindles.insert(0, main)
     if 74 in block.g_other and block.motion is not None:
         raise BlockError("G74 cannot be combined with G00/G01", 1)
     if 74 in block.g_other:
-        block.homing.update({a: int(v) for a, v in block.axes.items()})
-        block.axes.clear()
+        _homing_order(block, main, columns)
+    if main.m is not None or main.speed_rpm is not None or main.pos_deg is not None or main.g:
+        block.spindles.insert(0, main)
     return block
+
+
+def _homing_order(block: Block, main: SpindleCmd, columns: dict[str, int]) -> None:
+    """G74 X1 Z2 S1: the digits are the homing order, S the main spindle [000 §2.7]."""
+    orders = dict(block.axes)
+    if main.speed_rpm is not None:
+        if main.m is not None or main.pos_deg is not None:
+            raise BlockError("G74 S.. homes the spindle: no spindle M function with it", 1)
+        orders["S"] = main.speed_rpm
+        main.speed_rpm = None
+    for name, order in orders.items():
+        if order != int(order) or order < 1:
+            raise BlockError(f"G74 takes a homing order 1, 2, ... for {name}", columns[name] + 1)
+        block.homing[name] = int(order)
+    block.axes.clear()
+
+
+def _number(text: str, col: int) -> float:
+    """The value of a number in a block; 400 digits would be inf, which no address takes."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise BlockError(f"{text[:12]}… is too large", col)
+    return value
 
 
 def _named(block: Block, name: str) -> SpindleCmd:
@@ -222,6 +254,8 @@ def _word(
             raise BlockError("F must be positive", col + 1)
         block.feed = value
     elif letter == "S":
+        if value < 0:  # a negative S reverses only under G63 tapping [000 §2.8.6], not here
+            raise BlockError("S must not be negative: M3/M4 give the direction", col + 1)
         main.speed_rpm = value
     elif letter == "D":
         block.tool = _int_word(letter, value, text, col)

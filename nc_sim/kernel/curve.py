@@ -8,8 +8,17 @@ Below n_limit types 1 and 2 give a_konst; every type is floored at a_min.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
+import numpy as np
 from numba import njit
 
+from nc_sim.units import Quantity, to_eng
+
+# the least acceleration a curve must give: one unit of the list's accelerations (a_min,
+# a_konst, a_max are whole °/s²); below it (1e-304 °/s² from b2 = 1e308) nothing accelerates
+A_LEAST = to_eng(Quantity.ACCELERATION, 1)
 CURVE_NONE = 0
 CURVE_HYPERBOLA = 1
 CURVE_POLYNOMIAL = 2
@@ -54,3 +63,50 @@ def curve_accel(
     else:
         a = a_konst
     return max(a, a_min)
+
+
+@dataclass(frozen=True)
+class CurveParams:
+    """The acceleration curve of one gear record in engineering units (°/s, °/s²)."""
+
+    typ: int
+    n_limit: float
+    a_konst: float
+    b1: float
+    b2: float
+    b3: float
+    a_min: float
+    a_max3: float
+    n1: float
+    n2: float
+    a_cap: float  # a_max (and a tool's a_max): the kernel never accelerates faster
+
+    def accel(self, n: float) -> float:
+        """Acceleration (°/s²) at speed n (°/s), as the kernel applies it."""
+        a = curve_accel(
+            self.typ,
+            n,
+            self.n_limit,
+            self.a_konst,
+            self.b1,
+            self.b2,
+            self.b3,
+            self.a_min,
+            self.a_max3,
+            self.n1,
+            self.n2,
+        )
+        return min(a, self.a_cap)
+
+    def speeds(self, v_from: float, v_to: float, steps: int = 256) -> np.ndarray:
+        """The speeds the checks sample between v_from and v_to (both included)."""
+        return np.linspace(v_from, v_to, steps + 1)
+
+    def dead_speed(self, v_from: float, v_to: float) -> float | None:
+        """The first sampled speed between v_from and v_to where the curve gives no usable
+        acceleration (below A_LEAST or not finite): a speed change there would never end."""
+        for n in self.speeds(v_from, v_to):
+            a = self.accel(float(n))
+            if not (math.isfinite(a) and a >= A_LEAST):
+                return float(n)
+        return None

@@ -55,9 +55,9 @@ class TaskPhase(IntEnum):
 
 @dataclass
 class SpindleTask:
-    """A spindle sequence in progress: M19, G74 or a gear change."""
+    """A spindle sequence in progress: M19, G74, a gear change, or M5 with homing."""
 
-    kind: str  # "M19", "G74", "gear"
+    kind: str  # "M19", "G74", "gear", "M5" (stop homing on the way after the control limit)
     pos_deg: float  # target angle 0..360
     direction: int | None  # +1 M3, -1 M4, None = shortest way
     speed: float  # positioning speed before override (°/s)
@@ -101,6 +101,10 @@ class Axis:
     speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767
     ff_set: float = 1.0  # weighting for G135, set by G136
     task: SpindleTask | None = None
+    reference_lost: bool = False  # lost above the control limit: M5 homes again [000 §2.7]
+    deadline: int | None = None  # watchdog: cycle by which the current phase must have ended
+    deadline_s: float = 0.0  # ... its bound in seconds
+    deadline_what: str = ""  # ... and what it is (for the job error 90023)
     drive: DriveStatus = field(default_factory=lambda: DriveStatus((), 0, 0))
     units: dict[str, int] = field(
         default_factory=lambda: {

@@ -2,19 +2,22 @@
 
 The Python layer of the NC: commands check their preconditions and either plan a motion for
 the kernel or end as a job error; kernel events (plan done, lag, limits, cam) drive the
-sequences (homing, blocks) forward. Nothing here reads a clock: time is `cycle · cycle_s`.
+sequences (homing, blocks) forward. Every phase of a sequence carries a deadline from its own
+parameters (`watchdog.py`): past it, job error 90023 instead of a hang. Nothing here reads a
+clock: time is `cycle · cycle_s`.
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from nc_sim.blocks import Block, BlockError, parse_block
 from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError, is_error
+from nc_sim.events import ACK_LOG_LEN, EVENT_LOG_LEN, EventLog
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import (
@@ -36,9 +39,10 @@ from nc_sim.machine.dynamics import (
     velocity_limit,
 )
 from nc_sim.machine.spindle import SpindleControl
+from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.units import AxisKind
+from nc_sim.units import AxisKind, Quantity, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
 AXIS_UNITS = (
@@ -51,7 +55,10 @@ AXIS_UNITS = (
     "spindle_stop_at_program_end",
     "spindle_reset",
 )
-_FAR = 1e9  # jog target of an axis whose software limits are not yet active
+_FAR = 1e9  # jog target of a spindle (a modulo axis: no position range)
+# positions the NC represents: SGN32 in 0.1 µm | 0.0001° (the range of P-AXIS-00177/00178);
+# an unhomed axis may go anywhere within it, a target beyond it is meaningless (90003)
+POSITION_RANGE = to_eng(Quantity.POSITION, 2**31 - 1)
 
 
 @dataclass
@@ -72,6 +79,7 @@ class _BlockRun:
     block: Block | None = None
     started: bool = False
     waiting_m: int = 0
+    homing: list[list[str]] = field(default_factory=list)  # G74 order groups still to start
 
 
 class Machine:
@@ -92,11 +100,11 @@ class Machine:
         self.main_spindle = cfg.main_spindle
         self.channel_units = {"override": 1000, "feedhold": 0, "reduced_acceleration": 0}
         self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
-        self.events: list[JobError] = []
+        self.events: EventLog[JobError] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
         self._queue: deque[_BlockRun] = deque()
         self._next_id = 1
-        self.acks: list[Ack] = []
+        self.acks: EventLog[Ack] = EventLog(ACK_LOG_LEN)
         self.estop = False
         self._powered = False  # power-on done: the PLC has switched every drive on
         self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
@@ -124,6 +132,7 @@ class Machine:
             times.append(due)
         timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
         times += [c + timeout for c in self._m_out]
+        times += [ax.deadline for ax in self.axes if ax.deadline is not None]
         if self.estop and any(ax.enables_ok() for ax in self.axes):
             times.append(self.cycle + 1)  # watch the braking axes settle (_estop_settled)
         return min(times) if times else None
@@ -177,10 +186,53 @@ class Machine:
     def _set_state(self, ax: Axis, state: AxisState) -> None:
         ax.state = state
         self.k.ist[ax.slot, L.I_STATE] = int(state)
+        if state in (AxisState.STANDSTILL, AxisState.ERROR):
+            ax.deadline = None
+
+    # --- watchdog -----------------------------------------------------------------------
+    def _watch(self, ax: Axis, expected_s: float, what: str = "", extend: bool = False) -> None:
+        """Bound the phase starting now (expected to take `expected_s`, or that much longer
+        with `extend`): unless it ended by then, it ends in job error 90023."""
+        if ax.state is AxisState.ERROR:
+            return  # the error reaction's braking: bounded by physics, nothing waits on it
+        if extend and ax.deadline is not None:
+            expected_s += (ax.deadline - self.cycle) * self.k.cycle_s
+        bound = bound_s(expected_s)
+        ax.deadline_what = what or ax.state.name.lower().replace("_", " ")
+        ax.deadline_s = bound
+        # a phase that can never end (no speed to search with) fails at once
+        ax.deadline = self.cycle + self._cycles(bound) if math.isfinite(bound) else self.cycle
+
+    def _unwatch(self, ax: Axis) -> None:
+        """The phase may last: a steady state (rotation at speed) or a hold by the operator."""
+        ax.deadline = None
+
+    def _watchdog_expired(self, ax: Axis) -> None:
+        """A sequence did not progress within its bound: job error, brake, axis in error."""
+        how = (
+            f"did not end within {ax.deadline_s:g} s"
+            if math.isfinite(ax.deadline_s)
+            else "could never end"
+        )
+        self._fail(ax, Code.SEQUENCE_WATCHDOG, f"{ax.name}: {ax.deadline_what} {how}")
+        self._abort_block(ax)
+        if ax.kind is AxisKind.SPINDLE:
+            self.sp.cancel_task(ax)
+        ax.task, ax.motion, ax.hold, ax.homing = None, None, False, HomingPhase.NONE
+        self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
+        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self._set_state(ax, AxisState.ERROR)
+        self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
+
+    def _as_axis(self, ax: Axis) -> bool:
+        """Moves like an axis: a linear axis, or a spindle jogged or moved as a rotary axis
+        [003 "jogging a spindle"]; then feed override, feedhold and G200 dynamics apply."""
+        return ax.kind is not AxisKind.SPINDLE or ax.state in (AxisState.MOVING, AxisState.JOG)
 
     def _override(self, ax: Axis, motion: Motion | None) -> float:
-        """Override in force as a fraction: axis override for spindles, channel override else."""
-        if ax.kind is AxisKind.SPINDLE:
+        """Override in force as a fraction: the spindle override in spindle mode, the
+        channel (feed) override for axes and for a spindle moving as a rotary axis."""
+        if not self._as_axis(ax):
             return self.sp.override(ax)
         cap = self.cfg.channel_eng("max_vb_override")
         return min(self.channel_units["override"] * 1e-3, cap)
@@ -203,6 +255,7 @@ class Machine:
     def _plan_move(self, ax: Axis, limits: np.ndarray, v_max: float) -> None:
         if v_max <= 0.0:  # feedhold or override 0 %: brake and hold, keep the target for later
             self._plan_velocity(ax, 0.0, limits)
+            self._unwatch(ax)  # held by the operator, not stuck
             return
         s = ax.slot
         st = self.k.st
@@ -217,25 +270,32 @@ class Machine:
             limits,
             self.k.cycle_s,
         )
+        self._watch(ax, plan_s(seg, n))
         self.k.load_plan(s, seg, n, ax.target)
+        if n == 0:  # already on the target at rest: no plan to finish, done at once
+            self._axis_events(ax, L.EV_PLAN_DONE)
 
     def _plan_velocity(self, ax: Axis, v: float, limits: np.ndarray) -> None:
         s = ax.slot
         st = self.k.st
         seg = new_plan()
         n = velocity_change(seg, 0, st[s, L.S_V_CMD], st[s, L.S_A_CMD], v, limits, self.k.cycle_s)
+        self._watch(ax, plan_s(seg, n))
         self.k.load_plan(s, seg, n, math.nan)
         if n == 0:  # already at that speed: the kernel has no plan to finish, done at once
             self._axis_events(ax, L.EV_PLAN_DONE)
 
     def _replan(self, ax: Axis) -> None:
         """Re-plan the active motion from the current state (override, feedhold release)."""
-        if ax.kind is AxisKind.SPINDLE:
+        if not self._as_axis(ax):
             self.sp.replan(ax)
             return
         if ax.motion is None or ax.state in (AxisState.STOPPING, AxisState.ERROR):
             return
         if ax.hold or self.channel_units["feedhold"]:
+            return
+        if ax.homing in (HomingPhase.TO_CAM, HomingPhase.OFF_CAM):  # a search has no target
+            self._homing_search(ax, ax.homing)
             return
         self._plan_move(ax, self._limits(ax, ax.motion), self._vmax(ax, ax.motion))
 
@@ -256,9 +316,12 @@ class Machine:
         return None
 
     def _within_limits(self, ax: Axis, target: float) -> JobError | None:
-        if ax.kind is AxisKind.SPINDLE or not ax.homed:
+        if ax.kind is AxisKind.SPINDLE:
             return None
-        lo, hi = self.k.pr[ax.slot, L.P_SWE_NEG], self.k.pr[ax.slot, L.P_SWE_POS]
+        if not ax.homed:  # no software limits yet, but no target beyond what the NC represents
+            lo, hi = -POSITION_RANGE, POSITION_RANGE
+        else:
+            lo, hi = self.k.pr[ax.slot, L.P_SWE_NEG], self.k.pr[ax.slot, L.P_SWE_POS]
         if not lo - 1e-9 <= target <= hi + 1e-9:
             return self._fail(
                 ax,
@@ -274,15 +337,18 @@ class Machine:
         motion: Motion,
         feed: float | None,
         block_id: int | None = None,
+        state: AxisState = AxisState.MOVING,
     ) -> JobError | None:
         err = self._check_motion(ax) or self._within_limits(ax, target)
+        if err is None and ax.kind is AxisKind.SPINDLE:
+            err = self.sp.as_rotary_axis(ax)
         if err:
             return err
         ax.target, ax.motion, ax.feed, ax.block_id = target, motion, feed, block_id
         ax.slope = self.slope if motion is not Motion.MANUAL else 1
         if motion is Motion.FEED and not feed:
             return self._fail(ax, Code.FEED_MISSING)
-        self._set_state(ax, AxisState.MOVING)
+        self._set_state(ax, state)
         self._replan(ax)
         return None
 
@@ -290,9 +356,15 @@ class Machine:
     def move(
         self, axis: str, target: float, rapid: bool = True, feed_mm_min: float | None = None
     ) -> JobError | None:
-        """Single-axis G00/G01 move to an absolute position (mm | °)."""
+        """Single-axis G00/G01 move to an absolute position (mm | °); a spindle moves as a
+        modulo rotary axis to the angle, the shortest way."""
         ax = self.axis(axis)
+        err = self._homing_required(ax)
+        if err:
+            return err
         feed = feed_mm_min / 60.0 if feed_mm_min else None
+        if ax.kind is AxisKind.SPINDLE:
+            target = self.sp.target(ax, target % 360.0, None)
         return self._start_move(ax, target, Motion.RAPID if rapid else Motion.FEED, feed)
 
     def jog_start(
@@ -301,16 +373,21 @@ class Machine:
         """Continuous jog (G200 dynamics) towards the software limit until `jog_stop`."""
         ax = self.axis(axis)
         d = 1.0 if direction > 0 else -1.0
-        if ax.homed and ax.kind is not AxisKind.SPINDLE:
-            target = self.k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
-        else:
+        if ax.kind is AxisKind.SPINDLE:
             target = self.k.st[ax.slot, L.S_P_CMD] + d * _FAR
-        err = self._start_move(
-            ax, target, Motion.MANUAL, feed_mm_min / 60.0 if feed_mm_min else None
-        )
-        if err is None:
-            self._set_state(ax, AxisState.JOG)
-        return err
+        elif ax.homed:
+            target = self.k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
+        else:  # towards the end of the position range: far, but a move that ends
+            target = d * POSITION_RANGE
+        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        return self._start_move(ax, target, Motion.MANUAL, feed, state=AxisState.JOG)
+
+    def _homing_required(self, ax: Axis) -> JobError | None:
+        """P-AXIS-00277: a programmed motion (G00/G01, `move`) of an unhomed axis is refused
+        with 90013; jogging and homing stay possible."""
+        if ax.homed or not ax.cfg.flag("kenngr.prog_move_requires_homing"):
+            return None
+        return self._fail(ax, Code.NOT_HOMED, f"{ax.name} is not homed (P-AXIS-00277): G74 first")
 
     def jog_stop(self, axis: str) -> None:
         """Release of the jog key: brake with the manual-mode deceleration."""
@@ -344,20 +421,24 @@ class Machine:
         self._set_state(ax, AxisState.HOMING)
         d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
         on_cam = bool(self.k.ist[ax.slot, L.I_CAM]) == (d > 0)
-        if on_cam:
-            self._homing_off_cam(ax)
-        else:
-            ax.homing = HomingPhase.TO_CAM
-            v = ax.cfg.eng("getriebe.vb_refmax", ax.gear)
-            self._plan_velocity(ax, d * v, self._limits(ax, Motion.HOMING))
+        self._homing_search(ax, HomingPhase.OFF_CAM if on_cam else HomingPhase.TO_CAM)
         return None
 
-    def _homing_off_cam(self, ax: Axis) -> None:
+    def _homing_search(self, ax: Axis, phase: HomingPhase) -> None:
+        """To the cam at vb_refmax, or off it at vb_reflow; also resumes after a feedhold."""
         d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
-        ax.homing = HomingPhase.OFF_CAM
-        self._plan_velocity(
-            ax, -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), self._limits(ax, Motion.HOMING)
-        )
+        ax.homing = phase
+        if phase is HomingPhase.TO_CAM:
+            v, what = d * ax.cfg.eng("getriebe.vb_refmax", ax.gear), "search for the cam"
+        else:
+            v, what = -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), "leaving the cam"
+        self._plan_velocity(ax, v, self._limits(ax, Motion.HOMING))
+        # the cam lies within the travel: a search over the whole of it finds it
+        self._watch(ax, search_s(self._travel(ax), abs(v)), f"homing: {what}", extend=True)
+
+    def _travel(self, ax: Axis) -> float:
+        """Length of the travel between the software limits (mm)."""
+        return float(self.k.pr[ax.slot, L.P_SWE_POS] - self.k.pr[ax.slot, L.P_SWE_NEG])
 
     def _homing_edge(self, ax: Axis) -> None:
         """Cam edge with zero pulse: the position here becomes ref_pos."""
@@ -380,12 +461,13 @@ class Machine:
         self._plan_move(ax, self._limits(ax, Motion.HOMING), ax.feed)
 
     def _stop(self, ax: Axis, limits: np.ndarray) -> None:
-        if ax.kind is AxisKind.SPINDLE:
+        if not self._as_axis(ax):
             self.sp.stop(ax)
             return
-        self._plan_velocity(ax, 0.0, limits)
-        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        # STOPPING first: an axis already at rest ends the stop within _plan_velocity
         self._set_state(ax, AxisState.STOPPING)
+        self.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self._plan_velocity(ax, 0.0, limits)
 
     # --- commands: spindle [000] ---------------------------------------------------------
     def _spindle(self, name: str) -> Axis:
@@ -407,7 +489,7 @@ class Machine:
         """M3/M4 with speed (rpm) and optional gear stage M40-M45, or M5."""
         ax = self._spindle(name)
         if m == 5:
-            self.sp.stop(ax)
+            self.sp.m5(ax)
             return None
         return self.sp.endless(ax, m, speed_rpm, gear)
 
@@ -425,7 +507,16 @@ class Machine:
         """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
         if not 40 <= m <= 45:
             raise NcUsageError("gear stage M40..M45")
-        return self.sp.gear_only(self._spindle(name), m - 39, None)
+        ax = self._spindle(name)
+        if not self.gear_change_enabled:  # then M40-M45 are free M functions
+            self._m_output(m, "", None)
+            return None
+        return self.sp.gear_only(ax, m - 39, None)
+
+    @property
+    def gear_change_enabled(self) -> bool:
+        """P-CHAN-00052: M40-M45 change the main spindle's gear; else they are free M functions."""
+        return bool(self.cfg.channel_raw("main_spindle_gear_change"))
 
     def tool(self, number: int) -> None:
         """D word: the tool's dynamic limits go to its spindle at the next start [000 §2.8.5]."""
@@ -482,7 +573,7 @@ class Machine:
             use_set = bool(self.cfg.channel_raw("use_drive_curr_limit"))
             for ax in self.axes:
                 if (
-                    ax.kind is not AxisKind.SPINDLE
+                    self._as_axis(ax)
                     and ax.state in (AxisState.MOVING, AxisState.JOG, AxisState.HOMING)
                     and ax.motion is not None
                 ):
@@ -496,7 +587,7 @@ class Machine:
                     self._replan(ax)
         else:
             for ax in self.axes:
-                if ax.kind is not AxisKind.SPINDLE:
+                if self._as_axis(ax):
                     self._replan(ax)
 
     def _enables_changed(self, ax: Axis) -> None:
@@ -573,7 +664,8 @@ class Machine:
         self.log(Code.EV_PLC_MODE, "", f"PLC {mode}")
 
     def plc_acknowledge(self, m: int | None = None) -> int:
-        """Manual acknowledgement; returns how many M functions were acknowledged."""
+        """Manual acknowledgement; returns how many M functions were acknowledged (0 when
+        none was pending, e.g. after its 90004 timeout)."""
         acked = self.plc.acknowledge(m)
         for p in acked:
             self._m_acked(p.m, p.out_cycle)
@@ -625,8 +717,13 @@ class Machine:
                 if not ok:
                     self._queue.popleft()
                     continue
-            busy = any(a.block_id == run.id for a in self.axes)
-            if busy or run.waiting_m > 0:
+            mine = [a for a in self.axes if a.block_id == run.id]
+            if run.homing and all(a.kind is AxisKind.SPINDLE for a in mine):
+                # the previous order group is homed (a spindle homes unsynchronised [000 §2.7])
+                if not self._home_next(run):
+                    self._queue.popleft()
+                continue
+            if mine or run.waiting_m > 0:
                 return
             self._queue.popleft()
             self.log(Code.EV_BLOCK_DONE, "", run.text)
@@ -642,7 +739,12 @@ class Machine:
             if m in (2, 30):
                 self.program_end()
             self._m_output(m, "", run)
-        gear = b.gear - 39 if b.gear is not None else None
+        gear = None
+        if b.gear is not None:
+            if self.gear_change_enabled:
+                gear = b.gear - 39
+            else:  # M40-M45 are free M functions without gear change (P-CHAN-00052)
+                self._m_output(b.gear, "", run)
         main_done = False
         for sc in b.spindles:
             ax = self.axis(sc.spindle)
@@ -661,8 +763,11 @@ class Machine:
                 return False
             if self.sp.gear_only(self.axis(self.main_spindle), gear, run.id):
                 return False
-        for name in sorted(b.homing, key=lambda n: b.homing[n]):
-            if self.home(name, run.id):
+        if b.homing:
+            # G74 X2 Z1 S1: the lowest order digit first, equal digits together [000 §2.7]
+            orders = sorted(set(b.homing.values()))
+            run.homing = [[n for n, o in b.homing.items() if o == order] for order in orders]
+            if not self._home_next(run):
                 return False
         if b.axes:
             motion = Motion.RAPID if (b.motion or 0) == 0 else Motion.FEED
@@ -670,9 +775,13 @@ class Machine:
             for name, value in b.axes.items():
                 ax = self.axis(name)
                 target = value if b.absolute is not False else self.k.st[ax.slot, L.S_P_CMD] + value
-                if self._start_move(ax, target, motion, feed, run.id):
+                if self._homing_required(ax) or self._start_move(ax, target, motion, feed, run.id):
                     return False
         return True
+
+    def _home_next(self, run: _BlockRun) -> bool:
+        """Start the next G74 order group of a block; False when one of them is refused."""
+        return all(self.home(name, run.id) is None for name in run.homing.pop(0))
 
     def _synch_plc(self, ax: Axis, m: int) -> bool:
         """M3/M4/M5/M19 with the PLC_INFO bit are output to the PLC [000 §2.5]."""
@@ -706,6 +815,7 @@ class Machine:
         for out, bid in list(self._m_out.items()):
             if cycle - out >= timeout:
                 del self._m_out[out]
+                self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
                 spindle = self._m_gear.pop(out, None)
                 self._fail(
                     spindle,
@@ -721,6 +831,8 @@ class Machine:
             if ev:
                 self.k.ist[ax.slot, L.I_EVENTS] = 0
                 self._axis_events(ax, ev)
+            if ax.deadline is not None and cycle >= ax.deadline:
+                self._watchdog_expired(ax)
         if self.estop:
             self._estop_settled()
         self._pump()
@@ -769,7 +881,7 @@ class Machine:
             cam = bool(self.k.ist[ax.slot, L.I_CAM])
             d = 1.0 if ax.cfg.flag("kenngr.ref_richt") else -1.0
             if ax.homing is HomingPhase.TO_CAM and cam == (d > 0):
-                self._homing_off_cam(ax)
+                self._homing_search(ax, HomingPhase.OFF_CAM)
             elif ax.homing is HomingPhase.OFF_CAM and cam != (d > 0):
                 self._homing_edge(ax)
         if ev & L.EV_PLAN_DONE:
@@ -807,7 +919,10 @@ class Machine:
                 self._estop_power_off(ax)
 
     def _plan_done(self, ax: Axis) -> None:
-        if ax.hold or ax.state in (AxisState.ERROR, AxisState.ENDLESS, AxisState.OPEN_LOOP):
+        if ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
+            self._unwatch(ax)  # at speed: endless rotation lasts until the next command
+            return
+        if ax.hold or ax.state is AxisState.ERROR:
             return
         away = abs(self.k.st[ax.slot, L.S_P_CMD] - ax.target) > 1e-9
         if ax.state in (AxisState.MOVING, AxisState.JOG) and away:

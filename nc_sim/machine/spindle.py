@@ -17,8 +17,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from nc_sim.blocks import SpindleCmd
-from nc_sim.errors import Code, JobError
+from nc_sim.errors import Code, JobError, NcUsageError
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.curve import CurveParams
 from nc_sim.machine.axis import (
     Axis,
     AxisState,
@@ -31,6 +32,7 @@ from nc_sim.machine.axis import (
 )
 from nc_sim.machine.dynamics import Motion
 from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
+from nc_sim.machine.watchdog import curve_s, plan_s
 from nc_sim.profiles.plan import (
     LIM_A_ACC,
     LIM_A_ACC2,
@@ -53,6 +55,13 @@ _V_EPS = 1e-9
 
 def _sign(x: float) -> int:
     return 1 if x > 0 else -1
+
+
+def _check_rpm(rpm: float | None) -> None:
+    """One meaning for a negative S everywhere: refused. M3/M4 (or M19's M3/M4) give the
+    direction; only G63 tapping reverses with a negative S [000 §2.8.6], which we lack."""
+    if rpm is not None and rpm < 0:
+        raise NcUsageError(f"S{rpm:g}: the speed must not be negative (M3/M4 give the direction)")
 
 
 def _why_not_positioned(ax: Axis) -> str:
@@ -127,10 +136,51 @@ class SpindleControl:
     # --- primitives ---------------------------------------------------------------------
     def velocity(self, ax: Axis, v: float) -> None:
         """Speed change: along the acceleration curve when one is set, else planned."""
-        if int(ax.cfg.raw("getriebe.beschl_kennlinie.typ", ax.gear)) != 0:
-            self.m.k.load_curve(ax.slot, v)
-        else:
+        if int(ax.cfg.raw("getriebe.beschl_kennlinie.typ", ax.gear)) == 0:
             self.m._plan_velocity(ax, v, self.limits(ax))
+            return
+        ramp = curve_s(self.curve(ax), float(self.m.k.st[ax.slot, L.S_V_CMD]), v)
+        if ramp.dead_speed is not None:
+            self._curve_refused(ax, ramp.dead_speed)
+            return
+        self.m._watch(ax, ramp.seconds, "speed change along the acceleration curve")
+        self.m.k.load_curve(ax.slot, v)
+
+    def curve(self, ax: Axis) -> CurveParams:
+        """The acceleration curve in force (the kernel's copy of the gear record)."""
+        pr = self.m.k.pr[ax.slot]
+        return CurveParams(
+            int(pr[L.P_CURVE_TYPE]),
+            *(
+                float(pr[c])
+                for c in (
+                    L.P_N_LIMIT,
+                    L.P_A_KONST,
+                    L.P_B1,
+                    L.P_B2,
+                    L.P_B3,
+                    L.P_A_MIN,
+                    L.P_CURVE_A_MAX,
+                    L.P_N1,
+                    L.P_N2,
+                    L.P_A_CAP,
+                )
+            ),
+        )
+
+    def _curve_refused(self, ax: Axis, n_deg_s: float) -> None:
+        """A curve that cannot reach the speed: job error, brake on the planner, error state."""
+        self.m._fail(
+            ax,
+            Code.CURVE_NO_ACCELERATION,
+            f"{ax.name} gear {ax.gear}: a(n) at {n_deg_s / RPM_TO_DEG_S:g} rpm is "
+            f"{self.curve(ax).accel(n_deg_s):g} °/s² (getriebe[{ax.gear - 1}].beschl_kennlinie)",
+        )
+        self.cancel_task(ax)
+        self.m._set_state(ax, AxisState.ERROR)
+        self.m.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
+        self.m.k.st[ax.slot, L.S_V_GOAL] = 0.0
+        self.m._plan_velocity(ax, 0.0, self.limits(ax))
 
     def _state(self, ax: Axis, state: AxisState, monitoring: bool = False) -> None:
         self.m._set_state(ax, state)
@@ -174,6 +224,20 @@ class SpindleControl:
             ist[ax.slot, L.I_OPEN_LOOP] = L.LOOP_CLOSED
             self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
 
+    def as_rotary_axis(self, ax: Axis) -> JobError | None:
+        """A spindle jogged or moved like a rotary axis [003 "jogging a spindle"]: from
+        standstill (or renewing its jog), position-controlled, so it needs its encoder."""
+        if speed_controlled(ax.cfg):
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
+        if ax.task is not None or ax.state not in (
+            AxisState.STANDSTILL,
+            AxisState.MOVING,
+            AxisState.JOG,
+        ):
+            return self.m._fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
+        self.switch_back(ax)
+        return None
+
     # --- gear selection -----------------------------------------------------------------
     def _gear_for(self, ax: Axis, rpm: float, programmed: int | None) -> GearChoice:
         gt = self.gear_table(ax)
@@ -208,6 +272,7 @@ class SpindleControl:
         block_id: int | None = None,
     ) -> JobError | None:
         """M3/M4 with S (rpm; None keeps the programmed speed), optionally with M40-M45."""
+        _check_rpm(rpm)
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -215,7 +280,7 @@ class SpindleControl:
         err = self._direction_ok(ax, d)
         if err:
             return err
-        rpm = abs(rpm) if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
+        rpm = rpm if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
         choice = self._gear_for(ax, rpm, gear)
         if choice.error is not None:
             return self.m._fail(ax, choice.error, choice.detail)
@@ -250,11 +315,12 @@ class SpindleControl:
         self, ax: Axis, rpm: float, gear: int | None, block_id: int | None
     ) -> JobError | None:
         """S word alone (or S[REV..]): new speed, with a gear change when the table asks."""
-        choice = self._gear_for(ax, abs(rpm), gear)
+        _check_rpm(rpm)
+        choice = self._gear_for(ax, rpm, gear)
         if choice.error is not None:
             return self.m._fail(ax, choice.error, choice.detail)
         assert choice.gear is not None
-        ax.speed_prog = math.copysign(abs(rpm) * RPM_TO_DEG_S, ax.speed_prog or 1.0)
+        ax.speed_prog = math.copysign(rpm * RPM_TO_DEG_S, ax.speed_prog or 1.0)
         if choice.gear != ax.gear:
             err = self.m._check_motion(ax)
             if err:
@@ -273,6 +339,19 @@ class SpindleControl:
         self._state(ax, AxisState.STOPPING)
         self.velocity(ax, 0.0)
 
+    def m5(self, ax: Axis) -> None:
+        """M5; after the control limit an analogue spindle homes on the way to standstill
+        [000 §2.7, Fig. 9: "Control limit exceeded -> M5 -> Homing -> Done -> Standstill"]."""
+        rotating = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP, AxisState.STOPPING)
+        if not (ax.reference_lost and rotating and self.auto_homing(ax)):
+            self.stop(ax)
+            return
+        self.cancel_task(ax)
+        self.m.log(Code.EV_M_START, ax.name, "M5 (automatic homing)")
+        v = abs(self.m.k.st[ax.slot, L.S_V_CMD])
+        ax.task = SpindleTask("M5", 0.0, None, v)  # passes the zero mark at speed
+        self.advance(ax)
+
     # --- M19, G74, gear change ----------------------------------------------------------
     def position(
         self,
@@ -283,6 +362,7 @@ class SpindleControl:
         block_id: int | None = None,
     ) -> JobError | None:
         """M19: position to `pos_deg` (0..360) in `direction` (+1 M3, -1 M4, None)."""
+        _check_rpm(rpm)
         if speed_controlled(ax.cfg):
             return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
         err = self.m._check_motion(ax)
@@ -300,7 +380,7 @@ class SpindleControl:
         speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         self.cancel_task(ax)
         self.m.log(Code.EV_M_START, ax.name, f"M19 S.POS={pos_deg:g}")
-        ax.task = SpindleTask("M19", pos_deg % 360.0, direction, abs(speed))
+        ax.task = SpindleTask("M19", pos_deg % 360.0, direction, speed)
         ax.block_id = block_id
         self.advance(ax)
         return None
@@ -351,7 +431,7 @@ class SpindleControl:
             return
         k = self.m.k
         s = ax.slot
-        state = AxisState.HOMING if t.kind == "G74" else AxisState.POSITIONING
+        state = AxisState.HOMING if t.kind in ("G74", "M5") else AxisState.POSITIONING
         if t.kind == "gear":
             state = AxisState.GEAR_CHANGE
         self._adopt_tool(ax)
@@ -382,6 +462,13 @@ class SpindleControl:
             if v * d > _V_EPS:  # already turning the right way: pass the mark at speed
                 v_seek = max(v_seek, min(abs(v), t.speed * self.override(ax)))
             self.velocity(ax, d * v_seek)
+            # the mark passes once per revolution
+            self.m._watch(ax, 360.0 / v_seek, "search for the zero mark", extend=True)
+            return
+        if t.kind == "M5":  # homed on the way: now brake to standstill
+            t.phase = TaskPhase.STOP
+            self._state(ax, AxisState.STOPPING)
+            self.velocity(ax, 0.0)
             return
         if not ax.homed:
             self.m._fail(ax, Code.SPINDLE_NOT_HOMED, f"{ax.name}: M19 needs a reference")
@@ -422,6 +509,7 @@ class SpindleControl:
         k.st[ax.slot, L.S_OVERRIDE] = self.override(ax)
         if v_max <= 0:  # override 0 %: hold; the move resumes with the override
             self.m._plan_velocity(ax, 0.0, self.limits(ax))
+            self.m._unwatch(ax)  # held by the operator, not stuck
             return
         seg = new_plan()
         n = position_move(
@@ -434,6 +522,7 @@ class SpindleControl:
             self.limits(ax),
             k.cycle_s,
         )
+        self.m._watch(ax, plan_s(seg, n), f"{t.kind}: positioning to {t.pos_deg:g}°")
         k.load_plan(ax.slot, seg, n, ax.target)
 
     def replan(self, ax: Axis) -> None:
@@ -455,7 +544,7 @@ class SpindleControl:
         pr[s, L.P_ENC_OFFSET] += shift
         for col in (L.S_P_ACT, L.S_P_CMD, L.S_SEG_P0):
             k.st[s, col] += shift
-        ax.homed = True
+        ax.homed, ax.reference_lost = True, False
         k.ist[s, L.I_HOMED] = 1
         k.ist[s, L.I_MARK_ARMED] = 0
         self.m.log(Code.EV_HOMED, ax.name, f"{ax.name} reference at the zero mark")
@@ -467,10 +556,16 @@ class SpindleControl:
             t.phase = TaskPhase.WAIT_PLC
             self._state(ax, AxisState.GEAR_CHANGE)
             self.m._m_output_gear(m_of(t.gear), ax)
+            # the PLC's own timeout (90004) ends it first; this bounds it as every phase
+            timeout = self.m.cfg.channel_eng("plc.m_ack_timeout")
+            self.m._watch(ax, timeout, f"gear change: M{m_of(t.gear)} acknowledgement")
             return
         ax.task = None
         self._state(ax, AxisState.STANDSTILL)
         ax.motion, ax.block_id = None, None
+        if t.kind == "M5":
+            self.m.log(Code.EV_MOTION_DONE, ax.name, f"{ax.name} stopped (M5)")
+            return
         self.m.log(Code.EV_IN_POSITION, ax.name, f"{ax.name} at {t.pos_deg:g}° ({t.kind})")
 
     def gear_acknowledged(self, ax: Axis) -> None:
@@ -502,7 +597,7 @@ class SpindleControl:
         if ev & L.EV_LOOP:
             mode = int(k.ist[s, L.I_OPEN_LOOP])
             if mode == L.LOOP_CONTROL_LIMIT:
-                ax.homed = False
+                ax.homed, ax.reference_lost = False, True
                 self.m.log(Code.EV_LOOP_OPENED, ax.name, f"{ax.name} above the control limit")
                 self.m.log(Code.EV_REFERENCE_LOST, ax.name)
                 if ax.state is AxisState.ENDLESS:
@@ -557,7 +652,7 @@ class SpindleControl:
         if sc.m in (3, 4):
             err = self.endless(ax, sc.m, sc.speed_rpm, gear, block_id)
         elif sc.m == 5:
-            self.stop(ax)
+            self.m5(ax)
         elif sc.m == 19:
             err = self.position(ax, sc.pos_deg or 0.0, sc.direction, sc.speed_rpm, block_id)
         elif 74 in sc.g:
@@ -571,15 +666,22 @@ class SpindleControl:
         return err is None
 
     def gear_only(self, ax: Axis, gear: int, block_id: int | None) -> JobError | None:
-        """M40-M45 without S: change to that stage (the speed is checked with the next S)."""
+        """M40-M45 without S (MDI or the gear buttons): the stage is checked against the speed
+        it will run with, as `M4x S..` is: the programmed S of a rotating spindle; at
+        standstill there is none, the next S is checked."""
         if self.gear_table(ax) is None:
             return self.m._fail(ax, Code.GEAR_CHANGE_OFF, f"M{m_of(gear)}")
+        resume = self._resume(ax)
+        if resume is not None:
+            choice = self._gear_for(ax, resume[1], gear)
+            if choice.error is not None:
+                return self.m._fail(ax, choice.error, choice.detail)
         if gear == ax.gear:
             return None
         err = self.m._check_motion(ax)
         if err:
             return err
-        self.start_gear(ax, gear, self._resume(ax), block_id)
+        self.start_gear(ax, gear, resume, block_id)
         return None
 
     def _resume(self, ax: Axis) -> tuple[int, float] | None:

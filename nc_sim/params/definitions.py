@@ -824,6 +824,18 @@ DEFINITIONS: list[ParamDef] = [
         types="TR",
         title="Positive software limit switch",
     ),
+    # TF5200 axis parameter list (not in the seed manuals): programmed motion needs homing
+    _p(
+        "P-AXIS-00277",
+        "kenngr.prog_move_requires_homing",
+        A,
+        BOOL,
+        NONE,
+        0,
+        0,
+        1,
+        title="Lock moving of unreferenced axes (1: G00/G01 of an unhomed axis is error 90013)",
+    ),
     # --- spindle [000 §3.2.2] ----------------------------------------------------------------
     _p(
         "P-AXIS-00031",

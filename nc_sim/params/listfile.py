@@ -17,6 +17,7 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
+from nc_sim.params.curves import curve_problems
 from nc_sim.params.registry import (
     DTYPE_LIMITS,
     DType,
@@ -28,6 +29,12 @@ from nc_sim.params.registry import (
 from nc_sim.units import AxisKind
 
 Value = float | int | str
+
+# Numbers as the controller writes them: ASCII digits only (no full-width digits, no `2_000`
+# as Python would take), decimal or 0x hex integers, decimal reals with an optional exponent.
+_INT = re.compile(r"[+-]?(?:0[xX](?P<hex>[0-9a-fA-F]+)|(?P<dec>[0-9]+))")
+_REAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_MAX_NUMBER_CHARS = 1000  # far beyond any value a list holds; keeps int() cheap
 
 # how many records an indexed name may address
 _INDEX_LIMITS = {
@@ -121,27 +128,51 @@ def parse_value(d: ParamDef, name: str, text: str) -> Value:
             if token in d.symbols:
                 code |= d.symbols[token]
                 continue
-            try:
-                code |= int(token, 0)
-            except ValueError:
+            number = _integer(token)
+            if number is None:
                 allowed = ", ".join(d.symbols)
-                raise ParamError(
-                    f"{name}: '{token}' is not one of {allowed} ({d.id})", name=name
-                ) from None
+                raise ParamError(f"{name}: '{token}' is not one of {allowed} ({d.id})", name=name)
+            code |= number
             if d.dtype is DType.ENUM:
                 break
-        return code
-    try:
-        value: float = (
-            int(text, 0) if re.fullmatch(r"[+-]?(0x[0-9a-fA-F]+|\d+)", text) else float(text)
-        )
-    except ValueError:
-        raise ParamError(f"{name}: '{text}' is not a number ({d.id})", name=name) from None
+        return _within_type(d, name, code)
+    whole = _integer(text)
+    if whole is not None:
+        return _within_type(d, name, whole)
+    if len(text) > _MAX_NUMBER_CHARS or not _REAL.fullmatch(text):
+        shown = text if len(text) <= 40 else text[:40] + "…"
+        raise ParamError(f"{name}: '{shown}' is not a number ({d.id})", name=name)
+    value = float(text)
     if not math.isfinite(value):
         raise ParamError(f"{name}: '{text}' is not a finite number ({d.id})", name=name)
     if d.dtype is not DType.REAL64 and value != int(value):
         raise ParamError(
             f"{name}: {d.dtype.value} takes whole numbers, not {text} ({d.id})", name=name
+        )
+    return _within_type(d, name, value)
+
+
+def _integer(text: str) -> int | None:
+    """A decimal or 0x hex integer, or None when `text` is not one."""
+    m = _INT.fullmatch(text)
+    if m is None or len(text) > _MAX_NUMBER_CHARS:
+        return None
+    magnitude = int(m["hex"], 16) if m["hex"] else int(m["dec"], 10)
+    return -magnitude if text.startswith("-") else magnitude
+
+
+def _within_type(d: ParamDef, name: str, value: int | float) -> int | float:
+    """`value` when its data type holds it (a 300-digit integer is refused here, not by an
+    OverflowError further on)."""
+    lo, hi = DTYPE_LIMITS[d.dtype]
+    if not lo <= value <= hi:  # int against float compares exactly, without overflow
+        digits = str(value)
+        shown = digits if len(digits) <= 24 else f"{digits[:20]}… ({len(digits)} digits)"
+        span = f"{_fmt(lo)} … {_fmt(hi)}"
+        raise ParamError(
+            f"{name} = {shown} is out of range {span} of {d.dtype.value} ({d.id})",
+            name=name,
+            limits=(lo, hi, ""),
         )
     return value
 
@@ -270,6 +301,9 @@ def validate_values(
         except ParamError as e:
             e.line = (lines or {}).get(name)
             errors.append(ParamError(e.detail, name=name, line=e.line, limits=e.limits))
+    if scope is Scope.AXIS and not errors:  # the list as a whole: its curves must accelerate
+        for name, message in curve_problems(values, reg):
+            errors.append(ParamError(message, name=name, line=(lines or {}).get(name)))
     return errors
 
 
@@ -297,6 +331,10 @@ def parse_list(text: str, scope: Scope) -> ParamList:
             value = parse_value(d, name, value_text)
         except ParamError as e:
             errors.append(ParamError(e.detail, name=e.name or name, line=lineno))
+            continue
+        if name in line_of:  # last one winning would silently drop a value
+            msg = f"{name} is already set in line {line_of[name]} ({d.id})"
+            errors.append(ParamError(msg, name=name, line=lineno))
             continue
         line.name, line.value_text, line.comment = name, value_text, comment
         plist.values[name] = value

@@ -51,5 +51,26 @@ class RawWebSocket:
             (n,) = struct.unpack(">Q", self._exact(8))
         return b0 & 0x0F, self._exact(n)
 
+    def send(self, payload: bytes, opcode: int = 1) -> None:
+        """One masked client frame (1 text, 2 binary)."""
+        n = len(payload)
+        head = bytes([0x80 | opcode])
+        if n < 126:
+            head += bytes([0x80 | n])
+        elif n < 1 << 16:
+            head += bytes([0x80 | 126]) + struct.pack(">H", n)
+        else:
+            head += bytes([0x80 | 127]) + struct.pack(">Q", n)
+        mask = os.urandom(4)
+        body = bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
+        self.sock.sendall(head + mask + body)
+
+    def close_code(self) -> int:
+        """Read on until the server's close frame; its status code."""
+        while True:
+            op, payload = self.recv()
+            if op == 8:
+                return int(struct.unpack(">H", payload[:2])[0]) if len(payload) >= 2 else 1005
+
     def close(self) -> None:
         self.sock.close()

@@ -25,9 +25,10 @@ def free_port() -> int:
 class Server:
     """One uvicorn process serving the app with its own SQLite file."""
 
-    def __init__(self, db: Path, *extra: str) -> None:
+    def __init__(self, db: Path, *extra: str, env: dict[str, str] | None = None) -> None:
         self.db = db
         self.extra = extra
+        self.env = env or {}  # INBETRIEB_* settings
         self.port = free_port()
         self.base = f"http://127.0.0.1:{self.port}"
         self.ws_base = f"ws://127.0.0.1:{self.port}"
@@ -37,7 +38,9 @@ class Server:
     def start(self) -> Server:
         cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(self.port)]
         cmd += ["--db", str(self.db), *self.extra]
-        self.proc = subprocess.Popen(cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        self.proc = subprocess.Popen(
+            cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env}
+        )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             try:

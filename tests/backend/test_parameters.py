@@ -115,6 +115,20 @@ def test_out_of_range_is_422_with_range_and_unit_and_nothing_changes(srv: Server
     assert r.status_code == 422 and "X, Z, S1" in r.text
 
 
+def test_a_curve_that_cannot_accelerate_is_422_naming_it_and_nothing_changes(
+    srv: Server, mid: str
+) -> None:
+    """Each coefficient is within the manual's REAL64 range; the curve they make is not."""
+    pre = "getriebe[2].beschl_kennlinie."
+    changes: list[tuple[str, str | None, str, Any]] = [("axis", "S1", pre + "typ", 2)]
+    changes += [("axis", "S1", pre + b, 1e308) for b in ("b1", "b2", "b3")]
+    r = write(srv, mid, *changes)
+    assert r.status_code == 422, r.text
+    (problem,) = r.json()["detail"]["problems"]
+    assert problem["parameter"] == pre + "typ" and "at 0 rpm" in problem["message"]
+    assert values(srv, mid, "S1")[pre + "typ"]["value"] == 0
+
+
 def test_reset_effect_is_pending_until_reset(srv: Server, mid: str) -> None:
     r = write(srv, mid, ("axis", "X", "kenngr.swe_pos", 2500000))
     assert r.json()["changes"][0]["pending"]
@@ -179,3 +193,75 @@ def test_audit_trail_and_restart_of_the_service(srv: Server, mid: str) -> None:
     assert srv.http.get(f"/api/machines/{mid}/parameters/audit").json() == audit
     srv.wait_powered(mid)
     assert lag_at_feed(srv, mid, 600) == pytest.approx(1.0, rel=1e-3)
+
+
+def import_bytes(srv: Server, mid: str, body: bytes) -> Any:
+    return srv.http.post(
+        f"/api/machines/{mid}/parameters/import",
+        params={"scope": "axis", "target": "X"},
+        content=body,
+        headers={"content-type": "text/plain"},
+    )
+
+
+@pytest.mark.parametrize(
+    "value",
+    [True, "２０００", "2_000", "M3", 10**400, "9" * 400, "0x" + "F" * 300],
+    ids=["true", "full-width", "grouped", "text", "int-400-digits", "400-digits", "hex-300"],
+)
+def test_loose_and_huge_values_are_422_and_change_nothing(
+    srv: Server, mid: str, value: Any
+) -> None:
+    before = values(srv, mid)["getriebe[0].kv"]["value"]
+    r = write(srv, mid, ("axis", "X", "getriebe[0].kv", value))
+    assert r.status_code == 422, r.text
+    assert len(r.content) < 4000  # the echo of a 400-digit value is cut
+    assert values(srv, mid)["getriebe[0].kv"]["value"] == before
+
+
+def test_huge_integers_name_the_types_range(srv: Server, mid: str) -> None:
+    r = write(srv, mid, ("axis", "X", "getriebe[0].kv", 10**400))
+    (problem,) = r.json()["detail"]["problems"]
+    assert "out of range" in problem["message"]
+    assert (problem["min"], problem["max"]) == (0, 4294967295)  # UNS32 [004 P-AXIS-00099]
+
+
+def test_a_name_twice_in_one_write_or_list_is_refused(srv: Server, mid: str) -> None:
+    before = values(srv, mid)["getriebe[0].kv"]["value"]
+    kv = ("axis", "X", "getriebe[0].kv")
+    r = write(srv, mid, (*kv, 1500), (*kv, 1600))
+    assert r.status_code == 422 and "twice" in r.json()["detail"]["problems"][0]["message"]
+    r = import_bytes(srv, mid, b"getriebe[0].kv 1500\ngetriebe[0].kv 1600\n")
+    assert r.status_code == 422
+    (problem,) = r.json()["detail"]["problems"]
+    assert problem["line"] == 2 and "already set in line 1" in problem["message"]
+    assert values(srv, mid)["getriebe[0].kv"]["value"] == before
+
+
+@pytest.mark.parametrize(
+    ("body", "why"),
+    [
+        (b"getriebe[0].kv 2000\n# K\xfchlung\n", "not UTF-8 text (byte 23 is 0xfc)"),
+        ("getriebe[0].kv ２０００\n".encode(), "is not a number"),
+        (b"getriebe[0].kv 2_000\n", "is not a number"),
+        (b"getriebe[0].kv " + b"9" * 400 + b"\n", "out of range"),
+        (b"getriebe[0].kv 0x" + b"F" * 300 + b"\n", "out of range"),
+    ],
+    ids=["latin-1", "full-width", "grouped", "400-digits", "hex-300"],
+)
+def test_bad_list_files_are_422_naming_the_problem(
+    srv: Server, mid: str, body: bytes, why: str
+) -> None:
+    r = import_bytes(srv, mid, body)
+    assert r.status_code == 422, r.text
+    assert why in r.text
+
+
+def test_a_refused_50_mb_body_is_not_echoed(srv: Server, mid: str) -> None:
+    # a name far over its 120 characters: pydantic reports the input with the problem
+    body = {"changes": [{"scope": "axis", "target": "X", "name": "n" * 50_000_000, "value": 1}]}
+    r = srv.http.patch(f"/api/machines/{mid}/parameters", json=body, timeout=120)
+    assert r.status_code == 422
+    assert len(r.content) < 2000
+    (issue,) = r.json()["detail"]
+    assert issue["loc"] == ["body", "changes", 0, "name"] and issue["input"].endswith("…")

@@ -4,8 +4,11 @@ read by the real `rerun` CLI, the loopback-only Rerun web viewer, continuous rec
 from __future__ import annotations
 
 import json
+import os
 import re
+import signal
 import subprocess
+import time
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
@@ -328,3 +331,59 @@ def test_the_viewer_stops_with_the_service(tmp_path: Path) -> None:
     finally:
         s.close()
     assert not any(listening(p) for p in ports)  # no viewer left behind
+
+
+def children(pid: int) -> list[int]:
+    """Processes whose parent is `pid` (from /proc)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue  # ended while we looked
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def alive(pid: int) -> bool:
+    """Running (a zombie waiting for a reaper counts as ended)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_the_viewer_dies_when_the_service_is_killed(tmp_path: Path) -> None:
+    s = Server(tmp_path / "kill.sqlite").start()
+    assert s.proc is not None
+    service = s.proc.pid
+    viewers: list[int] = []
+    try:
+        assert s.http.get("/rerun/", timeout=60).status_code == 200
+        viewers = [p for p in children(service) if "--serve-web" in cmdline(p)]
+        assert len(viewers) == 1
+        # idle request threads end after 10 s; the viewer must outlive the one that asked
+        time.sleep(12)
+        assert alive(viewers[0]) and s.http.get("/rerun/", timeout=60).status_code == 200
+        assert [p for p in children(service) if "--serve-web" in cmdline(p)] == viewers
+        s.proc.send_signal(signal.SIGKILL)
+        s.proc.wait(timeout=10)
+        s.proc = None
+        deadline = time.monotonic() + 10
+        while alive(viewers[0]) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not alive(viewers[0])  # no orphan left behind
+    finally:
+        for pid in viewers:  # only on failure: do not leave what this test started
+            if alive(pid):
+                os.kill(pid, signal.SIGKILL)
+        s.close()
+
+
+def cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""

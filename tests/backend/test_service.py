@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
@@ -191,6 +192,21 @@ def test_plc_manual_acknowledgement(srv: Server, mid: str) -> None:
     srv.command(mid, {"type": "plc_mode", "mode": "auto"})
 
 
+def test_plc_acknowledge_after_the_timeout_acknowledges_nothing(srv: Server, mid: str) -> None:
+    """Timed out means gone: no longer pending in the status, a late ack answers 0."""
+    srv.pace(mid, mode="pause")
+    srv.command(mid, {"type": "plc_mode", "mode": "manual"})
+    srv.command(mid, {"type": "mdi", "block": "M8"})
+    srv.step(mid, 100)
+    assert [p["m"] for p in srv.status(mid)["plc"]["pending"]] == [8]
+    srv.step(mid, 5000)  # demo plc.m_ack_timeout: 5 s
+    st = srv.status(mid)
+    assert st["plc"]["pending"] == []
+    assert 90004 in {e["code"] for e in st["recent_events"]}
+    r = srv.command(mid, {"type": "plc_ack", "m": 8})
+    assert r.is_success and r.json()["acknowledged"] == 0
+
+
 def test_emergency_stop_and_reset(srv: Server, mid: str) -> None:
     srv.command(mid, {"type": "emergency_stop"})
     st = srv.status(mid)
@@ -208,6 +224,39 @@ def test_fast_mode_stops_exactly_at_the_cycle(srv: Server, mid: str) -> None:
     wait_for(lambda: srv.status(mid)["simulation"]["mode"] == "pause")
     assert srv.status(mid)["simulation"]["cycle"] == c0 + 30000
     srv.pace(mid, mode="run")
+
+
+def test_emergency_stop_ends_a_long_step_instead_of_waiting_for_it(srv: Server, mid: str) -> None:
+    """A step of a million cycles runs in one request thread; status and an emergency stop
+    from another thread get in while it runs: the stop acts at a cycle inside the step's span
+    and the step ends there."""
+    srv.pace(mid, mode="pause")
+    srv.command(mid, {"type": "mdi", "block": "M3 S1000"})  # something to simulate
+    c0 = srv.status(mid)["simulation"]["cycle"]
+    n = 1_000_000
+    with ThreadPoolExecutor(1) as pool:
+        stepping = pool.submit(
+            srv.http.post, f"/api/machines/{mid}/simulation/step", json={"cycles": n}
+        )
+        # status answers between the step's slices (before: only after the whole step)
+        wait_for(lambda: srv.status(mid)["simulation"]["cycle"] > c0)
+        stop = srv.command(mid, {"type": "emergency_stop"})
+        assert stop.status_code == 200, stop.text
+        stepped = stepping.result(timeout=120)
+    assert stepped.status_code == 200, stepped.text
+    stop_cycle, end_cycle = stop.json()["cycle"], stepped.json()["cycle"]
+    assert c0 < stop_cycle < c0 + n  # the stop acted inside the step's span ...
+    assert end_cycle < c0 + n  # ... and ended the step
+    st = srv.status(mid)
+    assert st["emergency_stop"] and st["simulation"]["mode"] == "pause"
+    assert st["simulation"]["cycle"] == end_cycle
+
+
+def test_a_step_longer_than_one_request_may_take_is_422(srv: Server, mid: str) -> None:
+    r = srv.http.post(f"/api/machines/{mid}/simulation/step", json={"cycles": 1_000_001})
+    assert r.status_code == 422
+    assert "cycles" in r.text and "1000000" in r.text
+    assert srv.status(mid)["simulation"]["mode"] == "run"  # nothing happened
 
 
 def test_create_from_lists_and_delete(srv: Server) -> None:

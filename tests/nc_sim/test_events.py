@@ -1,44 +1,67 @@
-"""Event and job-error codes: every code has its own meaning in words, each kind of event its
-own code, and the README's tables list them all."""
+"""The bounded event log: sequence numbers, cursors, drops; the machine's logs stay bounded."""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
+import pytest
 
-from nc_sim.errors import MESSAGES, Code
-from tests.nc_sim.sim_helpers import make, record
-
-README = Path(__file__).resolve().parents[2] / "README.md"
-
-
-def test_every_code_has_a_message_in_words() -> None:
-    for code in Code:
-        msg = MESSAGES[code]  # KeyError: a code without a message
-        # words, not the enum's name ("ev motion done", "EV_MOTION_DONE")
-        assert msg and not msg.lower().startswith("ev ") and code.name not in msg, (code, msg)
+from nc_sim.errors import Code
+from nc_sim.events import ACK_LOG_LEN, EVENT_LOG_LEN, EventLog
+from nc_sim.machine.config import demo_machine
+from nc_sim.scenario import run_scenario
+from tests.nc_sim.sim_helpers import make
 
 
-def test_an_event_without_detail_reads_as_its_meaning() -> None:
-    sim, m, _ = make()
-    assert m.mdi("G91 G01 X1 F600").ok
-    record(sim, 1.0)
-    done = [e for e in m.events if e.code == Code.EV_MOTION_DONE]
-    assert [e.message for e in done] == ["motion done"] and done[0].axis == "X"
+def test_entries_are_numbered_and_read_from_a_cursor() -> None:
+    log: EventLog[str] = EventLog(maxlen=5)
+    assert [log.append(x) for x in "abc"] == [0, 1, 2]
+    read = log.since(1)
+    assert (read.entries, read.first_seq, read.cursor, read.dropped) == (["b", "c"], 1, 3, 0)
+    assert log.since(read.cursor).entries == []  # nothing new
+    log.append("d")
+    assert log.since(read.cursor).entries == ["d"]
+    assert (len(log), log[-1], list(log), log.tail(2)) == (4, "d", list("abcd"), ["c", "d"])
 
 
-def test_a_gear_change_is_not_logged_as_an_hli_write() -> None:
-    sim, m, _ = make()
-    assert m.spindle("S", 3, 300) is None  # the demo starts in M42: 300 rpm needs M40
-    record(sim, 3.0)
-    hli = [e for e in m.events if e.code == Code.EV_HLI]
-    started = [e for e in m.events if e.code == Code.EV_GEAR_CHANGE_START]
-    assert hli == []
-    assert [e.message for e in started] == ["S1 gear change 3 -> 1"]
-    assert [e.code for e in m.events if e.code == Code.EV_GEAR_CHANGED]  # and it completed
+def test_a_full_log_drops_the_oldest_and_tells_a_reader_that_fell_behind() -> None:
+    log: EventLog[int] = EventLog(maxlen=3)
+    for i in range(10):
+        log.append(i)
+    assert list(log) == [7, 8, 9] and len(log) == 3
+    assert (log.first_seq, log.cursor) == (7, 10)
+    read = log.since(4)  # a reader that has seen 0..3: 4, 5, 6 are gone
+    assert (read.entries, read.first_seq, read.dropped, read.cursor) == ([7, 8, 9], 7, 3, 10)
+    assert log.since(8).dropped == 0 and log.since(8).entries == [8, 9]
+    assert log.tail(100) == [7, 8, 9]
 
 
-def test_the_readme_tables_list_every_code() -> None:
-    text = README.read_text()
-    documented = {int(c) for c in re.findall(r"^\| (\d+) \|", text, flags=re.M)}
-    assert {int(c) for c in Code} <= documented, sorted({int(c) for c in Code} - documented)
+def test_an_empty_log_is_refused() -> None:
+    with pytest.raises(ValueError, match="at least one"):
+        EventLog(maxlen=0)
+
+
+def test_machine_events_and_acknowledgements_stay_bounded() -> None:
+    """A command per block for longer than the logs hold: memory stays bounded, the cursor
+    counts every event, and a reader from the start learns how many it missed."""
+    _, m, _ = make()
+    start = m.events.cursor
+    n = EVENT_LOG_LEN + 500
+    for _ in range(n):
+        m.mdi("G1 X")  # refused at once: one BLOCK_SYNTAX event and one acknowledgement each
+    assert len(m.events) == EVENT_LOG_LEN
+    assert m.events.cursor == start + n
+    assert len(m.acks) == ACK_LOG_LEN and m.acks.cursor >= n
+    read = m.events.since(start)
+    assert read.dropped == 500 and len(read.entries) == EVENT_LOG_LEN
+    assert all(e.code == Code.BLOCK_SYNTAX for e in read.entries)
+
+
+def test_a_scenario_result_keeps_every_event_the_machine_log_dropped() -> None:
+    """The headless runner collects events as it goes: a run with more events than the
+    machine's log holds returns all of them, in order."""
+    n = EVENT_LOG_LEN + 300
+    actions = [{"t_s": 0.001 * (i // 100), "mdi": "G1 X"} for i in range(n)]  # refused each
+    result = run_scenario(demo_machine(), {"duration_s": 0.2, "actions": actions})
+    refused = [e for e in result.events if e.code == Code.BLOCK_SYNTAX]
+    assert len(refused) == n
+    assert [e.cycle for e in result.events] == sorted(e.cycle for e in result.events)
+    assert len(result.machine.events) == EVENT_LOG_LEN  # the machine itself stayed bounded

@@ -7,10 +7,13 @@ from pathlib import Path
 import pytest
 
 from nc_sim.machine.config import apply_overrides, demo_machine
-from nc_sim.params import ParamListError, Scope, format_list, parse_list, registry
+from nc_sim.params import ParamError, ParamListError, Scope, format_list, parse_list, registry
+from nc_sim.params.listfile import parse_value
 from nc_sim.units import AxisKind, Quantity, raw_unit, to_eng, v_reso_digits_per_unit_s
 
 DATA = Path(__file__).parent / "data"
+KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv, UNS32
+B1 = registry().by_id("P-AXIS-00026")  # getriebe[i].beschl_kennlinie.b1, REAL64
 DOMAIN_IDS = [
     "P-AXIS-00001",
     "P-AXIS-00078",
@@ -80,7 +83,7 @@ def test_values_are_typed() -> None:
 
 def test_bad_lines_are_rejected_with_line_numbers() -> None:
     text = (
-        "getriebe[0].kv 1000\ngetriebe[0].kv 0\nfoo.bar 1\ngetriebe[7].kv 100\n"
+        "getriebe[0].kv 1000\ngetriebe[1].kv 0\nfoo.bar 1\ngetriebe[7].kv 100\n"
         "getriebe[0].slope_profil.a_beschl 5000\nkenngr.achs_typ ACHSTYP_BOGUS\n"
     )
     with pytest.raises(ParamListError) as exc:
@@ -102,6 +105,61 @@ def test_rejected_overrides_change_nothing() -> None:
             cfg, Scope.AXIS, "X", {"getriebe[0].kv": 3000, "getriebe[0].dynamik.a_max": 0}
         )
     assert cfg.axis("X").values == before
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["２０００", "2_000", "0x_10", "1_0.5", "１e3", "٣", "0x１０", "1e", "--5", " ", "nan", "inf"],
+)
+def test_numbers_are_ascii_decimal_or_hex_only(text: str) -> None:
+    # Python's int() and float() take full-width and Arabic-Indic digits and underscores; the
+    # controller's list format does not, so a value typed on another keyboard is refused
+    with pytest.raises(ParamError, match=r"not a (finite )?number|value missing"):
+        parse_value(KV, "getriebe[0].kv", text)
+    with pytest.raises(ParamError):
+        parse_value(B1, "getriebe[0].beschl_kennlinie.b1", text)
+
+
+def test_integers_hex_and_reals_still_parse() -> None:
+    assert parse_value(KV, "getriebe[0].kv", "2000") == 2000
+    assert parse_value(KV, "getriebe[0].kv", "0x7D0") == 2000
+    assert parse_value(KV, "getriebe[0].kv", "+0002000") == 2000
+    assert parse_value(B1, "getriebe[0].beschl_kennlinie.b1", "-1.92901234E-10") == -1.92901234e-10
+    assert parse_value(B1, "getriebe[0].beschl_kennlinie.b1", ".5") == 0.5
+
+
+@pytest.mark.parametrize("text", ["9" * 400, "0x" + "F" * 300, "-" + "9" * 400, "4294967296"])
+def test_huge_integers_are_out_of_the_types_range(text: str) -> None:
+    # kv is UNS32 [004 P-AXIS-00099]: 0 … 4294967295, whatever the number of digits
+    with pytest.raises(ParamError, match="out of range") as exc:
+        parse_value(KV, "getriebe[0].kv", text)
+    assert exc.value.limits is not None and exc.value.limits[:2] == (0, 4294967295)
+    assert len(str(exc.value)) < 200
+
+
+def test_a_huge_integer_for_a_real_is_refused_not_an_overflow() -> None:
+    with pytest.raises(ParamError, match="out of range"):
+        parse_value(B1, "getriebe[0].beschl_kennlinie.b1", "9" * 400)
+    with pytest.raises(ParamError, match="not a finite number"):
+        parse_value(B1, "getriebe[0].beschl_kennlinie.b1", "1e400")
+
+
+def test_flag_values_take_the_same_numbers() -> None:
+    m3 = registry().by_id("P-CHAN-00045")
+    name = "spindel[0].m3_synch"
+    assert parse_value(m3, name, "PLC_INFO | 0x00000002") == 0x00020002
+    with pytest.raises(ParamError):
+        parse_value(m3, name, "PLC_INFO | ２")
+    with pytest.raises(ParamError, match="out of range"):
+        parse_value(m3, name, "0x" + "F" * 300)
+
+
+def test_a_name_twice_in_one_list_is_refused_naming_both_lines() -> None:
+    text = "getriebe[0].kv 1000\n# comment\ngetriebe[0].kv 2000\n"
+    with pytest.raises(ParamListError) as exc:
+        parse_list(text, Scope.AXIS)
+    (err,) = exc.value.errors
+    assert err.line == 3 and "already set in line 1" in str(err)
 
 
 def test_speed_scaling_reproduces_the_manuals_examples() -> None:

@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from nc_sim.events import EventLog
 from nc_sim.machine.axis import AxisState
 from nc_sim.scope import (
     EventKind,
@@ -189,7 +190,9 @@ def test_a_trigger_soon_after_power_on_keeps_the_history_back_to_cycle_1() -> No
     scope = Scope(sim.kernel.cycle_s)
     sig = machine_signals(m)
     trig = EventTrigger(EventKind.M_START, "S1", 3)
-    scope.arm(ScopeSetup(sig[:2], 1000, 50.0, ScopeMode.SINGLE, trig), 0, sim.new_record(0), [])
+    scope.arm(
+        ScopeSetup(sig[:2], 1000, 50.0, ScopeMode.SINGLE, trig), 0, sim.new_record(0), EventLog()
+    )
     rec = sim.new_record(100)
     sim.run(100, rec)
     scope.feed(rec, 1, m.events)
@@ -270,9 +273,9 @@ def test_hysteresis_ignores_ripple_around_the_level(
         ScopeSetup([sig], 2, 0.0, ScopeMode.NORMAL, LevelTrigger(sig, 10.0, rising, hysteresis)),
         0,
         rec[:0],
-        [],
+        EventLog(),
     )
-    scope.feed(rec, 1, [])
+    scope.feed(rec, 1, EventLog())
     assert [r.trigger_cycle for r in scope.completed] == expected
 
 

@@ -1,0 +1,72 @@
+"""Status and telemetry read the machine's bounded event log by cursor: an active job error
+keeps its event after the log has dropped it, and a telemetry client learns how many events
+it missed. In process, machines stepped by hand."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from typing import cast
+
+from fastapi import WebSocket
+
+from api.auth import Role
+from api.commands import EmergencyStopCommand
+from backend.services.auth import Actor
+from backend.services.commands import execute
+from backend.services.host import MachineHost
+from backend.services.status import RECENT_EVENTS, machine_status
+from backend.services.telemetry import TelemetryHub
+from nc_sim.errors import Code
+from nc_sim.events import EVENT_LOG_LEN
+from nc_sim.machine.config import demo_machine
+from tests.backend.fakews import FakeSocket
+
+INSTRUCTOR = Actor("test", Role.INSTRUCTOR)
+
+
+def _host() -> MachineHost:
+    host = MachineHost("m", "m", "demo", demo_machine())
+    host.set_mode("pause")
+    host.step(100)  # the PLC switches the drives on
+    return host
+
+
+def _flood(host: MachineHost, n: int) -> None:
+    """n refused MDI blocks: one event each, none of them sets a job error."""
+    with host.lock:
+        for _ in range(n):
+            host.machine.mdi("G1 X")
+
+
+def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it() -> None:
+    host = _host()
+    stop = execute(INSTRUCTOR, host, EmergencyStopCommand())
+    host.step(10)
+    _flood(host, EVENT_LOG_LEN + 100)
+    host.step(10)
+    assert all(e.code == Code.BLOCK_SYNTAX for e in host.machine.events)  # E-stop dropped
+    st = machine_status(host)
+    assert [(e.code, e.cycle) for e in st.job_errors] == [(int(Code.EMERGENCY_STOP), stop.cycle)]
+    assert len(st.recent_events) == RECENT_EVENTS
+    assert all(e.code == Code.BLOCK_SYNTAX for e in st.recent_events)
+
+
+def test_a_telemetry_client_that_fell_behind_learns_how_many_events_it_missed() -> None:
+    host = _host()
+
+    async def run() -> list[dict[str, object]]:
+        hub = TelemetryHub(1.0, 1000)  # ticked by hand below
+        ws = FakeSocket()
+        hub.add(cast(WebSocket, ws), host)
+        _flood(host, EVENT_LOG_LEN + 250)  # more than the log holds before the next frame
+        hub.tick()
+        await asyncio.sleep(0.05)  # let the send task run
+        return [json.loads(t) for t in ws.texts]
+
+    texts = asyncio.run(run())
+    events = [t for t in texts if t["type"] == "event"]
+    assert len(events) == EVENT_LOG_LEN
+    assert events[0]["missed"] == 250 and all(e["missed"] == 0 for e in events[1:])
+    seqs = [cast(int, e["seq"]) for e in events]
+    assert seqs == list(range(seqs[0], seqs[0] + EVENT_LOG_LEN))

@@ -1,0 +1,44 @@
+"""Event and job-error codes: every code has its own meaning in words, each kind of event its
+own code, and the README's tables list them all."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from nc_sim.errors import MESSAGES, Code
+from tests.nc_sim.sim_helpers import make, record
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+
+
+def test_every_code_has_a_message_in_words() -> None:
+    for code in Code:
+        msg = MESSAGES[code]  # KeyError: a code without a message
+        # words, not the enum's name ("ev motion done", "EV_MOTION_DONE")
+        assert msg and not msg.lower().startswith("ev ") and code.name not in msg, (code, msg)
+
+
+def test_an_event_without_detail_reads_as_its_meaning() -> None:
+    sim, m, _ = make()
+    assert m.mdi("G91 G01 X1 F600").ok
+    record(sim, 1.0)
+    done = [e for e in m.events if e.code == Code.EV_MOTION_DONE]
+    assert [e.message for e in done] == ["motion done"] and done[0].axis == "X"
+
+
+def test_a_gear_change_is_not_logged_as_an_hli_write() -> None:
+    sim, m, _ = make()
+    assert m.spindle("S", 3, 300) is None  # the demo starts in M42: 300 rpm needs M40
+    record(sim, 3.0)
+    hli = [e for e in m.events if e.code == Code.EV_HLI]
+    started = [e for e in m.events if e.code == Code.EV_GEAR_CHANGE_START]
+    assert hli == []
+    assert [e.message for e in started] == ["S1 gear change 3 -> 1"]
+    assert [e.code for e in m.events if e.code == Code.EV_GEAR_CHANGED]  # and it completed
+
+
+def test_the_readme_tables_list_every_code() -> None:
+    text = README.read_text()
+    documented = {int(c) for c in re.findall(r"^\| (\d+) \|", text, flags=re.M)}
+    assert {int(c) for c in Code} <= documented, sorted({int(c) for c in Code} - documented)
