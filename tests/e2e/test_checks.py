@@ -108,6 +108,9 @@ def test_trial_survives_a_visit_to_operate_and_reverts(page: Page, srv: Server) 
     bar = page.get_by_test_id("trial-bar")
     expect(bar.get_by_test_id("param-trial")).to_contain_text("getriebe[0].kv 2000 → 1000")
     assert kv() == 1000
+    # a second Apply waits for Keep/Revert: it would take this trial's Revert away
+    params.get_by_test_id("param-input-getriebe[0].kv").fill("1200")
+    expect(params.get_by_test_id("param-apply")).to_be_disabled()
     page.get_by_test_id("tab-Operate").click()  # test the values on the machine ...
     expect(bar.get_by_test_id("param-trial")).to_be_visible()  # ... the bar stays
     shot(page, "parameters-trial-operate-desktop")

@@ -164,7 +164,9 @@ export function Parameters() {
         </label>
       </div>
       <div class="row apply-bar">
-        <button type="button" data-testid="param-apply" disabled={!online.value || !edited || invalid.length > 0} onClick={() => void apply()}>
+        {/* one trial at a time: a second Apply would take the first one's Revert away */}
+        <button type="button" data-testid="param-apply" disabled={!online.value || !edited || invalid.length > 0 || !!trial.value}
+          title={trial.value ? "Keep or Revert the values on trial first" : ""} onClick={() => void apply()}>
           Apply {edited ? `(${edited})` : ""}
         </button>
         <button type="button" class="secondary" disabled={!edited} onClick={() => (setEdits({}), setProblems([]))}>
