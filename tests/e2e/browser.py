@@ -34,12 +34,12 @@ def chromium() -> Iterator[Browser]:
             browser.close()
 
 
-def open_hmi(browser: Browser, base: str, size: str = "desktop") -> Page:
-    """A fresh page on the HMI, connected to the service."""
+def open_hmi(browser: Browser, base: str, machine: str, size: str = "desktop") -> Page:
+    """A fresh page on the HMI showing `machine` (the test's own), connected to the service."""
     w, h = SIZES[size]
     page = browser.new_page(viewport={"width": w, "height": h})
     page.set_default_timeout(15_000)
-    page.goto(base + "/")
+    page.goto(f"{base}/#{machine}")
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
     return page
 

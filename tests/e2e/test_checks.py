@@ -18,10 +18,9 @@ from tests.e2e.browser import open_hmi, shot
 
 
 @pytest.fixture
-def page(browser: Browser, srv: Server) -> Iterator[Page]:
-    p = open_hmi(browser, srv.base)
+def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
+    p = open_hmi(browser, srv.base, mid)
     yield p
-    p.get_by_test_id("reset").click()  # leave the machine still (and out of E-stop)
     p.close()
 
 
@@ -75,7 +74,7 @@ def test_m19_needs_an_angle(page: Page) -> None:
 
 
 @pytest.mark.parametrize("feed", ["abc", "-1000", "0"])
-def test_an_invalid_jog_feed_jogs_nowhere(page: Page, srv: Server, feed: str) -> None:
+def test_an_invalid_jog_feed_jogs_nowhere(page: Page, srv: Server, feed: str, mid: str) -> None:
     jog = panel(page, "jog")
     jog.get_by_test_id("jog-axis-X").check()
     jog.get_by_test_id("jog-feed").fill(feed)
@@ -83,21 +82,21 @@ def test_an_invalid_jog_feed_jogs_nowhere(page: Page, srv: Server, feed: str) ->
     expect(jog.get_by_test_id("jog-feed-error")).to_be_visible()
     for key in ["jog-plus", "jog-minus", "jog-step-plus", "jog-step-minus"]:
         expect(jog.get_by_test_id(key)).to_be_disabled()
-    x0 = srv.axis("X")["pos_cmd"]
+    x0 = srv.axis("X", mid)["pos_cmd"]
     jog.get_by_test_id("jog-plus").hover()
     page.mouse.down()
     time.sleep(0.5)
     page.mouse.up()
-    assert srv.axis("X")["state"] == "STANDSTILL" and srv.axis("X")["pos_cmd"] == x0
+    assert srv.axis("X", mid)["state"] == "STANDSTILL" and srv.axis("X", mid)["pos_cmd"] == x0
     if feed == "abc":
         shot(page, "jog-feed-invalid-desktop")
     jog.get_by_test_id("jog-feed").fill("")  # empty: the G200 default, allowed
     expect(jog.get_by_test_id("jog-plus")).to_be_enabled()
 
 
-def test_trial_survives_a_visit_to_operate_and_reverts(page: Page, srv: Server) -> None:
+def test_trial_survives_a_visit_to_operate_and_reverts(page: Page, srv: Server, mid: str) -> None:
     def kv() -> float:
-        rows = srv.http.get("/api/machines/demo/parameters?target=X").json()
+        rows = srv.http.get(f"/api/machines/{mid}/parameters?target=X").json()
         return float(next(p["value"] for p in rows if p["name"] == "getriebe[0].kv"))
 
     page.get_by_test_id("tab-Parameters").click()
@@ -244,9 +243,9 @@ def test_noise_has_no_step_and_its_axis_ticks_differ(page: Page, tmp_path: Path)
     shot(page, "scope-noise-desktop")
 
 
-def test_the_new_bars_and_messages_fit_a_tablet(browser: Browser, srv: Server) -> None:
+def test_the_new_bars_and_messages_fit_a_tablet(browser: Browser, srv: Server, mid: str) -> None:
     """Trial bar, inline errors and the E-stop lock at 1024×768: nothing overflows sideways."""
-    page = open_hmi(browser, srv.base, "tablet")
+    page = open_hmi(browser, srv.base, mid, "tablet")
     page.get_by_test_id("tab-Parameters").click()
     params = panel(page, "parameters")
     params.get_by_test_id("param-search").fill("P-AXIS-00099")

@@ -20,10 +20,9 @@ KV_X = 20.0  # 1/s: getriebe[0].kv 2000 in 0.01/s
 
 
 @pytest.fixture
-def page(browser: Browser, srv: Server) -> Iterator[Page]:
-    p = open_hmi(browser, srv.base)
+def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
+    p = open_hmi(browser, srv.base, mid)
     yield p
-    p.get_by_test_id("reset").click()  # leave the machine still for the next test
     p.close()
 
 
@@ -52,11 +51,11 @@ def test_m3_speed_rises_to_s_and_m5_stops(page: Page) -> None:
     assert abs(number(page, "vact-S1")) < 1.0
 
 
-def test_m19_orients_to_90_degrees_within_the_window(page: Page, srv: Server) -> None:
+def test_m19_orients_to_90_degrees_within_the_window(page: Page, srv: Server, mid: str) -> None:
     window_deg = 1e-4 * float(  # kenngr.exact_stop_window in 0.1 µ°
         next(
             p["value"]
-            for p in srv.http.get("/api/machines/demo/parameters?target=S1").json()
+            for p in srv.http.get(f"/api/machines/{mid}/parameters?target=S1").json()
             if p["name"] == "kenngr.exact_stop_window"
         )
     )
@@ -156,9 +155,11 @@ def test_job_error_is_shown_as_a_banner_until_acknowledged(page: Page) -> None:
 
 
 @pytest.mark.parametrize("size", ["desktop", "tablet"])
-def test_every_panel_fits_and_is_captured(browser: Browser, srv: Server, size: str) -> None:
+def test_every_panel_fits_and_is_captured(
+    browser: Browser, srv: Server, size: str, mid: str
+) -> None:
     """Screenshots of every workspace at 1920×1080 and 1024×768; nothing overflows sideways."""
-    page = open_hmi(browser, srv.base, size)
+    page = open_hmi(browser, srv.base, mid, size)
     for tab in ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events"]:
         page.get_by_test_id(f"tab-{tab}").click()
         page.wait_for_timeout(300)

@@ -19,43 +19,43 @@ HOLD_S = 0.5  # the UI's dead-man lease (frontend/src/state/jog.ts)
 
 
 @pytest.fixture
-def page(browser: Browser, srv: Server) -> Iterator[Page]:
-    p = open_hmi(browser, srv.base)
+def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
+    p = open_hmi(browser, srv.base, mid)
     p.get_by_test_id("jog-axis-X").check()
     yield p
     p.close()
 
 
-def x_state(srv: Server) -> str:
-    return str(srv.axis("X")["state"])
+def x_state(srv: Server, mid: str) -> str:
+    return str(srv.axis("X", mid)["state"])
 
 
-def test_hold_moves_x_and_release_stops_it(page: Page, srv: Server) -> None:
+def test_hold_moves_x_and_release_stops_it(page: Page, srv: Server, mid: str) -> None:
     x0 = number(page, "pos-X")
     key = page.get_by_test_id("jog-plus")
     key.hover()
     page.mouse.down()
     expect(page.get_by_test_id("state-X")).to_have_text("JOG")
     time.sleep(3 * HOLD_S)  # held longer than one lease: the UI keeps renewing it
-    assert x_state(srv) == "JOG"
+    assert x_state(srv, mid) == "JOG"
     assert key.get_attribute("aria-pressed") == "true"
     assert page.get_by_test_id("jog-minus").get_attribute("aria-pressed") == "false"
     shot(page, "jog-held-desktop")
     page.mouse.up()
-    poll(lambda: x_state(srv) == "STANDSTILL", "X stopped after release")
-    x1 = srv.axis("X")["pos_cmd"]
+    poll(lambda: x_state(srv, mid) == "STANDSTILL", "X stopped after release")
+    x1 = srv.axis("X", mid)["pos_cmd"]
     assert x1 > x0 + 0.1
     time.sleep(2 * HOLD_S)
-    assert srv.axis("X")["pos_cmd"] == x1  # nothing moves after the release
+    assert srv.axis("X", mid)["pos_cmd"] == x1  # nothing moves after the release
 
 
-def test_lost_network_stops_the_jog_by_the_dead_man(page: Page, srv: Server) -> None:
+def test_lost_network_stops_the_jog_by_the_dead_man(page: Page, srv: Server, mid: str) -> None:
     page.get_by_test_id("jog-plus").hover()
     page.mouse.down()
-    poll(lambda: x_state(srv) == "JOG", "jogging")
+    poll(lambda: x_state(srv, mid) == "JOG", "jogging")
     page.context.set_offline(True)  # renewals stop reaching the service; the key stays down
     try:
-        poll(lambda: x_state(srv) == "STANDSTILL", "dead-man stop", timeout_s=5 + HOLD_S)
+        poll(lambda: x_state(srv, mid) == "STANDSTILL", "dead-man stop", timeout_s=5 + HOLD_S)
         # the UI noticed too: banner up, key released, controls locked
         expect(page.get_by_test_id("banner-connection")).to_be_visible()
         assert page.get_by_test_id("jog-plus").get_attribute("aria-pressed") == "false"
@@ -66,11 +66,11 @@ def test_lost_network_stops_the_jog_by_the_dead_man(page: Page, srv: Server) -> 
 
 
 def test_stopping_the_service_shows_the_banner_and_no_jog_continues(
-    page: Page, srv: Server
+    page: Page, srv: Server, mid: str
 ) -> None:
     page.get_by_test_id("jog-plus").hover()
     page.mouse.down()
-    poll(lambda: x_state(srv) == "JOG", "jogging")
+    poll(lambda: x_state(srv, mid) == "JOG", "jogging")
     jog_requests: list[float] = []
 
     def on_request(r: Request) -> None:
@@ -94,4 +94,4 @@ def test_stopping_the_service_shows_the_banner_and_no_jog_continues(
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
     expect(banner).to_be_hidden()
     time.sleep(2 * HOLD_S)
-    assert x_state(srv) == "STANDSTILL"
+    assert x_state(srv, mid) == "STANDSTILL"

@@ -44,9 +44,9 @@ def capture_m19(page: Page) -> str:
 
 
 def test_single_trigger_on_m19_start_shows_the_capture_with_marker_and_measurements(
-    browser: Browser, srv: Server
+    browser: Browser, srv: Server, mid: str
 ) -> None:
-    page = open_hmi(browser, srv.base)
+    page = open_hmi(browser, srv.base, mid)
     tid = capture_m19(page)
     expect(page.get_by_test_id("capture-trigger")).to_have_text("M19 start on S1")
     # the pre-trigger asked for: 25 % of 4 s
@@ -95,8 +95,10 @@ def test_single_trigger_on_m19_start_shows_the_capture_with_marker_and_measureme
     page.close()
 
 
-def test_save_import_csv_and_overlay(browser: Browser, srv: Server, tmp_path: Path) -> None:
-    page = open_hmi(browser, srv.base)
+def test_save_import_csv_and_overlay(
+    browser: Browser, srv: Server, tmp_path: Path, mid: str
+) -> None:
+    page = open_hmi(browser, srv.base, mid)
     tid = capture_m19(page)
     page.get_by_test_id("save-name").fill("M19 kv default")
     page.get_by_test_id("save-trace").click()
@@ -118,8 +120,8 @@ def test_save_import_csv_and_overlay(browser: Browser, srv: Server, tmp_path: Pa
     page.close()
 
 
-def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server) -> None:
-    page = open_hmi(browser, srv.base)
+def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server, mid: str) -> None:
+    page = open_hmi(browser, srv.base, mid)
     tid = capture_m19(page)
     viewer = browser.new_page(viewport={"width": 1280, "height": 800})
     elsewhere: list[str] = []  # requests for other hosts, and why they failed
@@ -146,8 +148,10 @@ def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server) ->
     page.close()
 
 
-def test_roll_mode_runs_free_and_a_capture_fits_a_tablet(browser: Browser, srv: Server) -> None:
-    page = open_hmi(browser, srv.base, "tablet")
+def test_roll_mode_runs_free_and_a_capture_fits_a_tablet(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    page = open_hmi(browser, srv.base, mid, "tablet")
     page.get_by_test_id("tab-Scope").click()
     page.get_by_test_id("scope-mode").select_option("roll")
     page.get_by_test_id("scope-length").fill("2")

@@ -1,4 +1,4 @@
-"""Fixtures shared by the service tests: each test gets a machine of its own."""
+"""Fixtures shared by the service and browser tests: each test gets a machine of its own."""
 
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ _serial = itertools.count(1)
 
 @pytest.fixture
 def mid(srv: Server) -> Iterator[str]:
-    """A fresh demo lathe on the module's server, powered on and running; deleted afterwards.
+    """A fresh demo lathe on the module's server (`srv`), powered on and running in real
+    time; deleted afterwards.
 
     No test sees what another wrote (parameters, pacing, errors, pending M functions)."""
     name = f"t{next(_serial)}"
