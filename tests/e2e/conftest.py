@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from playwright.sync_api import Browser
+from playwright.sync_api import Browser, Page
 
 from tests.backend.server import Server
-from tests.e2e.browser import DIST, chromium
+from tests.e2e.browser import DIST, chromium, open_hmi
 
 
 @pytest.fixture(scope="module")
@@ -24,3 +24,11 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
 def browser() -> Iterator[Browser]:
     with chromium() as b:
         yield b
+
+
+@pytest.fixture
+def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
+    """The HMI at 1920×1080 on the test's own machine."""
+    p = open_hmi(browser, srv.base, mid)
+    yield p
+    p.close()

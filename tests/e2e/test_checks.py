@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -15,13 +14,6 @@ from playwright.sync_api import Browser, Locator, Page, Request, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import open_hmi, shot
-
-
-@pytest.fixture
-def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
-    p = open_hmi(browser, srv.base, mid)
-    yield p
-    p.close()
 
 
 def panel(page: Page, name: str) -> Locator:

@@ -6,8 +6,6 @@ manuals and physics (speeds, gear ranges, lag = v/kv), never against wall-clock 
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import pytest
 from playwright.sync_api import Browser, Page, expect
 
@@ -17,13 +15,6 @@ from tests.e2e.browser import SIZES, number, open_hmi, poll, shot
 # The demo's gear range table is the manual's example [000 §2.8.2], rpm per stage M40..M45.
 GEAR_RANGES = [(50, 560), (400, 800), (700, 3500), (3501, 4000), (3800, 5500), (5400, 7000)]
 KV_X = 20.0  # 1/s: getriebe[0].kv 2000 in 0.01/s
-
-
-@pytest.fixture
-def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
-    p = open_hmi(browser, srv.base, mid)
-    yield p
-    p.close()
 
 
 def latest(page: Page, signal: str) -> float:
