@@ -48,7 +48,9 @@ class AxisStatus(BaseModel):
     stopped: bool | None = None
     speed_monitoring_active: bool | None = None
     speed_monitoring_invalid: bool | None = None
-    loop: Literal["closed", "control_limit", "speed_control"]
+    loop: Literal["open", "closed", "control_limit", "speed_control"] = Field(
+        description="position loop: open while the drive lacks its enables (servo off)"
+    )
 
 
 class PendingM(BaseModel):

@@ -23,7 +23,7 @@ from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.machine.machine import Machine
 from nc_sim.units import RPM_TO_DEG_S, AxisKind
 
-_LOOP: dict[int, Literal["closed", "control_limit", "speed_control"]] = {
+_LOOP: dict[int, Literal["open", "closed", "control_limit", "speed_control"]] = {
     L.LOOP_CLOSED: "closed",
     L.LOOP_CONTROL_LIMIT: "control_limit",
     L.LOOP_SPEED_CONTROL: "speed_control",
@@ -93,7 +93,8 @@ def _axis_status(m: Machine, ax: Axis) -> AxisStatus:
         stopped=bool(ist[L.I_STOPPED]) if spindle else None,
         speed_monitoring_active=bool(ist[L.I_MON_ACTIVE]) if spindle else None,
         speed_monitoring_invalid=bool(ist[L.I_MON_INVALID]) if spindle else None,
-        loop=_LOOP.get(int(ist[L.I_OPEN_LOOP]), "closed"),
+        # without its enables the drive does not follow: no loop is closed, whatever the mode
+        loop=_LOOP.get(int(ist[L.I_OPEN_LOOP]), "closed") if ist[L.I_ENABLED] else "open",
     )
 
 

@@ -12,7 +12,7 @@ from nc_sim.machine.config import AxisConfig
 from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion
 from nc_sim.params.definitions import OPMODE_SYMBOLS
-from nc_sim.units import AxisKind, v_reso_digits_per_unit_s
+from nc_sim.units import AxisKind, Quantity, eng_unit, v_reso_digits_per_unit_s
 
 # control units every drive type needs [004 §4.1]; others need only TorquePermission
 ENABLES_BY_DRIVE = {
@@ -125,6 +125,11 @@ class Axis:
     @property
     def kind(self) -> AxisKind:
         return self.cfg.kind
+
+    @property
+    def pos_unit(self) -> str:
+        """Unit of the axis' positions in messages: mm (linear) or ° (rotary, spindle)."""
+        return eng_unit(Quantity.POSITION, self.kind)
 
     @property
     def required_enables(self) -> tuple[str, ...]:

@@ -145,9 +145,10 @@ class Machine:
 
     @property
     def powered(self) -> bool:
-        """Power-on is done: every drive is switched on and reports ready, so the machine
-        can move (the moment the headless runner calls time 0)."""
-        return self._powered
+        """Power-on is done and every drive is still switched on, reports ready and has its
+        enables, so the machine can move (the moment the headless runner calls time 0).
+        Live, not latched: false as soon as an E-stop or the PLC takes a drive's enables."""
+        return self._powered and all(ax.drive_follows() for ax in self.axes)
 
     @property
     def queued_blocks(self) -> int:
@@ -323,10 +324,11 @@ class Machine:
         else:
             lo, hi = self.k.pr[ax.slot, L.P_SWE_NEG], self.k.pr[ax.slot, L.P_SWE_POS]
         if not lo - 1e-9 <= target <= hi + 1e-9:
+            u = ax.pos_unit
             return self._fail(
                 ax,
                 Code.SOFTWARE_LIMIT,
-                f"{ax.name} target {target:.4f} outside {lo:.4f} … {hi:.4f}",
+                f"{ax.name} target {target:.4f} {u} outside {lo:.4f} … {hi:.4f} {u}",
             )
         return None
 
@@ -864,11 +866,13 @@ class Machine:
 
     def _axis_events(self, ax: Axis, ev: int) -> None:
         if ev & L.EV_LAG:
-            self._fail(ax, Code.LAG_MONITORING, f"{ax.name} lag {self.k.st[ax.slot, L.S_LAG]:.4f}")
+            lag = self.k.st[ax.slot, L.S_LAG]
+            self._fail(ax, Code.LAG_MONITORING, f"{ax.name} lag {lag:.4f} {ax.pos_unit}")
             self._halt(ax)
             return
         if ev & L.EV_SWLIMIT and ax.state is not AxisState.ERROR:
-            self._fail(ax, Code.SOFTWARE_LIMIT, f"{ax.name} at {self.k.st[ax.slot, L.S_P_CMD]:.4f}")
+            pos = self.k.st[ax.slot, L.S_P_CMD]
+            self._fail(ax, Code.SOFTWARE_LIMIT, f"{ax.name} at {pos:.4f} {ax.pos_unit}")
             self._abort_block(ax)
             self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
             self._set_state(ax, AxisState.ERROR)

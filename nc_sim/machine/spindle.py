@@ -173,7 +173,7 @@ class SpindleControl:
         self.m._fail(
             ax,
             Code.CURVE_NO_ACCELERATION,
-            f"{ax.name} gear {ax.gear}: a(n) at {n_deg_s / RPM_TO_DEG_S:g} rpm is "
+            f"{ax.name} M{m_of(ax.gear)}: a(n) at {n_deg_s / RPM_TO_DEG_S:g} rpm is "
             f"{self.curve(ax).accel(n_deg_s):g} °/s² (getriebe[{ax.gear - 1}].beschl_kennlinie)",
         )
         self.cancel_task(ax)
@@ -415,7 +415,11 @@ class SpindleControl:
         ax.task = SpindleTask("gear", pos, self.preferred(ax), speed, gear=gear, resume=resume)
         ax.block_id = block_id
         self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}")
-        self.m.log(Code.EV_GEAR_CHANGE_START, ax.name, f"{ax.name} gear change {ax.gear} -> {gear}")
+        self.m.log(
+            Code.EV_GEAR_CHANGE_START,
+            ax.name,
+            f"{ax.name} gear change M{m_of(ax.gear)} -> M{m_of(gear)}",
+        )
         if not (ax.homed or self.auto_homing(ax)) or speed_controlled(ax.cfg):
             # no position to go to: change at standstill where the spindle stops
             ax.task.phase = TaskPhase.STOP
@@ -576,7 +580,9 @@ class SpindleControl:
         old = ax.gear
         ax.gear = t.gear
         push_params(self.m.k, ax)
-        self.m.log(Code.EV_GEAR_CHANGED, ax.name, f"{ax.name} gear {old} -> {ax.gear}")
+        self.m.log(
+            Code.EV_GEAR_CHANGED, ax.name, f"{ax.name} gear M{m_of(old)} -> M{m_of(ax.gear)}"
+        )
         ax.task = None
         ax.block_id = None
         self._state(ax, AxisState.STANDSTILL)

@@ -130,7 +130,7 @@ def test_spindle_sequences_scenario_exposes_the_spindle_signals(tmp_path: Path) 
     assert abs((float(at[11.9]["S1.pos_act_deg"]) - 90.0 + 180) % 360 - 180) <= 0.1
     events = [json.loads(line) for line in (tmp_path / "events.jsonl").read_text().splitlines()]
     messages = [e["message"] for e in events]
-    assert "S1 gear 3 -> 2" in messages and "S1 gear 2 -> 3" in messages
+    assert "S1 gear M42 -> M41" in messages and "S1 gear M41 -> M42" in messages
     assert any(m.startswith("M41 output") for m in messages)
     assert sum(m == "S1 at 90° (M19)" for m in messages) == 1
     assert not [e for e in events if e["error"]]

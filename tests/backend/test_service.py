@@ -213,9 +213,14 @@ def test_emergency_stop_and_reset(srv: Server, mid: str) -> None:
     assert st["emergency_stop"]
     assert {a["state"] for a in st["axes"]} == {"ERROR"}
     assert {e["code"] for e in st["job_errors"]} == {90005}
+    # at rest, the PLC takes every drive's enables at once: nothing is powered, no loop closed
+    assert not st["plc"]["drives_powered"]
+    assert {a["loop"] for a in st["axes"]} == {"open"}
     srv.command(mid, {"type": "reset"})
     st = srv.status(mid)
     assert not st["emergency_stop"] and st["job_errors"] == []
+    srv.wait_powered(mid)  # the PLC's start-up again
+    assert {a["loop"] for a in srv.status(mid)["axes"]} == {"closed"}
 
 
 def test_fast_mode_stops_exactly_at_the_cycle(srv: Server, mid: str) -> None:

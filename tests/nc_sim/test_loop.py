@@ -217,6 +217,8 @@ def test_homing_sets_the_reference_at_the_cam_edge() -> None:
     # software limits are active once homed
     m.mdi("G00 X400")
     assert [e.code for e in m.events if e.error] == [Code.SOFTWARE_LIMIT]
+    lo, hi = ax.eng("kenngr.swe_neg"), ax.eng("kenngr.swe_pos")  # positions carry their unit
+    assert m.events[-1].message.endswith(f"X target 400.0000 mm outside {lo:.4f} … {hi:.4f} mm")
 
 
 def cruising_x(block: str) -> tuple[Simulation, Machine, MachineConfig, Axis, float, float]:
@@ -318,6 +320,7 @@ def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back(
     z = m.axis("Z")  # at rest: its enables go at once
     m.emergency_stop()
     assert z.missing_enables() and not z.enables_ok()
+    assert not m.powered  # Z's drive is off: the machine's drives are no longer all powered
     assert x.enables_ok()  # X still brakes under position control
     a = cfg.axis("X").eng("getriebe.dynamik.a_emergency")
     record(sim, 0.9 * v / a)
@@ -334,7 +337,7 @@ def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back(
     m.reset()  # the PLC's start-up again: DriveOn, the drive's power-up, the other enables
     assert not x.enables_ok()
     record(sim, cfg.axis("X").eng("sim.drive_power_up_time") + 0.005)
-    assert x.enables_ok() and z.enables_ok()
+    assert x.enables_ok() and z.enables_ok() and m.powered
     assert m.events[-1].code == Code.EV_POWERED
     mdi(m, "G00 X10")
 
