@@ -148,11 +148,15 @@ def write(
             raise _rejected(problems)
         applied: list[AppliedChange] = []
         stored: list[StoredChange] = []
+        changed: list[tuple[Scope, str, ParamDef, str, Value]] = []
         for scope, target, d, name, value in parsed:
             key: Key = (scope.value, target, name)
             old = host.pending[key].value if key in host.pending else None
             if old is None:
                 old = list_values(host.machine.cfg, scope, target).get(name)
+            if old is not None and old == value:
+                continue  # the value it already has (a list re-imported): no change, no audit
+            changed.append((scope, target, d, name, value))
             stored.append(StoredChange(scope.value, target, name, old, value, d.effect.value))
             applied.append(
                 AppliedChange(
@@ -165,8 +169,10 @@ def write(
                     pending=d.effect is not Effect.NOW,
                 )
             )
+        if not changed:
+            return ParameterWriteResult(changes=[])
         store.write(host.id, actor.name, comment, stored)
-        for scope, target, d, name, value in parsed:
+        for scope, target, d, name, value in changed:
             if d.effect is Effect.NOW:
                 list_values(host.machine.cfg, scope, target)[name] = value
             else:

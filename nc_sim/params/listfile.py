@@ -164,15 +164,21 @@ def _integer(text: str) -> int | None:
 def _within_type(d: ParamDef, name: str, value: int | float) -> int | float:
     """`value` when its data type holds it (a 300-digit integer is refused here, not by an
     OverflowError further on)."""
-    lo, hi = DTYPE_LIMITS[d.dtype]
-    if not lo <= value <= hi:  # int against float compares exactly, without overflow
+    lo_t, hi_t = DTYPE_LIMITS[d.dtype]
+    if not lo_t <= value <= hi_t:  # int against float compares exactly, without overflow
         digits = str(value)
         shown = digits if len(digits) <= 24 else f"{digits[:20]}… ({len(digits)} digits)"
-        span = f"{_fmt(lo)} … {_fmt(hi)}"
+        # the parameter's own range, as the editor shows it (a bound that names another
+        # entry is not known here: the type's limit stands in for it)
+        lo = max(d.lo, lo_t) if isinstance(d.lo, int | float) else lo_t
+        hi = min(d.hi, hi_t) if isinstance(d.hi, int | float) else hi_t
+        units = {d.raw_unit(k) for k in AxisKind}  # named when the axis kind does not matter
+        unit = units.pop() if len(units) == 1 else ""
+        span = f"{_fmt(lo)} … {_fmt(hi)}" + (f" {unit}" if unit else "")
         raise ParamError(
-            f"{name} = {shown} is out of range {span} of {d.dtype.value} ({d.id})",
+            f"{name} = {shown} is out of range {span} ({d.id})",
             name=name,
-            limits=(lo, hi, ""),
+            limits=(lo, hi, unit),
         )
     return value
 

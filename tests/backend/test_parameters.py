@@ -3,6 +3,7 @@ export of the native list format, and everything surviving a restart of the serv
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -169,10 +170,19 @@ def test_export_round_trips(srv: Server, mid: str) -> None:
     assert r.status_code == 200 and r.headers["content-type"].startswith("text/plain")
     assert any(line.split()[:2] == ["getriebe[0].kv", "1500"] for line in r.text.splitlines())
     before = values(srv, mid)
+    audit = srv.http.get(f"/api/machines/{mid}/parameters/audit").json()
     r2 = import_list(srv, mid, "X", r.text)
     assert r2.status_code == 200, r2.text
     after = values(srv, mid)
     assert {k: v["value"] for k, v in after.items()} == {k: v["value"] for k, v in before.items()}
+    # the list as exported changes nothing, so nothing is reported or audited as a change
+    assert r2.json()["changes"] == []
+    assert srv.http.get(f"/api/machines/{mid}/parameters/audit").json() == audit
+    edited = re.sub(r"^(getriebe\[0\]\.kv\s+)1500", r"\g<1>1600", r.text, flags=re.M)
+    r3 = import_list(srv, mid, "X", edited)
+    assert [(c["name"], c["old"], c["new"]) for c in r3.json()["changes"]] == [
+        ("getriebe[0].kv", 1500, 1600)
+    ]
 
 
 def test_audit_trail_and_restart_of_the_service(srv: Server, mid: str) -> None:
@@ -219,11 +229,19 @@ def test_loose_and_huge_values_are_422_and_change_nothing(
     assert values(srv, mid)["getriebe[0].kv"]["value"] == before
 
 
-def test_huge_integers_name_the_types_range(srv: Server, mid: str) -> None:
-    r = write(srv, mid, ("axis", "X", "getriebe[0].kv", 10**400))
+@pytest.mark.parametrize("value", [10**400, -5])
+def test_values_beyond_the_type_name_the_parameters_range(
+    srv: Server, mid: str, value: int
+) -> None:
+    """Beyond UNS32 or not, kv's range is 1 … 4294967295 0.01/s [004 P-AXIS-00099], as the
+    editor shows it: a list import names that, not the data type's 0 … 4294967295."""
+    r = write(srv, mid, ("axis", "X", "getriebe[0].kv", value))
     (problem,) = r.json()["detail"]["problems"]
-    assert "out of range" in problem["message"]
-    assert (problem["min"], problem["max"]) == (0, 4294967295)  # UNS32 [004 P-AXIS-00099]
+    assert "out of range 1 … 4294967295 0.01/s" in problem["message"]
+    assert (problem["min"], problem["max"]) == (1, 4294967295)
+    r = import_list(srv, mid, "X", f"getriebe[0].kv {value}\n")
+    (problem,) = r.json()["detail"]["problems"]
+    assert "out of range 1 … 4294967295 0.01/s" in problem["message"]
 
 
 def test_a_name_twice_in_one_write_or_list_is_refused(srv: Server, mid: str) -> None:

@@ -130,10 +130,11 @@ def test_integers_hex_and_reals_still_parse() -> None:
 
 @pytest.mark.parametrize("text", ["9" * 400, "0x" + "F" * 300, "-" + "9" * 400, "4294967296"])
 def test_huge_integers_are_out_of_the_types_range(text: str) -> None:
-    # kv is UNS32 [004 P-AXIS-00099]: 0 … 4294967295, whatever the number of digits
-    with pytest.raises(ParamError, match="out of range") as exc:
+    # kv is UNS32 [004 P-AXIS-00099], whatever the number of digits; the message names the
+    # parameter's own range 1 … 4294967295, not the type's 0 … 4294967295
+    with pytest.raises(ParamError, match=r"out of range 1 … 4294967295 0\.01/s") as exc:
         parse_value(KV, "getriebe[0].kv", text)
-    assert exc.value.limits is not None and exc.value.limits[:2] == (0, 4294967295)
+    assert exc.value.limits is not None and exc.value.limits[:2] == (1, 4294967295)
     assert len(str(exc.value)) < 200
 
 

@@ -114,7 +114,8 @@ export function Parameters() {
     try {
       const r = await http.postText<ParameterWriteResult>(listUrl("/import", t.scope, t.target), await file.text());
       setProblems([]);
-      setMessage(`Imported ${file.name}: ${r.changes.length} value(s) changed.`);
+      const n = r.changes.length; // the service reports only values that differ
+      setMessage(`Imported ${file.name}: ${n ? `${n} value${n === 1 ? "" : "s"} changed.` : "no value changed (the list matches the machine)."}`);
       paramsVersion.value++;
     } catch (e) {
       if (e instanceof ApiError) {
