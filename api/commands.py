@@ -11,6 +11,15 @@ SpindleName = Annotated[
     str, Field(min_length=1, max_length=16, description="spindle name; S is the main spindle")
 ]
 Feed = Annotated[float, Field(gt=0, le=1e6, description="feed, mm/min (°/min for rotary)")]
+JogFeed = Annotated[
+    float,
+    Field(
+        gt=0,
+        allow_inf_nan=False,
+        description="jog feed, mm/min (°/min for rotary); the NC refuses one above the axis' "
+        "manual-mode maximum handbetrieb.hb.vb_max (P-AXIS-00213)",
+    ),
+]
 
 
 class MdiCommand(BaseModel):
@@ -48,7 +57,7 @@ class GearCommand(BaseModel):
 
     type: Literal["gear"] = "gear"
     spindle: SpindleName = "S"
-    m: int = Field(ge=40, le=45)
+    m: int = Field(ge=40, le=45, description="M function: M40-M45 select gear stage 1-6")
 
 
 class HomeCommand(BaseModel):
@@ -66,7 +75,7 @@ class JogCommand(BaseModel):
     action: Literal["start", "stop", "step"]
     direction: Literal[-1, 1] = 1
     distance: float | None = Field(None, ge=-1e6, le=1e6, description="step, mm | °")
-    feed_mm_min: Feed | None = None
+    feed_mm_min: JogFeed | None = None
     hold_s: float | None = Field(
         None,
         gt=0,

@@ -52,6 +52,10 @@ class ValidationIssue(BaseModel):
     msg: str
     type: str = Field(description="pydantic error type, e.g. missing, literal_error")
     input: Any = Field(None, description="the offending input; long inputs are cut and end in '…'")
+    text: str = Field(
+        description="the issue as a sentence: the field's meaning, the rule and its unit "
+        "(what a UI shows)"
+    )
 
 
 class ErrorBody(BaseModel):

@@ -17,6 +17,7 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
 
 from api.common import ErrorBody, Refusal, ValidationIssue
+from backend.validation import FieldTexts, issue_text
 
 # A refused request must not echo a 50 MB body back: each echoed input is cut to this.
 MAX_ECHO_CHARS = 200
@@ -75,14 +76,27 @@ def install(app: FastAPI) -> None:
     async def api_error(_request: Request, exc: ApiError) -> JSONResponse:
         return _answer(exc.status, Refusal.model_validate(exc.detail))
 
+    fields: list[FieldTexts] = []  # from the schema on first use (routes are all added then)
+
     @app.exception_handler(RequestValidationError)
     async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
+        if not fields:
+            fields.append(FieldTexts(app.openapi()))
         issues = [
             ValidationIssue(
                 loc=list(e.get("loc", ())),
                 msg=clip(str(e.get("msg", ""))),
                 type=str(e.get("type", "")),
                 input=clip(e.get("input")),
+                text=clip(
+                    issue_text(
+                        fields[0],
+                        list(e.get("loc", ())),
+                        str(e.get("type", "")),
+                        e.get("ctx") or {},
+                        str(e.get("msg", "")),
+                    )
+                ),
             )
             for e in exc.errors()[:20]  # the first few tell what is wrong
         ]

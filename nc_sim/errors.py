@@ -37,6 +37,7 @@ class Code(IntEnum):
     NOT_A_SPINDLE = 90022
     SEQUENCE_WATCHDOG = 90023
     CURVE_NO_ACCELERATION = 90024
+    JOG_FEED_TOO_HIGH = 90025  # [002 §2.6.1] above the G200 maximum handbetrieb.hb.vb_max
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -89,6 +90,8 @@ MESSAGES: dict[Code, str] = {
     "its own parameters; it is braked and the axis is in error",
     Code.CURVE_NO_ACCELERATION: "the acceleration curve (P-AXIS-00202) gives no usable "
     "acceleration on the way to the commanded speed: speed change refused",
+    Code.JOG_FEED_TOO_HIGH: "jog feed above the manual-mode maximum velocity (G200, "
+    "P-AXIS-00213): jog refused",
     Code.EV_BLOCK_DONE: "block done",
     Code.EV_M_OUTPUT: "M function output to the PLC",
     Code.EV_M_ACK: "M function acknowledged by the PLC",

@@ -90,8 +90,8 @@ def eng_unit(q: Quantity, kind: AxisKind) -> str:
         Quantity.ACCELERATION: "mm/s²" if linear else "°/s²",
         Quantity.TIME: "s",
         Quantity.KV: "1/s",
-        Quantity.PERMILLE: "1",
-        Quantity.PERCENT: "1",
+        Quantity.PERMILLE: "",  # a plain fraction (1 = 100 %): no unit to show
+        Quantity.PERCENT: "",
     }.get(q, raw_unit(q, kind))
 
 
@@ -114,6 +114,12 @@ def v_reso_digits_per_unit_s(num: float, denom: float, time_base: int, cycle_s: 
     in the time base (P-AXIS-00207). Check: 32767 for 3000 rpm = 1080000000 0.001°/min."""
     per = cycle_s if time_base == 2 else V_TIME_BASE_S[time_base]
     return num / denom * 1000.0 * per
+
+
+def feed_per_min(v_eng: float, kind: AxisKind) -> tuple[float, str]:
+    """A feed as programmed (F, jog feed): mm/min for linear axes, °/min for rotary axes and
+    spindles moved as axes."""
+    return v_eng * MM_MIN_PER_MM_S, "mm/min" if kind is AxisKind.LINEAR else "°/min"
 
 
 def display_velocity(v_eng: float, kind: AxisKind) -> tuple[float, str]:

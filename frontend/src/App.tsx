@@ -1,6 +1,6 @@
 // Layout: the top bar (machine, health, connection, emergency stop) and banners always; the
 // machine view beside the workspaces (tabs).
-import { useState } from "preact/hooks";
+import { useEffect, useRef, useState } from "preact/hooks";
 import { http } from "./api/http";
 import { Banner } from "./panels/Banner";
 import { EventsPanel } from "./panels/EventsPanel";
@@ -45,10 +45,25 @@ function MachineControls() {
 
 export function App() {
   const [tab, setTab] = useState<Tab>("Operate");
+  const head = useRef<HTMLDivElement>(null);
+  useEffect(() => {
+    // focus and scrollIntoView keep controls clear of the sticky head (its height varies:
+    // the top bar wraps on narrow screens, banners come and go)
+    const el = head.current;
+    if (!el) return;
+    const ro = new ResizeObserver(() => document.documentElement.style.setProperty("--head-h", `${el.offsetHeight}px`));
+    ro.observe(el);
+    return () => ro.disconnect();
+  }, []);
   return (
     <div class={connection.value === "lost" ? "app stale" : "app"}>
-      <TopBar />
-      <Banner />
+      {/* top bar, banners and the trial bar stay on screen while the page scrolls; they take
+          their own space (sticky, not fixed), and scrolling to a control keeps it below them */}
+      <div class="head" ref={head}>
+        <TopBar />
+        <Banner />
+        <TrialBar />
+      </div>
       <div class="body">
         <aside class="side">
           <MachineView />
@@ -63,7 +78,6 @@ export function App() {
               </button>
             ))}
           </nav>
-          <TrialBar />
           <div class="workspace" role="tabpanel" aria-label={tab}>
             {tab === "Operate" ? (
               <div class="operate">

@@ -42,7 +42,7 @@ from nc_sim.machine.spindle import SpindleControl
 from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.units import AxisKind, Quantity, to_eng
+from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
 AXIS_UNITS = (
@@ -382,7 +382,25 @@ class Machine:
         else:  # towards the end of the position range: far, but a move that ends
             target = d * POSITION_RANGE
         feed = feed_mm_min / 60.0 if feed_mm_min else None
+        err = self._jog_feed_refused(ax, feed)
+        if err:
+            return err
         return self._start_move(ax, target, Motion.MANUAL, feed, state=AxisState.JOG)
+
+    def _jog_feed_refused(self, ax: Axis, feed: float | None) -> JobError | None:
+        """A jog feed above the axis' G200 maximum (P-AXIS-00213) is refused naming that
+        limit [002 §2.6.1], not silently cut to it."""
+        v_max = ax.cfg.eng("handbetrieb.hb.vb_max")
+        if feed is None or feed <= v_max * (1 + 1e-12):
+            return None
+        f, unit = feed_per_min(feed, ax.kind)
+        lim, _ = feed_per_min(v_max, ax.kind)
+        return self._fail(
+            ax,
+            Code.JOG_FEED_TOO_HIGH,
+            f"{ax.name} jog feed {round(f, 4):.10g} {unit} is above the manual-mode maximum "
+            f"{round(lim, 4):.10g} {unit} (handbetrieb.hb.vb_max, P-AXIS-00213)",
+        )
 
     def _homing_required(self, ax: Axis) -> JobError | None:
         """P-AXIS-00277: a programmed motion (G00/G01, `move`) of an unhomed axis is refused
@@ -405,9 +423,8 @@ class Machine:
         if ax.state is not AxisState.STANDSTILL:
             return self._fail(ax, Code.AXIS_BUSY)
         target = self.k.st[ax.slot, L.S_P_CMD] + distance
-        return self._start_move(
-            ax, target, Motion.MANUAL, feed_mm_min / 60.0 if feed_mm_min else None
-        )
+        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        return self._jog_feed_refused(ax, feed) or self._start_move(ax, target, Motion.MANUAL, feed)
 
     def home(self, axis: str, block_id: int | None = None) -> JobError | None:
         """CNC-controlled homing G74: to the cam, off it slowly, zero at the edge, to ref_pos."""

@@ -77,6 +77,36 @@ def test_out_of_range_command_fields_are_422(srv: Server, mid: str) -> None:
     assert r.status_code == 422
 
 
+@pytest.mark.parametrize(
+    ("command", "text"),
+    [
+        # the bounds and units of api/commands.py: F of a move ≤ 1e6 mm/min, a jog feed > 0
+        (
+            {"type": "move", "axis": "X", "target": 1.0, "rapid": False, "feed_mm_min": 2e6},
+            "Feed must be at most 1e+06 mm/min.",
+        ),
+        (
+            {"type": "jog", "axis": "X", "action": "step", "distance": 1, "feed_mm_min": -5},
+            "Jog feed must be greater than 0 mm/min.",
+        ),
+        (
+            {"type": "override", "axis": "X", "percent": 250},
+            "Override percent must be at most 200 %.",
+        ),
+        ({"type": "gear", "m": 47}, "M function must be at most 45."),
+        ({"type": "jog", "action": "start"}, "Axis or spindle name is required."),
+    ],
+)
+def test_schema_violations_read_as_sentences_with_meaning_and_unit(
+    srv: Server, mid: str, command: dict[str, object], text: str
+) -> None:
+    r = srv.command(mid, command)
+    assert r.status_code == 422
+    (issue,) = r.json()["detail"]
+    assert issue["text"] == text
+    assert "Input should" not in issue["text"]
+
+
 def test_lag_of_a_feed_move_is_v_over_kv(srv: Server, mid: str) -> None:
     """G1 at F600 (10 mm/s) without feedforward: steady lag = v/kv = 0.5 mm."""
     srv.pace(mid, mode="pause")
@@ -134,6 +164,22 @@ def test_jog_step_and_continuous_jog(srv: Server, mid: str) -> None:
     srv.step(mid, 3000)
     assert srv.axis("Z", mid)["state"] == "STANDSTILL"
     srv.pace(mid, mode="run")
+
+
+def test_a_jog_feed_above_the_axis_limit_is_refused_by_the_nc_naming_it(
+    srv: Server, mid: str
+) -> None:
+    """Not the schema's bound: the axis' G200 maximum (P-AXIS-00213, 166666 µm/s in the demo
+    list = 9999.96 mm/min) decides, and the refusal says so in mm/min."""
+    for action in ("start", "step"):
+        jog = {"type": "jog", "axis": "X", "action": action, "distance": 1.0}
+        r = srv.command(mid, {**jog, "feed_mm_min": 99999999})
+        assert r.status_code == 409, r.text
+        detail = r.json()["detail"]
+        assert detail["code"] == 90025
+        assert "maximum 9999.96 mm/min (handbetrieb.hb.vb_max, P-AXIS-00213)" in detail["message"]
+        assert "Input should" not in r.text
+    assert srv.axis("X", mid)["state"] == "STANDSTILL"
 
 
 def test_held_jog_stops_when_its_dead_man_lease_runs_out(srv: Server, mid: str) -> None:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from nc_sim.errors import Code
+from nc_sim.errors import Code, JobError
 from nc_sim.machine.axis import Axis
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -190,6 +190,29 @@ def test_jog_stops_within_the_manual_mode_deceleration_distance() -> None:
     assert travelled == pytest.approx(v / 2 * (v / d + tr), rel=1e-6)
     assert x.state.name == "STANDSTILL"
     assert np.min(rec[:, x.slot, L.R_A_CMD]) == pytest.approx(-d)
+
+
+@pytest.mark.parametrize("kind", ["start", "step"])
+def test_a_jog_feed_above_the_manual_mode_maximum_is_refused_naming_it(kind: str) -> None:
+    """[002 §2.6.1] G200: handbetrieb.hb.vb_max (P-AXIS-00213) bounds the jog velocity. The
+    demo list holds 166666 µm/s = 9999.96 mm/min; a feed above it is refused naming that
+    limit in mm/min, a feed at it jogs at it."""
+    sim, m, cfg = make()
+    x = m.axis("X")
+    v_max = cfg.axis("X").eng("handbetrieb.hb.vb_max")
+    assert v_max * 60 == pytest.approx(166666 * 60 / 1000)
+
+    def jog(feed: float) -> JobError | None:
+        return m.jog_start("X", +1, feed) if kind == "start" else m.jog_step("X", 250.0, feed)
+
+    err = jog(99999999.0)
+    assert err is not None and err.code == Code.JOG_FEED_TOO_HIGH
+    assert "jog feed 99999999 mm/min is above the manual-mode maximum 9999.96 mm/min" in err.message
+    assert "P-AXIS-00213" in err.message
+    assert x.state.name == "STANDSTILL"
+    assert jog(v_max * 60) is None  # the limit itself is allowed
+    record(sim, 0.5)
+    assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(v_max)
 
 
 def test_override_scales_feed_and_is_capped_by_the_channel_limit() -> None:

@@ -1,5 +1,5 @@
 // fetch with the service's refusal bodies turned into one error type.
-import type { Refusal } from "./types";
+import type { Refusal, ValidationIssue } from "./types";
 
 /** A request the service answered with 4xx/5xx, or could not be reached. */
 export class ApiError extends Error {
@@ -35,11 +35,10 @@ function refusalOf(status: number, payload: unknown): Refusal {
     return { ...r, message: r.message ?? `HTTP ${status}`, problems: r.problems ?? [] };
   }
   if (Array.isArray(detail)) {
-    // FastAPI's request validation: [{loc, msg}]
-    const first = detail[0] as { loc?: unknown[]; msg?: string } | undefined;
-    // the field's own name, not the path through the request body and union tags
-    const where = String(first?.loc?.slice(-1)[0] ?? "");
-    return { message: `${where}: ${first?.msg ?? "invalid"}`, problems: [] };
+    // schema violations: the service words each one as a sentence (the field's meaning,
+    // the rule, its unit), so no pydantic text ("Input should be …") reaches the operator
+    const issues = detail as ValidationIssue[];
+    return { message: issues.map((i) => i.text).join(" ") || "the request was refused as invalid", problems: [] };
   }
   return { message: typeof payload === "string" && payload ? payload : `HTTP ${status}`, problems: [] };
 }

@@ -8,6 +8,7 @@ export type AxisStatus = S["AxisStatus"];
 export type ServiceStatus = S["ServiceStatus"];
 export type JobError = S["JobErrorModel"];
 export type Refusal = S["Refusal"];
+export type ValidationIssue = S["ValidationIssue"];
 export type ParameterProblem = S["ParameterProblem"];
 export type ParameterValue = S["ParameterValue"];
 export type ParameterDef = S["ParameterDef"];

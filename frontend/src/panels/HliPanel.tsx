@@ -5,7 +5,7 @@ import type { HliUnit } from "../api/types";
 import { online, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { Panel } from "../ui/Panel";
-import { fmt } from "../ui/format";
+import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
 const NUMERIC = new Set(["override"]); // written with the override sliders, not a switch
@@ -49,7 +49,8 @@ export function HliPanel() {
               <Lamp on={a.job_error !== 0} label={`job error ${a.job_error || ""}`} tone="bad" />
             </div>
             <div class="hint">
-              state {a.state} · loop {a.loop} · override {fmt(a.override_pct, 1)} %
+              state {a.state} · loop <span data-testid={`hli-loop-${a.name}`}>{a.loop}</span> · override{" "}
+              {qty(a.override_pct, 1, "%")}
             </div>
             <div class="switches">
               {Object.entries(a.control_units)
@@ -63,7 +64,7 @@ export function HliPanel() {
         <fieldset class="hli-axis">
           <legend>Channel</legend>
           <div class="hint">
-            path override {fmt((s.channel_units.override ?? 1000) / 10, 1)} % · queued blocks {s.queued_blocks}
+            path override {qty((s.channel_units.override ?? 1000) / 10, 1, "%")} · queued blocks {s.queued_blocks}
           </div>
           <div class="switches">
             {Object.entries(s.channel_units)
@@ -89,7 +90,8 @@ export function HliPanel() {
               delay <input size={5} inputMode="decimal" placeholder={fmt(plc.ack_delay_s, 3)} value={delay}
                 onInput={(e) => setDelay((e.target as HTMLInputElement).value)} /> s
             </label>
-            <Lamp on={plc.drives_powered} label="drives powered" />
+            <Lamp id="lamp-drives-powered" on={plc.drives_powered} label="drives powered"
+              title="every drive switched on, ready and enabled (DriveOn, TorquePermission)" />
           </div>
           <table class="pending-m">
             <thead>

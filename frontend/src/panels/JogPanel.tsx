@@ -3,10 +3,10 @@ import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { heldKey, holdJog, keyName, releaseJog } from "../state/jog";
-import { numbers, paramsVersion } from "../state/params";
+import { loadList, numbers, paramsVersion } from "../state/params";
 import { machineId, motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
-import { fmt } from "../ui/format";
+import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
 const STEPS = [0.001, 0.01, 0.1, 1, 10];
@@ -70,14 +70,34 @@ export function JogPanel() {
     if (!machineId.value) return;
     void numbers("channel", null).then((v) => setOverrideMax((v.get("max_vb_override") ?? 1000) / 10), () => undefined);
   }, [machineId.value, paramsVersion.value]);
+  // the axis' G200 maximum (P-AXIS-00213) bounds the jog feed [002 §2.6.1]; the NC refuses a
+  // feed above it as well (90025), this shows it before a key is pressed
+  const [feedMax, setFeedMax] = useState<number | null>(null);
+  const axName = ax?.name;
+  useEffect(() => {
+    setFeedMax(null);
+    if (!machineId.value || !axName) return;
+    void loadList("axis", axName).then((list) => {
+      const p = list.find((q) => q.name === "handbetrieb.hb.vb_max");
+      // list unit (µm/s, 0.001°/s) × eng_factor = mm/s | °/s, × 60 = per minute
+      setFeedMax(p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor * 60 : null);
+    }, () => undefined);
+  }, [machineId.value, paramsVersion.value, axName]);
   if (!ax) return <Panel title="Jog" id="jog">Waiting for the service…</Panel>;
   const unit = ax.unit === "deg" ? "°" : "mm";
   const feedNum = feed.trim() === "" ? null : Number(feed);
-  const feedOk = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
+  const feedPositive = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
+  const feedInLimit = feedNum === null || feedMax === null || feedNum <= feedMax * (1 + 1e-12);
+  const feedOk = feedPositive && feedInLimit;
+  const feedError = !feedPositive
+    ? "a feed > 0 is needed (empty: the G200 default)"
+    : !feedInLimit
+      ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the manual-mode maximum of ${ax.name} (handbetrieb.hb.vb_max, P-AXIS-00213)`
+      : "";
   const dis = !online.value;
-  // a jog feed that is not a positive number jogs nowhere (never at the default instead)
+  // a jog feed the axis cannot take jogs nowhere (never at the default or the limit instead)
   const noMotion = motionLocked.value || !feedOk;
-  const why = status.value?.emergency_stop ? "emergency stop: reset first" : !feedOk ? "jog feed must be a number > 0" : "";
+  const why = status.value?.emergency_stop ? "emergency stop: reset first" : feedError ? `jog feed: ${feedError}` : "";
   const pathOverride = (status.value?.channel_units.override ?? 1000) / 10;
   return (
     <Panel title="Jog" id="jog">
@@ -103,9 +123,11 @@ export function JogPanel() {
             aria-invalid={!feedOk} onInput={(e) => setFeed((e.target as HTMLInputElement).value)} />{" "}
           {unit}/min
         </label>
-        {!feedOk ? (
+      </div>
+      <div class="field-note">
+        {feedError ? (
           <span class="inline-error" role="alert" data-testid="jog-feed-error">
-            a feed &gt; 0 is needed (empty: the G200 default)
+            {feedError}
           </span>
         ) : null}
       </div>
@@ -133,7 +155,7 @@ export function JogPanel() {
           Feed override{" "}
           <input type="range" data-testid="feed-override" min={0} max={overrideMax} step={1} value={pathOverride} disabled={dis}
             onChange={(e) => void cmd.run({ type: "override", axis: null, percent: Number((e.target as HTMLInputElement).value) })} />
-          <b>{fmt(pathOverride, 1)} %</b>
+          <b>{qty(pathOverride, 1, "%")}</b>
         </label>
       </div>
       <div class="row apart">

@@ -7,7 +7,7 @@ import type { ParameterProblem, ParameterValue, ParameterWriteResult, Scope } fr
 import { dtypes, listUrl, loadList, loadRegistry, paramsVersion, trial, trialMessage, writeChanges } from "../state/params";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
-import { fmt } from "../ui/format";
+import { qty } from "../ui/format";
 import { groupOf } from "./paramGroups";
 
 interface Target {
@@ -148,7 +148,7 @@ export function Parameters() {
             ))}
           </select>
         </label>
-        <input type="search" data-testid="param-search" placeholder="Search ID, name or description" value={query}
+        <input type="search" data-testid="param-search" size={32} placeholder="Search ID, name or description" value={query}
           onInput={(e) => setQuery((e.target as HTMLInputElement).value)} aria-label="search parameters" />
         <a class="button secondary" href={t && machineId.value ? listUrl("/export", t.scope, t.target) : "#"}
           download={`${machineId.value}-${t?.target ?? t?.scope}.lis`}>
@@ -224,7 +224,7 @@ export function Parameters() {
                   </td>
                   <td>{p.unit}</td>
                   <td class="num" data-testid={`param-eng-${p.name}`}>
-                    {typeof v === "number" && p.eng_factor != null && p.eng_unit !== p.unit ? `${fmt(v * p.eng_factor, 4)} ${p.eng_unit}` : ""}
+                    {typeof v === "number" && p.eng_factor != null && p.eng_unit !== p.unit ? qty(v * p.eng_factor, 4, p.eng_unit) : ""}
                   </td>
                   <td class="hint">{p.min != null ? `${num(p.min)} … ${num(p.max ?? Infinity)}` : ""}</td>
                   <td class="num">{String(p.default)}</td>

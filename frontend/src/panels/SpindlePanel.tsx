@@ -4,7 +4,7 @@ import { useEffect, useRef, useState } from "preact/hooks";
 import { loadList, paramsVersion } from "../state/params";
 import { machineId, motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
-import { fmt } from "../ui/format";
+import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 import { GearBars, type GearRange } from "./GearBars";
 
@@ -131,11 +131,6 @@ export function SpindlePanel() {
           M19 to <input data-testid="m19-angle" inputMode="decimal" value={angle} size={6} aria-invalid={!validAngle}
             onInput={(e) => setAngle((e.target as HTMLInputElement).value)} />°
         </label>
-        {!validAngle ? (
-          <span class="inline-error" role="alert" data-testid="m19-angle-error">
-            an angle in degrees is needed
-          </span>
-        ) : null}
         <select aria-label="M19 direction" value={dir} onChange={(e) => setDir((e.target as HTMLSelectElement).value as "0")}>
           <option value="0">shortest way</option>
           <option value="1">M3 direction (+)</option>
@@ -145,6 +140,14 @@ export function SpindlePanel() {
           M19 orient
         </button>
       </form>
+      {/* its own line, reserved: the message appears without moving the buttons */}
+      <div class="field-note">
+        {!validAngle ? (
+          <span class="inline-error" role="alert" data-testid="m19-angle-error">
+            an angle in degrees is needed
+          </span>
+        ) : null}
+      </div>
       <div class="gears">
         <div class="row">
           <span>
@@ -175,8 +178,8 @@ export function SpindlePanel() {
               setOvr(null);
               void cmd.run({ type: "override", axis: sp.name, percent: pct });
             }} />
-          <b>{fmt(overridePct, 1)} %</b>
-          <span class="hint">max {fmt(params?.overrideMaxPct, 1)} % (P-AXIS-00109)</span>
+          <b>{qty(overridePct, 1, "%")}</b>{" "}
+          <span class="hint">max {qty(params?.overrideMaxPct, 1, "%")} (P-AXIS-00109)</span>
         </label>
       </div>
       <div class="row apart">

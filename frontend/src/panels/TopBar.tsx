@@ -1,7 +1,7 @@
 // Always visible: machine, time and loop health, connection, and the emergency stop.
 import { connection, machineId, machines, online, selectMachine, service, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
-import { fmt } from "../ui/format";
+import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
 export function TopBar() {
@@ -25,7 +25,7 @@ export function TopBar() {
         </select>
       </label>
       <span class="health" data-testid="health">
-        <span title="simulated time">t = {fmt(sim?.t_s, 2)} s</span>
+        <span title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
         <span title="simulated seconds per wall second">
           {sim?.mode ?? "—"} ×{fmt(rt, 2)}
         </span>

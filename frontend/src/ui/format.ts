@@ -5,6 +5,12 @@ export function fmt(v: number | null | undefined, decimals = 3): string {
   return v < 0 && Number(s) !== 0 ? `−${s}` : s;
 }
 
+/** A value with its unit, joined by a no-break space so a narrow line never leaves the unit
+ * on a line of its own ("100.0 %", "0.500 s"). */
+export function qty(v: number | null | undefined, decimals: number, unit: string): string {
+  return unit ? `${fmt(v, decimals)}\u00a0${unit}` : fmt(v, decimals);
+}
+
 export const velUnit = (unit: string, kind: string) => (kind === "spindle" ? "rpm" : `${unit}/min`);
 
 /** Axis tick labels: as many decimals as the tick spacing needs (so neighbouring ticks never

@@ -1,0 +1,124 @@
+"""Schema violations as sentences an operator can read: the field's meaning and unit from the
+API schema, the rule it broke ("must be at most 1000000 mm/min"), never pydantic's
+"Input should be …" text."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+# unit suffixes of field names (the project names units in field names where ambiguous)
+_UNIT_SUFFIX = [
+    ("_mm_min", "mm/min"),
+    ("_rpm", "rpm"),
+    ("_deg", "°"),
+    ("_mm", "mm"),
+    ("_ms", "ms"),
+    ("_s", "s"),
+    ("_pct", "%"),
+]
+_NAMED_UNITS = {"percent": "%"}
+_LOC_ROOTS = {"body", "query", "path", "header", "cookie"}
+
+
+class FieldTexts:
+    """Meaning of every request field, from the OpenAPI schema: keyed by (tag, field), the
+    tag being the `type` literal of a command union member (None for other models)."""
+
+    def __init__(self, openapi: Mapping[str, Any]) -> None:
+        self._by_tag: dict[tuple[str | None, str], str] = {}  # "" when it has none
+        self._by_name: dict[str, set[str]] = {}
+        schemas = openapi.get("components", {}).get("schemas", {})
+        for schema in schemas.values():
+            props: Mapping[str, Any] = schema.get("properties", {})
+            tag = props.get("type", {}).get("const")
+            for name, prop in props.items():
+                text = _description(prop)
+                if tag is not None:
+                    self._by_tag[(tag, name)] = text
+                if text:
+                    self._by_name.setdefault(name, set()).add(text)
+
+    def description(self, tag: str | None, name: str) -> str:
+        """The field's description, or "" when the schema has none (or, for a field of no
+        command, models describe it differently)."""
+        if (tag, name) in self._by_tag:
+            return self._by_tag[(tag, name)]
+        texts = self._by_name.get(name, set())
+        return next(iter(texts)) if len(texts) == 1 else ""
+
+
+def _description(prop: Mapping[str, Any]) -> str:
+    if "description" in prop:
+        return str(prop["description"])
+    for alt in prop.get("anyOf", []):  # Optional[Annotated[...]]: on the non-null member
+        if "description" in alt:
+            return str(alt["description"])
+    return ""
+
+
+def _unit(name: str, description: str) -> str:
+    if name in _NAMED_UNITS:
+        return _NAMED_UNITS[name]
+    for suffix, unit in _UNIT_SUFFIX:
+        if name.endswith(suffix):
+            return unit
+    m = re.match(r"[^,;(]*,\s*([^\s,;(]+)", description)  # "meaning, unit ..."
+    return m.group(1) if m else ""
+
+
+def _meaning(tag: str | None, name: str, description: str) -> str:
+    if description:
+        first = re.split(r"[,;:(]", description, maxsplit=1)[0].strip()
+        if first and first != _unit(name, description):
+            return first
+    words = name
+    for suffix, _ in _UNIT_SUFFIX:
+        if words.endswith(suffix):
+            words = words[: -len(suffix)]
+            break
+    words = words.replace("_", " ")
+    return f"{tag} {words}" if tag else words
+
+
+def _num(x: Any) -> str:
+    return f"{x:g}" if isinstance(x, float) else str(x)
+
+
+def _rule(kind: str, ctx: Mapping[str, Any], unit: str, msg: str) -> str:
+    u = f" {unit}" if unit else ""
+    rules = {
+        "less_than_equal": f"must be at most {_num(ctx.get('le'))}{u}",
+        "less_than": f"must be less than {_num(ctx.get('lt'))}{u}",
+        "greater_than_equal": f"must be at least {_num(ctx.get('ge'))}{u}",
+        "greater_than": f"must be greater than {_num(ctx.get('gt'))}{u}",
+        "finite_number": "must be a finite number",
+        "missing": "is required",
+        "literal_error": f"must be one of {ctx.get('expected', '')}",
+        "enum": f"must be one of {ctx.get('expected', '')}",
+        "string_too_long": f"must be at most {ctx.get('max_length')} characters",
+        "string_too_short": f"must be at least {ctx.get('min_length')} characters",
+    }
+    if kind in rules:
+        return rules[kind]
+    if kind.endswith("_parsing") or kind.endswith("_type"):
+        return {"int": "must be a whole number", "float": "must be a number"}.get(
+            kind.split("_")[0], "has the wrong type"
+        )
+    return re.sub(r"^Input should", "must", msg) or "is not valid"
+
+
+def issue_text(
+    fields: FieldTexts, loc: Sequence[str | int], kind: str, ctx: Mapping[str, Any], msg: str
+) -> str:
+    """One schema violation as a sentence, e.g. "Jog feed must be greater than 0 mm/min"."""
+    names = [p for p in loc if isinstance(p, str) and p not in _LOC_ROOTS]
+    if not names:
+        return f"The request {_rule(kind, ctx, '', msg)}."
+    name = names[-1]
+    tag = names[-2] if len(names) > 1 else None
+    description = fields.description(tag, name)
+    meaning = _meaning(tag, name, description)
+    text = f"{meaning} {_rule(kind, ctx, _unit(name, description), msg)}"
+    return text[0].upper() + text[1:] + "."
