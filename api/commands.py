@@ -45,7 +45,7 @@ class SpindlePositionCommand(BaseModel):
 
     type: Literal["spindle_position"] = "spindle_position"
     spindle: SpindleName = "S"
-    position_deg: float = Field(ge=-1e9, le=1e9)
+    position_deg: float = Field(ge=-1e9, le=1e9, description="M19 target angle, ° (modulo 360)")
     direction: Literal[-1, 1] | None = None
     speed_rpm: float | None = Field(
         None, gt=0, allow_inf_nan=False, description="rpm (the NC checks its maximum)"

@@ -79,7 +79,7 @@ def _meaning(tag: str | None, name: str, description: str) -> str:
             words = words[: -len(suffix)]
             break
     words = words.replace("_", " ")
-    return f"{tag} {words}" if tag else words
+    return f"{tag.replace('_', ' ')} {words}" if tag else words
 
 
 def _num(x: Any) -> str:
