@@ -93,6 +93,9 @@ def test_head_and_trial_bar_stay_on_screen_when_scrolled_on_a_tablet(
     spindle.get_by_test_id("m3").click()
     banner = page.get_by_test_id("banner-error")
     expect(banner).to_be_visible()
+    panel(page, "jog").get_by_test_id("jog-feed").fill("99999999")
+    expect(panel(page, "jog").get_by_test_id("jog-feed-error")).to_be_visible()
+    shot(page, "operate-limits-tablet")
     panel(page, "plot").scroll_into_view_if_needed()  # down to the live plot
     page.mouse.wheel(0, 5000)
     page.wait_for_timeout(300)

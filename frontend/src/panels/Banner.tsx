@@ -1,7 +1,7 @@
 // Connection loss and the newest job error, until acknowledged.
 import { acknowledgeBanner, bannerError } from "../state/events";
 import { connection } from "../state/session";
-import { fmt } from "../ui/format";
+import { qty } from "../ui/format";
 
 export function Banner() {
   const err = bannerError.value;
@@ -14,7 +14,9 @@ export function Banner() {
       ) : null}
       {err ? (
         <div class="banner error" role="alert" data-testid="banner-error">
-          ✖ Job error <b>{err.code}</b> {err.axis ? `[${err.axis}]` : ""} at t = {fmt(err.t_s, 3)} s: {err.message}
+          <span>
+            ✖ Job error <b>{err.code}</b> {err.axis ? `[${err.axis}]` : ""} at t = {qty(err.t_s, 3, "s")}: {err.message}
+          </span>
           <button onClick={acknowledgeBanner}>Acknowledge</button>
         </div>
       ) : null}

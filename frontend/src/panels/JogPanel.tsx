@@ -92,7 +92,7 @@ export function JogPanel() {
   const feedError = !feedPositive
     ? "a feed > 0 is needed (empty: the G200 default)"
     : !feedInLimit
-      ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the manual-mode maximum of ${ax.name} (handbetrieb.hb.vb_max, P-AXIS-00213)`
+      ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the G200 maximum of ${ax.name} (P-AXIS-00213)`
       : "";
   const dis = !online.value;
   // a jog feed the axis cannot take jogs nowhere (never at the default or the limit instead)
