@@ -103,9 +103,10 @@ export function Parameters() {
     const r = await write(changes, "editor: apply (trial)");
     if (r && t) {
       setEdits({});
-      trial.value = { machine: machineId.value, scope: t.scope, target: t.target, applied: r.changes };
+      // only values that differ are changes: nothing to keep or revert when none did
+      trial.value = r.changes.length ? { machine: machineId.value, scope: t.scope, target: t.target, applied: r.changes } : null;
       trialMessage.value = "";
-      setMessage("");
+      setMessage(r.changes.length ? "" : "No value changed: every value was already set.");
     }
   }
 
