@@ -5,6 +5,8 @@ Locators are scoped to their panel."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from playwright.sync_api import Browser, Locator, Page, expect
 
 from tests.backend.server import Server
@@ -165,3 +167,18 @@ def test_long_signal_names_stay_beside_their_checkbox(page: Page) -> None:
     assert box is not None and rects == 1
     assert height < 2 * box["height"] + 4  # one line: the name beside its box, not below
     shot(page, "plots-signal-picker-desktop")
+
+
+def test_reimporting_an_unchanged_export_changes_nothing(
+    page: Page, srv: Server, mid: str, tmp_path: Path
+) -> None:
+    export = srv.http.get(f"/api/machines/{mid}/parameters/export", params={"target": "X"})
+    lis = tmp_path / "export_x.lis"
+    lis.write_text(export.text)
+    audit = srv.http.get(f"/api/machines/{mid}/parameters/audit").json()
+    page.get_by_test_id("tab-Parameters").click()
+    params = panel(page, "parameters")
+    params.locator("input[type=file]").set_input_files(str(lis))
+    message = params.get_by_test_id("param-message")
+    expect(message).to_contain_text("Imported export_x.lis: no value changed")
+    assert srv.http.get(f"/api/machines/{mid}/parameters/audit").json() == audit
