@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 
 from nc_sim.machine.config import demo_machine
+from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
 
 CYCLE_S = 0.001
@@ -15,7 +16,7 @@ def busy_sim(machines: int) -> Simulation:
     sim = Simulation(CYCLE_S)
     for _ in range(machines):
         m = sim.add(demo_machine())
-        sim.run(10)
+        power_on(sim, m)  # the drives are ready: the blocks below are accepted and move
         m.mdi("G01 X250 F3000")
         m.mdi("M3 S1500")
     sim.run(100)  # compile and settle

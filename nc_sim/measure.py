@@ -4,9 +4,13 @@ All work on samples `y` at times `t` (s) of a window. The step goes from the ini
 (the first sample) to the final value (the mean of the last 10 % of the window, at least one
 sample). A signal that returns to where it started (a pulse, the lag of a finished move) has no
 step: no rise time or overshoot, and its settling band is relative to its largest excursion.
-Neither has a signal whose step does not stand out of its noise (NOISE_FACTOR standard
-deviations): noise alone would read as hundreds of % overshoot and a rise time of one sample.
-Crossing times are interpolated linearly between samples.
+Neither has a signal whose step does not stand out of its noise: NOISE_FACTOR standard
+deviations of the white noise, and RIPPLE_FACTOR times the ripple left at the end of the
+window (half its peak-to-peak). The second catches quantised signals: a lag that sits on one
+encoder increment and now and then reads the next one has differences that are almost all
+zero, so the white-noise estimate is 0, yet a first sample one increment off would read as a
+"step" of one increment with hundreds of % overshoot. Crossing times are interpolated
+linearly between samples.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import numpy as np
 FINAL_SHARE = 0.1  # the final value is the mean of this last share of the window
 PULSE_SHARE = 0.05  # a step smaller than this share of the excursion counts as none
 NOISE_FACTOR = 10.0  # a step must exceed this many noise standard deviations
+RIPPLE_FACTOR = 3.0  # ... and this many times the ripple (half peak-to-peak) at its end
 
 
 @dataclass(frozen=True)
@@ -37,7 +42,7 @@ class Measurements:
     rise_time_s: float | None  # 10 % → 90 % of the step
     settling_time_s: float | None  # from `t_ref_s` until y stays inside final ± band
     band: float  # absolute half-width of the settling band used
-    noise: float  # standard deviation of the sample-to-sample noise
+    noise: float  # noise standard deviation: white noise, or the settled end where larger
     step_found: bool  # a step stands out of the noise and does not come back
 
 
@@ -79,10 +84,13 @@ def measure(
     n_final = max(1, round(y.size * FINAL_SHARE))
     initial, final = float(y[0]), float(np.mean(y[-n_final:]))
     step = final - initial
-    noise = noise_std(y)
+    end = y[-n_final:]
+    white = noise_std(y)
+    ripple = 0.5 * float(np.max(end) - np.min(end))
+    noise = max(white, float(np.std(end)))
     if abs(step) < PULSE_SHARE * float(np.max(np.abs(y - initial))):
         step = 0.0  # it came back (a pulse, a move's lag): no step to rise or overshoot
-    if abs(step) <= NOISE_FACTOR * noise:
+    if abs(step) <= NOISE_FACTOR * white or abs(step) <= RIPPLE_FACTOR * ripple:
         step = 0.0  # not told from the noise
     i_abs = int(np.argmax(np.abs(y)))
     # without a step (a pulse, a speed back to zero) the band is relative to the excursion

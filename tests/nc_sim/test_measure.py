@@ -98,3 +98,31 @@ def test_a_step_smaller_than_ten_noise_deviations_is_not_a_step() -> None:
     noise = rng.normal(0.0, 0.01, t.size)
     assert not measure(t, np.where(t < 0.5, 0.0, 0.05) + noise).step_found  # 5 σ
     assert measure(t, np.where(t < 0.5, 0.0, 0.2) + noise).step_found  # 20 σ
+
+
+def test_a_quantised_steady_signal_has_no_step() -> None:
+    """A spindle's lag at steady speed: 480° (800 rpm at kv 10/s) read in encoder increments of
+    360°/8192 = 0.0439°, now and then one increment off. Nearly every difference is zero, so
+    the white-noise estimate is 0; a first sample one increment high must still not make a
+    'step' of one increment with its hundreds of % overshoot."""
+    rng = np.random.default_rng(5)
+    inc = 360.0 / 8192
+    t = np.arange(0, 1.0, 1e-3)
+    y = 480.0 + inc * rng.choice([-1, 0, 0, 0, 0, 0, 0, 0, 0, 1], t.size)
+    y[0] = 480.0 + inc
+    m = measure(t, y)
+    assert not m.step_found
+    assert m.overshoot_pct is None and m.rise_time_s is None
+    assert 0 < m.noise < inc  # the increment ripple, not zero
+
+
+def test_a_quantised_step_of_many_increments_is_measured() -> None:
+    """A first-order step of 100 increments read through the same quantisation: found, its
+    10-90 % rise time τ·ln 9 within a sample, no overshoot."""
+    inc = 360.0 / 8192
+    t = np.arange(0, 1.0, 1e-3)
+    y = inc * np.round(100 * (1 - np.exp(-t / TAU)))
+    m = measure(t, y)
+    assert m.step_found
+    assert m.rise_time_s == pytest.approx(TAU * math.log(9), abs=2e-3)
+    assert m.overshoot_pct == pytest.approx(0.0, abs=1e-9)
