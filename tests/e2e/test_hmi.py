@@ -39,7 +39,10 @@ def test_m3_speed_rises_to_s_and_m5_stops(page: Page) -> None:
     page.get_by_test_id("m5").click()
     expect(page.get_by_test_id("lamp-stopped-S1")).to_have_attribute("data-on", "1")
     assert reached.get_attribute("data-on") == "0"
-    assert abs(number(page, "vact-S1")) < 1.0
+    # "stopped" comes below vb_min_null (1 rpm) and, against encoder ripple, drops back only
+    # beyond it by the speed filter's resolution, so a lone count while creeping to rest may
+    # still read ~2 rpm; the settled loop then rests at exactly 0
+    poll(lambda: number(page, "vact-S1") == 0.0, "S1 at rest")
 
 
 def test_m19_orients_to_90_degrees_within_the_window(page: Page, srv: Server, mid: str) -> None:
