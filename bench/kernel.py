@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 
+from nc_sim.commands import Mdi
 from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
@@ -17,8 +18,8 @@ def busy_sim(machines: int) -> Simulation:
     for _ in range(machines):
         m = sim.add(demo_machine())
         power_on(sim, m)  # the drives are ready: the blocks below are accepted and move
-        m.mdi("G01 X250 F3000")
-        m.mdi("M3 S1500")
+        m.submit(Mdi("G01 X250 F3000"))
+        m.submit(Mdi("M3 S1500"))
     sim.run(100)  # compile and settle
     return sim
 

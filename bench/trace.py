@@ -24,6 +24,7 @@ from api.scope import LevelTriggerModel, ScopeSetupModel
 from backend.services import rrd, scope
 from backend.services.host import MachineHost
 from backend.services.recorder import Recorders
+from nc_sim.commands import Move, SpindleRun
 from nc_sim.machine.config import demo_machine
 
 BLOCK = 250  # cycles per loop tick and per recorder pump (0.25 s at 1 kHz)
@@ -34,11 +35,11 @@ def programme(host: MachineHost, cycle: int) -> None:
     m = host.machine
     t = cycle // 1000
     if cycle % 5000 == 0:
-        m.spindle("S1", 3, 400.0 + 600.0 * ((t // 5) % 3))
+        m.submit(SpindleRun("S1", 3, 400.0 + 600.0 * ((t // 5) % 3)))
     if cycle % 4000 == 0:
         x = 60.0 if (t // 4) % 2 == 0 else 40.0
-        m.move("X", x, rapid=False, feed_mm_min=1200.0)
-        m.move("Z", -100.0 + x / 2, rapid=False, feed_mm_min=900.0)
+        m.submit(Move("X", x, rapid=False, feed_mm_min=1200.0))
+        m.submit(Move("Z", -100.0 + x / 2, rapid=False, feed_mm_min=900.0))
 
 
 def run(seconds: float, signals: list[str] | None, out: Path) -> tuple[float, int, int]:

@@ -1,4 +1,4 @@
-"""A bounded log read by cursor: the machine's events and acknowledgements.
+"""A bounded log read by cursor: the machine's events and the outcomes of its commands.
 
 Every entry gets a sequence number, counting from 0 and never reused, so a reader keeps the
 sequence number of the next entry it wants (its cursor) and asks for what came since. The log
@@ -18,7 +18,7 @@ from typing import Generic, TypeVar
 T = TypeVar("T")
 
 EVENT_LOG_LEN = 10_000  # events kept per machine (a few MB at most)
-ACK_LOG_LEN = 1_000  # MDI acknowledgements kept per machine
+OUTCOME_LOG_LEN = 1_000  # outcomes of submitted commands kept per machine
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,24 @@ from typing import Any
 
 import numpy as np
 
+from nc_sim.commands import (
+    Command,
+    EmergencyStop,
+    GearChange,
+    HliWrite,
+    Home,
+    Invalid,
+    JogStart,
+    JogStep,
+    JogStop,
+    Mdi,
+    Move,
+    PlcAck,
+    PlcMode,
+    Reset,
+    SpindlePosition,
+    SpindleRun,
+)
 from nc_sim.errors import JobError, NcUsageError
 from nc_sim.events import EVENT_LOG_LEN
 from nc_sim.machine.config import MachineConfig, apply_overrides
@@ -53,49 +71,46 @@ def apply_parameters(cfg: MachineConfig, params: Mapping[str, Mapping[str, Any]]
         apply_overrides(cfg, scope, target, values)
 
 
-def _act(m: Machine, action: Mapping[str, Any]) -> None:
+def command(action: Mapping[str, Any]) -> Command:
+    """The command a TOML action stands for (README: scenario format)."""
     if "mdi" in action:
-        m.mdi(str(action["mdi"]))
-    elif "hli" in action:
+        return Mdi(str(action["mdi"]))
+    if "hli" in action:
         h = action["hli"]
-        m.hli_write(str(h["unit"]), int(h["value"]), h.get("axis"))
-    elif "plc" in action:
+        return HliWrite(str(h["unit"]), int(h["value"]), h.get("axis"))
+    if "plc" in action:
         p = action["plc"]
         if "ack" in p:
-            m.plc_acknowledge(None if p["ack"] == "all" else int(p["ack"]))
-        else:
-            m.plc_mode(str(p["mode"]), p.get("delay_s"))
-    elif "jog" in action:
+            return PlcAck(None if p["ack"] == "all" else int(p["ack"]))
+        return PlcMode(str(p["mode"]), p.get("delay_s"))
+    if "jog" in action:
         j = action["jog"]
         axis = str(j["axis"])
         if j.get("stop"):
-            m.jog_stop(axis)
-        elif "step" in j:
-            m.jog_step(axis, float(j["step"]), j.get("feed_mm_min"))
-        else:
-            m.jog_start(axis, int(j.get("direction", 1)), j.get("feed_mm_min"))
-    elif "move" in action:
+            return JogStop(axis)
+        if "step" in j:
+            return JogStep(axis, float(j["step"]), j.get("feed_mm_min"))
+        return JogStart(axis, int(j.get("direction", 1)), j.get("feed_mm_min"))
+    if "move" in action:
         mv = action["move"]
-        m.move(
+        return Move(
             str(mv["axis"]), float(mv["target"]), bool(mv.get("rapid", True)), mv.get("feed_mm_min")
         )
-    elif "home" in action:
-        m.home(str(action["home"]))
-    elif "spindle" in action:
+    if "home" in action:
+        return Home(str(action["home"]))
+    if "spindle" in action:
         sp = action["spindle"]
         name = str(sp.get("name", "S"))
         if "pos_deg" in sp:
-            m.spindle_position(name, float(sp["pos_deg"]), sp.get("direction"), sp.get("rpm"))
-        elif "gear" in sp:
-            m.spindle_gear(name, int(sp["gear"]))
-        else:
-            m.spindle(name, int(sp["m"]), sp.get("rpm"))
-    elif action.get("reset"):
-        m.reset()
-    elif action.get("emergency_stop"):
-        m.emergency_stop()
-    else:
-        raise NcUsageError(f"unknown action {dict(action)}")
+            return SpindlePosition(name, float(sp["pos_deg"]), sp.get("direction"), sp.get("rpm"))
+        if "gear" in sp:
+            return GearChange(name, int(sp["gear"]))
+        return SpindleRun(name, int(sp["m"]), sp.get("rpm"))
+    if action.get("reset"):
+        return Reset()
+    if action.get("emergency_stop"):
+        return EmergencyStop()
+    raise NcUsageError(f"unknown action {dict(action)}")
 
 
 def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.ndarray]:
@@ -140,7 +155,9 @@ def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioRes
 
     for action in actions:
         run_to(min(n_total, round(float(action.get("t_s", 0.0)) / cfg.cycle_s)))
-        _act(m, action)
+        outcome = m.submit(command(action))  # a refusal or a bad block: in the event log
+        if isinstance(outcome, Invalid) and outcome.code is None:  # a fault of the scenario
+            raise NcUsageError(f"action {dict(action)}: {outcome.message}")
         collect()
     run_to(n_total)
     events = [replace(e, t_s=(e.cycle - t0) * cfg.cycle_s) for e in events]

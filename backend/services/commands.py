@@ -1,8 +1,10 @@
-"""Commands to a machine: authorize, carry out between kernel batches, acknowledge or refuse.
+"""Commands to a machine: authorize, submit between kernel batches, answer with the outcome.
 
-Every command passes `execute`, the one place that asks who may send it. A command the NC
-refuses (a job error raised by the command itself) is answered 409 with that job error; a bad
-NC block 422 with its column; an accepted command with the cycle it took effect in.
+Every command passes `execute`, the one place that asks who may send it. The API command maps
+onto its nc_sim command (`to_nc`), `Machine.submit` carries it out, and its outcome becomes the
+answer: Accepted 200 with the cycle it took effect in, Refused 409 with the job error (a
+precondition failed, or an MDI block failed while starting), Invalid 422 with the message and
+the column of a bad NC block.
 """
 
 from __future__ import annotations
@@ -30,8 +32,9 @@ from backend.errors import ApiError
 from backend.services.auth import Actor, authorize
 from backend.services.host import MachineHost
 from backend.services.parameters import apply_pending
-from nc_sim.errors import JobError, NcUsageError
-from nc_sim.machine.machine import Ack, Machine
+from nc_sim import commands as nc
+from nc_sim.commands import Accepted, Invalid, Refused
+from nc_sim.errors import JobError
 
 
 def job_error_model(e: JobError) -> JobErrorModel:
@@ -44,72 +47,58 @@ def _refuse(status: int, message: str, **kw: object) -> ApiError:
     return ApiError(status, Refusal.model_validate({"message": message, **kw}).model_dump())
 
 
-def _carry_out(m: Machine, cmd: Command) -> JobError | Ack | int | None:
-    """Call the machine; returns what it answered."""
+def to_nc(cmd: Command) -> nc.Command:
+    """The nc_sim command an API command stands for (the host's jog lease aside)."""
     match cmd:
         case MdiCommand():
-            return m.mdi(cmd.block)
+            return nc.Mdi(cmd.block)
         case SpindleCommand():
-            return m.spindle(cmd.spindle, cmd.m, cmd.speed_rpm)
+            return nc.SpindleRun(cmd.spindle, cmd.m, cmd.speed_rpm)
         case SpindlePositionCommand():
-            return m.spindle_position(cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm)
+            return nc.SpindlePosition(cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm)
         case GearCommand():
-            return m.spindle_gear(cmd.spindle, cmd.m)
+            return nc.GearChange(cmd.spindle, cmd.m)
         case HomeCommand():
-            return m.home(cmd.axis)
+            return nc.Home(cmd.axis)
         case JogCommand(action="start"):
-            return m.jog_start(cmd.axis, cmd.direction, cmd.feed_mm_min)
+            return nc.JogStart(cmd.axis, cmd.direction, cmd.feed_mm_min)
         case JogCommand(action="stop"):
-            m.jog_stop(cmd.axis)
-            return None
+            return nc.JogStop(cmd.axis)
         case JogCommand():
             if cmd.distance is None:
-                raise NcUsageError("jog step needs a distance")
-            return m.jog_step(cmd.axis, cmd.direction * cmd.distance, cmd.feed_mm_min)
+                raise _refuse(422, "jog step needs a distance")
+            return nc.JogStep(cmd.axis, cmd.direction * cmd.distance, cmd.feed_mm_min)
         case MoveCommand():
-            return m.move(cmd.axis, cmd.target, cmd.rapid, cmd.feed_mm_min)
+            return nc.Move(cmd.axis, cmd.target, cmd.rapid, cmd.feed_mm_min)
         case OverrideCommand():
-            m.hli_write("override", round(cmd.percent * 10), cmd.axis)  # HLI counts in ‰
-            return None
+            return nc.HliWrite("override", round(cmd.percent * 10), cmd.axis)  # HLI counts in ‰
         case HliCommand():
-            m.hli_write(cmd.unit, cmd.value, cmd.axis)
-            return None
+            return nc.HliWrite(cmd.unit, cmd.value, cmd.axis)
         case PlcModeCommand():
-            m.plc_mode(cmd.mode, cmd.delay_s)
-            return None
+            return nc.PlcMode(cmd.mode, cmd.delay_s)
         case PlcAckCommand():
-            return m.plc_acknowledge(cmd.m)
+            return nc.PlcAck(cmd.m)
         case ResetCommand():
-            m.reset()
-            return None
+            return nc.Reset()
         case EmergencyStopCommand():
-            m.emergency_stop()
-            return None
-    raise NcUsageError(f"unknown command {cmd!r}")
+            return nc.EmergencyStop()
+    raise _refuse(422, f"unknown command {cmd!r}")
 
 
 def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
     """Authorize and carry out one command; raises ApiError with the refusal."""
     authorize(actor, Action.COMMAND, host.id)
+    nc_cmd = to_nc(cmd)
     with host.lock:
         m = host.machine
-        seen = m.events.cursor
-        try:
-            answer = _carry_out(m, cmd)
-        except NcUsageError as e:
-            raise _refuse(422, str(e)) from None
-        block_id = answer.id if isinstance(answer, Ack) else None
-        if isinstance(answer, Ack):
-            if not answer.ok:
-                raise _refuse(422, answer.message, code=answer.code, column=answer.column)
-            # a block that cannot start is refused in the same call
-            failed = [e for e in m.events.since(seen).entries if e.error]
-            if failed:
-                answer = failed[0]
-        if isinstance(answer, JobError):
-            raise _refuse(
-                409, answer.message, code=answer.code, error=job_error_model(answer).model_dump()
-            )
+        match m.submit(nc_cmd):
+            case Invalid() as bad:
+                raise _refuse(422, bad.message, code=bad.code, column=bad.column)
+            case Refused() as refused:
+                e = refused.error
+                raise _refuse(409, e.message, code=e.code, error=job_error_model(e).model_dump())
+            case Accepted() as ok:
+                pass
         if isinstance(cmd, JogCommand) and cmd.action != "step":
             host.hold_jog(cmd.axis, cmd.hold_s if cmd.action == "start" else None)
         if isinstance(cmd, EmergencyStopCommand):
@@ -118,7 +107,7 @@ def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
             apply_pending(host, {"reset"})  # values that take effect at reset [params]
         return CommandResult(
             cycle=host.cycle,
-            block_id=block_id,
-            acknowledged=answer if isinstance(answer, int) else None,
+            block_id=ok.block_id,
+            acknowledged=ok.acknowledged,
             state={ax.name: ax.state.name for ax in m.axes},
         )

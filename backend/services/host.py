@@ -20,6 +20,7 @@ import numpy as np
 
 from api.scope import ScopeSetupModel
 from backend.services.handover import HandoverLock
+from nc_sim.commands import JogStop
 from nc_sim.errors import JobError
 from nc_sim.events import EventLog
 from nc_sim.kernel import layout as L
@@ -178,7 +179,7 @@ class MachineHost:
         for axis, end in list(self.jog_leases.items()):
             if self.sim.cycle >= end:
                 del self.jog_leases[axis]
-                self.machine.jog_stop(axis)
+                self.machine.submit(JogStop(axis))  # the dead-man released the key
 
     def tick(self, now_mono: float, fast_budget_s: float) -> None:
         """Called by the real-time loop each period: step what is due for the mode."""

@@ -16,8 +16,31 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nc_sim.blocks import Block, BlockError, parse_block
+from nc_sim.commands import (
+    Accepted,
+    Command,
+    EmergencyStop,
+    GearChange,
+    HliWrite,
+    Home,
+    Invalid,
+    JogStart,
+    JogStep,
+    JogStop,
+    Mdi,
+    Move,
+    Outcome,
+    PlcAck,
+    Refused,
+    Reset,
+    SpindlePosition,
+    SpindleRun,
+)
+from nc_sim.commands import (
+    PlcMode as SetPlcMode,  # the command; nc_sim.plc.PlcMode is the PLC's behaviour
+)
 from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError, is_error
-from nc_sim.events import ACK_LOG_LEN, EVENT_LOG_LEN, EventLog
+from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, EventLog
 from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import (
@@ -62,17 +85,6 @@ POSITION_RANGE = to_eng(Quantity.POSITION, 2**31 - 1)
 
 
 @dataclass
-class Ack:
-    """Acknowledgement of a command on the external command channel."""
-
-    id: int
-    ok: bool
-    code: int = 0
-    message: str = ""
-    column: int | None = None
-
-
-@dataclass
 class _BlockRun:
     id: int
     text: str
@@ -80,6 +92,7 @@ class _BlockRun:
     started: bool = False
     waiting_m: int = 0
     homing: list[list[str]] = field(default_factory=list)  # G74 order groups still to start
+    error: JobError | None = None  # the job error it failed with while starting
 
 
 class Machine:
@@ -104,7 +117,7 @@ class Machine:
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
         self._queue: deque[_BlockRun] = deque()
         self._next_id = 1
-        self.acks: EventLog[Ack] = EventLog(ACK_LOG_LEN)
+        self.outcomes: EventLog[Outcome] = EventLog(OUTCOME_LOG_LEN)  # answers to submit
         self.estop = False
         self._powered = False  # power-on done: the PLC has switched every drive on
         self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
@@ -114,6 +127,57 @@ class Machine:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
             power_on(kernel, ax)
+
+    # --- the command surface -----------------------------------------------------------
+    def submit(self, cmd: Command) -> Outcome:
+        """Carry out one command (nc_sim.commands) and answer with its outcome; the one way
+        in for the HMI, scenarios and tests. Never raises for a bad command: misuse (unknown
+        axis, not a spindle, unknown HLI unit, a value out of range) is `Invalid`, as a
+        process boundary carries answers, not exceptions. Every outcome is also kept in
+        `outcomes`."""
+        try:
+            outcome = self._dispatch(cmd)
+        except NcUsageError as e:
+            outcome = Invalid(cmd.serial, str(e))
+        self.outcomes.append(outcome)
+        return outcome
+
+    def _dispatch(self, cmd: Command) -> Outcome:
+        answer: JobError | int | None = None
+        match cmd:
+            case Mdi():
+                return self._mdi(cmd.block, cmd.serial)
+            case SpindleRun():
+                answer = self._spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
+            case SpindlePosition():
+                answer = self._spindle_position(
+                    cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm
+                )
+            case GearChange():
+                answer = self._spindle_gear(cmd.spindle, cmd.m)
+            case Home():
+                answer = self._home(cmd.axis)
+            case JogStart():
+                answer = self._jog_start(cmd.axis, cmd.direction, cmd.feed_mm_min)
+            case JogStop():
+                self._jog_stop(cmd.axis)
+            case JogStep():
+                answer = self._jog_step(cmd.axis, cmd.distance, cmd.feed_mm_min)
+            case Move():
+                answer = self._move(cmd.axis, cmd.target, cmd.rapid, cmd.feed_mm_min)
+            case HliWrite():
+                self._hli_write(cmd.unit, cmd.value, cmd.axis)
+            case SetPlcMode():
+                self._plc_mode(cmd.mode, cmd.delay_s)
+            case PlcAck():
+                answer = self._plc_acknowledge(cmd.m)
+            case Reset():
+                self._reset()
+            case EmergencyStop():
+                self._emergency_stop()
+        if isinstance(answer, JobError):
+            return Refused(cmd.serial, answer)
+        return Accepted(cmd.serial, self.cycle, acknowledged=answer)
 
     # --- time ---------------------------------------------------------------------------
     def _cycles(self, seconds: float) -> int:
@@ -355,7 +419,7 @@ class Machine:
         return None
 
     # --- commands: axes -----------------------------------------------------------------
-    def move(
+    def _move(
         self, axis: str, target: float, rapid: bool = True, feed_mm_min: float | None = None
     ) -> JobError | None:
         """Single-axis G00/G01 move to an absolute position (mm | °); a spindle moves as a
@@ -369,7 +433,7 @@ class Machine:
             target = self.sp.target(ax, target % 360.0, None)
         return self._start_move(ax, target, Motion.RAPID if rapid else Motion.FEED, feed)
 
-    def jog_start(
+    def _jog_start(
         self, axis: str, direction: int, feed_mm_min: float | None = None
     ) -> JobError | None:
         """Continuous jog (G200 dynamics) towards the software limit until `jog_stop`."""
@@ -409,13 +473,13 @@ class Machine:
             return None
         return self._fail(ax, Code.NOT_HOMED, f"{ax.name} is not homed (P-AXIS-00277): G74 first")
 
-    def jog_stop(self, axis: str) -> None:
+    def _jog_stop(self, axis: str) -> None:
         """Release of the jog key: brake with the manual-mode deceleration."""
         ax = self.axis(axis)
         if ax.state is AxisState.JOG:
             self._stop(ax, self._limits(ax, Motion.MANUAL))
 
-    def jog_step(
+    def _jog_step(
         self, axis: str, distance: float, feed_mm_min: float | None = None
     ) -> JobError | None:
         """Incremental jog by `distance` (mm | °) with G200 dynamics."""
@@ -426,7 +490,7 @@ class Machine:
         feed = feed_mm_min / 60.0 if feed_mm_min else None
         return self._jog_feed_refused(ax, feed) or self._start_move(ax, target, Motion.MANUAL, feed)
 
-    def home(self, axis: str, block_id: int | None = None) -> JobError | None:
+    def _home(self, axis: str, block_id: int | None = None) -> JobError | None:
         """CNC-controlled homing G74: to the cam, off it slowly, zero at the edge, to ref_pos."""
         ax = self.axis(axis)
         if ax.kind is AxisKind.SPINDLE:
@@ -502,7 +566,7 @@ class Machine:
                 return i
         return None
 
-    def spindle(
+    def _spindle_run(
         self, name: str, m: int, speed_rpm: float | None = None, gear: int | None = None
     ) -> JobError | None:
         """M3/M4 with speed (rpm) and optional gear stage M40-M45, or M5."""
@@ -512,7 +576,7 @@ class Machine:
             return None
         return self.sp.endless(ax, m, speed_rpm, gear)
 
-    def spindle_position(
+    def _spindle_position(
         self,
         name: str,
         pos_deg: float,
@@ -522,7 +586,7 @@ class Machine:
         """M19 S.POS=pos_deg with M3 (+1) / M4 (-1) or the shortest way (None)."""
         return self.sp.position(self._spindle(name), pos_deg, direction, speed_rpm)
 
-    def spindle_gear(self, name: str, m: int) -> JobError | None:
+    def _spindle_gear(self, name: str, m: int) -> JobError | None:
         """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
         if not 40 <= m <= 45:
             raise NcUsageError("gear stage M40..M45")
@@ -562,7 +626,7 @@ class Machine:
                 self.sp.stop(ax)
 
     # --- HLI ----------------------------------------------------------------------------
-    def hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
+    def _hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
         """Write a control unit of the channel (axis=None) or of an axis."""
         if axis is None:
             if unit not in CHANNEL_UNITS:
@@ -640,7 +704,7 @@ class Machine:
         elif ax.state is AxisState.ERROR:
             self._set_state(ax, AxisState.STANDSTILL)
 
-    def reset(self) -> None:
+    def _reset(self) -> None:
         """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.estop = self.estop, False
@@ -655,7 +719,7 @@ class Machine:
             self._drive_status()  # DriveOn now; the power-up is then a wake-up of its own
         self.log(Code.EV_RESET)
 
-    def emergency_stop(self) -> None:
+    def _emergency_stop(self) -> None:
         """Step-shaped braking of every axis at a_emergency; the channel stays in error and
         the PLC removes each axis' enables (DriveOn, TorquePermission) once it has braked and
         settled (stop category 1)."""
@@ -676,13 +740,13 @@ class Machine:
         self.log(Code.EMERGENCY_STOP)
 
     # --- PLC ----------------------------------------------------------------------------
-    def plc_mode(self, mode: str, delay_s: float | None = None) -> None:
+    def _plc_mode(self, mode: str, delay_s: float | None = None) -> None:
         self.plc.set_mode(
             PlcMode(mode), self.cycle, None if delay_s is None else self._cycles(delay_s)
         )
         self.log(Code.EV_PLC_MODE, "", f"PLC {mode}")
 
-    def plc_acknowledge(self, m: int | None = None) -> int:
+    def _plc_acknowledge(self, m: int | None = None) -> int:
         """Manual acknowledgement; returns how many M functions were acknowledged (0 when
         none was pending, e.g. after its 90004 timeout)."""
         acked = self.plc.acknowledge(m)
@@ -700,8 +764,10 @@ class Machine:
             self.sp.gear_acknowledged(spindle)
 
     # --- MDI and the external command channel -------------------------------------------
-    def mdi(self, text: str) -> Ack:
-        """Queue one block; a bad block is refused at once with the column of the error."""
+    def _mdi(self, text: str, serial: int) -> Outcome:
+        """Queue one block and start it when the queue is free: a block that does not parse
+        is invalid (with the column), one that fails while starting is refused with its job
+        error, one that started or waits behind a running block is accepted."""
         bid = self._next_id
         self._next_id += 1
         names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
@@ -710,14 +776,13 @@ class Machine:
             block = parse_block(text, names, spindles)
         except BlockError as e:
             self.log(Code.BLOCK_SYNTAX, "", f"{e.detail} (column {e.column}) in '{text}'")
-            ack = Ack(bid, False, int(Code.BLOCK_SYNTAX), e.detail, e.column)
-            self.acks.append(ack)
-            return ack
-        self._queue.append(_BlockRun(bid, text, block))
-        ack = Ack(bid, True)
-        self.acks.append(ack)
+            return Invalid(serial, e.detail, e.column, int(Code.BLOCK_SYNTAX))
+        run = _BlockRun(bid, text, block)
+        self._queue.append(run)
         self._pump()
-        return ack
+        if run.error is not None:
+            return Refused(serial, run.error)
+        return Accepted(serial, self.cycle, block_id=bid)
 
     def _abort_block(self, ax: Axis) -> None:
         if ax.block_id is not None and self._queue and self._queue[0].id == ax.block_id:
@@ -730,9 +795,13 @@ class Machine:
             run = self._queue[0]
             if not run.started:
                 run.started = True
+                seen = self.events.cursor
                 ok = self._start_block(run)
-                if not self._queue or self._queue[0] is not run:
-                    continue  # aborted while starting
+                aborted = not self._queue or self._queue[0] is not run
+                if aborted or not ok:  # the first job error it raised is its refusal
+                    run.error = next((e for e in self.events.since(seen).entries if e.error), None)
+                if aborted:
+                    continue
                 if not ok:
                     self._queue.popleft()
                     continue
@@ -800,7 +869,7 @@ class Machine:
 
     def _home_next(self, run: _BlockRun) -> bool:
         """Start the next G74 order group of a block; False when one of them is refused."""
-        return all(self.home(name, run.id) is None for name in run.homing.pop(0))
+        return all(self._home(name, run.id) is None for name in run.homing.pop(0))
 
     def _synch_plc(self, ax: Axis, m: int) -> bool:
         """M3/M4/M5/M19 with the PLC_INFO bit are output to the PLC [000 §2.5]."""

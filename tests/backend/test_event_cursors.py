@@ -17,6 +17,7 @@ from backend.services.commands import execute
 from backend.services.host import MachineHost
 from backend.services.status import RECENT_EVENTS, machine_status
 from backend.services.telemetry import TelemetryHub
+from nc_sim.commands import Mdi
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN
 from nc_sim.machine.config import demo_machine
@@ -36,7 +37,7 @@ def _flood(host: MachineHost, n: int) -> None:
     """n refused MDI blocks: one event each, none of them sets a job error."""
     with host.lock:
         for _ in range(n):
-            host.machine.mdi("G1 X")
+            host.machine.submit(Mdi("G1 X"))
 
 
 def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it() -> None:

@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from nc_sim.commands import Accepted, Mdi
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.machine.machine import Machine
@@ -35,13 +36,12 @@ def record(sim: Simulation, seconds: float) -> np.ndarray:
     return rec
 
 
-def mdi(m: Machine, text: str) -> None:
-    """Start an MDI block and assert that the NC took it: accepted, and no job error raised
-    while it started (the acknowledgement alone says only that the block parsed)."""
-    seen = {id(e) for e in m.events}
-    ack = m.mdi(text)
-    errors = [e for e in m.events if id(e) not in seen and e.error]
-    assert ack.ok and not errors, (text, ack, errors)
+def mdi(m: Machine, text: str) -> Accepted:
+    """Submit an MDI block and assert that the NC accepted it: it parsed and started (or
+    waits behind a running block) without a job error."""
+    outcome = m.submit(Mdi(text))
+    assert isinstance(outcome, Accepted), (text, outcome)
+    return outcome
 
 
 __all__ = ["L", "make", "mdi", "record"]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from nc_sim.commands import Accepted, Mdi, SpindleRun
 from nc_sim.errors import MESSAGES, Code
 from tests.nc_sim.sim_helpers import make, record
 
@@ -21,7 +22,7 @@ def test_every_code_has_a_message_in_words() -> None:
 
 def test_an_event_without_detail_reads_as_its_meaning() -> None:
     sim, m, _ = make()
-    assert m.mdi("G91 G01 X1 F600").ok
+    assert isinstance(m.submit(Mdi("G91 G01 X1 F600")), Accepted)
     record(sim, 1.0)
     done = [e for e in m.events if e.code == Code.EV_MOTION_DONE]
     assert [e.message for e in done] == ["motion done"] and done[0].axis == "X"
@@ -29,7 +30,8 @@ def test_an_event_without_detail_reads_as_its_meaning() -> None:
 
 def test_a_gear_change_is_not_logged_as_an_hli_write() -> None:
     sim, m, _ = make()
-    assert m.spindle("S", 3, 300) is None  # the demo starts in M42: 300 rpm needs M40
+    # the demo starts in M42: 300 rpm needs M40
+    assert isinstance(m.submit(SpindleRun("S", 3, 300)), Accepted)
     record(sim, 3.0)
     hli = [e for e in m.events if e.code == Code.EV_HLI]
     started = [e for e in m.events if e.code == Code.EV_GEAR_CHANGE_START]

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from nc_sim.commands import Mdi
 from nc_sim.errors import Code
-from nc_sim.events import ACK_LOG_LEN, EVENT_LOG_LEN, EventLog
+from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, EventLog
 from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import run_scenario
 from tests.nc_sim.sim_helpers import make
@@ -46,10 +47,11 @@ def test_machine_events_and_acknowledgements_stay_bounded() -> None:
     start = m.events.cursor
     n = EVENT_LOG_LEN + 500
     for _ in range(n):
-        m.mdi("G1 X")  # refused at once: one BLOCK_SYNTAX event and one acknowledgement each
+        # invalid at once: one BLOCK_SYNTAX event and one outcome each
+        m.submit(Mdi("G1 X"))
     assert len(m.events) == EVENT_LOG_LEN
     assert m.events.cursor == start + n
-    assert len(m.acks) == ACK_LOG_LEN and m.acks.cursor >= n
+    assert len(m.outcomes) == OUTCOME_LOG_LEN and m.outcomes.cursor >= n
     read = m.events.since(start)
     assert read.dropped == 500 and len(read.entries) == EVENT_LOG_LEN
     assert all(e.code == Code.BLOCK_SYNTAX for e in read.entries)

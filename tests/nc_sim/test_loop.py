@@ -7,7 +7,22 @@ import math
 import numpy as np
 import pytest
 
-from nc_sim.errors import Code, JobError
+from nc_sim.commands import (
+    Accepted,
+    EmergencyStop,
+    HliWrite,
+    JogStart,
+    JogStep,
+    JogStop,
+    Mdi,
+    Move,
+    Outcome,
+    PlcAck,
+    PlcMode,
+    Refused,
+    Reset,
+)
+from nc_sim.errors import Code
 from nc_sim.machine.axis import Axis
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -51,7 +66,7 @@ def test_lag_is_command_minus_actual_of_the_same_sample() -> None:
     speed that difference is v/(kv·0.01) [004 §3.6], so k from the columns gives kv."""
     sim, m, _ = make({"X": {"getriebe[0].kv": 2000}})  # 20/s
     x = m.axis("X")
-    assert m.mdi("G01 X200 F1000").ok
+    assert isinstance(m.submit(Mdi("G01 X200 F1000")), Accepted)
     rec = record(sim, 3.0)[:, x.slot]
     assert np.array_equal(rec[:, L.R_LAG], rec[:, L.R_P_CMD] - rec[:, L.R_P_ACT])
     v = 1000.0 / 60.0
@@ -68,7 +83,7 @@ def test_settled_loop_rests_within_half_an_increment_without_hunting(target: flo
     comes to rest with |lag| at most half an increment and the count stops changing."""
     sim, m, _ = make({"X": {"getriebe[0].wegaufz": 1, "getriebe[0].wegaufn": 100}})
     x = m.axis("X")
-    assert m.move("X", target, rapid=False, feed_mm_min=1000) is None
+    assert isinstance(m.submit(Move("X", target, rapid=False, feed_mm_min=1000)), Accepted)
     rec = record(sim, 6.0)[:, x.slot]
     rest = rec[-1000:]
     assert np.ptp(rest[:, L.R_P_ACT]) == 0.0
@@ -113,9 +128,9 @@ def test_both_signs_inverted_on_an_inverted_machine_work() -> None:
 def test_no_motion_without_enables() -> None:
     sim, m, _ = make()
     x = m.axis("X")
-    m.hli_write("DriveOn", 0, "X")
+    m.submit(HliWrite("DriveOn", 0, "X"))
     p0 = m.k.st[x.slot, L.S_P_ACT]
-    m.mdi("G00 X100")
+    m.submit(Mdi("G00 X100"))
     record(sim, 0.5)
     err = [e for e in m.events if e.error]
     assert len(err) == 1 and err[0].code == Code.NO_ENABLES
@@ -132,7 +147,7 @@ def test_power_on_sequence_follows_the_drive_status() -> None:
     x, spindle = m.axis("X"), m.axis("S1")
     assert x.drive.missing() == ["ready_for_power_on", "ready_for_control_loop_on"]
     assert spindle.drive.reported() == {}  # terminal drive [004 §4.2]
-    assert m.move("X", 60.0) is not None  # nothing moves before the drives are on
+    assert isinstance(m.submit(Move("X", 60.0)), Refused)  # nothing moves before the drives are on
     assert m.events[-1].code == Code.NO_ENABLES
     sim.run(19)
     assert not x.units["DriveOn"] and spindle.drive_follows()  # the PLC ran at its start
@@ -144,29 +159,29 @@ def test_power_on_sequence_follows_the_drive_status() -> None:
     sim.run(1)  # 30 ms after DriveOn
     assert x.drive.missing() == [] and x.enables_ok() and m.powered
     assert [e.cycle for e in m.events if e.code == Code.EV_POWERED] == [50]
-    assert m.move("X", 60.0) is None
+    assert isinstance(m.submit(Move("X", 60.0)), Accepted)
 
 
 def test_motion_refused_with_90007_while_the_drive_is_not_ready() -> None:
     sim, m, _ = make()
     x = m.axis("X")
-    m.hli_write("DriveOn", 0, "X")
+    m.submit(HliWrite("DriveOn", 0, "X"))
     record(sim, 0.1)
-    m.hli_write("DriveOn", 1, "X")  # the power stage needs its power-up time again
+    m.submit(HliWrite("DriveOn", 1, "X"))  # the power stage needs its power-up time again
     assert x.enables_ok()
-    err = m.move("X", 60.0)
-    assert err is not None and err.code == Code.DRIVE_NOT_READY
-    assert "ready_for_control_loop_on" in err.message
+    err = m.submit(Move("X", 60.0))
+    assert isinstance(err, Refused) and err.code == Code.DRIVE_NOT_READY
+    assert "ready_for_control_loop_on" in err.detail
     record(sim, x.cfg.eng("sim.drive_power_up_time"))
-    assert m.move("X", 60.0) is None
+    assert isinstance(m.submit(Move("X", 60.0)), Accepted)
 
 
 def test_enables_lost_during_motion_stop_the_axis_with_an_error() -> None:
     sim, m, _ = make()
     x = m.axis("X")
-    m.mdi("G01 X200 F3000")
+    m.submit(Mdi("G01 X200 F3000"))
     record(sim, 0.5)
-    m.hli_write("TorquePermission", 0, "X")
+    m.submit(HliWrite("TorquePermission", 0, "X"))
     record(sim, 0.5)
     assert [e.code for e in m.events if e.error] == [Code.ENABLES_LOST]
     assert abs(m.k.st[x.slot, L.S_V_ACT]) < 1e-6
@@ -177,12 +192,12 @@ def test_jog_stops_within_the_manual_mode_deceleration_distance() -> None:
     sim, m, cfg = make()
     x = m.axis("X")
     feed = 6000.0
-    assert m.jog_start("X", +1, feed) is None
+    assert isinstance(m.submit(JogStart("X", +1, feed)), Accepted)
     record(sim, 1.0)
     v = m.k.st[x.slot, L.S_V_CMD]
     assert v == pytest.approx(feed / 60)
     p_release = m.k.st[x.slot, L.S_P_CMD]
-    m.jog_stop("X")
+    m.submit(JogStop("X"))
     rec = record(sim, 0.5)
     d = cfg.axis("X").eng("handbetrieb.hb.d_max")
     tr = cfg.axis("X").eng("handbetrieb.hb.tr")
@@ -202,15 +217,19 @@ def test_a_jog_feed_above_the_manual_mode_maximum_is_refused_naming_it(kind: str
     v_max = cfg.axis("X").eng("handbetrieb.hb.vb_max")
     assert v_max * 60 == pytest.approx(166666 * 60 / 1000)
 
-    def jog(feed: float) -> JobError | None:
-        return m.jog_start("X", +1, feed) if kind == "start" else m.jog_step("X", 250.0, feed)
+    def jog(feed: float) -> Outcome:
+        return (
+            m.submit(JogStart("X", +1, feed))
+            if kind == "start"
+            else m.submit(JogStep("X", 250.0, feed))
+        )
 
     err = jog(99999999.0)
-    assert err is not None and err.code == Code.JOG_FEED_TOO_HIGH
-    assert "jog feed 99999999 mm/min is above the manual-mode maximum 9999.96 mm/min" in err.message
-    assert "P-AXIS-00213" in err.message
+    assert isinstance(err, Refused) and err.code == Code.JOG_FEED_TOO_HIGH
+    assert "jog feed 99999999 mm/min is above the manual-mode maximum 9999.96 mm/min" in err.detail
+    assert "P-AXIS-00213" in err.detail
     assert x.state.name == "STANDSTILL"
-    assert jog(v_max * 60) is None  # the limit itself is allowed
+    assert isinstance(jog(v_max * 60), Accepted)  # the limit itself is allowed
     record(sim, 0.5)
     assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(v_max)
 
@@ -218,11 +237,11 @@ def test_a_jog_feed_above_the_manual_mode_maximum_is_refused_naming_it(kind: str
 def test_override_scales_feed_and_is_capped_by_the_channel_limit() -> None:
     sim, m, _cfg = make()
     x = m.axis("X")
-    m.hli_write("override", 500)
-    m.mdi("G01 X250 F1200")
+    m.submit(HliWrite("override", 500))
+    m.submit(Mdi("G01 X250 F1200"))
     record(sim, 1.0)
     assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(10.0)  # 50 % of 20 mm/s
-    m.hli_write("override", 2000)  # capped by max_vb_override 1200 [P-CHAN-00056]
+    m.submit(HliWrite("override", 2000))  # capped by max_vb_override 1200 [P-CHAN-00056]
     record(sim, 1.0)
     assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(24.0)
 
@@ -238,7 +257,7 @@ def test_homing_sets_the_reference_at_the_cam_edge() -> None:
     # NC position ref_pos now means the physical cam edge
     assert m.k.st[x.slot, L.S_X_MOTOR] == pytest.approx(ax.eng("sim.ref_cam_pos"), abs=1e-3)
     # software limits are active once homed
-    m.mdi("G00 X400")
+    m.submit(Mdi("G00 X400"))
     assert [e.code for e in m.events if e.error] == [Code.SOFTWARE_LIMIT]
     lo, hi = ax.eng("kenngr.swe_neg"), ax.eng("kenngr.swe_pos")  # positions carry their unit
     assert m.events[-1].message.endswith(f"X target 400.0000 mm outside {lo:.4f} … {hi:.4f} mm")
@@ -248,36 +267,36 @@ def cruising_x(block: str) -> tuple[Simulation, Machine, MachineConfig, Axis, fl
     """X one second into `block`: the machine, and X's commanded speed and position there."""
     sim, m, cfg = make()
     x = m.axis("X")
-    m.mdi(block)
+    m.submit(Mdi(block))
     record(sim, 1.0)
     return sim, m, cfg, x, m.k.st[x.slot, L.S_V_CMD], m.k.st[x.slot, L.S_P_CMD]
 
 
 def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
     sim, m, cfg, x, v, p = cruising_x("G01 X250 F6000")
-    m.emergency_stop()
+    m.submit(EmergencyStop())
     record(sim, 0.2)  # braked (20 ms), the loop still settling with the enables on
     a = cfg.axis("X").eng("getriebe.dynamik.a_emergency")
     assert m.k.st[x.slot, L.S_P_CMD] - p == pytest.approx(v * v / (2 * a), rel=1e-6)
-    m.mdi("G00 X10")
+    m.submit(Mdi("G00 X10"))
     assert m.events[-1].code == Code.CHANNEL_ERROR_STATE
-    m.reset()
+    m.submit(Reset())
     record(sim, 0.02)  # the PLC switches the drives on again: their power-up (10 ms)
     mdi(m, "G00 X10")
 
 
 def test_plc_acknowledges_after_its_delay_or_times_out_in_fault_mode() -> None:
     sim, m, _ = make(channel={"plc.m_ack_timeout": 500000})
-    m.mdi("M8")
+    m.submit(Mdi("M8"))
     record(sim, 0.1)
     out, ack = [e for e in m.events if e.code in (Code.EV_M_OUTPUT, Code.EV_M_ACK)]
     assert round((ack.t_s - out.t_s) * 1000) == 20  # plc.m_ack_delay 20 ms
-    m.plc_mode("manual")
-    m.mdi("M9")
+    m.submit(PlcMode("manual"))
+    m.submit(Mdi("M9"))
     record(sim, 0.2)
-    assert m.plc.pending and m.plc_acknowledge(9) == 1
-    m.plc_mode("fault")
-    m.mdi("M10")
+    assert m.plc.pending and m.submit(PlcAck(9)) == Accepted(0, m.cycle, acknowledged=1)
+    m.submit(PlcMode("fault"))
+    m.submit(Mdi("M10"))
     record(sim, 0.6)
     timeouts = [e for e in m.events if e.code == Code.PLC_ACK_TIMEOUT]
     assert len(timeouts) == 1
@@ -295,7 +314,7 @@ def test_spindle_m3_reaches_speed_with_lag_v_over_kv() -> None:
     assert t_cmd - ack_at == pytest.approx(6000.0 / a + tr, abs=0.002)
     assert rec[-1, s.slot, L.R_LAG] == pytest.approx(6000.0 / 10.0, rel=0.01)  # 600°
     assert rec[-1, s.slot, L.R_SPEED_REACHED] == 1
-    m.mdi("M5")
+    m.submit(Mdi("M5"))
     rec = record(sim, 3.0)
     assert rec[-1, s.slot, L.R_STOPPED] == 1
 
@@ -304,8 +323,8 @@ def test_same_scenario_same_trace() -> None:
     traces = []
     for _ in range(2):
         sim, m, _ = make()
-        m.mdi("G01 X120 F3000")
-        m.mdi("M3 S700")
+        m.submit(Mdi("G01 X120 F3000"))
+        m.submit(Mdi("M3 S700"))
         traces.append(record(sim, 1.0))
     assert np.array_equal(traces[0], traces[1])
 
@@ -313,13 +332,13 @@ def test_same_scenario_same_trace() -> None:
 def test_feedhold_brakes_with_the_feedhold_set_and_resumes_to_the_target() -> None:
     # use_drive_curr_limit = 1: a_feedh 4000 mm/s², tr_feedh 10 ms [002 P-CHAN-00097, 00053/81]
     sim, m, cfg, x, v, p = cruising_x("G01 X200 F6000")
-    m.hli_write("feedhold", 1)
+    m.submit(HliWrite("feedhold", 1))
     record(sim, 0.5)
     a = cfg.axis("X").eng("getriebe.slope_profil.a_feedh")
     tr = cfg.axis("X").eng("getriebe.slope_profil.tr_feedh")
     assert m.k.st[x.slot, L.S_V_CMD] == 0.0
     assert m.k.st[x.slot, L.S_P_CMD] - p == pytest.approx(v / 2 * (v / a + tr), rel=1e-6)
-    m.hli_write("feedhold", 0)
+    m.submit(HliWrite("feedhold", 0))
     record(sim, 3.0)
     assert m.k.st[x.slot, L.S_P_CMD] == 200.0 and x.state.name == "STANDSTILL"
 
@@ -327,12 +346,12 @@ def test_feedhold_brakes_with_the_feedhold_set_and_resumes_to_the_target() -> No
 def test_override_zero_holds_the_move_and_it_resumes() -> None:
     sim, m, _ = make()
     x = m.axis("X")
-    m.mdi("G01 X100 F3000")
+    m.submit(Mdi("G01 X100 F3000"))
     record(sim, 0.5)
-    m.hli_write("override", 0)
+    m.submit(HliWrite("override", 0))
     record(sim, 1.0)
     assert m.k.st[x.slot, L.S_V_CMD] == 0.0 and x.state.name == "MOVING"
-    m.hli_write("override", 1000)
+    m.submit(HliWrite("override", 1000))
     record(sim, 3.0)
     assert m.k.st[x.slot, L.S_P_CMD] == 100.0 and x.state.name == "STANDSTILL"
 
@@ -341,7 +360,7 @@ def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back(
     """Stop category 1: brake under control, then the PLC removes DriveOn/TorquePermission."""
     sim, m, cfg, x, v, _ = cruising_x("G01 X250 F6000")
     z = m.axis("Z")  # at rest: its enables go at once
-    m.emergency_stop()
+    m.submit(EmergencyStop())
     assert z.missing_enables() and not z.enables_ok()
     assert not m.powered  # Z's drive is off: the machine's drives are no longer all powered
     assert x.enables_ok()  # X still brakes under position control
@@ -357,7 +376,7 @@ def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back(
     assert abs(m.k.st[x.slot, L.S_LAG]) <= window
     assert set(x.missing_enables()) >= {"DriveOn", "TorquePermission"}
     assert not [e for e in m.events if e.code == Code.ENABLES_LOST]  # no error of its own
-    m.reset()  # the PLC's start-up again: DriveOn, the drive's power-up, the other enables
+    m.submit(Reset())  # the PLC's start-up again: DriveOn, the drive's power-up, the other enables
     assert not x.enables_ok()
     record(sim, cfg.axis("X").eng("sim.drive_power_up_time") + 0.005)
     assert x.enables_ok() and z.enables_ok() and m.powered
@@ -367,10 +386,10 @@ def test_emergency_stop_takes_the_enables_once_braked_and_reset_gives_them_back(
 
 def test_an_emergency_stop_during_power_up_holds_the_start_up_until_reset() -> None:
     sim, m, _ = make(settle=0)
-    m.emergency_stop()  # before the PLC has switched anything on
+    m.submit(EmergencyStop())  # before the PLC has switched anything on
     record(sim, 0.2)
     assert not any(ax.enables_ok() for ax in m.axes)
     assert not m.powered
-    m.reset()
+    m.submit(Reset())
     record(sim, 0.2)
     assert m.powered and all(ax.enables_ok() for ax in m.axes)

@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from nc_sim.commands import Accepted, HliWrite, JogStep, Move, SpindlePosition, SpindleRun
 from nc_sim.events import EventLog
 from nc_sim.machine.axis import AxisState
 from nc_sim.scope import (
@@ -83,7 +84,7 @@ def test_m19_capture_has_the_asked_pretrigger_and_the_trigger_at_the_first_m19_c
     rig.arm(setup)
     rig.run(123)
     issued_after = rig.sim.cycle
-    assert rig.m.spindle_position("S1", 90.0) is None
+    assert isinstance(rig.m.submit(SpindlePosition("S1", 90.0)), Accepted)
     rig.run(4000)
 
     assert len(rig.scope.completed) == 1
@@ -112,7 +113,7 @@ def test_pretrigger_comes_from_history_when_the_trigger_follows_arming_at_once()
         )
     )
     at = rig.sim.cycle
-    rig.m.spindle("S1", 3, 500.0)
+    rig.m.submit(SpindleRun("S1", 3, 500.0))
     rig.run(600)
     (rec,) = rig.scope.completed
     assert rec.trigger_cycle == at + 1 and rec.pre_cycles == 500
@@ -120,11 +121,11 @@ def test_pretrigger_comes_from_history_when_the_trigger_follows_arming_at_once()
 
 
 def _two_speed_ramps(rig: Rig) -> None:
-    rig.m.spindle("S1", 3, 1000.0)
+    rig.m.submit(SpindleRun("S1", 3, 1000.0))
     rig.run(1500)
-    rig.m.spindle("S1", 5)
+    rig.m.submit(SpindleRun("S1", 5))
     rig.run(1500)
-    rig.m.spindle("S1", 3, 1000.0)
+    rig.m.submit(SpindleRun("S1", 3, 1000.0))
     rig.run(1500)
 
 
@@ -165,7 +166,7 @@ def test_falling_edge_and_hysteresis_ignore_ripple_around_the_level() -> None:
 
 def test_a_level_already_beyond_the_edge_at_arming_waits_for_a_real_crossing() -> None:
     rig = Rig()
-    rig.m.spindle("S1", 3, 1000.0)
+    rig.m.submit(SpindleRun("S1", 3, 1000.0))
     rig.run(1500)  # above 500 rpm when armed
     sig = rig.sig["S1.speed_cmd_rpm"]
     rig.arm(ScopeSetup([sig], 100, 0.0, ScopeMode.SINGLE, LevelTrigger(sig, 500.0)))
@@ -179,7 +180,7 @@ def test_a_crossing_in_the_first_cycle_after_arming_counts() -> None:
     sig = rig.sig["X.vel_cmd_mm_min"]
     rig.arm(ScopeSetup([sig], 300, 10.0, ScopeMode.SINGLE, LevelTrigger(sig, 1.0)))
     at = rig.sim.cycle
-    assert rig.m.move("X", 75.0, rapid=False, feed_mm_min=600) is None
+    assert isinstance(rig.m.submit(Move("X", 75.0, rapid=False, feed_mm_min=600)), Accepted)
     rig.run(400)
     (rec,) = rig.scope.completed
     assert rec.trigger_cycle == at + 1 and rec.data[0][30] > 1.0 and rec.data[0][29] == 0.0
@@ -196,7 +197,7 @@ def test_a_trigger_soon_after_power_on_keeps_the_history_back_to_cycle_1() -> No
     rec = sim.new_record(100)
     sim.run(100, rec)
     scope.feed(rec, 1, m.events)
-    m.spindle("S1", 3, 100.0)
+    m.submit(SpindleRun("S1", 3, 100.0))
     rec = sim.new_record(1000)
     sim.run(1000, rec)
     scope.feed(rec, 101, m.events)
@@ -211,11 +212,11 @@ def test_a_trigger_before_the_pretrigger_is_filled_is_ignored() -> None:
     sig = rig.sig["S1.speed_cmd_rpm"]
     trig = EventTrigger(EventKind.M_START, "S1")
     rig.arm(ScopeSetup([sig], 1000, 50.0, ScopeMode.SINGLE, trig))
-    rig.m.spindle("S1", 3, 100.0)  # 100 cycles of history, 500 asked: ignored
+    rig.m.submit(SpindleRun("S1", 3, 100.0))  # 100 cycles of history, 500 asked: ignored
     rig.run(600)
     assert rig.scope.completed == [] and rig.scope.state is ScopeState.ARMED
     at = rig.sim.cycle
-    rig.m.spindle("S1", 3, 200.0)  # now the history is there
+    rig.m.submit(SpindleRun("S1", 3, 200.0))  # now the history is there
     rig.run(600)
     (r,) = rig.scope.completed
     assert r.trigger_cycle == at + 1 and r.pre_cycles == 500
@@ -300,22 +301,22 @@ def test_event_triggers_fire_in_the_cycle_the_record_shows_the_event() -> None:
         return rig, at
 
     # speed reached: the first cycle the speed_reached bit is set
-    rig, at = capture(EventKind.SPEED_REACHED, lambda r: r.m.spindle("S1", 3, 1000.0))
+    rig, at = capture(EventKind.SPEED_REACHED, lambda r: r.m.submit(SpindleRun("S1", 3, 1000.0)))
     t = rig.scope.completed[0].trigger_cycle
     assert t == _first_rise(rig, "S1.speed_reached", at)
     # gear change: the first cycle in the new gear stage (S300 needs M40 from M42)
-    rig, at = capture(EventKind.GEAR_CHANGE, lambda r: r.m.spindle("S1", 3, 300.0), 9000)
+    rig, at = capture(EventKind.GEAR_CHANGE, lambda r: r.m.submit(SpindleRun("S1", 3, 300.0)), 9000)
     assert rig.scope.completed[0].trigger_cycle == _first_rise(rig, "S1.gear", at)
     # M19 done: the cycle the spindle comes into its exact-stop window for good
-    rig, at = capture(EventKind.M19_DONE, lambda r: r.m.spindle_position("S1", 90.0), 9000)
+    rig, at = capture(EventKind.M19_DONE, lambda r: r.m.submit(SpindlePosition("S1", 90.0)), 9000)
     t = rig.scope.completed[0].trigger_cycle or 0
     pos = rig.column("S1.in_position")
     assert pos[t - rig.base - 1] == 1 and pos[t - rig.base - 2] == 0
 
     # job error (a step without enables): the first cycle with X's job error set
     def refused(r: Rig) -> None:
-        r.m.hli_write("DriveOn", 0, "X")
-        r.m.jog_step("X", 1.0)
+        r.m.submit(HliWrite("DriveOn", 0, "X"))
+        r.m.submit(JogStep("X", 1.0))
 
     rig, at = capture(EventKind.JOB_ERROR, refused, 300)
     assert rig.scope.completed[0].trigger_cycle == _first_rise(rig, "X.job_error", at) == at + 1

@@ -12,6 +12,7 @@ import random
 
 import pytest
 
+from nc_sim.commands import GearChange, JogStart, JogStep, JogStop, Mdi, Move
 from nc_sim.errors import Code, is_error
 from nc_sim.machine.axis import AxisState
 from nc_sim.machine.machine import Machine
@@ -32,23 +33,23 @@ def _act(m: Machine, rng: random.Random) -> None:
     rpm = rng.choice([rng.uniform(50, 7000), rng.uniform(0, 9000)])
     choice = rng.randrange(10)
     if choice == 0:
-        m.jog_step(axis, rng.uniform(-50, 50))
+        m.submit(JogStep(axis, rng.uniform(-50, 50)))
     elif choice == 1:
-        m.move(axis, rng.uniform(-200, 400), rng.random() < 0.5, rng.uniform(100, 6000))
+        m.submit(Move(axis, rng.uniform(-200, 400), rng.random() < 0.5, rng.uniform(100, 6000)))
     elif choice == 2:
-        m.mdi(rng.choice(["G74 X1 Z2", "G74 Z1 X2 S1", "G74 X1 Z1", "G74 S1"]))
+        m.submit(Mdi(rng.choice(["G74 X1 Z2", "G74 Z1 X2 S1", "G74 X1 Z1", "G74 S1"])))
     elif choice == 3:
-        m.mdi(f"M{rng.choice([3, 4])} S{rpm:.1f}")
+        m.submit(Mdi(f"M{rng.choice([3, 4])} S{rpm:.1f}"))
     elif choice == 4:
-        m.mdi("M5")
+        m.submit(Mdi("M5"))
     elif choice == 5:
-        m.mdi(f"M19 S.POS={rng.uniform(0, 360):.2f}")
+        m.submit(Mdi(f"M19 S.POS={rng.uniform(0, 360):.2f}"))
     elif choice == 6:
-        m.spindle_gear("S", rng.randint(40, 45))
+        m.submit(GearChange("S", rng.randint(40, 45)))
     elif choice == 7:
-        m.mdi(f"G01 X{rng.uniform(-5, 290):.2f} F{rng.uniform(500, 5000):.0f}")
+        m.submit(Mdi(f"G01 X{rng.uniform(-5, 290):.2f} F{rng.uniform(500, 5000):.0f}"))
     else:  # a held jog key, released later by the session
-        m.jog_start(axis, rng.choice([-1, 1]), rng.uniform(100, 3000))
+        m.submit(JogStart(axis, rng.choice([-1, 1]), rng.uniform(100, 3000)))
 
 
 def _session(seed: int) -> None:
@@ -59,9 +60,9 @@ def _session(seed: int) -> None:
         sim.run(round(rng.uniform(0.05, 3.0) / 0.001))
         for ax in m.axes:  # jog keys are released
             if ax.state is AxisState.JOG and rng.random() < 0.7:
-                m.jog_stop(ax.name)
+                m.submit(JogStop(ax.name))
     for ax in m.axes:
-        m.jog_stop(ax.name)
+        m.submit(JogStop(ax.name))
     sim.run(90_000)  # longer than any bound of the demo's sequences
     for ax in m.axes:
         assert ax.state in LASTING, (ax.name, ax.state, ax.deadline_what)

@@ -8,6 +8,16 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from nc_sim.commands import (
+    Accepted,
+    HliWrite,
+    Mdi,
+    PlcMode,
+    Refused,
+    Reset,
+    SpindlePosition,
+    SpindleRun,
+)
 from nc_sim.errors import Code
 from nc_sim.kernel.curve import curve_accel
 from nc_sim.kernel.step import V_ACT_FILTER_S
@@ -61,7 +71,7 @@ def test_sensorless_speed_reached_edge_is_the_commands_band_entry() -> None:
 def test_speed_reached_with_encoder_follows_the_loop_delay_and_stopped_below_vb_min_null() -> None:
     sim, m, cfg = make(channel={"spindel[0].m3_synch": 0, "spindel[0].m5_synch": 0})
     s = m.axis(S)
-    m.mdi("M3 S1000")
+    m.submit(Mdi("M3 S1000"))
     rec = record(sim, 3.0)[:, s.slot]
     a = cfg.axis(S).eng("getriebe.slope_profil.a_beschl", 3)
     tr = cfg.axis(S).eng("getriebe.slope_profil.tr_beschl_zu", 3)
@@ -74,7 +84,7 @@ def test_speed_reached_with_encoder_follows_the_loop_delay_and_stopped_below_vb_
     # monitoring: active with the M3, invalid while the command still changes
     assert rec[10, L.R_MON_ACTIVE] == 1 and rec[10, L.R_MON_INVALID] == 1
     assert rec[-1, L.R_MON_ACTIVE] == 1 and rec[-1, L.R_MON_INVALID] == 0
-    m.mdi("M5")
+    m.submit(Mdi("M5"))
     rec = record(sim, 3.0)[:, s.slot]
     assert rec[-1, L.R_MON_ACTIVE] == 0 and s.state is AxisState.STANDSTILL
     v_zero = cfg.axis(S).eng("getriebe.vb_min_null", 3)
@@ -87,11 +97,11 @@ def test_speed_monitoring_flags_have_one_edge_each() -> None:
     reached" edge and event; M5 one "stopped" edge, and the settled loop stops counting."""
     sim, m, _ = make(channel={"spindel[0].m3_synch": 0, "spindel[0].m5_synch": 0})
     s = m.axis(S)
-    m.mdi("M3 S1000")
+    m.submit(Mdi("M3 S1000"))
     rec = record(sim, 3.0)[:, s.slot]
     assert np.count_nonzero(np.diff(rec[:, L.R_SPEED_REACHED])) == 1
     assert codes(m).count(Code.EV_SPEED_REACHED) == 1
-    m.mdi("M5")
+    m.submit(Mdi("M5"))
     rec = record(sim, 6.0)[:, s.slot]
     edges = np.flatnonzero(np.diff(rec[:, L.R_STOPPED]))
     assert len(edges) == 1 and rec[edges[0] + 1, L.R_STOPPED] == 1
@@ -103,18 +113,18 @@ def test_override_example_g167_and_rev_from_the_manual() -> None:
     """[000 §2.4.1] at 50 %: S[M3 REV1000] 500 rpm; S[G167] 1000 rpm; S[REV3000] 1500 rpm."""
     sim, m, _ = make(channel={"spindel[0].m3_synch": 0})
     s = m.axis(S)
-    m.hli_write("override", 500, S)
-    m.mdi("S[M3 REV1000]")
+    m.submit(HliWrite("override", 500, S))
+    m.submit(Mdi("S[M3 REV1000]"))
     rec = record(sim, 2.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(500.0)
     assert rec[-1, L.R_OVERRIDE] == pytest.approx(0.5)
-    m.mdi("S[G167]")
+    m.submit(Mdi("S[G167]"))
     rec = record(sim, 2.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(1000.0)
-    m.mdi("S[REV3000]")
+    m.submit(Mdi("S[REV3000]"))
     rec = record(sim, 4.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(1500.0)
-    m.hli_write("override_valid", 0, S)  # invalid override: 100 %
+    m.submit(HliWrite("override_valid", 0, S))  # invalid override: 100 %
     rec = record(sim, 4.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(3000.0)
 
@@ -167,12 +177,12 @@ def test_m19_from_rotation_keeps_the_direction_and_with_m3_reverses() -> None:
     s = m.axis(S)
     window = cfg.axis(S).eng("kenngr.exact_stop_window")
     _m19(m, sim, "M19 S.POS=0")
-    m.mdi("M4 S800")
+    m.submit(Mdi("M4 S800"))
     record(sim, 2.5)
     rec = _m19(m, sim, "M19 S.POS=123")[:, s.slot]
     assert np.all(rec[:, L.R_V_CMD] <= 1e-9)  # continued in M4 direction, no reversal
     assert abs((rec[-1, L.R_P_ACT] - 123.0 + 180) % 360 - 180) <= window
-    m.mdi("M4 S800")
+    m.submit(Mdi("M4 S800"))
     record(sim, 2.5)
     rec = _m19(m, sim, "M19 S.POS=200 M3 S100")[:, s.slot]  # reversal [001 Fig. 1]
     assert rec[:, L.R_V_CMD].min() < -700 * RPM and _approach_sign(rec) == 1.0
@@ -183,18 +193,18 @@ def test_m19_from_rotation_keeps_the_direction_and_with_m3_reverses() -> None:
 def test_preferred_direction_refuses_the_other_with_60254_until_reset() -> None:
     sim, m, _ = make({S: {"kenngr.vorz_richtung": 1, "kenngr.beweg_richt": 1}})
     s = m.axis(S)
-    m.mdi("M4 S500")
+    m.submit(Mdi("M4 S500"))
     record(sim, 0.1)
     assert Code.SPINDLE_PREFERRED_DIRECTION in codes(m) and s.state is AxisState.ERROR
-    m.mdi("M3 S500")  # even the allowed direction is refused: error state until reset
+    m.submit(Mdi("M3 S500"))  # even the allowed direction is refused: error state until reset
     assert m.events[-1].code == Code.CHANNEL_ERROR_STATE and m.events[-1].axis == S
     record(sim, 0.1)
     assert s.state is AxisState.ERROR
-    m.reset()
-    m.mdi("M3 S500")
+    m.submit(Reset())
+    m.submit(Mdi("M3 S500"))
     record(sim, 2.0)
     assert m.axis(S).state is AxisState.ENDLESS
-    m.mdi("M5")
+    m.submit(Mdi("M5"))
     record(sim, 2.0)
     rec = _m19(m, sim, "M19 S.POS=300")[:, s.slot]  # no direction given: the preferred one
     assert np.all(rec[:, L.R_V_CMD] >= -1e-9)
@@ -202,7 +212,7 @@ def test_preferred_direction_refuses_the_other_with_60254_until_reset() -> None:
 
 def test_sensorless_spindle_cannot_position() -> None:
     sim, m, _ = make({S: {"sim.sensorless": 1}})
-    m.mdi("M19 S.POS=90")
+    m.submit(Mdi("M19 S.POS=90"))
     record(sim, 0.1)
     assert Code.SPINDLE_SENSORLESS_M19 in codes(m)
     assert m.axis(S).state is AxisState.STANDSTILL
@@ -225,10 +235,10 @@ def test_digital_drive_needs_g74_before_m19() -> None:
     sim, m, cfg = make({S: {"kenngr.achs_mode": 0x101}})
     s = m.axis(S)
     window = cfg.axis(S).eng("kenngr.exact_stop_window")
-    m.mdi("M19 S.POS=45")
+    m.submit(Mdi("M19 S.POS=45"))
     record(sim, 0.2)
     assert Code.SPINDLE_NOT_HOMED in codes(m) and s.state is AxisState.ERROR
-    m.reset()
+    m.submit(Reset())
     _m19(m, sim, "S[G74]")
     rec = _m19(m, sim, "M19 S.POS=45")[:, s.slot]
     assert s.homed and abs((rec[-1, L.R_P_ACT] - 45.0 + 180) % 360 - 180) <= window
@@ -244,7 +254,7 @@ def test_control_limit_opens_the_loop_loses_and_regains_the_reference() -> None:
     window = cfg.axis(S).eng("kenngr.exact_stop_window")
     _m19(m, sim, "M19 S.POS=0")
     assert s.homed
-    m.mdi("M3 S3000")
+    m.submit(Mdi("M3 S3000"))
     rec = record(sim, 8.0)[:, s.slot]
     i = first(rec[:, L.R_OPEN_LOOP] == L.LOOP_CONTROL_LIMIT)
     assert rec[i, L.R_V_CMD] > limit_rpm * RPM >= rec[i - 1, L.R_V_CMD]
@@ -274,7 +284,7 @@ def test_changeover_to_speed_control_and_back_for_m19_as_in_the_manual() -> None
     s = m.axis(S)
     window = cfg.axis(S).eng("kenngr.exact_stop_window")
     _m19(m, sim, "M19 S.POS=0")
-    m.mdi("M4 S1000")
+    m.submit(Mdi("M4 S1000"))
     rec = record(sim, 3.0)[:, s.slot]
     i = first(rec[:, L.R_OPEN_LOOP] == L.LOOP_SPEED_CONTROL)
     assert abs(rec[i, L.R_V_CMD]) > 200 * RPM >= abs(rec[i - 1, L.R_V_CMD])
@@ -305,7 +315,7 @@ def test_switch_back_from_speed_control_takes_over_the_lag_without_a_step() -> N
     )
     s = m.axis(S)
     window = cfg.axis(S).eng("kenngr.exact_stop_window")
-    m.mdi("M3 S1000")
+    m.submit(Mdi("M3 S1000"))
     record(sim, 3.0)
     assert m.k.ist[s.slot, L.I_OPEN_LOOP] == L.LOOP_SPEED_CONTROL
     rec = _m19(m, sim, "M19 S.POS=180")[:, s.slot]
@@ -324,12 +334,12 @@ def test_changeover_stays_in_speed_control_for_a_lower_speed_and_reset_switches_
         {"spindel[0].m3_synch": 0, "main_spindle_gear_change": 0},  # S150 in this stage
     )
     s = m.axis(S)
-    m.mdi("M3 S1000")
+    m.submit(Mdi("M3 S1000"))
     record(sim, 3.0)
-    m.mdi("M3 S150")
+    m.submit(Mdi("M3 S150"))
     rec = record(sim, 3.0)[:, s.slot]
     assert np.all(rec[:, L.R_OPEN_LOOP] == L.LOOP_SPEED_CONTROL)
-    m.reset()
+    m.submit(Reset())
     record(sim, 0.01)
     assert m.k.ist[s.slot, L.I_OPEN_LOOP] == L.LOOP_CLOSED
 
@@ -348,7 +358,7 @@ def test_old_changeover_names_p_axis_00265_00266_keep_working() -> None:
     )
     s = m.axis(S)
     _m19(m, sim, "M19 S.POS=0")
-    m.mdi("M4 S1000")
+    m.submit(Mdi("M4 S1000"))
     rec = record(sim, 3.0)[:, s.slot]
     i = first(rec[:, L.R_OPEN_LOOP] == L.LOOP_SPEED_CONTROL)
     assert abs(rec[i, L.R_V_CMD]) > 200 * RPM >= abs(rec[i - 1, L.R_V_CMD])
@@ -379,18 +389,19 @@ def test_speed_controlled_spindle_outputs_with_the_speed_scaling(sensorless: int
     )
     s = m.axis(S)
     assert s.gear == 3
-    m.mdi("M3 S3000")
+    m.submit(Mdi("M3 S3000"))
     rec = record(sim, 7.0)[:, s.slot]  # 500 rpm/s in this gear stage
     assert np.all(rec[:, L.R_OPEN_LOOP] == L.LOOP_SPEED_CONTROL)
     assert rec[-1, L.R_DA] == pytest.approx(32767.0)
     assert rec[-1, L.R_V_ACT] / RPM == pytest.approx(3000.0, rel=1e-3)
     assert rec[-1, L.R_SPEED_REACHED] == 1
-    m.mdi("M3 S1500")
+    m.submit(Mdi("M3 S1500"))
     rec = record(sim, 4.0)[:, s.slot]
     assert rec[-1, L.R_DA] == pytest.approx(32767.0 / 2)
     assert rec[-1, L.R_V_ACT] / RPM == pytest.approx(1500.0, rel=1e-3)
-    err = m.spindle_position(S, 90.0, None, None)  # no position control: cannot be positioned
-    assert err is not None and err.code == Code.SPINDLE_SENSORLESS_M19
+    # no position control: cannot be positioned
+    err = m.submit(SpindlePosition(S, 90.0, None, None))
+    assert isinstance(err, Refused) and err.code == Code.SPINDLE_SENSORLESS_M19
 
 
 # --- acceleration curves ---------------------------------------------------------------------
@@ -482,14 +493,14 @@ def test_curve_ramp_takes_the_integral_of_dn_over_a_and_never_exceeds_the_curve(
             a = 16000.0 if n <= 10000 else 16000 * 10000 / n * (1 if n <= 20000 else 20000 / n)
         return max(a, 3000.0)
 
-    m.mdi("M3 S7000")
+    m.submit(Mdi("M3 S7000"))
     rec = record(sim, 10.0)[:, s.slot]
     t_end = (first(rec[:, L.R_V_CMD] >= 42000 - 1e-6) + 1) * DT
     assert t_end == pytest.approx(_ramp_time(a_of, 42000), abs=2 * DT)
     v_prev = np.concatenate(([0.0], rec[:-1, L.R_V_CMD]))
     allowed = np.array([a_of(abs(v)) for v in v_prev])
     assert np.all(np.abs(rec[:, L.R_A_CMD]) <= allowed * (1 + 1e-9))
-    m.mdi("M5")  # the curve also brakes
+    m.submit(Mdi("M5"))  # the curve also brakes
     rec = record(sim, 10.0)[:, s.slot]
     t_stop = (first(rec[:, L.R_V_CMD] <= 1e-9) + 1) * DT
     assert t_stop == pytest.approx(_ramp_time(a_of, 42000), abs=2 * DT)
@@ -550,7 +561,7 @@ def test_gear_change_sequence_adopts_the_new_gear_record_and_resumes() -> None:
         {"spindel[0].m3_synch": 0},
     )
     s = m.axis(S)
-    m.mdi("M3 S650")  # from M42 (start-up stage 3) to M41
+    m.submit(Mdi("M3 S650"))  # from M42 (start-up stage 3) to M41
     rec = record(sim, 4.0)[:, s.slot]
     assert s.gear == 2 and s.state is AxisState.ENDLESS
     out = next(e for e in m.events if e.code == Code.EV_M_OUTPUT and "M41" in e.message)
@@ -568,7 +579,7 @@ def test_gear_change_sequence_adopts_the_new_gear_record_and_resumes() -> None:
     assert rec[-1, L.R_GEAR] == 2 and rec[-1, L.R_V_CMD] / RPM == pytest.approx(650)
     assert rec[-1, L.R_LAG] == pytest.approx(650 * RPM / 10.0, rel=0.01)
     c0 = m.cycle
-    m.mdi("S950")  # back to M42 with kv 20/s, via the M41 change position 45°
+    m.submit(Mdi("S950"))  # back to M42 with kv 20/s, via the M41 change position 45°
     rec = record(sim, 6.0)[:, s.slot]
     assert s.gear == 3 and rec[-1, L.R_LAG] == pytest.approx(950 * RPM / 20.0, rel=0.01)
     out = next(e for e in m.events if e.code == Code.EV_M_OUTPUT and "M42" in e.message)
@@ -578,20 +589,20 @@ def test_gear_change_sequence_adopts_the_new_gear_record_and_resumes() -> None:
 def test_gear_change_errors_and_plc_timeout() -> None:
     sim, m, _ = make(channel={"spindel[0].autom_range": 0, "plc.m_ack_timeout": 300000})
     s = m.axis(S)
-    m.mdi("M3 S8000")
-    m.mdi("M40 M3 S750")
-    m.mdi("M3 S500")  # manual: S outside the current stage without M4x
+    m.submit(Mdi("M3 S8000"))
+    m.submit(Mdi("M40 M3 S750"))
+    m.submit(Mdi("M3 S500"))  # manual: S outside the current stage without M4x
     record(sim, 0.1)
     got = codes(m)
     assert Code.GEAR_NO_RANGE not in got  # manual mode: no search, so no "no range"
     assert got.count(Code.GEAR_NOT_PROGRAMMED) == 2 and Code.GEAR_WRONG_STAGE in got
     assert s.state is AxisState.STANDSTILL and s.gear == 3
-    m.plc_mode("fault")
-    m.mdi("M40 M3 S300")
+    m.submit(PlcMode("fault"))
+    m.submit(Mdi("M40 M3 S300"))
     record(sim, 3.0)
     assert Code.PLC_ACK_TIMEOUT in codes(m)
     assert s.gear == 3 and m.axis(S).state is AxisState.ERROR
-    m.reset()
+    m.submit(Reset())
     assert s.state is AxisState.STANDSTILL
 
 
@@ -599,25 +610,25 @@ def test_gear_change_errors_and_plc_timeout() -> None:
 def test_tool_dynamics_take_effect_at_the_next_start_and_default_data_resets() -> None:
     sim, m, cfg = make(channel={"spindel[0].m3_synch": 0, "spindel[0].m5_synch": 0})
     s = m.axis(S)
-    m.mdi("M3 S3000")
+    m.submit(Mdi("M3 S3000"))
     record(sim, 0.2)
-    m.mdi("D1")  # 1500 rpm, 1000 °/s² for S1: not while it turns
+    m.submit(Mdi("D1"))  # 1500 rpm, 1000 °/s² for S1: not while it turns
     rec = record(sim, 7.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(3000)
-    m.mdi("M5")
+    m.submit(Mdi("M5"))
     record(sim, 7.0)
-    m.mdi("M3 S3000")
+    m.submit(Mdi("M3 S3000"))
     rec = record(sim, 10.0)[:, s.slot]
     assert rec[:, L.R_V_CMD].max() / RPM == pytest.approx(1500)
     a_tool = cfg.tool_eng("wz[1].a_max")
     assert np.abs(rec[:, L.R_A_CMD]).max() == pytest.approx(a_tool)
-    m.mdi("M3 S700")
+    m.submit(Mdi("M3 S700"))
     rec = record(sim, 6.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(700)
-    m.mdi("M5")
-    m.mdi("S[DEFAULT_DYNAMIC_DATA]")
+    m.submit(Mdi("M5"))
+    m.submit(Mdi("S[DEFAULT_DYNAMIC_DATA]"))
     record(sim, 6.0)
-    m.mdi("M3 S3000")
+    m.submit(Mdi("M3 S3000"))
     rec = record(sim, 8.0)[:, s.slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(3000)
 
@@ -628,8 +639,8 @@ def test_tool_minimum_speed_raises_a_lower_s() -> None:
     m.cfg.tools["wz[3].vb_min"] = 6000000  # 1000 rpm
     m.cfg.tools["wz[3].vb_max"] = 18000000
     m.cfg.tools["wz[3].a_max"] = 3000
-    m.mdi("D3")
-    m.mdi("M3 S800")
+    m.submit(Mdi("D3"))
+    m.submit(Mdi("M3 S800"))
     rec = record(sim, 3.0)[:, m.axis(S).slot]
     assert rec[-1, L.R_V_CMD] / RPM == pytest.approx(1000)
 
@@ -639,14 +650,14 @@ def test_feedforward_g135_g136_g137_scale_the_steady_lag(block: str, weight: flo
     sim, m, cfg = make(channel={"spindel[0].m3_synch": 0})
     s = m.axis(S)
     if block == "S[G136=50]":
-        m.mdi("S[G135]")
+        m.submit(Mdi("S[G135]"))
     if block:
-        m.mdi(block)
-    m.mdi("M3 S1000")
+        m.submit(Mdi(block))
+    m.submit(Mdi("M3 S1000"))
     rec = record(sim, 3.0)[:, s.slot]
     kv = cfg.axis(S).eng("getriebe.kv", 3)
     assert rec[-1, L.R_LAG] == pytest.approx((1 - weight) * 6000 / kv, abs=0.5)
-    m.mdi("S[G137]")
+    m.submit(Mdi("S[G137]"))
     rec = record(sim, 2.0)[:, s.slot]
     assert rec[-1, L.R_LAG] == pytest.approx(6000 / kv, rel=0.01)
 
@@ -655,9 +666,9 @@ def test_feedforward_g135_g136_g137_scale_the_steady_lag(block: str, weight: flo
 def test_reset_stops_the_spindle_unless_p_axis_00455(keep: int) -> None:
     sim, m, _ = make({S: {"kenngr.spdl_no_stop_at_reset": keep}}, {"spindel[0].m3_synch": 0})
     s = m.axis(S)
-    m.mdi("M3 S1000")
+    m.submit(Mdi("M3 S1000"))
     record(sim, 3.0)
-    m.reset()
+    m.submit(Reset())
     rec = record(sim, 3.0)[:, s.slot]
     assert (rec[-1, L.R_V_CMD] / RPM) == pytest.approx(1000.0 if keep else 0.0)
 
@@ -666,10 +677,10 @@ def test_reset_stops_the_spindle_unless_p_axis_00455(keep: int) -> None:
 def test_program_end_stops_only_with_the_hli_flag(flag: int) -> None:
     sim, m, _ = make(channel={"spindel[0].m3_synch": 0})
     s = m.axis(S)
-    m.hli_write("spindle_stop_at_program_end", flag, S)
-    m.mdi("M3 S1000")
+    m.submit(HliWrite("spindle_stop_at_program_end", flag, S))
+    m.submit(Mdi("M3 S1000"))
     record(sim, 3.0)
-    m.mdi("M30")
+    m.submit(Mdi("M30"))
     rec = record(sim, 3.0)[:, s.slot]
     assert (rec[-1, L.R_V_CMD] / RPM) == pytest.approx(0.0 if flag else 1000.0)
 
@@ -677,12 +688,12 @@ def test_program_end_stops_only_with_the_hli_flag(flag: int) -> None:
 def test_m19_to_the_angle_the_spindle_stands_at_completes_at_once() -> None:
     """A repeated M19 must not hang in POSITIONING: the in-position edge comes again."""
     sim, m, _ = make()
-    assert m.spindle_position("S1", 90.0) is None
+    assert isinstance(m.submit(SpindlePosition("S1", 90.0)), Accepted)
     sim.run(6000)
     ax = m.by_name["S1"]
     assert ax.state is AxisState.STANDSTILL
     c0 = m.cycle
-    assert m.spindle_position("S1", 90.0) is None
+    assert isinstance(m.submit(SpindlePosition("S1", 90.0)), Accepted)
     sim.run(2)
     assert ax.state is AxisState.STANDSTILL
     done = [e for e in m.events if e.code == Code.EV_IN_POSITION]
@@ -693,15 +704,15 @@ def test_a_speed_above_the_machine_limit_is_refused_naming_the_limit() -> None:
     """S above the highest gear stage (M45 up to 7000 rpm, P-CHAN-00055) or, without gear
     change, above the gear record's vb_max (P-AXIS-00212: 3500 rpm in M42) is refused."""
     _, m, _ = make()
-    err = m.spindle("S", 3, 2_000_000)
-    assert err is not None and err.code == Code.GEAR_NO_RANGE
-    assert "7000 rpm" in err.message and "P-CHAN-00055" in err.message
-    assert "S2000000 rpm" in err.message
+    err = m.submit(SpindleRun("S", 3, 2_000_000))
+    assert isinstance(err, Refused) and err.code == Code.GEAR_NO_RANGE
+    assert "7000 rpm" in err.detail and "P-CHAN-00055" in err.detail
+    assert "S2000000 rpm" in err.detail
     _, m, _ = make(channel={"main_spindle_gear_change": 0})
-    err = m.spindle("S", 3, 3600)
-    assert err is not None and err.code == Code.GEAR_NO_RANGE
-    assert "3500 rpm" in err.message and "P-AXIS-00212" in err.message
-    m.reset()
-    assert m.spindle("S", 3, 3500) is None
-    err = m.spindle_position("S", 90.0, None, 4000)
-    assert err is not None and "3500 rpm" in err.message
+    err = m.submit(SpindleRun("S", 3, 3600))
+    assert isinstance(err, Refused) and err.code == Code.GEAR_NO_RANGE
+    assert "3500 rpm" in err.detail and "P-AXIS-00212" in err.detail
+    m.submit(Reset())
+    assert isinstance(m.submit(SpindleRun("S", 3, 3500)), Accepted)
+    err = m.submit(SpindlePosition("S", 90.0, None, 4000))
+    assert isinstance(err, Refused) and "3500 rpm" in err.detail
