@@ -741,6 +741,8 @@ class Machine:
 
     # --- PLC ----------------------------------------------------------------------------
     def _plc_mode(self, mode: str, delay_s: float | None = None) -> None:
+        if mode not in {p.value for p in PlcMode}:
+            raise NcUsageError(f"unknown PLC mode '{mode}' (auto, manual, fault)")
         self.plc.set_mode(
             PlcMode(mode), self.cycle, None if delay_s is None else self._cycles(delay_s)
         )

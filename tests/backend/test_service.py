@@ -69,6 +69,23 @@ def test_bad_block_is_refused_with_its_column(srv: Server, mid: str) -> None:
     assert detail["code"] == 90010
 
 
+def test_a_block_that_fails_while_starting_is_409_with_its_job_error(srv: Server, mid: str) -> None:
+    """S20000 fits no gear stage (M45 up to 7000 rpm, P-CHAN-00055): the block parses but is
+    refused as it starts, 90017 naming the limit; the spindle stays at rest."""
+    r = srv.command(mid, {"type": "mdi", "block": "M3 S20000"})
+    assert r.status_code == 409, r.text
+    detail = r.json()["detail"]
+    assert detail["code"] == 90017 and detail["error"]["axis"] == "S1"
+    assert "7000 rpm" in detail["message"] and "P-CHAN-00055" in detail["message"]
+    assert srv.axis("S1", mid)["state"] == "STANDSTILL"
+
+
+def test_a_command_naming_no_axis_is_422_naming_it(srv: Server, mid: str) -> None:
+    r = srv.command(mid, {"type": "home", "axis": "Q"})
+    assert r.status_code == 422, r.text
+    assert r.json()["detail"]["message"] == "no axis or spindle 'Q'"
+
+
 def test_out_of_range_command_fields_are_422(srv: Server, mid: str) -> None:
     r = srv.command(mid, {"type": "gear", "m": 47})
     assert r.status_code == 422
