@@ -1,8 +1,9 @@
 """One simulated machine: a channel with axes and spindles, its HLI and its PLC.
 
-The Python layer of the NC: commands check their preconditions and either plan a motion for
-the kernel or end as a job error; kernel events (plan done, lag, limits, cam) drive the
-sequences (homing, blocks) forward. Every phase of a sequence carries a deadline from its own
+The Python layer of the NC: `submit` takes a command (nc_sim/commands.py) and answers with its
+outcome; commands check their preconditions and either plan a motion for the kernel or end as
+a job error; kernel events (plan done, lag, limits, cam) drive the sequences (homing, blocks)
+forward. Every phase of a sequence carries a deadline from its own
 parameters (`watchdog.py`): past it, job error 90023 instead of a hang. Nothing here reads a
 clock: time is `cycle · cycle_s`.
 """
@@ -566,15 +567,13 @@ class Machine:
                 return i
         return None
 
-    def _spindle_run(
-        self, name: str, m: int, speed_rpm: float | None = None, gear: int | None = None
-    ) -> JobError | None:
-        """M3/M4 with speed (rpm) and optional gear stage M40-M45, or M5."""
+    def _spindle_run(self, name: str, m: int, speed_rpm: float | None = None) -> JobError | None:
+        """M3/M4 with speed (rpm), or M5."""
         ax = self._spindle(name)
         if m == 5:
             self.sp.m5(ax)
             return None
-        return self.sp.endless(ax, m, speed_rpm, gear)
+        return self.sp.endless(ax, m, speed_rpm)
 
     def _spindle_position(
         self,
@@ -601,7 +600,7 @@ class Machine:
         """P-CHAN-00052: M40-M45 change the main spindle's gear; else they are free M functions."""
         return bool(self.cfg.channel_raw("main_spindle_gear_change"))
 
-    def tool(self, number: int) -> None:
+    def _tool(self, number: int) -> None:
         """D word: the tool's dynamic limits go to its spindle at the next start [000 §2.8.5]."""
         pre = f"wz[{number}]."
         nr = int(self.cfg.tools.get(pre + "log_ax_nr_spdl", 0))
@@ -618,7 +617,7 @@ class Machine:
         a_max = self.cfg.tool_eng(pre + "a_max")
         target.tool_pending = ToolLimits(self.cfg.tool_eng(pre + "vb_min"), vb_max, a_max)
 
-    def program_end(self) -> None:
+    def _program_end(self) -> None:
         """M30/M2: spindles stop only with the HLI flag "spindle stop at program end"."""
         self.log(Code.EV_PROGRAM_END)
         for ax in self.axes:
@@ -824,10 +823,10 @@ class Machine:
         if b.slope_type is not None:
             self.slope = b.slope_type
         if b.tool is not None:
-            self.tool(b.tool)
+            self._tool(b.tool)
         for m in b.m_functions:
             if m in (2, 30):
-                self.program_end()
+                self._program_end()
             self._m_output(m, "", run)
         gear = None
         if b.gear is not None:
