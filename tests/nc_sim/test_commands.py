@@ -7,6 +7,8 @@ message and column of a malformed command; the caller's serial comes back in eac
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from nc_sim.commands import (
@@ -57,7 +59,7 @@ ACCEPTED: list[Command] = [
 @pytest.mark.parametrize("cmd", ACCEPTED, ids=lambda c: type(c).__name__)
 def test_every_command_is_accepted_on_a_ready_machine_with_its_serial(cmd: Command) -> None:
     _, m, _ = make()
-    sent = type(cmd)(**{**vars(cmd), "serial": 4711})
+    sent = replace(cmd, serial=4711)
     out = m.submit(sent)
     assert isinstance(out, Accepted) and out.serial == 4711 and out.cycle == m.cycle
     assert m.outcomes[-1] == out  # kept in the machine's outcome log
@@ -153,7 +155,7 @@ def test_misuse_is_invalid_not_an_exception(cmd: Command, says: str) -> None:
     """A process boundary carries answers, not exceptions: misuse is an Invalid outcome."""
     _, m, _ = make()
     before = m.events.cursor
-    out = m.submit(type(cmd)(**{**vars(cmd), "serial": 3}))
+    out = m.submit(replace(cmd, serial=3))
     assert isinstance(out, Invalid) and out.serial == 3 and says in out.message
     assert out.column is None and out.code is None
     assert m.events.cursor == before  # nothing happened on the machine
