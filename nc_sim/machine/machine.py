@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from typing import assert_never
 
 import numpy as np
 
@@ -176,6 +177,8 @@ class Machine:
                 self._reset()
             case EmergencyStop():
                 self._emergency_stop()
+            case _:  # a new command type must get its case here (mypy checks)
+                assert_never(cmd)
         if isinstance(answer, JobError):
             return Refused(cmd.serial, answer)
         return Accepted(cmd.serial, self.cycle, acknowledged=answer)

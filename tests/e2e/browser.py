@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from playwright.sync_api import Browser, Page, expect, sync_playwright
+from playwright.sync_api import Browser, Locator, Page, Request, expect, sync_playwright
 
 CHROMIUM = "/usr/bin/chromium"  # Debian's package; Playwright never downloads a browser here
 ARGS = [
@@ -64,3 +64,20 @@ def poll(fn: Callable[[], bool], what: str, timeout_s: float = 15.0) -> None:
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out waiting for {what}")
         time.sleep(0.05)
+
+
+def panel(page: Page, name: str) -> Locator:
+    """A panel of the HMI by name: the scope every e2e locator starts from."""
+    return page.get_by_test_id(f"panel-{name}")
+
+
+def commands_sent(page: Page) -> list[str]:
+    """The bodies of the commands the page posts from now on."""
+    sent: list[str] = []
+
+    def on_request(r: Request) -> None:
+        if r.url.endswith("/commands") and r.method == "POST":
+            sent.append(r.post_data or "")
+
+    page.on("request", on_request)
+    return sent

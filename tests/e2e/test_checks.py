@@ -10,26 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from playwright.sync_api import Browser, Locator, Page, Request, expect
+from playwright.sync_api import Browser, Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import open_hmi, shot
-
-
-def panel(page: Page, name: str) -> Locator:
-    return page.get_by_test_id(f"panel-{name}")
-
-
-def commands_sent(page: Page) -> list[str]:
-    """The bodies of the commands the page posts from now on."""
-    sent: list[str] = []
-
-    def on_request(r: Request) -> None:
-        if r.url.endswith("/commands") and r.method == "POST":
-            sent.append(r.post_data or "")
-
-    page.on("request", on_request)
-    return sent
+from tests.e2e.browser import commands_sent, open_hmi, panel, shot
 
 
 def test_no_request_ever_goes_to_an_empty_machine_id(browser: Browser, srv: Server) -> None:

@@ -7,17 +7,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from playwright.sync_api import Browser, Locator, Page, expect
+from playwright.sync_api import Browser, Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import SIZES, open_hmi, shot
-from tests.e2e.test_checks import commands_sent
+from tests.e2e.browser import SIZES, commands_sent, open_hmi, panel, shot
 
 NBSP = "\u00a0"
-
-
-def panel(page: Page, name: str) -> Locator:
-    return page.get_by_test_id(f"panel-{name}")
 
 
 def test_during_an_emergency_stop_the_plc_lamps_show_the_drives_off(page: Page) -> None:
