@@ -180,3 +180,8 @@ class CommandResult(BaseModel):
     state: dict[str, str] = Field(
         default_factory=dict, description="state of every axis after the command"
     )
+    latency_ms: float = Field(
+        0.0,
+        description="from the gateway handing the command to the machine's worker until it "
+        "took effect in the kernel there, ms",
+    )

@@ -79,6 +79,9 @@ class SimulationStatus(BaseModel):
     until_cycle: int | None = Field(None, description="fast mode pauses at this cycle")
     t0_unix: float = Field(description="wall time (Unix s) of cycle 0 while running")
     slips: int = Field(description="times the machine fell over 1 s behind and was re-anchored")
+    worker: str | None = Field(None, description="the worker whose loop paces this machine")
+    loop_overruns: int = Field(0, description="overruns of that worker's loop so far")
+    loop_work_p99_ms: float = Field(0.0, description="that loop's work per tick, 99th pct, ms")
 
 
 class MachineStatus(BaseModel):
@@ -114,7 +117,7 @@ class OverrunRecord(BaseModel):
 
 
 class LoopStatus(BaseModel):
-    """The real-time loop that paces every running machine."""
+    """A worker's real-time loop, which paces the worker's machines."""
 
     period_s: float = Field(description="loop period, s (it steps every due cycle per tick)")
     ticks: int
@@ -128,7 +131,18 @@ class LoopStatus(BaseModel):
     host_failures: int = Field(
         description="machine ticks that raised; the machine was paused, the loop went on"
     )
-    restarts: int = Field(description="times the loop itself failed and was restarted")
+    cpu_pct: float = Field(description="CPU time of the worker process, % of one core")
+
+
+class WorkerStatus(BaseModel):
+    """One worker: a process on this server or a Ray actor on a cluster node."""
+
+    id: str
+    pid: int | None
+    node: str = Field(description="'local', or the Ray node the actor runs on")
+    alive: bool
+    machines: list[str]
+    loop: LoopStatus | None = Field(description="figures of its last report (about 1 s old)")
 
 
 class TelemetryStatus(BaseModel):
@@ -144,7 +158,10 @@ class TelemetryStatus(BaseModel):
 class ServiceStatus(BaseModel):
     version: str
     uptime_s: float
-    loop: LoopStatus
+    transport: Literal["local", "ray"] = Field(description="how the gateway reaches workers")
+    workers: list[WorkerStatus]
+    workers_replaced: int = Field(description="workers that died and were replaced")
+    machines_rebuilt: int = Field(description="machines rebuilt after their worker died")
     clients: int = Field(description="telemetry websockets connected")
     telemetry: TelemetryStatus
     machines: dict[str, SimulationStatus]

@@ -16,6 +16,7 @@ import numpy as np
 from pydantic import BaseModel, Field
 
 from api.common import JobErrorModel
+from api.status import MachineStatus
 
 MAGIC = b"INBT"
 MAX_SIGNALS = 256  # per subscription
@@ -71,6 +72,25 @@ class EventMessage(BaseModel):
         0, description="events before this one the bounded log dropped before they were sent"
     )
     event: JobErrorModel
+
+
+class StatusMessage(BaseModel):
+    """Server → client: the machine's status, pushed about 20 times a second while the
+    client is connected (no polling)."""
+
+    type: Literal["status"] = "status"
+    status: MachineStatus
+
+
+class NoticeMessage(BaseModel):
+    """Server → client: something every viewer must see, e.g. the machine was rebuilt on
+    another worker after its worker died (simulated time restarts at 0)."""
+
+    type: Literal["notice"] = "notice"
+    seq: int = Field(description="numbered per machine; a reconnecting client sees it again")
+    kind: Literal["rebuilt"]
+    message: str
+    time_unix: float
 
 
 class ErrorMessage(BaseModel):

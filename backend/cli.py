@@ -22,6 +22,8 @@ def main(argv: list[str] | None = None) -> int:
     p_srv.add_argument("--port", type=int, default=8000)
     p_srv.add_argument("--db", type=Path, help="SQLite file (default var/inbetrieb.sqlite)")
     p_srv.add_argument("--no-demo", action="store_true", help="no demo machine in a new store")
+    p_srv.add_argument("--workers", type=int, help="worker processes (default: one per core)")
+    p_srv.add_argument("--cluster", help="Ray cluster (ray://HOST:PORT): workers as Ray actors")
     p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
     args = parser.parse_args(argv)
@@ -52,6 +54,10 @@ def main(argv: list[str] | None = None) -> int:
         overrides["db_path"] = args.db
     if args.no_demo:
         overrides["demo"] = False
+    if args.workers is not None:
+        overrides["workers"] = args.workers
+    if args.cluster:
+        overrides["cluster"] = args.cluster
     serve(args.host, args.port, overrides)
     return 0
 

@@ -10,16 +10,14 @@ from fastapi import Depends
 from fastapi.requests import HTTPConnection
 
 from backend.services.auth import Actor
-from backend.services.host import MachineHost
-from backend.services.loop import RealtimeLoop
-from backend.services.machines import MachineService
+from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
 from backend.services.viewer import RerunViewer
-from backend.services.warmup import warm_up
 from backend.settings import Settings
+from backend.workers.pool import WorkerPool
 
 
 @dataclass
@@ -29,7 +27,7 @@ class Services:
     settings: Settings
     store: Store
     machines: MachineService
-    loop: RealtimeLoop
+    pool: WorkerPool
     hub: TelemetryHub
     traces: TraceService
     recorders: Recorders
@@ -39,27 +37,24 @@ class Services:
     @classmethod
     def start(cls, settings: Settings) -> Services:
         store = Store(settings.db_path)
-        machines = MachineService(store)
+        pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster)
+        machines = MachineService(store, pool)
+        pool.start(machines.on_push, machines.on_death)
         machines.load(create_demo=settings.demo)
-        warm_up()
-        for host in machines.hosts():  # start every clock from now
-            host.set_mode(host.pacing.mode, host.pacing.until_cycle)
-        loop = RealtimeLoop(machines.hosts, settings.loop_period_s)
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
         tdir = settings.traces_path
         traces = TraceService(store, tdir, machines)
         recorders = Recorders(tdir / "recordings")
         viewer = RerunViewer(tdir / "rerun-viewer.log")
-        loop.start()
         hub.start()
         recorders.start()
-        return cls(settings, store, machines, loop, hub, traces, recorders, viewer, time.time())
+        return cls(settings, store, machines, pool, hub, traces, recorders, viewer, time.time())
 
     async def stop(self) -> None:
         await self.hub.stop()
         self.recorders.stop()
         self.viewer.stop()
-        self.loop.stop()
+        self.pool.stop()
         self.store.close()
 
 
@@ -78,8 +73,8 @@ ServicesDep = Annotated[Services, Depends(get_services)]
 ActorDep = Annotated[Actor, Depends(get_actor)]
 
 
-def get_host(mid: str, services: ServicesDep) -> MachineHost:
+def get_machine(mid: str, services: ServicesDep) -> MachineProxy:
     return services.machines.get(mid)
 
 
-HostDep = Annotated[MachineHost, Depends(get_host)]
+MachineDep = Annotated[MachineProxy, Depends(get_machine)]

@@ -16,7 +16,9 @@ from api.telemetry import (
     EventMessage,
     FrameHeader,
     Hello,
+    NoticeMessage,
     SignalInfo,
+    StatusMessage,
     Subscribe,
     Subscribed,
 )
@@ -27,6 +29,8 @@ WEBSOCKET_MODELS: tuple[type[BaseModel], ...] = (
     Hello,
     Subscribed,
     EventMessage,
+    StatusMessage,
+    NoticeMessage,
     ErrorMessage,
     FrameHeader,
     SignalInfo,

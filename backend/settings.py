@@ -15,7 +15,13 @@ class Settings(BaseSettings):
 
     db_path: Path = Field(Path("var/inbetrieb.sqlite"), description="SQLite file")
     demo: bool = Field(True, description="create the demo lathe in a fresh store")
-    loop_period_s: float = Field(0.01, gt=0, le=0.1, description="real-time loop period")
+    loop_period_s: float = Field(
+        0.002, gt=0, le=0.1, description="real-time loop period of each worker"
+    )
+    workers: int = Field(0, ge=0, le=256, description="worker processes (0: one per core)")
+    cluster: str | None = Field(
+        None, description="Ray cluster address (ray://HOST:PORT): workers become Ray actors"
+    )
     frame_s: float = Field(0.02, gt=0, le=1, description="telemetry frame period")
     max_frame_samples: int = Field(1000, ge=10, description="decimate beyond this per frame")
     send_buffer_bytes: int = Field(

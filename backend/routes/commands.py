@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from api.commands import Command, CommandResult
-from backend.deps import ActorDep, HostDep
+from backend.deps import ActorDep, MachineDep
 from backend.errors import responses
 from backend.services.commands import execute
 
@@ -23,6 +23,6 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
         },
     ),
 )
-def command(cmd: Command, host: HostDep, actor: ActorDep) -> CommandResult:
+def command(cmd: Command, machine: MachineDep, actor: ActorDep) -> CommandResult:
     """MDI block, spindle, gear, homing, jog, move, override, HLI, PLC, reset, E-stop."""
-    return execute(actor, host, cmd)
+    return execute(actor, machine, cmd)

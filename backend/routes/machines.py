@@ -8,22 +8,25 @@ from api.auth import Action
 from api.machines import MachineCreate, SimulationControl, StepRequest
 from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
-from backend.deps import ActorDep, HostDep, ServicesDep
+from backend.deps import ActorDep, MachineDep, ServicesDep
 from backend.errors import responses
 from backend.services.auth import authorize
+from backend.services.machines import MachineProxy
 from backend.services.status import (
     machine_status,
     machine_summary,
     signal_infos,
     simulation_status,
+    with_loop_health,
 )
+from backend.workers.protocol import Pace, Pacing, Step
 
 router = APIRouter(prefix="/api/machines", tags=["machines"])
 
 
 @router.get("")
 def list_machines(services: ServicesDep) -> list[MachineSummary]:
-    return [machine_summary(h) for h in services.machines.hosts()]
+    return [machine_summary(m) for m in services.machines.proxies()]
 
 
 @router.post("", status_code=201, responses=responses(403, 409, 422))
@@ -33,15 +36,15 @@ def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -
 
 
 @router.get("/{mid}/status", responses=responses(404))
-def status(host: HostDep) -> MachineStatus:
+def status(machine: MachineDep) -> MachineStatus:
     """Full snapshot: HLI objects, axis and spindle states, gear, job errors, PLC."""
-    return machine_status(host)
+    return machine_status(machine)
 
 
 @router.get("/{mid}/signals", responses=responses(404))
-def signals(host: HostDep) -> list[SignalInfo]:
+def signals(machine: MachineDep) -> list[SignalInfo]:
     """Every signal the machine records each cycle (for telemetry subscriptions)."""
-    return signal_infos(host)
+    return signal_infos(machine)
 
 
 @router.post("/{mid}/restart", responses=responses(403, 404))
@@ -57,17 +60,23 @@ def delete(mid: str, services: ServicesDep, actor: ActorDep) -> Response:
 
 
 @router.post("/{mid}/simulation", responses=responses(403, 404, 422))
-def pace(req: SimulationControl, host: HostDep, actor: ActorDep) -> SimulationStatus:
+def pace(req: SimulationControl, machine: MachineDep, actor: ActorDep) -> SimulationStatus:
     """Run in real time, pause, or run as fast as possible (until a cycle)."""
-    authorize(actor, Action.SIMULATE, host.id)
-    host.set_mode(req.mode, req.until_cycle)
-    return simulation_status(host)
+    authorize(actor, Action.SIMULATE, machine.id)
+    return paced(machine, Pace(machine.id, req.mode, req.until_cycle))
 
 
 @router.post("/{mid}/simulation/step", responses=responses(403, 404, 422))
-def step(req: StepRequest, host: HostDep, actor: ActorDep) -> SimulationStatus:
+def step(req: StepRequest, machine: MachineDep, actor: ActorDep) -> SimulationStatus:
     """Pause and advance `cycles` cycles; an emergency stop, a pacing change or a restart
     meanwhile ends the step early (the answer's `cycle` says where it stopped)."""
-    authorize(actor, Action.SIMULATE, host.id)
-    host.step(req.cycles)
-    return simulation_status(host)
+    authorize(actor, Action.SIMULATE, machine.id)
+    return paced(machine, Step(machine.id, req.cycles))
+
+
+def paced(machine: MachineProxy, request: Pace | Step) -> SimulationStatus:
+    """Carry out a pacing request; the answer is the pacing it left."""
+    p = machine.call(request)
+    assert isinstance(p, Pacing)
+    machine.pacing = p
+    return with_loop_health(simulation_status(p), machine.worker)

@@ -17,7 +17,7 @@ from api.parameters import (
     ScopeName,
 )
 from backend.bodies import read_text, text_answer, text_body
-from backend.deps import ActorDep, HostDep, ServicesDep
+from backend.deps import ActorDep, MachineDep, ServicesDep
 from backend.errors import responses
 from backend.services import parameters as params
 from nc_sim.params import Scope, registry
@@ -53,17 +53,19 @@ def definitions() -> list[ParameterDef]:
 
 
 @router.get("/machines/{mid}/parameters", responses=responses(404, 422))
-def values(host: HostDep, scope: ScopeQ = "axis", target: TargetQ = None) -> list[ParameterValue]:
+def values(
+    machine: MachineDep, scope: ScopeQ = "axis", target: TargetQ = None
+) -> list[ParameterValue]:
     """Values of one list (every gear record for getriebe[i]), with pending values."""
-    return params.read(host, Scope(scope), target)
+    return params.read(machine, Scope(scope), target)
 
 
 @router.patch("/machines/{mid}/parameters", responses=responses(403, 404, why=_REJECTED))
 def write(
-    req: ParameterWrite, host: HostDep, services: ServicesDep, actor: ActorDep
+    req: ParameterWrite, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> ParameterWriteResult:
     """Write one or many values: all are checked first, then stored, audited and applied."""
-    return params.write(actor, host, services.store, req.changes, req.comment)
+    return params.write(actor, machine, services.store, req.changes, req.comment)
 
 
 @router.get(
@@ -71,9 +73,11 @@ def write(
     response_class=Response,
     responses=text_answer("text/plain", "the list") | responses(404, 422),
 )
-def export(host: HostDep, scope: ScopeQ = "axis", target: TargetQ = None) -> PlainTextResponse:
+def export(
+    machine: MachineDep, scope: ScopeQ = "axis", target: TargetQ = None
+) -> PlainTextResponse:
     """The list in the native format, as a restart would load it."""
-    return PlainTextResponse(params.export_list(host, Scope(scope), target))
+    return PlainTextResponse(params.export_list(machine, Scope(scope), target))
 
 
 @router.post(
@@ -83,7 +87,7 @@ def export(host: HostDep, scope: ScopeQ = "axis", target: TargetQ = None) -> Pla
 )
 async def import_list(
     request: Request,
-    host: HostDep,
+    machine: MachineDep,
     services: ServicesDep,
     actor: ActorDep,
     scope: ScopeQ = "axis",
@@ -92,7 +96,7 @@ async def import_list(
     """Import a native list (text/plain, UTF-8); a bad line is rejected with its line number."""
     text = await read_text(request, MAX_LIST_BYTES, "parameter list")
     return await run_in_threadpool(
-        params.import_list, actor, host, services.store, Scope(scope), target, text
+        params.import_list, actor, machine, services.store, Scope(scope), target, text
     )
 
 

@@ -9,7 +9,7 @@ from fastapi.responses import FileResponse, RedirectResponse, Response
 
 from api.auth import Action
 from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
-from backend.deps import ActorDep, HostDep, ServicesDep
+from backend.deps import ActorDep, MachineDep, ServicesDep
 from backend.errors import responses
 from backend.services import scope
 from backend.services.auth import authorize
@@ -22,35 +22,35 @@ BINARY: dict[int | str, dict[str, Any]] = {
 
 
 @router.get("/machines/{mid}/scope", responses=responses(403, 404))
-def scope_status(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+def scope_status(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """State of the scope, its setup and the recent captures (newest first)."""
-    authorize(actor, Action.OBSERVE, host.id)
-    return scope.status(host, services.traces, services.recorders)
+    authorize(actor, Action.OBSERVE, machine.id)
+    return scope.status(machine, services.traces, services.recorders)
 
 
 @router.put("/machines/{mid}/scope", responses=responses(403, 404, why={422: "bad setup"}))
 def scope_arm(
-    req: ScopeSetupModel, host: HostDep, services: ServicesDep, actor: ActorDep
+    req: ScopeSetupModel, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> ScopeStatus:
     """Arm (or start rolling) with this setup; the pre-trigger fills from recent history."""
-    authorize(actor, Action.OBSERVE, host.id)
-    scope.arm(host, req)
-    return scope.status(host, services.traces, services.recorders)
+    authorize(actor, Action.OBSERVE, machine.id)
+    scope.arm(machine, req)
+    return scope.status(machine, services.traces, services.recorders)
 
 
 @router.post("/machines/{mid}/scope/force", responses=responses(403, 404))
-def scope_force(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+def scope_force(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """Trigger now (an armed scope only)."""
-    authorize(actor, Action.OBSERVE, host.id)
-    scope.force(host)
-    return scope.status(host, services.traces, services.recorders)
+    authorize(actor, Action.OBSERVE, machine.id)
+    scope.force(machine)
+    return scope.status(machine, services.traces, services.recorders)
 
 
 @router.post("/machines/{mid}/scope/stop", responses=responses(403, 404))
-def scope_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
-    authorize(actor, Action.OBSERVE, host.id)
-    scope.stop(host)
-    return scope.status(host, services.traces, services.recorders)
+def scope_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+    authorize(actor, Action.OBSERVE, machine.id)
+    scope.stop(machine)
+    return scope.status(machine, services.traces, services.recorders)
 
 
 @router.get(
@@ -59,28 +59,28 @@ def scope_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> ScopeSt
     responses=BINARY | responses(403, 404, 409, 422),
 )
 def scope_roll(
-    host: HostDep,
+    machine: MachineDep,
     actor: ActorDep,
     max_points: Annotated[int, Query(ge=100, le=200_000)] = 5000,
 ) -> Response:
     """The newest record length of a running scope (every stride-th cycle)."""
-    authorize(actor, Action.OBSERVE, host.id)
-    return Response(scope.roll_frame(host, max_points), media_type="application/octet-stream")
+    authorize(actor, Action.OBSERVE, machine.id)
+    return Response(scope.roll_frame(machine, max_points), media_type="application/octet-stream")
 
 
 @router.post("/machines/{mid}/recording", status_code=201, responses=responses(403, 404, 409, 422))
 def recording_start(
-    req: RecordingStart, host: HostDep, services: ServicesDep, actor: ActorDep
+    req: RecordingStart, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> RecordingInfo:
     """Record these signals every cycle into a Rerun .rrd until stopped."""
-    authorize(actor, Action.OBSERVE, host.id)
-    return services.recorders.begin(host, req.signals)
+    authorize(actor, Action.OBSERVE, machine.id)
+    return services.recorders.begin(machine, req.signals)
 
 
 @router.delete("/machines/{mid}/recording", responses=responses(403, 404, 409))
-def recording_stop(host: HostDep, services: ServicesDep, actor: ActorDep) -> RecordingInfo:
-    authorize(actor, Action.OBSERVE, host.id)
-    return services.recorders.end(host.id)
+def recording_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> RecordingInfo:
+    authorize(actor, Action.OBSERVE, machine.id)
+    return services.recorders.end(machine.id)
 
 
 @router.get(

@@ -9,7 +9,7 @@ from fastapi import APIRouter
 from api.status import ServiceStatus
 from backend import VERSION
 from backend.deps import ServicesDep
-from backend.services.status import simulation_status
+from backend.services.status import machine_simulation, worker_statuses
 
 router = APIRouter(prefix="/api", tags=["service"])
 
@@ -21,12 +21,16 @@ def health() -> dict[str, str]:
 
 @router.get("/service/status")
 def service_status(services: ServicesDep) -> ServiceStatus:
-    """Loop timing and overruns, telemetry clients, and each machine's real-time factor."""
+    """Each worker with its machines and loop figures, telemetry clients, and each machine's
+    pacing and worker."""
     return ServiceStatus(
         version=VERSION,
         uptime_s=time.time() - services.started,
-        loop=services.loop.status(),
+        transport="ray" if services.settings.cluster else "local",
+        workers=worker_statuses(services.machines),
+        workers_replaced=services.pool.replaced,
+        machines_rebuilt=services.machines.rebuilt,
         clients=len(services.hub.subscribers),
         telemetry=services.hub.status(),
-        machines={h.id: simulation_status(h) for h in services.machines.hosts()},
+        machines={m.id: machine_simulation(m) for m in services.machines.proxies()},
     )

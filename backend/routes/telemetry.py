@@ -31,16 +31,21 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
     with 1009, a client that does not read what we send with 1008.
     """
     try:
-        host = services.machines.get(mid)
+        machine = services.machines.get(mid)
         authorize(actor, Action.OBSERVE, mid)
     except ApiError as e:
         await ws.close(code=4403 if e.status == 403 else 4404, reason=str(e)[:120])
         return
     await ws.accept()
     hub = services.hub
-    sub = hub.add(ws, host)
+    sub = hub.add(ws, machine)
     sub.reply(
-        Hello(machine=host.id, cycle=host.cycle, cycle_s=host.cycle_s, signals=signal_infos(host))
+        Hello(
+            machine=machine.id,
+            cycle=machine.cycle,
+            cycle_s=machine.cycle_s,
+            signals=signal_infos(machine),
+        )
     )
     query = ws.query_params.get("signals")
     if query:

@@ -9,6 +9,8 @@ the column of a bad NC block.
 
 from __future__ import annotations
 
+import time
+
 from api.auth import Action
 from api.commands import (
     Command,
@@ -30,8 +32,9 @@ from api.commands import (
 from api.common import JobErrorModel, Refusal
 from backend.errors import ApiError
 from backend.services.auth import Actor, authorize
-from backend.services.host import MachineHost
-from backend.services.parameters import apply_pending
+from backend.services.machines import MachineProxy
+from backend.services.parameters import pending_values, take_pending
+from backend.workers.protocol import Submit, Submitted
 from nc_sim import commands as nc
 from nc_sim.commands import Accepted, Invalid, Refused
 from nc_sim.errors import JobError
@@ -85,29 +88,41 @@ def to_nc(cmd: Command) -> nc.Command:
     raise _refuse(422, f"unknown command {cmd!r}")
 
 
-def execute(actor: Actor, host: MachineHost, cmd: Command) -> CommandResult:
-    """Authorize and carry out one command; raises ApiError with the refusal."""
-    authorize(actor, Action.COMMAND, host.id)
+def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
+    """Authorize and carry out one command on the machine's worker; raises ApiError with the
+    refusal."""
+    authorize(actor, Action.COMMAND, m.id)
     nc_cmd = to_nc(cmd)
-    with host.lock:
-        m = host.machine
-        match m.submit(nc_cmd):
+    jog_hold_s, jog_release = None, False
+    if isinstance(cmd, JogCommand) and cmd.action != "step":  # the dead-man lease of a jog
+        jog_hold_s = cmd.hold_s if cmd.action == "start" else None
+        jog_release = jog_hold_s is None
+    with m.lock:  # values pending for reset go in the reset's own cycle
+        reset_values = pending_values(m, {"reset"}) if isinstance(cmd, ResetCommand) else []
+        done = m.call(
+            Submit(
+                m.id,
+                nc_cmd,
+                sent_mono=time.monotonic(),
+                jog_hold_s=jog_hold_s,
+                jog_release=jog_release,
+                then_apply=reset_values,
+            )
+        )
+        assert isinstance(done, Submitted)
+        match done.outcome:
             case Invalid() as bad:
                 raise _refuse(422, bad.message, code=bad.code, column=bad.column)
             case Refused() as refused:
                 e = refused.error
                 raise _refuse(409, e.message, code=e.code, error=job_error_model(e).model_dump())
             case Accepted() as ok:
-                pass
-        if isinstance(cmd, JogCommand) and cmd.action != "step":
-            host.hold_jog(cmd.axis, cmd.hold_s if cmd.action == "start" else None)
-        if isinstance(cmd, EmergencyStopCommand):
-            host.interrupt_steps()  # stop means stop: a long single step ends here too
-        if isinstance(cmd, ResetCommand):
-            apply_pending(host, {"reset"})  # values that take effect at reset [params]
+                if reset_values:
+                    take_pending(m, {"reset"})
         return CommandResult(
-            cycle=host.cycle,
+            cycle=done.cycle,
             block_id=ok.block_id,
             acknowledged=ok.acknowledged,
-            state={ax.name: ax.state.name for ax in m.axes},
+            state=done.state,
+            latency_ms=done.latency_s * 1e3,
         )

@@ -1,39 +1,231 @@
-"""The machines of the service: created from the demo or from lists, kept in SQLite, rebuilt
-with their stored parameter values at start-up and restart."""
+"""The machines of the service as the gateway knows them: identity and parameter lists (kept in
+SQLite), which worker runs each, and what that worker last pushed.
+
+A machine runs on exactly one worker. When a worker dies its machines are rebuilt from their
+stored parameters on a live worker (a power cycle: cycle 0, new epoch), their viewers are
+told, and a replacement worker is started; machines on other workers never notice.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import threading
+import time
+import uuid
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
 
 from api.auth import Action
 from api.machines import MachineCreate
+from api.status import MachineStatus
 from backend.errors import ApiError, not_found
 from backend.services.auth import Actor, authorize
-from backend.services.host import MachineHost
-from backend.services.parameters import apply_stored
 from backend.services.store import Store, StoredMachine
-from nc_sim.errors import NcUsageError
+from backend.workers.client import WorkerClient, WorkerGone, WorkerRefused
+from backend.workers.pool import WorkerPool
+from backend.workers.protocol import (
+    AddMachine,
+    MachineInfo,
+    MachineNews,
+    Pacing,
+    ParamSnapshot,
+    Push,
+    ReadSamples,
+    RemoveMachine,
+    Request,
+    Samples,
+    Watch,
+    WorkerNews,
+)
+from backend.workers.ring import SampleRing
+from nc_sim.errors import JobError, NcUsageError
+from nc_sim.events import EventLog
 from nc_sim.machine.config import MachineConfig, demo_machine, machine_from_lists
-from nc_sim.params import ParamListError
+from nc_sim.params import ParamListError, Scope, Value
+from nc_sim.scope import Record
+from nc_sim.signals import Signal
+
+log = logging.getLogger(__name__)
+
+RECENT_CAPTURES = 16  # completed captures kept in memory until saved to the library
+PULL_PERIOD_S = 0.02  # how often samples are pulled from workers without shared memory
+
+
+@dataclass
+class Pending:
+    """An accepted value that waits for reset or restart."""
+
+    value: Value
+    effect: str
+
+
+@dataclass
+class Capture:
+    """A completed scope record with what the machine was at the time."""
+
+    id: str
+    record: Record
+    params: ParamSnapshot
+    created_unix: float
+
+
+@dataclass(frozen=True)
+class Notice:
+    """Something every viewer of a machine must see (a banner), numbered per machine."""
+
+    seq: int
+    kind: str
+    message: str
+    time_unix: float
+
+
+class MachineProxy:
+    """One machine in the gateway. Request threads share it: `lock` guards the lists and
+    pending values; pushed news is swapped in whole or appended under `_news`."""
+
+    def __init__(self, sm: StoredMachine, cfg: MachineConfig) -> None:
+        self.id = sm.id
+        self.name = sm.name
+        self.source = sm.source
+        self.cfg = cfg  # the written lists the worker runs with (the gateway's copy)
+        self.pending: dict[tuple[str, str, str], Pending] = {}
+        self.lock = threading.RLock()
+        self.worker: WorkerClient | None = None
+        self.info: MachineInfo | None = None
+        self.ring: SampleRing | None = None
+        self.epoch = 0
+        self.deleted = False  # telemetry closes its subscribers
+        self.watchers = 0
+        self.scope_setup: object | None = None  # the ScopeSetupModel as the client asked
+        self.captures: deque[Capture] = deque(maxlen=RECENT_CAPTURES)  # newest last
+        self.notices: deque[Notice] = deque(maxlen=16)
+        self.status: MachineStatus | None = None  # the newest pushed status
+        self.status_seq = 0
+        self.pacing: Pacing | None = None
+        self._news = threading.Lock()
+        self.events: EventLog[JobError] = EventLog()
+
+    # --- where it runs --------------------------------------------------------------------
+    def attach(self, worker: WorkerClient, info: MachineInfo) -> None:
+        """The machine now runs on `worker` as built in `info` (a new epoch)."""
+        old = self.ring
+        ring = SampleRing.attach(Path(info.ring_path)) if info.ring_path else None
+        if ring is None:
+            ring = SampleRing.create(None, info.slots)
+        with self._news:
+            self.worker, self.info, self.ring, self.epoch = worker, info, ring, info.epoch
+            self.events = EventLog()
+            self.signal_by_name: dict[str, Signal] = {s.name: s for s in info.signals}
+            self.status, self.pacing = None, None
+        if old is not None:
+            old.close()
+
+    @property
+    def axes(self) -> list[str]:
+        return self.info.axes if self.info else []
+
+    @property
+    def signals(self) -> list[Signal]:
+        return self.info.signals if self.info else []
+
+    @property
+    def cycle(self) -> int:
+        """The newest cycle stepped (from the sample ring)."""
+        return self.ring.head if self.ring else 0
+
+    @property
+    def cycle_s(self) -> float:
+        return self.info.cycle_s if self.info else self.cfg.cycle_s
+
+    def call(self, request: Request) -> object:
+        """A request to the machine's worker; 503 while it has none, 404/409/422 as refused."""
+        worker = self.worker
+        if worker is None or not worker.alive:
+            raise ApiError(503, {"message": f"machine '{self.id}' is being rebuilt: try again"})
+        try:
+            return worker.call(request)
+        except WorkerGone as e:
+            raise ApiError(503, {"message": f"machine '{self.id}': {e}; it is rebuilt"}) from None
+        except WorkerRefused as e:
+            code = {"not_found": 404, "invalid": 422, "conflict": 409}.get(e.failure.kind, 500)
+            raise ApiError(code, {"message": e.failure.message}) from None
+
+    def post(self, request: Request) -> None:
+        """A request whose answer nobody waits for (watching)."""
+        worker = self.worker
+        if worker is not None and worker.alive:
+            worker.post(request)
+
+    def samples(
+        self, signals: list[Signal], first: int, last: int, stride: int
+    ) -> tuple[np.ndarray, int]:
+        assert self.ring is not None
+        return self.ring.read(signals, first, last, stride)
+
+    # --- what the worker pushed -------------------------------------------------------------
+    def news(self, n: MachineNews) -> None:
+        with self._news:
+            if n.epoch != self.epoch:
+                return  # from a build that was replaced
+            for e in n.events:
+                self.events.append(e)
+            if n.status is not None:
+                assert isinstance(n.status, MachineStatus)
+                self.status = n.status
+                self.status_seq += 1
+        for rec, params in n.captures:
+            self.captures.append(Capture(uuid.uuid4().hex[:12], rec, params, time.time()))
+
+    def events_since(self, cursor: int) -> tuple[list[JobError], int, int, int]:
+        """(events, seq of the first, next cursor, missed) from the gateway's copy."""
+        with self._news:
+            read = self.events.since(cursor)
+        return read.entries, read.first_seq, read.cursor, read.dropped
+
+    def notice(self, kind: str, message: str) -> None:
+        seq = self.notices[-1].seq + 1 if self.notices else 1
+        self.notices.append(Notice(seq, kind, message, time.time()))
+
+    def pull(self) -> None:
+        """Fill the gateway's ring from a worker without shared memory."""
+        worker, ring = self.worker, self.ring
+        if worker is None or ring is None or worker.shared_rings or not worker.alive:
+            return
+        got = worker.call(ReadSamples(self.id, ring.head + 1, ring.cycles // 2))
+        assert isinstance(got, Samples)
+        rows = got.rows
+        if getattr(rows, "shape", (0,))[0]:
+            ring.put(got.first, rows)  # type: ignore[arg-type]
 
 
 class MachineService:
-    """Owns the hosts; the real-time loop reads `hosts()`."""
+    """Owns the proxies; places machines on workers and rebuilds them when a worker dies."""
 
-    def __init__(self, store: Store) -> None:
+    def __init__(self, store: Store, pool: WorkerPool) -> None:
         self.store = store
-        self._hosts: dict[str, MachineHost] = {}
+        self.pool = pool
+        self._proxies: dict[str, MachineProxy] = {}
         self._lock = threading.Lock()
+        self.rebuilt = 0  # machines rebuilt after their worker died
+        self.listeners: list[Callable[[MachineProxy], None]] = []  # told after a rebuild
 
-    def hosts(self) -> list[MachineHost]:
+    def proxies(self) -> list[MachineProxy]:
         with self._lock:
-            return list(self._hosts.values())
+            return list(self._proxies.values())
 
-    def get(self, mid: str) -> MachineHost:
-        host = self._hosts.get(mid)
-        if host is None:
+    def get(self, mid: str) -> MachineProxy:
+        proxy = self._proxies.get(mid)
+        if proxy is None:
             raise not_found(f"machine '{mid}'")
-        return host
+        return proxy
+
+    def on_machine(self, worker: WorkerClient) -> list[MachineProxy]:
+        return [p for p in self.proxies() if p.worker is worker]
 
     def _config(self, sm: StoredMachine) -> MachineConfig:
         if sm.source == "demo":
@@ -43,6 +235,16 @@ class MachineService:
         apply_stored(cfg, self.store.values(sm.id))
         return cfg
 
+    def _place(self, proxy: MachineProxy, worker: WorkerClient | None = None) -> None:
+        """Build the machine on a worker (the least loaded live one unless given)."""
+        worker = worker or self.pool.choose(self.on_machine)
+        epoch = proxy.epoch + 1
+        info = worker.call(AddMachine(proxy.id, proxy.name, proxy.cfg, epoch))
+        assert isinstance(info, MachineInfo)
+        proxy.attach(worker, info)
+        if proxy.watchers:
+            worker.post(Watch(proxy.id, True))
+
     def load(self, create_demo: bool) -> None:
         """Bring back every stored machine; a fresh store gets the demo lathe."""
         stored = self.store.machines()
@@ -51,11 +253,13 @@ class MachineService:
             self.store.add_machine(sm)
             stored = [sm]
         for sm in stored:
-            self._hosts[sm.id] = MachineHost(sm.id, sm.name, sm.source, self._config(sm))
+            proxy = MachineProxy(sm, self._config(sm))
+            self._place(proxy)
+            self._proxies[sm.id] = proxy
 
-    def create(self, actor: Actor, req: MachineCreate) -> MachineHost:
+    def create(self, actor: Actor, req: MachineCreate) -> MachineProxy:
         authorize(actor, Action.ADMINISTER)
-        if req.id in self._hosts:
+        if req.id in self._proxies:
             raise ApiError(409, {"message": f"machine '{req.id}' exists"})
         sm = StoredMachine(
             req.id,
@@ -79,28 +283,93 @@ class MachineService:
             ) from None
         except NcUsageError as e:
             raise ApiError(422, {"message": str(e)}) from None
-        host = MachineHost(sm.id, sm.name, sm.source, cfg)
+        proxy = MachineProxy(sm, cfg)
+        try:
+            self._place(proxy)
+        except (WorkerGone, WorkerRefused) as e:
+            raise ApiError(503, {"message": f"no worker could build the machine: {e}"}) from None
         self.store.add_machine(sm)
         with self._lock:
-            self._hosts[sm.id] = host
-        return host
+            self._proxies[sm.id] = proxy
+        return proxy
 
-    def restart(self, actor: Actor, mid: str) -> MachineHost:
+    def restart(self, actor: Actor, mid: str) -> MachineProxy:
         """Power the machine off and on: all stored values apply, pending ones included."""
         authorize(actor, Action.ADMINISTER, mid)
-        host = self.get(mid)
+        proxy = self.get(mid)
         sm = next(s for s in self.store.machines() if s.id == mid)
-        cfg = self._config(sm)
-        with host.lock:
-            host.build(cfg)
-            host.pending.clear()
-        return host
+        with proxy.lock:
+            proxy.cfg = self._config(sm)
+            proxy.pending.clear()
+            worker = proxy.worker if proxy.worker is not None and proxy.worker.alive else None
+            try:
+                self._place(proxy, worker)
+            except (WorkerGone, WorkerRefused) as e:
+                raise ApiError(503, {"message": f"machine '{mid}': {e}"}) from None
+        return proxy
 
     def delete(self, actor: Actor, mid: str) -> None:
         authorize(actor, Action.ADMINISTER, mid)
-        host = self.get(mid)
+        proxy = self.get(mid)
         with self._lock:
-            del self._hosts[mid]
-        host.deleted = True
-        host.interrupt_steps()  # a step in progress ends with the machine
+            del self._proxies[mid]
+        proxy.deleted = True
+        if proxy.worker is not None and proxy.worker.alive:
+            with contextlib.suppress(WorkerGone, WorkerRefused):  # gone with its worker
+                proxy.worker.call(RemoveMachine(mid))
         self.store.delete_machine(mid)
+
+    # --- worker events ----------------------------------------------------------------------
+    def on_push(self, worker: WorkerClient, push: Push) -> None:
+        if isinstance(push, MachineNews):
+            proxy = self._proxies.get(push.mid)
+            if proxy is not None and proxy.worker is worker:
+                proxy.news(push)
+        elif isinstance(push, WorkerNews):
+            worker.latest = push
+            for mid, pacing in push.pacing.items():
+                proxy = self._proxies.get(mid)
+                if proxy is not None and proxy.worker is worker:
+                    proxy.pacing = pacing
+
+    def on_death(self, worker: WorkerClient) -> None:
+        """Rebuild the dead worker's machines on live workers (off the reader thread)."""
+        threading.Thread(
+            target=self._rebuild_from, args=(worker,), name="rebuild", daemon=True
+        ).start()
+
+    def _rebuild_from(self, dead: WorkerClient) -> None:
+        lost = self.on_machine(dead)
+        self.pool.replace(dead)
+        why = f"its worker {dead.id} (pid {dead.pid}, node {dead.node}) stopped"
+        for proxy in lost:
+            if proxy.deleted:
+                continue
+            sm = next((s for s in self.store.machines() if s.id == proxy.id), None)
+            if sm is None:
+                continue
+            try:
+                with proxy.lock:
+                    proxy.cfg = self._config(sm)
+                    proxy.pending.clear()
+                    self._place(proxy)
+            except Exception:
+                log.exception("machine %s could not be rebuilt", proxy.id)
+                continue
+            self.rebuilt += 1
+            proxy.notice(
+                "rebuilt",
+                f"machine {proxy.id} was rebuilt from its stored parameters: "
+                f"{why} (simulated time starts again at 0)",
+            )
+            for listener in self.listeners:
+                listener(proxy)
+
+
+def apply_stored(cfg: MachineConfig, stored: list[tuple[str, str, str, Value]]) -> None:
+    """Layer stored values over a machine's base lists (at start-up and restart)."""
+    for scope, target, name, value in stored:
+        try:
+            cfg.list_values(Scope(scope), target)[name] = value
+        except NcUsageError:
+            continue  # an axis that the base lists no longer define

@@ -23,10 +23,9 @@ from api.parameters import (
 )
 from backend.errors import ApiError
 from backend.services.auth import Actor, authorize
-from backend.services.host import MachineHost, Pending
+from backend.services.machines import MachineProxy, Pending
 from backend.services.store import Store, StoredChange
-from nc_sim.errors import NcUsageError
-from nc_sim.machine.config import MachineConfig
+from backend.workers.protocol import ApplyValues, Values
 from nc_sim.params import (
     Effect,
     ParamDef,
@@ -48,19 +47,10 @@ _GEAR = "getriebe[i]."
 _KIND_LETTER = {AxisKind.LINEAR: "T", AxisKind.ROTARY: "R", AxisKind.SPINDLE: "S"}
 
 
-def list_values(cfg: MachineConfig, scope: Scope, target: str) -> dict[str, Value]:
-    """The live dict of written values of one list (channel, tool, or an axis)."""
-    if scope is Scope.CHANNEL:
-        return cfg.channel
-    if scope is Scope.TOOL:
-        return cfg.tools
-    return cfg.axis(target).values
-
-
-def _target(host: MachineHost, scope: Scope, target: str | None) -> str:
+def _target(m: MachineProxy, scope: Scope, target: str | None) -> str:
     if scope is not Scope.AXIS:
         return ""
-    names = [ax.name for ax in host.machine.axes]
+    names = [ax.name for ax in m.cfg.axes]
     if target not in names:
         raise ApiError(
             422, {"message": f"axis parameters need a target, one of {', '.join(names)}"}
@@ -102,10 +92,10 @@ def _parse(d: ParamDef, name: str, value: Value) -> Value:
     return parse_value(d, name, str(value))
 
 
-def _effective(host: MachineHost, scope: Scope, target: str) -> dict[str, Value]:
+def _effective(m: MachineProxy, scope: Scope, target: str) -> dict[str, Value]:
     """A list as it stands with pending values: what the next restart would load."""
-    values = dict(list_values(host.machine.cfg, scope, target))
-    for (s, t, n), p in host.pending.items():
+    values = dict(m.cfg.list_values(scope, target))
+    for (s, t, n), p in m.pending.items():
         if s == scope.value and t == target:
             values[n] = p.value
     return values
@@ -113,21 +103,21 @@ def _effective(host: MachineHost, scope: Scope, target: str) -> dict[str, Value]
 
 def write(
     actor: Actor,
-    host: MachineHost,
+    m: MachineProxy,
     store: Store,
     changes: list[ParameterChange],
     comment: str = "",
     lines: Mapping[str, int] | None = None,
 ) -> ParameterWriteResult:
     """Validate all changes together, then store, audit and apply them."""
-    authorize(actor, Action.CONFIGURE, host.id)
-    with host.lock:
+    authorize(actor, Action.CONFIGURE, m.id)
+    with m.lock:
         problems: list[ParameterProblem] = []
         parsed: list[tuple[Scope, str, ParamDef, str, Value]] = []
         seen: set[Key] = set()
         for c in changes:
             scope = Scope(c.scope)
-            target = _target(host, scope, c.target)
+            target = _target(m, scope, c.target)
             if (scope.value, target, c.name) in seen:  # which one should win? neither
                 err = ParamError(f"{c.name} is written twice in one change", name=c.name)
                 problems.append(_problem(err, scope, target))
@@ -140,7 +130,7 @@ def write(
                 problems.append(_problem(e, scope, target, (lines or {}).get(c.name)))
         lists: dict[tuple[Scope, str], dict[str, Value]] = {}
         for scope, target, _d, name, value in parsed:
-            lists.setdefault((scope, target), _effective(host, scope, target))[name] = value
+            lists.setdefault((scope, target), _effective(m, scope, target))[name] = value
         for (scope, target), values in lists.items():
             for err in validate_values(scope, values):
                 problems.append(_problem(err, scope, target, (lines or {}).get(err.name)))
@@ -151,9 +141,9 @@ def write(
         changed: list[tuple[Scope, str, ParamDef, str, Value]] = []
         for scope, target, d, name, value in parsed:
             key: Key = (scope.value, target, name)
-            old = host.pending[key].value if key in host.pending else None
+            old = m.pending[key].value if key in m.pending else None
             if old is None:
-                old = list_values(host.machine.cfg, scope, target).get(name)
+                old = m.cfg.list_values(scope, target).get(name)
             if old is not None and old == value:
                 continue  # the value it already has (a list re-imported): no change, no audit
             changed.append((scope, target, d, name, value))
@@ -171,27 +161,31 @@ def write(
             )
         if not changed:
             return ParameterWriteResult(changes=[])
-        store.write(host.id, actor.name, comment, stored)
+        now: Values = []
         for scope, target, d, name, value in changed:
             if d.effect is Effect.NOW:
-                list_values(host.machine.cfg, scope, target)[name] = value
+                now.append((scope.value, target, name, value))
             else:
-                host.pending[(scope.value, target, name)] = Pending(value, d.effect.value)
-        host.machine.refresh_params()
+                m.pending[(scope.value, target, name)] = Pending(value, d.effect.value)
+        if now:  # the running machine first: a write it cannot take is not stored
+            m.call(ApplyValues(m.id, now))
+            for scope_name, target, name, value in now:
+                m.cfg.list_values(Scope(scope_name), target)[name] = value
+        store.write(m.id, actor.name, comment, stored)
         return ParameterWriteResult(changes=applied)
 
 
-def apply_pending(host: MachineHost, effects: set[str]) -> int:
-    """Move pending values with these effects into the running machine (at reset)."""
-    with host.lock:
-        keys = [k for k, p in host.pending.items() if p.effect in effects]
-        for scope, target, name in keys:
-            list_values(host.machine.cfg, Scope(scope), target)[name] = host.pending.pop(
-                (scope, target, name)
-            ).value
-        if keys:
-            host.machine.refresh_params()
-        return len(keys)
+def pending_values(m: MachineProxy, effects: set[str]) -> Values:
+    """Pending values with these effects (call holding `m.lock`)."""
+    return [(s, t, n, p.value) for (s, t, n), p in m.pending.items() if p.effect in effects]
+
+
+def take_pending(m: MachineProxy, effects: set[str]) -> None:
+    """The running machine took the pending values with these effects: they are written now
+    (call holding `m.lock`)."""
+    for scope, target, name, value in pending_values(m, effects):
+        m.cfg.list_values(Scope(scope), target)[name] = value
+        del m.pending[(scope, target, name)]
 
 
 def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) -> list[str]:
@@ -207,16 +201,16 @@ def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) 
     return names + sorted(n for n in written if n not in set(names))
 
 
-def read(host: MachineHost, scope: Scope, target: str | None) -> list[ParameterValue]:
+def read(m: MachineProxy, scope: Scope, target: str | None) -> list[ParameterValue]:
     """Every parameter of one list with value, default, unit, effect and pending value."""
-    with host.lock:
-        tgt = _target(host, scope, target)
-        written = list_values(host.machine.cfg, scope, tgt)
+    with m.lock:
+        tgt = _target(m, scope, target)
+        written = m.cfg.list_values(scope, tgt)
         kind = axis_kind_of(written) if scope is Scope.AXIS else AxisKind.LINEAR
         out = []
         for name in _concrete_names(scope, kind, written):
             d = resolve(scope, name)
-            pending = host.pending.get((scope.value, tgt, name))
+            pending = m.pending.get((scope.value, tgt, name))
             gear = int(name[9]) + 1 if name.startswith("getriebe[") else None
             lo, hi = value_range(d, name, written) if d.is_numeric else (None, None)
             out.append(
@@ -242,22 +236,22 @@ def read(host: MachineHost, scope: Scope, target: str | None) -> list[ParameterV
         return out
 
 
-def export_list(host: MachineHost, scope: Scope, target: str | None) -> str:
+def export_list(m: MachineProxy, scope: Scope, target: str | None) -> str:
     """The list in native format as the next restart would load it (pending included)."""
-    with host.lock:
-        tgt = _target(host, scope, target)
-        values = _effective(host, scope, tgt)
+    with m.lock:
+        tgt = _target(m, scope, target)
+        values = _effective(m, scope, tgt)
     where = f" axis {tgt}" if tgt else ""
-    title = f"Inbetrieb export: machine {host.id}, {scope.value} list{where}"
+    title = f"Inbetrieb export: machine {m.id}, {scope.value} list{where}"
     return format_list(values, scope, [title])
 
 
 def import_list(
-    actor: Actor, host: MachineHost, store: Store, scope: Scope, target: str | None, text: str
+    actor: Actor, m: MachineProxy, store: Store, scope: Scope, target: str | None, text: str
 ) -> ParameterWriteResult:
     """Parse a native list (errors with line numbers) and write its values as one change."""
-    authorize(actor, Action.CONFIGURE, host.id)
-    tgt = _target(host, scope, target)
+    authorize(actor, Action.CONFIGURE, m.id)
+    tgt = _target(m, scope, target)
     try:
         plist = parse_list(text, scope)
     except ParamListError as e:
@@ -269,7 +263,7 @@ def import_list(
         ParameterChange(scope=scope.value, target=tgt or None, name=n, value=v)
         for n, v in plist.values.items()
     ]
-    return write(actor, host, store, changes, f"import {scope.value} list", lines)
+    return write(actor, m, store, changes, f"import {scope.value} list", lines)
 
 
 def audit(store: Store, mid: str, limit: int) -> list[AuditEntry]:
@@ -289,12 +283,3 @@ def audit(store: Store, mid: str, limit: int) -> list[AuditEntry]:
         )
         for r in store.audit(mid, limit)
     ]
-
-
-def apply_stored(cfg: MachineConfig, stored: list[tuple[str, str, str, Value]]) -> None:
-    """Layer stored values over a machine's base lists (at start-up and restart)."""
-    for scope, target, name, value in stored:
-        try:
-            list_values(cfg, Scope(scope), target)[name] = value
-        except NcUsageError:
-            continue  # an axis that the base lists no longer define

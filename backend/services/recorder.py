@@ -1,8 +1,8 @@
 """Continuous recording: chosen signals of a machine, every cycle, into a Rerun .rrd file.
 
-A recorder reads the host's sample ring behind a cursor (like a telemetry subscriber) and one
-thread writes every recorder's new cycles every `period_s`, outside the host lock, so the
-real-time loop only ever waits for the copy out of the ring. A power cycle of the machine ends
+A recorder reads the machine's sample ring behind a cursor (like a telemetry subscriber) and one
+thread writes every recorder's new cycles every `period_s`; the worker's loop never waits
+for it. A power cycle of the machine ends
 its recording (simulated time starts again at zero), and so does deleting the machine.
 """
 
@@ -19,7 +19,8 @@ from pathlib import Path
 from api.scope import RecordingInfo
 from backend.errors import ApiError, not_found
 from backend.services import rrd
-from backend.services.host import MachineHost
+from backend.services.machines import MachineProxy
+from nc_sim.errors import JobError
 
 log = logging.getLogger(__name__)
 
@@ -27,7 +28,7 @@ log = logging.getLogger(__name__)
 @dataclass
 class Recording:
     id: str
-    host: MachineHost
+    machine: MachineProxy
     signals: list[str]
     path: Path
     writer: rrd.RrdWriter
@@ -43,7 +44,7 @@ class Recording:
     def info(self) -> RecordingInfo:
         return RecordingInfo(
             id=self.id,
-            machine=self.host.id,
+            machine=self.machine.id,
             signals=self.signals,
             active=self.active,
             first_cycle=self.first_cycle,
@@ -58,19 +59,18 @@ class Recording:
         with self.lock:
             if not self.active:
                 return
-            host = self.host
-            sigs = [host.signal_by_name[n] for n in self.signals]
-            ended = host.deleted or host.epoch != self.epoch
-            with host.lock:
-                if ended:
-                    head, data, start, events = self.cursor - 1, None, self.cursor, []
-                else:
-                    head = host.cycle
-                    data, start = (None, self.cursor)
-                    if head >= self.cursor:
-                        data, start = host.samples(sigs, self.cursor, head, 1)
-                    read = host.machine.events.since(self.events_from)
-                    events, self.events_from = read.entries, read.cursor
+            m = self.machine
+            sigs = [m.signal_by_name[n] for n in self.signals]
+            ended = m.deleted or m.epoch != self.epoch
+            if ended:
+                head, data, start = self.cursor - 1, None, self.cursor
+                events: list[JobError] = []
+            else:
+                head = m.cycle
+                data, start = (None, self.cursor)
+                if head >= self.cursor:
+                    data, start = m.samples(sigs, self.cursor, head, 1)
+                events, _, self.events_from, _ = m.events_since(self.events_from)
             if data is not None:
                 self.skipped += start - self.cursor
                 self.writer.block(start, data)
@@ -125,42 +125,39 @@ class Recorders:
                     r._close()
                 r.active = False
 
-    def begin(self, host: MachineHost, signals: list[str]) -> RecordingInfo:
+    def begin(self, m: MachineProxy, signals: list[str]) -> RecordingInfo:
         """Start recording from the next cycle; 409 when the machine already records."""
-        bad = [n for n in signals if n not in host.signal_by_name]
+        bad = [n for n in signals if n not in m.signal_by_name]
         if bad:
             raise ApiError(422, {"message": f"recording: unknown signals {bad}"})
-        if self.active(host.id) is not None:
-            raise ApiError(409, {"message": f"{host.id} is already recording: stop it first"})
+        if self.active(m.id) is not None:
+            raise ApiError(409, {"message": f"{m.id} is already recording: stop it first"})
         rid = uuid.uuid4().hex[:12]
         path = self.dir / f"{rid}.rrd"
-        about = f"# continuous recording of {host.name} ({host.id})\n- signals: " + ", ".join(
-            signals
+        about = f"# continuous recording of {m.name} ({m.id})\n- signals: " + ", ".join(signals)
+        stream = rrd.open_stream(path, rid, m.id, about)
+        first = m.cycle + 1
+        rec = Recording(
+            rid,
+            m,
+            list(signals),
+            path,
+            rrd.RrdWriter(stream, m.id, signals, m.cycle_s),
+            m.epoch,
+            first,
+            first,
+            time.time(),
+            events_from=m.events.cursor,
         )
-        stream = rrd.open_stream(path, rid, host.id, about)
-        with host.lock:
-            first = host.cycle + 1
-            rec = Recording(
-                rid,
-                host,
-                list(signals),
-                path,
-                rrd.RrdWriter(stream, host.id, signals, host.cycle_s),
-                host.epoch,
-                first,
-                first,
-                time.time(),
-                events_from=host.machine.events.cursor,
-            )
         self.all[rid] = rec
         return rec.info()
 
     def active(self, mid: str) -> Recording | None:
-        return next((r for r in self.all.values() if r.host.id == mid and r.active), None)
+        return next((r for r in self.all.values() if r.machine.id == mid and r.active), None)
 
     def info(self, mid: str) -> RecordingInfo | None:
         """The machine's running recording, else its newest finished one."""
-        mine = [r for r in self.all.values() if r.host.id == mid]
+        mine = [r for r in self.all.values() if r.machine.id == mid]
         act = [r for r in mine if r.active]
         pick = act[0] if act else (mine[-1] if mine else None)
         return pick.info() if pick else None

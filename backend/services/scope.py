@@ -1,13 +1,19 @@
-"""A machine's scope as the service offers it: setup from the API model, arm, force, stop."""
+"""A machine's scope as the service offers it: setup from the API model, arm, force, stop.
+
+The scope runs in the machine's worker, where the cycles are; completed captures are pushed
+to the gateway with the machine's news."""
 
 from __future__ import annotations
+
+import numpy as np
 
 from api.scope import EventTriggerModel, LevelTriggerModel, ScopeSetupModel, ScopeStatus
 from api.telemetry import FrameHeader, encode_frame
 from backend.errors import ApiError
-from backend.services.host import MachineHost
+from backend.services.machines import MachineProxy
 from backend.services.recorder import Recorders
 from backend.services.traces import TraceService
+from backend.workers.protocol import Roll, ScopeAct, ScopeArm, ScopeRoll, ScopeState
 from nc_sim.scope import (
     EventKind,
     EventTrigger,
@@ -18,29 +24,29 @@ from nc_sim.scope import (
 )
 
 
-def _unknown(host: MachineHost, names: list[str], what: str) -> ApiError:
-    bad = [n for n in names if n not in host.signal_by_name]
+def _unknown(m: MachineProxy, names: list[str], what: str) -> ApiError:
+    bad = [n for n in names if n not in m.signal_by_name]
     return ApiError(422, {"message": f"{what}: unknown signals {bad}"})
 
 
-def engine_setup(host: MachineHost, req: ScopeSetupModel) -> ScopeSetup:
+def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
     """The kernel-side setup; 422 naming an unknown signal or axis or a length too long."""
-    if any(n not in host.signal_by_name for n in req.channels):
-        raise _unknown(host, req.channels, "channels")
+    if any(n not in m.signal_by_name for n in req.channels):
+        raise _unknown(m, req.channels, "channels")
     trigger: Trigger | None = None
     t = req.trigger
     if isinstance(t, LevelTriggerModel):
-        if t.signal not in host.signal_by_name:
-            raise _unknown(host, [t.signal], "trigger")
-        sig = host.signal_by_name[t.signal]
+        if t.signal not in m.signal_by_name:
+            raise _unknown(m, [t.signal], "trigger")
+        sig = m.signal_by_name[t.signal]
         trigger = LevelTrigger(sig, t.level, t.edge == "rising", t.hysteresis)
     elif isinstance(t, EventTriggerModel):
-        if t.axis is not None and t.axis not in host.machine.by_name:
+        if t.axis is not None and t.axis not in m.axes:
             raise ApiError(422, {"message": f"trigger: no axis {t.axis}"})
         trigger = EventTrigger(EventKind(t.event), t.axis, t.m)
-    length = round(req.length_s / host.cycle_s)
+    length = round(req.length_s / m.cycle_s)
     setup = ScopeSetup(
-        [host.signal_by_name[n] for n in req.channels],
+        [m.signal_by_name[n] for n in req.channels],
         length,
         req.pretrigger_pct,
         ScopeMode(req.mode),
@@ -53,65 +59,60 @@ def engine_setup(host: MachineHost, req: ScopeSetupModel) -> ScopeSetup:
     return setup
 
 
-def arm(host: MachineHost, req: ScopeSetupModel) -> None:
+def arm(m: MachineProxy, req: ScopeSetupModel) -> None:
     """(Re)arm the scope with a setup; a capture in progress is dropped."""
-    setup = engine_setup(host, req)
-    with host.lock:
-        host.scope_setup = req
-        host.scope.arm(setup, host.cycle, host.history(setup.length_cycles), host.machine.events)
+    setup = engine_setup(m, req)
+    m.call(ScopeArm(m.id, setup))
+    m.scope_setup = req
 
 
-def force(host: MachineHost) -> None:
+def force(m: MachineProxy) -> None:
     """Trigger an armed scope now."""
-    with host.lock:
-        host.scope.force()
+    m.call(ScopeAct(m.id, "force"))
 
 
-def stop(host: MachineHost) -> None:
+def stop(m: MachineProxy) -> None:
     """Stop recording; a capture in progress is dropped."""
-    with host.lock:
-        host.scope.stop()
+    m.call(ScopeAct(m.id, "stop"))
 
 
-def status(host: MachineHost, traces: TraceService, recorders: Recorders) -> ScopeStatus:
-    with host.lock:
-        sc = host.scope
-        setup = sc.setup
-        out = ScopeStatus(
-            state=sc.state.value,
-            setup=host.scope_setup if setup is not None else None,
-            cycle=host.cycle,
-            length_cycles=setup.length_cycles if setup else 0,
-            pre_cycles=setup.pre_cycles if setup else 0,
-            filled_cycles=min(sc.filled, setup.length_cycles) if setup else 0,
-            trigger_cycle=sc.trigger_cycle,
-            captures=[],
-            recording=None,
-        )
-    out.captures = traces.recent(host)
-    out.recording = recorders.info(host.id)
-    return out
+def status(m: MachineProxy, traces: TraceService, recorders: Recorders) -> ScopeStatus:
+    st = m.call(ScopeAct(m.id, "state"))
+    assert isinstance(st, ScopeState)
+    idle = st.length_cycles == 0
+    setup = m.scope_setup if not idle else None
+    assert setup is None or isinstance(setup, ScopeSetupModel)
+    return ScopeStatus(
+        state=st.state,
+        setup=setup,
+        cycle=st.cycle,
+        length_cycles=st.length_cycles,
+        pre_cycles=st.pre_cycles,
+        filled_cycles=st.filled_cycles,
+        trigger_cycle=st.trigger_cycle,
+        captures=traces.recent(m),
+        recording=recorders.info(m.id),
+    )
 
 
-def roll_frame(host: MachineHost, max_points: int) -> bytes:
+def roll_frame(m: MachineProxy, max_points: int) -> bytes:
     """The newest record length of the running scope as a binary frame, every `stride`-th
     cycle so that at most `max_points` samples per channel go out (a roll is for watching;
     a capture carries every cycle)."""
-    with host.lock:
-        snap = host.scope.snapshot()
-        if snap is None:
-            raise ApiError(409, {"message": "the scope is not recording: arm it first"})
-        stride = max(1, -(-snap.count // max_points))
-        data = snap.data[:, ::stride]
-        header = FrameHeader(
-            machine=host.id,
-            first_cycle=snap.first_cycle,
-            count=data.shape[1],
-            stride=stride,
-            cycle_s=snap.cycle_s,
-            t0_unix=host.t0_unix(),
-            signals=[s.name for s in snap.channels],
-            decimated=stride > 1,
-            skipped_cycles=0,
-        )
-        return encode_frame(header, data)
+    roll = m.call(ScopeRoll(m.id, max_points))
+    assert isinstance(roll, Roll)
+    data = roll.data
+    assert isinstance(data, np.ndarray)
+    t0 = m.pacing.t0_unix if m.pacing else 0.0
+    header = FrameHeader(
+        machine=m.id,
+        first_cycle=roll.first_cycle,
+        count=data.shape[1],
+        stride=roll.stride,
+        cycle_s=m.cycle_s,
+        t0_unix=t0,
+        signals=roll.signals,
+        decimated=roll.stride > 1,
+        skipped_cycles=0,
+    )
+    return encode_frame(header, data)

@@ -1,5 +1,9 @@
 """Telemetry fan-out: every frame period, each subscriber gets the samples of every cycle
-since its last frame, as one binary frame, and the new events as JSON messages.
+since its last frame, as one binary frame, and as JSON the new events, the machine's newest
+status (pushed by its worker while somebody watches) and notices such as a rebuild.
+
+Samples come from the machine's sample ring (shared memory its worker writes), events and
+status from what the worker pushed: nothing here asks a worker anything.
 
 One hub task builds frames; each subscriber has at most one send in flight. A subscriber still
 busy sending when its next frame is due is skipped for that period (it never holds up the loop
@@ -30,12 +34,16 @@ from api.telemetry import (
     EventMessage,
     FrameHeader,
     Hello,
+    NoticeMessage,
+    StatusMessage,
     Subscribe,
     Subscribed,
     encode_frame,
 )
 from backend.services.commands import job_error_model
-from backend.services.host import MachineHost
+from backend.services.machines import MachineProxy
+from backend.services.status import with_loop_health
+from backend.workers.protocol import Watch
 from nc_sim.signals import Signal
 
 log = logging.getLogger(__name__)
@@ -59,12 +67,14 @@ class Subscriber:
     """One websocket watching one machine."""
 
     ws: WebSocket
-    host: MachineHost
+    machine: MachineProxy
     signals: list[Signal] = field(default_factory=list)
     min_stride: int = 1
     cursor: int = 0  # next cycle to send
     event_cursor: int = 0  # sequence number of the next event to send
     epoch: int = 0
+    status_seq: int = 0  # the newest pushed status sent
+    notice_seq: int = 0  # the newest notice sent
     control: list[str] = field(default_factory=list)  # JSON replies, sent before the next frame
     sending: asyncio.Task[None] | None = None
     send_started: float = 0.0  # event-loop time the send in flight began
@@ -74,18 +84,17 @@ class Subscriber:
     def subscribe(self, req: Subscribe) -> None:
         """Stream these signals from the current cycle (also after a reconnect); the reply,
         `subscribed` or `error`, goes out before the next frame."""
-        host = self.host
-        unknown = [n for n in req.signals if n not in host.signal_by_name]
+        m = self.machine
+        unknown = [n for n in req.signals if n not in m.signal_by_name]
         if unknown:
             more = f" and {len(unknown) - 10} more" if len(unknown) > 10 else ""
             self.reply(ErrorMessage(message=f"unknown signals: {unknown[:10]}{more}"))
             return
-        with host.lock:
-            self.signals = [host.signal_by_name[n] for n in req.signals]
-            rate = req.max_rate_hz or math.inf  # bounded by the protocol (api/telemetry.py)
-            self.min_stride = max(1, math.ceil(1.0 / (host.cycle_s * rate)))
-            self.cursor = host.cycle + 1
-            self.epoch = host.epoch
+        self.signals = [m.signal_by_name[n] for n in req.signals]
+        rate = req.max_rate_hz or math.inf  # bounded by the protocol (api/telemetry.py)
+        self.min_stride = max(1, math.ceil(1.0 / (m.cycle_s * rate)))
+        self.cursor = m.cycle + 1
+        self.epoch = m.epoch
         self.reply(
             Subscribed(signals=req.signals, first_cycle=self.cursor - 1, stride=self.min_stride)
         )
@@ -113,16 +122,22 @@ class TelemetryHub:
         self.restarts = 0  # times the hub task failed and was restarted
         self._task: asyncio.Task[None] | None = None
 
-    def add(self, ws: WebSocket, host: MachineHost) -> Subscriber:
-        with host.lock:
-            sub = Subscriber(
-                ws, host, cursor=host.cycle + 1, event_cursor=host.machine.events.cursor
-            )
-            sub.epoch = host.epoch
+    def add(self, ws: WebSocket, m: MachineProxy) -> Subscriber:
+        """A new viewer of `m`: from now on its worker pushes the machine's status."""
+        sub = Subscriber(ws, m, cursor=m.cycle + 1, event_cursor=m.events.cursor, epoch=m.epoch)
+        sub.notice_seq = m.notices[-1].seq - 1 if m.notices else 0  # the newest notice again
         self.subscribers.add(sub)
+        m.watchers += 1
+        if m.watchers == 1:
+            m.post(Watch(m.id, True))
         return sub
 
     def remove(self, sub: Subscriber) -> None:
+        if sub in self.subscribers:
+            m = sub.machine
+            m.watchers -= 1
+            if m.watchers == 0:
+                m.post(Watch(m.id, False))
         sub.closed = True
         self.subscribers.discard(sub)
 
@@ -203,7 +218,7 @@ class TelemetryHub:
                 if loop.time() - sub.send_started > self.stall_s:
                     self.drop(sub, CLOSE_POLICY, "client does not read")
                 continue
-            if sub.host.deleted:
+            if sub.machine.deleted:
                 self.remove(sub)
                 sub.sending = loop.create_task(self._close(sub.ws, 4404, "machine deleted"))
                 continue
@@ -220,43 +235,58 @@ class TelemetryHub:
     def _messages(
         self, sub: Subscriber, cache: dict[tuple[object, ...], Built]
     ) -> list[str | bytes]:
-        host = sub.host
+        m = sub.machine
         out: list[str | bytes] = list(sub.control)
         sub.control.clear()
-        with host.lock:
-            if sub.epoch != host.epoch:  # the machine was restarted: follow it from cycle 1
-                sub.epoch, sub.cursor, sub.event_cursor = host.epoch, 1, 0
-            head = host.cycle
-            read = host.machine.events.since(sub.event_cursor)
-            sub.event_cursor = read.cursor
-            if sub.signals and head >= sub.cursor:
-                out.append(self._frame(sub, head, cache))
+        if sub.epoch != m.epoch:  # the machine was rebuilt: follow it from cycle 1
+            sub.epoch, sub.cursor, sub.event_cursor = m.epoch, 1, 0
+        out += [
+            NoticeMessage(
+                seq=n.seq, kind="rebuilt", message=n.message, time_unix=n.time_unix
+            ).model_dump_json()
+            for n in list(m.notices)
+            if n.seq > sub.notice_seq
+        ]
+        if m.notices:
+            sub.notice_seq = max(sub.notice_seq, m.notices[-1].seq)
+        if m.status is not None and sub.status_seq != m.status_seq:
+            sub.status_seq = m.status_seq
+            key = ("status", m.id, m.epoch, m.status_seq)
+            if key not in cache:
+                st = m.status.model_copy()
+                st.simulation = with_loop_health(st.simulation.model_copy(), m.worker)
+                cache[key] = Built(StatusMessage(status=st).model_dump_json().encode(), 0)
+            out.append(cache[key].frame.decode())
+        head = m.cycle
+        if sub.signals and head >= sub.cursor:
+            out.append(self._frame(sub, head, cache))
+        events, first_seq, sub.event_cursor, dropped = m.events_since(sub.event_cursor)
         out += [
             EventMessage(
                 seq=seq,
-                missed=read.dropped if seq == read.first_seq else 0,
+                missed=dropped if seq == first_seq else 0,
                 event=job_error_model(e),
             ).model_dump_json()
-            for seq, e in enumerate(read.entries, read.first_seq)
+            for seq, e in enumerate(events, first_seq)
         ]
         return out
 
     def _frame(self, sub: Subscriber, head: int, cache: dict[tuple[object, ...], Built]) -> bytes:
-        """The frame of cycles cursor..head (caller holds the host lock); advances the cursor."""
-        host = sub.host
+        """The frame of cycles cursor..head; advances the cursor."""
+        m = sub.machine
         span = head - sub.cursor + 1
         stride = max(sub.min_stride, math.ceil(span / self.max_frame_samples))
-        key = (host.id, host.epoch, tuple(s.name for s in sub.signals), sub.cursor, head, stride)
+        key = (m.id, m.epoch, tuple(s.name for s in sub.signals), sub.cursor, head, stride)
         built = cache.get(key)
         if built is None:
-            data, start = host.samples(sub.signals, sub.cursor, head, stride)
+            data, start = m.samples(sub.signals, sub.cursor, head, stride)
             header = FrameHeader(
-                machine=host.id,
+                machine=m.id,
                 first_cycle=start,
                 count=data.shape[1],
                 stride=stride,
-                cycle_s=host.cycle_s,
-                t0_unix=host.t0_unix(),
+                cycle_s=m.cycle_s,
+                t0_unix=m.pacing.t0_unix if m.pacing else 0.0,
                 signals=[s.name for s in sub.signals],
                 decimated=stride > sub.min_stride,
                 skipped_cycles=start - sub.cursor,

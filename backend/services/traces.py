@@ -31,9 +31,9 @@ from api.telemetry import FrameHeader, encode_frame
 from backend.errors import ApiError, not_found
 from backend.services import rrd
 from backend.services.commands import job_error_model
-from backend.services.host import Capture, MachineHost, ParamSnapshot
-from backend.services.machines import MachineService
+from backend.services.machines import Capture, MachineProxy, MachineService
 from backend.services.store import Store
+from backend.workers.protocol import ParamSnapshot
 from nc_sim.errors import JobError
 from nc_sim.measure import measure
 from nc_sim.params import ParamError, Scope
@@ -90,7 +90,7 @@ class TraceService:
         self._cache: dict[str, Trace] = {}  # recent captures, converted once
 
     # --- finding ----------------------------------------------------------------------------
-    def _from_capture(self, host: MachineHost, cap: Capture) -> Trace:
+    def _from_capture(self, m: MachineProxy, cap: Capture) -> Trace:
         with self._lock:
             hit = self._cache.get(cap.id)
             if hit is not None:
@@ -99,8 +99,8 @@ class TraceService:
         params = param_diff(cap.params)
         detail = TraceDetail(
             id=cap.id,
-            machine=host.id,
-            machine_name=host.name,
+            machine=m.id,
+            machine_name=m.name,
             name="",
             notes="",
             source="capture",
@@ -120,19 +120,18 @@ class TraceService:
         trace = Trace(detail, rec.data)
         with self._lock:
             self._cache[cap.id] = trace
-            live = {c.id for h in self.machines.hosts() for c in h.captures}
+            live = {c.id for p in self.machines.proxies() for c in p.captures}
             for k in [k for k in self._cache if k not in live]:
                 del self._cache[k]
                 (self.dir / "recent" / f"{k}.rrd").unlink(missing_ok=True)
         return trace
 
-    def recent(self, host: MachineHost) -> list[TraceInfo]:
+    def recent(self, m: MachineProxy) -> list[TraceInfo]:
         """The machine's recent captures, newest first."""
-        with host.lock:
-            caps = list(host.captures)
+        caps = list(m.captures)
         out = []
         for c in reversed(caps):
-            info = _info(self._from_capture(host, c).detail)
+            info = _info(self._from_capture(m, c).detail)
             info.stored = self.store.trace(c.id) is not None  # the library is the one record
             out.append(info)
         return out
@@ -150,11 +149,10 @@ class TraceService:
                 raise not_found(f"readable stored trace {tid} ({type(e).__name__})") from None
             detail.name, detail.notes = name, notes
             return Trace(detail, data)
-        for host in self.machines.hosts():
-            with host.lock:
-                cap = next((c for c in host.captures if c.id == tid), None)
+        for m in self.machines.proxies():
+            cap = next((c for c in list(m.captures) if c.id == tid), None)
             if cap is not None:
-                return self._from_capture(host, cap)
+                return self._from_capture(m, cap)
         raise not_found(f"trace {tid}")
 
     # --- the library ------------------------------------------------------------------------

@@ -84,6 +84,14 @@ class MachineConfig:
     def cycle_s(self) -> float:
         return self.channel_eng("cycle_time")
 
+    def list_values(self, scope: Scope, target: str = "") -> dict[str, Value]:
+        """The live dict of written values of one list (channel, tool, or axis `target`)."""
+        if scope is Scope.CHANNEL:
+            return self.channel
+        if scope is Scope.TOOL:
+            return self.tools
+        return self.axis(target).values
+
     def axis(self, name: str) -> AxisConfig:
         for a in self.axes:
             if a.name == name:

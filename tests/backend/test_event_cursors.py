@@ -1,66 +1,77 @@
 """Status and telemetry read the machine's bounded event log by cursor: an active job error
 keeps its event after the log has dropped it, and a telemetry client learns how many events
-it missed. In process, machines stepped by hand."""
+it missed. In process: the machine service with its worker on a thread, machines stepped by
+request."""
 
 from __future__ import annotations
 
 import asyncio
 import json
+from collections.abc import Iterator
+from pathlib import Path
 from typing import cast
 
+import pytest
 from fastapi import WebSocket
 
 from api.auth import Role
 from api.commands import EmergencyStopCommand
 from backend.services.auth import Actor
 from backend.services.commands import execute
-from backend.services.host import MachineHost
-from backend.services.status import RECENT_EVENTS, machine_status
+from backend.services.machines import MachineProxy, MachineService
+from backend.services.status import machine_status
 from backend.services.telemetry import TelemetryHub
+from backend.workers.protocol import Submit
+from backend.workers.status import RECENT_EVENTS
 from nc_sim.commands import Mdi
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN
-from nc_sim.machine.config import demo_machine
 from tests.backend.fakews import FakeSocket
+from tests.backend.inprocess import machine_service, paused_demo, step, wait_until
 
 INSTRUCTOR = Actor("test", Role.INSTRUCTOR)
 
 
-def _host() -> MachineHost:
-    host = MachineHost("m", "m", "demo", demo_machine())
-    host.set_mode("pause")
-    host.step(100)  # the PLC switches the drives on
-    return host
+@pytest.fixture
+def service(tmp_path: Path) -> Iterator[MachineService]:
+    with machine_service(tmp_path) as s:
+        yield s
 
 
-def _flood(host: MachineHost, n: int) -> None:
+def _flood(m: MachineProxy, n: int) -> None:
     """n refused MDI blocks: one event each, none of them sets a job error."""
-    with host.lock:
-        for _ in range(n):
-            host.machine.submit(Mdi("G1 X"))
+    for _ in range(n):
+        m.call(Submit(m.id, Mdi("G1 X")))
 
 
-def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it() -> None:
-    host = _host()
+def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it(
+    service: MachineService,
+) -> None:
+    host = paused_demo(service, "m")
     stop = execute(INSTRUCTOR, host, EmergencyStopCommand())
-    host.step(10)
+    step(host, 10)
     _flood(host, EVENT_LOG_LEN + 100)
-    host.step(10)
-    assert all(e.code == Code.BLOCK_SYNTAX for e in host.machine.events)  # E-stop dropped
+    step(host, 10)
+    wait_until(lambda: host.events.cursor >= EVENT_LOG_LEN + 100)
+    assert all(e.code == Code.BLOCK_SYNTAX for e in host.events)  # E-stop dropped
     st = machine_status(host)
     assert [(e.code, e.cycle) for e in st.job_errors] == [(int(Code.EMERGENCY_STOP), stop.cycle)]
     assert len(st.recent_events) == RECENT_EVENTS
     assert all(e.code == Code.BLOCK_SYNTAX for e in st.recent_events)
 
 
-def test_a_telemetry_client_that_fell_behind_learns_how_many_events_it_missed() -> None:
-    host = _host()
+def test_a_telemetry_client_that_fell_behind_learns_how_many_events_it_missed(
+    service: MachineService,
+) -> None:
+    host = paused_demo(service, "m")
 
     async def run() -> list[dict[str, object]]:
         hub = TelemetryHub(1.0, 1000)  # ticked by hand below
         ws = FakeSocket()
         hub.add(cast(WebSocket, ws), host)
+        start = host.events.cursor
         _flood(host, EVENT_LOG_LEN + 250)  # more than the log holds before the next frame
+        wait_until(lambda: host.events.cursor == start + EVENT_LOG_LEN + 250)
         hub.tick()
         await asyncio.sleep(0.05)  # let the send task run
         return [json.loads(t) for t in ws.texts]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import pytest
 
@@ -345,9 +346,17 @@ def test_create_from_lists_and_delete(srv: Server) -> None:
 
 
 def test_service_status(srv: Server, mid: str) -> None:
-    st = srv.http.get("/api/service/status").json()
-    assert st["loop"]["period_s"] == pytest.approx(0.01)
-    assert st["loop"]["ticks"] > 0
+    def service() -> dict[str, Any]:
+        data: dict[str, Any] = srv.http.get("/api/service/status").json()
+        return data
+
+    wait_for(lambda: all(w["loop"] is not None for w in service()["workers"]))
+    st = service()
+    assert st["transport"] == "local" and len(st["workers"]) >= 1
+    assert all(w["alive"] and w["loop"]["period_s"] == pytest.approx(0.002) for w in st["workers"])
+    assert all(w["loop"]["ticks"] > 0 for w in st["workers"])
+    (home,) = [w for w in st["workers"] if mid in w["machines"]]  # on exactly one worker
+    assert st["machines"][mid]["worker"] == home["id"]
 
     def rt_factor() -> float:
         return float(srv.http.get("/api/service/status").json()["machines"][mid]["rt_factor"])

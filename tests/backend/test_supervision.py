@@ -1,13 +1,10 @@
-"""Background work is supervised: the telemetry hub, the real-time loop and the recorders
-survive a failure, and the loop's figures can be read while it appends to them. In process,
-machines stepped by hand (no clock judged)."""
+"""Background work is supervised: the telemetry hub, the workers' loops and the recorders
+survive a failure. In process: the gateway's machine service with its worker on a thread,
+machines stepped by request (no clock judged)."""
 
 from __future__ import annotations
 
 import asyncio
-import sys
-import threading
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, cast
@@ -16,20 +13,21 @@ import pytest
 from fastapi import WebSocket
 
 from api.telemetry import decode_frame
-from backend.services.host import MachineHost
-from backend.services.loop import RealtimeLoop
+from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.telemetry import CLOSE_INTERNAL, Subscriber, TelemetryHub
-from nc_sim.machine.config import demo_machine
+from backend.workers.protocol import Pace
+from backend.workers.threaded import InProcessWorker
 from tests.backend.fakews import FakeSocket
+from tests.backend.inprocess import machine_service, paused_demo, step, wait_until
 
 FRAME_S = 0.005
 
 
-def _subscribe(hub: TelemetryHub, host: MachineHost) -> tuple[Subscriber, FakeSocket]:
+def _subscribe(hub: TelemetryHub, m: MachineProxy) -> tuple[Subscriber, FakeSocket]:
     ws = FakeSocket()
-    sub = hub.add(cast(WebSocket, ws), host)
-    sub.signals, sub.min_stride = [host.signal_by_name["X.pos_act_mm"]], 1
+    sub = hub.add(cast(WebSocket, ws), m)
+    sub.signals, sub.min_stride = [m.signal_by_name["X.pos_act_mm"]], 1
     return sub, ws
 
 
@@ -39,10 +37,14 @@ def _last_cycle(ws: FakeSocket) -> int:
 
 
 @pytest.fixture
-def host() -> MachineHost:
-    h = MachineHost("m", "m", "demo", demo_machine())
-    h.set_mode("pause")
-    return h
+def service(tmp_path: Path) -> Iterator[MachineService]:
+    with machine_service(tmp_path) as s:
+        yield s
+
+
+@pytest.fixture
+def host(service: MachineService) -> MachineProxy:
+    return paused_demo(service, "m", powered=False)
 
 
 async def _until(pred: Any, ticks: int = 400) -> None:
@@ -54,10 +56,9 @@ async def _until(pred: Any, ticks: int = 400) -> None:
 
 
 def test_a_client_whose_frames_fail_is_closed_and_the_others_go_on(
-    host: MachineHost, monkeypatch: pytest.MonkeyPatch
+    service: MachineService, host: MachineProxy, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    broken = MachineHost("b", "b", "demo", demo_machine())
-    broken.set_mode("pause")
+    broken = paused_demo(service, "b", powered=False)
 
     def fail(*_: object) -> Any:
         raise OverflowError("samples of an impossible range")
@@ -69,10 +70,10 @@ def test_a_client_whose_frames_fail_is_closed_and_the_others_go_on(
         hub.start()
         _, good = _subscribe(hub, host)
         _, bad = _subscribe(hub, broken)
-        broken.step(10)
+        step(broken, 10)
         await _until(lambda: bad.close_code is not None)
         assert bad.close_code == CLOSE_INTERNAL and hub.clients_dropped == 1
-        host.step(100)
+        step(host, 100)
         end = host.cycle
         await _until(lambda: bool(good.frames) and _last_cycle(good) == end)
         assert hub.restarts == 0
@@ -81,7 +82,7 @@ def test_a_client_whose_frames_fail_is_closed_and_the_others_go_on(
     asyncio.run(run())
 
 
-def test_a_failing_hub_is_restarted(host: MachineHost, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_failing_hub_is_restarted(host: MachineProxy, monkeypatch: pytest.MonkeyPatch) -> None:
     async def run() -> None:
         hub = TelemetryHub(FRAME_S, 1000)
         tick = hub.tick
@@ -95,7 +96,7 @@ def test_a_failing_hub_is_restarted(host: MachineHost, monkeypatch: pytest.Monke
         monkeypatch.setattr(hub, "tick", flaky)
         hub.start()
         _, ws = _subscribe(hub, host)
-        host.step(100)
+        step(host, 100)
         end = host.cycle
         await _until(lambda: bool(ws.frames) and _last_cycle(ws) == end)
         assert hub.restarts == 2
@@ -105,93 +106,29 @@ def test_a_failing_hub_is_restarted(host: MachineHost, monkeypatch: pytest.Monke
 
 
 def test_a_machine_that_fails_in_the_loop_is_paused_and_the_others_keep_time(
-    host: MachineHost, monkeypatch: pytest.MonkeyPatch
+    service: MachineService, host: MachineProxy, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    broken = MachineHost("b", "b", "demo", demo_machine())
+    broken = paused_demo(service, "b", powered=False)
+    assert isinstance(broken.worker, InProcessWorker)
+    worker = broken.worker.core.worker
 
     def fail(*_: object) -> None:
         raise RuntimeError("kernel bug")
 
-    monkeypatch.setattr(broken, "advance", fail)
-    broken.set_mode("run")
-    host.set_mode("run")
-    loop = RealtimeLoop(lambda: [broken, host], 0.002)
-    loop.start()
-    try:
-        c0 = host.cycle
-        for _ in range(5000):
-            if loop.host_failures and host.cycle > c0 + 50:
-                break
-            threading.Event().wait(0.002)
-        assert loop.host_failures == 1  # paused after its first failure, not every tick
-        assert broken.pacing.mode == "pause"
-        assert host.cycle > c0 + 50 and loop.status().host_failures == 1
-    finally:
-        loop.stop()
-
-
-class Overrunning:
-    """A machine whose every tick works past the loop's next deadline."""
-
-    id = "slow"
-
-    def tick(self, now_mono: float, fast_budget_s: float) -> None:
-        end = time.monotonic() + 0.003
-        while time.monotonic() < end:
-            pass
-
-
-@pytest.fixture
-def fine_switching() -> Iterator[None]:
-    old = sys.getswitchinterval()
-    sys.setswitchinterval(1e-6)  # switch threads as often as possible to meet the race
-    yield
-    sys.setswitchinterval(old)
-
-
-@pytest.mark.usefixtures("fine_switching")
-def test_loop_status_while_the_loop_appends() -> None:
-    """`GET /api/service/status` read the overrun records while the loop thread appended to
-    them: 'deque mutated during iteration', a 500. Every tick here overruns."""
-    slow = cast(MachineHost, Overrunning())
-    loop = RealtimeLoop(lambda: [slow], 0.001)
-    loop.start()
-    try:
-        for _ in range(3000):
-            st = loop.status()
-            assert st.overruns >= len(st.recent_overruns)
-        assert st.overruns > 20 and len(st.recent_overruns) == 20
-    finally:
-        loop.stop()
-
-
-def test_the_loop_restarts_when_its_own_code_fails(host: MachineHost) -> None:
-    calls = iter([True])
-
-    def hosts() -> list[MachineHost]:
-        if next(calls, False):
-            raise RuntimeError("loop bug")
-        return [host]
-
-    host.set_mode("run")
-    loop = RealtimeLoop(hosts, 0.002)
-    loop.start()
-    try:
-        c0 = host.cycle
-        for _ in range(5000):
-            if host.cycle > c0 + 50:
-                break
-            threading.Event().wait(0.002)
-        assert loop.restarts == 1 and host.cycle > c0 + 50  # paced on after the failure
-    finally:
-        loop.stop()
+    monkeypatch.setattr(worker.hosts["b"], "advance", fail)
+    broken.call(Pace("b", "run"))
+    host.call(Pace("m", "run"))
+    c0 = host.cycle
+    wait_until(lambda: worker.host_failures and host.cycle > c0 + 50)
+    assert worker.host_failures == 1  # paused after its first failure, not every tick
+    assert worker.hosts["b"].pacing.mode == "pause"
+    assert host.cycle > c0 + 50
 
 
 def test_a_failing_recording_ends_and_the_others_go_on(
-    host: MachineHost, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    service: MachineService, host: MachineProxy, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    other = MachineHost("o", "o", "demo", demo_machine())
-    other.set_mode("pause")
+    other = paused_demo(service, "o", powered=False)
     recorders = Recorders(tmp_path)
     bad = recorders.begin(host, ["X.pos_act_mm"]).id
     good = recorders.begin(other, ["X.pos_act_mm"]).id
@@ -200,8 +137,8 @@ def test_a_failing_recording_ends_and_the_others_go_on(
         raise OSError("disk full")
 
     monkeypatch.setattr(recorders.all[bad].writer, "block", fail)
-    host.step(100)
-    other.step(100)
+    step(host, 100)
+    step(other, 100)
     recorders.pump()  # no exception escapes into the recorders' thread
     assert not recorders.all[bad].active
     assert recorders.all[good].active and recorders.all[good].info().cycles == 100

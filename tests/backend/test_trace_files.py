@@ -14,12 +14,14 @@ from backend.services.machines import MachineService
 from backend.services.store import Store
 from backend.services.trace_csv import from_csv
 from backend.services.traces import TraceService
+from backend.workers.pool import WorkerPool
 
 
 @pytest.fixture
 def library(tmp_path: Path) -> TraceService:
     store = Store(tmp_path / "t.sqlite")
-    return TraceService(store, tmp_path / "traces", MachineService(store))
+    no_workers = WorkerPool(1, 0.002)  # never started: the library needs no machine
+    return TraceService(store, tmp_path / "traces", MachineService(store, no_workers))
 
 
 def test_the_row_is_committed_after_the_file_is_synced_in_place(

@@ -1,15 +1,23 @@
-// Connection loss and the newest job error, until acknowledged.
+// Connection loss, notices (a machine rebuilt after its worker died) and the newest job error,
+// until acknowledged.
 import { acknowledgeBanner, bannerError } from "../state/events";
-import { connection } from "../state/session";
+import { connection, notice } from "../state/session";
 import { qty } from "../ui/format";
 
 export function Banner() {
   const err = bannerError.value;
+  const n = notice.value;
   return (
     <div class="banners">
       {connection.value === "lost" ? (
         <div class="banner lost" role="alert" data-testid="banner-connection">
           ⚠ Connection to the service lost: controls are locked and jog keys released. Reconnecting…
+        </div>
+      ) : null}
+      {n ? (
+        <div class="banner notice" role="alert" data-testid="banner-notice">
+          <span>⚠ {n.message}</span>
+          <button onClick={() => (notice.value = null)}>Dismiss</button>
         </div>
       ) : null}
       {err ? (

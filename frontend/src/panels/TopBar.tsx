@@ -1,14 +1,12 @@
 // Always visible: machine, time and loop health, connection, and the emergency stop.
-import { connection, machineId, machines, online, selectMachine, service, status } from "../state/session";
+import { connection, machineId, machines, online, selectMachine, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
 export function TopBar() {
   const s = status.value;
-  const svc = service.value;
   const sim = s?.simulation;
-  const rt = svc && machineId.value ? svc.machines[machineId.value]?.rt_factor : sim?.rt_factor;
   const c = connection.value;
   const estop = useCommand();
   return (
@@ -27,10 +25,13 @@ export function TopBar() {
       <span class="health" data-testid="health">
         <span title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
         <span title="simulated seconds per wall second">
-          {sim?.mode ?? "—"} ×{fmt(rt, 2)}
+          {sim?.mode ?? "—"} ×{fmt(sim?.rt_factor, 2)}
         </span>
-        <span title="real-time loop: ticks whose work ran past the next deadline">
-          overruns {svc?.loop.overruns ?? "—"}
+        <span
+          title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile`}
+          data-testid="loop-health"
+        >
+          {sim?.worker ?? "—"}: overruns {sim?.loop_overruns ?? "—"} · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}
         </span>
       </span>
       <Lamp

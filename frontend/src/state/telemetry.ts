@@ -1,11 +1,21 @@
 // The telemetry websocket: the hello's signal catalogue, one subscription (the union of what
-// the plots want), binary frames decoded into the rings, events into the log. Reconnects by
+// the plots want), binary frames decoded into the rings, events into the log, the machine's
+// pushed status and notices. Reconnects by
 // itself; while it is down the session counts as lost (jog keys release on that).
 import { effect, signal } from "@preact/signals";
-import type { ErrorMessage, EventMessage, FrameHeader, Hello, SignalInfo, Subscribed } from "../api/types";
+import type {
+  ErrorMessage,
+  EventMessage,
+  FrameHeader,
+  Hello,
+  NoticeMessage,
+  SignalInfo,
+  StatusMessage,
+  Subscribed,
+} from "../api/types";
 import { addEvents } from "./events";
 import { Rings } from "./rings";
-import { machineId, socket } from "./session";
+import { machineId, notice, socket, status } from "./session";
 
 const MAGIC = 0x54424e49; // "INBT" little-endian
 export const RING_SECONDS = 30;
@@ -74,7 +84,7 @@ function onFrame(buf: ArrayBuffer): void {
 }
 
 function onMessage(text: string): void {
-  const msg = JSON.parse(text) as Hello | Subscribed | EventMessage | ErrorMessage;
+  const msg = JSON.parse(text) as Hello | Subscribed | EventMessage | StatusMessage | NoticeMessage | ErrorMessage;
   switch (msg.type) {
     case "hello":
       cycleS = msg.cycle_s;
@@ -85,6 +95,12 @@ function onMessage(text: string): void {
       break;
     case "event":
       addEvents([msg.event]);
+      break;
+    case "status":
+      if (msg.status.id === machineId.value) status.value = msg.status;
+      break;
+    case "notice":
+      notice.value = msg;
       break;
     case "error":
       console.warn("telemetry:", msg.message);

@@ -1,0 +1,236 @@
+"""One machine in a worker: its simulation, its sample ring, its pacing, its scope.
+
+Only the worker's loop thread touches a host, so nothing here locks. Every cycle the kernel
+steps is written into the sample ring and then published, so the gateway's readers never
+see a half-written row and telemetry has no gaps unless a reader falls a whole ring behind.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from backend.workers.protocol import MachineInfo, Mode, Pacing, ParamSnapshot
+from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
+from nc_sim.commands import JogStop
+from nc_sim.errors import JobError
+from nc_sim.events import EventLog
+from nc_sim.kernel import layout as L
+from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.machine import Machine
+from nc_sim.scope import Record, Scope
+from nc_sim.signals import Signal, machine_signals
+from nc_sim.sim import Simulation
+
+assert R_COLS == L.R_COLS, "the ring's record width must follow the kernel layout"
+
+FAST_CHUNK = MAX_WRITE  # cycles per kernel call in fast mode
+MAX_CATCH_UP_S = 1.0  # behind by more than this: re-anchor instead of racing to catch up
+
+
+@dataclass
+class EventIndex:
+    """The newest event of each (code, axis), brought up to date by cursor: status finds the
+    event behind each active job error without scanning the machine's event log."""
+
+    cursor: int = 0
+    latest: dict[tuple[int, str], tuple[int, JobError]] = field(default_factory=dict)
+
+    def update(self, log: EventLog[JobError]) -> None:
+        read = log.since(self.cursor)
+        for seq, e in enumerate(read.entries, read.first_seq):
+            self.latest[(e.code, e.axis)] = (seq, e)
+        self.cursor = read.cursor
+
+    def newest(self, code: int, axes: tuple[str, ...]) -> JobError | None:
+        """The newest event with this code on any of these axes ("" is channel-wide)."""
+        found = [self.latest[(code, a)] for a in axes if (code, a) in self.latest]
+        return max(found, key=lambda x: x[0])[1] if found else None
+
+
+@dataclass
+class PacingState:
+    mode: Mode = "run"
+    until_cycle: int | None = None
+    anchor_mono: float = 0.0  # monotonic time of cycle 0 while running
+    slips: int = 0  # times the machine fell > MAX_CATCH_UP_S behind and was re-anchored
+    step_to: int | None = None  # single step in progress: advance to this cycle
+    history: deque[tuple[float, int]] = field(default_factory=lambda: deque(maxlen=256))
+
+
+class MachineHost:
+    """A machine owned by a worker."""
+
+    def __init__(
+        self, mid: str, name: str, cfg: MachineConfig, ring_path: Path | None, epoch: int
+    ) -> None:
+        self.id = mid
+        self.name = name
+        self.epoch = epoch
+        self.sim = Simulation(cfg.cycle_s)
+        self.machine: Machine = self.sim.add(cfg)
+        self.signals: list[Signal] = machine_signals(self.machine)
+        self.signal_by_name = {s.name: s for s in self.signals}
+        self.ring = SampleRing.create(ring_path, self.sim.kernel.n)
+        self.scope = Scope(self.sim.kernel.cycle_s)
+        self.captures: list[tuple[Record, ParamSnapshot]] = []  # completed, not yet pushed
+        self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
+        self.pacing = PacingState(anchor_mono=time.monotonic())
+        self.watched = False
+        self.event_index = EventIndex()
+        self.pushed_events = self.machine.events.cursor  # events up to here went out
+
+    def info(self) -> MachineInfo:
+        path = self.ring.path
+        return MachineInfo(
+            self.id,
+            self.epoch,
+            self.cycle_s,
+            [ax.name for ax in self.machine.axes],
+            self.signals,
+            self.sim.kernel.n,
+            str(path) if path is not None else None,
+        )
+
+    @property
+    def cycle(self) -> int:
+        """Cycles stepped; samples 1..cycle exist in the ring."""
+        return self.sim.cycle
+
+    @property
+    def cycle_s(self) -> float:
+        return self.sim.kernel.cycle_s
+
+    def advance(self, n: int) -> None:
+        """Step n cycles, recording each into the ring.
+
+        A held jog whose lease runs out stops in exactly the cycle its lease ends, so the
+        dead-man works the same in real time, single steps and fast mode."""
+        rows = self.ring.rows
+        while n > 0:
+            self._expire_jogs()
+            start_cycle = self.sim.cycle + 1
+            start = start_cycle % self.ring.cycles
+            part = min(n, self.ring.cycles - start, MAX_WRITE)
+            if self.jog_leases:
+                part = min(part, max(1, min(self.jog_leases.values()) - self.sim.cycle))
+            self.sim.run(part, rows[start : start + part])
+            self.ring.publish(self.sim.cycle)
+            if self.scope.active:
+                self.scope.feed(rows[start : start + part], start_cycle, self.machine.events)
+                if self.scope.completed:
+                    self._take_captures()
+            n -= part
+        self._expire_jogs()
+        self.event_index.update(self.machine.events)  # before the bounded log drops any
+
+    def _take_captures(self) -> None:
+        """Keep completed records with the parameter lists as written now (cheap copies)."""
+        cfg = self.machine.cfg
+        params: ParamSnapshot = {("channel", ""): dict(cfg.channel), ("tool", ""): dict(cfg.tools)}
+        for a in cfg.axes:
+            params[("axis", a.name)] = dict(a.values)
+        self.captures += [(rec, params) for rec in self.scope.completed]
+        self.scope.completed.clear()
+
+    def history(self, cycles: int) -> np.ndarray:
+        """Kernel records of the newest `cycles` cycles the ring holds, oldest first."""
+        n = min(cycles, self.sim.cycle, self.ring.cycles - 1)
+        idx = np.arange(self.sim.cycle - n + 1, self.sim.cycle + 1) % self.ring.cycles
+        rows: np.ndarray = self.ring.rows[idx]
+        return rows
+
+    def hold_jog(self, axis: str, hold_s: float | None) -> None:
+        """Renew (or with None drop) the dead-man lease of a continuous jog."""
+        if hold_s is None:
+            self.jog_leases.pop(axis, None)
+        else:
+            self.jog_leases[axis] = self.sim.cycle + max(1, round(hold_s / self.cycle_s))
+
+    def _expire_jogs(self) -> None:
+        for axis, end in list(self.jog_leases.items()):
+            if self.sim.cycle >= end:
+                del self.jog_leases[axis]
+                self.machine.submit(JogStop(axis))  # the dead-man released the key
+
+    def due_cycle(self, now_mono: float) -> int:
+        """The cycle real time calls for now (while running)."""
+        return int((now_mono - self.pacing.anchor_mono) / self.cycle_s)
+
+    def tick(self, now_mono: float, fast_budget_s: float) -> None:
+        """Step what is due for the pacing mode (the loop calls this every period)."""
+        p = self.pacing
+        if p.step_to is not None:
+            self.advance(min(p.step_to - self.sim.cycle, FAST_CHUNK))
+            if self.sim.cycle >= p.step_to:
+                p.step_to = None
+        elif p.mode == "run":
+            due = self.due_cycle(now_mono) - self.sim.cycle
+            limit = int(MAX_CATCH_UP_S / self.cycle_s)
+            if due > limit:
+                p.slips += 1
+                p.anchor_mono += (due - limit) * self.cycle_s
+                due = limit
+            if due > 0:
+                self.advance(due)
+        elif p.mode == "fast":
+            end = time.monotonic() + fast_budget_s
+            while time.monotonic() < end:
+                n = FAST_CHUNK
+                if p.until_cycle is not None:
+                    n = min(n, p.until_cycle - self.sim.cycle)
+                    if n <= 0:
+                        p.mode, p.until_cycle = "pause", None
+                        break
+                self.advance(n)
+        if p.mode != "run" or p.step_to is not None:  # "run" continues from now
+            p.anchor_mono = now_mono - self.sim.cycle * self.cycle_s
+        p.history.append((now_mono, self.sim.cycle))
+
+    def set_mode(self, mode: Mode, until_cycle: int | None = None) -> None:
+        """Pace the machine; a single step in progress ends (the new pacing applies at once)."""
+        p = self.pacing
+        p.step_to = None
+        p.mode = mode
+        p.until_cycle = until_cycle if mode == "fast" else None
+        p.anchor_mono = time.monotonic() - self.sim.cycle * self.cycle_s
+
+    def start_step(self, cycles: int) -> int:
+        """Pause and advance `cycles` over the next ticks; returns the cycle to reach."""
+        self.set_mode("pause")
+        self.pacing.step_to = self.sim.cycle + cycles
+        return self.pacing.step_to
+
+    def rt_factor(self) -> float:
+        """Simulated seconds per wall second over about the last second."""
+        h = list(self.pacing.history)
+        if len(h) < 2:
+            return 0.0
+        t1, c1 = h[-1]
+        old = [x for x in h if t1 - x[0] <= 1.0]
+        t0, c0 = old[0] if len(old) > 1 else h[-2]
+        return (c1 - c0) * self.cycle_s / (t1 - t0) if t1 > t0 else 0.0
+
+    def pacing_now(self) -> Pacing:
+        p = self.pacing
+        mode: Mode = "pause" if p.step_to is not None else p.mode
+        return Pacing(
+            mode,
+            self.sim.cycle,
+            self.cycle_s,
+            self.rt_factor(),
+            p.until_cycle,
+            p.anchor_mono + (time.time() - time.monotonic()),
+            p.slips,
+        )
+
+    def close(self) -> None:
+        """Remove the machine's ring file (the gateway unmaps its side)."""
+        path = self.ring.path
+        self.ring.close()
+        if path is not None:
+            path.unlink(missing_ok=True)

@@ -1,0 +1,119 @@
+"""The gateway's workers: started together, chosen by load, replaced when one dies.
+
+Locally a worker is a process (one per core by default); with a cluster address they are Ray
+actors spread over the cluster's nodes. The rest of the gateway sees only `WorkerClient`.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+import threading
+import uuid
+from collections.abc import Callable, Sized
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from backend.workers.client import DeathHandler, PushHandler, WorkerClient
+from backend.workers.local import LocalWorker
+from backend.workers.ring import shm_dir
+
+log = logging.getLogger(__name__)
+
+Factory = Callable[[str, float, Path], WorkerClient]  # (id, loop period, ring folder)
+
+
+def default_count() -> int:
+    """One worker per core this process may use, at least one."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class WorkerPool:
+    """Starts, chooses and replaces workers."""
+
+    def __init__(
+        self,
+        count: int,
+        period_s: float,
+        cluster: str | None = None,
+        factory: Factory | None = None,
+    ) -> None:
+        self.count = count or default_count()
+        self.period_s = period_s
+        self.cluster = cluster
+        self.factory = factory  # how a worker is made when neither local nor Ray (tests)
+        self.workers: list[WorkerClient] = []
+        self.ring_dir = shm_dir() / f"inbetrieb-{os.getpid()}-{uuid.uuid4().hex[:6]}"
+        self._serial = 0
+        self._lock = threading.Lock()
+        self._on_push: PushHandler = lambda _c, _p: None
+        self._on_death: DeathHandler = lambda _c: None
+        self.replaced = 0
+
+    def _new(self) -> WorkerClient:
+        with self._lock:
+            self._serial += 1
+            wid = f"w{self._serial}"
+        if self.factory is not None:
+            return self.factory(wid, self.period_s, self.ring_dir)
+        if self.cluster is not None:
+            from backend.workers.ray_transport import RayWorker  # only with a cluster
+
+            return RayWorker(wid, self.period_s, self.cluster)
+        return LocalWorker(wid, self.period_s, self.ring_dir)
+
+    def start(self, on_push: PushHandler, on_death: DeathHandler) -> None:
+        """Start every worker (in parallel: each loads the compiled kernel)."""
+        self._on_push, self._on_death = on_push, on_death
+        self.ring_dir.mkdir(parents=True, exist_ok=True)
+        fresh = [self._new() for _ in range(self.count)]
+        with ThreadPoolExecutor(len(fresh)) as ex:
+            list(ex.map(lambda w: w.start(on_push, on_death), fresh))
+        with self._lock:
+            self.workers += fresh
+
+    def alive(self) -> list[WorkerClient]:
+        with self._lock:
+            return [w for w in self.workers if w.alive]
+
+    def choose(self, machines_on: Callable[[WorkerClient], Sized]) -> WorkerClient:
+        """The live worker running the fewest machines."""
+        live = self.alive()
+        if not live:
+            raise RuntimeError("no live worker")
+        return min(live, key=lambda w: len(machines_on(w)))
+
+    def replace(self, dead: WorkerClient) -> None:
+        """Start a worker in place of a dead one (in the background: machines are rebuilt on
+        the live ones meanwhile, the new one takes machines created later)."""
+        self.replaced += 1
+
+        def start() -> None:
+            w = self._new()
+            try:
+                w.start(self._on_push, self._on_death)
+            except Exception:
+                log.exception("the replacement for worker %s did not start", dead.id)
+                return
+            with self._lock:
+                self.workers = [x for x in self.workers if x is not dead] + [w]
+
+        if self.alive():
+            threading.Thread(target=start, name="worker-replace", daemon=True).start()
+        else:
+            start()  # nothing left to rebuild on: wait for the new one
+
+    def stop(self) -> None:
+        for w in self.workers:
+            try:
+                w.stop()
+            except Exception:
+                log.exception("stopping worker %s failed", w.id)
+        shutil.rmtree(self.ring_dir, ignore_errors=True)
+
+    def __len__(self) -> int:
+        return len(self.workers)

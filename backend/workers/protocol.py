@@ -1,0 +1,261 @@
+"""What the gateway and a worker say to each other: requests with an id, one reply each, and
+pushes the worker sends on its own (LinuxCNC's command / status / error channels).
+
+Every message is a frozen dataclass of plain values and nc_sim records, so it pickles the
+same through a local pipe and through Ray. Nothing here imports the kernel: the gateway
+builds requests and reads replies without it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from nc_sim import commands as nc
+from nc_sim.commands import Outcome
+from nc_sim.errors import JobError
+from nc_sim.machine.config import MachineConfig
+from nc_sim.params import Value
+from nc_sim.scope import Record, ScopeSetup
+from nc_sim.signals import Signal
+
+Mode = Literal["run", "pause", "fast"]
+# (scope, target, name) -> value: parameter values a worker writes into a machine's lists
+Values = list[tuple[str, str, str, Value]]
+ParamSnapshot = dict[tuple[str, str], dict[str, Value]]
+
+
+# --- requests ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class AddMachine:
+    """Build a machine powered on at cycle 0 and pace it in real time (also a rebuild)."""
+
+    mid: str
+    name: str
+    cfg: MachineConfig
+    epoch: int  # the gateway counts builds: telemetry readers restart when it changes
+    mode: Mode = "run"
+
+
+@dataclass(frozen=True)
+class RemoveMachine:
+    mid: str
+
+
+@dataclass(frozen=True)
+class Submit:
+    """One command to a machine. `jog_hold_s` renews (a number) or drops (None with
+    `jog_release`) the dead-man lease of a continuous jog; `then_apply` are values written
+    in the same cycle when the command is accepted (pending values at reset)."""
+
+    mid: str
+    cmd: nc.Command
+    sent_mono: float = 0.0  # time.monotonic() when the gateway sent it (one clock per host)
+    jog_hold_s: float | None = None
+    jog_release: bool = False
+    then_apply: Values = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Pace:
+    mid: str
+    mode: Mode
+    until_cycle: int | None = None
+
+
+@dataclass(frozen=True)
+class Step:
+    """Pause and advance `cycles`; answered when done or ended early (E-stop, new pacing)."""
+
+    mid: str
+    cycles: int
+
+
+@dataclass(frozen=True)
+class ApplyValues:
+    """Write accepted parameter values into the running machine (at a cycle boundary)."""
+
+    mid: str
+    values: Values
+
+
+@dataclass(frozen=True)
+class ReadStatus:
+    """A fresh status of the machine, consistent to one cycle."""
+
+    mid: str
+
+
+@dataclass(frozen=True)
+class Watch:
+    """Push this machine's status at the status rate while `on` (someone watches it)."""
+
+    mid: str
+    on: bool
+
+
+@dataclass(frozen=True)
+class ScopeArm:
+    mid: str
+    setup: ScopeSetup
+
+
+@dataclass(frozen=True)
+class ScopeAct:
+    mid: str
+    action: Literal["force", "stop", "state"]
+
+
+@dataclass(frozen=True)
+class ScopeRoll:
+    """The newest record length of a running scope, every stride-th cycle."""
+
+    mid: str
+    max_points: int
+
+
+@dataclass(frozen=True)
+class ReadSamples:
+    """Kernel records of cycles `first`..newest (at most `max_cycles`): how a gateway without
+    shared memory (a Ray worker on another node) fills its copy of the sample ring."""
+
+    mid: str
+    first: int
+    max_cycles: int
+
+
+Request = (
+    AddMachine
+    | RemoveMachine
+    | Submit
+    | Pace
+    | Step
+    | ApplyValues
+    | ReadStatus
+    | Watch
+    | ScopeArm
+    | ScopeAct
+    | ScopeRoll
+    | ReadSamples
+)
+
+
+# --- replies ------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Pacing:
+    """How a machine is paced and where its time stands."""
+
+    mode: Mode
+    cycle: int
+    cycle_s: float
+    rt_factor: float
+    until_cycle: int | None
+    t0_unix: float
+    slips: int
+
+
+@dataclass(frozen=True)
+class MachineInfo:
+    """A machine as built: its signals and where its samples are."""
+
+    mid: str
+    epoch: int
+    cycle_s: float
+    axes: list[str]
+    signals: list[Signal]
+    slots: int  # kernel slots (axes) per sample row
+    ring_path: str | None  # the shared sample ring, None when samples are pulled
+
+
+@dataclass(frozen=True)
+class Submitted:
+    outcome: Outcome
+    cycle: int  # the cycle the command took effect in
+    state: dict[str, str]  # each axis' state after the command
+    latency_s: float  # from `sent_mono` until the kernel took the command
+
+
+@dataclass(frozen=True)
+class ScopeState:
+    state: str
+    cycle: int
+    length_cycles: int
+    pre_cycles: int
+    filled_cycles: int
+    trigger_cycle: int | None
+
+
+@dataclass(frozen=True)
+class Roll:
+    """A running scope's newest record length."""
+
+    first_cycle: int
+    stride: int
+    signals: list[str]
+    data: object  # np.ndarray channels × samples
+
+
+@dataclass(frozen=True)
+class Samples:
+    first: int  # cycle of rows[0]
+    rows: object  # np.ndarray cycles × slots × columns (object: no numpy type in messages)
+
+
+@dataclass(frozen=True)
+class Failure:
+    """The request could not be carried out: `kind` says how the gateway answers."""
+
+    kind: Literal["not_found", "invalid", "conflict", "internal"]
+    message: str
+
+
+# --- pushes -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Reply:
+    """The answer to request `req` (a reply, or a Failure)."""
+
+    req: int
+    value: object
+
+
+@dataclass(frozen=True)
+class MachineNews:
+    """What changed in one machine since the last push: new events always, the status when
+    somebody watches, completed scope captures."""
+
+    mid: str
+    epoch: int
+    events: list[JobError]
+    first_seq: int  # sequence number of events[0]
+    status: object | None  # api MachineStatus while watched
+    captures: list[tuple[Record, ParamSnapshot]]
+
+
+@dataclass(frozen=True)
+class LoopFigures:
+    """A worker's real-time loop over its recent ticks."""
+
+    period_s: float
+    ticks: int
+    overruns: int
+    missed_deadlines: int
+    work_p50_ms: float
+    work_p99_ms: float
+    work_max_ms: float
+    wake_late_p99_ms: float
+    cpu_pct: float
+    host_failures: int
+    recent_overruns: list[tuple[float, float, float]]  # unix time, wake late ms, work ms
+
+
+@dataclass(frozen=True)
+class WorkerNews:
+    """Sent about once a second: the loop's figures and every machine's pacing."""
+
+    pid: int
+    node: str
+    loop: LoopFigures
+    pacing: dict[str, Pacing]
+
+
+Push = Reply | MachineNews | WorkerNews

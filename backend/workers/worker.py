@@ -1,0 +1,345 @@
+"""A worker: owns its machines and their time, in one thread.
+
+The loop sleeps to absolute deadlines `t0 + i·period`; while it waits it serves requests as
+they arrive (a command acts in the cycle after the one being stepped, never a period later);
+at each deadline it steps every machine's due cycles into its sample ring, looking for new
+requests between machines so an emergency stop never waits behind the others. Then it pushes
+what changed: new events and completed captures of every machine, the status of the watched
+ones (staggered over the status period), and about once a second its loop figures.
+
+Nothing else runs here: no HTTP, no JSON, no SQLite. A channel (a local pipe, or a queue in
+a Ray actor) brings requests and takes replies and pushes.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections import deque
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from backend.workers import status as worker_status
+from backend.workers.host import MachineHost
+from backend.workers.protocol import (
+    AddMachine,
+    ApplyValues,
+    Failure,
+    LoopFigures,
+    MachineNews,
+    Pace,
+    Push,
+    ReadSamples,
+    ReadStatus,
+    RemoveMachine,
+    Reply,
+    Request,
+    Roll,
+    Samples,
+    ScopeAct,
+    ScopeArm,
+    ScopeRoll,
+    ScopeState,
+    Step,
+    Submit,
+    Submitted,
+    Values,
+    Watch,
+    WorkerNews,
+)
+from nc_sim.commands import Accepted, EmergencyStop, JogStart, JogStop
+from nc_sim.errors import NcUsageError
+from nc_sim.params import Scope
+
+log = logging.getLogger(__name__)
+
+STATUS_PERIOD_S = 0.05  # watched machines' status: 20 per second, like a display refresh
+NEWS_PERIOD_S = 1.0  # loop figures and every machine's pacing
+MAX_READ_CYCLES = 4 * 2000  # rows one ReadSamples reply carries at most
+
+
+class Channel(Protocol):
+    """Where requests come from and replies and pushes go."""
+
+    closed: bool  # the gateway went away: the worker stops
+
+    def wait(self, timeout_s: float) -> bool:
+        """Block until a request is there or the timeout passed; true when one is there."""
+
+    def ready(self) -> bool:
+        """A request is there (without blocking)."""
+
+    def take(self) -> list[tuple[int, Request]]:
+        """Every request there now, oldest first."""
+
+    def send(self, push: Push) -> None: ...
+
+
+class Worker:
+    """The machines of one worker and the real-time loop that paces them."""
+
+    def __init__(
+        self,
+        channel: Channel,
+        period_s: float,
+        ring_dir: Path | None,
+        node: str = "local",
+        fast_share: float = 0.4,
+    ) -> None:
+        self.channel = channel
+        self.period_s = period_s
+        self.fast_budget_s = period_s * fast_share  # for machines running "as fast as possible"
+        self.ring_dir = ring_dir
+        self.node = node
+        self.hosts: dict[str, MachineHost] = {}
+        self.steps: list[tuple[int, str]] = []  # (request, machine) answered when its step ends
+        self.stopped = False
+        self.news_due = False  # pacing changed: report at the end of this tick
+        # loop figures, read only by this thread
+        self.ticks = self.overruns = self.missed = self.host_failures = 0
+        self.work_s: deque[float] = deque(maxlen=5000)
+        self.late_s: deque[float] = deque(maxlen=5000)
+        self.recent: deque[tuple[float, float, float]] = deque(maxlen=20)
+        self._cpu = (time.monotonic(), time.process_time())
+        self._cpu_pct = 0.0
+
+    # --- the loop ---------------------------------------------------------------------------
+    def run(self) -> None:
+        """Pace until stopped (a `RemoveMachine` of everything does not stop it; `stop` does)."""
+        t0 = time.monotonic()
+        i = 0
+        status_every = max(1, round(STATUS_PERIOD_S / self.period_s))
+        news_every = max(1, round(NEWS_PERIOD_S / self.period_s))
+        while not (self.stopped or self.channel.closed):
+            deadline = t0 + i * self.period_s
+            while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
+                if self.channel.wait(remaining):
+                    self.serve()
+            wake = time.monotonic()
+            for k, host in enumerate(list(self.hosts.values())):
+                self._tick(host, deadline)
+                if self.channel.ready():
+                    self.serve()
+                self._push_news(host, (i + k) % status_every == 0)
+            self._finish_steps()
+            done = time.monotonic()
+            i += 1
+            self._account(deadline, wake, done, t0 + i * self.period_s)
+            if done > t0 + i * self.period_s:
+                skip = int((done - (t0 + i * self.period_s)) / self.period_s)
+                self.missed += skip
+                i += skip
+            if self.news_due or self.ticks % news_every == 0:
+                self.news_due = False
+                self.channel.send(self.news())
+
+    def stop(self) -> None:
+        self.stopped = True
+
+    def _account(self, deadline: float, wake: float, done: float, next_deadline: float) -> None:
+        self.ticks += 1
+        self.work_s.append(done - wake)
+        self.late_s.append(wake - deadline)
+        if done > next_deadline:
+            self.overruns += 1
+            self.recent.append((time.time(), (wake - deadline) * 1e3, (done - wake) * 1e3))
+
+    def _tick(self, host: MachineHost, deadline: float) -> None:
+        try:
+            host.tick(deadline, self.fast_budget_s)
+        except Exception:
+            self.host_failures += 1
+            log.exception("machine %s failed in the real-time loop; pausing it", host.id)
+            host.set_mode("pause")
+
+    def _push_news(self, host: MachineHost, status_due: bool) -> None:
+        events = host.machine.events
+        fresh = events.cursor != host.pushed_events
+        if not (fresh or host.captures or (status_due and host.watched)):
+            return
+        read = events.since(host.pushed_events)
+        host.pushed_events = read.cursor
+        status = worker_status.machine_status(host) if host.watched and status_due else None
+        caps, host.captures = host.captures, []
+        self.channel.send(
+            MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps)
+        )
+
+    def _finish_steps(self) -> None:
+        waiting = []
+        for req, mid in self.steps:
+            host = self.hosts.get(mid)
+            if host is None:
+                self.channel.send(Reply(req, Failure("not_found", f"machine '{mid}'")))
+            elif host.pacing.step_to is None:
+                self.channel.send(Reply(req, host.pacing_now()))
+            else:
+                waiting.append((req, mid))
+        self.steps = waiting
+
+    def news(self) -> WorkerNews:
+        now, cpu = time.monotonic(), time.process_time()
+        t, c = self._cpu
+        if now - t > 0.2:
+            self._cpu_pct, self._cpu = 100.0 * (cpu - c) / (now - t), (now, cpu)
+        work = np.array(self.work_s) * 1e3 if self.work_s else np.zeros(1)
+        late = np.array(self.late_s) * 1e3 if self.late_s else np.zeros(1)
+        loop = LoopFigures(
+            self.period_s,
+            self.ticks,
+            self.overruns,
+            self.missed,
+            float(np.percentile(work, 50)),
+            float(np.percentile(work, 99)),
+            float(work.max()),
+            float(np.percentile(late, 99)),
+            self._cpu_pct,
+            self.host_failures,
+            list(self.recent),
+        )
+        return WorkerNews(
+            os.getpid(), self.node, loop, {h.id: h.pacing_now() for h in self.hosts.values()}
+        )
+
+    # --- requests ---------------------------------------------------------------------------
+    def serve(self) -> None:
+        """Carry out every request waiting, emergency stops first."""
+        batch = self.channel.take()
+        batch.sort(
+            key=lambda r: not (isinstance(r[1], Submit) and isinstance(r[1].cmd, EmergencyStop))
+        )
+        for req, request in batch:
+            try:
+                value = self.handle(req, request)
+            except (NcUsageError, ValueError) as e:
+                value = Failure("invalid", str(e))
+            except Exception as e:  # a bug must not take the loop and the other machines
+                log.exception("request %r failed", request)
+                value = Failure("internal", f"{type(e).__name__}: {e}")
+            if value is not _DEFERRED:
+                self.channel.send(Reply(req, value))
+
+    def _host(self, mid: str) -> MachineHost:
+        host = self.hosts.get(mid)
+        if host is None:
+            raise _NotHere(mid)
+        return host
+
+    def handle(self, req: int, request: Request) -> object:
+        """Carry out one request; returns the reply value (or _DEFERRED for a step)."""
+        try:
+            return self._handle(req, request)
+        except _NotHere as e:
+            return Failure("not_found", f"machine '{e.args[0]}'")
+
+    def _handle(self, req: int, r: Request) -> object:
+        match r:
+            case AddMachine():
+                old = self.hosts.pop(r.mid, None)
+                if old is not None:
+                    old.close()
+                path = None if self.ring_dir is None else self.ring_dir / f"{r.mid}.{r.epoch}.ring"
+                host = MachineHost(r.mid, r.name, r.cfg, path, r.epoch)
+                host.set_mode(r.mode)
+                self.hosts[r.mid] = host
+                self.news_due = True
+                return host.info()
+            case RemoveMachine():
+                gone = self.hosts.pop(r.mid, None)
+                if gone is not None:
+                    gone.close()
+                return None
+            case Submit():
+                return self._submit(self._host(r.mid), r)
+            case Pace():
+                host = self._host(r.mid)
+                host.set_mode(r.mode, r.until_cycle)
+                self.news_due = True
+                return host.pacing_now()
+            case Step():
+                self._host(r.mid).start_step(r.cycles)
+                self.steps.append((req, r.mid))
+                return _DEFERRED
+            case ApplyValues():
+                host = self._host(r.mid)
+                _apply(host, r.values)
+                return None
+            case ReadStatus():
+                return worker_status.machine_status(self._host(r.mid))
+            case Watch():
+                self._host(r.mid).watched = r.on
+                return None
+            case ScopeArm():
+                host = self._host(r.mid)
+                length = r.setup.length_cycles
+                host.scope.arm(r.setup, host.cycle, host.history(length), host.machine.events)
+                return _scope_state(host)
+            case ScopeAct():
+                host = self._host(r.mid)
+                if r.action == "force":
+                    host.scope.force()
+                elif r.action == "stop":
+                    host.scope.stop()
+                return _scope_state(host)
+            case ScopeRoll():
+                return _roll(self._host(r.mid), r.max_points)
+            case ReadSamples():
+                host = self._host(r.mid)
+                first = max(r.first, host.cycle - host.ring.cycles + 2, 1)
+                last = min(host.cycle, first + min(r.max_cycles, MAX_READ_CYCLES) - 1)
+                idx = np.arange(first, last + 1) % host.ring.cycles
+                return Samples(first, host.ring.rows[idx])
+        raise NcUsageError(f"unknown request {r!r}")
+
+    def _submit(self, host: MachineHost, r: Submit) -> Submitted:
+        outcome = host.machine.submit(r.cmd)
+        latency_s = time.monotonic() - r.sent_mono if r.sent_mono else 0.0
+        if isinstance(outcome, Accepted):
+            if isinstance(r.cmd, JogStart | JogStop) and (
+                r.jog_hold_s is not None or r.jog_release
+            ):
+                host.hold_jog(r.cmd.axis, None if r.jog_release else r.jog_hold_s)
+            if isinstance(r.cmd, EmergencyStop):
+                host.pacing.step_to = None  # stop means stop: a long single step ends here too
+            if r.then_apply:
+                _apply(host, r.then_apply)
+        state = {ax.name: ax.state.name for ax in host.machine.axes}
+        return Submitted(outcome, host.cycle, state, latency_s)
+
+
+class _NotHere(Exception):
+    pass
+
+
+_DEFERRED = object()
+
+
+def _apply(host: MachineHost, values: Values) -> None:
+    cfg = host.machine.cfg
+    for scope, target, name, value in values:
+        cfg.list_values(Scope(scope), target)[name] = value
+    host.machine.refresh_params()
+
+
+def _scope_state(host: MachineHost) -> ScopeState:
+    sc = host.scope
+    setup = sc.setup
+    return ScopeState(
+        sc.state.value,
+        host.cycle,
+        setup.length_cycles if setup else 0,
+        setup.pre_cycles if setup else 0,
+        min(sc.filled, setup.length_cycles) if setup else 0,
+        sc.trigger_cycle,
+    )
+
+
+def _roll(host: MachineHost, max_points: int) -> Roll | Failure:
+    snap = host.scope.snapshot()
+    if snap is None:
+        return Failure("conflict", "the scope is not recording: arm it first")
+    stride = max(1, -(-snap.count // max_points))
+    return Roll(snap.first_cycle, stride, [s.name for s in snap.channels], snap.data[:, ::stride])
