@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import pytest
 
 from tests.backend.server import Server
+
+if TYPE_CHECKING:  # ray is imported only by the tests that start a cluster
+    from ray.cluster_utils import Cluster
 
 _serial = itertools.count(1)
 
@@ -24,3 +28,12 @@ def mid(srv: Server) -> Iterator[str]:
     srv.wait_powered(name)
     yield name
     srv.http.delete(f"/api/machines/{name}")
+
+
+@pytest.fixture(scope="session")
+def ray_cluster() -> Iterator[Cluster]:
+    """One local Ray cluster (head + 2 nodes) for every Ray test of the run (≈10 s to start)."""
+    from tests.backend.raycluster import local_cluster
+
+    with local_cluster(2) as cluster:
+        yield cluster

@@ -32,13 +32,12 @@ from backend.workers.protocol import (
     AddMachine,
     MachineInfo,
     MachineNews,
+    MachineSamples,
     Pacing,
     ParamSnapshot,
     Push,
-    ReadSamples,
     RemoveMachine,
     Request,
-    Samples,
     Watch,
     WorkerNews,
 )
@@ -53,7 +52,7 @@ from nc_sim.signals import Signal
 log = logging.getLogger(__name__)
 
 RECENT_CAPTURES = 16  # completed captures kept in memory until saved to the library
-PULL_PERIOD_S = 0.02  # how often samples are pulled from workers without shared memory
+EARLY_PUSHES = 64  # pushes of a build kept until its AddMachine reply is through
 
 
 @dataclass
@@ -109,6 +108,8 @@ class MachineProxy:
         self.pacing: Pacing | None = None
         self._news = threading.Lock()
         self.events: EventLog[JobError] = EventLog()
+        # pushes of a newer build that came before its AddMachine reply was taken in
+        self._early: deque[MachineNews | MachineSamples] = deque(maxlen=EARLY_PUSHES)
 
     # --- where it runs --------------------------------------------------------------------
     def attach(self, worker: WorkerClient, info: MachineInfo) -> None:
@@ -122,8 +123,12 @@ class MachineProxy:
             self.events = EventLog()
             self.signal_by_name: dict[str, Signal] = {s.name: s for s in info.signals}
             self.status, self.pacing = None, None
+            early = [p for p in self._early if p.epoch == info.epoch]
+            self._early.clear()
         if old is not None:
             old.close()
+        for push in early:
+            self.take(push)
 
     @property
     def axes(self) -> list[str]:
@@ -168,6 +173,21 @@ class MachineProxy:
         return self.ring.read(signals, first, last, stride)
 
     # --- what the worker pushed -------------------------------------------------------------
+    def take(self, push: MachineNews | MachineSamples) -> None:
+        """News or samples of this machine (kept for later when from a build not attached
+        yet, dropped when from a build that was replaced)."""
+        with self._news:
+            if push.epoch > self.epoch:
+                self._early.append(push)
+                return
+            if push.epoch < self.epoch:
+                return
+            if isinstance(push, MachineSamples):
+                assert self.ring is not None
+                self.ring.put(push.first, push.rows)  # type: ignore[arg-type]
+                return
+        self.news(push)
+
     def news(self, n: MachineNews) -> None:
         with self._news:
             if n.epoch != self.epoch:
@@ -191,17 +211,6 @@ class MachineProxy:
         seq = self.notices[-1].seq + 1 if self.notices else 1
         self.notices.append(Notice(seq, kind, message, time.time()))
 
-    def pull(self) -> None:
-        """Fill the gateway's ring from a worker without shared memory."""
-        worker, ring = self.worker, self.ring
-        if worker is None or ring is None or worker.shared_rings or not worker.alive:
-            return
-        got = worker.call(ReadSamples(self.id, ring.head + 1, ring.cycles // 2))
-        assert isinstance(got, Samples)
-        rows = got.rows
-        if getattr(rows, "shape", (0,))[0]:
-            ring.put(got.first, rows)  # type: ignore[arg-type]
-
 
 class MachineService:
     """Owns the proxies; places machines on workers and rebuilds them when a worker dies."""
@@ -210,6 +219,7 @@ class MachineService:
         self.store = store
         self.pool = pool
         self._proxies: dict[str, MachineProxy] = {}
+        self._building: dict[str, MachineProxy] = {}  # new machines until their first build
         self._lock = threading.Lock()
         self.rebuilt = 0  # machines rebuilt after their worker died
         self.listeners: list[Callable[[MachineProxy], None]] = []  # told after a rebuild
@@ -239,7 +249,11 @@ class MachineService:
         """Build the machine on a worker (the least loaded live one unless given)."""
         worker = worker or self.pool.choose(self.on_machine)
         epoch = proxy.epoch + 1
-        info = worker.call(AddMachine(proxy.id, proxy.name, proxy.cfg, epoch))
+        self._building.setdefault(proxy.id, proxy)  # its pushes may come before the reply
+        try:
+            info = worker.call(AddMachine(proxy.id, proxy.name, proxy.cfg, epoch))
+        finally:
+            self._building.pop(proxy.id, None)
         assert isinstance(info, MachineInfo)
         proxy.attach(worker, info)
         if proxy.watchers:
@@ -321,10 +335,10 @@ class MachineService:
 
     # --- worker events ----------------------------------------------------------------------
     def on_push(self, worker: WorkerClient, push: Push) -> None:
-        if isinstance(push, MachineNews):
-            proxy = self._proxies.get(push.mid)
-            if proxy is not None and proxy.worker is worker:
-                proxy.news(push)
+        if isinstance(push, MachineNews | MachineSamples):
+            proxy = self._proxies.get(push.mid) or self._building.get(push.mid)
+            if proxy is not None and (proxy.worker is worker or push.epoch > proxy.epoch):
+                proxy.take(push)
         elif isinstance(push, WorkerNews):
             worker.latest = push
             for mid, pacing in push.pacing.items():

@@ -41,7 +41,7 @@ DeathHandler = Callable[["WorkerClient"], None]
 class WorkerClient(ABC):
     """One worker as the gateway sees it."""
 
-    shared_rings: bool  # samples are read from shared memory (else pulled with ReadSamples)
+    shared_rings: bool  # samples are read from shared memory (else pushed: MachineSamples)
 
     def __init__(self, wid: str) -> None:
         self.id = wid

@@ -54,6 +54,10 @@ class WorkerPool:
         self._on_death: DeathHandler = lambda _c: None
         self.replaced = 0
 
+    @property
+    def _on_cluster(self) -> bool:
+        return self.factory is None and self.cluster is not None
+
     def _new(self) -> WorkerClient:
         with self._lock:
             self._serial += 1
@@ -70,6 +74,10 @@ class WorkerPool:
         """Start every worker (in parallel: each loads the compiled kernel)."""
         self._on_push, self._on_death = on_push, on_death
         self.ring_dir.mkdir(parents=True, exist_ok=True)
+        if self._on_cluster:
+            from backend.workers.ray_transport import connect
+
+            connect(self.cluster)  # type: ignore[arg-type]  # once, before the actors
         fresh = [self._new() for _ in range(self.count)]
         with ThreadPoolExecutor(len(fresh)) as ex:
             list(ex.map(lambda w: w.start(on_push, on_death), fresh))
@@ -114,6 +122,10 @@ class WorkerPool:
             except Exception:
                 log.exception("stopping worker %s failed", w.id)
         shutil.rmtree(self.ring_dir, ignore_errors=True)
+        if self._on_cluster:
+            from backend.workers.ray_transport import disconnect
+
+            disconnect()
 
     def __len__(self) -> int:
         return len(self.workers)

@@ -114,16 +114,6 @@ class ScopeRoll:
     max_points: int
 
 
-@dataclass(frozen=True)
-class ReadSamples:
-    """Kernel records of cycles `first`..newest (at most `max_cycles`): how a gateway without
-    shared memory (a Ray worker on another node) fills its copy of the sample ring."""
-
-    mid: str
-    first: int
-    max_cycles: int
-
-
 Request = (
     AddMachine
     | RemoveMachine
@@ -136,7 +126,6 @@ Request = (
     | ScopeArm
     | ScopeAct
     | ScopeRoll
-    | ReadSamples
 )
 
 
@@ -164,7 +153,7 @@ class MachineInfo:
     axes: list[str]
     signals: list[Signal]
     slots: int  # kernel slots (axes) per sample row
-    ring_path: str | None  # the shared sample ring, None when samples are pulled
+    ring_path: str | None  # the shared sample ring, None when samples are pushed
 
 
 @dataclass(frozen=True)
@@ -193,12 +182,6 @@ class Roll:
     stride: int
     signals: list[str]
     data: object  # np.ndarray channels × samples
-
-
-@dataclass(frozen=True)
-class Samples:
-    first: int  # cycle of rows[0]
-    rows: object  # np.ndarray cycles × slots × columns (object: no numpy type in messages)
 
 
 @dataclass(frozen=True)
@@ -258,4 +241,15 @@ class WorkerNews:
     pacing: dict[str, Pacing]
 
 
-Push = Reply | MachineNews | WorkerNews
+@dataclass(frozen=True)
+class MachineSamples:
+    """Kernel records of cycles `first`.. of one machine: how a worker without shared memory
+    with the gateway (a Ray actor on another node) fills the gateway's copy of the ring."""
+
+    mid: str
+    epoch: int
+    first: int  # cycle of rows[0]
+    rows: object  # np.ndarray cycles × slots × columns (object: no numpy type in messages)
+
+
+Push = Reply | MachineNews | WorkerNews | MachineSamples

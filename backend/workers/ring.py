@@ -6,7 +6,8 @@ kernel writes its records straight into it and then publishes the newest cycle i
 the gateway reads rows and checks afterwards that the worker did not overwrite them meanwhile
 (a seqlock without the lock: x86 keeps the worker's stores in order). A gateway that reaches
 a worker without shared memory (a Ray actor on another node) keeps a ring of its own, filled
-from `ReadSamples` replies; both answer the same `read`.
+with the rows the worker sends (`since` on its side, `put` on the gateway's); both answer the
+same `read`.
 """
 
 from __future__ import annotations
@@ -83,6 +84,18 @@ class SampleRing:
         idx = np.arange(first, first + n) % self.cycles
         self.rows[idx] = rows
         self.publish(first + n - 1)
+
+    def since(self, first: int, max_cycles: int) -> tuple[int, np.ndarray]:
+        """A copy of the rows of cycles first..head (the newest `max_cycles` when there are
+        more) and the cycle of the first row: later than asked when the writer may have
+        overwritten older ones meanwhile (read from another thread than the writer's)."""
+        head = self.head
+        first = max(first, self.oldest(head), head - max_cycles + 1)
+        rows: np.ndarray = self.rows[np.arange(first, head + 1) % self.cycles]
+        safe = self.oldest(self.head)
+        if safe > first:
+            rows, first = rows[safe - first :], safe
+        return first, rows
 
     def oldest(self, head: int) -> int:
         """The oldest cycle still safe to read while the writer may be writing past head."""

@@ -32,13 +32,11 @@ from backend.workers.protocol import (
     MachineNews,
     Pace,
     Push,
-    ReadSamples,
     ReadStatus,
     RemoveMachine,
     Reply,
     Request,
     Roll,
-    Samples,
     ScopeAct,
     ScopeArm,
     ScopeRoll,
@@ -58,7 +56,6 @@ log = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 0.05  # watched machines' status: 20 per second, like a display refresh
 NEWS_PERIOD_S = 1.0  # loop figures and every machine's pacing
-MAX_READ_CYCLES = 4 * 2000  # rows one ReadSamples reply carries at most
 
 
 class Channel(Protocol):
@@ -286,12 +283,6 @@ class Worker:
                 return _scope_state(host)
             case ScopeRoll():
                 return _roll(self._host(r.mid), r.max_points)
-            case ReadSamples():
-                host = self._host(r.mid)
-                first = max(r.first, host.cycle - host.ring.cycles + 2, 1)
-                last = min(host.cycle, first + min(r.max_cycles, MAX_READ_CYCLES) - 1)
-                idx = np.arange(first, last + 1) % host.ring.cycles
-                return Samples(first, host.ring.rows[idx])
         raise NcUsageError(f"unknown request {r!r}")
 
     def _submit(self, host: MachineHost, r: Submit) -> Submitted:

@@ -1,0 +1,246 @@
+"""The Ray transport: a worker is a Ray actor on a cluster node, reached through Ray calls.
+
+The actor wraps a `ThreadedWorker` (its loop thread owns the machines; their rings live in
+the actor's private memory). Requests go to the actor one way (`put`, executed in order on
+one actor thread). Everything that comes back, replies included, travels in batches: the
+gateway keeps one long poll outstanding per actor, which returns at once when a reply is
+waiting and otherwise after `POLL_S` with the news of that time and, per machine, the ring
+rows stepped since the last poll (`MachineSamples`), which fill the gateway's copy of the
+ring. One path back keeps replies and pushes in the order the worker sent them, and a
+command's round trip is one message each way (the poll is already waiting for it).
+
+Only the gateway imports this module, and only when a cluster is configured; the kernel is
+imported inside the actor, on its node.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # before ray loads: no usage reports
+
+import contextlib
+import importlib.util
+import logging
+import threading
+from collections import deque
+from typing import Any
+
+import ray
+from ray.exceptions import (
+    ActorDiedError,
+    ActorUnavailableError,
+    GetTimeoutError,
+    RayActorError,
+    RayError,
+)
+from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+from backend.workers.client import WorkerClient
+from backend.workers.protocol import MachineSamples, Push, Reply, Request
+from backend.workers.ring import MAX_WRITE
+
+log = logging.getLogger(__name__)
+
+POLL_S = 0.04  # news and samples in batches of 25 per second (a reply comes back at once)
+POLL_TIMEOUT_S = 5.0  # a poll unanswered this much longer makes the actor suspect
+SUSPECT_POLLS = 3  # polls in a row an actor may be unavailable before it counts as dead
+MAX_BUFFERED = 20_000  # pushes an actor keeps for a gateway that stopped polling
+SAMPLE_CHUNKS = 4  # rows per machine and poll: at most this many chunks of MAX_WRITE
+START_TIMEOUT_S = 120.0  # the actor's process starts and loads the compiled kernel
+NODE_CHARS = 8  # node ids are shown shortened, like Ray's own tools do
+
+_connect_lock = threading.Lock()
+_homes: dict[int, str] = {}  # id(RayWorker) -> node id, live workers of this gateway
+
+
+def connect(address: str) -> None:
+    """Join the cluster as a driver (once per process): `HOST:PORT` is the head's GCS
+    address (the gateway runs on a cluster node), `ray://HOST:PORT` a Ray Client server."""
+    with _connect_lock:
+        if ray.is_initialized():
+            return
+        # Ray Client's transport is grpc, not in the minimal ray wheel
+        if address.startswith("ray://") and importlib.util.find_spec("grpc") is None:
+            raise RuntimeError(
+                f"cluster {address}: Ray Client (ray://) needs the ray[client] extra "
+                "(grpcio): pip install 'ray[client]', or give the head's GCS address "
+                "HOST:PORT when the gateway runs on a cluster node"
+            )
+        ray.init(address=address, log_to_driver=False, logging_level=logging.WARNING)
+
+
+def disconnect() -> None:
+    """Leave the cluster (the actors this gateway owns end with it)."""
+    with _connect_lock:
+        if ray.is_initialized():
+            ray.shutdown()
+
+
+def _choose_node(worker: RayWorker) -> str:
+    """The live node running the fewest of this gateway's workers (then by id): exact and
+    even, unlike SPREAD, which is best effort."""
+    alive: list[str] = sorted(n["NodeID"] for n in ray.nodes() if n["Alive"])  # type: ignore[no-untyped-call]
+    if not alive:
+        raise RuntimeError("the cluster has no live node")
+    with _connect_lock:
+        load = {n: 0 for n in alive}
+        for node in _homes.values():
+            if node in load:
+                load[node] += 1
+        node = min(alive, key=lambda n: load[n])
+        _homes[id(worker)] = node
+    return node
+
+
+def _release(worker: RayWorker) -> None:
+    with _connect_lock:
+        _homes.pop(id(worker), None)
+
+
+@ray.remote(  # type: ignore[call-overload]
+    num_cpus=0, max_restarts=0, concurrency_groups={"requests": 1, "poll": 1}
+)
+class WorkerActor:
+    """A worker on a cluster node. Ray runs `put` and `poll` on threads of their own."""
+
+    def __init__(self, period_s: float) -> None:
+        # the kernel is loaded here, on the node, never in the gateway
+        from backend.workers.threaded import ThreadedWorker
+        from backend.workers.warmup import warm_up
+
+        warm_up()
+        self.node_id: str = ray.get_runtime_context().get_node_id()
+        self._pushes: deque[Push] = deque()
+        self._replies = 0  # replies among the buffered pushes: a poll returns at once
+        self._cond = threading.Condition()
+        self.dropped = 0
+        self._sent: dict[str, tuple[int, int]] = {}  # machine -> (epoch, newest cycle sent)
+        self.core = ThreadedWorker(period_s, None, self._deliver, self.node_id[:NODE_CHARS])
+        self.core.start()
+
+    def _deliver(self, push: Push) -> None:
+        """The loop thread's replies and pushes, kept until the next poll."""
+        with self._cond:
+            if len(self._pushes) >= MAX_BUFFERED:  # nobody polls: drop the oldest
+                old = self._pushes.popleft()
+                self._replies -= isinstance(old, Reply)
+                self.dropped += 1
+            self._pushes.append(push)
+            if isinstance(push, Reply):
+                self._replies += 1
+                self._cond.notify()
+
+    def describe(self) -> tuple[int, str]:
+        """(pid, node id): answered once the kernel is loaded and the loop runs."""
+        return os.getpid(), self.node_id
+
+    @ray.method(concurrency_group="requests")
+    def put(self, req: int, request: Request) -> None:
+        self.core.channel.put(req, request)
+
+    @ray.method(concurrency_group="poll")
+    def poll(self, wait_s: float) -> list[Push]:
+        """The ring rows stepped since the last poll, then every push since (oldest first);
+        waits up to `wait_s` unless a reply is there. Samples come first so a machine's
+        cycles are in the gateway's ring when the reply to its step arrives."""
+        if not self.core.thread.is_alive():
+            raise RuntimeError(f"the worker loop ended: {self.core.failed!r}")
+        with self._cond:
+            self._cond.wait_for(lambda: self._replies > 0, wait_s)
+            pushes, self._pushes, self._replies = self._pushes, deque(), 0
+        return [*self._samples(), *pushes]
+
+    def _samples(self) -> list[MachineSamples]:
+        out: list[MachineSamples] = []
+        hosts = list(self.core.worker.hosts.values())  # the loop thread may add or remove
+        for host in hosts:
+            epoch, sent = self._sent.get(host.id, (host.epoch, 0))
+            if epoch != host.epoch:
+                sent = 0  # rebuilt: its cycles start again
+            try:
+                first, rows = host.ring.since(sent + 1, SAMPLE_CHUNKS * MAX_WRITE)
+            except IndexError:  # removed meanwhile (its ring was closed)
+                continue
+            for k in range(0, rows.shape[0], MAX_WRITE):  # the gateway's reader's margin
+                out.append(MachineSamples(host.id, host.epoch, first + k, rows[k : k + MAX_WRITE]))
+            self._sent[host.id] = (host.epoch, first + rows.shape[0] - 1)
+        for mid in set(self._sent) - {h.id for h in hosts}:
+            del self._sent[mid]
+        return out
+
+
+class RayWorker(WorkerClient):
+    """A worker actor on a cluster node, placed evenly over the live nodes."""
+
+    shared_rings = False
+
+    def __init__(self, wid: str, period_s: float, cluster: str) -> None:
+        super().__init__(wid)
+        self.period_s = period_s
+        self.cluster = cluster
+        self.actor: Any = None  # the actor handle
+        self._stopping = False
+
+    def _launch(self) -> None:
+        connect(self.cluster)
+        node = _choose_node(self)
+        strategy = NodeAffinitySchedulingStrategy(node, soft=False)
+        actor = WorkerActor.options(scheduling_strategy=strategy).remote(  # type: ignore[attr-defined]
+            self.period_s
+        )
+        try:
+            pid, node_id = ray.get(actor.describe.remote(), timeout=START_TIMEOUT_S)
+        except Exception as e:
+            _release(self)
+            ray.kill(actor)
+            raise RuntimeError(f"worker {self.id} did not start on node {node}: {e}") from None
+        self.actor, self.pid, self.node = actor, pid, node_id[:NODE_CHARS]
+        threading.Thread(target=self._poll, name=f"worker-{self.id}-poller", daemon=True).start()
+
+    def _send(self, req: int, request: Request) -> None:
+        self.actor.put.remote(req, request)
+
+    def _poll(self) -> None:
+        """Take the actor's pushes in batches until it is gone or stopped."""
+        suspect = 0
+        why = ""
+        while not self._stopping:
+            try:
+                batch = ray.get(self.actor.poll.remote(POLL_S), timeout=POLL_S + POLL_TIMEOUT_S)
+            except ActorDiedError as e:
+                why = f"its actor died ({_first_line(e)})"
+                break
+            except (ActorUnavailableError, GetTimeoutError) as e:
+                suspect += 1  # a node that does not answer may be back soon, or dead
+                if suspect < SUSPECT_POLLS:
+                    continue
+                why = f"its actor did not answer {suspect} polls ({_first_line(e)})"
+                break
+            except (RayActorError, RayError) as e:  # the loop ended, or an actor error
+                why = f"{_first_line(e)}"
+                break
+            suspect = 0
+            for push in batch:
+                self._received(push)
+        if self._stopping:
+            return
+        _release(self)
+        with contextlib.suppress(Exception):  # a hung or failed actor must not keep running
+            ray.kill(self.actor)
+        self._died(why)
+
+    def stop(self) -> None:
+        self._stopping = True  # an orderly stop is not a death
+        self.alive = False
+        _release(self)
+        if self.actor is not None:
+            try:
+                ray.kill(self.actor)
+            except Exception:
+                log.debug("killing worker %s's actor failed", self.id, exc_info=True)
+
+
+def _first_line(e: BaseException) -> str:
+    text = str(e).strip().splitlines()
+    return f"{type(e).__name__}: {text[0] if text else ''}"
