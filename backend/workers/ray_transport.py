@@ -18,10 +18,12 @@ from __future__ import annotations
 import os
 
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # before ray loads: no usage reports
+os.environ.setdefault("RAY_ENABLE_AUTO_CONNECT", "0")  # a call after leaving must not rejoin
 
 import contextlib
 import importlib.util
 import logging
+import signal
 import threading
 from collections import deque
 from typing import Any
@@ -67,7 +69,12 @@ def connect(address: str) -> None:
                 "(grpcio): pip install 'ray[client]', or give the head's GCS address "
                 "HOST:PORT when the gateway runs on a cluster node"
             )
+        # ray.init takes over SIGTERM (sys.exit); the server's own shutdown must keep it
+        main = threading.current_thread() is threading.main_thread()
+        kept = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)} if main else {}
         ray.init(address=address, log_to_driver=False, logging_level=logging.WARNING)
+        for sig, handler in kept.items():
+            signal.signal(sig, handler)
 
 
 def disconnect() -> None:
@@ -181,6 +188,7 @@ class RayWorker(WorkerClient):
         self.cluster = cluster
         self.actor: Any = None  # the actor handle
         self._stopping = False
+        self._poller: threading.Thread | None = None
 
     def _launch(self) -> None:
         connect(self.cluster)
@@ -196,7 +204,9 @@ class RayWorker(WorkerClient):
             ray.kill(actor)
             raise RuntimeError(f"worker {self.id} did not start on node {node}: {e}") from None
         self.actor, self.pid, self.node = actor, pid, node_id[:NODE_CHARS]
-        threading.Thread(target=self._poll, name=f"worker-{self.id}-poller", daemon=True).start()
+        self._poller = threading.Thread(target=self._poll, name=f"worker-{self.id}-poller")
+        self._poller.daemon = True
+        self._poller.start()
 
     def _send(self, req: int, request: Request) -> None:
         self.actor.put.remote(req, request)
@@ -239,6 +249,8 @@ class RayWorker(WorkerClient):
                 ray.kill(self.actor)
             except Exception:
                 log.debug("killing worker %s's actor failed", self.id, exc_info=True)
+        if self._poller is not None and self._poller is not threading.current_thread():
+            self._poller.join(timeout=POLL_S + POLL_TIMEOUT_S)  # before the gateway leaves
 
 
 def _first_line(e: BaseException) -> str:
