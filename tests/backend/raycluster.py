@@ -38,5 +38,12 @@ def local_cluster(worker_nodes: int = 2) -> Iterator[Cluster]:
         cluster.wait_for_nodes()
         yield cluster
     finally:
-        cluster.shutdown()
+        cluster.shutdown()  # type: ignore[no-untyped-call]
         shutil.rmtree(temp, ignore_errors=True)
+
+
+def head_node_id(cluster: Cluster) -> str:
+    """The head's node id, shortened as the service status shows it."""
+    assert cluster.head_node is not None
+    node_id: str = cluster.head_node.node_id
+    return node_id[:8]

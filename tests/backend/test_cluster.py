@@ -12,7 +12,7 @@ import pytest
 from ray.cluster_utils import Cluster
 
 from api.telemetry import FrameHeader
-from tests.backend.raycluster import NODE_ARGS
+from tests.backend.raycluster import NODE_ARGS, head_node_id
 from tests.backend.server import Server
 from tests.backend.test_workers import service, wait_for, watch, worker_of
 
@@ -53,7 +53,7 @@ def test_machines_run_on_every_node_and_answer_and_stream(
     srv: Server, ray_cluster: Cluster
 ) -> None:
     workers = service(srv)["workers"]
-    nodes = {n.node_id[:8] for n in [ray_cluster.head_node, *ray_cluster.worker_nodes]}
+    nodes = {head_node_id(ray_cluster), *(n.node_id[:8] for n in ray_cluster.worker_nodes)}
     assert len(workers) == 3 and {w["node"] for w in workers} == nodes  # one per node
     assert service(srv)["transport"] == "ray"
     ids = machines_on_every_node(srv)
@@ -64,7 +64,7 @@ def test_machines_run_on_every_node_and_answer_and_stream(
         r = srv.command(mid, {"type": "mdi", "block": "G01 X10 F500 &"})
         assert r.status_code == 422, r.text
     # telemetry from a machine on a worker node: every cycle, in order, nothing skipped
-    remote = next(m for m in ids if worker_of(srv, m)["node"] != ray_cluster.head_node.node_id[:8])
+    remote = next(m for m in ids if worker_of(srv, m)["node"] != head_node_id(ray_cluster))
     frames = frames_of(srv, remote, 1.5)
     assert len(frames) > 5  # batches of the worker's polls: a frame per poll or two
     for prev, h in itertools.pairwise(frames):
@@ -77,7 +77,7 @@ def test_machines_run_on_every_node_and_answer_and_stream(
 def test_a_node_that_leaves_has_its_machines_rebuilt_on_the_others(
     srv: Server, ray_cluster: Cluster
 ) -> None:
-    head = ray_cluster.head_node.node_id[:8]  # the gateway's own node: it stays
+    head = head_node_id(ray_cluster)  # the gateway's own node: it stays
     for k in itertools.count():  # placed by load: within a round one lands on a worker node
         leaver = f"leaver{k}"
         r = srv.http.post("/api/machines", json={"id": leaver, "demo": True})
