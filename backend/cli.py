@@ -23,7 +23,11 @@ def main(argv: list[str] | None = None) -> int:
     p_srv.add_argument("--db", type=Path, help="SQLite file (default var/inbetrieb.sqlite)")
     p_srv.add_argument("--no-demo", action="store_true", help="no demo machine in a new store")
     p_srv.add_argument("--workers", type=int, help="worker processes (default: one per core)")
-    p_srv.add_argument("--cluster", help="Ray cluster (ray://HOST:PORT): workers as Ray actors")
+    p_srv.add_argument(
+        "--cluster",
+        help="Ray cluster: the head's HOST:PORT (gateway on a cluster node) or ray://HOST:PORT "
+        "(Ray Client, needs ray[client]); workers become Ray actors spread over the nodes",
+    )
     p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
     args = parser.parse_args(argv)
