@@ -21,8 +21,6 @@ import numpy as np
 from api.scope import ScopeSetupModel
 from backend.services.handover import HandoverLock
 from nc_sim.commands import JogStop
-from nc_sim.errors import JobError
-from nc_sim.events import EventLog
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -57,26 +55,6 @@ class Capture:
     record: Record
     params: ParamSnapshot
     created_unix: float
-
-
-@dataclass
-class EventIndex:
-    """The newest event of each (code, axis), brought up to date by cursor: status finds the
-    event behind each active job error without scanning the machine's event log."""
-
-    cursor: int = 0
-    latest: dict[tuple[int, str], tuple[int, JobError]] = field(default_factory=dict)
-
-    def update(self, log: EventLog[JobError]) -> None:
-        read = log.since(self.cursor)
-        for seq, e in enumerate(read.entries, read.first_seq):
-            self.latest[(e.code, e.axis)] = (seq, e)
-        self.cursor = read.cursor
-
-    def newest(self, code: int, axes: tuple[str, ...]) -> JobError | None:
-        """The newest event with this code on any of these axes ("" is channel-wide)."""
-        found = [self.latest[(code, a)] for a in axes if (code, a) in self.latest]
-        return max(found, key=lambda x: x[0])[1] if found else None
 
 
 @dataclass
@@ -116,7 +94,6 @@ class MachineHost:
             self.ring = np.zeros((RING_CYCLES, self.sim.kernel.n, L.R_COLS))
             self.scope = Scope(self.sim.kernel.cycle_s)  # a power cycle stops the scope
             self.epoch = getattr(self, "epoch", 0) + 1  # telemetry cursors restart with it
-            self.event_index = EventIndex()
             self.jog_leases.clear()  # a power cycle ends every held jog
             self.pacing.anchor_mono = time.monotonic()
             self.pacing.history.clear()
@@ -150,7 +127,6 @@ class MachineHost:
                     self._take_captures()
             n -= part
         self._expire_jogs()
-        self.event_index.update(self.machine.events)  # before the bounded log drops any
 
     def _take_captures(self) -> None:
         """Keep completed records with the parameter lists as written now (cheap copies)."""

@@ -16,7 +16,6 @@ from api.status import (
 from api.telemetry import SignalInfo
 from backend.services.commands import job_error_model
 from backend.services.host import MachineHost
-from nc_sim.errors import JobError
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import Axis, target_and_distance
 from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
@@ -102,14 +101,8 @@ def machine_status(host: MachineHost) -> MachineStatus:
     """Everything the HMI shows about a machine, consistent to one cycle."""
     with host.lock:
         m = host.machine
-        host.event_index.update(m.events)  # only the events since the last status
-        latest: dict[str, JobError] = {}
-        for ax in m.axes:  # the event that set each axis' job error (channel-wide ones too)
-            e = host.event_index.newest(ax.job_error, (ax.name, "")) if ax.job_error else None
-            if e is not None:
-                latest[ax.name] = e
-        # one entry per distinct error: an emergency stop is one error, not one per axis
-        distinct = {(e.cycle, e.code, e.axis): e for e in latest.values()}
+        # the event that set each axis' job error, once: an emergency stop is one error
+        distinct = {e.seq: e for ax in m.axes if (e := ax.error_event) is not None}
         return MachineStatus(
             id=host.id,
             name=host.name,

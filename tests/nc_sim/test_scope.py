@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from nc_sim.commands import Accepted, HliWrite, JogStep, Move, SpindlePosition, SpindleRun
+from nc_sim.errors import Code
 from nc_sim.events import EventLog
 from nc_sim.machine.axis import AxisState
 from nc_sim.scope import (
@@ -98,7 +99,7 @@ def test_m19_capture_has_the_asked_pretrigger_and_the_trigger_at_the_first_m19_c
     for k, name in enumerate(CH):
         np.testing.assert_array_equal(rec.data[k], rig.span(name, rec.first_cycle, 1000))
     assert rig.scope.state is ScopeState.DONE
-    assert any(e.message.startswith("M19") for e in rec.events)
+    assert any(e.code == Code.EV_M_START and e.m == 19 for e in rec.events)
 
 
 def test_pretrigger_comes_from_history_when_the_trigger_follows_arming_at_once() -> None:
