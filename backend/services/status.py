@@ -16,27 +16,20 @@ from api.status import (
 from api.telemetry import SignalInfo
 from backend.services.commands import job_error_model
 from backend.services.host import MachineHost
-from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import Axis, target_and_distance
-from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
-from nc_sim.machine.machine import Machine
-from nc_sim.units import RPM_TO_DEG_S, AxisKind
-
-_LOOP: dict[int, Literal["open", "closed", "control_limit", "speed_control"]] = {
-    L.LOOP_CLOSED: "closed",
-    L.LOOP_CONTROL_LIMIT: "control_limit",
-    L.LOOP_SPEED_CONTROL: "speed_control",
-}
-
+from nc_sim.snapshot import AxisSnapshot, LoopMode
+from nc_sim.units import AxisKind
 
 _KIND: dict[AxisKind, Literal["linear", "rotary", "spindle"]] = {
     AxisKind.LINEAR: "linear",
     AxisKind.ROTARY: "rotary",
     AxisKind.SPINDLE: "spindle",
 }
-
-
-RECENT_EVENTS = 50  # events a status snapshot carries
+_LOOP: dict[LoopMode, Literal["open", "closed", "control_limit", "speed_control"]] = {
+    LoopMode.OPEN: "open",
+    LoopMode.CLOSED: "closed",
+    LoopMode.CONTROL_LIMIT: "control_limit",
+    LoopMode.SPEED_CONTROL: "speed_control",
+}
 
 
 def _mode(host: MachineHost) -> SimMode:
@@ -59,68 +52,62 @@ def simulation_status(host: MachineHost) -> SimulationStatus:
         )
 
 
-def _axis_status(m: Machine, ax: Axis) -> AxisStatus:
-    st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
-    spindle = ax.kind is AxisKind.SPINDLE
-    vel_scale = 1.0 / RPM_TO_DEG_S if spindle else 60.0
-    target, to_go = target_and_distance(m.k, ax)
-    drive = ax.drive.reported()
+def _axis_status(a: AxisSnapshot) -> AxisStatus:
+    sp = a.spindle
     return AxisStatus(
-        name=ax.name,
-        kind=_KIND[ax.kind],
-        state=ax.state.name,
-        unit="mm" if ax.kind is AxisKind.LINEAR else "deg",
-        pos_cmd=float(st[L.S_P_CMD]),
-        pos_act=float(st[L.S_P_ACT]),
-        lag=float(st[L.S_LAG]),
-        vel_cmd=float(st[L.S_V_CMD]) * vel_scale,
-        vel_act=float(st[L.S_V_ACT]) * vel_scale,
-        homed=bool(ist[L.I_HOMED]),
-        in_position=bool(ist[L.I_IN_POS]),
-        target_pos=target,
-        distance_to_go=to_go,
-        enabled=ax.enables_ok(),
-        missing_enables=ax.missing_enables(),
-        ready_for_power_on=drive.get(READY_FOR_POWER_ON),
-        ready_for_control_loop_on=drive.get(READY_FOR_CONTROL_LOOP_ON),
-        control_units=dict(ax.units),
-        override_pct=float(st[L.S_OVERRIDE]) * 100.0,
-        job_error=ax.job_error,
-        gear=ax.gear if spindle else None,
-        speed_prog_rpm=abs(ax.speed_prog) / RPM_TO_DEG_S if spindle else None,
-        speed_reached=bool(ist[L.I_SPEED_REACHED]) if spindle else None,
-        stopped=bool(ist[L.I_STOPPED]) if spindle else None,
-        speed_monitoring_active=bool(ist[L.I_MON_ACTIVE]) if spindle else None,
-        speed_monitoring_invalid=bool(ist[L.I_MON_INVALID]) if spindle else None,
-        # without its enables the drive does not follow: no loop is closed, whatever the mode
-        loop=_LOOP.get(int(ist[L.I_OPEN_LOOP]), "closed") if ist[L.I_ENABLED] else "open",
+        name=a.name,
+        kind=_KIND[a.kind],
+        state=a.state,
+        unit=a.pos_unit,
+        pos_cmd=a.pos_cmd,
+        pos_act=a.pos_act,
+        lag=a.lag,
+        vel_cmd=a.vel_cmd,
+        vel_act=a.vel_act,
+        homed=a.homed,
+        in_position=a.in_position,
+        target_pos=a.target_pos,
+        distance_to_go=a.distance_to_go,
+        enabled=a.enabled,
+        missing_enables=list(a.missing_enables),
+        ready_for_power_on=a.ready_for_power_on,
+        ready_for_control_loop_on=a.ready_for_control_loop_on,
+        control_units=dict(a.control_units),
+        override_pct=a.override_pct,
+        job_error=a.job_error,
+        gear=sp.gear if sp else None,
+        speed_prog_rpm=sp.speed_prog_rpm if sp else None,
+        speed_reached=sp.speed_reached if sp else None,
+        stopped=sp.stopped if sp else None,
+        speed_monitoring_active=sp.speed_monitoring_active if sp else None,
+        speed_monitoring_invalid=sp.speed_monitoring_invalid if sp else None,
+        loop=_LOOP[a.loop],
     )
 
 
 def machine_status(host: MachineHost) -> MachineStatus:
-    """Everything the HMI shows about a machine, consistent to one cycle."""
+    """Everything the HMI shows about a machine, consistent to one cycle: the machine's
+    snapshot in the API's words."""
     with host.lock:
-        m = host.machine
-        # the event that set each axis' job error, once: an emergency stop is one error
-        distinct = {e.seq: e for ax in m.axes if (e := ax.error_event) is not None}
+        snap = host.machine.snapshot()
         return MachineStatus(
             id=host.id,
             name=host.name,
             simulation=simulation_status(host),
-            channel_units=dict(m.channel_units),
-            emergency_stop=m.estop,
-            queued_blocks=m.queued_blocks,
-            axes=[_axis_status(m, ax) for ax in m.axes],
+            channel_units=dict(snap.channel_units),
+            emergency_stop=snap.emergency_stop,
+            queued_blocks=snap.queued_blocks,
+            axes=[_axis_status(a) for a in snap.axes],
             plc=PlcStatus(
-                mode=m.plc.mode.value,
-                ack_delay_s=m.plc.delay_cycles * host.cycle_s,
-                drives_powered=m.powered,
+                mode=snap.plc.mode.value,
+                ack_delay_s=snap.plc.ack_delay_s,
+                drives_powered=snap.plc.drives_powered,
                 pending=[
-                    PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle) for p in m.plc.pending
+                    PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle) for p in snap.plc.pending
                 ],
             ),
-            job_errors=[job_error_model(e) for e in distinct.values()],
-            recent_events=[job_error_model(e) for e in m.events.tail(RECENT_EVENTS)],
+            job_errors=[job_error_model(e) for e in snap.job_errors],
+            recent_events=[job_error_model(e) for e in snap.recent_events],
         )
 
 

@@ -64,10 +64,12 @@ from nc_sim.machine.dynamics import (
     velocity_limit,
 )
 from nc_sim.machine.gears import m_of
+from nc_sim.machine.readout import machine_snapshot
 from nc_sim.machine.spindle import SpindleControl
 from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
+from nc_sim.snapshot import RECENT_EVENTS, MachineSnapshot
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
@@ -218,6 +220,11 @@ class Machine:
         enables, so the machine can move (the moment the headless runner calls time 0).
         Live, not latched: false as soon as an E-stop or the PLC takes a drive's enables."""
         return self._powered and all(ax.drive_follows() for ax in self.axes)
+
+    def snapshot(self, recent_events: int = RECENT_EVENTS) -> MachineSnapshot:
+        """Everything a status shows about the machine now, as plain values in engineering
+        units (nc_sim/snapshot.py), with the newest `recent_events` events."""
+        return machine_snapshot(self, recent_events)
 
     @property
     def queued_blocks(self) -> int:

@@ -15,12 +15,13 @@ from api.commands import EmergencyStopCommand
 from backend.services.auth import Actor
 from backend.services.commands import execute
 from backend.services.host import MachineHost
-from backend.services.status import RECENT_EVENTS, machine_status
+from backend.services.status import machine_status
 from backend.services.telemetry import TelemetryHub
 from nc_sim.commands import Mdi
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN
 from nc_sim.machine.config import demo_machine
+from nc_sim.snapshot import RECENT_EVENTS
 from tests.backend.fakews import FakeSocket
 
 INSTRUCTOR = Actor("test", Role.INSTRUCTOR)
