@@ -89,7 +89,7 @@ class MachineHost:
             self.interrupt_steps()  # a step must not go on into the new machine
             self.sim = Simulation(cfg.cycle_s)
             self.machine: Machine = self.sim.add(cfg)
-            self.signals: list[Signal] = machine_signals(self.machine)
+            self.signals: list[Signal] = machine_signals(self.machine.axes)
             self.signal_by_name = {s.name: s for s in self.signals}
             self.ring = np.zeros((RING_CYCLES, self.sim.kernel.n, L.R_COLS))
             self.scope = Scope(self.sim.kernel.cycle_s)  # a power cycle stops the scope

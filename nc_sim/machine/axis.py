@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 
 from nc_sim.events import Event
-from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.config import AxisConfig
 from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion

@@ -43,8 +43,8 @@ from nc_sim.commands import (
 )
 from nc_sim.errors import MESSAGES, Code, NcUsageError, is_error
 from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
-from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.axis import (
     Axis,
     AxisState,

@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from nc_sim.accel_curve import CurveParams
 from nc_sim.blocks import SpindleCmd
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.kernel.curve import CurveParams
 from nc_sim.machine.axis import (
     Axis,
     AxisState,

@@ -33,7 +33,7 @@ class Rig:
         self.scope = Scope(self.sim.kernel.cycle_s)
         self.base = self.sim.cycle  # cycles before the rig recorded (the drives switching on)
         self.full = [self.sim.new_record(0)]
-        self.sig = {s.name: s for s in machine_signals(self.m)}
+        self.sig = {s.name: s for s in machine_signals(self.m.axes)}
 
     def signals(self, *names: str) -> list[Signal]:
         return [self.sig[n] for n in names]
@@ -190,7 +190,7 @@ def test_a_crossing_in_the_first_cycle_after_arming_counts() -> None:
 def test_a_trigger_soon_after_power_on_keeps_the_history_back_to_cycle_1() -> None:
     sim, m, _ = make(settle=0)
     scope = Scope(sim.kernel.cycle_s)
-    sig = machine_signals(m)
+    sig = machine_signals(m.axes)
     trig = EventTrigger(EventKind.M_START, "S1", 3)
     scope.arm(
         ScopeSetup(sig[:2], 1000, 50.0, ScopeMode.SINGLE, trig), 0, sim.new_record(0), EventLog()
@@ -244,7 +244,7 @@ def test_force_takes_the_newest_cycle_and_roll_keeps_the_newest_window() -> None
 
 
 def test_setup_limits_name_what_is_wrong() -> None:
-    s = machine_signals(make()[1])
+    s = machine_signals(make()[1].axes)
     with pytest.raises(ValueError, match="channels: 1 … 16"):
         ScopeSetup(s[:17], 100, trigger=EventTrigger(EventKind.JOB_ERROR)).check()
     with pytest.raises(ValueError, match="60000 cycles"):
