@@ -6,8 +6,9 @@ import math
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-from nc_sim.kernel import Kernel
+from nc_sim.events import Event
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.config import AxisConfig
 from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion
@@ -91,7 +92,7 @@ class Axis:
     hold: bool = False  # braked by feedhold, resumes on release
     homing: HomingPhase = HomingPhase.NONE
     homed: bool = False
-    job_error: int = 0
+    error_event: Event | None = None  # the job error in force (what set it), None without
     block_id: int | None = None  # MDI block this motion belongs to
     # spindle only
     override_suppressed: bool = False  # G167 until the next S[REV..]
@@ -125,6 +126,11 @@ class Axis:
     @property
     def kind(self) -> AxisKind:
         return self.cfg.kind
+
+    @property
+    def job_error(self) -> int:
+        """Code of the job error in force, 0 without (as the HLI shows it)."""
+        return self.error_event.code if self.error_event is not None else 0
 
     @property
     def pos_unit(self) -> str:
