@@ -9,13 +9,28 @@ computes: the gateway imports it without numba.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import StrEnum
+from enum import IntEnum, StrEnum
 
 from nc_sim.events import Event
 from nc_sim.plc import PlcMode
 from nc_sim.units import AxisKind
 
 RECENT_EVENTS = 50  # events a snapshot carries
+
+
+class AxisState(IntEnum):
+    """Operating state shown in the HLI and traces."""
+
+    STANDSTILL = 0
+    MOVING = 1  # positioning (G00/G01, incremental jog, M19 later)
+    JOG = 2  # continuous jog
+    HOMING = 3
+    ENDLESS = 4  # spindle M3/M4
+    STOPPING = 5
+    POSITIONING = 6  # spindle M19
+    OPEN_LOOP = 7  # spindle rotating above the control limit vb_regelgrenze
+    GEAR_CHANGE = 8  # spindle at the change position, waiting for the PLC
+    ERROR = 9
 
 
 class LoopMode(StrEnum):

@@ -111,7 +111,7 @@ class MachineProxy:
         self.events: EventLog[Event] = EventLog()
 
     # --- where it runs --------------------------------------------------------------------
-    def attach(self, worker: WorkerClient, info: MachineInfo) -> None:
+    def attach(self, worker: WorkerClient | None, info: MachineInfo) -> None:
         """The machine now runs on `worker` as built in `info` (a new epoch)."""
         old = self.ring
         ring = SampleRing.attach(Path(info.ring_path)) if info.ring_path else None

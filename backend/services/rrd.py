@@ -16,7 +16,7 @@ import numpy as np
 import rerun as rr
 
 from nc_sim.events import Event
-from nc_sim.machine.axis import AxisState
+from nc_sim.snapshot import AxisState
 
 APP_ID = "inbetrieb"
 

@@ -13,6 +13,7 @@ from nc_sim.machine.config import AxisConfig
 from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion
 from nc_sim.params.definitions import OPMODE_SYMBOLS
+from nc_sim.snapshot import AxisState
 from nc_sim.units import AxisKind, Quantity, eng_unit, v_reso_digits_per_unit_s
 
 # control units every drive type needs [004 §4.1]; others need only TorquePermission
@@ -21,21 +22,6 @@ ENABLES_BY_DRIVE = {
     3: ("DriveOn", "TorquePermission"),  # PROFIDRIVE
     8: ("DriveOn", "TorquePermission", "ReleaseFeedhold"),  # CANopen
 }
-
-
-class AxisState(IntEnum):
-    """Operating state shown in the HLI and traces."""
-
-    STANDSTILL = 0
-    MOVING = 1  # positioning (G00/G01, incremental jog, M19 later)
-    JOG = 2  # continuous jog
-    HOMING = 3
-    ENDLESS = 4  # spindle M3/M4
-    STOPPING = 5
-    POSITIONING = 6  # spindle M19
-    OPEN_LOOP = 7  # spindle rotating above the control limit vb_regelgrenze
-    GEAR_CHANGE = 8  # spindle at the change position, waiting for the PLC
-    ERROR = 9
 
 
 class HomingPhase(IntEnum):

@@ -47,7 +47,6 @@ from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.axis import (
     Axis,
-    AxisState,
     HomingPhase,
     ToolLimits,
     drive_status,
@@ -69,7 +68,7 @@ from nc_sim.machine.spindle import SpindleControl
 from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.snapshot import RECENT_EVENTS, MachineSnapshot
+from nc_sim.snapshot import RECENT_EVENTS, AxisState, MachineSnapshot
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")

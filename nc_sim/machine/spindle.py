@@ -23,7 +23,6 @@ from nc_sim.events import Event
 from nc_sim.kernel import layout as L
 from nc_sim.machine.axis import (
     Axis,
-    AxisState,
     SpindleTask,
     TaskPhase,
     ToolLimits,
@@ -44,6 +43,7 @@ from nc_sim.profiles.plan import (
     position_move,
     velocity_change,
 )
+from nc_sim.snapshot import AxisState
 from nc_sim.units import RPM_TO_DEG_S
 
 if TYPE_CHECKING:

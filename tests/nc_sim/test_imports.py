@@ -11,6 +11,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 
 GATEWAY_IMPORTS = (
+    "backend.main",  # the whole gateway: app, routes, services, worker clients
     "nc_sim.params",
     "nc_sim.machine.config",
     "nc_sim.commands",

@@ -10,7 +10,6 @@ import pytest
 from nc_sim.commands import Accepted, HliWrite, JogStep, Move, SpindlePosition, SpindleRun
 from nc_sim.errors import Code
 from nc_sim.events import EventLog
-from nc_sim.machine.axis import AxisState
 from nc_sim.scope import (
     EventKind,
     EventTrigger,
@@ -21,6 +20,7 @@ from nc_sim.scope import (
     ScopeState,
 )
 from nc_sim.signals import Signal, machine_signals, signal_columns
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make
 
 

@@ -25,10 +25,10 @@ from nc_sim.commands import (
     SpindleRun,
 )
 from nc_sim.errors import Code
-from nc_sim.machine.axis import AxisState
 from nc_sim.machine.machine import Machine
 from nc_sim.params import ParamListError
 from nc_sim.sim import Simulation
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import L, make, record
 
 S = "S1"
