@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import asyncio
 import json
+import multiprocessing as mp
 import os
 import struct
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from multiprocessing.synchronize import Event
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +22,7 @@ from websockets.asyncio.client import connect
 from api.telemetry import MAGIC
 
 REPORT_WAIT_S = 3.0  # workers report loop figures once a second; give up on one after this
+STOP_POLL_S = 0.2  # how soon a viewer notices it should stop
 SHOW_OVERRUNS = 5  # the worst overruns of a run, printed with their cause
 
 
@@ -204,19 +208,30 @@ def _header(buf: bytes) -> dict[str, Any]:
     return header
 
 
-async def view(url: str, signals: list[str], until: float, start: float = 0.0) -> Viewer:
-    """Subscribe to `signals` and read every message until monotonic time `until`; frames
-    count from monotonic time `start` (to skip the first burst after subscribing)."""
+async def view(
+    url: str,
+    signals: list[str],
+    until: float,
+    start: float = 0.0,
+    stop: Callable[[], bool] | None = None,
+    subscribed: Callable[[], None] | None = None,
+) -> Viewer:
+    """Subscribe to `signals` and read every message until monotonic time `until` (or until
+    `stop()` says so, checked at least every `STOP_POLL_S`); frames count from monotonic time
+    `start` (to skip the first burst after subscribing); `subscribed()` is called once the
+    subscription is sent."""
     v = Viewer()
     expected: int | None = None
     try:
         async with connect(url, max_size=None) as ws:
             await ws.send(json.dumps({"type": "subscribe", "signals": signals}))
-            while (left := until - time.monotonic()) > 0:
+            if subscribed:
+                subscribed()
+            while (left := until - time.monotonic()) > 0 and not (stop and stop()):
                 try:
-                    msg = await asyncio.wait_for(ws.recv(), left)
+                    msg = await asyncio.wait_for(ws.recv(), min(left, STOP_POLL_S))
                 except TimeoutError:
-                    break
+                    continue
                 now = time.time()
                 if not isinstance(msg, bytes):
                     if '"status"' in msg[:20]:
@@ -251,3 +266,59 @@ def latencies_ms(viewers: list[Viewer]) -> np.ndarray:
 def pct(a: np.ndarray, q: float) -> float:
     """Percentile, NaN for no data."""
     return float(np.percentile(a, q)) if len(a) else float("nan")
+
+
+def _viewers_main(
+    urls: list[str], signals: list[str], settle_s: float, stop: Event, ready: Any, out: Any
+) -> None:
+    """Child process: one viewer per URL until `stop` is set; counts subscriptions in
+    `ready`, puts the results to `out`."""
+
+    def subscribed() -> None:
+        with ready.get_lock():
+            ready.value += 1
+
+    async def main() -> list[Viewer]:
+        start = time.monotonic() + settle_s
+        until = time.monotonic() + 24 * 3600
+        return await asyncio.gather(
+            *(view(u, signals, until, start, stop.is_set, subscribed) for u in urls)
+        )
+
+    out.put(asyncio.run(main()))
+
+
+class Viewers:
+    """Telemetry viewers in a separate client process (so they do not compete with the
+    bench's own timing for this interpreter): one per URL, from `start()` until `stop()`."""
+
+    def __init__(self, urls: list[str], signals: list[str], settle_s: float = 0.5) -> None:
+        ctx = mp.get_context("spawn")
+        self.stopping = ctx.Event()
+        self.ready: Any = ctx.Value("i", 0)
+        self.out: Any = ctx.Queue()
+        self.proc = ctx.Process(
+            target=_viewers_main,
+            args=(urls, signals, settle_s, self.stopping, self.ready, self.out),
+        )
+        self.n = len(urls)
+        self.settle_s = settle_s
+
+    def start(self, timeout_s: float = 60.0) -> Viewers:
+        """Start the viewers; return once all have subscribed and their first burst passed."""
+        self.proc.start()
+        deadline = time.monotonic() + timeout_s
+        while self.ready.value < self.n:
+            if time.monotonic() > deadline or not self.proc.is_alive():
+                self.proc.terminate()  # our own child
+                raise RuntimeError(f"only {self.ready.value} of {self.n} viewers subscribed")
+            time.sleep(0.05)
+        time.sleep(self.settle_s)
+        return self
+
+    def stop(self) -> list[Viewer]:
+        """Stop the viewers; what each received."""
+        self.stopping.set()
+        viewers: list[Viewer] = self.out.get(timeout=60)
+        self.proc.join(timeout=10)
+        return viewers
