@@ -177,6 +177,7 @@ class Viewer:
     status_messages: int = 0
     other_messages: int = 0
     error: str | None = None
+    counted_s: float = 0.0  # how long frames were counted
 
     @property
     def frames(self) -> int:
@@ -212,7 +213,7 @@ async def view(
     url: str,
     signals: list[str],
     until: float,
-    start: float = 0.0,
+    start: float | None = None,
     stop: Callable[[], bool] | None = None,
     subscribed: Callable[[], None] | None = None,
 ) -> Viewer:
@@ -221,6 +222,7 @@ async def view(
     `start` (to skip the first burst after subscribing); `subscribed()` is called once the
     subscription is sent."""
     v = Viewer()
+    start = time.monotonic() if start is None else start
     expected: int | None = None
     try:
         async with connect(url, max_size=None) as ws:
@@ -254,6 +256,7 @@ async def view(
                 expected = first + count * stride
     except Exception as e:  # a dropped viewer is a figure, not a crash of the bench
         v.error = f"{type(e).__name__}: {e}"
+    v.counted_s = max(0.0, time.monotonic() - start)
     return v
 
 
