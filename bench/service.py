@@ -116,7 +116,8 @@ class Run:
                 f"work {o['work_ms']:.1f} ms"
             )
         if len(worst) > SHOW_OVERRUNS:
-            print(f"{indent}  ... {len(worst) - SHOW_OVERRUNS} more of the last 20 per worker")
+            more = len(worst) - SHOW_OVERRUNS
+            print(f"{indent}  ... and {more} more (each worker keeps its last 20)")
 
 
 class Meter:
