@@ -64,6 +64,7 @@ bench: $(STAMP) $(DIST) $(CHROMIUM)
 	$(PY) bench/telemetry.py
 	$(PY) bench/ui.py
 	$(PY) bench/trace.py
+	$(PY) bench/class.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache *.egg-info frontend/node_modules \

@@ -16,8 +16,23 @@ class JobErrorModel(BaseModel):
     t_s: float = Field(description="simulated time, s")
     axis: str = Field(description="axis or spindle, empty for the channel")
     code: int = Field(description="job error (≥ 60000) or event number")
-    message: str
+    message: str = Field(description="in the operator's words (for people: never parse it)")
     error: bool = Field(description="true for a job error, false for an information event")
+    seq: int | None = Field(
+        None,
+        description="sequence number in the machine's event log (from 0 per power-on, "
+        "increasing by one); null only in traces saved before events were numbered",
+    )
+    m: int | None = Field(
+        None,
+        description="the M function it concerns: M function output, acknowledgement and "
+        "start, in position after M19 (m = 19), M5 stop done; null for none",
+    )
+    gear: int | None = Field(
+        None,
+        description="the gear stage 1..6 (M40..M45) it concerns: gear change started, gear "
+        "changed, M40-M45 output of a gear change; null for none",
+    )
 
 
 class ParameterProblem(BaseModel):

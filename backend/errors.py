@@ -47,6 +47,9 @@ def not_found(what: str) -> ApiError:
     return ApiError(404, {"message": f"{what} not found"})
 
 
+WORKER_GONE = {503: "the machine's worker stopped: the machine is being rebuilt, try again"}
+
+
 def responses(*codes: int, why: Mapping[int, str] | None = None) -> dict[int | str, Any]:
     """OpenAPI `responses=` for error answers: each code with the shared body and a reason
     (`why` overrides or adds reasons, e.g. `{409: "the NC refused the command"}`)."""

@@ -33,11 +33,14 @@ def write_events(path: Path, result: ScenarioResult) -> None:
     with path.open("w", encoding="utf-8") as f:
         for e in result.events:
             rec = {
+                "seq": e.seq,
                 "t_s": round(e.t_s, 9),
                 "axis": e.axis,
                 "code": e.code,
                 "error": e.error,
                 "message": e.message,
+                "m": e.m,
+                "gear": e.gear,
             }
             f.write(json.dumps(rec) + "\n")
 

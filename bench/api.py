@@ -1,6 +1,13 @@
-"""Command round trip over loopback HTTP: MDI blocks and jog commands against the real
-service, one keep-alive connection, each request answered with its acknowledgement.
-Prints p50/p99/max per command kind. Bar: p99 <= 10 ms."""
+"""Command round trip over loopback HTTP with 50 viewers attached: MDI blocks and jog
+commands against the real service (gateway and workers), one keep-alive connection, each
+request answered with its acknowledgement, while 50 websocket viewers (a separate client
+process) stream a few signals of the same machine and read everything.
+
+Prints per command kind the round trip p50/p99/max and the `latency_ms` the service reports
+(gateway hand-over to the kernel on the worker) p50/p99/max; then what the viewers received
+meanwhile, overruns summed over every worker and one line per worker.
+Bar: round trip p99 <= 5 ms and 0 overruns.
+"""
 
 from __future__ import annotations
 
@@ -14,42 +21,74 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.service import Meter, Viewers, latencies_ms, pct
 from tests.backend.server import Server
 
 KINDS: dict[str, list[dict[str, object]]] = {
-    "MDI": [{"type": "mdi", "block": "M3 S800"}, {"type": "mdi", "block": "M5"}],
     "jog": [
         {"type": "jog", "axis": "Z", "action": "start", "direction": 1},
         {"type": "jog", "axis": "Z", "action": "stop"},
     ],
+    "MDI": [{"type": "mdi", "block": "M3 S800"}, {"type": "mdi", "block": "M5"}],
 }
+SIGNALS = ["S1.speed_act_rpm", "S1.lag_deg", "Z.pos_act_mm", "Z.lag_mm"]
+
+
+def figures(ms: np.ndarray) -> str:
+    return f"p50 {pct(ms, 50):5.2f} ms  p99 {pct(ms, 99):5.2f} ms  max {pct(ms, 100):6.2f} ms"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--requests", type=int, default=2000)
+    parser.add_argument("--requests", type=int, default=2000, help="per command kind")
+    parser.add_argument("--viewers", type=int, default=50)
+    parser.add_argument("--workers", type=int, help="worker processes (default: one per core)")
     args = parser.parse_args()
+    extra = ["--workers", str(args.workers)] if args.workers else []
     with tempfile.TemporaryDirectory() as tmp:
-        srv = Server(Path(tmp) / "bench.sqlite").start()
+        srv = Server(Path(tmp) / "bench.sqlite", *extra).start()
+        assert srv.proc is not None
         try:
+            srv.wait_powered("demo")
             for _ in range(50):  # warm the connection and the code paths
                 srv.http.get("/api/machines/demo/status")
-            print(f"command round trip, {args.requests} requests per kind, loopback HTTP")
+            url = f"{srv.ws_base}/api/machines/demo/telemetry"
+            viewers = Viewers([url] * args.viewers, SIGNALS).start()
+            print(
+                f"command round trip, {args.requests} requests per kind, loopback HTTP, "
+                f"{args.viewers} viewers of {len(SIGNALS)} signals attached"
+            )
+            meter = Meter(srv.http, srv.proc.pid)
+            meter.start()
+            t0 = time.monotonic()
             for kind, bodies in KINDS.items():
-                rtt = []
+                rtt, handover = [], []
                 for i in range(args.requests):
-                    t0 = time.perf_counter()
+                    t = time.perf_counter()
                     r = srv.command("demo", bodies[i % len(bodies)])
-                    rtt.append(time.perf_counter() - t0)
+                    rtt.append(time.perf_counter() - t)
                     if r.status_code != 200:
                         raise SystemExit(f"{kind}: {r.status_code} {r.text}")
-                ms = np.array(rtt) * 1e3
-                print(
-                    f"{kind:4s}: p50 {np.percentile(ms, 50):5.2f} ms  "
-                    f"p99 {np.percentile(ms, 99):5.2f} ms  max {ms.max():6.2f} ms"
-                )
-            loop = srv.http.get("/api/service/status").json()["loop"]
-            print(f"loop overruns meanwhile: {loop['overruns']}")
+                    handover.append(r.json()["latency_ms"])
+                print(f"  {kind:4s} round trip  {figures(np.array(rtt) * 1e3)}")
+                print(f"  {kind:4s} hand-over   {figures(np.array(handover))}  (latency_ms)")
+            seconds = time.monotonic() - t0
+            received = viewers.stop()
+            service = meter.stop()
+            lat = latencies_ms(received)
+            failed = [v.error for v in received if v.error]
+            print(
+                f"viewers meanwhile: sample to client p99 {pct(lat, 99):.1f} ms, "
+                f"{sum(v.frames for v in received) / seconds / len(received):.1f} frames/s "
+                f"per viewer, gaps {sum(v.gaps for v in received)}"
+                + (f", {len(failed)} failed: {failed[0]}" if failed else "")
+            )
+            print(
+                f"overruns of every worker during the run: {service.overruns} | CPU gateway "
+                f"{100 * service.gateway_cpu_s / service.wall_s:.0f} % workers "
+                f"{100 * service.worker_cpu_s / service.wall_s:.0f} %"
+            )
+            service.print_workers()
         finally:
             srv.close()
 

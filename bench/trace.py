@@ -22,8 +22,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from api.scope import LevelTriggerModel, ScopeSetupModel
 from backend.services import rrd, scope
-from backend.services.host import MachineHost
+from backend.services.machines import MachineProxy
 from backend.services.recorder import Recorders
+from backend.services.store import StoredMachine
+from backend.workers.host import MachineHost
 from nc_sim.commands import Move, SpindleRun
 from nc_sim.machine.config import demo_machine
 
@@ -42,12 +44,20 @@ def programme(host: MachineHost, cycle: int) -> None:
         m.submit(Move("Z", -100.0 + x / 2, rapid=False, feed_mm_min=900.0))
 
 
+def demo(out: Path) -> tuple[MachineHost, MachineProxy]:
+    """The demo lathe as a worker holds it, and the gateway's proxy reading its ring."""
+    host = MachineHost("demo", "Demo lathe", demo_machine(), out / "demo.ring", 1)
+    proxy = MachineProxy(StoredMachine("demo", "Demo lathe", "demo"), demo_machine())
+    proxy.attach(None, host.info())
+    host.advance(20)  # the PLC switches the drives on
+    return host, proxy
+
+
 def run(seconds: float, signals: list[str] | None, out: Path) -> tuple[float, int, int]:
     """CPU s of a run; with signals, also the .rrd bytes and samples written."""
-    host = MachineHost("demo", "Demo lathe", "demo", demo_machine())
-    host.advance(20)  # the PLC switches the drives on
+    host, proxy = demo(out)
     recs = Recorders(out)
-    rec = recs.begin(host, signals) if signals else None
+    rec = recs.begin(proxy, signals) if signals else None
     n = round(seconds / host.cycle_s)
     cpu0 = time.process_time()
     done = 0
@@ -68,8 +78,9 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=60.0, help="simulated seconds per run")
     ap.add_argument("--repeat", type=int, default=3, help="runs of each kind (best is used)")
     args = ap.parse_args()
-    host = MachineHost("demo", "Demo lathe", "demo", demo_machine())
-    signals = [s.name for s in host.signals if s.kind == "float"][:16]
+    with tempfile.TemporaryDirectory() as tmp:
+        host, _ = demo(Path(tmp))
+        signals = [s.name for s in host.signals if s.kind == "float"][:16]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         run(2.0, signals, out)  # warm up numba, numpy and the Rerun SDK
@@ -95,8 +106,7 @@ def main() -> None:
         ticks = round(args.seconds / 0.01)
         cost = []
         for armed in (False, True):
-            host = MachineHost("demo", "Demo lathe", "demo", demo_machine())
-            host.advance(20)
+            host, proxy = demo(out)
             if armed:
                 setup = ScopeSetupModel(
                     channels=signals,
@@ -105,7 +115,10 @@ def main() -> None:
                     mode="normal",
                     trigger=LevelTriggerModel(signal="S1.speed_cmd_rpm", level=900),
                 )
-                scope.arm(host, setup)
+                engine = scope.engine_setup(proxy, setup)
+                host.scope.arm(
+                    engine, host.cycle, host.history(engine.length_cycles), host.machine.events
+                )
             t0 = time.perf_counter()
             for _ in range(ticks):
                 programme(host, host.cycle)

@@ -6,7 +6,8 @@
 2. Click-to-motion: a real mouse click on M3 to the arrival of the first telemetry sample in
    which S1.speed_cmd_rpm rises, both timed in the page (performance.now). Bar: p99 <= 100 ms.
 
-Also prints the service loop's overruns during each part.
+Also prints, for each part, the overruns summed over every worker (and one line per worker)
+and the CPU of the gateway and of the workers.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from playwright.sync_api import Page, expect
 
+from bench.service import Meter, Run
 from tests.backend.server import Server
 from tests.e2e.browser import chromium, open_hmi
 
@@ -53,8 +55,21 @@ ARM_JS = """() => { window.__motion = new Promise((resolve) => {
 }); }"""
 
 
-def overruns(srv: Server) -> int:
-    return int(srv.http.get("/api/service/status").json()["loop"]["overruns"])
+def meter(srv: Server) -> Meter:
+    """Started measurement of the service (workers' overruns, CPU)."""
+    assert srv.proc is not None
+    m = Meter(srv.http, srv.proc.pid)
+    m.start()
+    return m
+
+
+def print_service(run: Run) -> None:
+    print(
+        f"  overruns of every worker {run.overruns}   CPU gateway "
+        f"{100 * run.gateway_cpu_s / run.wall_s:.0f} % workers "
+        f"{100 * run.worker_cpu_s / run.wall_s:.0f} %"
+    )
+    run.print_workers("    ")
 
 
 def plot_fps(page: Page, srv: Server, seconds: float) -> None:
@@ -68,7 +83,7 @@ def plot_fps(page: Page, srv: Server, seconds: float) -> None:
     expect(plot).to_be_visible()
     time.sleep(10.5)  # fill the 10 s window first
     points = page.evaluate(f"window.inbetrieb.rings().window(10, {json.dumps(SIGNALS)})[0].length")
-    o0 = overruns(srv)
+    m = meter(srv)
     c0 = page.evaluate(
         "({...window.inbetrieb.fps, ...window.inbetrieb.frames, t: performance.now()})"
     )
@@ -76,6 +91,7 @@ def plot_fps(page: Page, srv: Server, seconds: float) -> None:
     c1 = page.evaluate(
         "({...window.inbetrieb.fps, ...window.inbetrieb.frames, t: performance.now()})"
     )
+    service = m.stop()
     dt = (c1["t"] - c0["t"]) / 1000
     print(
         f"live plot: {len(SIGNALS)} signals at 1 kHz, 10 s window "
@@ -87,8 +103,8 @@ def plot_fps(page: Page, srv: Server, seconds: float) -> None:
         f"{(c1['received'] - c0['received']) / dt:5.1f} /s   decimated "
         f"{c1['decimated'] - c0['decimated']}   skipped cycles "
         f"{c1['skippedCycles'] - c0['skippedCycles']}"
-        f"   loop overruns {overruns(srv) - o0}"
     )
+    print_service(service)
     srv.command("demo", {"type": "reset"})
 
 
@@ -96,7 +112,7 @@ def click_to_motion(page: Page, srv: Server, n: int) -> None:
     page.get_by_test_id("tab-Operate").click()
     page.get_by_test_id("s-input").fill("1000")
     expect(page.get_by_test_id("lamp-stopped-S1")).to_have_attribute("data-on", "1")
-    o0 = overruns(srv)
+    m = meter(srv)
     lat = []
     for _ in range(n):
         page.evaluate(ARM_JS)
@@ -106,6 +122,7 @@ def click_to_motion(page: Page, srv: Server, n: int) -> None:
         expect(page.get_by_test_id("lamp-stopped-S1")).to_have_attribute(
             "data-on", "1", timeout=15_000
         )
+    service = m.stop()
     a = np.array(lat)
     print(
         f"click-to-motion, {n} M3 clicks "
@@ -113,8 +130,9 @@ def click_to_motion(page: Page, srv: Server, n: int) -> None:
     )
     print(
         f"  p50 {np.percentile(a, 50):6.1f} ms   p99 {np.percentile(a, 99):6.1f} ms   "
-        f"max {a.max():6.1f} ms   loop overruns {overruns(srv) - o0}"
+        f"max {a.max():6.1f} ms"
     )
+    print_service(service)
 
 
 def main() -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from nc_sim.errors import JobError
+from nc_sim.events import Event
 
 # --- commands ----------------------------------------------------------------------------
 
@@ -181,7 +181,7 @@ class Refused:
     failed, or an MDI block failed while starting."""
 
     serial: int  # the command's serial
-    error: JobError  # the job error the command raised
+    error: Event  # the job error the command raised
 
     @property
     def cycle(self) -> int:

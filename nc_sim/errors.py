@@ -1,12 +1,11 @@
 """Job errors and events: numbered as the manuals number them, ours where they give none.
 
-Expected outcomes (a refused command, a monitor that trips) are `JobError` values in the
-HLI and the event log; misuse of the API raises `NcUsageError`.
+Expected outcomes (a refused command, a monitor that trips) are `Event` values
+(nc_sim/events.py) in the HLI and the event log; misuse of the API raises `NcUsageError`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import IntEnum
 
 
@@ -120,21 +119,6 @@ when an event carries no detail of its own)."""
 def is_error(code: int) -> bool:
     """True for job errors, false for informational events."""
     return code >= 60000
-
-
-@dataclass(frozen=True)
-class JobError:
-    """One error or event: when, where, what."""
-
-    cycle: int
-    t_s: float
-    axis: str
-    code: int
-    message: str
-
-    @property
-    def error(self) -> bool:
-        return is_error(self.code)
 
 
 class NcUsageError(ValueError):

@@ -1,4 +1,8 @@
-"""A bounded log read by cursor: the machine's events and the outcomes of its commands.
+"""Typed events, and a bounded log read by cursor: the machine's events and the outcomes of
+its commands.
+
+An `Event` is one job error or information event with its facts as fields (the M function,
+the gear stage), so no reader ever parses its message: the message is for people.
 
 Every entry gets a sequence number, counting from 0 and never reused, so a reader keeps the
 sequence number of the next entry it wants (its cursor) and asks for what came since. The log
@@ -15,10 +19,31 @@ from dataclasses import dataclass
 from itertools import islice
 from typing import Generic, TypeVar
 
+from nc_sim.errors import is_error
+
 T = TypeVar("T")
 
 EVENT_LOG_LEN = 10_000  # events kept per machine (a few MB at most)
 OUTCOME_LOG_LEN = 1_000  # outcomes of submitted commands kept per machine
+
+
+@dataclass(frozen=True, kw_only=True)
+class Event:
+    """One job error or event of a machine: its place in the event log, when, where, what."""
+
+    seq: int  # sequence number the machine's EventLog gave it (from 0 per power-on)
+    cycle: int  # cycle in which it happened
+    t_s: float  # simulated time, s
+    axis: str  # axis or spindle, "" for the channel
+    code: int  # nc_sim.errors.Code: a job error (≥ 60000) or an event number
+    message: str  # in the operator's words; never parsed
+    m: int | None = None  # the M function it concerns (M3, M19 in position, M41 output, ...)
+    gear: int | None = None  # the gear stage 1..6 it concerns (gear change started, changed)
+
+    @property
+    def error(self) -> bool:
+        """True for a job error, false for an information event."""
+        return is_error(self.code)
 
 
 @dataclass(frozen=True)

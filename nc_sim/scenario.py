@@ -33,8 +33,8 @@ from nc_sim.commands import (
     SpindlePosition,
     SpindleRun,
 )
-from nc_sim.errors import JobError, NcUsageError
-from nc_sim.events import EVENT_LOG_LEN
+from nc_sim.errors import NcUsageError
+from nc_sim.events import EVENT_LOG_LEN, Event
 from nc_sim.machine.config import MachineConfig, apply_overrides
 from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope, resolve
@@ -50,7 +50,7 @@ COLLECT_CYCLES = EVENT_LOG_LEN // 10
 @dataclass
 class ScenarioResult:
     columns: dict[str, np.ndarray]
-    events: list[JobError]
+    events: list[Event]
     machine: Machine
 
 
@@ -117,7 +117,7 @@ def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.nd
     """Named trace columns `t_s` and `<axis>.<signal>` (nc_sim.signals) from a kernel record."""
     n = rec.shape[0]
     cols: dict[str, np.ndarray] = {"t_s": (t0_cycle + 1 + np.arange(n)) * m.k.cycle_s}
-    sigs = machine_signals(m)
+    sigs = machine_signals(m.axes)
     data = signal_columns(sigs, rec)
     for i, s in enumerate(sigs):
         cols[s.name] = data[i]
@@ -135,7 +135,7 @@ def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioRes
     n_total = round(duration / cfg.cycle_s)
     actions = sorted(scenario.get("actions", []), key=lambda a: float(a.get("t_s", 0.0)))
     rec = sim.new_record(n_total)
-    events: list[JobError] = []  # every event: the machine's own log keeps only the newest
+    events: list[Event] = []  # every event: the machine's own log keeps only the newest
     cursor = m.events.first_seq
     done = 0
 

@@ -27,8 +27,8 @@ from enum import StrEnum
 
 import numpy as np
 
-from nc_sim.errors import Code, JobError, is_error
-from nc_sim.events import EventLog
+from nc_sim.errors import Code, is_error
+from nc_sim.events import Event, EventLog
 from nc_sim.signals import Signal, signal_columns
 
 MAX_CHANNELS = 16
@@ -90,19 +90,18 @@ class EventTrigger:
         }[self.kind]
         return f"{what} on {self.axis}" if self.axis else what
 
-    def cycle_of(self, ev: JobError) -> int | None:
-        """The trigger cycle this event gives, or None when it does not match."""
+    def cycle_of(self, ev: Event) -> int | None:
+        """The trigger cycle this event gives, or None when it does not match (by its code,
+        axis and M function: never by its message)."""
         if self.axis is not None and ev.axis != self.axis:
             return None
         if self.kind is EventKind.M_START:
-            ok = ev.code == Code.EV_M_START and (
-                self.m is None or ev.message.split()[0] == f"M{self.m}"
-            )
+            ok = ev.code == Code.EV_M_START and (self.m is None or ev.m == self.m)
             return ev.cycle + 1 if ok else None
         if self.kind is EventKind.GEAR_CHANGE:
             return ev.cycle + 1 if ev.code == Code.EV_GEAR_CHANGED else None
-        if self.kind is EventKind.M19_DONE:
-            ok = ev.code == Code.EV_IN_POSITION and ev.message.endswith("(M19)")
+        if self.kind is EventKind.M19_DONE:  # the in-position that ends an M19 positioning
+            ok = ev.code == Code.EV_IN_POSITION and ev.m == 19
             return ev.cycle if ok else None
         if self.kind is EventKind.SPEED_REACHED:
             return ev.cycle if ev.code == Code.EV_SPEED_REACHED else None
@@ -153,7 +152,7 @@ class Record:
     trigger_cycle: int | None
     trigger: str  # description, "" for a roll snapshot
     forced: bool = False
-    events: list[JobError] = field(default_factory=list)
+    events: list[Event] = field(default_factory=list)
 
     @property
     def count(self) -> int:
@@ -204,7 +203,7 @@ class Scope:
         setup: ScopeSetup,
         head: int,
         history: np.ndarray,
-        events: EventLog[JobError],
+        events: EventLog[Event],
     ) -> None:
         """Start recording after cycle `head`. `history` holds kernel records of the cycles
         just before (up to `head`, oldest first) to fill the pre-trigger from."""
@@ -240,7 +239,7 @@ class Scope:
             self._trigger_cycle, self._forced = self._head, True
             self.state = ScopeState.TRIGGERED
 
-    def feed(self, rec: np.ndarray, first_cycle: int, events: EventLog[JobError]) -> None:
+    def feed(self, rec: np.ndarray, first_cycle: int, events: EventLog[Event]) -> None:
         """Take the kernel records of cycles first_cycle … first_cycle + len(rec) - 1."""
         if not self.active or self.setup is None or rec.shape[0] == 0:
             return
@@ -316,7 +315,7 @@ class Scope:
         first_cycle: int,
         pos: int,
         last: int,
-        events: EventLog[JobError],
+        events: EventLog[Event],
     ) -> int | None:
         trig = self.setup.trigger if self.setup else None
         if isinstance(trig, EventTrigger):
@@ -356,11 +355,11 @@ class Scope:
                 return first_cycle + i
         return None
 
-    def _complete(self, end: int, events: EventLog[JobError]) -> None:
+    def _complete(self, end: int, events: EventLog[Event]) -> None:
         setup = self.setup
         assert setup is not None and self._trigger_cycle is not None
         first = self._record_first()
-        window: list[JobError] = []
+        window: list[Event] = []
         for e in reversed(events):  # the log is in cycle order; the window is near its end
             if e.cycle < first:
                 break

@@ -7,12 +7,13 @@ its display unit.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from nc_sim.kernel import layout as L
-from nc_sim.machine.machine import Machine
 from nc_sim.units import RPM_TO_DEG_S, AxisKind
 
 
@@ -72,10 +73,24 @@ def _axis_signals(name: str, kind: AxisKind, slot: int) -> list[Signal]:
     return [Signal(f"{name}.{s}", name, slot, c, f, unit, k) for s, c, f, unit, k in rows]
 
 
-def machine_signals(m: Machine) -> list[Signal]:
-    """Every signal of a machine, axis by axis, in a stable order."""
+class SlottedAxis(Protocol):
+    """What the signal table needs of an axis: its name, its kind and its kernel slot (a
+    machine's `Axis`, or its description in a process without the machine)."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def kind(self) -> AxisKind: ...
+
+    @property
+    def slot(self) -> int: ...
+
+
+def machine_signals(axes: Iterable[SlottedAxis]) -> list[Signal]:
+    """Every signal of a machine's axes (`Machine.axes`), axis by axis, in a stable order."""
     out: list[Signal] = []
-    for ax in m.axes:
+    for ax in axes:
         out += _axis_signals(ax.name, ax.kind, ax.slot)
     return out
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 

@@ -6,7 +6,7 @@ from fastapi import APIRouter
 
 from api.commands import Command, CommandResult
 from backend.deps import ActorDep, MachineDep
-from backend.errors import responses
+from backend.errors import WORKER_GONE, responses
 from backend.services.commands import execute
 
 router = APIRouter(prefix="/api/machines", tags=["commands"])
@@ -20,7 +20,8 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
         why={
             409: "the NC refused the command (job error)",
             422: "bad input (an NC block with the column of the error)",
-        },
+        }
+        | WORKER_GONE,
     ),
 )
 def command(cmd: Command, machine: MachineDep, actor: ActorDep) -> CommandResult:

@@ -9,7 +9,7 @@ from api.machines import MachineCreate, SimulationControl, StepRequest
 from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
 from backend.deps import ActorDep, MachineDep, ServicesDep
-from backend.errors import responses
+from backend.errors import WORKER_GONE, responses
 from backend.services.auth import authorize
 from backend.services.machines import MachineProxy
 from backend.services.status import (
@@ -29,13 +29,13 @@ def list_machines(services: ServicesDep) -> list[MachineSummary]:
     return [machine_summary(m) for m in services.machines.proxies()]
 
 
-@router.post("", status_code=201, responses=responses(403, 409, 422))
+@router.post("", status_code=201, responses=responses(403, 409, 422, why=WORKER_GONE))
 def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -> MachineSummary:
     """A new machine from the demo or from native parameter lists; it starts running."""
     return machine_summary(services.machines.create(actor, req))
 
 
-@router.get("/{mid}/status", responses=responses(404))
+@router.get("/{mid}/status", responses=responses(404, why=WORKER_GONE))
 def status(machine: MachineDep) -> MachineStatus:
     """Full snapshot: HLI objects, axis and spindle states, gear, job errors, PLC."""
     return machine_status(machine)
@@ -47,7 +47,7 @@ def signals(machine: MachineDep) -> list[SignalInfo]:
     return signal_infos(machine)
 
 
-@router.post("/{mid}/restart", responses=responses(403, 404))
+@router.post("/{mid}/restart", responses=responses(403, 404, why=WORKER_GONE))
 def restart(mid: str, services: ServicesDep, actor: ActorDep) -> MachineSummary:
     """Power off and on: cycle 0, every stored value (pending ones too) in force."""
     return machine_summary(services.machines.restart(actor, mid))
@@ -59,14 +59,14 @@ def delete(mid: str, services: ServicesDep, actor: ActorDep) -> Response:
     return Response(status_code=204)
 
 
-@router.post("/{mid}/simulation", responses=responses(403, 404, 422))
+@router.post("/{mid}/simulation", responses=responses(403, 404, 422, why=WORKER_GONE))
 def pace(req: SimulationControl, machine: MachineDep, actor: ActorDep) -> SimulationStatus:
     """Run in real time, pause, or run as fast as possible (until a cycle)."""
     authorize(actor, Action.SIMULATE, machine.id)
     return paced(machine, Pace(machine.id, req.mode, req.until_cycle))
 
 
-@router.post("/{mid}/simulation/step", responses=responses(403, 404, 422))
+@router.post("/{mid}/simulation/step", responses=responses(403, 404, 422, why=WORKER_GONE))
 def step(req: StepRequest, machine: MachineDep, actor: ActorDep) -> SimulationStatus:
     """Pause and advance `cycles` cycles; an emergency stop, a pacing change or a restart
     meanwhile ends the step early (the answer's `cycle` says where it stopped)."""

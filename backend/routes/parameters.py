@@ -18,7 +18,7 @@ from api.parameters import (
 )
 from backend.bodies import read_text, text_answer, text_body
 from backend.deps import ActorDep, MachineDep, ServicesDep
-from backend.errors import responses
+from backend.errors import WORKER_GONE, responses
 from backend.services import parameters as params
 from nc_sim.params import Scope, registry
 
@@ -26,7 +26,7 @@ router = APIRouter(prefix="/api", tags=["parameters"])
 
 ScopeQ = Annotated[ScopeName, Query(description="axis, channel or tool list")]
 TargetQ = Annotated[str | None, Query(description="axis name for the axis list")]
-_REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"}
+_REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"} | WORKER_GONE
 MAX_LIST_BYTES = 1_000_000
 
 

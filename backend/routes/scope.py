@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse, RedirectResponse, Response
 from api.auth import Action
 from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
 from backend.deps import ActorDep, MachineDep, ServicesDep
-from backend.errors import responses
+from backend.errors import WORKER_GONE, responses
 from backend.services import scope
 from backend.services.auth import authorize
 from backend.services.viewer import viewer_url
@@ -21,14 +21,16 @@ BINARY: dict[int | str, dict[str, Any]] = {
 }
 
 
-@router.get("/machines/{mid}/scope", responses=responses(403, 404))
+@router.get("/machines/{mid}/scope", responses=responses(403, 404, why=WORKER_GONE))
 def scope_status(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """State of the scope, its setup and the recent captures (newest first)."""
     authorize(actor, Action.OBSERVE, machine.id)
     return scope.status(machine, services.traces, services.recorders)
 
 
-@router.put("/machines/{mid}/scope", responses=responses(403, 404, why={422: "bad setup"}))
+@router.put(
+    "/machines/{mid}/scope", responses=responses(403, 404, why={422: "bad setup"} | WORKER_GONE)
+)
 def scope_arm(
     req: ScopeSetupModel, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> ScopeStatus:
@@ -38,7 +40,7 @@ def scope_arm(
     return scope.status(machine, services.traces, services.recorders)
 
 
-@router.post("/machines/{mid}/scope/force", responses=responses(403, 404))
+@router.post("/machines/{mid}/scope/force", responses=responses(403, 404, why=WORKER_GONE))
 def scope_force(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     """Trigger now (an armed scope only)."""
     authorize(actor, Action.OBSERVE, machine.id)
@@ -46,7 +48,7 @@ def scope_force(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> 
     return scope.status(machine, services.traces, services.recorders)
 
 
-@router.post("/machines/{mid}/scope/stop", responses=responses(403, 404))
+@router.post("/machines/{mid}/scope/stop", responses=responses(403, 404, why=WORKER_GONE))
 def scope_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
     authorize(actor, Action.OBSERVE, machine.id)
     scope.stop(machine)
@@ -56,7 +58,7 @@ def scope_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> S
 @router.get(
     "/machines/{mid}/scope/roll",
     response_class=Response,
-    responses=BINARY | responses(403, 404, 409, 422),
+    responses=BINARY | responses(403, 404, 409, 422, why=WORKER_GONE),
 )
 def scope_roll(
     machine: MachineDep,

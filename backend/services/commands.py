@@ -37,12 +37,21 @@ from backend.services.parameters import pending_values, take_pending
 from backend.workers.protocol import Submit, Submitted
 from nc_sim import commands as nc
 from nc_sim.commands import Accepted, Invalid, Refused
-from nc_sim.errors import JobError
+from nc_sim.events import Event
 
 
-def job_error_model(e: JobError) -> JobErrorModel:
+def job_error_model(e: Event) -> JobErrorModel:
+    """The API model of an event or job error (nc_sim's Event)."""
     return JobErrorModel(
-        cycle=e.cycle, t_s=e.t_s, axis=e.axis, code=e.code, message=e.message, error=e.error
+        cycle=e.cycle,
+        t_s=e.t_s,
+        axis=e.axis,
+        code=e.code,
+        message=e.message,
+        error=e.error,
+        seq=e.seq,
+        m=e.m,
+        gear=e.gear,
     )
 
 

@@ -22,7 +22,6 @@ import numpy as np
 
 from api.auth import Action
 from api.machines import MachineCreate
-from api.status import MachineStatus
 from backend.errors import ApiError, not_found
 from backend.services.auth import Actor, authorize
 from backend.services.store import Store, StoredMachine
@@ -38,12 +37,13 @@ from backend.workers.protocol import (
     Push,
     RemoveMachine,
     Request,
+    StatusRead,
     Watch,
     WorkerNews,
 )
 from backend.workers.ring import SampleRing
-from nc_sim.errors import JobError, NcUsageError
-from nc_sim.events import EventLog
+from nc_sim.errors import NcUsageError
+from nc_sim.events import Event, EventLog
 from nc_sim.machine.config import MachineConfig, demo_machine, machine_from_lists
 from nc_sim.params import ParamListError, Scope, Value
 from nc_sim.scope import Record
@@ -103,16 +103,16 @@ class MachineProxy:
         self.scope_setup: object | None = None  # the ScopeSetupModel as the client asked
         self.captures: deque[Capture] = deque(maxlen=RECENT_CAPTURES)  # newest last
         self.notices: deque[Notice] = deque(maxlen=16)
-        self.status: MachineStatus | None = None  # the newest pushed status
+        self.status: StatusRead | None = None  # the newest pushed status
         self.status_seq = 0
         self.pacing: Pacing | None = None
         self._news = threading.Lock()
-        self.events: EventLog[JobError] = EventLog()
+        self.events: EventLog[Event] = EventLog()
         # pushes of a newer build that came before its AddMachine reply was taken in
         self._early: deque[MachineNews | MachineSamples] = deque(maxlen=EARLY_PUSHES)
 
     # --- where it runs --------------------------------------------------------------------
-    def attach(self, worker: WorkerClient, info: MachineInfo) -> None:
+    def attach(self, worker: WorkerClient | None, info: MachineInfo) -> None:
         """The machine now runs on `worker` as built in `info` (a new epoch)."""
         old = self.ring
         ring = SampleRing.attach(Path(info.ring_path)) if info.ring_path else None
@@ -195,13 +195,12 @@ class MachineProxy:
             for e in n.events:
                 self.events.append(e)
             if n.status is not None:
-                assert isinstance(n.status, MachineStatus)
                 self.status = n.status
                 self.status_seq += 1
         for rec, params in n.captures:
             self.captures.append(Capture(uuid.uuid4().hex[:12], rec, params, time.time()))
 
-    def events_since(self, cursor: int) -> tuple[list[JobError], int, int, int]:
+    def events_since(self, cursor: int) -> tuple[list[Event], int, int, int]:
         """(events, seq of the first, next cursor, missed) from the gateway's copy."""
         with self._news:
             read = self.events.since(cursor)

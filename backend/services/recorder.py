@@ -20,7 +20,7 @@ from api.scope import RecordingInfo
 from backend.errors import ApiError, not_found
 from backend.services import rrd
 from backend.services.machines import MachineProxy
-from nc_sim.errors import JobError
+from nc_sim.events import Event
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +64,7 @@ class Recording:
             ended = m.deleted or m.epoch != self.epoch
             if ended:
                 head, data, start = self.cursor - 1, None, self.cursor
-                events: list[JobError] = []
+                events: list[Event] = []
             else:
                 head = m.cycle
                 data, start = (None, self.cursor)

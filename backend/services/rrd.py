@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from nc_sim.errors import JobError
-from nc_sim.machine.axis import AxisState
+from nc_sim.events import Event
+from nc_sim.snapshot import AxisState
 
 APP_ID = "inbetrieb"
 
@@ -76,7 +76,7 @@ class RrdWriter:
                 columns=rr.TextLog.columns(text=[state_name(v) for v in y[at]]),
             )
 
-    def events(self, events: Sequence[JobError]) -> None:
+    def events(self, events: Sequence[Event]) -> None:
         """Events and job errors as text logs (ERROR level for job errors)."""
         if not events:
             return
@@ -113,7 +113,7 @@ def write_capture(
     first_cycle: int,
     cycle_s: float,
     data: np.ndarray,
-    events: Sequence[JobError],
+    events: Sequence[Event],
 ) -> None:
     """One capture as an .rrd file."""
     tmp = path.with_suffix(".part")

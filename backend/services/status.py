@@ -3,18 +3,38 @@ machine list, and the workers of the service."""
 
 from __future__ import annotations
 
+from typing import Literal
+
 from api.status import (
+    AxisStatus,
     LoopStatus,
     MachineStatus,
     MachineSummary,
     OverrunRecord,
+    PendingM,
+    PlcStatus,
     SimulationStatus,
     WorkerStatus,
 )
 from api.telemetry import SignalInfo
+from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy, MachineService
 from backend.workers.client import WorkerClient
-from backend.workers.protocol import LoopFigures, Pacing, ReadStatus, WorkerNews
+from backend.workers.protocol import LoopFigures, Pacing, ReadStatus, StatusRead, WorkerNews
+from nc_sim.snapshot import AxisSnapshot, LoopMode, MachineSnapshot
+from nc_sim.units import AxisKind
+
+_KIND: dict[AxisKind, Literal["linear", "rotary", "spindle"]] = {
+    AxisKind.LINEAR: "linear",
+    AxisKind.ROTARY: "rotary",
+    AxisKind.SPINDLE: "spindle",
+}
+_LOOP: dict[LoopMode, Literal["open", "closed", "control_limit", "speed_control"]] = {
+    LoopMode.OPEN: "open",
+    LoopMode.CLOSED: "closed",
+    LoopMode.CONTROL_LIMIT: "control_limit",
+    LoopMode.SPEED_CONTROL: "speed_control",
+}
 
 
 def simulation_status(p: Pacing) -> SimulationStatus:
@@ -45,13 +65,66 @@ def with_loop_health(sim: SimulationStatus, worker: WorkerClient | None) -> Simu
     return sim
 
 
+def _axis_status(a: AxisSnapshot) -> AxisStatus:
+    sp = a.spindle
+    return AxisStatus(
+        name=a.name,
+        kind=_KIND[a.kind],
+        state=a.state,
+        unit=a.pos_unit,
+        pos_cmd=a.pos_cmd,
+        pos_act=a.pos_act,
+        lag=a.lag,
+        vel_cmd=a.vel_cmd,
+        vel_act=a.vel_act,
+        homed=a.homed,
+        in_position=a.in_position,
+        target_pos=a.target_pos,
+        distance_to_go=a.distance_to_go,
+        enabled=a.enabled,
+        missing_enables=list(a.missing_enables),
+        ready_for_power_on=a.ready_for_power_on,
+        ready_for_control_loop_on=a.ready_for_control_loop_on,
+        control_units=dict(a.control_units),
+        override_pct=a.override_pct,
+        job_error=a.job_error,
+        gear=sp.gear if sp else None,
+        speed_prog_rpm=sp.speed_prog_rpm if sp else None,
+        speed_reached=sp.speed_reached if sp else None,
+        stopped=sp.stopped if sp else None,
+        speed_monitoring_active=sp.speed_monitoring_active if sp else None,
+        speed_monitoring_invalid=sp.speed_monitoring_invalid if sp else None,
+        loop=_LOOP[a.loop],
+    )
+
+
+def status_of(m: MachineProxy, read: StatusRead) -> MachineStatus:
+    """A machine's snapshot and pacing, as its worker read them, in the API's words."""
+    snap: MachineSnapshot = read.snapshot
+    return MachineStatus(
+        id=m.id,
+        name=m.name,
+        simulation=with_loop_health(simulation_status(read.pacing), m.worker),
+        channel_units=dict(snap.channel_units),
+        emergency_stop=snap.emergency_stop,
+        queued_blocks=snap.queued_blocks,
+        axes=[_axis_status(a) for a in snap.axes],
+        plc=PlcStatus(
+            mode=snap.plc.mode.value,
+            ack_delay_s=snap.plc.ack_delay_s,
+            drives_powered=snap.plc.drives_powered,
+            pending=[PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle) for p in snap.plc.pending],
+        ),
+        job_errors=[job_error_model(e) for e in snap.job_errors],
+        recent_events=[job_error_model(e) for e in snap.recent_events],
+    )
+
+
 def machine_status(m: MachineProxy) -> MachineStatus:
     """Everything the HMI shows about a machine, fresh from its worker (one cycle)."""
-    st = m.call(ReadStatus(m.id))
-    assert isinstance(st, MachineStatus)
-    st.name = m.name
-    with_loop_health(st.simulation, m.worker)
-    return st
+    read = m.call(ReadStatus(m.id))
+    assert isinstance(read, StatusRead)
+    return status_of(m, read)
 
 
 def machine_simulation(m: MachineProxy) -> SimulationStatus:

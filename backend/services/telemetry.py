@@ -42,7 +42,7 @@ from api.telemetry import (
 )
 from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy
-from backend.services.status import with_loop_health
+from backend.services.status import status_of
 from backend.workers.protocol import Watch
 from nc_sim.signals import Signal
 
@@ -253,8 +253,7 @@ class TelemetryHub:
             sub.status_seq = m.status_seq
             key = ("status", m.id, m.epoch, m.status_seq)
             if key not in cache:
-                st = m.status.model_copy()
-                st.simulation = with_loop_health(st.simulation.model_copy(), m.worker)
+                st = status_of(m, m.status)
                 cache[key] = Built(StatusMessage(status=st).model_dump_json().encode(), 0)
             out.append(cache[key].frame.decode())
         head = m.cycle

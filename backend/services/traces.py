@@ -34,7 +34,7 @@ from backend.services.commands import job_error_model
 from backend.services.machines import Capture, MachineProxy, MachineService
 from backend.services.store import Store
 from backend.workers.protocol import ParamSnapshot
-from nc_sim.errors import JobError
+from nc_sim.events import Event
 from nc_sim.measure import measure
 from nc_sim.params import ParamError, Scope
 from nc_sim.params.listfile import resolve
@@ -55,8 +55,22 @@ class Trace:
         ref = d.trigger_cycle if d.trigger_cycle is not None else d.first_cycle
         return (np.arange(d.count) + d.first_cycle - ref) * d.cycle_s
 
-    def events(self) -> list[JobError]:
-        return [JobError(e.cycle, e.t_s, e.axis, e.code, e.message) for e in self.detail.events]
+    def events(self) -> list[Event]:
+        """The trace's events (seq -1 where a trace saved before events were numbered has
+        none)."""
+        return [
+            Event(
+                seq=-1 if e.seq is None else e.seq,
+                cycle=e.cycle,
+                t_s=e.t_s,
+                axis=e.axis,
+                code=e.code,
+                message=e.message,
+                m=e.m,
+                gear=e.gear,
+            )
+            for e in self.detail.events
+        ]
 
 
 def param_diff(snapshot: ParamSnapshot) -> list[ParamValueAt]:

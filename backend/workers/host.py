@@ -14,11 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from backend.workers.protocol import MachineInfo, Mode, Pacing, ParamSnapshot
+from backend.workers.protocol import MachineInfo, Mode, Pacing, ParamSnapshot, StatusRead
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
 from nc_sim.commands import JogStop
-from nc_sim.errors import JobError
-from nc_sim.events import EventLog
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -30,26 +28,6 @@ assert R_COLS == L.R_COLS, "the ring's record width must follow the kernel layou
 
 FAST_CHUNK = MAX_WRITE  # cycles per kernel call in fast mode
 MAX_CATCH_UP_S = 1.0  # behind by more than this: re-anchor instead of racing to catch up
-
-
-@dataclass
-class EventIndex:
-    """The newest event of each (code, axis), brought up to date by cursor: status finds the
-    event behind each active job error without scanning the machine's event log."""
-
-    cursor: int = 0
-    latest: dict[tuple[int, str], tuple[int, JobError]] = field(default_factory=dict)
-
-    def update(self, log: EventLog[JobError]) -> None:
-        read = log.since(self.cursor)
-        for seq, e in enumerate(read.entries, read.first_seq):
-            self.latest[(e.code, e.axis)] = (seq, e)
-        self.cursor = read.cursor
-
-    def newest(self, code: int, axes: tuple[str, ...]) -> JobError | None:
-        """The newest event with this code on any of these axes ("" is channel-wide)."""
-        found = [self.latest[(code, a)] for a in axes if (code, a) in self.latest]
-        return max(found, key=lambda x: x[0])[1] if found else None
 
 
 @dataclass
@@ -73,7 +51,7 @@ class MachineHost:
         self.epoch = epoch
         self.sim = Simulation(cfg.cycle_s)
         self.machine: Machine = self.sim.add(cfg)
-        self.signals: list[Signal] = machine_signals(self.machine)
+        self.signals: list[Signal] = machine_signals(self.machine.axes)
         self.signal_by_name = {s.name: s for s in self.signals}
         self.ring = SampleRing.create(ring_path, self.sim.kernel.n)
         self.scope = Scope(self.sim.kernel.cycle_s)
@@ -81,7 +59,6 @@ class MachineHost:
         self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
         self.pacing = PacingState(anchor_mono=time.monotonic())
         self.watched = False
-        self.event_index = EventIndex()
         self.pushed_events = self.machine.events.cursor  # events up to here went out
 
     def info(self) -> MachineInfo:
@@ -126,7 +103,6 @@ class MachineHost:
                     self._take_captures()
             n -= part
         self._expire_jogs()
-        self.event_index.update(self.machine.events)  # before the bounded log drops any
 
     def _take_captures(self) -> None:
         """Keep completed records with the parameter lists as written now (cheap copies)."""
@@ -227,6 +203,10 @@ class MachineHost:
             p.anchor_mono + (time.time() - time.monotonic()),
             p.slips,
         )
+
+    def status_read(self) -> StatusRead:
+        """The machine's snapshot and pacing now."""
+        return StatusRead(self.machine.snapshot(), self.pacing_now())
 
     def close(self) -> None:
         """Remove the machine's ring file (the gateway unmaps its side)."""

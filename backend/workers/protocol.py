@@ -13,11 +13,12 @@ from typing import Literal
 
 from nc_sim import commands as nc
 from nc_sim.commands import Outcome
-from nc_sim.errors import JobError
+from nc_sim.events import Event
 from nc_sim.machine.config import MachineConfig
 from nc_sim.params import Value
 from nc_sim.scope import Record, ScopeSetup
 from nc_sim.signals import Signal
+from nc_sim.snapshot import MachineSnapshot
 
 Mode = Literal["run", "pause", "fast"]
 # (scope, target, name) -> value: parameter values a worker writes into a machine's lists
@@ -165,6 +166,14 @@ class Submitted:
 
 
 @dataclass(frozen=True)
+class StatusRead:
+    """A machine's snapshot and pacing, read in the same cycle."""
+
+    snapshot: MachineSnapshot
+    pacing: Pacing
+
+
+@dataclass(frozen=True)
 class ScopeState:
     state: str
     cycle: int
@@ -208,9 +217,9 @@ class MachineNews:
 
     mid: str
     epoch: int
-    events: list[JobError]
+    events: list[Event]
     first_seq: int  # sequence number of events[0]
-    status: object | None  # api MachineStatus while watched
+    status: StatusRead | None  # while watched
     captures: list[tuple[Record, ParamSnapshot]]
 
 

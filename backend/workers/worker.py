@@ -22,7 +22,6 @@ from typing import Protocol
 
 import numpy as np
 
-from backend.workers import status as worker_status
 from backend.workers.host import MachineHost
 from backend.workers.protocol import (
     AddMachine,
@@ -159,7 +158,7 @@ class Worker:
             return
         read = events.since(host.pushed_events)
         host.pushed_events = read.cursor
-        status = worker_status.machine_status(host) if host.watched and status_due else None
+        status = host.status_read() if host.watched and status_due else None
         caps, host.captures = host.captures, []
         self.channel.send(
             MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps)
@@ -265,7 +264,7 @@ class Worker:
                 _apply(host, r.values)
                 return None
             case ReadStatus():
-                return worker_status.machine_status(self._host(r.mid))
+                return self._host(r.mid).status_read()
             case Watch():
                 self._host(r.mid).watched = r.on
                 return None

@@ -6,12 +6,14 @@ import math
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-from nc_sim.kernel import Kernel
+from nc_sim.events import Event
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.config import AxisConfig
 from nc_sim.machine.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.machine.dynamics import Motion
 from nc_sim.params.definitions import OPMODE_SYMBOLS
+from nc_sim.snapshot import AxisState
 from nc_sim.units import AxisKind, Quantity, eng_unit, v_reso_digits_per_unit_s
 
 # control units every drive type needs [004 §4.1]; others need only TorquePermission
@@ -20,21 +22,6 @@ ENABLES_BY_DRIVE = {
     3: ("DriveOn", "TorquePermission"),  # PROFIDRIVE
     8: ("DriveOn", "TorquePermission", "ReleaseFeedhold"),  # CANopen
 }
-
-
-class AxisState(IntEnum):
-    """Operating state shown in the HLI and traces."""
-
-    STANDSTILL = 0
-    MOVING = 1  # positioning (G00/G01, incremental jog, M19 later)
-    JOG = 2  # continuous jog
-    HOMING = 3
-    ENDLESS = 4  # spindle M3/M4
-    STOPPING = 5
-    POSITIONING = 6  # spindle M19
-    OPEN_LOOP = 7  # spindle rotating above the control limit vb_regelgrenze
-    GEAR_CHANGE = 8  # spindle at the change position, waiting for the PLC
-    ERROR = 9
 
 
 class HomingPhase(IntEnum):
@@ -91,7 +78,7 @@ class Axis:
     hold: bool = False  # braked by feedhold, resumes on release
     homing: HomingPhase = HomingPhase.NONE
     homed: bool = False
-    job_error: int = 0
+    error_event: Event | None = None  # the job error in force (what set it), None without
     block_id: int | None = None  # MDI block this motion belongs to
     # spindle only
     override_suppressed: bool = False  # G167 until the next S[REV..]
@@ -125,6 +112,11 @@ class Axis:
     @property
     def kind(self) -> AxisKind:
         return self.cfg.kind
+
+    @property
+    def job_error(self) -> int:
+        """Code of the job error in force, 0 without (as the HLI shows it)."""
+        return self.error_event.code if self.error_event is not None else 0
 
     @property
     def pos_unit(self) -> str:

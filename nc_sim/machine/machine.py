@@ -41,13 +41,12 @@ from nc_sim.commands import (
 from nc_sim.commands import (
     PlcMode as SetPlcMode,  # the command; nc_sim.plc.PlcMode is the PLC's behaviour
 )
-from nc_sim.errors import MESSAGES, Code, JobError, NcUsageError, is_error
-from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, EventLog
-from nc_sim.kernel import Kernel
+from nc_sim.errors import MESSAGES, Code, NcUsageError, is_error
+from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.axis import (
     Axis,
-    AxisState,
     HomingPhase,
     ToolLimits,
     drive_status,
@@ -63,10 +62,13 @@ from nc_sim.machine.dynamics import (
     motion_limits,
     velocity_limit,
 )
+from nc_sim.machine.gears import m_of
+from nc_sim.machine.readout import machine_snapshot
 from nc_sim.machine.spindle import SpindleControl
 from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
+from nc_sim.snapshot import RECENT_EVENTS, AxisState, MachineSnapshot
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
@@ -94,7 +96,7 @@ class _BlockRun:
     started: bool = False
     waiting_m: int = 0
     homing: list[list[str]] = field(default_factory=list)  # G74 order groups still to start
-    error: JobError | None = None  # the job error it failed with while starting
+    error: Event | None = None  # the job error it failed with while starting
 
 
 class Machine:
@@ -115,7 +117,7 @@ class Machine:
         self.main_spindle = cfg.main_spindle
         self.channel_units = {"override": 1000, "feedhold": 0, "reduced_acceleration": 0}
         self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
-        self.events: EventLog[JobError] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
+        self.events: EventLog[Event] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
         self._queue: deque[_BlockRun] = deque()
         self._next_id = 1
@@ -145,7 +147,7 @@ class Machine:
         return outcome
 
     def _dispatch(self, cmd: Command) -> Outcome:
-        answer: JobError | int | None = None
+        answer: Event | int | None = None
         match cmd:
             case Mdi():
                 return self._mdi(cmd.block, cmd.serial)
@@ -179,7 +181,7 @@ class Machine:
                 self._emergency_stop()
             case _:  # a new command type must get its case here (mypy checks)
                 assert_never(cmd)
-        if isinstance(answer, JobError):
+        if isinstance(answer, Event):
             return Refused(cmd.serial, answer)
         return Accepted(cmd.serial, self.cycle, acknowledged=answer)
 
@@ -218,28 +220,63 @@ class Machine:
         Live, not latched: false as soon as an E-stop or the PLC takes a drive's enables."""
         return self._powered and all(ax.drive_follows() for ax in self.axes)
 
+    def snapshot(self, recent_events: int = RECENT_EVENTS) -> MachineSnapshot:
+        """Everything a status shows about the machine now, as plain values in engineering
+        units (nc_sim/snapshot.py), with the newest `recent_events` events."""
+        return machine_snapshot(self, recent_events)
+
     @property
     def queued_blocks(self) -> int:
         """MDI blocks waiting or running."""
         return len(self._queue)
 
     # --- events -------------------------------------------------------------------------
-    def log(self, code: Code, axis: str = "", detail: str = "") -> JobError:
+    def log(
+        self,
+        code: Code,
+        axis: str = "",
+        detail: str = "",
+        *,
+        m: int | None = None,
+        gear: int | None = None,
+    ) -> Event:
         """Record an error (its meaning, then the detail) or an event (its detail, which
-        reads as a message of its own, else the meaning)."""
+        reads as a message of its own, else the meaning), numbered by the event log, with
+        the M function and gear stage it concerns as fields."""
         msg = MESSAGES[code]
         if detail:
             msg = f"{msg}: {detail}" if is_error(code) else detail
-        ev = JobError(self.cycle, self.t_s, axis, int(code), msg)
+        ev = Event(
+            seq=self.events.cursor,
+            cycle=self.cycle,
+            t_s=self.t_s,
+            axis=axis,
+            code=int(code),
+            message=msg,
+            m=m,
+            gear=gear,
+        )
         self.events.append(ev)
         return ev
 
-    def _fail(self, ax: Axis | None, code: Code, detail: str = "") -> JobError:
-        ev = self.log(code, ax.name if ax else "", detail)
+    def _fail(
+        self,
+        ax: Axis | None,
+        code: Code,
+        detail: str = "",
+        *,
+        m: int | None = None,
+        gear: int | None = None,
+    ) -> Event:
+        ev = self.log(code, ax.name if ax else "", detail, m=m, gear=gear)
         if ax is not None:
-            ax.job_error = int(code)
-            self.k.ist[ax.slot, L.I_JOB_ERROR] = int(code)
+            self._set_job_error(ax, ev)
         return ev
+
+    def _set_job_error(self, ax: Axis, ev: Event | None) -> None:
+        """The axis' active job error is this event's (None clears it)."""
+        ax.error_event = ev
+        self.k.ist[ax.slot, L.I_JOB_ERROR] = ax.job_error
 
     # --- lookup -------------------------------------------------------------------------
     def axis(self, name: str) -> Axis:
@@ -368,7 +405,7 @@ class Machine:
             return
         self._plan_move(ax, self._limits(ax, ax.motion), self._vmax(ax, ax.motion))
 
-    def _check_motion(self, ax: Axis) -> JobError | None:
+    def _check_motion(self, ax: Axis) -> Event | None:
         if self.estop:
             return self._fail(ax, Code.CHANNEL_ERROR_STATE, "emergency stop active")
         if ax.state is AxisState.ERROR:
@@ -384,7 +421,7 @@ class Machine:
             )
         return None
 
-    def _within_limits(self, ax: Axis, target: float) -> JobError | None:
+    def _within_limits(self, ax: Axis, target: float) -> Event | None:
         if ax.kind is AxisKind.SPINDLE:
             return None
         if not ax.homed:  # no software limits yet, but no target beyond what the NC represents
@@ -408,7 +445,7 @@ class Machine:
         feed: float | None,
         block_id: int | None = None,
         state: AxisState = AxisState.MOVING,
-    ) -> JobError | None:
+    ) -> Event | None:
         err = self._check_motion(ax) or self._within_limits(ax, target)
         if err is None and ax.kind is AxisKind.SPINDLE:
             err = self.sp.as_rotary_axis(ax)
@@ -425,7 +462,7 @@ class Machine:
     # --- commands: axes -----------------------------------------------------------------
     def _move(
         self, axis: str, target: float, rapid: bool = True, feed_mm_min: float | None = None
-    ) -> JobError | None:
+    ) -> Event | None:
         """Single-axis G00/G01 move to an absolute position (mm | °); a spindle moves as a
         modulo rotary axis to the angle, the shortest way."""
         ax = self.axis(axis)
@@ -439,7 +476,7 @@ class Machine:
 
     def _jog_start(
         self, axis: str, direction: int, feed_mm_min: float | None = None
-    ) -> JobError | None:
+    ) -> Event | None:
         """Continuous jog (G200 dynamics) towards the software limit until `jog_stop`."""
         ax = self.axis(axis)
         d = 1.0 if direction > 0 else -1.0
@@ -455,7 +492,7 @@ class Machine:
             return err
         return self._start_move(ax, target, Motion.MANUAL, feed, state=AxisState.JOG)
 
-    def _jog_feed_refused(self, ax: Axis, feed: float | None) -> JobError | None:
+    def _jog_feed_refused(self, ax: Axis, feed: float | None) -> Event | None:
         """A jog feed above the axis' G200 maximum (P-AXIS-00213) is refused naming that
         limit [002 §2.6.1], not silently cut to it."""
         v_max = ax.cfg.eng("handbetrieb.hb.vb_max")
@@ -470,7 +507,7 @@ class Machine:
             f"{round(lim, 4):.10g} {unit} (handbetrieb.hb.vb_max, P-AXIS-00213)",
         )
 
-    def _homing_required(self, ax: Axis) -> JobError | None:
+    def _homing_required(self, ax: Axis) -> Event | None:
         """P-AXIS-00277: a programmed motion (G00/G01, `move`) of an unhomed axis is refused
         with 90013; jogging and homing stay possible."""
         if ax.homed or not ax.cfg.flag("kenngr.prog_move_requires_homing"):
@@ -485,7 +522,7 @@ class Machine:
 
     def _jog_step(
         self, axis: str, distance: float, feed_mm_min: float | None = None
-    ) -> JobError | None:
+    ) -> Event | None:
         """Incremental jog by `distance` (mm | °) with G200 dynamics."""
         ax = self.axis(axis)
         if ax.state is not AxisState.STANDSTILL:
@@ -494,7 +531,7 @@ class Machine:
         feed = feed_mm_min / 60.0 if feed_mm_min else None
         return self._jog_feed_refused(ax, feed) or self._start_move(ax, target, Motion.MANUAL, feed)
 
-    def _home(self, axis: str, block_id: int | None = None) -> JobError | None:
+    def _home(self, axis: str, block_id: int | None = None) -> Event | None:
         """CNC-controlled homing G74: to the cam, off it slowly, zero at the edge, to ref_pos."""
         ax = self.axis(axis)
         if ax.kind is AxisKind.SPINDLE:
@@ -570,7 +607,7 @@ class Machine:
                 return i
         return None
 
-    def _spindle_run(self, name: str, m: int, speed_rpm: float | None = None) -> JobError | None:
+    def _spindle_run(self, name: str, m: int, speed_rpm: float | None = None) -> Event | None:
         """M3/M4 with speed (rpm), or M5."""
         ax = self._spindle(name)
         if m == 5:
@@ -584,11 +621,11 @@ class Machine:
         pos_deg: float,
         direction: int | None = None,
         speed_rpm: float | None = None,
-    ) -> JobError | None:
+    ) -> Event | None:
         """M19 S.POS=pos_deg with M3 (+1) / M4 (-1) or the shortest way (None)."""
         return self.sp.position(self._spindle(name), pos_deg, direction, speed_rpm)
 
-    def _spindle_gear(self, name: str, m: int) -> JobError | None:
+    def _spindle_gear(self, name: str, m: int) -> Event | None:
         """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
         if not 40 <= m <= 45:
             raise NcUsageError("gear stage M40..M45")
@@ -694,8 +731,7 @@ class Machine:
         moving = ax.state not in (AxisState.STANDSTILL, AxisState.ERROR)
         spindle = ax.kind is AxisKind.SPINDLE
         keep = spindle and ax.cfg.flag("kenngr.spdl_no_stop_at_reset")
-        ax.job_error = 0
-        self.k.ist[ax.slot, L.I_JOB_ERROR] = 0
+        self._set_job_error(ax, None)
         ax.hold, ax.homing, ax.block_id, ax.task = False, HomingPhase.NONE, None, None
         self.k.ist[ax.slot, L.I_MARK_ARMED] = 0
         if spindle:
@@ -727,19 +763,18 @@ class Machine:
         settled (stop category 1)."""
         self.estop = True
         self._queue.clear()
+        stop = self.log(Code.EMERGENCY_STOP)  # one error, the active one of every axis
         for ax in self.axes:
             moving = ax.state not in (AxisState.STANDSTILL, AxisState.ERROR)
             ax.motion, ax.hold, ax.homing, ax.task = None, False, HomingPhase.NONE, None
             self.k.ist[ax.slot, L.I_MON_ACTIVE] = 0
             self._set_state(ax, AxisState.ERROR)
-            ax.job_error = int(Code.EMERGENCY_STOP)
-            self.k.ist[ax.slot, L.I_JOB_ERROR] = ax.job_error
+            self._set_job_error(ax, stop)
             if moving:
                 self._plan_velocity(ax, 0.0, emergency_limits(ax.cfg, ax.gear))
                 self.k.st[ax.slot, L.S_V_GOAL] = 0.0
             else:
                 self._estop_power_off(ax)  # at rest (or servo already off): at once
-        self.log(Code.EMERGENCY_STOP)
 
     # --- PLC ----------------------------------------------------------------------------
     def _plc_mode(self, mode: str, delay_s: float | None = None) -> None:
@@ -759,7 +794,7 @@ class Machine:
         return len(acked)
 
     def _m_acked(self, m: int, out_cycle: int) -> None:
-        self.log(Code.EV_M_ACK, "", f"M{m} acknowledged")
+        self.log(Code.EV_M_ACK, "", f"M{m} acknowledged", m=m)
         block = self._m_out.pop(out_cycle, None)
         if block is not None and self._queue and self._queue[0].id == block:
             self._queue[0].waiting_m -= 1
@@ -882,19 +917,19 @@ class Machine:
             return False
         return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & 0x20000)
 
-    def _m_output(self, m: int, axis: str, run: _BlockRun | None) -> int:
+    def _m_output(self, m: int, axis: str, run: _BlockRun | None, gear: int | None = None) -> int:
         p = self.plc.output(m, axis, self.cycle)
         while p.out_cycle in self._m_out:  # one key per output
             p.out_cycle += 1
         self._m_out[p.out_cycle] = run.id if run else None
         if run:
             run.waiting_m += 1
-        self.log(Code.EV_M_OUTPUT, axis, f"M{m} output to the PLC")
+        self.log(Code.EV_M_OUTPUT, axis, f"M{m} output to the PLC", m=m, gear=gear)
         return p.out_cycle
 
-    def _m_output_gear(self, m: int, ax: Axis) -> None:
-        """M40-M45 of a gear change; its acknowledgement continues the change."""
-        self._m_gear[self._m_output(m, ax.name, None)] = ax
+    def _m_output_gear(self, gear: int, ax: Axis) -> None:
+        """M40-M45 of a change to `gear`; its acknowledgement continues the change."""
+        self._m_gear[self._m_output(m_of(gear), ax.name, None, gear)] = ax
 
     # --- the cycle boundary --------------------------------------------------------------
     def on_cycle(self, cycle: int) -> None:
@@ -907,12 +942,13 @@ class Machine:
         for out, bid in list(self._m_out.items()):
             if cycle - out >= timeout:
                 del self._m_out[out]
-                self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
+                gone = self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
                 spindle = self._m_gear.pop(out, None)
                 self._fail(
                     spindle,
                     Code.PLC_ACK_TIMEOUT,
                     f"no acknowledgement after {timeout * self.k.cycle_s:g} s",
+                    m=gone.m if gone else None,
                 )
                 if spindle is not None:
                     self.sp.gear_timeout(spindle)

@@ -16,13 +16,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from nc_sim.accel_curve import CurveParams
 from nc_sim.blocks import SpindleCmd
-from nc_sim.errors import Code, JobError, NcUsageError
+from nc_sim.errors import Code, NcUsageError
+from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.kernel.curve import CurveParams
 from nc_sim.machine.axis import (
     Axis,
-    AxisState,
     SpindleTask,
     TaskPhase,
     ToolLimits,
@@ -43,6 +43,7 @@ from nc_sim.profiles.plan import (
     position_move,
     velocity_change,
 )
+from nc_sim.snapshot import AxisState
 from nc_sim.units import RPM_TO_DEG_S
 
 if TYPE_CHECKING:
@@ -175,6 +176,7 @@ class SpindleControl:
             Code.CURVE_NO_ACCELERATION,
             f"{ax.name} M{m_of(ax.gear)}: a(n) at {n_deg_s / RPM_TO_DEG_S:g} rpm is "
             f"{self.curve(ax).accel(n_deg_s):g} °/s² (getriebe[{ax.gear - 1}].beschl_kennlinie)",
+            gear=ax.gear,
         )
         self.cancel_task(ax)
         self.m._set_state(ax, AxisState.ERROR)
@@ -196,13 +198,12 @@ class SpindleControl:
         push_params(self.m.k, ax)
         self.m.log(Code.EV_TOOL_DYNAMICS, ax.name, f"{ax.name} tool dynamics {ax.tool}")
 
-    def _direction_ok(self, ax: Axis, d: int) -> JobError | None:
+    def _direction_ok(self, ax: Axis, d: int) -> Event | None:
         pref = self.preferred(ax)
         if pref is None or d == pref:
             return None
-        err = self.m._fail(
-            ax, Code.SPINDLE_PREFERRED_DIRECTION, f"{ax.name}: M{3 if d > 0 else 4} refused"
-        )
+        m = 3 if d > 0 else 4
+        err = self.m._fail(ax, Code.SPINDLE_PREFERRED_DIRECTION, f"{ax.name}: M{m} refused", m=m)
         self.cancel_task(ax)
         if ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
             self.velocity(ax, 0.0)
@@ -224,7 +225,7 @@ class SpindleControl:
             ist[ax.slot, L.I_OPEN_LOOP] = L.LOOP_CLOSED
             self.m.log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
 
-    def as_rotary_axis(self, ax: Axis) -> JobError | None:
+    def as_rotary_axis(self, ax: Axis) -> Event | None:
         """A spindle jogged or moved like a rotary axis [003 "jogging a spindle"]: from
         standstill (or renewing its jog), position-controlled, so it needs its encoder."""
         if speed_controlled(ax.cfg):
@@ -250,6 +251,14 @@ class SpindleControl:
         way = int(self.m.cfg.channel_raw(f"spindel[{i}].range_way"))
         return select_gear(table, ax.gear, rpm, automatic, way, programmed)
 
+    def _gear_refused(self, ax: Axis, choice: GearChoice, programmed: int | None) -> Event:
+        """The job error of a refused gear choice, with the programmed M40-M45 if any."""
+        assert choice.error is not None
+        detail = choice.detail or (f"M{m_of(programmed)}" if programmed is not None else "")
+        if programmed is None:
+            return self.m._fail(ax, choice.error, detail)
+        return self.m._fail(ax, choice.error, detail, m=m_of(programmed), gear=programmed)
+
     def _within_vb_max(self, ax: Axis, rpm: float) -> GearChoice | None:
         """The refusal of a speed above the active gear record's maximum (P-AXIS-00212)."""
         top_rpm = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear) / RPM_TO_DEG_S
@@ -270,7 +279,7 @@ class SpindleControl:
         rpm: float | None,
         gear: int | None = None,
         block_id: int | None = None,
-    ) -> JobError | None:
+    ) -> Event | None:
         """M3/M4 with S (rpm; None keeps the programmed speed), optionally with M40-M45."""
         _check_rpm(rpm)
         err = self.m._check_motion(ax)
@@ -283,9 +292,9 @@ class SpindleControl:
         rpm = rpm if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
         choice = self._gear_for(ax, rpm, gear)
         if choice.error is not None:
-            return self.m._fail(ax, choice.error, choice.detail)
+            return self._gear_refused(ax, choice, gear)
         self.cancel_task(ax)
-        self.m.log(Code.EV_M_START, ax.name, f"M{m} S{rpm:g}")
+        self.m.log(Code.EV_M_START, ax.name, f"M{m} S{rpm:g}", m=m)
         ax.speed_prog = d * rpm * RPM_TO_DEG_S
         assert choice.gear is not None
         if choice.gear != ax.gear:
@@ -311,14 +320,12 @@ class SpindleControl:
         k.st[ax.slot, L.S_OVERRIDE] = self.override(ax)
         self.velocity(ax, v)
 
-    def speed(
-        self, ax: Axis, rpm: float, gear: int | None, block_id: int | None
-    ) -> JobError | None:
+    def speed(self, ax: Axis, rpm: float, gear: int | None, block_id: int | None) -> Event | None:
         """S word alone (or S[REV..]): new speed, with a gear change when the table asks."""
         _check_rpm(rpm)
         choice = self._gear_for(ax, rpm, gear)
         if choice.error is not None:
-            return self.m._fail(ax, choice.error, choice.detail)
+            return self._gear_refused(ax, choice, gear)
         assert choice.gear is not None
         ax.speed_prog = math.copysign(rpm * RPM_TO_DEG_S, ax.speed_prog or 1.0)
         if choice.gear != ax.gear:
@@ -333,7 +340,7 @@ class SpindleControl:
     def stop(self, ax: Axis) -> None:
         """M5: brake to standstill (curve or a_brems)."""
         self.cancel_task(ax)
-        self.m.log(Code.EV_M_START, ax.name, "M5")
+        self.m.log(Code.EV_M_START, ax.name, "M5", m=5)
         if ax.state in (AxisState.STANDSTILL, AxisState.ERROR):
             return
         self._state(ax, AxisState.STOPPING)
@@ -347,7 +354,7 @@ class SpindleControl:
             self.stop(ax)
             return
         self.cancel_task(ax)
-        self.m.log(Code.EV_M_START, ax.name, "M5 (automatic homing)")
+        self.m.log(Code.EV_M_START, ax.name, "M5 (automatic homing)", m=5)
         v = abs(self.m.k.st[ax.slot, L.S_V_CMD])
         ax.task = SpindleTask("M5", 0.0, None, v)  # passes the zero mark at speed
         self.advance(ax)
@@ -360,11 +367,11 @@ class SpindleControl:
         direction: int | None,
         rpm: float | None,
         block_id: int | None = None,
-    ) -> JobError | None:
+    ) -> Event | None:
         """M19: position to `pos_deg` (0..360) in `direction` (+1 M3, -1 M4, None)."""
         _check_rpm(rpm)
         if speed_controlled(ax.cfg):
-            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
+            return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax), m=19)
         err = self.m._check_motion(ax)
         if err:
             return err
@@ -379,13 +386,13 @@ class SpindleControl:
             return self.m._fail(ax, Code.GEAR_NO_RANGE, too_fast.detail)
         speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         self.cancel_task(ax)
-        self.m.log(Code.EV_M_START, ax.name, f"M19 S.POS={pos_deg:g}")
+        self.m.log(Code.EV_M_START, ax.name, f"M19 S.POS={pos_deg:g}", m=19)
         ax.task = SpindleTask("M19", pos_deg % 360.0, direction, speed)
         ax.block_id = block_id
         self.advance(ax)
         return None
 
-    def home(self, ax: Axis, block_id: int | None = None) -> JobError | None:
+    def home(self, ax: Axis, block_id: int | None = None) -> Event | None:
         """G74: rotate to the zero mark, take ref_pos there, stop on it with exact stop."""
         if speed_controlled(ax.cfg):
             return self.m._fail(ax, Code.SPINDLE_SENSORLESS_M19, _why_not_positioned(ax))
@@ -414,11 +421,12 @@ class SpindleControl:
         speed = ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
         ax.task = SpindleTask("gear", pos, self.preferred(ax), speed, gear=gear, resume=resume)
         ax.block_id = block_id
-        self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}")
+        self.m.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}", m=m_of(gear), gear=gear)
         self.m.log(
             Code.EV_GEAR_CHANGE_START,
             ax.name,
             f"{ax.name} gear change M{m_of(ax.gear)} -> M{m_of(gear)}",
+            gear=gear,
         )
         if not (ax.homed or self.auto_homing(ax)) or speed_controlled(ax.cfg):
             # no position to go to: change at standstill where the spindle stops
@@ -475,7 +483,12 @@ class SpindleControl:
             self.velocity(ax, 0.0)
             return
         if not ax.homed:
-            self.m._fail(ax, Code.SPINDLE_NOT_HOMED, f"{ax.name}: M19 needs a reference")
+            self.m._fail(
+                ax,
+                Code.SPINDLE_NOT_HOMED,
+                f"{ax.name}: {t.kind} needs a reference",
+                m=19 if t.kind == "M19" else None,
+            )
             self.cancel_task(ax)
             self.velocity(ax, 0.0)
             self._state(ax, AxisState.ERROR)
@@ -559,7 +572,7 @@ class SpindleControl:
         if t.kind == "gear":
             t.phase = TaskPhase.WAIT_PLC
             self._state(ax, AxisState.GEAR_CHANGE)
-            self.m._m_output_gear(m_of(t.gear), ax)
+            self.m._m_output_gear(t.gear, ax)
             # the PLC's own timeout (90004) ends it first; this bounds it as every phase
             timeout = self.m.cfg.channel_eng("plc.m_ack_timeout")
             self.m._watch(ax, timeout, f"gear change: M{m_of(t.gear)} acknowledgement")
@@ -568,9 +581,14 @@ class SpindleControl:
         self._state(ax, AxisState.STANDSTILL)
         ax.motion, ax.block_id = None, None
         if t.kind == "M5":
-            self.m.log(Code.EV_MOTION_DONE, ax.name, f"{ax.name} stopped (M5)")
+            self.m.log(Code.EV_MOTION_DONE, ax.name, f"{ax.name} stopped (M5)", m=5)
             return
-        self.m.log(Code.EV_IN_POSITION, ax.name, f"{ax.name} at {t.pos_deg:g}° ({t.kind})")
+        self.m.log(
+            Code.EV_IN_POSITION,
+            ax.name,
+            f"{ax.name} at {t.pos_deg:g}° ({t.kind})",
+            m=19 if t.kind == "M19" else None,  # the in-position that ends M19 [000 §2.3]
+        )
 
     def gear_acknowledged(self, ax: Axis) -> None:
         """The PLC has changed the gear: adopt the new record and resume."""
@@ -581,7 +599,10 @@ class SpindleControl:
         ax.gear = t.gear
         push_params(self.m.k, ax)
         self.m.log(
-            Code.EV_GEAR_CHANGED, ax.name, f"{ax.name} gear M{m_of(old)} -> M{m_of(ax.gear)}"
+            Code.EV_GEAR_CHANGED,
+            ax.name,
+            f"{ax.name} gear M{m_of(old)} -> M{m_of(ax.gear)}",
+            gear=ax.gear,
         )
         ax.task = None
         ax.block_id = None
@@ -654,7 +675,7 @@ class SpindleControl:
         if sc.default_dynamics:
             ax.tool_pending = ToolLimits()
             self.m.log(Code.EV_TOOL_DYNAMICS, ax.name, f"{ax.name} default dynamics pending")
-        err: JobError | None = None
+        err: Event | None = None
         if sc.m in (3, 4):
             err = self.endless(ax, sc.m, sc.speed_rpm, gear, block_id)
         elif sc.m == 5:
@@ -671,17 +692,17 @@ class SpindleControl:
             self.replan(ax)
         return err is None
 
-    def gear_only(self, ax: Axis, gear: int, block_id: int | None) -> JobError | None:
+    def gear_only(self, ax: Axis, gear: int, block_id: int | None) -> Event | None:
         """M40-M45 without S (MDI or the gear buttons): the stage is checked against the speed
         it will run with, as `M4x S..` is: the programmed S of a rotating spindle; at
         standstill there is none, the next S is checked."""
         if self.gear_table(ax) is None:
-            return self.m._fail(ax, Code.GEAR_CHANGE_OFF, f"M{m_of(gear)}")
+            return self._gear_refused(ax, GearChoice(None, Code.GEAR_CHANGE_OFF), gear)
         resume = self._resume(ax)
         if resume is not None:
             choice = self._gear_for(ax, resume[1], gear)
             if choice.error is not None:
-                return self.m._fail(ax, choice.error, choice.detail)
+                return self._gear_refused(ax, choice, gear)
         if gear == ax.gear:
             return None
         err = self.m._check_motion(ax)

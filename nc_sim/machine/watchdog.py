@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nc_sim.kernel.curve import CurveParams
+from nc_sim.accel_curve import CurveParams
 from nc_sim.profiles.plan import plan_duration
 
 MARGIN_FACTOR = 2.0  # the bound is at least twice the expected duration ...

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from nc_sim.kernel.curve import A_LEAST, CurveParams
+from nc_sim.accel_curve import A_LEAST, CurveParams
 from nc_sim.params.registry import Registry, Scope
 from nc_sim.units import RPM_TO_DEG_S, to_eng
 

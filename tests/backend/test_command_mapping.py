@@ -15,9 +15,9 @@ from api.commands import Command as ApiCommand
 from backend.services.commands import to_nc
 from nc_sim.commands import Accepted, Refused
 from nc_sim.errors import Code, NcUsageError
-from nc_sim.machine.axis import AxisState
 from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import command, run_scenario
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make
 
 PAIRS: list[tuple[dict[str, Any], dict[str, Any]]] = [

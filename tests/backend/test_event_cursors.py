@@ -22,10 +22,10 @@ from backend.services.machines import MachineProxy, MachineService
 from backend.services.status import machine_status
 from backend.services.telemetry import TelemetryHub
 from backend.workers.protocol import Submit
-from backend.workers.status import RECENT_EVENTS
 from nc_sim.commands import Mdi
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN
+from nc_sim.snapshot import RECENT_EVENTS
 from tests.backend.fakews import FakeSocket
 from tests.backend.inprocess import machine_service, paused_demo, step, wait_until
 

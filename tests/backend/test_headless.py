@@ -134,3 +134,12 @@ def test_spindle_sequences_scenario_exposes_the_spindle_signals(tmp_path: Path) 
     assert any(m.startswith("M41 output") for m in messages)
     assert sum(m == "S1 at 90° (M19)" for m in messages) == 1
     assert not [e for e in events if e["error"]]
+    # the same facts as fields: gear stage 2 is M41, 3 is M42; M19 done is in position, m 19
+    assert [e["seq"] for e in events] == list(
+        range(events[0]["seq"], len(events) + events[0]["seq"])
+    )
+    changed = [e["gear"] for e in events if e["code"] == Code.EV_GEAR_CHANGED]
+    assert changed == [2, 3]
+    assert any(e["code"] == Code.EV_M_OUTPUT and (e["m"], e["gear"]) == (41, 2) for e in events)
+    # in position after M19 (m 19), then after S[G74] homing (no M function)
+    assert [e["m"] for e in events if e["code"] == Code.EV_IN_POSITION] == [19, None]

@@ -19,7 +19,7 @@ import pytest
 
 from api.telemetry import decode_frame
 from backend.services.viewer import rerun_cli
-from nc_sim.machine.axis import AxisState
+from nc_sim.snapshot import AxisState
 from tests.backend.server import Server
 
 CH = ["S1.speed_cmd_rpm", "S1.pos_act_deg", "S1.lag_deg", "S1.state"]

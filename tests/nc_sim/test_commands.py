@@ -33,7 +33,7 @@ from nc_sim.commands import (
 )
 from nc_sim.errors import Code
 from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import AxisState
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make, record
 
 X0_MM = 50.0  # demo X stands at 50 mm after power-on

@@ -54,6 +54,8 @@ def test_machine_events_and_acknowledgements_stay_bounded() -> None:
     assert len(m.outcomes) == OUTCOME_LOG_LEN and m.outcomes.cursor >= n
     read = m.events.since(start)
     assert read.dropped == 500 and len(read.entries) == EVENT_LOG_LEN
+    # each event keeps the number the log gave it, also after the log dropped older ones
+    assert [e.seq for e in read.entries] == list(range(read.first_seq, read.cursor))
     assert all(e.code == Code.BLOCK_SYNTAX for e in read.entries)
 
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from ruckig import InputParameter, Ruckig, Trajectory
 
-from nc_sim.kernel import Kernel
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.arrays import Kernel
 from nc_sim.profiles.plan import (
     SHAPE_SIN2,
     make_limits,

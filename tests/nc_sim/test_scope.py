@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from nc_sim.commands import Accepted, HliWrite, JogStep, Move, SpindlePosition, SpindleRun
+from nc_sim.errors import Code
 from nc_sim.events import EventLog
-from nc_sim.machine.axis import AxisState
 from nc_sim.scope import (
     EventKind,
     EventTrigger,
@@ -20,6 +20,7 @@ from nc_sim.scope import (
     ScopeState,
 )
 from nc_sim.signals import Signal, machine_signals, signal_columns
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make
 
 
@@ -32,7 +33,7 @@ class Rig:
         self.scope = Scope(self.sim.kernel.cycle_s)
         self.base = self.sim.cycle  # cycles before the rig recorded (the drives switching on)
         self.full = [self.sim.new_record(0)]
-        self.sig = {s.name: s for s in machine_signals(self.m)}
+        self.sig = {s.name: s for s in machine_signals(self.m.axes)}
 
     def signals(self, *names: str) -> list[Signal]:
         return [self.sig[n] for n in names]
@@ -98,7 +99,7 @@ def test_m19_capture_has_the_asked_pretrigger_and_the_trigger_at_the_first_m19_c
     for k, name in enumerate(CH):
         np.testing.assert_array_equal(rec.data[k], rig.span(name, rec.first_cycle, 1000))
     assert rig.scope.state is ScopeState.DONE
-    assert any(e.message.startswith("M19") for e in rec.events)
+    assert any(e.code == Code.EV_M_START and e.m == 19 for e in rec.events)
 
 
 def test_pretrigger_comes_from_history_when_the_trigger_follows_arming_at_once() -> None:
@@ -189,7 +190,7 @@ def test_a_crossing_in_the_first_cycle_after_arming_counts() -> None:
 def test_a_trigger_soon_after_power_on_keeps_the_history_back_to_cycle_1() -> None:
     sim, m, _ = make(settle=0)
     scope = Scope(sim.kernel.cycle_s)
-    sig = machine_signals(m)
+    sig = machine_signals(m.axes)
     trig = EventTrigger(EventKind.M_START, "S1", 3)
     scope.arm(
         ScopeSetup(sig[:2], 1000, 50.0, ScopeMode.SINGLE, trig), 0, sim.new_record(0), EventLog()
@@ -243,7 +244,7 @@ def test_force_takes_the_newest_cycle_and_roll_keeps_the_newest_window() -> None
 
 
 def test_setup_limits_name_what_is_wrong() -> None:
-    s = machine_signals(make()[1])
+    s = machine_signals(make()[1].axes)
     with pytest.raises(ValueError, match="channels: 1 … 16"):
         ScopeSetup(s[:17], 100, trigger=EventTrigger(EventKind.JOB_ERROR)).check()
     with pytest.raises(ValueError, match="60000 cycles"):

@@ -25,10 +25,10 @@ from nc_sim.commands import (
     SpindleRun,
 )
 from nc_sim.errors import Code
-from nc_sim.machine.axis import AxisState
 from nc_sim.machine.machine import Machine
 from nc_sim.params import ParamListError
 from nc_sim.sim import Simulation
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import L, make, record
 
 S = "S1"
@@ -147,8 +147,9 @@ def test_m40_to_m45_are_free_m_functions_when_gear_change_is_off() -> None:
     # the gear buttons send the same M function
     assert isinstance(m.submit(GearChange("S", 44)), Accepted)
     record(sim, 3.0)
-    outputs = [e.message for e in m.events if e.code == Code.EV_M_OUTPUT]
-    assert sorted(o.split()[0] for o in outputs) == ["M41", "M43", "M44"]
+    outputs = [e for e in m.events if e.code == Code.EV_M_OUTPUT]
+    assert sorted(e.m or 0 for e in outputs) == [41, 43, 44]
+    assert all(e.gear is None for e in outputs)  # free M functions: no gear stage
     assert codes(m).count(Code.EV_M_ACK) == 3 and m.queued_blocks == 0
     assert Code.GEAR_CHANGE_OFF not in codes(m)
     assert s.gear == gear and s.state is AxisState.ENDLESS

@@ -14,8 +14,8 @@ import pytest
 
 from nc_sim.commands import GearChange, JogStart, JogStep, JogStop, Mdi, Move
 from nc_sim.errors import Code, is_error
-from nc_sim.machine.axis import AxisState
 from nc_sim.machine.machine import Machine
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make
 
 S = "S1"

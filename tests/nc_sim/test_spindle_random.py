@@ -11,7 +11,7 @@ import pytest
 from nc_sim.commands import HliWrite, Invalid, Mdi, Reset
 from nc_sim.errors import Code, is_error
 from nc_sim.kernel.curve import curve_accel
-from nc_sim.machine.axis import AxisState
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import L, make
 
 S = "S1"

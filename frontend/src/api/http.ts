@@ -11,6 +11,9 @@ export class ApiError extends Error {
   }
 }
 
+/** Told whether each request reached the service (true) or failed on the network (false). */
+export const reachListeners = new Set<(reached: boolean) => void>();
+
 async function request<T>(method: string, url: string, body?: unknown, text = false): Promise<T> {
   let res: Response;
   try {
@@ -20,8 +23,10 @@ async function request<T>(method: string, url: string, body?: unknown, text = fa
       body: body === undefined ? undefined : text ? String(body) : JSON.stringify(body),
     });
   } catch {
+    reachListeners.forEach((f) => f(false));
     throw new ApiError(0, { message: "no connection to the service", problems: [] });
   }
+  reachListeners.forEach((f) => f(true));
   const type = res.headers.get("content-type") ?? "";
   const payload: unknown = type.includes("json") ? await res.json() : await res.text();
   if (!res.ok) throw new ApiError(res.status, refusalOf(res.status, payload));

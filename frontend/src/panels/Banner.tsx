@@ -16,7 +16,9 @@ export function Banner() {
       ) : null}
       {n ? (
         <div class="banner notice" role="alert" data-testid="banner-notice">
-          <span>⚠ {n.message}</span>
+          <span>
+            ⚠ {new Date(n.time_unix * 1000).toLocaleTimeString()}: {n.message}
+          </span>
           <button onClick={() => (notice.value = null)}>Dismiss</button>
         </div>
       ) : null}

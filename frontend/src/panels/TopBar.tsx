@@ -31,7 +31,7 @@ export function TopBar() {
           title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile`}
           data-testid="loop-health"
         >
-          {sim?.worker ?? "—"}: overruns {sim?.loop_overruns ?? "—"} · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}
+          loop {sim?.worker ?? "—"} · overruns {sim?.loop_overruns ?? "—"} · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}
         </span>
       </span>
       <Lamp

@@ -1,7 +1,7 @@
 // The session: which machine, its status (pushed over the telemetry socket, never polled), and
 // the one way commands are sent.
 import { computed, signal } from "@preact/signals";
-import { http } from "../api/http";
+import { http, reachListeners } from "../api/http";
 import type { Command, CommandResult, MachineStatus, MachineSummary, NoticeMessage } from "../api/types";
 
 export type Connection = "connecting" | "online" | "lost";
@@ -13,9 +13,45 @@ export const status = signal<MachineStatus | null>(null);
 export const notice = signal<NoticeMessage | null>(null);
 /** The telemetry socket: it brings status, events and samples. */
 export const socket = signal<Connection>("connecting");
-export const connection = computed<Connection>(() =>
-  socket.value === "online" && status.value ? "online" : socket.value === "lost" ? "lost" : "connecting",
-);
+/** Requests reach the service (false after one failed on the network, until one gets through). */
+export const reachable = signal(true);
+/** The pushed status stopped arriving although the socket looks open (a silent network). */
+export const statusStale = signal(false);
+export const connection = computed<Connection>(() => {
+  if (socket.value === "lost" || !reachable.value || statusStale.value) return "lost";
+  return socket.value === "online" && status.value ? "online" : "connecting";
+});
+
+const STALE_MS = 2000; // status comes about 20 times a second
+const PROBE_MS = 1000;
+let lastStatusMs = 0;
+
+/** A status pushed for the current machine. */
+export function statusArrived(st: MachineStatus): void {
+  if (st.id !== machineId.value) return;
+  status.value = st;
+  lastStatusMs = Date.now();
+  statusStale.value = false;
+}
+
+let probing = false;
+reachListeners.add((reached) => {
+  reachable.value = reached;
+  if (reached || probing) return;
+  probing = true; // ask until the service answers again (no other request may come meanwhile)
+  const probe = async (): Promise<void> => {
+    try {
+      await http.get("/api/health");
+      probing = false;
+    } catch {
+      setTimeout(() => void probe(), PROBE_MS);
+    }
+  };
+  setTimeout(() => void probe(), PROBE_MS);
+});
+setInterval(() => {
+  statusStale.value = socket.value === "online" && lastStatusMs > 0 && Date.now() - lastStatusMs > STALE_MS;
+}, STALE_MS / 4);
 export const online = computed(() => connection.value === "online");
 
 export const axis = (name: string) => status.value?.axes.find((a) => a.name === name) ?? null;
@@ -48,6 +84,7 @@ export function selectMachine(id: string): void {
   machineId.value = id;
   status.value = null;
   notice.value = null;
+  lastStatusMs = 0;
   location.hash = id;
 }
 

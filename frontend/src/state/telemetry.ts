@@ -15,7 +15,7 @@ import type {
 } from "../api/types";
 import { addEvents } from "./events";
 import { Rings } from "./rings";
-import { machineId, notice, socket, status } from "./session";
+import { machineId, notice, socket, statusArrived } from "./session";
 
 const MAGIC = 0x54424e49; // "INBT" little-endian
 export const RING_SECONDS = 30;
@@ -97,7 +97,7 @@ function onMessage(text: string): void {
       addEvents([msg.event]);
       break;
     case "status":
-      if (msg.status.id === machineId.value) status.value = msg.status;
+      statusArrived(msg.status);
       break;
     case "notice":
       notice.value = msg;

@@ -1,0 +1,91 @@
+"""The kernel's arrays for every axis slot of every machine, advanced by one compiled step."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from nc_sim.kernel import layout as L
+from nc_sim.kernel.step import run_cycles
+from nc_sim.profiles.plan import MAX_SEGMENTS, SEG_COLS
+
+
+class Kernel:
+    """Owns the state arrays; machines claim slots and share one `run` call."""
+
+    st: np.ndarray  # float state, slots × S_COLS
+    pr: np.ndarray  # float parameters, slots × P_COLS
+    ist: np.ndarray  # integer state, slots × I_COLS
+    seg: np.ndarray  # active plan, slots × MAX_SEGMENTS × SEG_COLS
+
+    def __init__(self, cycle_s: float = 0.001, capacity: int = 8) -> None:
+        self.cycle_s = cycle_s
+        self.n = 0
+        self._alloc(capacity)
+
+    def _alloc(self, capacity: int) -> None:
+        old = self.st if hasattr(self, "st") else None
+        st = np.zeros((capacity, L.S_COLS))
+        pr = np.zeros((capacity, L.P_COLS))
+        ist = np.zeros((capacity, L.I_COLS), dtype=np.int64)
+        seg = np.zeros((capacity, MAX_SEGMENTS, SEG_COLS))
+        if old is not None:
+            st[: self.n] = self.st[: self.n]
+            pr[: self.n] = self.pr[: self.n]
+            ist[: self.n] = self.ist[: self.n]
+            seg[: self.n] = self.seg[: self.n]
+        self.st, self.pr, self.ist, self.seg = st, pr, ist, seg
+
+    def claim(self, count: int) -> range:
+        """Reserve `count` slots; returns their indices."""
+        if self.n + count > self.st.shape[0]:
+            self._alloc(max(2 * self.st.shape[0], self.n + count))
+        first = self.n
+        self.n += count
+        for s in range(first, self.n):
+            self.st[s, L.S_TARGET] = math.nan
+            self.st[s, L.S_OVERRIDE] = 1.0
+            # no loop-opening speeds and no curve cap until the machine sets them
+            for col in (L.P_V_CTRL_LIMIT, L.P_V_SPEED_CTRL, L.P_A_CAP):
+                self.pr[s, col] = math.inf
+            self.pr[s, L.P_DRV_ALPHA] = 1.0  # an ideal drive
+        return range(first, self.n)
+
+    def load_plan(self, slot: int, seg: np.ndarray, n: int, target: float) -> None:
+        """Start a plan on a slot from its current commanded position and velocity."""
+        self.seg[slot, :n] = seg[:n]
+        self.ist[slot, L.I_PLAN_N] = n
+        self.ist[slot, L.I_PLAN_K] = 0
+        self.ist[slot, L.I_CURVE] = 0
+        self.st[slot, L.S_SEG_TAU] = 0.0
+        self.st[slot, L.S_SEG_P0] = self.st[slot, L.S_P_CMD]
+        self.st[slot, L.S_SEG_V0] = self.st[slot, L.S_V_CMD]
+        self.st[slot, L.S_TARGET] = target
+        # a new target is not yet confirmed: the in-position edge (EV_IN_POS) comes again even
+        # when the axis already stands there (M19 twice to the same angle)
+        self.ist[slot, L.I_IN_POS] = 0
+        if n == 0 and not math.isnan(target):
+            self.st[slot, L.S_P_CMD] = target
+            self.st[slot, L.S_V_CMD] = 0.0
+
+    def load_curve(self, slot: int, v_target: float) -> None:
+        """Start a curve-controlled speed change (pr P_CURVE_*) towards v_target."""
+        self.ist[slot, L.I_PLAN_N] = 0
+        self.ist[slot, L.I_CURVE] = 1
+        self.st[slot, L.S_V_TARGET] = v_target
+        self.st[slot, L.S_TARGET] = math.nan
+
+    def run(self, n: int, rec: np.ndarray | None = None) -> int:
+        """Advance all slots by up to n cycles (fewer when an event is raised)."""
+        if rec is None:
+            rec = _NO_REC
+        k = self.n
+        return int(
+            run_cycles(self.st[:k], self.pr[:k], self.ist[:k], self.seg[:k], rec, n, self.cycle_s)
+        )
+
+
+_NO_REC = np.zeros((0, 0, L.R_COLS))
+
+__all__ = ["Kernel"]

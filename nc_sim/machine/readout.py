@@ -1,0 +1,98 @@
+"""Reading a machine into its snapshot (nc_sim/snapshot.py): every kernel column and every
+unit conversion a status needs happens here, between cycles, in O(axes + recent events)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from nc_sim.kernel import layout as L
+from nc_sim.machine.axis import Axis, target_and_distance
+from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
+from nc_sim.snapshot import (
+    AxisSnapshot,
+    LoopMode,
+    MachineSnapshot,
+    PendingMSnapshot,
+    PlcSnapshot,
+    SpindleSnapshot,
+)
+from nc_sim.units import AxisKind, Quantity, display_velocity, to_raw
+
+if TYPE_CHECKING:
+    from nc_sim.machine.machine import Machine
+
+_LOOP = {
+    L.LOOP_CLOSED: LoopMode.CLOSED,
+    L.LOOP_CONTROL_LIMIT: LoopMode.CONTROL_LIMIT,
+    L.LOOP_SPEED_CONTROL: LoopMode.SPEED_CONTROL,
+}
+
+
+def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
+    """One axis or spindle as the HLI shows it now."""
+    st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
+    vel_cmd, vel_unit = display_velocity(float(st[L.S_V_CMD]), ax.kind)
+    vel_act, _ = display_velocity(float(st[L.S_V_ACT]), ax.kind)
+    target, to_go = target_and_distance(m.k, ax)
+    drive = ax.drive.reported()
+    spindle = None
+    if ax.kind is AxisKind.SPINDLE:
+        spindle = SpindleSnapshot(
+            gear=ax.gear,
+            speed_prog_rpm=display_velocity(abs(ax.speed_prog), ax.kind)[0],
+            speed_reached=bool(ist[L.I_SPEED_REACHED]),
+            stopped=bool(ist[L.I_STOPPED]),
+            speed_monitoring_active=bool(ist[L.I_MON_ACTIVE]),
+            speed_monitoring_invalid=bool(ist[L.I_MON_INVALID]),
+        )
+    return AxisSnapshot(
+        name=ax.name,
+        kind=ax.kind,
+        state=ax.state.name,
+        pos_unit="mm" if ax.kind is AxisKind.LINEAR else "deg",
+        vel_unit=vel_unit,
+        pos_cmd=float(st[L.S_P_CMD]),
+        pos_act=float(st[L.S_P_ACT]),
+        lag=float(st[L.S_LAG]),
+        vel_cmd=vel_cmd,
+        vel_act=vel_act,
+        homed=bool(ist[L.I_HOMED]),
+        in_position=bool(ist[L.I_IN_POS]),
+        target_pos=target,
+        distance_to_go=to_go,
+        enabled=ax.enables_ok(),
+        missing_enables=tuple(ax.missing_enables()),
+        ready_for_power_on=drive.get(READY_FOR_POWER_ON),
+        ready_for_control_loop_on=drive.get(READY_FOR_CONTROL_LOOP_ON),
+        control_units=dict(ax.units),
+        override_pct=to_raw(Quantity.PERCENT, float(st[L.S_OVERRIDE])),
+        job_error=ax.job_error,
+        # without its enables the drive does not follow: no loop is closed, whatever the mode
+        loop=_LOOP.get(int(ist[L.I_OPEN_LOOP]), LoopMode.CLOSED)
+        if ist[L.I_ENABLED]
+        else LoopMode.OPEN,
+        spindle=spindle,
+    )
+
+
+def machine_snapshot(m: Machine, recent_events: int) -> MachineSnapshot:
+    """The whole machine now, with the newest `recent_events` events."""
+    # the event that set each axis' job error, once: an emergency stop is one error
+    active = {e.seq: e for ax in m.axes if (e := ax.error_event) is not None}
+    return MachineSnapshot(
+        cycle=m.cycle,
+        t_s=m.t_s,
+        channel_units=dict(m.channel_units),
+        emergency_stop=m.estop,
+        queued_blocks=m.queued_blocks,
+        axes=tuple(axis_snapshot(m, ax) for ax in m.axes),
+        plc=PlcSnapshot(
+            mode=m.plc.mode,
+            ack_delay_s=m.plc.delay_cycles * m.k.cycle_s,
+            drives_powered=m.powered,
+            pending=tuple(PendingMSnapshot(p.m, p.axis, p.out_cycle) for p in m.plc.pending),
+        ),
+        job_errors=tuple(active[s] for s in sorted(active)),
+        recent_events=tuple(m.events.tail(recent_events)),
+        event_cursor=m.events.cursor,
+    )

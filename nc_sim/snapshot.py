@@ -1,0 +1,117 @@
+"""What a machine shows at one cycle: axes, spindles, PLC, active job errors, recent events.
+
+`Machine.snapshot()` fills these records between cycles; they are plain frozen values in
+engineering units (positions mm | °, speeds mm/min | °/min, spindles rpm), so a reader in
+another process needs neither the kernel nor the machine. This module imports nothing that
+computes: the gateway imports it without numba.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum, StrEnum
+
+from nc_sim.events import Event
+from nc_sim.plc import PlcMode
+from nc_sim.units import AxisKind
+
+RECENT_EVENTS = 50  # events a snapshot carries
+
+
+class AxisState(IntEnum):
+    """Operating state shown in the HLI and traces."""
+
+    STANDSTILL = 0
+    MOVING = 1  # positioning (G00/G01, incremental jog, M19 later)
+    JOG = 2  # continuous jog
+    HOMING = 3
+    ENDLESS = 4  # spindle M3/M4
+    STOPPING = 5
+    POSITIONING = 6  # spindle M19
+    OPEN_LOOP = 7  # spindle rotating above the control limit vb_regelgrenze
+    GEAR_CHANGE = 8  # spindle at the change position, waiting for the PLC
+    ERROR = 9
+
+
+class LoopMode(StrEnum):
+    """The position loop as the drive runs it."""
+
+    OPEN = "open"  # servo off: the drive lacks its enables and does not follow
+    CLOSED = "closed"  # position control
+    CONTROL_LIMIT = "control_limit"  # spindle above vb_regelgrenze: open loop [000 §2.7]
+    SPEED_CONTROL = "speed_control"  # spindle changed over to speed control [001 §2.3]
+
+
+@dataclass(frozen=True)
+class SpindleSnapshot:
+    """The spindle part of an axis' snapshot."""
+
+    gear: int  # active gear stage 1..6 (M40..M45)
+    speed_prog_rpm: float  # programmed S, before override
+    speed_reached: bool
+    stopped: bool
+    speed_monitoring_active: bool
+    speed_monitoring_invalid: bool
+
+
+@dataclass(frozen=True)
+class AxisSnapshot:
+    """One axis or spindle: state, actual values, its HLI objects and drive status."""
+
+    name: str
+    kind: AxisKind
+    state: str  # AxisState name: STANDSTILL, MOVING, ... ERROR
+    pos_unit: str  # "mm" (linear) or "deg" (rotary axes, spindles): positions and lag
+    vel_unit: str  # "mm/min", "°/min" or "rpm" (spindles): vel_cmd, vel_act
+    pos_cmd: float
+    pos_act: float
+    lag: float
+    vel_cmd: float
+    vel_act: float
+    homed: bool
+    in_position: bool
+    target_pos: float | None  # target of the active or last positioning, None without
+    distance_to_go: float | None  # target − commanded position, None without a target
+    enabled: bool  # every drive enable present
+    missing_enables: tuple[str, ...]
+    # drive status [004 §4.2]; None where the drive type does not report the signal
+    ready_for_power_on: bool | None
+    ready_for_control_loop_on: bool | None
+    control_units: dict[str, int]  # HLI control units as written
+    override_pct: float  # override in force, %
+    job_error: int  # code of the active job error, 0 none
+    loop: LoopMode
+    spindle: SpindleSnapshot | None  # None for axes
+
+
+@dataclass(frozen=True)
+class PendingMSnapshot:
+    """An M function output to the PLC and not yet acknowledged."""
+
+    m: int
+    axis: str
+    out_cycle: int
+
+
+@dataclass(frozen=True)
+class PlcSnapshot:
+    mode: PlcMode
+    ack_delay_s: float  # auto mode acknowledges this long after the output
+    drives_powered: bool  # power-on done: every drive switched on and reporting ready
+    pending: tuple[PendingMSnapshot, ...]
+
+
+@dataclass(frozen=True)
+class MachineSnapshot:
+    """A machine at the end of one cycle, consistent in itself."""
+
+    cycle: int
+    t_s: float  # simulated time, s
+    channel_units: dict[str, int]  # override (‰), feedhold, reduced_acceleration
+    emergency_stop: bool
+    queued_blocks: int  # MDI blocks waiting or running
+    axes: tuple[AxisSnapshot, ...]
+    plc: PlcSnapshot
+    job_errors: tuple[Event, ...]  # the event behind each active job error, once each
+    recent_events: tuple[Event, ...]  # the newest events, oldest first
+    event_cursor: int  # sequence number the next event will get

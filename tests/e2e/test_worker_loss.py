@@ -1,0 +1,32 @@
+"""The HMI when the machine's worker dies: a banner tells the viewer the machine was rebuilt
+from its stored parameters, the top bar names the worker whose loop paces it now, and the
+machine answers again."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+from playwright.sync_api import Page, expect
+
+from tests.backend.server import Server
+from tests.e2e.browser import poll, shot
+
+
+def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
+    page: Page, srv: Server, mid: str
+) -> None:
+    health = page.get_by_test_id("loop-health")
+    workers = srv.http.get("/api/service/status").json()["workers"]
+    (home,) = [w for w in workers if mid in w["machines"]]
+    expect(health).to_contain_text(f"loop {home['id']}")
+    os.kill(home["pid"], signal.SIGKILL)
+    banner = page.get_by_test_id("banner-notice")
+    expect(banner).to_contain_text("rebuilt from its stored parameters")
+    expect(banner).to_contain_text(home["id"])
+    expect(health).not_to_contain_text(f"loop {home['id']} ")  # paced by another worker now
+    expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    poll(lambda: srv.status(mid)["plc"]["drives_powered"], "powered again after the rebuild")
+    shot(page, "worker-lost-desktop")
+    banner.get_by_role("button", name="Dismiss").click()
+    expect(banner).to_have_count(0)

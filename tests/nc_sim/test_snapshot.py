@@ -1,0 +1,114 @@
+"""Machine.snapshot() in simulated time: values in engineering units against the parameters'
+physics and the geometry of a move; the event behind each active job error."""
+
+from __future__ import annotations
+
+import pickle
+
+import pytest
+
+from nc_sim.commands import (
+    EmergencyStop,
+    HliWrite,
+    JogStep,
+    PlcMode,
+    Refused,
+    Reset,
+    SpindleRun,
+)
+from nc_sim.errors import Code
+from nc_sim.snapshot import AxisSnapshot, LoopMode, MachineSnapshot
+from nc_sim.units import AxisKind
+from tests.nc_sim.sim_helpers import make, mdi, record
+
+
+def _axis(snap: MachineSnapshot, name: str) -> AxisSnapshot:
+    return next(a for a in snap.axes if a.name == name)
+
+
+def test_a_spindle_at_s1000_m3_reaches_its_speed_after_the_ramp_its_parameters_give() -> None:
+    """Demo S1 in M42 (getriebe[2]): a_beschl 3000 °/s² with 10 ms jerk ramps, so the command
+    rises at 500 rpm/s, v(t) = 3000·(t − 0.005 s) °/s once the jerk ramp is done. Speed reached
+    is ±10 % (vb_prozent 100) of 1000 rpm; kv 10/s gives a lag of v/kv = 6000/10 = 600°."""
+    sim, m, _ = make()
+    assert m.axis("S1").gear == 3
+    m.submit(SpindleRun("S1", 3, 1000.0))
+    record(sim, 1.7)
+    s1 = _axis(m.snapshot(), "S1")
+    assert s1.kind is AxisKind.SPINDLE and (s1.pos_unit, s1.vel_unit) == ("deg", "rpm")
+    assert s1.vel_cmd == pytest.approx(3000.0 * (1.7 - 0.005) / 6.0, abs=1.0)  # 847.5 rpm
+    assert s1.spindle is not None and not s1.spindle.speed_reached  # below 900 rpm
+    assert s1.spindle.speed_monitoring_invalid  # the speed is still changing
+    record(sim, 1.3)
+    snap = m.snapshot()
+    s1 = _axis(snap, "S1")
+    assert s1.spindle is not None
+    assert s1.state == "ENDLESS" and s1.loop is LoopMode.CLOSED
+    assert s1.vel_cmd == pytest.approx(1000.0)
+    assert s1.vel_act == pytest.approx(1000.0, rel=0.01)
+    assert s1.lag == pytest.approx(600.0, rel=0.01)
+    assert s1.spindle.speed_prog_rpm == pytest.approx(1000.0) and s1.spindle.gear == 3
+    assert s1.spindle.speed_reached and not s1.spindle.stopped
+    assert s1.spindle.speed_monitoring_active and not s1.spindle.speed_monitoring_invalid
+    assert s1.override_pct == pytest.approx(100.0)
+    assert (s1.target_pos, s1.distance_to_go) == (None, None)  # a speed motion has no target
+    assert snap.cycle == sim.cycle and snap.t_s == pytest.approx(sim.cycle * 0.001)
+    assert snap.recent_events[-1].code == Code.EV_SPEED_REACHED
+    assert snap.event_cursor == m.events.cursor
+    assert pickle.loads(pickle.dumps(snap)) == snap  # plain values: it crosses processes
+
+
+def test_a_moving_axis_reports_its_target_and_the_distance_to_go() -> None:
+    """G91 G01 X20 F600 from the start position: the target is 20 mm on, the distance to go is
+    target − commanded position and shrinks at the feed, 600 mm/min = 10 mm/s."""
+    sim, m, _ = make()
+    x0 = _axis(m.snapshot(), "X").pos_cmd
+    mdi(m, "G91 G01 X20 F600")
+    record(sim, 1.0)
+    a = _axis(m.snapshot(), "X")
+    assert (a.pos_unit, a.vel_unit, a.state) == ("mm", "mm/min", "MOVING")
+    assert a.target_pos is not None and a.target_pos == pytest.approx(x0 + 20.0)
+    assert a.distance_to_go == pytest.approx(a.target_pos - a.pos_cmd)
+    assert a.vel_cmd == pytest.approx(600.0)
+    record(sim, 0.5)
+    b = _axis(m.snapshot(), "X")
+    assert a.distance_to_go is not None and b.distance_to_go is not None
+    assert a.distance_to_go - b.distance_to_go == pytest.approx(5.0, abs=1e-6)  # 0.5 s × 10 mm/s
+    assert not b.in_position
+    record(sim, 2.0)
+    c = _axis(m.snapshot(), "X")
+    assert c.state == "STANDSTILL" and c.in_position
+    assert c.target_pos == pytest.approx(x0 + 20.0) and c.distance_to_go == pytest.approx(0.0)
+    assert c.pos_act == pytest.approx(x0 + 20.0, abs=1e-3)
+
+
+def test_active_job_errors_carry_the_event_that_set_them_once_each() -> None:
+    sim, m, _ = make()
+    m.submit(HliWrite("DriveOn", 0, "X"))
+    refused = m.submit(JogStep("X", 1.0))
+    snap = m.snapshot()
+    (err,) = snap.job_errors
+    assert err == m.events[-1] and err.code == Code.NO_ENABLES and err.axis == "X"
+    assert _axis(snap, "X").job_error == Code.NO_ENABLES and _axis(snap, "X").enabled is False
+    assert "DriveOn" in _axis(snap, "X").missing_enables
+    assert isinstance(refused, Refused) and refused.error == err  # the refusal's error
+    m.submit(EmergencyStop())
+    record(sim, 0.5)
+    snap = m.snapshot()
+    stop = next(e for e in m.events if e.code == Code.EMERGENCY_STOP)
+    # one E-stop for every axis is one error; X's older error was replaced by it
+    assert snap.job_errors == (stop,) and snap.emergency_stop
+    assert {a.job_error for a in snap.axes} == {Code.EMERGENCY_STOP}
+    assert all(a.loop is LoopMode.OPEN for a in snap.axes)  # enables taken (stop category 1)
+    m.submit(Reset())
+    assert m.snapshot().job_errors == ()
+
+
+def test_the_plc_snapshot_shows_a_pending_m_function_in_manual_mode() -> None:
+    _, m, _ = make()
+    m.submit(PlcMode("manual"))
+    mdi(m, "M8")
+    snap = m.snapshot()
+    assert snap.plc.mode.value == "manual" and snap.plc.drives_powered
+    assert [(p.m, p.axis) for p in snap.plc.pending] == [(8, "")]
+    assert snap.queued_blocks == 1  # the block waits for the acknowledgement
