@@ -28,6 +28,7 @@ from backend.workers.protocol import (
     ReadStatus,
     ScopeAct,
     ScopeArm,
+    StatusRead,
     Step,
     Submit,
     Submitted,
@@ -90,6 +91,12 @@ def step(m: MachineProxy, cycles: int) -> Pacing:
     return pacing
 
 
+def read_status(m: MachineProxy) -> StatusRead:
+    status = m.call(ReadStatus(m.id))
+    assert isinstance(status, StatusRead)
+    return status
+
+
 def test_commands_are_accepted_refused_or_invalid(m: MachineProxy) -> None:
     block = "G01 X10 F500 &"
     bad = submit(m, Mdi(block)).outcome
@@ -110,7 +117,7 @@ def test_a_step_moves_the_cycle_exactly_and_its_samples_reach_the_gateway(
     x0 = float(m.samples([pos], start, start, 1)[0][0, 0])
     submit(m, Move("X", x0 + 50.0, rapid=False, feed_mm_min=600.0))
     assert step(m, 700).cycle == start + 700
-    assert m.call(ReadStatus(m.id)).simulation.cycle == start + 700  # type: ignore[attr-defined]
+    assert read_status(m).pacing.cycle == start + 700
     assert m.cycle == start + 700  # the gateway's ring holds every stepped cycle
     data, first = m.samples([pos], start + 1, start + 700, 1)
     assert first == start + 1 and data.shape == (1, 700)
@@ -168,7 +175,6 @@ def test_a_dead_worker_is_detected_and_its_machines_rebuilt_on_another(
         ray.kill(dead.actor)  # type: ignore[attr-defined]
     wait_until(lambda: m.worker is not dead and m.epoch == epoch + 1, 30)
     assert not dead.alive and service.rebuilt > rebuilt
-    status = m.call(ReadStatus(m.id))
-    assert status.id == m.id  # type: ignore[attr-defined]
+    assert read_status(m).pacing.mode == "run"  # the rebuilt machine answers, running
     wait_until(lambda: m.cycle > 0)  # its samples flow from the new worker
     wait_until(lambda: len(service.pool.alive()) == 2, 60)  # a replacement took its place
