@@ -218,7 +218,10 @@ class MachineService:
         self.store = store
         self.pool = pool
         self._proxies: dict[str, MachineProxy] = {}
-        self._building: dict[str, MachineProxy] = {}  # new machines until their first build
+        # machines being built and where: their pushes may come before the reply, and they
+        # count as load, so machines created at once spread over the workers
+        self._building: dict[str, tuple[MachineProxy, WorkerClient]] = {}
+        self._placing = threading.Lock()
         self._lock = threading.Lock()
         self.rebuilt = 0  # machines rebuilt after their worker died
         self.listeners: list[Callable[[MachineProxy], None]] = []  # told after a rebuild
@@ -236,6 +239,11 @@ class MachineService:
     def on_machine(self, worker: WorkerClient) -> list[MachineProxy]:
         return [p for p in self.proxies() if p.worker is worker]
 
+    def _load(self, worker: WorkerClient) -> set[str]:
+        """The machines a worker runs or is building."""
+        building = {mid for mid, (_p, w) in self._building.items() if w is worker}
+        return {p.id for p in self.on_machine(worker)} | building
+
     def _config(self, sm: StoredMachine) -> MachineConfig:
         if sm.source == "demo":
             cfg = demo_machine()
@@ -246,13 +254,15 @@ class MachineService:
 
     def _place(self, proxy: MachineProxy, worker: WorkerClient | None = None) -> None:
         """Build the machine on a worker (the least loaded live one unless given)."""
-        worker = worker or self.pool.choose(self.on_machine)
+        with self._placing:
+            worker = worker or self.pool.choose(self._load)
+            self._building[proxy.id] = (proxy, worker)
         epoch = proxy.epoch + 1
-        self._building.setdefault(proxy.id, proxy)  # its pushes may come before the reply
         try:
             info = worker.call(AddMachine(proxy.id, proxy.name, proxy.cfg, epoch))
         finally:
-            self._building.pop(proxy.id, None)
+            with self._placing:
+                self._building.pop(proxy.id, None)
         assert isinstance(info, MachineInfo)
         proxy.attach(worker, info)
         if proxy.watchers:
@@ -335,7 +345,8 @@ class MachineService:
     # --- worker events ----------------------------------------------------------------------
     def on_push(self, worker: WorkerClient, push: Push) -> None:
         if isinstance(push, MachineNews | MachineSamples):
-            proxy = self._proxies.get(push.mid) or self._building.get(push.mid)
+            building = self._building.get(push.mid)
+            proxy = self._proxies.get(push.mid) or (building[0] if building else None)
             if proxy is not None and (proxy.worker is worker or push.epoch > proxy.epoch):
                 proxy.take(push)
         elif isinstance(push, WorkerNews):

@@ -11,12 +11,15 @@ from __future__ import annotations
 import itertools
 import os
 import signal
+from collections import Counter
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from api.machines import MachineCreate
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.store import Store
 from backend.workers.client import WorkerClient, WorkerRefused
@@ -36,7 +39,7 @@ from backend.workers.protocol import (
 from nc_sim.commands import Accepted, Command, EmergencyStop, HliWrite, Invalid, Mdi, Move, Refused
 from nc_sim.errors import Code
 from nc_sim.scope import LevelTrigger, ScopeMode, ScopeSetup
-from tests.backend.inprocess import INSTRUCTOR, paused_demo, wait_until
+from tests.backend.inprocess import INSTRUCTOR, machine_service, paused_demo, wait_until
 
 PERIOD_S = 0.002
 _serial = itertools.count(1)
@@ -178,3 +181,17 @@ def test_a_dead_worker_is_detected_and_its_machines_rebuilt_on_another(
     assert read_status(m).pacing.mode == "run"  # the rebuilt machine answers, running
     wait_until(lambda: m.cycle > 0)  # its samples flow from the new worker
     wait_until(lambda: len(service.pool.alive()) == 2, 60)  # a replacement took its place
+
+
+def test_machines_created_at_once_spread_over_the_workers(tmp_path: Path) -> None:
+    """A machine being built counts as its worker's load: four created at the same time on
+    two workers land two and two (before, each saw both workers empty)."""
+    with machine_service(tmp_path, workers=2) as service, ThreadPoolExecutor(4) as ex:
+        made = list(
+            ex.map(
+                lambda k: service.create(INSTRUCTOR, MachineCreate(id=f"s{k}", demo=True)),
+                range(4),
+            )
+        )
+        per_worker = Counter(id(m.worker) for m in made)
+        assert sorted(per_worker.values()) == [2, 2]
