@@ -9,6 +9,7 @@ told, and a replacement worker is started; machines on other workers never notic
 from __future__ import annotations
 
 import contextlib
+import itertools
 import logging
 import threading
 import time
@@ -109,6 +110,11 @@ class MachineProxy:
         self.pacing: Pacing | None = None
         self._news = threading.Lock()
         self.events: EventLog[Event] = EventLog()
+        self._serials = itertools.count(1)  # commands to this machine, numbered
+
+    def next_serial(self) -> int:
+        """The number of the next command to this machine."""
+        return next(self._serials)
 
     # --- where it runs --------------------------------------------------------------------
     def attach(self, worker: WorkerClient | None, info: MachineInfo) -> None:

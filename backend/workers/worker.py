@@ -26,6 +26,7 @@ from backend.workers.host import MachineHost
 from backend.workers.protocol import (
     AddMachine,
     ApplyValues,
+    Envelope,
     Failure,
     LoopFigures,
     MachineNews,
@@ -71,7 +72,7 @@ class Channel(Protocol):
     def ready(self) -> bool:
         """A request is there (without blocking)."""
 
-    def take(self) -> list[tuple[int, Request]]:
+    def take(self) -> list[Envelope]:
         """Every request there now, oldest first."""
 
     def send(self, push: Push) -> None: ...
@@ -210,9 +211,9 @@ class Worker:
         batch.sort(
             key=lambda r: not (isinstance(r[1], Submit) and isinstance(r[1].cmd, EmergencyStop))
         )
-        for req, request in batch:
+        for req, request, sent_mono in batch:
             try:
-                value = self.handle(req, request)
+                value = self.handle(req, request, sent_mono)
             except (NcUsageError, ValueError) as e:
                 value = Failure("invalid", str(e))
             except Exception as e:  # a bug must not take the loop and the other machines
@@ -227,14 +228,15 @@ class Worker:
             raise _NotHere(mid)
         return host
 
-    def handle(self, req: int, request: Request) -> object:
-        """Carry out one request; returns the reply value (or _DEFERRED for a step)."""
+    def handle(self, req: int, request: Request, sent_mono: float = 0.0) -> object:
+        """Carry out one request sent at `sent_mono`; returns the reply value (or _DEFERRED
+        for a step)."""
         try:
-            return self._handle(req, request)
+            return self._handle(req, request, sent_mono)
         except _NotHere as e:
             return Failure("not_found", f"machine '{e.args[0]}'")
 
-    def _handle(self, req: int, r: Request) -> object:
+    def _handle(self, req: int, r: Request, sent_mono: float) -> object:
         match r:
             case AddMachine():
                 old = self.hosts.pop(r.mid, None)
@@ -252,7 +254,7 @@ class Worker:
                     gone.close()
                 return None
             case Submit():
-                return self._submit(self._host(r.mid), r)
+                return self._submit(self._host(r.mid), r, sent_mono)
             case Pace():
                 host = self._host(r.mid)
                 host.set_mode(r.mode, r.until_cycle)
@@ -293,9 +295,9 @@ class Worker:
                 return Samples(first, host.ring.rows[idx])
         raise NcUsageError(f"unknown request {r!r}")
 
-    def _submit(self, host: MachineHost, r: Submit) -> Submitted:
+    def _submit(self, host: MachineHost, r: Submit, sent_mono: float) -> Submitted:
         outcome = host.machine.submit(r.cmd)
-        latency_s = time.monotonic() - r.sent_mono if r.sent_mono else 0.0
+        latency_s = time.monotonic() - sent_mono if sent_mono else 0.0
         if isinstance(outcome, Accepted):
             if isinstance(r.cmd, JogStart | JogStop) and (
                 r.jog_hold_s is not None or r.jog_release
