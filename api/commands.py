@@ -174,6 +174,10 @@ class CommandResult(BaseModel):
     """The acknowledgement of an accepted command."""
 
     accepted: bool = True
+    serial: int = Field(
+        description="the machine's number of this command (counting from 1 per service run), "
+        "as its outcome records it"
+    )
     cycle: int = Field(description="cycle at which the command took effect")
     block_id: int | None = Field(None, description="MDI block number")
     acknowledged: int | None = Field(None, description="M functions acknowledged (plc_ack)")

@@ -55,6 +55,9 @@ class Refusal(BaseModel):
     code: int | None = Field(None, description="job error number when the NC refused it")
     column: int | None = Field(None, description="1-based column of a bad NC block")
     error: JobErrorModel | None = None
+    serial: int | None = Field(
+        None, description="the machine's number of the refused command (commands only)"
+    )
     problems: list[ParameterProblem] = Field(
         default_factory=list, description="rejected parameter values (nothing was applied)"
     )

@@ -9,7 +9,7 @@ the column of a bad NC block.
 
 from __future__ import annotations
 
-import time
+from dataclasses import replace
 
 from api.auth import Action
 from api.commands import (
@@ -101,7 +101,8 @@ def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
     """Authorize and carry out one command on the machine's worker; raises ApiError with the
     refusal."""
     authorize(actor, Action.COMMAND, m.id)
-    nc_cmd = to_nc(cmd)
+    serial = m.next_serial()
+    nc_cmd = replace(to_nc(cmd), serial=serial)
     jog_hold_s, jog_release = None, False
     if isinstance(cmd, JogCommand) and cmd.action != "step":  # the dead-man lease of a jog
         jog_hold_s = cmd.hold_s if cmd.action == "start" else None
@@ -112,7 +113,6 @@ def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
             Submit(
                 m.id,
                 nc_cmd,
-                sent_mono=time.monotonic(),
                 jog_hold_s=jog_hold_s,
                 jog_release=jog_release,
                 then_apply=reset_values,
@@ -121,14 +121,16 @@ def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
         assert isinstance(done, Submitted)
         match done.outcome:
             case Invalid() as bad:
-                raise _refuse(422, bad.message, code=bad.code, column=bad.column)
+                raise _refuse(422, bad.message, code=bad.code, column=bad.column, serial=serial)
             case Refused() as refused:
                 e = refused.error
-                raise _refuse(409, e.message, code=e.code, error=job_error_model(e).model_dump())
+                model = job_error_model(e).model_dump()
+                raise _refuse(409, e.message, code=e.code, error=model, serial=serial)
             case Accepted() as ok:
                 if reset_values:
                     take_pending(m, {"reset"})
         return CommandResult(
+            serial=serial,
             cycle=done.cycle,
             block_id=ok.block_id,
             acknowledged=ok.acknowledged,

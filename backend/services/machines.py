@@ -9,6 +9,7 @@ told, and a replacement worker is started; machines on other workers never notic
 from __future__ import annotations
 
 import contextlib
+import itertools
 import logging
 import threading
 import time
@@ -110,6 +111,11 @@ class MachineProxy:
         self.events: EventLog[Event] = EventLog()
         # pushes of a newer build that came before its AddMachine reply was taken in
         self._early: deque[MachineNews | MachineSamples] = deque(maxlen=EARLY_PUSHES)
+        self._serials = itertools.count(1)  # commands to this machine, numbered
+
+    def next_serial(self) -> int:
+        """The number of the next command to this machine."""
+        return next(self._serials)
 
     # --- where it runs --------------------------------------------------------------------
     def attach(self, worker: WorkerClient | None, info: MachineInfo) -> None:
@@ -260,13 +266,19 @@ class MachineService:
         epoch = proxy.epoch + 1
         try:
             info = worker.call(AddMachine(proxy.id, proxy.name, proxy.cfg, epoch))
-        finally:
-            with self._placing:
-                self._building.pop(proxy.id, None)
+        except BaseException:
+            self._built(proxy.id)
+            raise
         assert isinstance(info, MachineInfo)
         proxy.attach(worker, info)
+        if proxy.id in self._proxies:  # a new machine counts as building until it is listed
+            self._built(proxy.id)
         if proxy.watchers:
             worker.post(Watch(proxy.id, True))
+
+    def _built(self, mid: str) -> None:
+        with self._placing:
+            self._building.pop(mid, None)
 
     def load(self, create_demo: bool) -> None:
         """Bring back every stored machine; a fresh store gets the demo lathe."""
@@ -279,6 +291,7 @@ class MachineService:
             proxy = MachineProxy(sm, self._config(sm))
             self._place(proxy)
             self._proxies[sm.id] = proxy
+            self._built(sm.id)
 
     def create(self, actor: Actor, req: MachineCreate) -> MachineProxy:
         authorize(actor, Action.ADMINISTER)
@@ -314,6 +327,7 @@ class MachineService:
         self.store.add_machine(sm)
         with self._lock:
             self._proxies[sm.id] = proxy
+        self._built(sm.id)
         return proxy
 
     def restart(self, actor: Actor, mid: str) -> MachineProxy:

@@ -59,6 +59,7 @@ class MachineHost:
         self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
         self.pacing = PacingState(anchor_mono=time.monotonic())
         self.watched = False
+        self.status_due = 0.0  # monotonic time of the next status push while watched
         self.pushed_events = self.machine.events.cursor  # events up to here went out
 
     def info(self) -> MachineInfo:

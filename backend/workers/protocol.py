@@ -51,7 +51,6 @@ class Submit:
 
     mid: str
     cmd: nc.Command
-    sent_mono: float = 0.0  # time.monotonic() when the gateway sent it (one clock per host)
     jog_hold_s: float | None = None
     jog_release: bool = False
     then_apply: Values = field(default_factory=list)
@@ -130,6 +129,11 @@ Request = (
 )
 
 
+# A request on its way: (request id, request, time.monotonic() when the gateway sent it; one
+# clock for every process of a host, so a worker can tell how long a command took to act)
+Envelope = tuple[int, Request, float]
+
+
 # --- replies ------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Pacing:
@@ -162,7 +166,7 @@ class Submitted:
     outcome: Outcome
     cycle: int  # the cycle the command took effect in
     state: dict[str, str]  # each axis' state after the command
-    latency_s: float  # from `sent_mono` until the kernel took the command
+    latency_s: float  # from the gateway sending it until the kernel took it
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ import importlib.util
 import logging
 import signal
 import threading
+import time
 from collections import deque
 from typing import Any
 
@@ -144,7 +145,9 @@ class WorkerActor:
 
     @ray.method(concurrency_group="requests")
     def put(self, req: int, request: Request) -> None:
-        self.core.channel.put(req, request)
+        """A request for the loop; its latency counts from here: the gateway's monotonic
+        clock means nothing on another host."""
+        self.core.channel.put(req, request, time.monotonic())
 
     @ray.method(concurrency_group="poll")
     def poll(self, wait_s: float) -> list[Push]:

@@ -8,12 +8,13 @@ out on the caller's thread.
 from __future__ import annotations
 
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
 from backend.workers.client import WorkerClient
-from backend.workers.protocol import Push, Request
+from backend.workers.protocol import Envelope, Push, Request
 from backend.workers.worker import Worker
 
 
@@ -23,12 +24,12 @@ class QueueChannel:
     def __init__(self, deliver: Callable[[Push], None]) -> None:
         self.deliver = deliver
         self.closed = False
-        self._inbox: deque[tuple[int, Request]] = deque()
+        self._inbox: deque[Envelope] = deque()
         self._ready = threading.Condition()
 
-    def put(self, req: int, request: Request) -> None:
+    def put(self, req: int, request: Request, sent_mono: float) -> None:
         with self._ready:
-            self._inbox.append((req, request))
+            self._inbox.append((req, request, sent_mono))
             self._ready.notify()
 
     def close(self) -> None:
@@ -43,7 +44,7 @@ class QueueChannel:
     def ready(self) -> bool:
         return bool(self._inbox)
 
-    def take(self) -> list[tuple[int, Request]]:
+    def take(self) -> list[Envelope]:
         with self._ready:
             out = list(self._inbox)
             self._inbox.clear()
@@ -97,7 +98,7 @@ class InProcessWorker(WorkerClient):
     def _send(self, req: int, request: Request) -> None:
         if not self.core.thread.is_alive():
             raise RuntimeError("the worker thread ended")
-        self.core.channel.put(req, request)
+        self.core.channel.put(req, request, time.monotonic())
 
     def stop(self) -> None:
         self._on_death = lambda _c: None

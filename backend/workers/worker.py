@@ -14,6 +14,7 @@ a Ray actor) brings requests and takes replies and pushes.
 from __future__ import annotations
 
 import logging
+import math
 import os
 import time
 from collections import deque
@@ -26,6 +27,7 @@ from backend.workers.host import MachineHost
 from backend.workers.protocol import (
     AddMachine,
     ApplyValues,
+    Envelope,
     Failure,
     LoopFigures,
     MachineNews,
@@ -55,6 +57,8 @@ log = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 0.05  # watched machines' status: 20 per second, like a display refresh
 NEWS_PERIOD_S = 1.0  # loop figures and every machine's pacing
+MAX_PERIOD_S = 0.01  # the longest loop period (telemetry waits at most this for samples)
+MACHINES_PER_PERIOD = 16  # machines per base period before the period grows
 
 
 class Channel(Protocol):
@@ -68,7 +72,7 @@ class Channel(Protocol):
     def ready(self) -> bool:
         """A request is there (without blocking)."""
 
-    def take(self) -> list[tuple[int, Request]]:
+    def take(self) -> list[Envelope]:
         """Every request there now, oldest first."""
 
     def send(self, push: Push) -> None: ...
@@ -86,8 +90,8 @@ class Worker:
         fast_share: float = 0.4,
     ) -> None:
         self.channel = channel
-        self.period_s = period_s
-        self.fast_budget_s = period_s * fast_share  # for machines running "as fast as possible"
+        self.base_period_s = period_s
+        self.fast_share = fast_share  # of a period, for machines running "as fast as possible"
         self.ring_dir = ring_dir
         self.node = node
         self.hosts: dict[str, MachineHost] = {}
@@ -104,33 +108,39 @@ class Worker:
 
     # --- the loop ---------------------------------------------------------------------------
     def run(self) -> None:
-        """Pace until stopped (a `RemoveMachine` of everything does not stop it; `stop` does)."""
-        t0 = time.monotonic()
-        i = 0
-        status_every = max(1, round(STATUS_PERIOD_S / self.period_s))
-        news_every = max(1, round(NEWS_PERIOD_S / self.period_s))
+        """Pace until stopped (the gateway closing the channel stops it too)."""
+        deadline = time.monotonic()
+        next_news = deadline + NEWS_PERIOD_S
         while not (self.stopped or self.channel.closed):
-            deadline = t0 + i * self.period_s
+            period = self.period()
+            deadline += period
             while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
                 if self.channel.wait(remaining):
                     self.serve()
             wake = time.monotonic()
-            for k, host in enumerate(list(self.hosts.values())):
-                self._tick(host, deadline)
+            for host in list(self.hosts.values()):
+                self._tick(host, deadline, period)
                 if self.channel.ready():
                     self.serve()
-                self._push_news(host, (i + k) % status_every == 0)
+                self._push_news(host, wake)
             self._finish_steps()
             done = time.monotonic()
-            i += 1
-            self._account(deadline, wake, done, t0 + i * self.period_s)
-            if done > t0 + i * self.period_s:
-                skip = int((done - (t0 + i * self.period_s)) / self.period_s)
+            self._account(deadline, wake, done, deadline + period)
+            if done > deadline + period:  # skip the deadlines already passed
+                skip = int((done - deadline) / period)
                 self.missed += skip
-                i += skip
-            if self.news_due or self.ticks % news_every == 0:
+                deadline += skip * period
+            if self.news_due or done >= next_news:
                 self.news_due = False
+                next_news = done + NEWS_PERIOD_S
                 self.channel.send(self.news())
+
+    def period(self) -> float:
+        """The loop period for the machines held now: the configured one for a few
+        machines, longer for a class of them (each tick then steps more cycles per machine,
+        which costs less per cycle), at most MAX_PERIOD_S. Commands never wait for a tick."""
+        n = max(1, math.ceil(len(self.hosts) / MACHINES_PER_PERIOD))
+        return min(MAX_PERIOD_S, max(self.base_period_s, self.base_period_s * n))
 
     def stop(self) -> None:
         self.stopped = True
@@ -143,22 +153,26 @@ class Worker:
             self.overruns += 1
             self.recent.append((time.time(), (wake - deadline) * 1e3, (done - wake) * 1e3))
 
-    def _tick(self, host: MachineHost, deadline: float) -> None:
+    def _tick(self, host: MachineHost, deadline: float, period: float) -> None:
         try:
-            host.tick(deadline, self.fast_budget_s)
+            host.tick(deadline, period * self.fast_share)
         except Exception:
             self.host_failures += 1
             log.exception("machine %s failed in the real-time loop; pausing it", host.id)
             host.set_mode("pause")
 
-    def _push_news(self, host: MachineHost, status_due: bool) -> None:
+    def _push_news(self, host: MachineHost, now: float) -> None:
         events = host.machine.events
         fresh = events.cursor != host.pushed_events
-        if not (fresh or host.captures or (status_due and host.watched)):
+        status_due = host.watched and now >= host.status_due
+        if not (fresh or host.captures or status_due):
             return
         read = events.since(host.pushed_events)
         host.pushed_events = read.cursor
-        status = host.status_read() if host.watched and status_due else None
+        status = None
+        if status_due:
+            status = host.status_read()
+            host.status_due = max(host.status_due + STATUS_PERIOD_S, now)
         caps, host.captures = host.captures, []
         self.channel.send(
             MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps)
@@ -184,7 +198,7 @@ class Worker:
         work = np.array(self.work_s) * 1e3 if self.work_s else np.zeros(1)
         late = np.array(self.late_s) * 1e3 if self.late_s else np.zeros(1)
         loop = LoopFigures(
-            self.period_s,
+            self.period(),
             self.ticks,
             self.overruns,
             self.missed,
@@ -207,9 +221,9 @@ class Worker:
         batch.sort(
             key=lambda r: not (isinstance(r[1], Submit) and isinstance(r[1].cmd, EmergencyStop))
         )
-        for req, request in batch:
+        for req, request, sent_mono in batch:
             try:
-                value = self.handle(req, request)
+                value = self.handle(req, request, sent_mono)
             except (NcUsageError, ValueError) as e:
                 value = Failure("invalid", str(e))
             except Exception as e:  # a bug must not take the loop and the other machines
@@ -224,14 +238,15 @@ class Worker:
             raise _NotHere(mid)
         return host
 
-    def handle(self, req: int, request: Request) -> object:
-        """Carry out one request; returns the reply value (or _DEFERRED for a step)."""
+    def handle(self, req: int, request: Request, sent_mono: float = 0.0) -> object:
+        """Carry out one request sent at `sent_mono`; returns the reply value (or _DEFERRED
+        for a step)."""
         try:
-            return self._handle(req, request)
+            return self._handle(req, request, sent_mono)
         except _NotHere as e:
             return Failure("not_found", f"machine '{e.args[0]}'")
 
-    def _handle(self, req: int, r: Request) -> object:
+    def _handle(self, req: int, r: Request, sent_mono: float) -> object:
         match r:
             case AddMachine():
                 old = self.hosts.pop(r.mid, None)
@@ -249,7 +264,7 @@ class Worker:
                     gone.close()
                 return None
             case Submit():
-                return self._submit(self._host(r.mid), r)
+                return self._submit(self._host(r.mid), r, sent_mono)
             case Pace():
                 host = self._host(r.mid)
                 host.set_mode(r.mode, r.until_cycle)
@@ -266,7 +281,8 @@ class Worker:
             case ReadStatus():
                 return self._host(r.mid).status_read()
             case Watch():
-                self._host(r.mid).watched = r.on
+                host = self._host(r.mid)
+                host.watched, host.status_due = r.on, time.monotonic()  # the first one now
                 return None
             case ScopeArm():
                 host = self._host(r.mid)
@@ -284,9 +300,9 @@ class Worker:
                 return _roll(self._host(r.mid), r.max_points)
         raise NcUsageError(f"unknown request {r!r}")
 
-    def _submit(self, host: MachineHost, r: Submit) -> Submitted:
+    def _submit(self, host: MachineHost, r: Submit, sent_mono: float) -> Submitted:
         outcome = host.machine.submit(r.cmd)
-        latency_s = time.monotonic() - r.sent_mono if r.sent_mono else 0.0
+        latency_s = time.monotonic() - sent_mono if sent_mono else 0.0
         if isinstance(outcome, Accepted):
             if isinstance(r.cmd, JogStart | JogStop) and (
                 r.jog_hold_s is not None or r.jog_release

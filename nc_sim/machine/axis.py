@@ -105,6 +105,10 @@ class Axis:
         }
     )
 
+    # the enables the drive type needs [004 §4.1], read from the list by push_params (the
+    # cycle boundary and every status ask them)
+    required_enables: tuple[str, ...] = ("TorquePermission",)
+
     @property
     def name(self) -> str:
         return self.cfg.name
@@ -122,10 +126,6 @@ class Axis:
     def pos_unit(self) -> str:
         """Unit of the axis' positions in messages: mm (linear) or ° (rotary, spindle)."""
         return eng_unit(Quantity.POSITION, self.kind)
-
-    @property
-    def required_enables(self) -> tuple[str, ...]:
-        return ENABLES_BY_DRIVE.get(int(self.cfg.raw("kenngr.antr_typ")), ("TorquePermission",))
 
     def enables_ok(self) -> bool:
         return all(self.units[u] for u in self.required_enables)
@@ -188,6 +188,7 @@ def push_params(k: Kernel, ax: Axis) -> None:
     """Write the axis' active gear record and loop parameters into the kernel row."""
     c, g, s = ax.cfg, ax.gear, ax.slot
     pr = k.pr
+    ax.required_enables = ENABLES_BY_DRIVE.get(int(c.raw("kenngr.antr_typ")), ("TorquePermission",))
     spindle = ax.kind is AxisKind.SPINDLE
     pr[s, L.P_KV] = c.eng("getriebe.kv", g)
     pr[s, L.P_FF] = ax.ff_weight if spindle else c.eng("lr_param.ff_weight")

@@ -62,6 +62,14 @@ class DriveStatus:
             and self.cycle - self.drive_on_since >= self.power_up_cycles
         )
 
+    def ready(self) -> tuple[bool, bool]:
+        """The reported signals as (ready for power on, ready for the control loop), an
+        unreported one always true: what `missing` tells, cheap to compare each cycle."""
+        return (
+            self.ready_for_power_on or READY_FOR_POWER_ON not in self.signals,
+            self.ready_for_control_loop_on or READY_FOR_CONTROL_LOOP_ON not in self.signals,
+        )
+
     def reported(self) -> dict[str, bool]:
         """The status signals this drive type supplies, as the HLI shows them."""
         values = {

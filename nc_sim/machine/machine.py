@@ -119,6 +119,8 @@ class Machine:
         self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
         self.events: EventLog[Event] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
+        # read once here and in refresh_params: the cycle boundary runs every few cycles
+        self._ack_timeout = self._cycles(cfg.channel_eng("plc.m_ack_timeout"))
         self._queue: deque[_BlockRun] = deque()
         self._next_id = 1
         self.outcomes: EventLog[Outcome] = EventLog(OUTCOME_LOG_LEN)  # answers to submit
@@ -200,8 +202,7 @@ class Machine:
         due = self.plc.next_due()
         if due is not None:
             times.append(due)
-        timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
-        times += [c + timeout for c in self._m_out]
+        times += [c + self._ack_timeout for c in self._m_out]
         times += [ax.deadline for ax in self.axes if ax.deadline is not None]
         if self.estop and any(ax.enables_ok() for ax in self.axes):
             times.append(self.cycle + 1)  # watch the braking axes settle (_estop_settled)
@@ -210,6 +211,7 @@ class Machine:
     def refresh_params(self) -> None:
         """Re-read the configuration after a parameter change (values that apply now)."""
         self.plc.delay_cycles = self._cycles(self.cfg.channel_eng("plc.m_ack_delay"))
+        self._ack_timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
         for ax in self.axes:
             push_params(self.k, ax)
 
@@ -938,7 +940,7 @@ class Machine:
         self._drive_status()
         for p in self.plc.due(cycle):
             self._m_acked(p.m, p.out_cycle)
-        timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
+        timeout = self._ack_timeout
         for out, bid in list(self._m_out.items()):
             if cycle - out >= timeout:
                 del self._m_out[out]
@@ -970,9 +972,9 @@ class Machine:
         a drive is ready for power on, TorquePermission and ReleaseFeedhold once it is ready
         for the control loop (drives that report no status at the PLC's start)."""
         for ax in self.axes:
-            before = ax.drive.missing()
+            before = ax.drive.ready()
             ax.drive.update(self.cycle, bool(ax.units["DriveOn"]))
-            if ax.drive.missing() != before:
+            if ax.drive.ready() != before:
                 self._enables_changed(ax)
         if self._powered or self.estop or self.cycle < self.plc.power_on_cycle:
             return  # (no start-up during an E-stop: the reset resumes it)

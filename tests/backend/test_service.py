@@ -377,3 +377,16 @@ def test_openapi_lists_the_contract(srv: Server) -> None:
         spec["components"]["schemas"]
     )
     assert srv.http.get("/docs").status_code == 200
+
+
+def test_every_command_gets_the_machine_s_next_serial(srv: Server, mid: str) -> None:
+    """Accepted, refused and invalid commands are numbered in the order they reached the
+    machine, so a client can match an answer to its command."""
+    first = srv.command(mid, {"type": "mdi", "block": "M3 S500"})
+    invalid = srv.command(mid, {"type": "mdi", "block": "G1 X"})
+    srv.command(mid, {"type": "emergency_stop"})
+    refused = srv.command(mid, {"type": "mdi", "block": "M3 S500"})  # in E-stop: 90015
+    assert (first.status_code, invalid.status_code, refused.status_code) == (200, 422, 409)
+    n = first.json()["serial"]
+    assert invalid.json()["detail"]["serial"] == n + 1
+    assert refused.json()["detail"]["serial"] == n + 3

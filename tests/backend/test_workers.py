@@ -162,5 +162,5 @@ def test_an_emergency_stop_takes_effect_within_2_ms_under_a_flood(srv: Server, m
         flooding.set()
         thread.join(timeout=10)
     assert sent[0] > 300  # the flood ran throughout
-    assert max(latencies) <= ESTOP_WITHIN_MS, latencies
+    assert max(latencies) <= ESTOP_WITHIN_MS, sorted(latencies)[-5:]
     assert min(latencies) > 0.0  # measured, not a default
