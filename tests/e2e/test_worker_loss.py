@@ -1,6 +1,6 @@
 """The HMI when the machine's worker dies: a banner tells the viewer the machine was rebuilt
-from its stored parameters, the top bar names the worker whose loop paces it now, and the
-machine answers again."""
+from its stored parameters, the event log starts again with that notice, the top bar names
+the worker whose loop paces it now, and the machine answers again."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import signal
 from playwright.sync_api import Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import poll, shot
+from tests.e2e.browser import panel, poll, shot
 
 
 def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
@@ -30,3 +30,7 @@ def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
     shot(page, "worker-lost-desktop")
     banner.get_by_role("button", name="Dismiss").click()
     expect(banner).to_have_count(0)
+    # the event log starts again with the machine's new life, the rebuild its oldest entry
+    page.get_by_test_id("tab-Events").click()
+    rows = panel(page, "events").locator("tbody tr")
+    expect(rows.last).to_contain_text("rebuilt from its stored parameters")

@@ -11,6 +11,15 @@ export const acknowledged = signal("");
 
 export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 
+/** The machine was rebuilt (its worker died): its time and log start again, so the log
+ * starts again too, with the notice as its first entry. */
+export function restartLog(message: string): void {
+  events.value = [];
+  seen.clear();
+  acknowledged.value = "";
+  addEvents([{ cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null }]);
+}
+
 export function addEvents(list: JobError[]): void {
   const fresh = list.filter((e) => !seen.has(keyOf(e)));
   if (!fresh.length) return;

@@ -13,7 +13,7 @@ import type {
   StatusMessage,
   Subscribed,
 } from "../api/types";
-import { addEvents } from "./events";
+import { addEvents, restartLog } from "./events";
 import { Rings } from "./rings";
 import { machineId, notice, socket, statusArrived } from "./session";
 
@@ -100,6 +100,7 @@ function onMessage(text: string): void {
       statusArrived(msg.status);
       break;
     case "notice":
+      if (notice.value?.seq !== msg.seq) restartLog(msg.message); // once per rebuild
       notice.value = msg;
       break;
     case "error":
