@@ -25,8 +25,10 @@ def main(argv: list[str] | None = None) -> int:
     p_srv.add_argument("--workers", type=int, help="worker processes (default: one per core)")
     p_srv.add_argument(
         "--cluster",
-        help="Ray cluster: the head's HOST:PORT (gateway on a cluster node) or ray://HOST:PORT "
-        "(Ray Client, needs ray[client]); workers become Ray actors spread over the nodes",
+        help="Ray cluster: the head's GCS address HOST:PORT when the gateway runs on a cluster "
+        "node, or ray://HOST:PORT (Ray Client, the head's port 10001 by default) from anywhere "
+        "else, shipping the gateway's code to the actors; workers become Ray actors spread "
+        "over the nodes",
     )
     p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))

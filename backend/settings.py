@@ -21,8 +21,9 @@ class Settings(BaseSettings):
     workers: int = Field(0, ge=0, le=256, description="worker processes (0: one per core)")
     cluster: str | None = Field(
         None,
-        description="Ray cluster: the head's HOST:PORT or ray://HOST:PORT (Ray Client): "
-        "workers become Ray actors spread over the nodes",
+        description="Ray cluster: the head's GCS address HOST:PORT (the gateway on a cluster "
+        "node) or ray://HOST:PORT (Ray Client from anywhere else; the gateway's code is shipped "
+        "to the actors): workers become Ray actors spread over the nodes",
     )
     frame_s: float = Field(0.02, gt=0, le=1, description="telemetry frame period")
     max_frame_samples: int = Field(1000, ge=10, description="decimate beyond this per frame")

@@ -11,7 +11,7 @@ import pytest
 from tests.backend.server import Server
 
 if TYPE_CHECKING:  # ray is imported only by the tests that start a cluster
-    from ray.cluster_utils import Cluster
+    from tests.backend.raycluster import LocalCluster
 
 _serial = itertools.count(1)
 
@@ -31,7 +31,7 @@ def mid(srv: Server) -> Iterator[str]:
 
 
 @pytest.fixture(scope="session")
-def ray_cluster() -> Iterator[Cluster]:
+def ray_cluster() -> Iterator[LocalCluster]:
     """One local Ray cluster (head + 2 nodes) for every Ray test of the run (≈10 s to start)."""
     from tests.backend.raycluster import local_cluster
 

@@ -11,6 +11,15 @@ command's round trip is one message each way (the poll is already waiting for it
 
 Only the gateway imports this module, and only when a cluster is configured; the kernel is
 imported inside the actor, on its node.
+
+Two ways to join: with the head's GCS address `HOST:PORT` the gateway is a driver on a cluster
+node, and the actors import our packages as that node does (its install, plus the gateway's
+working directory, which Ray puts on their path). With `ray://HOST:PORT` it is a Ray Client
+from anywhere: the driver then runs inside the head's client server, whose path has neither,
+so the gateway ships its own packages with the job (`py_modules`) and the actors run exactly
+the gateway's code whatever the nodes have installed (they need only the dependencies). The
+shipped copy is new to numba's cache: the first actor on a node compiles the kernel (≈10 s).
+Everything else is the same in both: actor options, node affinity, `ray.get` with a timeout.
 """
 
 from __future__ import annotations
@@ -57,25 +66,39 @@ _connect_lock = threading.Lock()
 _homes: dict[int, str] = {}  # id(RayWorker) -> node id, live workers of this gateway
 
 
+SHIPPED = ("nc_sim", "api", "backend")  # what the actors import: the gateway ships it to a client
+
+
 def connect(address: str) -> None:
     """Join the cluster as a driver (once per process): `HOST:PORT` is the head's GCS
-    address (the gateway runs on a cluster node), `ray://HOST:PORT` a Ray Client server."""
+    address (the gateway runs on a cluster node), `ray://HOST:PORT` a Ray Client server
+    (the gateway's packages go with the job)."""
     with _connect_lock:
         if ray.is_initialized():
             return
-        # Ray Client's transport is grpc, not in the minimal ray wheel
-        if address.startswith("ray://") and importlib.util.find_spec("grpc") is None:
-            raise RuntimeError(
-                f"cluster {address}: Ray Client (ray://) needs the ray[client] extra "
-                "(grpcio): pip install 'ray[client]', or give the head's GCS address "
-                "HOST:PORT when the gateway runs on a cluster node"
-            )
+        runtime_env = shipped_code() if address.startswith("ray://") else None
         # ray.init takes over SIGTERM (sys.exit); the server's own shutdown must keep it
         main = threading.current_thread() is threading.main_thread()
         kept = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)} if main else {}
-        ray.init(address=address, log_to_driver=False, logging_level=logging.WARNING)
+        ray.init(
+            address=address,
+            runtime_env=runtime_env,
+            log_to_driver=False,
+            logging_level=logging.WARNING,
+        )
         for sig, handler in kept.items():
             signal.signal(sig, handler)
+
+
+def shipped_code() -> dict[str, Any]:
+    """The job's runtime env for a Ray Client gateway: the gateway's own packages, from
+    wherever it imports them (a checkout or an install), without compiled caches."""
+    dirs = []
+    for name in SHIPPED:
+        spec = importlib.util.find_spec(name)  # found, not imported: no kernel in the gateway
+        assert spec is not None and spec.submodule_search_locations, name
+        dirs.append(next(iter(spec.submodule_search_locations)))
+    return {"py_modules": dirs, "excludes": ["__pycache__"]}
 
 
 def disconnect() -> None:

@@ -9,7 +9,9 @@ os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # before ray loads: no us
 os.environ.setdefault("RAY_DEDUP_LOGS", "0")
 
 import shutil
+import socket
 import tempfile
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -26,12 +28,38 @@ HEALTH = {
 }
 
 
+def free_port() -> int:
+    """A TCP port nothing listens on now (the OS picks it)."""
+    with socket.socket() as s:
+        s.bind(("", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+class LocalCluster(Cluster):
+    """A `Cluster` whose head also serves Ray Client."""
+
+    client_address: str  # `ray://HOST:PORT`; the server listens on the node's IP only
+
+
 @contextmanager
-def local_cluster(worker_nodes: int = 2) -> Iterator[Cluster]:
-    """A head and `worker_nodes` nodes; shut down (every Ray process ended) afterwards."""
+def local_cluster(worker_nodes: int = 2) -> Iterator[LocalCluster]:
+    """A head and `worker_nodes` nodes; shut down (every Ray process ended) afterwards.
+    The head also serves Ray Client (`client_address`), as `ray start --head` does."""
     temp = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Unix socket paths ≤ 107 chars
-    head = {**NODE_ARGS, "include_dashboard": False, "temp_dir": temp, "_system_config": HEALTH}
-    cluster = Cluster(initialize_head=True, head_node_args=head)
+    client_port = free_port()
+    head = {
+        **NODE_ARGS,
+        "include_dashboard": False,
+        "temp_dir": temp,
+        "_system_config": HEALTH,
+        "ray_client_server_port": client_port,
+    }
+    with warnings.catch_warnings():  # Ray drops its handles on the client server's log files
+        warnings.simplefilter("ignore", ResourceWarning)
+        cluster = LocalCluster(initialize_head=True, head_node_args=head)
+    host = cluster.address.rsplit(":", 1)[0]
+    cluster.client_address = f"ray://{host}:{client_port}"
     try:
         for _ in range(worker_nodes):
             cluster.add_node(**NODE_ARGS)

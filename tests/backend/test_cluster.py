@@ -1,26 +1,35 @@
-"""A real gateway on a local multi-node Ray cluster (`inbetrieb serve --cluster HOST:PORT`):
-its workers are actors spread over the nodes, machines on them answer commands and stream
-telemetry, and a node that leaves the cluster has its machines rebuilt on the others."""
+"""A real gateway on a local multi-node Ray cluster, joined both ways: as a driver on the head
+node (`inbetrieb serve --cluster HOST:PORT`) and as a Ray Client (`--cluster ray://HOST:PORT`,
+the gateway's code shipped with the job). Its workers are actors spread over the nodes,
+machines on them answer commands and stream telemetry, and a node that leaves the cluster has
+its machines rebuilt on the others."""
 
 from __future__ import annotations
 
 import asyncio
+import importlib.util
 import itertools
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
-from ray.cluster_utils import Cluster
 
 from api.telemetry import FrameHeader
-from tests.backend.raycluster import NODE_ARGS, head_node_id
+from tests.backend.raycluster import NODE_ARGS, LocalCluster, head_node_id
 from tests.backend.server import Server
 from tests.backend.test_workers import service, wait_for, watch, worker_of
 
 
-@pytest.fixture(scope="module")
-def srv(ray_cluster: Cluster, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+@pytest.fixture(scope="module", params=["gcs", "client"])
+def srv(
+    request: pytest.FixtureRequest,
+    ray_cluster: LocalCluster,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[Server]:
+    """A gateway with 3 workers, on the head node (GCS address) or a Ray Client."""
+    address = ray_cluster.address if request.param == "gcs" else ray_cluster.client_address
     db = tmp_path_factory.mktemp("cluster") / "c.sqlite"
-    s = Server(db, "--cluster", ray_cluster.address, "--workers", "3").start()
+    s = Server(db, "--cluster", address, "--workers", "3").start()
     yield s
     s.close()
 
@@ -50,7 +59,7 @@ def frames_of(srv: Server, mid: str, seconds: float) -> list[FrameHeader]:
 
 
 def test_machines_run_on_every_node_and_answer_and_stream(
-    srv: Server, ray_cluster: Cluster
+    srv: Server, ray_cluster: LocalCluster
 ) -> None:
     workers = service(srv)["workers"]
     nodes = {head_node_id(ray_cluster), *(n.node_id[:8] for n in ray_cluster.worker_nodes)}
@@ -75,7 +84,7 @@ def test_machines_run_on_every_node_and_answer_and_stream(
 
 
 def test_a_node_that_leaves_has_its_machines_rebuilt_on_the_others(
-    srv: Server, ray_cluster: Cluster
+    srv: Server, ray_cluster: LocalCluster
 ) -> None:
     head = head_node_id(ray_cluster)  # the gateway's own node: it stays
     for k in itertools.count():  # placed by load: within a round one lands on a worker node
@@ -102,3 +111,26 @@ def test_a_node_that_leaves_has_its_machines_rebuilt_on_the_others(
     finally:
         ray_cluster.add_node(**NODE_ARGS)  # the next tests find the cluster as it was
         ray_cluster.wait_for_nodes()
+
+
+def test_a_client_gateway_ships_its_own_code(ray_cluster: LocalCluster) -> None:
+    """Through Ray Client the nodes run the gateway's packages, not what they have installed
+    (here the shared venv's editable install points at another checkout)."""
+    import ray
+
+    from backend.workers import ray_transport
+
+    def source_on_a_node(module: str) -> tuple[str, str]:  # local: pickled by value
+        spec = importlib.util.find_spec(module)
+        assert spec is not None and spec.origin is not None
+        return spec.origin, Path(spec.origin).read_text()
+
+    ours = Path(ray_transport.__file__)
+    ray_transport.connect(ray_cluster.client_address)
+    try:
+        task = ray.remote(num_cpus=0)(source_on_a_node)
+        origin, text = ray.get(task.remote(ray_transport.__name__), timeout=60)
+    finally:
+        ray_transport.disconnect()
+    assert Path(origin) != ours and "runtime_resources" in origin  # a copy, shipped
+    assert text == ours.read_text()
