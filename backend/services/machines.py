@@ -15,7 +15,6 @@ import threading
 import time
 import uuid
 from collections import deque
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -230,7 +229,6 @@ class MachineService:
         self._placing = threading.Lock()
         self._lock = threading.Lock()
         self.rebuilt = 0  # machines rebuilt after their worker died
-        self.listeners: list[Callable[[MachineProxy], None]] = []  # told after a rebuild
 
     def proxies(self) -> list[MachineProxy]:
         with self._lock:
@@ -397,11 +395,10 @@ class MachineService:
             self.rebuilt += 1
             proxy.notice(
                 "rebuilt",
-                f"machine {proxy.id} was rebuilt from its stored parameters: "
-                f"{why} (simulated time starts again at 0)",
+                f"machine {proxy.id} was rebuilt from its stored parameters: {why}. It "
+                "starts as after power-on: simulated time from 0, axes at their start "
+                "positions, spindle stopped, earlier events and pending values gone",
             )
-            for listener in self.listeners:
-                listener(proxy)
 
 
 def apply_stored(cfg: MachineConfig, stored: list[tuple[str, str, str, Value]]) -> None:

@@ -49,6 +49,29 @@ def test_hold_moves_x_and_release_stops_it(page: Page, srv: Server, mid: str) ->
     assert srv.axis("X", mid)["pos_cmd"] == x1  # nothing moves after the release
 
 
+def test_pressing_the_other_key_with_the_mouse_jogs_the_other_way(
+    page: Page, srv: Server, mid: str
+) -> None:
+    """The focus moves from + to − as − is pressed: the blur of + must not release −."""
+    page.get_by_test_id("jog-plus").hover()
+    page.mouse.down()
+    poll(lambda: x_state(srv, mid) == "JOG", "jogging +")
+    page.mouse.up()
+    poll(lambda: x_state(srv, mid) == "STANDSTILL", "stopped")
+    page.get_by_test_id("jog-minus").hover()
+    page.mouse.down()
+    try:
+        poll(lambda: x_state(srv, mid) == "JOG", "jogging −")
+        time.sleep(3 * HOLD_S)  # longer than a lease: still held, still renewed
+        x1 = srv.axis("X", mid)["pos_cmd"]
+        time.sleep(HOLD_S)
+        assert x_state(srv, mid) == "JOG" and srv.axis("X", mid)["pos_cmd"] < x1
+        assert page.get_by_test_id("jog-minus").get_attribute("aria-pressed") == "true"
+    finally:
+        page.mouse.up()
+    poll(lambda: x_state(srv, mid) == "STANDSTILL", "stopped after release")
+
+
 def test_lost_network_stops_the_jog_by_the_dead_man(page: Page, srv: Server, mid: str) -> None:
     page.get_by_test_id("jog-plus").hover()
     page.mouse.down()

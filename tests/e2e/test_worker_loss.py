@@ -13,6 +13,15 @@ from tests.backend.server import Server
 from tests.e2e.browser import panel, poll, shot
 
 
+def plotted(page: Page) -> tuple[float, float, float]:
+    """The live plot's sample times: the first and last of its window, and the newest."""
+    t: list[float] = page.evaluate(
+        "() => { const r = window.inbetrieb.rings(); const t = r.window(60, [])[0];"
+        " return [t[0] ?? 0, t[t.length - 1] ?? 0, r.lastTime]; }"
+    )
+    return t[0], t[1], t[2]
+
+
 def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
     page: Page, srv: Server, mid: str
 ) -> None:
@@ -20,6 +29,8 @@ def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
     workers = srv.http.get("/api/service/status").json()["workers"]
     (home,) = [w for w in workers if mid in w["machines"]]
     expect(health).to_contain_text(f"loop {home['id']}")
+    poll(lambda: plotted(page)[2] > 1.0, "a second of samples plotted")
+    before = plotted(page)[2]
     os.kill(home["pid"], signal.SIGKILL)
     banner = page.get_by_test_id("banner-notice")
     expect(banner).to_contain_text("rebuilt from its stored parameters")
@@ -27,6 +38,10 @@ def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
     expect(health).not_to_contain_text(f"loop {home['id']} ")  # paced by another worker now
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
     poll(lambda: srv.status(mid)["plc"]["drives_powered"], "powered again after the rebuild")
+    # the live plot shows the new run alone: its time axis starts again, never mixes runs
+    poll(lambda: 0.2 < plotted(page)[2] < before, "the plot follows the new run")
+    first, last, _ = plotted(page)
+    assert 0.0 <= first <= last < before
     shot(page, "worker-lost-desktop")
     banner.get_by_role("button", name="Dismiss").click()
     expect(banner).to_have_count(0)

@@ -19,7 +19,11 @@ function JogKey(props: {
   title: string;
   onRefused: (r: Refusal) => void;
 }) {
-  const active = heldKey.value === keyName(props.axis, props.dir);
+  const name = keyName(props.axis, props.dir);
+  const active = heldKey.value === name;
+  // a key's own events release only its own hold: pressing the other key moves the focus,
+  // and the blur of this one must not end the hold just started there
+  const release = () => releaseJog(name);
   // Chromium delivers pointer events to disabled buttons too: a locked key must not jog
   const start = () =>
     !props.disabled &&
@@ -38,17 +42,17 @@ function JogKey(props: {
         (e.currentTarget as HTMLElement).setPointerCapture(e.pointerId);
         start();
       }}
-      onPointerUp={releaseJog}
-      onPointerCancel={releaseJog}
-      onLostPointerCapture={releaseJog}
+      onPointerUp={release}
+      onPointerCancel={release}
+      onLostPointerCapture={release}
       onKeyDown={(e) => {
         if ((e.key === " " || e.key === "Enter") && !e.repeat) {
           e.preventDefault();
           start();
         }
       }}
-      onKeyUp={(e) => (e.key === " " || e.key === "Enter") && releaseJog()}
-      onBlur={releaseJog}
+      onKeyUp={(e) => (e.key === " " || e.key === "Enter") && release()}
+      onBlur={release}
       onContextMenu={(e) => e.preventDefault()}
     >
       {props.dir > 0 ? "+" : "−"} {props.axis}

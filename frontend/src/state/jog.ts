@@ -38,9 +38,10 @@ export function holdJog(axis: string, direction: 1 | -1, feed: number | null, on
   heldKey.value = keyName(axis, direction);
 }
 
-/** Release the held key: stop renewing and tell the service to brake now. */
-export function releaseJog(): void {
-  if (!held) return;
+/** Release the held key (only if it is `key`, when given): stop renewing and tell the service
+ * to brake now. */
+export function releaseJog(key?: string): void {
+  if (!held || (key !== undefined && heldKey.value !== key)) return;
   const { axis, timer } = held;
   clearInterval(timer);
   held = null;
@@ -48,8 +49,8 @@ export function releaseJog(): void {
   send({ type: "jog", axis, action: "stop", direction: 1 }).catch(() => undefined); // the lease ends it anyway
 }
 
-window.addEventListener("blur", releaseJog);
-window.addEventListener("pagehide", releaseJog);
+window.addEventListener("blur", () => releaseJog());
+window.addEventListener("pagehide", () => releaseJog());
 document.addEventListener("visibilitychange", () => document.hidden && releaseJog());
 effect(() => {
   if (!online.value) releaseJog();

@@ -76,11 +76,15 @@ function onFrame(buf: ArrayBuffer): void {
   if (h.signals.join(",") !== r.names.join(",")) return; // a frame of the old subscription
   const times = new Float64Array(h.count);
   for (let k = 0; k < h.count; k++) times[k] = (h.first_cycle + k * h.stride) * h.cycle_s;
-  r.append(times, data, h.count);
+  if (r.size && h.count && times[0] < r.lastTime) {
+    // simulated time went back (the machine was restarted or rebuilt): plot the new run only
+    rings.value = new Rings(r.names, Math.round(RING_SECONDS / cycleS));
+  }
+  rings.value.append(times, data, h.count);
   frames.received++;
   if (h.decimated) frames.decimated++;
   frames.skippedCycles += h.skipped_cycles;
-  frameListeners.forEach((f) => f(r));
+  frameListeners.forEach((f) => f(rings.value));
 }
 
 function onMessage(text: string): void {
