@@ -32,6 +32,19 @@ def default_count() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def remove_stale_rings(base: Path) -> None:
+    """Remove the ring folders of gateways that are gone (killed before they could clean up:
+    the folder is named after the gateway's pid)."""
+    for d in base.glob("inbetrieb-*-*"):
+        try:
+            pid = int(d.name.split("-")[1])
+            os.kill(pid, 0)  # raises when no such process
+        except ProcessLookupError:
+            shutil.rmtree(d, ignore_errors=True)
+        except (ValueError, PermissionError):
+            continue  # not ours, or another user's live gateway
+
+
 class WorkerPool:
     """Starts, chooses and replaces workers."""
 
@@ -73,6 +86,7 @@ class WorkerPool:
     def start(self, on_push: PushHandler, on_death: DeathHandler) -> None:
         """Start every worker (in parallel: each loads the compiled kernel)."""
         self._on_push, self._on_death = on_push, on_death
+        remove_stale_rings(self.ring_dir.parent)
         self.ring_dir.mkdir(parents=True, exist_ok=True)
         if self._on_cluster:
             from backend.workers.ray_transport import connect

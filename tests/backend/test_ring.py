@@ -1,0 +1,64 @@
+"""The shared sample ring between a worker and the gateway, and the cleanup of rings that
+a killed gateway left behind."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from backend.workers.pool import remove_stale_rings
+from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
+from nc_sim.signals import Signal
+
+POS = Signal("X.pos_cmd_mm", "X", 0, 0, 1.0, "mm", "float")  # slot 0, column 0
+
+
+def write(ring: SampleRing, first: int, last: int) -> None:
+    """Cycles first..last with value = cycle in slot 0, column 0, as a worker writes them."""
+    for c in range(first, last + 1):
+        ring.rows[c % ring.cycles, 0, 0] = float(c)
+    ring.publish(last)
+
+
+def test_the_gateway_reads_what_the_worker_wrote_through_the_file(tmp_path: Path) -> None:
+    writer = SampleRing.create(tmp_path / "m.ring", slots=2, cycles=8192)
+    reader = SampleRing.attach(tmp_path / "m.ring")
+    assert (reader.cycles, reader.rows.shape) == (8192, (8192, 2, R_COLS))
+    write(writer, 1, 1000)
+    assert reader.head == 1000
+    data, first = reader.read([POS], 10, 1000, 10)
+    assert first == 10
+    np.testing.assert_array_equal(data[0], np.arange(10, 1001, 10, dtype=float))
+
+
+def test_a_reader_that_fell_behind_skips_what_may_be_overwritten(tmp_path: Path) -> None:
+    """With the writer at cycle h and writing up to MAX_WRITE more before it publishes, the
+    oldest cycle safe to read is h - cycles + 1 + MAX_WRITE."""
+    ring = SampleRing.create(tmp_path / "m.ring", slots=1, cycles=4096)
+    write(ring, 1, 10_000)
+    data, first = ring.read([POS], 1, 10_000, 1)
+    oldest = 10_000 - 4096 + 1 + MAX_WRITE
+    assert first == oldest
+    np.testing.assert_array_equal(data[0], np.arange(oldest, 10_001, dtype=float))
+    data, first = ring.read([POS], 1, 10_000, 7)  # on the reader's grid: 1, 8, 15, ...
+    assert first >= oldest and (first - 1) % 7 == 0 and first - 7 < oldest
+
+
+def test_rings_of_a_gateway_that_is_gone_are_removed(tmp_path: Path) -> None:
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    gone = tmp_path / f"inbetrieb-{int(dead.stdout)}-abc123"
+    mine = tmp_path / f"inbetrieb-{os.getpid()}-def456"
+    for d in (gone, mine):
+        d.mkdir()
+        (d / "m.1.ring").write_bytes(b"x")
+    remove_stale_rings(tmp_path)
+    assert not gone.exists() and (mine / "m.1.ring").exists()
