@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass
 from typing import Annotated
@@ -18,6 +19,8 @@ from backend.services.traces import TraceService
 from backend.services.viewer import RerunViewer
 from backend.settings import Settings
 from backend.workers.pool import WorkerPool
+
+GIL_SWITCH_S = 0.0005
 
 
 @dataclass
@@ -36,6 +39,10 @@ class Services:
 
     @classmethod
     def start(cls, settings: Settings) -> Services:
+        # Python hands the GIL to a waiting thread only every 5 ms by default: a command's
+        # reply (read by a worker's reader thread, answered on a request thread) would wait
+        # that long behind the telemetry hub at every hand-over
+        sys.setswitchinterval(GIL_SWITCH_S)
         store = Store(settings.db_path)
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster)
         machines = MachineService(store, pool)
@@ -58,14 +65,16 @@ class Services:
         self.store.close()
 
 
-def get_services(conn: HTTPConnection) -> Services:
+# The dependencies are coroutines: FastAPI would run plain functions on its thread pool, a
+# thread hand-over per request for a dictionary lookup.
+async def get_services(conn: HTTPConnection) -> Services:
     services: Services = conn.app.state.services
     return services
 
 
-def get_actor(conn: HTTPConnection) -> Actor:
+async def get_actor(conn: HTTPConnection) -> Actor:
     """Who sends this request. Authentication will set it from the session."""
-    s = get_services(conn).settings
+    s = (await get_services(conn)).settings
     return Actor(s.user, s.role)
 
 
@@ -73,7 +82,7 @@ ServicesDep = Annotated[Services, Depends(get_services)]
 ActorDep = Annotated[Actor, Depends(get_actor)]
 
 
-def get_machine(mid: str, services: ServicesDep) -> MachineProxy:
+async def get_machine(mid: str, services: ServicesDep) -> MachineProxy:
     return services.machines.get(mid)
 
 

@@ -24,6 +24,6 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
         | WORKER_GONE,
     ),
 )
-def command(cmd: Command, machine: MachineDep, actor: ActorDep) -> CommandResult:
+async def command(cmd: Command, machine: MachineDep, actor: ActorDep) -> CommandResult:
     """MDI block, spindle, gear, homing, jog, move, override, HLI, PLC, reset, E-stop."""
-    return execute(actor, machine, cmd)
+    return await execute(actor, machine, cmd)

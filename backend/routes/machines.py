@@ -36,9 +36,9 @@ def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -
 
 
 @router.get("/{mid}/status", responses=responses(404, why=WORKER_GONE))
-def status(machine: MachineDep) -> MachineStatus:
+async def status(machine: MachineDep) -> MachineStatus:
     """Full snapshot: HLI objects, axis and spindle states, gear, job errors, PLC."""
-    return machine_status(machine)
+    return await machine_status(machine)
 
 
 @router.get("/{mid}/signals", responses=responses(404))

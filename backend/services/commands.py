@@ -33,8 +33,8 @@ from api.common import JobErrorModel, Refusal
 from backend.errors import ApiError
 from backend.services.auth import Actor, authorize
 from backend.services.machines import MachineProxy
-from backend.services.parameters import pending_values, take_pending
-from backend.workers.protocol import Submit, Submitted
+from backend.services.parameters import pending_values, took_pending
+from backend.workers.protocol import Submit, Submitted, Values
 from nc_sim import commands as nc
 from nc_sim.commands import Accepted, Invalid, Refused
 from nc_sim.events import Event
@@ -97,9 +97,9 @@ def to_nc(cmd: Command) -> nc.Command:
     raise _refuse(422, f"unknown command {cmd!r}")
 
 
-def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
+async def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
     """Authorize and carry out one command on the machine's worker; raises ApiError with the
-    refusal."""
+    refusal. Runs on the event loop: nothing here blocks, the worker's answer wakes it."""
     authorize(actor, Action.COMMAND, m.id)
     serial = m.next_serial()
     nc_cmd = replace(to_nc(cmd), serial=serial)
@@ -107,33 +107,29 @@ def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
     if isinstance(cmd, JogCommand) and cmd.action != "step":  # the dead-man lease of a jog
         jog_hold_s = cmd.hold_s if cmd.action == "start" else None
         jog_release = jog_hold_s is None
-    with m.lock:  # values pending for reset go in the reset's own cycle
-        reset_values = pending_values(m, {"reset"}) if isinstance(cmd, ResetCommand) else []
-        done = m.call(
-            Submit(
-                m.id,
-                nc_cmd,
-                jog_hold_s=jog_hold_s,
-                jog_release=jog_release,
-                then_apply=reset_values,
-            )
-        )
-        assert isinstance(done, Submitted)
-        match done.outcome:
-            case Invalid() as bad:
-                raise _refuse(422, bad.message, code=bad.code, column=bad.column, serial=serial)
-            case Refused() as refused:
-                e = refused.error
-                model = job_error_model(e).model_dump()
-                raise _refuse(409, e.message, code=e.code, error=model, serial=serial)
-            case Accepted() as ok:
-                if reset_values:
-                    take_pending(m, {"reset"})
-        return CommandResult(
-            serial=serial,
-            cycle=done.cycle,
-            block_id=ok.block_id,
-            acknowledged=ok.acknowledged,
-            state=done.state,
-            latency_ms=done.latency_s * 1e3,
-        )
+    reset_values: Values = []
+    if isinstance(cmd, ResetCommand):  # values pending for reset go in the reset's own cycle
+        with m.lock:
+            reset_values = pending_values(m, {"reset"})
+    submit = Submit(m.id, nc_cmd, jog_hold_s, jog_release, reset_values)
+    done = await m.acall(submit)
+    assert isinstance(done, Submitted)
+    match done.outcome:
+        case Invalid() as bad:
+            raise _refuse(422, bad.message, code=bad.code, column=bad.column, serial=serial)
+        case Refused() as refused:
+            e = refused.error
+            model = job_error_model(e).model_dump()
+            raise _refuse(409, e.message, code=e.code, error=model, serial=serial)
+        case Accepted() as ok:
+            if reset_values:
+                with m.lock:
+                    took_pending(m, reset_values)
+    return CommandResult(
+        serial=serial,
+        cycle=done.cycle,
+        block_id=ok.block_id,
+        acknowledged=ok.acknowledged,
+        state=done.state,
+        latency_ms=done.latency_s * 1e3,
+    )

@@ -154,16 +154,30 @@ class MachineProxy:
 
     def call(self, request: Request) -> object:
         """A request to the machine's worker; 503 while it has none, 404/409/422 as refused."""
+        try:
+            return self._worker().call(request)
+        except (WorkerGone, WorkerRefused) as e:
+            raise self._answer(e) from None
+
+    async def acall(self, request: Request) -> object:
+        """`call` from the event loop (no thread waits for the worker)."""
+        try:
+            return await self._worker().acall(request)
+        except (WorkerGone, WorkerRefused) as e:
+            raise self._answer(e) from None
+
+    def _worker(self) -> WorkerClient:
         worker = self.worker
         if worker is None or not worker.alive:
             raise ApiError(503, {"message": f"machine '{self.id}' is being rebuilt: try again"})
-        try:
-            return worker.call(request)
-        except WorkerGone as e:
-            raise ApiError(503, {"message": f"machine '{self.id}': {e}; it is rebuilt"}) from None
-        except WorkerRefused as e:
-            code = {"not_found": 404, "invalid": 422, "conflict": 409}.get(e.failure.kind, 500)
-            raise ApiError(code, {"message": e.failure.message}) from None
+        return worker
+
+    def _answer(self, e: WorkerGone | WorkerRefused) -> ApiError:
+        """A worker's failure as the API answers it."""
+        if isinstance(e, WorkerGone):
+            return ApiError(503, {"message": f"machine '{self.id}': {e}; it is rebuilt"})
+        code = {"not_found": 404, "invalid": 422, "conflict": 409}.get(e.failure.kind, 500)
+        return ApiError(code, {"message": e.failure.message})
 
     def post(self, request: Request) -> None:
         """A request whose answer nobody waits for (watching)."""

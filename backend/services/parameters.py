@@ -180,12 +180,14 @@ def pending_values(m: MachineProxy, effects: set[str]) -> Values:
     return [(s, t, n, p.value) for (s, t, n), p in m.pending.items() if p.effect in effects]
 
 
-def take_pending(m: MachineProxy, effects: set[str]) -> None:
-    """The running machine took the pending values with these effects: they are written now
-    (call holding `m.lock`)."""
-    for scope, target, name, value in pending_values(m, effects):
+def took_pending(m: MachineProxy, values: Values) -> None:
+    """The running machine took these pending values: they are written now, and no longer
+    pending unless a newer value is (call holding `m.lock`)."""
+    for scope, target, name, value in values:
         m.cfg.list_values(Scope(scope), target)[name] = value
-        del m.pending[(scope, target, name)]
+        key = (scope, target, name)
+        if key in m.pending and m.pending[key].value == value:
+            del m.pending[key]
 
 
 def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) -> list[str]:

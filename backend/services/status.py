@@ -120,9 +120,9 @@ def status_of(m: MachineProxy, read: StatusRead) -> MachineStatus:
     )
 
 
-def machine_status(m: MachineProxy) -> MachineStatus:
+async def machine_status(m: MachineProxy) -> MachineStatus:
     """Everything the HMI shows about a machine, fresh from its worker (one cycle)."""
-    read = m.call(ReadStatus(m.id))
+    read = await m.acall(ReadStatus(m.id))
     assert isinstance(read, StatusRead)
     return status_of(m, read)
 

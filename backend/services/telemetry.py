@@ -208,7 +208,8 @@ class TelemetryHub:
     def tick(self) -> None:
         """Build and dispatch one period's messages."""
         loop = asyncio.get_running_loop()
-        cache: dict[tuple[object, ...], Built] = {}
+        cache: dict[tuple[object, ...], Built] = {}  # frames, shared by equal subscriptions
+        texts: dict[tuple[object, ...], str] = {}  # status and events, shared by all viewers
         for sub in list(self.subscribers):
             if sub.flooding:
                 self.drop(sub, CLOSE_POLICY, "client sends without reading the replies")
@@ -223,7 +224,7 @@ class TelemetryHub:
                 sub.sending = loop.create_task(self._close(sub.ws, 4404, "machine deleted"))
                 continue
             try:
-                messages = self._messages(sub, cache)
+                messages = self._messages(sub, cache, texts)
             except Exception:  # one client's failure must not stop the others
                 log.exception("telemetry for a client failed; closing it")
                 self.drop(sub, CLOSE_INTERNAL, "telemetry failed")
@@ -233,7 +234,10 @@ class TelemetryHub:
                 sub.sending = loop.create_task(self._send(sub, messages))
 
     def _messages(
-        self, sub: Subscriber, cache: dict[tuple[object, ...], Built]
+        self,
+        sub: Subscriber,
+        cache: dict[tuple[object, ...], Built],
+        texts: dict[tuple[object, ...], str],
     ) -> list[str | bytes]:
         m = sub.machine
         out: list[str | bytes] = list(sub.control)
@@ -252,22 +256,20 @@ class TelemetryHub:
         if m.status is not None and sub.status_seq != m.status_seq:
             sub.status_seq = m.status_seq
             key = ("status", m.id, m.epoch, m.status_seq)
-            if key not in cache:
-                st = status_of(m, m.status)
-                cache[key] = Built(StatusMessage(status=st).model_dump_json().encode(), 0)
-            out.append(cache[key].frame.decode())
+            if key not in texts:
+                texts[key] = StatusMessage(status=status_of(m, m.status)).model_dump_json()
+            out.append(texts[key])
         head = m.cycle
         if sub.signals and head >= sub.cursor:
             out.append(self._frame(sub, head, cache))
         events, first_seq, sub.event_cursor, dropped = m.events_since(sub.event_cursor)
-        out += [
-            EventMessage(
-                seq=seq,
-                missed=dropped if seq == first_seq else 0,
-                event=job_error_model(e),
-            ).model_dump_json()
-            for seq, e in enumerate(events, first_seq)
-        ]
+        for seq, e in enumerate(events, first_seq):
+            missed = dropped if seq == first_seq else 0
+            ekey = ("event", m.id, m.epoch, seq, missed)  # encoded once for every viewer
+            if ekey not in texts:
+                msg = EventMessage(seq=seq, missed=missed, event=job_error_model(e))
+                texts[ekey] = msg.model_dump_json()
+            out.append(texts[ekey])
         return out
 
     def _frame(self, sub: Subscriber, head: int, cache: dict[tuple[object, ...], Built]) -> bytes:

@@ -7,6 +7,7 @@ and the gateway is told once, so it can rebuild the worker's machines elsewhere.
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import logging
 import threading
@@ -63,6 +64,24 @@ class WorkerClient(ABC):
 
     def call(self, request: Request, timeout_s: float = CALL_TIMEOUT_S) -> object:
         """Send a request and wait for its reply value; raises WorkerRefused or WorkerGone."""
+        fut = self._submit(request)
+        try:
+            value = fut.result(timeout_s)
+        except FutureTimeout:
+            raise self._timed_out(fut, timeout_s) from None
+        return self._value(value)
+
+    async def acall(self, request: Request, timeout_s: float = CALL_TIMEOUT_S) -> object:
+        """`call` for the event loop: the reply wakes the loop, no thread waits for it."""
+        fut = self._submit(request)
+        try:
+            value = await asyncio.wait_for(asyncio.wrap_future(fut), timeout_s)
+        except TimeoutError:
+            raise self._timed_out(fut, timeout_s) from None
+        return self._value(value)
+
+    def _submit(self, request: Request) -> Future[object]:
+        """Register a reply and send the request."""
         fut: Future[object] = Future()
         with self._lock:
             if not self.alive:
@@ -76,12 +95,17 @@ class WorkerClient(ABC):
                 self._waiting.pop(req, None)
             self._died(f"send failed: {e}")
             raise WorkerGone(f"worker {self.id}: {e}") from None
-        try:
-            value = fut.result(timeout_s)
-        except FutureTimeout:
-            with self._lock:
-                self._waiting.pop(req, None)
-            raise WorkerGone(f"worker {self.id} did not answer within {timeout_s:g} s") from None
+        return fut
+
+    def _timed_out(self, fut: Future[object], timeout_s: float) -> WorkerGone:
+        with self._lock:
+            for req, waiting in list(self._waiting.items()):
+                if waiting is fut:
+                    del self._waiting[req]
+        return WorkerGone(f"worker {self.id} did not answer within {timeout_s:g} s")
+
+    @staticmethod
+    def _value(value: object) -> object:
         if isinstance(value, Failure):
             raise WorkerRefused(value)
         return value

@@ -48,13 +48,13 @@ def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it(
     service: MachineService,
 ) -> None:
     host = paused_demo(service, "m")
-    stop = execute(INSTRUCTOR, host, EmergencyStopCommand())
+    stop = asyncio.run(execute(INSTRUCTOR, host, EmergencyStopCommand()))
     step(host, 10)
     _flood(host, EVENT_LOG_LEN + 100)
     step(host, 10)
     wait_until(lambda: host.events.cursor >= EVENT_LOG_LEN + 100)
     assert all(e.code == Code.BLOCK_SYNTAX for e in host.events)  # E-stop dropped
-    st = machine_status(host)
+    st = asyncio.run(machine_status(host))
     assert [(e.code, e.cycle) for e in st.job_errors] == [(int(Code.EMERGENCY_STOP), stop.cycle)]
     assert len(st.recent_events) == RECENT_EVENTS
     assert all(e.code == Code.BLOCK_SYNTAX for e in st.recent_events)
