@@ -57,6 +57,7 @@ log = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 0.05  # watched machines' status: 20 per second, like a display refresh
 NEWS_PERIOD_S = 1.0  # loop figures and every machine's pacing
+MAX_SERVE = 64  # requests carried out at a time before the loop looks at its deadline
 MAX_PERIOD_S = 0.01  # the longest loop period (telemetry waits at most this for samples)
 MACHINES_PER_PERIOD = 16  # machines per base period before the period grows
 
@@ -96,6 +97,7 @@ class Worker:
         self.node = node
         self.hosts: dict[str, MachineHost] = {}
         self.steps: list[tuple[int, str]] = []  # (request, machine) answered when its step ends
+        self.backlog: deque[Envelope] = deque()  # taken from the channel, not yet carried out
         self.stopped = False
         self.news_due = False  # pacing changed: report at the end of this tick
         # loop figures, read only by this thread
@@ -115,12 +117,12 @@ class Worker:
             period = self.period()
             deadline += period
             while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
-                if self.channel.wait(remaining):
+                if self.backlog or self.channel.wait(remaining):
                     self.serve()
             wake = time.monotonic()
             for host in list(self.hosts.values()):
                 self._tick(host, deadline, period)
-                if self.channel.ready():
+                if self.channel.ready() or self.backlog:
                     self.serve()
                 self._push_news(host, wake)
             self._finish_steps()
@@ -216,12 +218,18 @@ class Worker:
 
     # --- requests ---------------------------------------------------------------------------
     def serve(self) -> None:
-        """Carry out every request waiting, emergency stops first."""
-        batch = self.channel.take()
-        batch.sort(
-            key=lambda r: not (isinstance(r[1], Submit) and isinstance(r[1].cmd, EmergencyStop))
-        )
-        for req, request, sent_mono in batch:
+        """Carry out every request waiting. An emergency stop goes first, also one that
+        arrives while others are being carried out (the channel is looked at before each)."""
+        waiting = self.backlog
+        for _ in range(MAX_SERVE):  # then a tick: a flood of requests cannot stall the loop
+            if not waiting or self.channel.ready():
+                fresh = self.channel.take()
+                stops = [r for r in fresh if _is_stop(r[1])]
+                waiting.extendleft(reversed(stops))
+                waiting.extend(r for r in fresh if not _is_stop(r[1]))
+            if not waiting:
+                return
+            req, request, sent_mono = waiting.popleft()
             try:
                 value = self.handle(req, request, sent_mono)
             except (NcUsageError, ValueError) as e:
@@ -314,6 +322,10 @@ class Worker:
                 _apply(host, r.then_apply)
         state = {ax.name: ax.state.name for ax in host.machine.axes}
         return Submitted(outcome, host.cycle, state, latency_s)
+
+
+def _is_stop(request: Request) -> bool:
+    return isinstance(request, Submit) and isinstance(request.cmd, EmergencyStop)
 
 
 class _NotHere(Exception):
