@@ -7,10 +7,8 @@ its machines rebuilt on the others."""
 from __future__ import annotations
 
 import asyncio
-import importlib.util
 import itertools
 from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
 
@@ -111,26 +109,3 @@ def test_a_node_that_leaves_has_its_machines_rebuilt_on_the_others(
     finally:
         ray_cluster.add_node(**NODE_ARGS)  # the next tests find the cluster as it was
         ray_cluster.wait_for_nodes()
-
-
-def test_a_client_gateway_ships_its_own_code(ray_cluster: LocalCluster) -> None:
-    """Through Ray Client the nodes run the gateway's packages, not what they have installed
-    (here the shared venv's editable install points at another checkout)."""
-    import ray
-
-    from backend.workers import ray_transport
-
-    def source_on_a_node(module: str) -> tuple[str, str]:  # local: pickled by value
-        spec = importlib.util.find_spec(module)
-        assert spec is not None and spec.origin is not None
-        return spec.origin, Path(spec.origin).read_text()
-
-    ours = Path(ray_transport.__file__)
-    ray_transport.connect(ray_cluster.client_address)
-    try:
-        task = ray.remote(num_cpus=0)(source_on_a_node)
-        origin, text = ray.get(task.remote(ray_transport.__name__), timeout=60)
-    finally:
-        ray_transport.disconnect()
-    assert Path(origin) != ours and "runtime_resources" in origin  # a copy, shipped
-    assert text == ours.read_text()
