@@ -11,15 +11,13 @@ from api.telemetry import SignalInfo
 from backend.deps import ActorDep, MachineDep, ServicesDep
 from backend.errors import WORKER_GONE, responses
 from backend.services.auth import authorize
-from backend.services.machines import MachineProxy
 from backend.services.status import (
     machine_status,
     machine_summary,
+    paced,
     signal_infos,
-    simulation_status,
-    with_loop_health,
 )
-from backend.workers.protocol import Pace, Pacing, Step
+from backend.workers.protocol import Pace, Step
 
 router = APIRouter(prefix="/api/machines", tags=["machines"])
 
@@ -72,11 +70,3 @@ def step(req: StepRequest, machine: MachineDep, actor: ActorDep) -> SimulationSt
     meanwhile ends the step early (the answer's `cycle` says where it stopped)."""
     authorize(actor, Action.SIMULATE, machine.id)
     return paced(machine, Step(machine.id, req.cycles))
-
-
-def paced(machine: MachineProxy, request: Pace | Step) -> SimulationStatus:
-    """Carry out a pacing request; the answer is the pacing it left."""
-    p = machine.call(request)
-    assert isinstance(p, Pacing)
-    machine.pacing = p
-    return with_loop_health(simulation_status(p), machine.worker)

@@ -20,7 +20,15 @@ from api.telemetry import SignalInfo
 from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy, MachineService
 from backend.workers.client import WorkerClient
-from backend.workers.protocol import LoopFigures, Pacing, ReadStatus, StatusRead, WorkerNews
+from backend.workers.protocol import (
+    LoopFigures,
+    Pace,
+    Pacing,
+    ReadStatus,
+    StatusRead,
+    Step,
+    WorkerNews,
+)
 from nc_sim.snapshot import AxisSnapshot, LoopMode, MachineSnapshot
 from nc_sim.units import AxisKind
 
@@ -189,3 +197,12 @@ def worker_statuses(machines: MachineService) -> list[WorkerStatus]:
             )
         )
     return out
+
+
+def paced(machine: MachineProxy, request: Pace | Step) -> SimulationStatus:
+    """Carry out a pacing request (run, pause, fast, step); the answer is the pacing it
+    left."""
+    p = machine.call(request)
+    assert isinstance(p, Pacing)
+    machine.pacing = p
+    return with_loop_health(simulation_status(p), machine.worker)

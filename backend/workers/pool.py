@@ -140,6 +140,3 @@ class WorkerPool:
             from backend.workers.ray_transport import disconnect
 
             disconnect()
-
-    def __len__(self) -> int:
-        return len(self.workers)
