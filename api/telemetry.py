@@ -76,7 +76,8 @@ class EventMessage(BaseModel):
 
 class StatusMessage(BaseModel):
     """Server → client: the machine's status, pushed about 20 times a second while the
-    client is connected (no polling)."""
+    client is connected (no polling). Its `recent_events` is empty: a viewer gets the
+    newest events as event messages when it connects and every new one as it comes."""
 
     type: Literal["status"] = "status"
     status: MachineStatus

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import sys
 import time
 from dataclasses import dataclass
@@ -38,16 +39,17 @@ class Services:
     started: float
 
     @classmethod
-    def start(cls, settings: Settings) -> Services:
-        # Python hands the GIL to a waiting thread only every 5 ms by default: a command's
-        # reply (read by a worker's reader thread, answered on a request thread) would wait
-        # that long behind the telemetry hub at every hand-over
+    async def start(cls, settings: Settings) -> Services:
+        # Python hands the GIL to a waiting thread only every 5 ms by default: a request
+        # handled on the thread pool would wait that long behind the telemetry hub
         sys.setswitchinterval(GIL_SWITCH_S)
         store = Store(settings.db_path)
-        pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster)
+        loop = asyncio.get_running_loop()  # reads the local workers' replies and pushes
+        pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
-        pool.start(machines.on_push, machines.on_death)
-        machines.load(create_demo=settings.demo)
+        # both wait for workers' replies, which this loop reads: off it
+        await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
+        await asyncio.to_thread(machines.load, create_demo=settings.demo)
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
         tdir = settings.traces_path
         traces = TraceService(store, tdir, machines)

@@ -28,7 +28,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        app.state.services = Services.start(cfg)
+        app.state.services = await Services.start(cfg)
         yield
         await app.state.services.stop()
 

@@ -1,4 +1,4 @@
-"""What a machine shows at one cycle: axes, spindles, PLC, active job errors, recent events.
+"""What a machine shows at one cycle: axes, spindles, PLC, active job errors, event cursor.
 
 `Machine.snapshot()` fills these records between cycles; they are plain frozen values in
 engineering units (positions mm | °, speeds mm/min | °/min, spindles rpm), so a reader in
@@ -14,8 +14,6 @@ from enum import IntEnum, StrEnum
 from nc_sim.events import Event
 from nc_sim.plc import PlcMode
 from nc_sim.units import AxisKind
-
-RECENT_EVENTS = 50  # events a snapshot carries
 
 
 class AxisState(IntEnum):
@@ -113,5 +111,4 @@ class MachineSnapshot:
     axes: tuple[AxisSnapshot, ...]
     plc: PlcSnapshot
     job_errors: tuple[Event, ...]  # the event behind each active job error, once each
-    recent_events: tuple[Event, ...]  # the newest events, oldest first
     event_cursor: int  # sequence number the next event will get

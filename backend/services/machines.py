@@ -219,6 +219,11 @@ class MachineProxy:
         for rec, params in n.captures:
             self.captures.append(Capture(uuid.uuid4().hex[:12], rec, params, time.time()))
 
+    def recent_events(self, n: int) -> list[Event]:
+        """The newest n events of the gateway's copy, oldest first."""
+        with self._news:
+            return self.events.tail(n)
+
     def events_since(self, cursor: int) -> tuple[list[Event], int, int, int]:
         """(events, seq of the first, next cursor, missed) from the gateway's copy."""
         with self._news:

@@ -32,6 +32,8 @@ from backend.workers.protocol import (
 from nc_sim.snapshot import AxisSnapshot, LoopMode, MachineSnapshot
 from nc_sim.units import AxisKind
 
+RECENT_EVENTS = 50  # events a machine's status carries
+
 _KIND: dict[AxisKind, Literal["linear", "rotary", "spindle"]] = {
     AxisKind.LINEAR: "linear",
     AxisKind.ROTARY: "rotary",
@@ -106,8 +108,10 @@ def _axis_status(a: AxisSnapshot) -> AxisStatus:
     )
 
 
-def status_of(m: MachineProxy, read: StatusRead) -> MachineStatus:
-    """A machine's snapshot and pacing, as its worker read them, in the API's words."""
+def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> MachineStatus:
+    """A machine's snapshot and pacing, as its worker read them, in the API's words, with
+    the newest events of the gateway's copy of its log (`recent_events`; a viewer's pushed
+    status goes without them: its events come as event messages)."""
     snap: MachineSnapshot = read.snapshot
     return MachineStatus(
         id=m.id,
@@ -124,7 +128,9 @@ def status_of(m: MachineProxy, read: StatusRead) -> MachineStatus:
             pending=[PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle) for p in snap.plc.pending],
         ),
         job_errors=[job_error_model(e) for e in snap.job_errors],
-        recent_events=[job_error_model(e) for e in snap.recent_events],
+        recent_events=[job_error_model(e) for e in m.recent_events(RECENT_EVENTS)]
+        if recent_events
+        else [],
     )
 
 

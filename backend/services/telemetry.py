@@ -42,7 +42,7 @@ from api.telemetry import (
 )
 from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy
-from backend.services.status import status_of
+from backend.services.status import RECENT_EVENTS, status_of
 from backend.workers.protocol import Watch
 from nc_sim.signals import Signal
 
@@ -124,7 +124,9 @@ class TelemetryHub:
 
     def add(self, ws: WebSocket, m: MachineProxy) -> Subscriber:
         """A new viewer of `m`: from now on its worker pushes the machine's status."""
-        sub = Subscriber(ws, m, cursor=m.cycle + 1, event_cursor=m.events.cursor, epoch=m.epoch)
+        # the newest events first, as event messages: the viewer's log starts filled
+        events = max(0, m.events.cursor - RECENT_EVENTS)
+        sub = Subscriber(ws, m, cursor=m.cycle + 1, event_cursor=events, epoch=m.epoch)
         sub.notice_seq = m.notices[-1].seq - 1 if m.notices else 0  # the newest notice again
         self.subscribers.add(sub)
         m.watchers += 1
@@ -257,7 +259,8 @@ class TelemetryHub:
             sub.status_seq = m.status_seq
             key = ("status", m.id, m.epoch, m.status_seq)
             if key not in texts:
-                texts[key] = StatusMessage(status=status_of(m, m.status)).model_dump_json()
+                status = status_of(m, m.status, recent_events=False)
+                texts[key] = StatusMessage(status=status).model_dump_json()
             out.append(texts[key])
         head = m.cycle
         if sub.signals and head >= sub.cursor:

@@ -8,6 +8,7 @@ and the gateway is told once, so it can rebuild the worker's machines elsewhere.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import itertools
 import logging
 import threading
@@ -36,6 +37,7 @@ class WorkerRefused(RuntimeError):
 
 
 PushHandler = Callable[["WorkerClient", Push], None]
+Waiting = Future[object] | asyncio.Future[object]  # a reply's future: a thread's or a loop's
 DeathHandler = Callable[["WorkerClient"], None]
 
 
@@ -50,8 +52,9 @@ class WorkerClient(ABC):
         self.node = "local"
         self.alive = False
         self.latest: Push | None = None  # the newest WorkerNews
+        self.reads_on: asyncio.AbstractEventLoop | None = None  # the loop reading replies, if any
         self._ids = itertools.count(1)
-        self._waiting: dict[int, Future[object]] = {}
+        self._waiting: dict[int, Waiting] = {}
         self._lock = threading.Lock()
         self._on_push: PushHandler = lambda _c, _p: None
         self._on_death: DeathHandler = lambda _c: None
@@ -63,26 +66,31 @@ class WorkerClient(ABC):
         self.alive = True
 
     def call(self, request: Request, timeout_s: float = CALL_TIMEOUT_S) -> object:
-        """Send a request and wait for its reply value; raises WorkerRefused or WorkerGone."""
-        fut = self._submit(request)
+        """Send a request and wait for its reply value; raises WorkerRefused or WorkerGone.
+        Not on the loop that reads the replies: the reply could never arrive (use `acall`)."""
+        if self.reads_on is not None and _running_loop() is self.reads_on:
+            raise RuntimeError("a blocking worker call on the loop reading its reply; use acall")
+        fut: Future[object] = Future()
+        req = self._submit(request, fut)
         try:
             value = fut.result(timeout_s)
         except FutureTimeout:
-            raise self._timed_out(fut, timeout_s) from None
+            raise self._timed_out(req, timeout_s) from None
         return self._value(value)
 
     async def acall(self, request: Request, timeout_s: float = CALL_TIMEOUT_S) -> object:
-        """`call` for the event loop: the reply wakes the loop, no thread waits for it."""
-        fut = self._submit(request)
+        """`call` for the event loop: the reply resolves a future of this loop (directly when
+        the transport reads on this loop), no thread waits for it."""
+        fut: asyncio.Future[object] = asyncio.get_running_loop().create_future()
+        req = self._submit(request, fut)
         try:
-            value = await asyncio.wait_for(asyncio.wrap_future(fut), timeout_s)
+            value = await asyncio.wait_for(fut, timeout_s)
         except TimeoutError:
-            raise self._timed_out(fut, timeout_s) from None
+            raise self._timed_out(req, timeout_s) from None
         return self._value(value)
 
-    def _submit(self, request: Request) -> Future[object]:
-        """Register a reply and send the request."""
-        fut: Future[object] = Future()
+    def _submit(self, request: Request, fut: Waiting) -> int:
+        """Register the reply's future and send the request."""
         with self._lock:
             if not self.alive:
                 raise WorkerGone(f"worker {self.id} is not running")
@@ -95,13 +103,11 @@ class WorkerClient(ABC):
                 self._waiting.pop(req, None)
             self._died(f"send failed: {e}")
             raise WorkerGone(f"worker {self.id}: {e}") from None
-        return fut
+        return req
 
-    def _timed_out(self, fut: Future[object], timeout_s: float) -> WorkerGone:
+    def _timed_out(self, req: int, timeout_s: float) -> WorkerGone:
         with self._lock:
-            for req, waiting in list(self._waiting.items()):
-                if waiting is fut:
-                    del self._waiting[req]
+            self._waiting.pop(req, None)
         return WorkerGone(f"worker {self.id} did not answer within {timeout_s:g} s")
 
     @staticmethod
@@ -125,7 +131,7 @@ class WorkerClient(ABC):
             with self._lock:
                 fut = self._waiting.pop(push.req, None)
             if fut is not None:
-                fut.set_result(push.value)
+                _settle(fut, push.value, None)
             return
         try:
             self._on_push(self, push)
@@ -141,7 +147,7 @@ class WorkerClient(ABC):
             waiting, self._waiting = self._waiting, {}
         log.warning("worker %s (pid %s) is gone: %s", self.id, self.pid, why)
         for fut in waiting.values():
-            fut.set_exception(WorkerGone(f"worker {self.id} is gone: {why}"))
+            _settle(fut, None, WorkerGone(f"worker {self.id} is gone: {why}"))
         self._on_death(self)
 
     @abstractmethod
@@ -154,3 +160,35 @@ class WorkerClient(ABC):
     @abstractmethod
     def stop(self) -> None:
         """End the worker (its machines end with it); no death is reported."""
+
+
+def _running_loop() -> asyncio.AbstractEventLoop | None:
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
+
+
+def _settle(fut: Waiting, value: object, error: BaseException | None) -> None:
+    """Resolve a reply's future from whichever thread read the reply."""
+    if isinstance(fut, Future):
+        if error is None:
+            fut.set_result(value)
+        else:
+            fut.set_exception(error)
+        return
+    loop = fut.get_loop()
+    if _running_loop() is loop:
+        _set(fut, value, error)
+    else:
+        with contextlib.suppress(RuntimeError):  # that loop is closed: nobody waits
+            loop.call_soon_threadsafe(_set, fut, value, error)
+
+
+def _set(fut: asyncio.Future[object], value: object, error: BaseException | None) -> None:
+    if fut.done():  # timed out meanwhile
+        return
+    if error is None:
+        fut.set_result(value)
+    else:
+        fut.set_exception(error)

@@ -1,24 +1,28 @@
-"""The local transport: a worker is a process on this server, reached through a pipe; its
+"""The local transport: a worker is a process on this server, reached through a socket pair; its
 sample rings are files in shared memory that the gateway maps.
 
 The process is started with "spawn" (a fresh interpreter: the gateway's threads and sockets
-are not copied into it) and dies with the gateway: the pipe closes when the gateway ends,
-however it ends, and a worker whose pipe closes stops.
+are not copied into it) and dies with the gateway: the socket closes when the gateway ends,
+however it ends, and a worker whose socket closes stops.
 """
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import logging
 import multiprocessing as mp
 import os
+import socket
 import threading
 import time
-from multiprocessing.connection import Connection
+from collections.abc import Callable
+from concurrent.futures import Future
 from pathlib import Path
 
 from backend.workers.client import WorkerClient
-from backend.workers.protocol import Envelope, Push, Request
+from backend.workers.protocol import Envelope, Push, Reply, Request
+from backend.workers.wire import Wire
 
 log = logging.getLogger(__name__)
 
@@ -27,34 +31,34 @@ WORKER_RT_PRIORITY = 10  # SCHED_FIFO priority (1 lowest, 99 highest) of a worke
 MAX_TAKE = 256  # requests one `take` returns at most: the loop keeps its deadlines in a flood
 
 
-class PipeChannel:
-    """A worker's end of the pipe."""
+class WireChannel:
+    """A worker's end of the socket pair: pushes of a tick go out in one write at its end,
+    replies at once."""
 
-    def __init__(self, conn: Connection) -> None:
-        self.conn = conn
-        self.closed = False
+    def __init__(self, wire: Wire) -> None:
+        self.wire = wire
+
+    @property
+    def closed(self) -> bool:
+        return self.wire.closed
 
     def wait(self, timeout_s: float) -> bool:
-        try:
-            return self.conn.poll(timeout_s)
-        except (EOFError, OSError):
-            self.closed = True
-            return True  # `take` ends the worker
+        return self.wire.wait(timeout_s)
 
     def ready(self) -> bool:
-        return self.wait(0)
+        return self.wire.pending()
 
     def take(self) -> list[Envelope]:
-        out: list[Envelope] = []
-        try:
-            while len(out) < MAX_TAKE and self.conn.poll(0):
-                out.append(self.conn.recv())
-        except (EOFError, OSError):
-            self.closed = True
-        return out
+        return self.wire.take(MAX_TAKE)  # type: ignore[return-value]
 
     def send(self, push: Push) -> None:
-        self.conn.send(push)
+        if isinstance(push, Reply):
+            self.wire.send(push)
+        else:
+            self.wire.queue(push)
+
+    def flush(self) -> None:
+        self.wire.flush()
 
 
 def realtime_priority() -> str:
@@ -72,7 +76,7 @@ def realtime_priority() -> str:
     return "normal"
 
 
-def worker_main(conn: Connection, period_s: float, ring_dir: str, node: str) -> None:
+def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) -> None:
     """The worker process: load the compiled kernel, then pace until the gateway goes."""
     # imported here: the gateway process never loads the kernel
     from backend.workers.warmup import warm_up
@@ -81,9 +85,9 @@ def worker_main(conn: Connection, period_s: float, ring_dir: str, node: str) -> 
     logging.basicConfig(level=logging.WARNING, format="worker %(process)d: %(message)s")
     realtime_priority()
     warm_up()
-    channel = PipeChannel(conn)
-    worker = Worker(channel, period_s, Path(ring_dir), node)
-    conn.send(("ready",))
+    wire = Wire(sock)
+    worker = Worker(WireChannel(wire), period_s, Path(ring_dir), node)
+    wire.send(("ready",))
     try:
         worker.run()
     finally:
@@ -96,19 +100,28 @@ class LocalWorker(WorkerClient):
 
     shared_rings = True
 
-    def __init__(self, wid: str, period_s: float, ring_dir: Path, start_timeout_s: float = 60.0):
+    def __init__(
+        self,
+        wid: str,
+        period_s: float,
+        ring_dir: Path,
+        loop: asyncio.AbstractEventLoop | None = None,
+        start_timeout_s: float = 60.0,
+    ):
         super().__init__(wid)
         self.period_s = period_s
         self.ring_dir = ring_dir
+        self.reads_on = loop  # reads the replies and pushes (else a loop of ours)
         self.start_timeout_s = start_timeout_s
-        self._conn: Connection | None = None
+        self._wire: Wire | None = None
+        self._fd = -1
         self._proc: mp.process.BaseProcess | None = None
         self._send_lock = threading.Lock()
         self._stopping = False
 
     def _launch(self) -> None:
         ctx = mp.get_context("spawn")
-        ours, theirs = ctx.Pipe(duplex=True)
+        ours, theirs = socket.socketpair()
         proc = ctx.Process(
             target=worker_main,
             args=(theirs, self.period_s, str(self.ring_dir), "local"),
@@ -117,42 +130,82 @@ class LocalWorker(WorkerClient):
         )
         proc.start()
         theirs.close()
-        if not ours.poll(self.start_timeout_s):
+        wire = Wire(ours)
+        if not wire.wait(self.start_timeout_s) or wire.closed:
             proc.kill()
             raise RuntimeError(f"worker {self.id} did not start")
-        ours.recv()  # ("ready",)
-        self._conn, self._proc, self.pid = ours, proc, proc.pid
-        threading.Thread(target=self._read, name=f"worker-{self.id}-reader", daemon=True).start()
+        wire.take(1)  # ("ready",)
+        self._wire, self._proc, self.pid, self._fd = wire, proc, proc.pid, ours.fileno()
+        loop = self.reads_on = self.reads_on or reader_loop()
+        on_loop(loop, lambda: loop.add_reader(self._fd, self._readable))
 
-    def _read(self) -> None:
-        conn = self._conn
-        assert conn is not None
-        while not self._stopping:
-            try:
-                push = conn.recv()
-            except (EOFError, OSError):
-                break
-            except Exception:  # a message we cannot unpickle: a bug, not a dead worker
-                if self._stopping:
-                    break
-                log.exception("worker %s sent an unreadable message", self.id)
-                continue
-            self._received(push)
-        if not self._stopping:
-            self._died("its pipe closed (the process ended)")
+    def _readable(self) -> None:
+        """On the loop: everything that arrived, handled at once (no thread hand-over)."""
+        wire = self._wire
+        assert wire is not None
+        for push in wire.take():
+            self._received(push)  # type: ignore[arg-type]
+        if wire.closed:
+            self._close()
+            if not self._stopping:
+                self._died("its socket closed (the process ended)")
+
+    def _close(self) -> None:
+        """On the loop: stop reading, close the socket."""
+        assert self.reads_on is not None and self._wire is not None
+        self.reads_on.remove_reader(self._fd)
+        self._wire.shut()
 
     def _send(self, req: int, request: Request) -> None:
-        assert self._conn is not None
+        assert self._wire is not None
         with self._send_lock:
-            self._conn.send((req, request, time.monotonic()))
+            self._wire.send((req, request, time.monotonic()))
 
     def stop(self) -> None:
         self._stopping = True  # an orderly stop is not a death
         self.alive = False
-        if self._conn is not None:
-            self._conn.close()
+        if self._wire is not None and self.reads_on is not None:
+            on_loop(self.reads_on, self._close)
         if self._proc is not None:
             self._proc.join(timeout=5)
             if self._proc.is_alive():
                 self._proc.kill()
                 self._proc.join(timeout=5)
+
+
+_readers: asyncio.AbstractEventLoop | None = None
+_readers_lock = threading.Lock()
+
+
+def reader_loop() -> asyncio.AbstractEventLoop:
+    """An event loop on a thread of its own, reading the workers of a process that runs
+    none (tests, scripts); a gateway passes its own loop instead."""
+    global _readers
+    with _readers_lock:
+        if _readers is None:
+            loop = asyncio.new_event_loop()
+            threading.Thread(target=loop.run_forever, name="worker-readers", daemon=True).start()
+            _readers = loop
+        return _readers
+
+
+def on_loop(loop: asyncio.AbstractEventLoop, fn: Callable[[], object]) -> None:
+    """Run `fn` on `loop` and wait for it (at once when this is the loop's thread, or when
+    the loop runs no more)."""
+    try:
+        running = asyncio.get_running_loop()
+    except RuntimeError:
+        running = None
+    if running is loop or not loop.is_running():
+        fn()
+        return
+    done: Future[object] = Future()
+
+    def run() -> None:
+        try:
+            done.set_result(fn())
+        except BaseException as e:
+            done.set_exception(e)
+
+    loop.call_soon_threadsafe(run)
+    done.result(timeout=10)

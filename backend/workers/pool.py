@@ -6,6 +6,7 @@ actors spread over the cluster's nodes. The rest of the gateway sees only `Worke
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import os
 import shutil
@@ -54,8 +55,10 @@ class WorkerPool:
         period_s: float,
         cluster: str | None = None,
         factory: Factory | None = None,
+        loop: asyncio.AbstractEventLoop | None = None,
     ) -> None:
         self.count = count or default_count()
+        self.loop = loop  # where local workers' messages are read (the gateway's loop)
         self.period_s = period_s
         self.cluster = cluster
         self.factory = factory  # how a worker is made when neither local nor Ray (tests)
@@ -81,7 +84,7 @@ class WorkerPool:
             from backend.workers.ray_transport import RayWorker  # only with a cluster
 
             return RayWorker(wid, self.period_s, self.cluster)
-        return LocalWorker(wid, self.period_s, self.ring_dir)
+        return LocalWorker(wid, self.period_s, self.ring_dir, self.loop)
 
     def start(self, on_push: PushHandler, on_death: DeathHandler) -> None:
         """Start every worker (in parallel: each loads the compiled kernel)."""

@@ -65,7 +65,9 @@ MACHINES_PER_PERIOD = 16  # machines per base period before the period grows
 class Channel(Protocol):
     """Where requests come from and replies and pushes go."""
 
-    closed: bool  # the gateway went away: the worker stops
+    @property
+    def closed(self) -> bool:
+        """The gateway went away: the worker stops."""
 
     def wait(self, timeout_s: float) -> bool:
         """Block until a request is there or the timeout passed; true when one is there."""
@@ -76,7 +78,11 @@ class Channel(Protocol):
     def take(self) -> list[Envelope]:
         """Every request there now, oldest first."""
 
-    def send(self, push: Push) -> None: ...
+    def send(self, push: Push) -> None:
+        """A reply goes at once; a push may wait for `flush`."""
+
+    def flush(self) -> None:
+        """Send the pushes held back (the loop calls this at the end of every tick)."""
 
 
 class Worker:
@@ -126,6 +132,7 @@ class Worker:
                     self.serve()
                 self._push_news(host, wake)
             self._finish_steps()
+            self.channel.flush()  # the tick's pushes in one write
             done = time.monotonic()
             self._account(deadline, wake, done, deadline + period)
             if done > deadline + period:  # skip the deadlines already passed

@@ -68,7 +68,7 @@ from nc_sim.machine.spindle import SpindleControl
 from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.snapshot import RECENT_EVENTS, AxisState, MachineSnapshot
+from nc_sim.snapshot import AxisState, MachineSnapshot
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
@@ -222,10 +222,10 @@ class Machine:
         Live, not latched: false as soon as an E-stop or the PLC takes a drive's enables."""
         return self._powered and all(ax.drive_follows() for ax in self.axes)
 
-    def snapshot(self, recent_events: int = RECENT_EVENTS) -> MachineSnapshot:
+    def snapshot(self) -> MachineSnapshot:
         """Everything a status shows about the machine now, as plain values in engineering
-        units (nc_sim/snapshot.py), with the newest `recent_events` events."""
-        return machine_snapshot(self, recent_events)
+        units (nc_sim/snapshot.py); its events are read from `events` by cursor."""
+        return machine_snapshot(self)
 
     @property
     def queued_blocks(self) -> int:

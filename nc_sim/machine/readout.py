@@ -1,5 +1,5 @@
 """Reading a machine into its snapshot (nc_sim/snapshot.py): every kernel column and every
-unit conversion a status needs happens here, between cycles, in O(axes + recent events)."""
+unit conversion a status needs happens here, between cycles, in O(axes)."""
 
 from __future__ import annotations
 
@@ -75,8 +75,8 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
     )
 
 
-def machine_snapshot(m: Machine, recent_events: int) -> MachineSnapshot:
-    """The whole machine now, with the newest `recent_events` events."""
+def machine_snapshot(m: Machine) -> MachineSnapshot:
+    """The whole machine now (its events are read from `m.events` by cursor)."""
     # the event that set each axis' job error, once: an emergency stop is one error
     active = {e.seq: e for ax in m.axes if (e := ax.error_event) is not None}
     return MachineSnapshot(
@@ -93,6 +93,5 @@ def machine_snapshot(m: Machine, recent_events: int) -> MachineSnapshot:
             pending=tuple(PendingMSnapshot(p.m, p.axis, p.out_cycle) for p in m.plc.pending),
         ),
         job_errors=tuple(active[s] for s in sorted(active)),
-        recent_events=tuple(m.events.tail(recent_events)),
         event_cursor=m.events.cursor,
     )

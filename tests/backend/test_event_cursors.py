@@ -19,13 +19,12 @@ from api.commands import EmergencyStopCommand
 from backend.services.auth import Actor
 from backend.services.commands import execute
 from backend.services.machines import MachineProxy, MachineService
-from backend.services.status import machine_status
+from backend.services.status import RECENT_EVENTS, machine_status
 from backend.services.telemetry import TelemetryHub
 from backend.workers.protocol import Submit
 from nc_sim.commands import Mdi
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN
-from nc_sim.snapshot import RECENT_EVENTS
 from tests.backend.fakews import FakeSocket
 from tests.backend.inprocess import machine_service, paused_demo, step, wait_until
 
@@ -68,17 +67,25 @@ def test_a_telemetry_client_that_fell_behind_learns_how_many_events_it_missed(
     async def run() -> list[dict[str, object]]:
         hub = TelemetryHub(1.0, 1000)  # ticked by hand below
         ws = FakeSocket()
-        hub.add(cast(WebSocket, ws), host)
-        start = host.events.cursor
-        _flood(host, EVENT_LOG_LEN + 250)  # more than the log holds before the next frame
+        sub = hub.add(cast(WebSocket, ws), host)
+        start, cursor[0] = host.events.cursor, sub.event_cursor
+        # more than the log holds before the next frame (blocking calls: off the loop)
+        await asyncio.to_thread(_flood, host, EVENT_LOG_LEN + 250)
         wait_until(lambda: host.events.cursor == start + EVENT_LOG_LEN + 250)
         hub.tick()
         await asyncio.sleep(0.05)  # let the send task run
         return [json.loads(t) for t in ws.texts]
 
+    cursor = [0]
     texts = asyncio.run(run())
     events = [t for t in texts if t["type"] == "event"]
     assert len(events) == EVENT_LOG_LEN
-    assert events[0]["missed"] == 250 and all(e["missed"] == 0 for e in events[1:])
+    # a new viewer starts with the newest RECENT_EVENTS events; the log now holds only the
+    # last EVENT_LOG_LEN of the flood, so it missed the first 250 of the flood and what it
+    # would have got from before
+    start = cast(int, events[-1]["seq"]) + 1 - (EVENT_LOG_LEN + 250)
+    assert 0 <= start - cursor[0] <= RECENT_EVENTS
+    assert events[0]["missed"] == 250 + start - cursor[0]
+    assert all(e["missed"] == 0 for e in events[1:])
     seqs = [cast(int, e["seq"]) for e in events]
     assert seqs == list(range(seqs[0], seqs[0] + EVENT_LOG_LEN))

@@ -53,7 +53,7 @@ def test_a_spindle_at_s1000_m3_reaches_its_speed_after_the_ramp_its_parameters_g
     assert s1.override_pct == pytest.approx(100.0)
     assert (s1.target_pos, s1.distance_to_go) == (None, None)  # a speed motion has no target
     assert snap.cycle == sim.cycle and snap.t_s == pytest.approx(sim.cycle * 0.001)
-    assert snap.recent_events[-1].code == Code.EV_SPEED_REACHED
+    assert m.events[-1].code == Code.EV_SPEED_REACHED
     assert snap.event_cursor == m.events.cursor
     assert pickle.loads(pickle.dumps(snap)) == snap  # plain values: it crosses processes
 

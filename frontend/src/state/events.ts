@@ -1,7 +1,8 @@
-// The event log: job errors and information events, from status snapshots and the socket.
+// The event log: job errors and information events, as the socket sends them (the newest
+// ones when it connects, then each new one).
 import { computed, effect, signal } from "@preact/signals";
 import type { JobError } from "../api/types";
-import { machineId, status } from "./session";
+import { machineId } from "./session";
 
 const MAX_EVENTS = 500;
 export const events = signal<JobError[]>([]);
@@ -39,11 +40,6 @@ export function acknowledgeBanner(): void {
   const e = bannerError.value;
   if (e) acknowledged.value = keyOf(e);
 }
-
-effect(() => {
-  const s = status.value;
-  if (s) addEvents(s.recent_events);
-});
 
 effect(() => {
   void machineId.value; // a new machine: a new log
