@@ -75,9 +75,10 @@ class EventMessage(BaseModel):
 
 
 class StatusMessage(BaseModel):
-    """Server → client: the machine's status, pushed about 20 times a second while the
-    client is connected (no polling). Its `recent_events` is empty: a viewer gets the
-    newest events as event messages when it connects and every new one as it comes."""
+    """Server → client: the machine's status, pushed 20 times a second (10 when its worker
+    holds a class of machines) while the client is connected (no polling). Its
+    `recent_events` is empty: a viewer gets the newest events as event messages when it
+    connects and every new one as it comes."""
 
     type: Literal["status"] = "status"
     status: MachineStatus

@@ -8,7 +8,8 @@ viewers in one client process, asyncio, frame headers decoded only). After a set
 the load is held for `--seconds`, then the curve is printed, one line per N: overruns of every
 worker during the hold, telemetry sample-to-client p50/p99 (receive time minus
 `t0_unix + cycle * cycle_s`, every sample), frames/s per viewer, gaps, the slowest machine's
-real-time factor, CPU per machine (worker CPU s / wall s / N, % of a core) and of the gateway,
+real-time factor, CPU per machine (worker CPU s / wall s / N, % of a core), of the gateway and
+of the load generators (the viewers' process and this one, which jogs),
 commands refused or failed; finally the largest N that held real time: 0 overruns and
 p99 <= 50 ms. A fresh service per N keeps the steps independent (no leftovers of deleted
 machines, workers placed from empty).
@@ -31,7 +32,7 @@ import httpx
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.service import Meter, Viewers, latencies_ms, pct
+from bench.service import Meter, Viewers, cpu_s, latencies_ms, pct
 from tests.backend.server import Server
 
 SIGNALS = ["S1.speed_act_rpm", "S1.lag_deg", "X.pos_act_mm", "X.lag_mm"]
@@ -52,6 +53,7 @@ class Step:
     rt_factor_min: float
     cpu_per_machine_pct: float
     gateway_pct: float
+    clients_pct: float  # the viewers' process and this one (jogging), % of a core
     commands: int
     refused: int
     viewers_failed: int
@@ -139,7 +141,9 @@ def step(n: int, seconds: float, jog_s: float, extra: list[str]) -> Step:
             meter = Meter(srv.http, srv.proc.pid)
             meter.start()
             c0, r0 = jogging.commands, jogging.refused
+            clients0 = cpu_s(viewers.proc.pid) + cpu_s(os.getpid())
             time.sleep(seconds)
+            clients_s = cpu_s(viewers.proc.pid) + cpu_s(os.getpid()) - clients0
             service = meter.stop()
             commands, refused = jogging.commands - c0, jogging.refused - r0
             received = viewers.stop()
@@ -157,6 +161,7 @@ def step(n: int, seconds: float, jog_s: float, extra: list[str]) -> Step:
                 rt_factor_min=min(m["rt_factor"] for m in machines.values()),
                 cpu_per_machine_pct=100 * service.worker_cpu_s / service.wall_s / n,
                 gateway_pct=100 * service.gateway_cpu_s / service.wall_s,
+                clients_pct=100 * clients_s / service.wall_s,
                 commands=commands,
                 refused=refused,
                 viewers_failed=sum(1 for v in received if v.error),
@@ -187,13 +192,13 @@ def main() -> None:
         steps.append(step(n, args.seconds, args.jog_s, extra))
     print(
         "    N  overruns  p50 ms  p99 ms  frames/s/viewer  gaps  rt min  "
-        "CPU/machine %  gateway %  commands refused  viewers failed"
+        "CPU/machine %  gateway %  clients %  commands refused  viewers failed"
     )
     for s in steps:
         print(
             f"{s.n:5d}  {s.overruns:8d}  {s.p50_ms:6.1f}  {s.p99_ms:6.1f}  "
             f"{s.frames_per_viewer_s:15.1f}  {s.gaps:4d}  {s.rt_factor_min:6.3f}  "
-            f"{s.cpu_per_machine_pct:13.2f}  {s.gateway_pct:9.0f}  "
+            f"{s.cpu_per_machine_pct:13.2f}  {s.gateway_pct:9.0f}  {s.clients_pct:9.0f}  "
             f"{s.commands:8d} {s.refused:7d}  {s.viewers_failed:14d}"
         )
     held = [s.n for s in steps if s.held]

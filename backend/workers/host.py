@@ -7,6 +7,7 @@ see a half-written row and telemetry has no gaps unless a reader falls a whole r
 
 from __future__ import annotations
 
+import bisect
 import time
 from collections import deque
 from dataclasses import dataclass, field
@@ -184,12 +185,12 @@ class MachineHost:
 
     def rt_factor(self) -> float:
         """Simulated seconds per wall second over about the last second."""
-        h = list(self.pacing.history)
+        h = self.pacing.history
         if len(h) < 2:
             return 0.0
         t1, c1 = h[-1]
-        old = [x for x in h if t1 - x[0] <= 1.0]
-        t0, c0 = old[0] if len(old) > 1 else h[-2]
+        i = bisect.bisect_left(h, t1 - 1.0, key=lambda x: x[0])  # the oldest within 1 s
+        t0, c0 = h[i] if len(h) - i > 1 else h[-2]
         return (c1 - c0) * self.cycle_s / (t1 - t0) if t1 > t0 else 0.0
 
     def pacing_now(self) -> Pacing:

@@ -56,7 +56,9 @@ from nc_sim.params import Scope
 log = logging.getLogger(__name__)
 
 STATUS_PERIOD_S = 0.05  # watched machines' status: 20 per second, like a display refresh
+CLASS_STATUS_PERIOD_S = 0.1  # 10 per second once a worker holds a class of machines
 NEWS_PERIOD_S = 1.0  # loop figures and every machine's pacing
+SERVE_CHECK_S = 0.0002  # a tick looks for requests this often (a look is a system call)
 MAX_SERVE = 64  # requests carried out at a time before the loop looks at its deadline
 MAX_PERIOD_S = 0.01  # the longest loop period (telemetry waits at most this for samples)
 MACHINES_PER_PERIOD = 16  # machines per base period before the period grows
@@ -125,11 +127,15 @@ class Worker:
             while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
                 if self.backlog or self.channel.wait(remaining):
                     self.serve()
-            wake = time.monotonic()
+            wake = checked = time.monotonic()
             for host in list(self.hosts.values()):
                 self._tick(host, deadline, period)
-                if self.channel.ready() or self.backlog:
-                    self.serve()
+                # between machines, look for requests (an E-stop) every SERVE_CHECK_S
+                now = time.monotonic()
+                if now - checked >= SERVE_CHECK_S or self.backlog:
+                    checked = now
+                    if self.channel.ready() or self.backlog:
+                        self.serve()
                 self._push_news(host, wake)
             self._finish_steps()
             self.channel.flush()  # the tick's pushes in one write
@@ -150,6 +156,13 @@ class Worker:
         which costs less per cycle), at most MAX_PERIOD_S. Commands never wait for a tick."""
         n = max(1, math.ceil(len(self.hosts) / MACHINES_PER_PERIOD))
         return min(MAX_PERIOD_S, max(self.base_period_s, self.base_period_s * n))
+
+    def status_period(self) -> float:
+        """How often a watched machine's status is pushed: 20 times a second, 10 once the
+        loop period grows (a class of machines: a status costs the worker, the gateway and
+        the viewer more than a tick of the machine; the plots keep their full rate)."""
+        many = len(self.hosts) > MACHINES_PER_PERIOD
+        return CLASS_STATUS_PERIOD_S if many else STATUS_PERIOD_S
 
     def stop(self) -> None:
         self.stopped = True
@@ -181,7 +194,7 @@ class Worker:
         status = None
         if status_due:
             status = host.status_read()
-            host.status_due = max(host.status_due + STATUS_PERIOD_S, now)
+            host.status_due = max(host.status_due + self.status_period(), now)
         caps, host.captures = host.captures, []
         self.channel.send(
             MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps)
