@@ -9,10 +9,8 @@ however it ends, and a worker whose socket closes stops.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import multiprocessing as mp
-import os
 import socket
 import threading
 import time
@@ -26,8 +24,6 @@ from backend.workers.wire import Wire
 
 log = logging.getLogger(__name__)
 
-WORKER_NICE = -10  # the fallback when real-time scheduling is not allowed
-WORKER_RT_PRIORITY = 10  # SCHED_FIFO priority (1 lowest, 99 highest) of a worker's loop
 MAX_TAKE = 256  # requests one `take` returns at most: the loop keeps its deadlines in a flood
 
 
@@ -61,26 +57,11 @@ class WireChannel:
         self.wire.flush()
 
 
-def realtime_priority() -> str:
-    """Run this process ahead of the gateway and the clients: SCHED_FIFO where allowed (root
-    or CAP_SYS_NICE; the loop sleeps to every deadline, and Linux keeps 5 % of each second
-    for other tasks, so a worker cannot lock a core up), else nice -10, else as it is."""
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(WORKER_RT_PRIORITY))
-        return "fifo"
-    except (OSError, AttributeError):
-        pass
-    with contextlib.suppress(OSError):
-        os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
-        return "nice"
-    return "normal"
-
-
 def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) -> None:
     """The worker process: load the compiled kernel, then pace until the gateway goes."""
     # imported here: the gateway process never loads the kernel
     from backend.workers.warmup import warm_up
-    from backend.workers.worker import Worker
+    from backend.workers.worker import Worker, realtime_priority
 
     logging.basicConfig(level=logging.WARNING, format="worker %(process)d: %(message)s")
     realtime_priority()

@@ -147,7 +147,8 @@ class WorkerActor:
         self._cond = threading.Condition()
         self.dropped = 0
         self._sent: dict[str, tuple[int, int]] = {}  # machine -> (epoch, newest cycle sent)
-        self.core = ThreadedWorker(period_s, None, self._deliver, self.node_id[:NODE_CHARS])
+        node = self.node_id[:NODE_CHARS]
+        self.core = ThreadedWorker(period_s, None, self._deliver, node, realtime=True)
         self.core.start()
 
     def _deliver(self, push: Push) -> None:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from backend.workers.client import WorkerClient
 from backend.workers.protocol import Envelope, Push, Request
-from backend.workers.worker import Worker
+from backend.workers.worker import Worker, realtime_priority
 
 
 class QueueChannel:
@@ -61,14 +61,22 @@ class ThreadedWorker:
     """A Worker running on its own thread."""
 
     def __init__(
-        self, period_s: float, ring_dir: Path | None, deliver: Callable[[Push], None], node: str
+        self,
+        period_s: float,
+        ring_dir: Path | None,
+        deliver: Callable[[Push], None],
+        node: str,
+        realtime: bool = False,
     ) -> None:
+        self.realtime = realtime  # the loop thread runs ahead of others (a Ray actor's)
         self.channel = QueueChannel(deliver)
         self.worker = Worker(self.channel, period_s, ring_dir, node)
         self.thread = threading.Thread(target=self._run, name="worker-loop", daemon=True)
         self.failed: BaseException | None = None
 
     def _run(self) -> None:
+        if self.realtime:
+            realtime_priority()
         try:
             self.worker.run()
         except BaseException as e:  # the owner learns of it: the worker is dead
