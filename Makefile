@@ -10,7 +10,7 @@ DIST      := frontend/dist/index.html
 CHROMIUM  := /usr/bin/chromium
 SUDO      := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 API_SRC   := $(shell find api backend -name '*.py')
-UI_SRC    := $(shell find frontend/src -type f ! -name schema.d.ts) frontend/index.html \
+UI_SRC    := $(shell find frontend/src -type f ! -name schema.d.ts) frontend/index.html frontend/docs.html \
              frontend/vite.config.ts frontend/tsconfig.json
 
 .PHONY: run test lint bench bootstrap frontend clean

@@ -30,6 +30,22 @@ def main(argv: list[str] | None = None) -> int:
         "else, shipping the gateway's code to the actors; workers become Ray actors spread "
         "over the nodes",
     )
+    p_srv.add_argument(
+        "--allowed-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="a Host name clients reach the service by (repeat for more); loopback names "
+        "and the --host address are always allowed",
+    )
+    p_srv.add_argument("--tls-cert", type=Path, help="TLS certificate (PEM) to serve HTTPS")
+    p_srv.add_argument("--tls-key", type=Path, help="its private key (PEM)")
+    p_srv.add_argument(
+        "--behind-proxy",
+        metavar="ADDRESS",
+        help="served through a reverse proxy at ADDRESS that terminates TLS: its "
+        "X-Forwarded-For/-Proto headers are trusted, nobody else's",
+    )
     p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
     args = parser.parse_args(argv)
@@ -53,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         rows = len(next(iter(result.columns.values())))
         print(f"{rows} cycles, {len(result.events)} events ({len(errors)} errors) -> {args.out}")
         return 0
-    from backend.server import serve
+    from backend.server import Exposure, serve
 
     overrides: dict[str, object] = {}
     if args.db:
@@ -64,8 +80,10 @@ def main(argv: list[str] | None = None) -> int:
         overrides["workers"] = args.workers
     if args.cluster:
         overrides["cluster"] = args.cluster
-    serve(args.host, args.port, overrides)
-    return 0
+    if args.allowed_host:
+        overrides["allowed_hosts"] = args.allowed_host
+    exposure = Exposure(args.tls_cert, args.tls_key, args.behind_proxy)
+    return serve(args.host, args.port, overrides, exposure)
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ from backend.routes import (
     traces,
     viewer,
 )
+from backend.security import Perimeter, host_names
 from backend.settings import Settings
 
 
@@ -38,7 +39,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         description="Commissioning HMI for a simulated NC: machines, commands, parameters, "
         "live telemetry.",
         lifespan=lifespan,
+        docs_url=None,  # ours (backend/frontend.py): Swagger UI from our build, not a CDN
+        redoc_url=None,
     )
+    app.add_middleware(Perimeter, hosts=host_names(cfg.host, cfg.allowed_hosts))
 
     errors.install(app)
     for module in (service, machines, commands, parameters, telemetry, scope, traces, viewer):

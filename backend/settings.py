@@ -40,6 +40,11 @@ class Settings(BaseSettings):
         Path(__file__).resolve().parents[1] / "frontend" / "dist",
         description="built browser HMI served at / (make builds it)",
     )
+    host: str = Field("127.0.0.1", description="the address the service binds")
+    allowed_hosts: list[str] = Field(
+        default_factory=list,
+        description="Host names clients reach the service by, besides loopback and `host`",
+    )
     user: str = Field("local", description="who requests act as until login exists")
     role: Role = Field(Role.INSTRUCTOR, description="role of that user")
 

@@ -57,8 +57,8 @@ class Server:
             self.proc = None
 
     def close(self) -> None:
+        self.http.close()  # first: an open TLS keep-alive connection holds up the shutdown
         self.stop()
-        self.http.close()
 
     # --- helpers ----------------------------------------------------------------------------
     def command(self, mid: str, body: dict[str, Any]) -> httpx.Response:

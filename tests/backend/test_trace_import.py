@@ -133,7 +133,7 @@ def test_a_body_over_the_limit_is_413_and_never_held_whole(tmp_path: Path) -> No
         assert peak_rss_bytes(s.proc.pid) - before < 1.5 * MAX_CSV_BYTES
         # a Content-Length over the limit is refused before anything is read
         with socket.create_connection(("127.0.0.1", s.port), timeout=30) as raw:
-            head = "POST /api/traces/import HTTP/1.1\r\nHost: x\r\n"
+            head = f"POST /api/traces/import HTTP/1.1\r\nHost: 127.0.0.1:{s.port}\r\n"
             raw.sendall(f"{head}Content-Length: {3 * MAX_CSV_BYTES}\r\n\r\n1,2\n".encode())
             assert raw.recv(100).startswith(b"HTTP/1.1 413")
     finally:

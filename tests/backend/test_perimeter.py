@@ -1,0 +1,152 @@
+"""The perimeter over real HTTP and websockets: a foreign Host or Origin is refused before a
+route runs (and nothing changes), every page carries a CSP that forbids framing and foreign
+sources, the API docs come from our own build, and `serve` refuses to listen beyond loopback
+without TLS."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import ssl
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+import websockets
+
+from tests.backend.server import ROOT, Server, free_port
+
+FOREIGN = "http://evil.example"
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    s = Server(tmp_path_factory.mktemp("perimeter") / "p.sqlite").start()
+    yield s
+    s.close()
+
+
+def test_a_request_for_a_foreign_host_name_is_refused(srv: Server) -> None:
+    """DNS rebinding: the page's own name reaches our address; we answer only our names."""
+    r = srv.http.get("/api/machines", headers={"Host": "evil.example"})
+    assert r.status_code == 400
+    assert "evil.example" in r.json()["detail"]["message"]
+    for name in (f"127.0.0.1:{srv.port}", f"localhost:{srv.port}"):
+        assert srv.http.get("/api/machines", headers={"Host": name}).status_code == 200
+
+
+def test_a_cross_site_command_is_refused_and_changes_nothing(srv: Server, mid: str) -> None:
+    """Another site's page POSTing to us (a "simple" request needs no preflight)."""
+    spin = {"type": "mdi", "block": "M3 S500"}
+    url = f"/api/machines/{mid}/commands"
+    r = srv.http.post(url, json=spin, headers={"Origin": FOREIGN})
+    assert r.status_code == 403 and FOREIGN in r.json()["detail"]["message"]
+    lst = "getriebe[0].kv 1\n"
+    r = srv.http.post(
+        f"/api/machines/{mid}/parameters/import?scope=axis&target=X",
+        content=lst,
+        headers={"Origin": FOREIGN, "Content-Type": "text/plain"},
+    )
+    assert r.status_code == 403
+    r = srv.http.post(url, json=spin, headers={"Sec-Fetch-Site": "cross-site"})
+    assert r.status_code == 403
+    r = srv.http.post(url, json=spin, headers={"Origin": "null"})  # a sandboxed frame
+    assert r.status_code == 403
+    s1 = srv.axis("S1", mid)
+    assert s1["vel_cmd"] == 0.0 and s1["state"] == "STANDSTILL"
+    x = srv.http.get(f"/api/machines/{mid}/parameters?scope=axis&target=X").json()
+    assert all(p["value"] != 1 for p in x if p["name"] == "getriebe[0].kv")
+    # the service's own page and a script without Origin may
+    own = srv.http.post(url, json=spin, headers={"Origin": srv.base})
+    assert own.status_code == 200, own.text
+    assert srv.command(mid, {"type": "spindle", "m": 5}).status_code == 200
+
+
+def test_a_websocket_from_a_foreign_origin_is_refused(srv: Server, mid: str) -> None:
+    url = f"{srv.ws_base}/api/machines/{mid}/telemetry"
+
+    async def connect(origin: str) -> str:
+        try:
+            async with websockets.connect(url, origin=origin) as ws:  # type: ignore[arg-type]
+                return str(await asyncio.wait_for(ws.recv(), 10))
+        except websockets.InvalidStatus as e:
+            return f"refused {e.response.status_code}"
+
+    assert asyncio.run(connect(FOREIGN)) == "refused 403"
+    assert '"hello"' in asyncio.run(connect(srv.base))
+
+
+def test_every_page_forbids_framing_and_foreign_sources(srv: Server) -> None:
+    for path in ("/", "/docs", "/api/health", "/api/machines/none/status"):
+        r = srv.http.get(path)
+        csp = r.headers["content-security-policy"]
+        assert "frame-ancestors 'none'" in csp, path
+        assert "default-src 'self'" in csp and "http" not in csp, path  # no foreign source
+        assert r.headers["x-frame-options"] == "DENY"
+        assert r.headers["x-content-type-options"] == "nosniff"
+
+
+def test_the_api_docs_load_only_from_this_service(srv: Server) -> None:
+    page = srv.http.get("/docs")
+    assert page.status_code == 200 and "swagger-ui" in page.text
+    refs = re.findall(r'(?:src|href)="([^"]+)"', page.text)
+    assert refs and all(ref.startswith("/") and not ref.startswith("//") for ref in refs), refs
+    for ref in refs:
+        asset = srv.http.get(ref)
+        assert asset.status_code == 200, ref
+        assert "cdn.jsdelivr" not in asset.text and "unpkg.com" not in asset.text
+    assert srv.http.get("/openapi.json").json()["info"]["title"] == "Inbetrieb"
+
+
+def _serve(*args: str) -> subprocess.CompletedProcess[str]:
+    """`inbetrieb serve` that must refuse: it exits without serving."""
+    cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(free_port()), *args]
+    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=60)
+
+
+def test_serving_beyond_loopback_needs_tls_or_a_proxy(tmp_path: Path) -> None:
+    db = ["--db", str(tmp_path / "x.sqlite")]
+    plain = _serve("--host", "0.0.0.0", *db)
+    assert plain.returncode == 2 and "without TLS" in plain.stderr
+    assert "--tls-cert" in plain.stderr and "--behind-proxy" in plain.stderr
+    anywhere = _serve("--host", "0.0.0.0", "--behind-proxy", "127.0.0.1", *db)
+    assert anywhere.returncode == 2 and "--allowed-host" in anywhere.stderr
+    half = _serve("--tls-cert", str(tmp_path / "c.pem"), *db)
+    assert half.returncode == 2 and "go together" in half.stderr
+    assert not (tmp_path / "x.sqlite").exists()  # nothing started
+
+
+def test_with_a_certificate_it_serves_https(tmp_path: Path) -> None:
+    cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
+    subject = ["-subj", "/CN=127.0.0.1", "-addext", "subjectAltName=IP:127.0.0.1"]
+    files = ["-keyout", str(key), "-out", str(cert)]
+    subprocess.run(
+        [
+            "openssl",
+            "req",
+            "-x509",
+            "-newkey",
+            "rsa:2048",
+            "-nodes",
+            "-days",
+            "1",
+            *subject,
+            *files,
+        ],
+        check=True,
+        capture_output=True,
+    )
+    s = Server(tmp_path / "tls.sqlite", "--no-demo", "--tls-cert", str(cert), "--tls-key", str(key))
+    s.base = f"https://127.0.0.1:{s.port}"
+    trust = ssl.create_default_context(cafile=str(cert))
+    s.http = httpx.Client(base_url=s.base, timeout=10, verify=trust)
+    try:
+        s.start()
+        r = s.http.get("/api/health")
+        assert r.status_code == 200
+        assert r.url.scheme == "https"
+    finally:
+        s.close()
