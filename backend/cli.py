@@ -7,6 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from backend import cli_accounts
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 
@@ -48,7 +49,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
+    cli_accounts.add_parsers(sub)
     args = parser.parse_args(argv)
+    if args.cmd in ("user", "token"):
+        return cli_accounts.run(args)
     if args.cmd == "openapi":
         import json
 

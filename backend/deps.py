@@ -11,6 +11,9 @@ from typing import Annotated
 from fastapi import Depends
 from fastapi.requests import HTTPConnection
 
+from backend.errors import ApiError
+from backend.security import is_loopback
+from backend.services.accounts import Accounts
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
@@ -30,6 +33,7 @@ class Services:
 
     settings: Settings
     store: Store
+    accounts: Accounts
     machines: MachineService
     pool: WorkerPool
     hub: TelemetryHub
@@ -44,6 +48,8 @@ class Services:
         # handled on the thread pool would wait that long behind the telemetry hub
         sys.setswitchinterval(GIL_SWITCH_S)
         store = Store(settings.db_path)
+        accounts = Accounts(store)
+        accounts.ensure_admin()
         loop = asyncio.get_running_loop()  # reads the local workers' replies and pushes
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
@@ -57,7 +63,22 @@ class Services:
         viewer = RerunViewer(tdir / "rerun-viewer.log")
         hub.start()
         recorders.start()
-        return cls(settings, store, machines, pool, hub, traces, recorders, viewer, time.time())
+        services = cls(
+            settings, store, accounts, machines, pool, hub, traces, recorders, viewer, time.time()
+        )
+        services.print_login_link()
+        return services
+
+    def print_login_link(self) -> None:
+        """On loopback, a one-time login link for the first admin (as Jupyter prints one):
+        `make run` opens the HMI without a password, and nobody else gets one."""
+        admin = self.accounts.first_admin()
+        if admin is None or not is_loopback(self.settings.host):
+            return
+        token = self.accounts.new_token(admin, "printed at start", once=True)
+        host = "localhost" if ":" in self.settings.host else self.settings.host
+        link = f"http://{host}:{self.settings.port}/auth/once?token={token}"
+        print(f"Log in as {admin} (once, within an hour): {link}", flush=True)
 
     async def stop(self) -> None:
         await self.hub.stop()
@@ -75,9 +96,11 @@ async def get_services(conn: HTTPConnection) -> Services:
 
 
 async def get_actor(conn: HTTPConnection) -> Actor:
-    """Who sends this request. Authentication will set it from the session."""
-    s = (await get_services(conn)).settings
-    return Actor(s.user, s.role)
+    """Who sends this request, as the authentication middleware found (backend/authn.py)."""
+    actor: Actor | None = conn.scope.get("state", {}).get("actor")
+    if actor is None:  # a route outside the guarded paths asked: nobody
+        raise ApiError(401, {"message": "not logged in"})
+    return actor
 
 
 ServicesDep = Annotated[Services, Depends(get_services)]

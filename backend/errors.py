@@ -24,7 +24,8 @@ MAX_ECHO_CHARS = 200
 
 WHY: dict[int, str] = {
     400: "malformed request",
-    403: "not allowed for this role",
+    401: "not logged in: no session, or an unknown or expired token",
+    403: "not allowed for this role, or a missing CSRF token",
     404: "no such machine, trace or recording",
     409: "conflicts with the current state",
     413: "body too large",

@@ -8,8 +8,11 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI
 
 from backend import VERSION, errors, frontend, openapi
+from backend.authn import Authentication
 from backend.deps import Services
+from backend.errors import responses
 from backend.routes import (
+    auth,
     commands,
     machines,
     parameters,
@@ -42,11 +45,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         docs_url=None,  # ours (backend/frontend.py): Swagger UI from our build, not a CDN
         redoc_url=None,
     )
-    app.add_middleware(Perimeter, hosts=host_names(cfg.host, cfg.allowed_hosts))
+    app.add_middleware(Authentication)
+    app.add_middleware(Perimeter, hosts=host_names(cfg.host, cfg.allowed_hosts))  # outermost
 
     errors.install(app)
+    app.include_router(auth.router)
+    # every other route needs a token or a session (backend/authn.py)
     for module in (service, machines, commands, parameters, telemetry, scope, traces, viewer):
-        app.include_router(module.router)
+        app.include_router(module.router, responses=responses(401, 403))
     openapi.install(app)
     frontend.mount(app, cfg.frontend_dir)
     return app

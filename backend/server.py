@@ -62,7 +62,7 @@ class Exposure:
 def serve(host: str, port: int, overrides: Mapping[str, object], exposure: Exposure) -> int:
     """Start the service and block until it is stopped (SIGINT/SIGTERM); 2 when the
     exposure asked for is unsafe (nothing started)."""
-    settings = Settings.model_validate({**overrides, "host": host})
+    settings = Settings.model_validate({**overrides, "host": host, "port": port})
     problem = exposure.problem(host, settings.allowed_hosts)
     if problem:
         print(f"inbetrieb serve: {problem}", file=sys.stderr)

@@ -7,8 +7,6 @@ from pathlib import Path
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from api.auth import Role
-
 
 class Settings(BaseSettings):
     model_config = SettingsConfigDict(env_prefix="INBETRIEB_")
@@ -41,12 +39,11 @@ class Settings(BaseSettings):
         description="built browser HMI served at / (make builds it)",
     )
     host: str = Field("127.0.0.1", description="the address the service binds")
+    port: int = Field(8000, ge=0, le=65535, description="its port (for the login link)")
     allowed_hosts: list[str] = Field(
         default_factory=list,
         description="Host names clients reach the service by, besides loopback and `host`",
     )
-    user: str = Field("local", description="who requests act as until login exists")
-    role: Role = Field(Role.INSTRUCTOR, description="role of that user")
 
     @property
     def traces_path(self) -> Path:

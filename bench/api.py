@@ -53,7 +53,7 @@ def main() -> None:
             for _ in range(50):  # warm the connection and the code paths
                 srv.http.get("/api/machines/demo/status")
             url = f"{srv.ws_base}/api/machines/demo/telemetry"
-            viewers = Viewers([url] * args.viewers, SIGNALS).start()
+            viewers = Viewers([url] * args.viewers, SIGNALS, headers=srv.auth).start()
             print(
                 f"command round trip, {args.requests} requests per kind, loopback HTTP, "
                 f"{args.viewers} viewers of {len(SIGNALS)} signals attached"

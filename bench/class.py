@@ -66,15 +66,19 @@ class Step:
 class Jogging:
     """Every machine's X axis jogging back and forth, driven from a thread of this process."""
 
-    def __init__(self, base: str, mids: list[str], period_s: float) -> None:
-        self.base, self.mids, self.period_s = base, mids, period_s
+    def __init__(
+        self, base: str, mids: list[str], period_s: float, headers: dict[str, str]
+    ) -> None:
+        self.base, self.mids, self.period_s, self.headers = base, mids, period_s, headers
         self.commands = self.refused = 0
         self.stopping = threading.Event()
         self.thread = threading.Thread(target=lambda: asyncio.run(self.main()), daemon=True)
 
     async def main(self) -> None:
         limits = httpx.Limits(max_connections=64)
-        async with httpx.AsyncClient(base_url=self.base, timeout=10, limits=limits) as http:
+        async with httpx.AsyncClient(
+            base_url=self.base, timeout=10, limits=limits, headers=self.headers
+        ) as http:
             await asyncio.gather(*(self.jog(http, mid) for mid in self.mids))
 
     async def command(self, http: httpx.AsyncClient, mid: str, body: dict[str, object]) -> None:
@@ -101,10 +105,10 @@ class Jogging:
         self.thread.join(timeout=30)
 
 
-async def set_up(base: str, mids: list[str]) -> None:
+async def set_up(base: str, mids: list[str], headers: dict[str, str]) -> None:
     """Create the machines, wait for their drives, turn their spindles."""
     gate = asyncio.Semaphore(SETUP_CONCURRENCY)
-    async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+    async with httpx.AsyncClient(base_url=base, timeout=60, headers=headers) as http:
 
         async def one(mid: str) -> None:
             async with gate:
@@ -132,12 +136,12 @@ def step(n: int, seconds: float, jog_s: float, extra: list[str]) -> Step:
         try:
             mids = [f"c{i:03d}" for i in range(n)]
             t0 = time.monotonic()
-            asyncio.run(set_up(srv.base, mids))
+            asyncio.run(set_up(srv.base, mids, srv.auth))
             setup_s = time.monotonic() - t0
-            jogging = Jogging(srv.base, mids, jog_s)
+            jogging = Jogging(srv.base, mids, jog_s, srv.auth)
             jogging.thread.start()
             urls = [f"{srv.ws_base}/api/machines/{mid}/telemetry" for mid in mids]
-            viewers = Viewers(urls, SIGNALS, settle_s=1.0).start()
+            viewers = Viewers(urls, SIGNALS, settle_s=1.0, headers=srv.auth).start()
             meter = Meter(srv.http, srv.proc.pid)
             meter.start()
             c0, r0 = jogging.commands, jogging.refused

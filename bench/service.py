@@ -217,16 +217,17 @@ async def view(
     start: float | None = None,
     stop: Callable[[], bool] | None = None,
     subscribed: Callable[[], None] | None = None,
+    headers: dict[str, str] | None = None,
 ) -> Viewer:
     """Subscribe to `signals` and read every message until monotonic time `until` (or until
     `stop()` says so, checked at least every `STOP_POLL_S`); frames count from monotonic time
     `start` (to skip the first burst after subscribing); `subscribed()` is called once the
-    subscription is sent."""
+    subscription is sent. `headers`: the credentials (an API token)."""
     v = Viewer()
     start = time.monotonic() if start is None else start
     expected: int | None = None
     try:
-        async with connect(url, max_size=None) as ws:
+        async with connect(url, max_size=None, additional_headers=headers) as ws:
             await ws.send(json.dumps({"type": "subscribe", "signals": signals}))
             if subscribed:
                 subscribed()
@@ -273,7 +274,13 @@ def pct(a: np.ndarray, q: float) -> float:
 
 
 def _viewers_main(
-    urls: list[str], signals: list[str], settle_s: float, stop: Event, ready: Any, out: Any
+    urls: list[str],
+    signals: list[str],
+    settle_s: float,
+    stop: Event,
+    ready: Any,
+    out: Any,
+    headers: dict[str, str] | None,
 ) -> None:
     """Child process: one viewer per URL until `stop` is set; counts subscriptions in
     `ready`, puts the results to `out`."""
@@ -286,7 +293,7 @@ def _viewers_main(
         start = time.monotonic() + settle_s
         until = time.monotonic() + 24 * 3600
         return await asyncio.gather(
-            *(view(u, signals, until, start, stop.is_set, subscribed) for u in urls)
+            *(view(u, signals, until, start, stop.is_set, subscribed, headers) for u in urls)
         )
 
     out.put(asyncio.run(main()))
@@ -296,14 +303,20 @@ class Viewers:
     """Telemetry viewers in a separate client process (so they do not compete with the
     bench's own timing for this interpreter): one per URL, from `start()` until `stop()`."""
 
-    def __init__(self, urls: list[str], signals: list[str], settle_s: float = 0.5) -> None:
+    def __init__(
+        self,
+        urls: list[str],
+        signals: list[str],
+        settle_s: float = 0.5,
+        headers: dict[str, str] | None = None,
+    ) -> None:
         ctx = mp.get_context("spawn")
         self.stopping = ctx.Event()
         self.ready: Any = ctx.Value("i", 0)
         self.out: Any = ctx.Queue()
         self.proc = ctx.Process(
             target=_viewers_main,
-            args=(urls, signals, settle_s, self.stopping, self.ready, self.out),
+            args=(urls, signals, settle_s, self.stopping, self.ready, self.out, headers),
         )
         self.n = len(urls)
         self.settle_s = settle_s

@@ -38,9 +38,11 @@ SIGNALS = [
 SETTLE_S = 0.5  # frames in the first half second after subscribing (backlog) are not counted
 
 
-async def viewers(url: str, n: int, seconds: float) -> list[Viewer]:
+async def viewers(url: str, n: int, seconds: float, headers: dict[str, str]) -> list[Viewer]:
     start = time.monotonic() + SETTLE_S
-    return await asyncio.gather(*(view(url, SIGNALS, start + seconds, start) for _ in range(n)))
+    return await asyncio.gather(
+        *(view(url, SIGNALS, start + seconds, start, headers=headers) for _ in range(n))
+    )
 
 
 def run(srv: Server, n: int, seconds: float) -> None:
@@ -48,7 +50,8 @@ def run(srv: Server, n: int, seconds: float) -> None:
     meter = Meter(srv.http, srv.proc.pid)
     meter.start()
     own0 = time.process_time()
-    results = asyncio.run(viewers(f"{srv.ws_base}/api/machines/demo/telemetry", n, seconds))
+    url = f"{srv.ws_base}/api/machines/demo/telemetry"
+    results = asyncio.run(viewers(url, n, seconds, srv.auth))
     own = time.process_time() - own0
     service = meter.stop()
     wall = service.wall_s

@@ -1,4 +1,4 @@
-"""The service itself: health and status of the loop, clients and machines."""
+"""The service itself: status of the workers, clients and machines."""
 
 from __future__ import annotations
 
@@ -12,11 +12,6 @@ from backend.deps import ServicesDep
 from backend.services.status import machine_simulation, worker_statuses
 
 router = APIRouter(prefix="/api", tags=["service"])
-
-
-@router.get("/health")
-def health() -> dict[str, str]:
-    return {"status": "ok"}
 
 
 @router.get("/service/status")

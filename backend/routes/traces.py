@@ -8,7 +8,7 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse, RedirectResponse
 
-from api.auth import Action
+from api.auth import Action, Me
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
 from backend.bodies import read_text, text_answer, text_body
 from backend.deps import ActorDep, ServicesDep
@@ -90,10 +90,13 @@ def rrd(tid: str, services: ServicesDep) -> FileResponse:
 @router.get(
     "/{tid}/viewer", response_class=RedirectResponse, status_code=307, responses=responses(404)
 )
-def viewer(tid: str, request: Request, services: ServicesDep) -> RedirectResponse:
-    """Open the trace in the bundled Rerun web viewer."""
+def viewer(tid: str, request: Request, services: ServicesDep, actor: ActorDep) -> RedirectResponse:
+    """Open the trace in the bundled Rerun web viewer. Its loader fetches the .rrd without
+    the session cookie, so the URL carries a ticket for that one request."""
     services.traces.get(tid)
-    return RedirectResponse(viewer_url(request, f"/api/traces/{tid}/trace.rrd"))
+    path = f"/api/traces/{tid}/trace.rrd"
+    ticket = services.accounts.issue_ticket(Me(name=actor.name, role=actor.role), path)
+    return RedirectResponse(viewer_url(request, f"{path}?ticket={ticket}"))
 
 
 @router.get("/{tid}/measure", responses=responses(404, why={422: "unknown channel, empty window"}))

@@ -1,8 +1,8 @@
 """The single authorization point. Every command, parameter write, simulation control and
 telemetry subscription asks `authorize` first.
 
-Today every request acts as the configured local user; authentication (who the actor is) and a
-single-operator control lock plug in here without changing routes.
+The actor is who the authentication middleware identified (backend/authn.py: an API token or
+a login session); a single-operator control lock plugs in here without changing routes.
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from nc_sim.params import Value
 
@@ -102,6 +103,20 @@ class Store:
     def close(self) -> None:
         with self._lock:
             self._db.close()
+
+    # --- for the services with tables of their own (accounts) -------------------------------
+    def script(self, sql: str) -> None:
+        """Run a schema script (CREATE TABLE IF NOT EXISTS ...)."""
+        with self._lock:
+            self._db.executescript(sql)
+
+    def query(self, sql: str, args: tuple[object, ...] = ()) -> list[tuple[Any, ...]]:
+        with self._lock:
+            return self._db.execute(sql, args).fetchall()
+
+    def run(self, sql: str, args: tuple[object, ...] = ()) -> None:
+        with self._lock:
+            self._db.execute(sql, args)
 
     def machines(self) -> list[StoredMachine]:
         with self._lock:

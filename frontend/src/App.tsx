@@ -1,11 +1,12 @@
-// Layout: the top bar (machine, health, connection, emergency stop) and banners always; the
-// machine view beside the workspaces (tabs).
+// Layout: the login screen while nobody is logged in; then the top bar (machine, health,
+// connection, user, emergency stop) and banners always, the machine view beside the workspaces (tabs).
 import { useEffect, useRef, useState } from "preact/hooks";
 import { http } from "./api/http";
 import { Banner } from "./panels/Banner";
 import { EventsPanel } from "./panels/EventsPanel";
 import { HliPanel } from "./panels/HliPanel";
 import { JogPanel } from "./panels/JogPanel";
+import { Login } from "./panels/Login";
 import { MachineView } from "./panels/MachineView";
 import { MdiPanel } from "./panels/MdiPanel";
 import { Parameters } from "./panels/Parameters";
@@ -14,6 +15,7 @@ import { Scope } from "./panels/Scope";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
 import { TrialBar } from "./panels/TrialBar";
+import { me } from "./state/auth";
 import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
@@ -44,6 +46,11 @@ function MachineControls() {
 }
 
 export function App() {
+  if (me.value === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
+  return me.value ? <Hmi /> : <Login />;
+}
+
+function Hmi() {
   const [tab, setTab] = useState<Tab>("Operate");
   const head = useRef<HTMLDivElement>(null);
   useEffect(() => {

@@ -1,7 +1,9 @@
+import { effect } from "@preact/signals";
 import { render } from "preact";
 import { App } from "./App";
 import { fps } from "./panels/LivePlot";
-import { startSession } from "./state/session";
+import { loadMe, loggedIn } from "./state/auth";
+import { endSession, startSession } from "./state/session";
 import type { Rings } from "./state/rings";
 import { frameListeners, frames, rings } from "./state/telemetry";
 import "./styles.css";
@@ -20,4 +22,9 @@ declare global {
 window.inbetrieb = { fps, frames, frameListeners, rings: () => rings.value };
 
 render(<App />, document.getElementById("app")!);
-void startSession();
+// the machines and their socket run only while someone is logged in (logged out, nothing asks)
+effect(() => {
+  if (loggedIn.value) void startSession();
+  else endSession();
+});
+void loadMe();

@@ -14,7 +14,9 @@ import struct
 
 
 class RawWebSocket:
-    def __init__(self, host: str, port: int, path: str, rcvbuf: int = 4096) -> None:
+    def __init__(
+        self, host: str, port: int, path: str, header: str = "", rcvbuf: int = 4096
+    ) -> None:
         self.sock = socket.socket()
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
         self.sock.connect((host, port))
@@ -23,7 +25,7 @@ class RawWebSocket:
             (
                 f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
                 f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-                "Sec-WebSocket-Version: 13\r\n\r\n"
+                f"Sec-WebSocket-Version: 13\r\n{header}\r\n"
             ).encode()
         )
         head = b""

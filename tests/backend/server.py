@@ -9,9 +9,13 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import httpx
+
+from api.auth import Role
+from backend.services.accounts import Accounts
+from backend.services.store import Store
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -22,10 +26,28 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
+USER, PASSWORD = "tester", "tester-password"  # an admin in every test store
+
+
+def seed_user(db: Path) -> str:
+    """The test admin in the store (added once) and a fresh API token of theirs."""
+    store = Store(db)
+    try:
+        accounts = Accounts(store)
+        if all(u.name != USER for u in accounts.users()):
+            accounts.add_user(USER, Role.ADMIN, PASSWORD)
+        return accounts.new_token(USER, "tests")
+    finally:
+        store.close()
+
+
 class Server:
     """One uvicorn process serving the app with its own SQLite file."""
 
-    def __init__(self, db: Path, *extra: str, env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, db: Path, *extra: str, env: dict[str, str] | None = None, seed: bool = True
+    ) -> None:
+        self.seed = seed  # the test admin and a token of theirs in the store before start
         self.db = db
         self.extra = extra
         self.env = env or {}  # INBETRIEB_* settings
@@ -33,13 +55,32 @@ class Server:
         self.base = f"http://127.0.0.1:{self.port}"
         self.ws_base = f"ws://127.0.0.1:{self.port}"
         self.proc: subprocess.Popen[bytes] | None = None
+        self.token = ""
         self.http = httpx.Client(base_url=self.base, timeout=10)
 
-    def start(self) -> Server:
+    @property
+    def auth(self) -> dict[str, str]:
+        """The test user's API token as a request header."""
+        return {"Authorization": f"Bearer {self.token}"}
+
+    @property
+    def ws_auth(self) -> dict[str, Any]:
+        """`connect(url, **srv.ws_auth)`: a websocket with the test user's API token."""
+        return {"additional_headers": self.auth}
+
+    @property
+    def auth_header(self) -> str:
+        """The token as a raw HTTP header line (CRLF included)."""
+        return f"Authorization: Bearer {self.token}\r\n"
+
+    def start(self, stdout: IO[str] | None = None) -> Server:
+        if self.seed:
+            self.token = seed_user(self.db)
+            self.http.headers["Authorization"] = f"Bearer {self.token}"
         cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(self.port)]
         cmd += ["--db", str(self.db), *self.extra]
         self.proc = subprocess.Popen(
-            cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env}
+            cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env}, stdout=stdout
         )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:

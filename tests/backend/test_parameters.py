@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from nc_sim.params import registry
-from tests.backend.server import Server
+from tests.backend.server import USER, Server
 
 DATA = Path(__file__).resolve().parents[1] / "nc_sim" / "data"
 KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv
@@ -193,7 +193,7 @@ def test_audit_trail_and_restart_of_the_service(srv: Server, mid: str) -> None:
     assert import_list(srv, mid, "S1", (DATA / "axis_excerpt.lis").read_text()).is_success
     audit = srv.http.get(f"/api/machines/{mid}/parameters/audit").json()
     kv = [a for a in audit if a["name"] == "getriebe[0].kv" and a["target"] == "X"]
-    assert (kv[0]["old"], kv[0]["new"], kv[0]["actor"]) == (2000, 1000, "local")
+    assert (kv[0]["old"], kv[0]["new"], kv[0]["actor"]) == (2000, 1000, USER)  # who it was
     assert any(a["comment"] == "import axis list" for a in audit)
     srv.stop()
     srv.start()

@@ -70,7 +70,7 @@ def test_a_websocket_from_a_foreign_origin_is_refused(srv: Server, mid: str) -> 
 
     async def connect(origin: str) -> str:
         try:
-            async with websockets.connect(url, origin=origin) as ws:  # type: ignore[arg-type]
+            async with websockets.connect(url, origin=origin, **srv.ws_auth) as ws:  # type: ignore[arg-type]
                 return str(await asyncio.wait_for(ws.recv(), 10))
         except websockets.InvalidStatus as e:
             return f"refused {e.response.status_code}"

@@ -10,6 +10,7 @@ service's demo machine, so requests reach the services behind the routes, not on
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -56,7 +57,7 @@ def _pinned(case: Case[Any], pin: bool) -> Case[Any]:
 Operation = APIOperation[Any, Any, Any, Any]
 
 
-def _fuzz(op: Operation, mode: GenerationMode) -> str | None:
+def _fuzz(op: Operation, mode: GenerationMode, headers: dict[str, str]) -> str | None:
     """Send the operation's generated requests; the first violation found, or None."""
     pin = op.label not in UNPINNED
 
@@ -70,7 +71,9 @@ def _fuzz(op: Operation, mode: GenerationMode) -> str | None:
     )
     @given(case=op.as_strategy(generation_mode=mode), pin_this=st.booleans())
     def run(case: Case[Any], pin_this: bool) -> None:
-        _pinned(case, pin and pin_this).call_and_validate(checks=CHECKS, timeout=30)
+        _pinned(case, pin and pin_this).call_and_validate(
+            checks=CHECKS, timeout=30, headers=headers
+        )
 
     try:
         run()
@@ -89,11 +92,75 @@ def test_every_operation_answers_as_its_schema_says(srv: Server) -> None:
         # machine or trace name in the path is any string)
         negatable = len(op.body) > 0 or len(op.query) > 0
         for mode in [GenerationMode.POSITIVE] + [GenerationMode.NEGATIVE] * negatable:
-            found = _fuzz(op, mode)
+            found = _fuzz(op, mode, {"Authorization": f"Bearer {srv.token}"})
             if found:
                 failures.append(found)
     assert len(operations) > 30  # the whole HTTP API was fuzzed
     assert not failures, "\n\n".join(failures)
+
+
+OPEN = {"GET /api/health", "POST /api/auth/login", "POST /api/auth/logout"}
+
+
+def _state(srv: Server) -> tuple[object, ...]:
+    """What a stranger's request could change: machines, the demo's time, parameters,
+    their audit, the trace library."""
+    get = srv.http.get  # with the test admin's token
+    machines = [(m["id"], m["name"], m["mode"]) for m in get("/api/machines").json()]
+    return (
+        machines,
+        srv.status("demo")["simulation"]["cycle"],
+        get("/api/machines/demo/parameters?scope=axis&target=X").json(),
+        get("/api/machines/demo/parameters/audit").json(),
+        get("/api/traces").json(),
+    )
+
+
+def test_without_credentials_every_operation_is_refused_and_changes_nothing(
+    tmp_path: Path,
+) -> None:
+    """A stranger's requests get 401 (or 403), never an answer or a change."""
+    srv = Server(tmp_path / "stranger.sqlite").start()
+    srv.pace("demo", mode="pause")  # its cycle stands still unless somebody moves it
+    try:
+        _stranger(srv)
+    finally:
+        srv.close()
+
+
+def _stranger(srv: Server) -> None:
+    schema = schemathesis.openapi.from_url(f"{srv.base}/openapi.json")
+    before = _state(srv)
+    answered: list[str] = []
+    operations = [r.ok() for r in schema.get_all_operations() if isinstance(r, Ok)]
+    for op in operations:
+        if op.label not in OPEN:
+            answered += _as_stranger(op)
+    assert len(operations) > 30
+    assert answered == []
+    assert _state(srv) == before
+
+
+def _as_stranger(op: Operation) -> list[str]:
+    """An operation's generated requests without credentials; those not refused."""
+    answered: list[str] = []
+
+    @settings(
+        max_examples=4,
+        derandomize=True,
+        database=None,
+        deadline=None,
+        phases=[Phase.explicit, Phase.generate],
+        suppress_health_check=list(HealthCheck),
+    )
+    @given(case=op.as_strategy(generation_mode=GenerationMode.POSITIVE))
+    def run(case: Case[Any]) -> None:
+        r = _pinned(case, True).call(timeout=30)
+        if r.status_code not in (401, 403):
+            answered.append(f"{op.label}: {r.status_code}")
+
+    run()
+    return answered
 
 
 def test_the_schema_names_one_error_body_and_the_real_media_types(srv: Server) -> None:

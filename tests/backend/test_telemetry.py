@@ -97,7 +97,7 @@ async def _step(srv: Server, mid: str, cycles: int) -> int:
 
 def test_every_cycle_with_events(srv: Server, mid: str) -> None:
     async def run() -> None:
-        async with connect(f"{srv.ws_base}/api/machines/{mid}/telemetry") as ws:
+        async with connect(f"{srv.ws_base}/api/machines/{mid}/telemetry", **srv.ws_auth) as ws:
             hello = await _json(ws, "hello")
             names = {s["name"] for s in hello["signals"]}
             assert set(SIGNALS) <= names and hello["cycle_s"] == pytest.approx(0.001)
@@ -128,7 +128,7 @@ def test_every_cycle_with_events(srv: Server, mid: str) -> None:
 def test_max_rate_decimates_on_a_fixed_grid(srv: Server, mid: str) -> None:
     async def run() -> None:
         url = f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_cmd_mm"
-        async with connect(url) as ws:
+        async with connect(url, **srv.ws_auth) as ws:
             await _json(ws, "subscribed")
             await ws.send(
                 json.dumps({"type": "subscribe", "signals": ["X.pos_cmd_mm"], "max_rate_hz": 100})
@@ -147,7 +147,7 @@ def test_max_rate_decimates_on_a_fixed_grid(srv: Server, mid: str) -> None:
 
 def test_unknown_signal_is_an_error_message(srv: Server) -> None:
     async def run() -> None:
-        async with connect(f"{srv.ws_base}/api/machines/demo/telemetry") as ws:
+        async with connect(f"{srv.ws_base}/api/machines/demo/telemetry", **srv.ws_auth) as ws:
             await ws.send(json.dumps({"type": "subscribe", "signals": ["X.nonsense"]}))
             err = await _json(ws, "error")
             assert "X.nonsense" in err["message"]
@@ -158,7 +158,7 @@ def test_unknown_signal_is_an_error_message(srv: Server) -> None:
 def test_reconnect_resumes_at_the_current_cycle(srv: Server, mid: str) -> None:
     async def one() -> list[tuple[FrameHeader, np.ndarray]]:
         url = f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=Z.pos_act_mm"
-        async with connect(url) as ws:
+        async with connect(url, **srv.ws_auth) as ws:
             await _json(ws, "subscribed")
             frames, _ = await _until_cycle(ws, await _step(srv, mid, 100))
         return frames
@@ -175,12 +175,15 @@ def test_slow_client_is_decimated_and_never_delays_others(srv: Server, mid: str)
     backlog decimated, while a second client keeps receiving every cycle."""
     every = [s["name"] for s in srv.http.get(f"/api/machines/{mid}/signals").json()]
     slow = RawWebSocket(
-        "127.0.0.1", srv.port, f"/api/machines/{mid}/telemetry?signals=" + ",".join(every)
+        "127.0.0.1",
+        srv.port,
+        f"/api/machines/{mid}/telemetry?signals=" + ",".join(every),
+        srv.auth_header,
     )
 
     async def watch() -> tuple[list[tuple[FrameHeader, np.ndarray]], int]:
         url = f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_act_mm"
-        async with connect(url) as fast:
+        async with connect(url, **srv.ws_auth) as fast:
             sub = await _json(fast, "subscribed")
             frames, _ = await _step_watched(srv, mid, fast, 5000)  # slow one reads nothing
         return frames, sub["first_cycle"]
@@ -204,7 +207,7 @@ def test_deleting_a_machine_closes_its_subscribers(srv: Server) -> None:
 
     async def run() -> int | None:
         url = f"{srv.ws_base}/api/machines/gone/telemetry?signals=X.pos_act_mm"
-        async with connect(url) as ws:
+        async with connect(url, **srv.ws_auth) as ws:
             await _json(ws, "subscribed")
             await asyncio.to_thread(srv.http.delete, "/api/machines/gone")
             with pytest.raises(ConnectionClosed):

@@ -47,7 +47,9 @@ def _telemetry(srv: Server) -> dict[str, Any]:
 @contextmanager
 def _watching(srv: Server, mid: str) -> Iterator[ClientConnection]:
     """A well-behaved client subscribed to one signal."""
-    with connect(f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_act_mm") as ws:
+    with connect(
+        f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_act_mm", **srv.ws_auth
+    ) as ws:
         while json.loads(ws.recv(timeout=10))["type"] != "subscribed":
             pass
         yield ws
@@ -65,7 +67,9 @@ def _still_receives(srv: Server, mid: str, ws: ClientConnection) -> None:
 
 
 def _raw(srv: Server, mid: str, query: str = "") -> RawWebSocket:
-    raw = RawWebSocket("127.0.0.1", srv.port, f"/api/machines/{mid}/telemetry{query}")
+    raw = RawWebSocket(
+        "127.0.0.1", srv.port, f"/api/machines/{mid}/telemetry{query}", srv.auth_header
+    )
     raw.sock.settimeout(30)
     return raw
 
@@ -74,7 +78,7 @@ def test_an_absurd_rate_is_refused_and_telemetry_goes_on(srv: Server, mid: str) 
     """max_rate_hz 1e-16 once made a stride of 10^19 cycles that killed the hub for all."""
     with (
         _watching(srv, mid) as other,
-        connect(f"{srv.ws_base}/api/machines/{mid}/telemetry") as bad,
+        connect(f"{srv.ws_base}/api/machines/{mid}/telemetry", **srv.ws_auth) as bad,
     ):
         bad.send(json.dumps({"type": "subscribe", "signals": ["X.lag_mm"], "max_rate_hz": 1e-16}))
         while (reply := json.loads(bad.recv(timeout=10)))["type"] != "error":
@@ -150,7 +154,7 @@ def test_a_client_that_stops_reading_is_disconnected_after_the_stall_limit(
 
 
 def _step_until_dropped(srv: Server, mid: str, dropped: int) -> None:
-    with httpx.Client(base_url=srv.base, timeout=10) as http:  # this thread's own client
+    with httpx.Client(base_url=srv.base, timeout=10, headers=srv.auth) as http:  # this thread's
         for _ in range(10_000):
             http.post(f"/api/machines/{mid}/simulation/step", json={"cycles": 100})
             status = http.get("/api/service/status").json()

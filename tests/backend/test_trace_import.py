@@ -134,6 +134,7 @@ def test_a_body_over_the_limit_is_413_and_never_held_whole(tmp_path: Path) -> No
         # a Content-Length over the limit is refused before anything is read
         with socket.create_connection(("127.0.0.1", s.port), timeout=30) as raw:
             head = f"POST /api/traces/import HTTP/1.1\r\nHost: 127.0.0.1:{s.port}\r\n"
+            head += s.auth_header
             raw.sendall(f"{head}Content-Length: {3 * MAX_CSV_BYTES}\r\n\r\n1,2\n".encode())
             assert raw.recv(100).startswith(b"HTTP/1.1 413")
     finally:

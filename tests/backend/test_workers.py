@@ -78,7 +78,7 @@ async def watch(
     frames: list[FrameHeader] = []
     texts: list[dict[str, Any]] = []
     url = f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_act_mm"
-    async with connect(url) as ws:
+    async with connect(url, **srv.ws_auth) as ws:
         while not stop.is_set():
             try:
                 msg = await asyncio.wait_for(ws.recv(), 0.2)

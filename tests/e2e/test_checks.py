@@ -13,11 +13,11 @@ import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import commands_sent, open_hmi, panel, shot
+from tests.e2e.browser import commands_sent, open_hmi, panel, shot, signed_in_page
 
 
 def test_no_request_ever_goes_to_an_empty_machine_id(browser: Browser, srv: Server) -> None:
-    page = browser.new_page(viewport={"width": 1920, "height": 1080})
+    page = signed_in_page(browser, srv.base)
     urls: list[str] = []
     page.on("request", lambda r: urls.append(r.url))
     page.goto(srv.base + "/")

@@ -10,7 +10,7 @@ from pathlib import Path
 from playwright.sync_api import Browser, Page, Request, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import number, open_hmi, shot
+from tests.e2e.browser import number, open_hmi, shot, signed_in_page
 
 LENGTH_S = 4.0
 PRE_PCT = 25.0
@@ -123,7 +123,8 @@ def test_save_import_csv_and_overlay(
 def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server, mid: str) -> None:
     page = open_hmi(browser, srv.base, mid)
     tid = capture_m19(page)
-    viewer = browser.new_page(viewport={"width": 1280, "height": 800})
+    viewer = signed_in_page(browser, srv.base)
+    viewer.set_viewport_size({"width": 1280, "height": 800})
     elsewhere: list[str] = []  # requests for other hosts, and why they failed
 
     def failed(r: Request) -> None:
@@ -134,7 +135,7 @@ def test_rerun_viewer_page_for_a_capture_loads(browser: Browser, srv: Server, mi
     slow = 60_000  # a 43 MB wasm, compiled in a software-rendering browser
     with (
         viewer.expect_response(lambda r: r.url.endswith(".wasm"), timeout=slow) as wasm,
-        viewer.expect_response(lambda r: r.url.endswith("/trace.rrd"), timeout=slow) as rrd,
+        viewer.expect_response(lambda r: "/trace.rrd?ticket=" in r.url, timeout=slow) as rrd,
     ):
         viewer.goto(f"{srv.base}/api/traces/{tid}/viewer", timeout=slow)
     assert viewer.url.startswith(f"{srv.base}/rerun/?")

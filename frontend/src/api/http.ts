@@ -1,4 +1,5 @@
-// fetch with the service's refusal bodies turned into one error type.
+// fetch with the service's refusal bodies turned into one error type, the CSRF token on every
+// change, and a 401 reported as the end of the session. Every request of the HMI goes through here.
 import type { Refusal, ValidationIssue } from "./types";
 
 /** A request the service answered with 4xx/5xx, or could not be reached. */
@@ -13,21 +14,45 @@ export class ApiError extends Error {
 
 /** Told whether each request reached the service (true) or failed on the network (false). */
 export const reachListeners = new Set<(reached: boolean) => void>();
+/** Told when the service answered 401: the session is gone (expired, logged out elsewhere). */
+export const unauthorizedListeners = new Set<() => void>();
 
-async function request<T>(method: string, url: string, body?: unknown, text = false): Promise<T> {
+// as api/auth.py CSRF_COOKIE and CSRF_HEADER: the page echoes the cookie on every change
+const CSRF_COOKIE = "inbetrieb_csrf";
+const CSRF_HEADER = "X-CSRF-Token";
+
+function csrfToken(): string | null {
+  const pair = document.cookie.split("; ").find((c) => c.startsWith(`${CSRF_COOKIE}=`));
+  return pair ? pair.slice(CSRF_COOKIE.length + 1) : null; // as set: the service compares it with the cookie
+}
+
+/** How a body is sent (JSON, or text as is with its type) and how the answer is read. */
+interface Options {
+  contentType?: string; // a text body's type; without it the body is sent as JSON
+  binary?: boolean; // the answer is samples (ArrayBuffer), not JSON or text
+}
+
+async function request<T>(method: string, url: string, body?: unknown, opts: Options = {}): Promise<T> {
+  const headers: Record<string, string> = {};
+  if (body !== undefined) headers["content-type"] = opts.contentType ?? "application/json";
+  const csrf = method === "GET" || method === "HEAD" ? null : csrfToken();
+  if (csrf) headers[CSRF_HEADER] = csrf;
   let res: Response;
   try {
     res = await fetch(url, {
       method,
-      headers: body === undefined ? {} : { "content-type": text ? "text/plain" : "application/json" },
-      body: body === undefined ? undefined : text ? String(body) : JSON.stringify(body),
+      headers,
+      body: body === undefined ? undefined : opts.contentType ? String(body) : JSON.stringify(body),
     });
   } catch {
     reachListeners.forEach((f) => f(false));
     throw new ApiError(0, { message: "no connection to the service", problems: [] });
   }
   reachListeners.forEach((f) => f(true));
+  if (res.status === 401) unauthorizedListeners.forEach((f) => f());
   const type = res.headers.get("content-type") ?? "";
+  if (res.ok && opts.binary) return (await res.arrayBuffer()) as T;
+  if (res.status === 204) return undefined as T; // no content, whatever the type says
   const payload: unknown = type.includes("json") ? await res.json() : await res.text();
   if (!res.ok) throw new ApiError(res.status, refusalOf(res.status, payload));
   return payload as T;
@@ -51,9 +76,12 @@ function refusalOf(status: number, payload: unknown): Refusal {
 export const http = {
   get: <T>(url: string) => request<T>("GET", url),
   post: <T>(url: string, body: unknown) => request<T>("POST", url, body),
-  postText: <T>(url: string, text: string) => request<T>("POST", url, text, true),
+  /** A file's text as is: `text/plain` (parameter import) or e.g. `text/csv` (trace import). */
+  postText: <T>(url: string, text: string, contentType = "text/plain") => request<T>("POST", url, text, { contentType }),
   put: <T>(url: string, body: unknown) => request<T>("PUT", url, body),
   patch: <T>(url: string, body: unknown) => request<T>("PATCH", url, body),
   del: <T>(url: string) => request<T>("DELETE", url),
   text: (url: string) => request<string>("GET", url),
+  /** Samples (a binary frame, see `decodeFrame`). */
+  bytes: (url: string) => request<ArrayBuffer>("GET", url, undefined, { binary: true }),
 };

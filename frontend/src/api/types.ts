@@ -48,3 +48,6 @@ export type TraceDetail = S["TraceDetail"];
 export type TraceCompare = S["TraceCompare"];
 export type Measurements = S["MeasurementsModel"];
 export type RecordingInfo = S["RecordingInfo"];
+export type Me = S["Me"];
+export type Role = S["Role"];
+export type LoginRequest = S["LoginRequest"];

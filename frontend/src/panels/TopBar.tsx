@@ -1,4 +1,8 @@
-// Always visible: machine, time and loop health, connection, and the emergency stop.
+// Always visible: machine, time and loop health, connection, who is logged in, and the emergency stop.
+import { useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { Refusal } from "../api/types";
+import { logout, me } from "../state/auth";
 import { connection, machineId, machines, online, selectMachine, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
@@ -42,15 +46,40 @@ export function TopBar() {
       />
       {s?.emergency_stop ? <span class="estop-state">EMERGENCY STOP ACTIVE</span> : null}
       <RefusalLine refusal={estop.refusal} />
-      <button
-        class="estop"
-        data-testid="estop"
-        disabled={!online.value}
-        onClick={() => void estop.run({ type: "emergency_stop" })}
-        title="Emergency stop: every axis brakes with a_emergency"
-      >
-        EMERGENCY STOP
-      </button>
+      {/* one group: when the bar wraps, the emergency stop stays at the right end */}
+      <span class="topbar-end">
+        <UserBox />
+        <button
+          class="estop"
+          data-testid="estop"
+          disabled={!online.value}
+          onClick={() => void estop.run({ type: "emergency_stop" })}
+          title="Emergency stop: every axis brakes with a_emergency"
+        >
+          EMERGENCY STOP
+        </button>
+      </span>
     </header>
+  );
+}
+
+/** Who is logged in, in which role, and the way out. */
+function UserBox() {
+  const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const user = me.value;
+  if (!user) return null;
+  const leave = () =>
+    logout().catch((e: unknown) =>
+      setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
+    );
+  return (
+    <span class="user" title="logged in as">
+      <RefusalLine refusal={refusal} id="logout-error" />
+      <b data-testid="user-name">{user.name}</b>
+      <span data-testid="user-role">{user.role}</span>
+      <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
+        Log out
+      </button>
+    </span>
   );
 }

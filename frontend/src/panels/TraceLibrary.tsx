@@ -88,15 +88,10 @@ export function TraceLibrary() {
     input.value = "";
     if (!file) return;
     try {
-      const res = await fetch(`/api/traces/import?name=${encodeURIComponent(file.name.replace(/\.csv$/i, ""))}`, {
-        method: "POST",
-        headers: { "content-type": "text/csv" },
-        body: await file.text(),
-      });
-      const body = (await res.json()) as TraceInfo | { detail: { message: string } };
-      if (!res.ok) throw new Error("detail" in body ? body.detail.message : `HTTP ${res.status}`);
+      const name = encodeURIComponent(file.name.replace(/\.csv$/i, ""));
+      const info = await http.postText<TraceInfo>(`/api/traces/import?name=${name}`, await file.text(), "text/csv");
       await refreshLibrary();
-      overlayId.value = (body as TraceInfo).id;
+      overlayId.value = info.id;
       setError("");
     } catch (err) {
       setError(String(err instanceof Error ? err.message : err));

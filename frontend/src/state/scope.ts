@@ -93,9 +93,7 @@ export async function loadTrace(id: string): Promise<LoadedTrace> {
   const detail = await http.get<TraceDetail>(`/api/traces/${id}`);
   const hit = cache.get(id);
   if (hit) return { ...hit, detail };
-  const res = await fetch(`/api/traces/${id}/data`);
-  if (!res.ok) throw new Error(`trace ${id}: HTTP ${res.status}`);
-  const f = decodeFrame(await res.arrayBuffer());
+  const f = decodeFrame(await http.bytes(`/api/traces/${id}/data`));
   if (!f) throw new Error(`trace ${id}: not a sample frame`);
   const { header: h, data } = f;
   const ref = detail.trigger_cycle ?? detail.first_cycle;
@@ -118,9 +116,13 @@ export interface RollData {
 }
 
 export async function loadRoll(maxPoints: number): Promise<RollData | null> {
-  const res = await fetch(machineUrl(`/scope/roll?max_points=${Math.max(100, Math.round(maxPoints))}`));
-  if (!res.ok) return null;
-  const f = decodeFrame(await res.arrayBuffer());
+  let buf: ArrayBuffer;
+  try {
+    buf = await http.bytes(machineUrl(`/scope/roll?max_points=${Math.max(100, Math.round(maxPoints))}`));
+  } catch {
+    return null; // the next tick asks again
+  }
+  const f = decodeFrame(buf);
   if (!f) return null;
   const { header: h, data } = f;
   const last = h.first_cycle + (h.count - 1) * h.stride;

@@ -3,6 +3,7 @@
 import { computed, signal } from "@preact/signals";
 import { http, reachListeners } from "../api/http";
 import type { Command, CommandResult, MachineStatus, MachineSummary, NoticeMessage } from "../api/types";
+import { loggedIn } from "./auth";
 
 export type Connection = "connecting" | "online" | "lost";
 
@@ -65,19 +66,33 @@ export function machineUrl(path = ""): string {
 /** Motion commands are refused in an emergency stop until reset: their buttons say so. */
 export const motionLocked = computed(() => !online.value || !!status.value?.emergency_stop);
 
-/** Load the machine list and choose the first machine unless `#machine` says. */
+/** Load the machine list and choose the first machine unless `#machine` says (the socket
+ * follows the chosen machine). Gives up when the user logs out meanwhile. */
 export async function startSession(): Promise<void> {
-  for (;;) {
+  while (loggedIn.value) {
     try {
-      machines.value = await http.get<MachineSummary[]>("/api/machines");
-      break;
+      const list = await http.get<MachineSummary[]>("/api/machines");
+      if (!loggedIn.value) return; // logged out while the list was on its way
+      machines.value = list;
+      const wanted = location.hash.slice(1);
+      machineId.value = machines.value.find((m) => m.id === wanted)?.id ?? machines.value[0]?.id ?? "";
+      return;
     } catch {
       socket.value = "lost";
       await new Promise((r) => setTimeout(r, 1000));
     }
   }
-  const wanted = location.hash.slice(1);
-  machineId.value = machines.value.find((m) => m.id === wanted)?.id ?? machines.value[0]?.id ?? "";
+}
+
+/** Logged out: no machine, so the socket closes and nothing asks the service any more
+ * (`#machine` stays, the same machine shows after the next login). */
+export function endSession(): void {
+  machineId.value = "";
+  machines.value = [];
+  status.value = null;
+  notice.value = null;
+  lastStatusMs = 0;
+  socket.value = "connecting";
 }
 
 export function selectMachine(id: string): void {

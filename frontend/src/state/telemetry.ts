@@ -1,7 +1,8 @@
 // The telemetry websocket: the hello's signal catalogue, one subscription (the union of what
 // the plots want), binary frames decoded into the rings, events into the log, the machine's
 // pushed status and notices. Reconnects by
-// itself; while it is down the session counts as lost (jog keys release on that).
+// itself; while it is down the session counts as lost (jog keys release on that). It opens only
+// while a machine is chosen, i.e. while someone is logged in (the session cookie admits it).
 import { effect, signal } from "@preact/signals";
 import type {
   ErrorMessage,
@@ -13,6 +14,7 @@ import type {
   StatusMessage,
   Subscribed,
 } from "../api/types";
+import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { Rings } from "./rings";
 import { machineId, notice, socket, statusArrived } from "./session";
@@ -119,10 +121,14 @@ function connect(mid: string): void {
   sock.binaryType = "arraybuffer";
   ws = sock;
   sock.onmessage = (ev) => (typeof ev.data === "string" ? onMessage(ev.data) : onFrame(ev.data as ArrayBuffer));
+  let opened = false;
+  sock.onopen = () => void (opened = true);
   sock.onclose = () => {
     if (ws !== sock) return; // replaced on purpose
     ws = null;
     socket.value = "lost";
+    // a refused handshake looks like any failed connect: a 401 from `me` says the session ended
+    if (!opened) void loadMe();
     setTimeout(() => ws === null && machineId.value === mid && connect(mid), RECONNECT_MS);
   };
 }

@@ -1,0 +1,77 @@
+"""Who is asking: every request to the API, the telemetry websockets and the Rerun viewer
+needs an API token (`Authorization: Bearer`) or a login session (cookie), checked before the
+request reaches a route (so even a malformed request of a stranger gets only 401), and a
+state-changing request on a session must echo the session's CSRF token.
+
+Open without either: health, logging in, one-time login links, and the static pages (the
+HMI shows its login screen; the docs describe the API).
+"""
+
+from __future__ import annotations
+
+import secrets
+
+from starlette.requests import HTTPConnection
+from starlette.responses import JSONResponse
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from api.auth import CSRF_HEADER, SESSION_COOKIE
+from api.common import ErrorBody, Refusal
+from backend.security import SAFE_METHODS
+from backend.services.accounts import Accounts
+from backend.services.auth import Actor
+
+OPEN_PATHS = frozenset({"/api/health", "/api/auth/login", "/api/auth/logout"})
+GUARDED_PREFIXES = ("/api/", "/rerun")
+
+
+def guarded(path: str) -> bool:
+    """Whether this path needs a token or a session."""
+    return path.startswith(GUARDED_PREFIXES) and path not in OPEN_PATHS
+
+
+def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | tuple[int, str]:
+    """The actor behind a request, or why there is none (status, message)."""
+    ticket = conn.query_params.get("ticket")
+    if ticket is not None and conn.scope["type"] == "http" and conn.scope["method"] == "GET":
+        me = accounts.redeem_ticket(ticket, conn.scope["path"])
+        return Actor(me.name, me.role) if me else (401, "unknown, used or expired ticket")
+    auth = conn.headers.get("authorization", "")
+    if auth[:7].lower() == "bearer ":
+        me = accounts.token_user(auth[7:].strip())
+        return Actor(me.name, me.role) if me else (401, "unknown or revoked API token")
+    sid = conn.cookies.get(SESSION_COOKIE)
+    session = accounts.session(sid) if sid else None
+    if session is None:
+        return 401, "the session has ended: log in again" if sid else "not logged in"
+    if conn.scope["type"] == "http" and conn.scope["method"] not in SAFE_METHODS:
+        sent = conn.headers.get(CSRF_HEADER, "")
+        if not secrets.compare_digest(sent.encode(), session.csrf.encode()):
+            return 403, f"missing or wrong {CSRF_HEADER} header"
+    return Actor(session.me.name, session.me.role)
+
+
+class Authentication:
+    """ASGI middleware: the actor in `scope["state"]["actor"]`, or a refusal."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket") or not guarded(scope["path"]):
+            await self.app(scope, receive, send)
+            return
+        conn = HTTPConnection(scope)
+        found = identify(scope["app"].state.services.accounts, conn)
+        if isinstance(found, Actor):
+            scope.setdefault("state", {})["actor"] = found
+            await self.app(scope, receive, send)
+            return
+        status, why = found
+        if scope["type"] == "websocket":  # closed before the accept: an HTTP 403 for the client
+            await send({"type": "websocket.close", "code": 1008, "reason": why})
+            return
+        body = ErrorBody(detail=Refusal(message=why)).model_dump(mode="json")
+        headers = {"www-authenticate": "Bearer"} if status == 401 else None
+        response = JSONResponse(body, status_code=status, headers=headers)
+        await response(scope, receive, send)

@@ -1,0 +1,75 @@
+"""`inbetrieb user add|list|remove|passwd` and `inbetrieb token create`: people on the
+command line, straight in the store (the service need not run)."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import sys
+from pathlib import Path
+
+from api.auth import Role
+from backend.services.accounts import AccountError, Accounts
+from backend.services.store import Store
+from backend.settings import Settings
+
+MIN_PASSWORD = 8
+
+
+def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    db_help = "SQLite file (default var/inbetrieb.sqlite)"
+    p_user = sub.add_parser("user", help="add, list, remove users or set a password")
+    users = p_user.add_subparsers(dest="action", required=True)
+    p_add = users.add_parser("add", help="add a user (asks for the password)")
+    p_add.add_argument("name")
+    p_add.add_argument("--role", choices=[r.value for r in Role], default=Role.OPERATOR.value)
+    p_list = users.add_parser("list", help="every user with their role")
+    p_rm = users.add_parser("remove", help="remove a user, their sessions and tokens")
+    p_rm.add_argument("name")
+    p_pw = users.add_parser("passwd", help="set a user's password (their sessions end)")
+    p_pw.add_argument("name")
+    p_tok = sub.add_parser("token", help="API tokens for scripts")
+    tokens = p_tok.add_subparsers(dest="action", required=True)
+    p_new = tokens.add_parser("create", help="print a new API token of a user")
+    p_new.add_argument("--user", required=True)
+    p_new.add_argument("--label", default="", help="what it is for (shown in the audit)")
+    for p in (p_add, p_list, p_rm, p_pw, p_new):
+        p.add_argument("--db", type=Path, help=db_help)
+    for p in (p_add, p_pw):
+        p.add_argument("--password-stdin", action="store_true", help="read the password from stdin")
+
+
+def _password(args: argparse.Namespace) -> str:
+    if args.password_stdin:
+        pw = sys.stdin.readline().rstrip("\n")
+    else:
+        pw = getpass.getpass("password: ")
+        if getpass.getpass("again: ") != pw:
+            raise AccountError("the passwords differ")
+    if len(pw) < MIN_PASSWORD:
+        raise AccountError(f"a password has at least {MIN_PASSWORD} characters")
+    return pw
+
+
+def run(args: argparse.Namespace) -> int:
+    """Carry out a `user` or `token` command; 0, or 2 with the reason on stderr."""
+    store = Store(args.db or Settings().db_path)
+    accounts = Accounts(store)
+    try:
+        if args.cmd == "token":
+            print(accounts.new_token(args.user, args.label))
+        elif args.action == "add":
+            accounts.add_user(args.name, Role(args.role), _password(args))
+        elif args.action == "list":
+            for me in accounts.users():
+                print(f"{me.name}\t{me.role.value}")
+        elif args.action == "remove":
+            accounts.remove_user(args.name)
+        elif args.action == "passwd":
+            accounts.set_password(args.name, _password(args))
+    except AccountError as e:
+        print(f"inbetrieb {args.cmd}: {e}", file=sys.stderr)
+        return 2
+    finally:
+        store.close()
+    return 0

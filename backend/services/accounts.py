@@ -1,0 +1,236 @@
+"""People: users with argon2-hashed passwords, login sessions, API tokens and one-time login
+links, all in the store; and the login rate limit.
+
+Secrets (session ids, tokens, links) are random and long, so the store keeps only their
+SHA-256: a stolen database file lets nobody in. Passwords are argon2 hashes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import secrets
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+
+from argon2 import PasswordHasher
+from argon2.exceptions import InvalidHashError, VerificationError
+
+from api.auth import Me, Role
+from backend.services.store import Store
+
+SESSION_S = 12 * 3600.0  # a shift; then log in again
+TICKET_S = 300.0  # a ticket for one URL (a viewer that cannot send the session) lives this long
+ONCE_S = 3600.0  # a one-time login link is good for an hour
+LOGIN_FAILURES = 5  # failed logins per address within LOGIN_WINDOW_S before 429
+LOGIN_WINDOW_S = 60.0
+FIRST_ADMIN = "admin"  # created without a password on a store with no users
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS users (
+    name TEXT PRIMARY KEY,
+    role TEXT NOT NULL,
+    hash TEXT NOT NULL,            -- argon2; '' = no password (one-time links only)
+    created REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS sessions (
+    digest TEXT PRIMARY KEY,       -- SHA-256 of the session id
+    user TEXT NOT NULL,
+    csrf TEXT NOT NULL,
+    created REAL NOT NULL,
+    expires REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS tokens (
+    digest TEXT PRIMARY KEY,       -- SHA-256 of the token
+    user TEXT NOT NULL,
+    kind TEXT NOT NULL,            -- 'api' (scripts) or 'once' (a login link)
+    label TEXT NOT NULL,
+    created REAL NOT NULL,
+    expires REAL                   -- NULL: until revoked
+);
+"""
+
+
+def _digest(secret: str) -> str:
+    return hashlib.sha256(secret.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class Session:
+    """A live login session: who, and the CSRF token its page must echo."""
+
+    me: Me
+    csrf: str
+
+
+class AccountError(ValueError):
+    """A user management request that cannot be carried out (unknown or duplicate name)."""
+
+
+class Accounts:
+    """Users, sessions and tokens of one store."""
+
+    def __init__(self, store: Store) -> None:
+        self.store = store
+        store.script(_SCHEMA)
+        self._hasher = PasswordHasher()
+        self._dummy = self._hasher.hash(secrets.token_hex(16))  # for unknown names: same cost
+        self._failures: dict[str, deque[float]] = {}
+        self._tickets: dict[str, tuple[Me, str, float]] = {}  # ticket -> (who, path, until)
+        self._lock = threading.Lock()
+
+    # --- users ------------------------------------------------------------------------------
+    def users(self) -> list[Me]:
+        rows = self.store.query("SELECT name, role FROM users ORDER BY created")
+        return [Me(name=r[0], role=Role(r[1])) for r in rows]
+
+    def add_user(self, name: str, role: Role, password: str | None) -> None:
+        if self._user(name) is not None:
+            raise AccountError(f"user {name!r} exists")
+        hashed = self._hasher.hash(password) if password else ""
+        self.store.run(
+            "INSERT INTO users VALUES (?, ?, ?, ?)", (name, role.value, hashed, time.time())
+        )
+
+    def remove_user(self, name: str) -> None:
+        """Remove a user with their sessions and tokens."""
+        if self._user(name) is None:
+            raise AccountError(f"no user {name!r}")
+        for table in ("users WHERE name", "sessions WHERE user", "tokens WHERE user"):
+            self.store.run(f"DELETE FROM {table} = ?", (name,))
+
+    def set_password(self, name: str, password: str) -> None:
+        """A new password; the user's sessions end."""
+        if self._user(name) is None:
+            raise AccountError(f"no user {name!r}")
+        self.store.run(
+            "UPDATE users SET hash = ? WHERE name = ?", (self._hasher.hash(password), name)
+        )
+        self.store.run("DELETE FROM sessions WHERE user = ?", (name,))
+
+    def ensure_admin(self) -> bool:
+        """On a store without users, create the first admin (no password); true if created."""
+        if self.store.query("SELECT 1 FROM users LIMIT 1"):
+            return False
+        self.add_user(FIRST_ADMIN, Role.ADMIN, None)
+        return True
+
+    def first_admin(self) -> str | None:
+        sql = "SELECT name FROM users WHERE role = ? ORDER BY created"
+        rows = self.store.query(sql, (Role.ADMIN.value,))
+        return rows[0][0] if rows else None
+
+    def _user(self, name: str) -> tuple[str, str] | None:
+        rows = self.store.query("SELECT role, hash FROM users WHERE name = ?", (name,))
+        return (rows[0][0], rows[0][1]) if rows else None
+
+    # --- logging in -------------------------------------------------------------------------
+    def check_password(self, name: str, password: str) -> Me | None:
+        """The user if the password is theirs (as slow for an unknown name as for a known)."""
+        user = self._user(name)
+        hashed = user[1] if user and user[1] else self._dummy
+        ok: bool
+        try:
+            ok = self._hasher.verify(hashed, password)
+        except (VerificationError, InvalidHashError):
+            ok = False
+        return Me(name=name, role=Role(user[0])) if ok and user and user[1] else None
+
+    def throttled(self, address: str) -> bool:
+        """Too many failed logins from this address lately."""
+        now = time.monotonic()
+        with self._lock:
+            recent = self._failures.get(address)
+            while recent and now - recent[0] > LOGIN_WINDOW_S:
+                recent.popleft()
+            return recent is not None and len(recent) >= LOGIN_FAILURES
+
+    def failed(self, address: str) -> None:
+        with self._lock:
+            self._failures.setdefault(address, deque()).append(time.monotonic())
+
+    # --- sessions ---------------------------------------------------------------------------
+    def new_session(self, name: str) -> tuple[str, str]:
+        """(session id, CSRF token) of a new session of the user."""
+        sid, csrf = secrets.token_urlsafe(32), secrets.token_urlsafe(24)
+        now = time.time()
+        self.store.run(
+            "INSERT INTO sessions VALUES (?, ?, ?, ?, ?)",
+            (_digest(sid), name, csrf, now, now + SESSION_S),
+        )
+        return sid, csrf
+
+    def session(self, sid: str) -> Session | None:
+        rows = self.store.query(
+            "SELECT s.user, u.role, s.csrf FROM sessions s JOIN users u ON u.name = s.user "
+            "WHERE s.digest = ? AND s.expires > ?",
+            (_digest(sid), time.time()),
+        )
+        if not rows:
+            return None
+        user, role, csrf = rows[0]
+        return Session(Me(name=user, role=Role(role)), csrf)
+
+    def end_session(self, sid: str) -> None:
+        self.store.run("DELETE FROM sessions WHERE digest = ?", (_digest(sid),))
+
+    # --- tickets: one URL, once, soon ------------------------------------------------------
+    def issue_ticket(self, me: Me, path: str) -> str:
+        """A ticket that lets one request for `path` act as `me` within TICKET_S (for a
+        client of ours that cannot send the session cookie: the Rerun viewer's loader)."""
+        ticket = secrets.token_urlsafe(24)
+        now = time.monotonic()
+        with self._lock:
+            for t in [t for t, (_, _, until) in self._tickets.items() if until < now]:
+                del self._tickets[t]
+            self._tickets[ticket] = (me, path, now + TICKET_S)
+        return ticket
+
+    def redeem_ticket(self, ticket: str, path: str) -> Me | None:
+        """Who the ticket is for, if it is for this path and still good; it is used up."""
+        with self._lock:
+            found = self._tickets.get(ticket)
+            if found is None or found[1] != path:  # another path does not use it up
+                return None
+            del self._tickets[ticket]
+        return found[0] if found[2] >= time.monotonic() else None
+
+    # --- tokens and one-time links ----------------------------------------------------------
+    def new_token(self, name: str, label: str = "", once: bool = False) -> str:
+        """An API token for scripts, or a one-time login link's token (good for ONCE_S)."""
+        if self._user(name) is None:
+            raise AccountError(f"no user {name!r}")
+        token = secrets.token_urlsafe(32)
+        now = time.time()
+        self.store.run(
+            "INSERT INTO tokens VALUES (?, ?, ?, ?, ?, ?)",
+            (
+                _digest(token),
+                name,
+                "once" if once else "api",
+                label,
+                now,
+                now + ONCE_S if once else None,
+            ),
+        )
+        return token
+
+    def token_user(self, token: str) -> Me | None:
+        """Whose API token this is."""
+        return self._token("api", token)
+
+    def redeem_once(self, token: str) -> Me | None:
+        """Whose login link this is; the link is used up."""
+        me = self._token("once", token)
+        if me is not None:
+            self.store.run("DELETE FROM tokens WHERE digest = ?", (_digest(token),))
+        return me
+
+    def _token(self, kind: str, token: str) -> Me | None:
+        rows = self.store.query(
+            "SELECT t.user, u.role FROM tokens t JOIN users u ON u.name = t.user "
+            "WHERE t.digest = ? AND t.kind = ? AND (t.expires IS NULL OR t.expires > ?)",
+            (_digest(token), kind, time.time()),
+        )
+        return Me(name=rows[0][0], role=Role(rows[0][1])) if rows else None
