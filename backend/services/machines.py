@@ -388,7 +388,8 @@ class MachineService:
                     proxy.pacing = pacing
 
     def on_death(self, worker: WorkerClient) -> None:
-        """Rebuild the dead worker's machines on live workers (off the reader thread)."""
+        """Rebuild the dead worker's machines on live workers (on a thread: the calls wait
+        for replies, which the event loop reading them must stay free to deliver)."""
         threading.Thread(
             target=self._rebuild_from, args=(worker,), name="rebuild", daemon=True
         ).start()
