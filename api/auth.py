@@ -1,4 +1,5 @@
-"""Who may do what. Roles and actions are part of the contract so the UI can show them."""
+"""Who may do what: roles, actions and the one authorization matrix. Roles, actions and the
+rule of every route are part of the contract, so the UI can show what a user may do."""
 
 from __future__ import annotations
 
@@ -8,34 +9,56 @@ from pydantic import BaseModel, Field
 
 
 class Role(StrEnum):
-    """Roles of a user of the HMI."""
+    """Roles of a user of the HMI, each allowed what the one before it may, and more."""
 
-    OBSERVER = "observer"  # watches status and telemetry
-    OPERATOR = "operator"  # commands the machine, edits parameters
-    INSTRUCTOR = "instructor"  # also creates, deletes and paces machines for a class
-    ADMIN = "admin"  # everything, and users and the service
+    OBSERVER = "observer"  # watches; captures, saves and exports traces
+    OPERATOR = "operator"  # commands, jogs and writes parameters while holding control
+    INSTRUCTOR = "instructor"  # also takes control from others and paces the simulation
+    ADMIN = "admin"  # everything, and users, machines and the service
 
 
 class Action(StrEnum):
-    """What a request does, as the single authorization point sees it."""
+    """What a request does, as the authorization matrix sees it."""
 
-    OBSERVE = "observe"
-    COMMAND = "command"
-    CONFIGURE = "configure"  # parameter writes and imports
+    OBSERVE = "observe"  # status, telemetry, parameters, traces, a machine's audit
+    CAPTURE = "capture"  # scope set-up, arm, force, stop; save, annotate, view traces
+    RECORD = "record"  # long recordings to disk (within the recordings quota)
+    DELETE_TRACE = "delete_trace"
+    CONTROL = "control"  # take a free machine, request, release, grant or refuse control
+    STOP = "stop"  # emergency stop: any operator, holding control or not
+    COMMAND = "command"  # NC commands, jog, reset, power cycle: only while holding control
+    CONFIGURE = "configure"  # parameter writes and imports: only while holding control
+    TAKE_CONTROL = "take_control"  # from another holder without asking
     SIMULATE = "simulate"  # run, pause, step, fast
-    ADMINISTER = "administer"  # create, restart, delete machines
+    MACHINES = "machines"  # create and delete machines
+    USERS = "users"  # users, everyone's tokens, the service-wide audit
 
+
+_OBSERVER = frozenset({Action.OBSERVE, Action.CAPTURE})
+_OPERATOR = _OBSERVER | {
+    Action.RECORD,
+    Action.DELETE_TRACE,
+    Action.CONTROL,
+    Action.STOP,
+    Action.COMMAND,
+    Action.CONFIGURE,
+}
+_INSTRUCTOR = _OPERATOR | {Action.TAKE_CONTROL, Action.SIMULATE}
 
 ALLOWED: dict[Role, frozenset[Action]] = {
-    Role.OBSERVER: frozenset({Action.OBSERVE}),
-    Role.OPERATOR: frozenset({Action.OBSERVE, Action.COMMAND, Action.CONFIGURE}),
-    Role.INSTRUCTOR: frozenset(Action),
+    Role.OBSERVER: _OBSERVER,
+    Role.OPERATOR: _OPERATOR,
+    Role.INSTRUCTOR: _INSTRUCTOR,
     Role.ADMIN: frozenset(Action),
 }
+HELD: frozenset[Action] = frozenset({Action.COMMAND, Action.CONFIGURE})
+"""Actions on a machine that only its control holder may do (a free machine is taken by the
+first of them)."""
 
 SESSION_COOKIE = "inbetrieb_session"  # HttpOnly: the session, never readable by scripts
 CSRF_COOKIE = "inbetrieb_csrf"  # readable by the page, which echoes it in CSRF_HEADER
 CSRF_HEADER = "X-CSRF-Token"
+CLIENT_HEADER = "X-Inbetrieb-Client"  # one browser tab: control is held by a tab, not a browser
 
 
 class LoginRequest(BaseModel):
@@ -50,3 +73,7 @@ class Me(BaseModel):
 
     name: str
     role: Role
+    session: str = Field(
+        description="public id of this login session or API token (who holds control)"
+    )
+    actions: list[Action] = Field(description="what this user may do (api/auth.py ALLOWED)")

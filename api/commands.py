@@ -147,7 +147,9 @@ class ResetCommand(BaseModel):
 
 
 class EmergencyStopCommand(BaseModel):
-    """Emergency stop: every axis brakes at a_emergency, the channel stays in error."""
+    """Emergency stop: every axis brakes at a_emergency, the channel stays in error. Sent to
+    its own route (`POST /api/machines/{mid}/emergency-stop`): anyone who may command may
+    stop the machine, holding control or not."""
 
     type: Literal["emergency_stop"] = "emergency_stop"
 
@@ -164,8 +166,7 @@ Command = Annotated[
     | HliCommand
     | PlcModeCommand
     | PlcAckCommand
-    | ResetCommand
-    | EmergencyStopCommand,
+    | ResetCommand,
     Field(discriminator="type"),
 ]
 

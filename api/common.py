@@ -48,6 +48,19 @@ class ParameterProblem(BaseModel):
     unit: str | None = None
 
 
+class StaleValue(BaseModel):
+    """A parameter someone else wrote after the edit began: both values, nothing written."""
+
+    parameter: str
+    target: str | None
+    yours: float | int | str = Field(description="the value this write asked for")
+    current: float | int | str | None = Field(description="the value in force (None: default)")
+    base_version: int = Field(description="the version the edit was based on")
+    version: int = Field(description="the parameter's version now")
+    by: str = Field(description="who wrote the current value")
+    time_unix: float | None
+
+
 class Refusal(BaseModel):
     """Why a request was not carried out (HTTP 4xx body under `detail`)."""
 
@@ -60,6 +73,9 @@ class Refusal(BaseModel):
     )
     problems: list[ParameterProblem] = Field(
         default_factory=list, description="rejected parameter values (nothing was applied)"
+    )
+    stale: list[StaleValue] = Field(
+        default_factory=list, description="parameters written by someone else meanwhile"
     )
 
 

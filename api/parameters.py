@@ -48,6 +48,11 @@ class ParameterValue(BaseModel):
         None, description="list value × eng_factor = engineering value (numeric entries)"
     )
     eng_unit: str = Field("", description="engineering unit, e.g. 1/s for a kv in 0.01/s")
+    version: int = Field(
+        0,
+        description="changes with every write (0: never written here); send it back as "
+        "`base_version` so a write over someone else's newer value is refused",
+    )
 
 
 class ParameterChange(BaseModel):
@@ -56,6 +61,12 @@ class ParameterChange(BaseModel):
     name: str = Field(min_length=1, max_length=120)
     # strict: `true` is not 1.0 and "2000" stays text (parsed as the list format would)
     value: StrictFloat | StrictInt | StrictStr
+    base_version: int | None = Field(
+        None,
+        ge=0,
+        description="the version the edit was based on: refused (409, both values) "
+        "when the parameter was written since; null: no check (a script's deliberate write)",
+    )
 
 
 class ParameterWrite(BaseModel):

@@ -7,6 +7,7 @@ from typing import Literal
 from pydantic import BaseModel, Field
 
 from api.common import JobErrorModel
+from api.control import ControlState
 
 SimMode = Literal["run", "pause", "fast"]
 
@@ -97,6 +98,7 @@ class MachineStatus(BaseModel):
     plc: PlcStatus
     job_errors: list[JobErrorModel] = Field(description="active job errors, one per axis")
     recent_events: list[JobErrorModel] = Field(description="the newest 50 events and errors")
+    control: ControlState = Field(description="who holds the machine, who asks for it")
 
 
 class MachineSummary(BaseModel):

@@ -15,10 +15,10 @@ from starlette.requests import HTTPConnection
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from api.auth import CSRF_HEADER, SESSION_COOKIE
+from api.auth import CLIENT_HEADER, CSRF_HEADER, SESSION_COOKIE
 from api.common import ErrorBody, Refusal
 from backend.security import SAFE_METHODS
-from backend.services.accounts import Accounts
+from backend.services.accounts import Accounts, public_id
 from backend.services.auth import Actor
 
 OPEN_PATHS = frozenset({"/api/health", "/api/auth/login", "/api/auth/logout"})
@@ -34,21 +34,27 @@ def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | tuple[int, str
     """The actor behind a request, or why there is none (status, message)."""
     ticket = conn.query_params.get("ticket")
     if ticket is not None and conn.scope["type"] == "http" and conn.scope["method"] == "GET":
-        me = accounts.redeem_ticket(ticket, conn.scope["path"])
-        return Actor(me.name, me.role) if me else (401, "unknown, used or expired ticket")
+        actor = accounts.redeem_ticket(ticket, conn.scope["path"])
+        return actor if actor else (401, "unknown, used or expired ticket")
+    # a browser tab's id: websockets cannot send headers, so they name it in the query
+    client = (conn.headers.get(CLIENT_HEADER) or conn.query_params.get("client") or "")[:64]
     auth = conn.headers.get("authorization", "")
     if auth[:7].lower() == "bearer ":
-        me = accounts.token_user(auth[7:].strip())
-        return Actor(me.name, me.role) if me else (401, "unknown or revoked API token")
+        token = auth[7:].strip()
+        user = accounts.token_user(token)
+        if user is None:
+            return 401, "unknown or revoked API token"
+        return Actor(user.name, user.role, public_id("token", token), client)
     sid = conn.cookies.get(SESSION_COOKIE)
     session = accounts.session(sid) if sid else None
-    if session is None:
+    if session is None or not sid:
         return 401, "the session has ended: log in again" if sid else "not logged in"
     if conn.scope["type"] == "http" and conn.scope["method"] not in SAFE_METHODS:
         sent = conn.headers.get(CSRF_HEADER, "")
         if not secrets.compare_digest(sent.encode(), session.csrf.encode()):
             return 403, f"missing or wrong {CSRF_HEADER} header"
-    return Actor(session.me.name, session.me.role)
+    user = session.user
+    return Actor(user.name, user.role, public_id("session", sid), client)
 
 
 class Authentication:

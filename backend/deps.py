@@ -6,15 +6,19 @@ import asyncio
 import sys
 import time
 from dataclasses import dataclass
-from typing import Annotated
+from typing import Annotated, Any
 
-from fastapi import Depends
+from fastapi import Depends, WebSocketException
 from fastapi.requests import HTTPConnection
 
-from backend.errors import ApiError
-from backend.security import is_loopback
+from api.audit import AuditKind
+from api.auth import HELD, Action
+from backend.errors import ApiError, refusal_text
+from backend.security import SAFE_METHODS, is_loopback
 from backend.services.accounts import Accounts
-from backend.services.auth import Actor
+from backend.services.audit import Audit, Entry
+from backend.services.auth import Actor, authorize
+from backend.services.control import Control
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.store import Store
@@ -34,6 +38,8 @@ class Services:
     settings: Settings
     store: Store
     accounts: Accounts
+    audit: Audit
+    control: Control
     machines: MachineService
     pool: WorkerPool
     hub: TelemetryHub
@@ -53,6 +59,8 @@ class Services:
         loop = asyncio.get_running_loop()  # reads the local workers' replies and pushes
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
+        audit = Audit(store)
+        control = Control(machines, audit)
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
@@ -63,8 +71,21 @@ class Services:
         viewer = RerunViewer(tdir / "rerun-viewer.log")
         hub.start()
         recorders.start()
+        hub.on_connect, hub.on_disconnect = control.connected, control.disconnected
+        control.start()
         services = cls(
-            settings, store, accounts, machines, pool, hub, traces, recorders, viewer, time.time()
+            settings,
+            store,
+            accounts,
+            audit,
+            control,
+            machines,
+            pool,
+            hub,
+            traces,
+            recorders,
+            viewer,
+            time.time(),
         )
         services.print_login_link()
         return services
@@ -81,10 +102,12 @@ class Services:
         print(f"Log in as {admin} (once, within an hour): {link}", flush=True)
 
     async def stop(self) -> None:
+        await self.control.stop()
         await self.hub.stop()
         self.recorders.stop()
         self.viewer.stop()
         self.pool.stop()
+        self.audit.stop()
         self.store.close()
 
 
@@ -103,8 +126,65 @@ async def get_actor(conn: HTTPConnection) -> Actor:
     return actor
 
 
+_KIND: dict[Action, AuditKind] = {
+    Action.OBSERVE: "command",
+    Action.CAPTURE: "trace",
+    Action.RECORD: "recording",
+    Action.DELETE_TRACE: "trace",
+    Action.CONTROL: "control",
+    Action.STOP: "command",
+    Action.COMMAND: "command",
+    Action.CONFIGURE: "parameter",
+    Action.TAKE_CONTROL: "control",
+    Action.SIMULATE: "simulation",
+    Action.MACHINES: "machine",
+    Action.USERS: "user",
+}
 ServicesDep = Annotated[Services, Depends(get_services)]
 ActorDep = Annotated[Actor, Depends(get_actor)]
+
+
+def permit(action: Action) -> Any:
+    """A route's rule in the authorization matrix (api/auth.py): the actor's role must allow
+    the action; an action only a control holder may do also needs control of the machine in
+    the path (a free machine is taken). Every guarded route declares one (backend/main.py
+    refuses to start otherwise)."""
+
+    async def check(conn: HTTPConnection, services: ServicesDep) -> None:
+        actor = await get_actor(conn)
+        mid: str | None = conn.path_params.get("mid")
+        try:
+            authorize(actor, action, mid)
+            if action in HELD and mid is not None:
+                services.control.hold(actor, services.machines.get(mid))
+        except ApiError as e:
+            if conn.scope["type"] == "websocket":  # refused before the accept: HTTP 403
+                raise WebSocketException(1008, refusal_text(e)[:120]) from None
+            if conn.scope["method"] not in SAFE_METHODS:  # an attempt to change something
+                services.audit.record_later(
+                    Entry(
+                        actor.name,
+                        actor.session,
+                        _KIND[action],
+                        f"{conn.scope['method']} {conn.scope['path']}",
+                        mid or "",
+                        outcome=f"refused ({e.status}): {refusal_text(e)}",
+                    )
+                )
+            raise
+
+    check.action = action  # type: ignore[attr-defined]  # the rule, for the start-up check
+    return Depends(check)
+
+
+def rule_of(route: object) -> Action | None:
+    """The action a route declared with `permit`, None without one."""
+    dependant = getattr(route, "dependant", None)
+    for dep in dependant.dependencies if dependant else []:
+        action = getattr(dep.call, "action", None)
+        if isinstance(action, Action):
+            return action
+    return None
 
 
 async def get_machine(mid: str, services: ServicesDep) -> MachineProxy:

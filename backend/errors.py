@@ -44,6 +44,12 @@ class ApiError(Exception):
         self.detail = detail
 
 
+def refusal_text(e: ApiError) -> str:
+    """The refusal's message (for the audit trail)."""
+    message = e.detail.get("message") if isinstance(e.detail, dict) else None
+    return str(message if message is not None else e.detail)
+
+
 def not_found(what: str) -> ApiError:
     return ApiError(404, {"message": f"{what} not found"})
 

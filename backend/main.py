@@ -6,14 +6,17 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
+from fastapi.routing import APIRoute, APIWebSocketRoute
 
 from backend import VERSION, errors, frontend, openapi
-from backend.authn import Authentication
-from backend.deps import Services
+from backend.authn import Authentication, guarded
+from backend.deps import Services, rule_of
 from backend.errors import responses
 from backend.routes import (
+    audit,
     auth,
     commands,
+    control,
     machines,
     parameters,
     scope,
@@ -51,11 +54,33 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     errors.install(app)
     app.include_router(auth.router)
     # every other route needs a token or a session (backend/authn.py)
-    for module in (service, machines, commands, parameters, telemetry, scope, traces, viewer):
+    for module in (
+        service,
+        machines,
+        commands,
+        control,
+        parameters,
+        telemetry,
+        scope,
+        traces,
+        audit,
+        viewer,
+    ):
         app.include_router(module.router, responses=responses(401, 403))
+    _every_route_has_a_rule(app)
     openapi.install(app)
     frontend.mount(app, cfg.frontend_dir)
     return app
+
+
+def _every_route_has_a_rule(app: FastAPI) -> None:
+    """A guarded route without its rule in the authorization matrix is a bug: refuse to
+    start rather than serve it to every role."""
+    for route in app.routes:
+        path = getattr(route, "path", "")
+        routed = isinstance(route, APIRoute | APIWebSocketRoute)
+        if guarded(path) and routed and rule_of(route) is None:
+            raise RuntimeError(f"{path} declares no rule: add dependencies=[permit(...)]")
 
 
 app = create_app()

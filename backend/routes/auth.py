@@ -5,10 +5,12 @@ from __future__ import annotations
 from fastapi import APIRouter, Request, Response
 from fastapi.responses import HTMLResponse, RedirectResponse
 
-from api.auth import CSRF_COOKIE, SESSION_COOKIE, LoginRequest, Me
-from backend.deps import ActorDep, ServicesDep
+from api.auth import CSRF_COOKIE, SESSION_COOKIE, Action, LoginRequest, Me, Role
+from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import ApiError, responses
-from backend.services.accounts import SESSION_S
+from backend.services.accounts import SESSION_S, User, public_id
+from backend.services.audit import Entry
+from backend.services.auth import Actor
 
 router = APIRouter(tags=["auth"])
 
@@ -22,12 +24,15 @@ def health() -> dict[str, str]:
     return {"status": "ok"}
 
 
-def _start_session(response: Response, request: Request, services: ServicesDep, me: Me) -> None:
-    sid, csrf = services.accounts.new_session(me.name)
+def _start_session(
+    response: Response, request: Request, services: ServicesDep, user: User
+) -> Actor:
+    sid, csrf = services.accounts.new_session(user.name)
     secure = request.url.scheme == "https"  # behind a TLS proxy too (its forwarded scheme)
     common = {"max_age": int(SESSION_S), "samesite": "strict", "secure": secure, "path": "/"}
     response.set_cookie(SESSION_COOKIE, sid, httponly=True, **common)  # type: ignore[arg-type]
     response.set_cookie(CSRF_COOKIE, csrf, **common)  # type: ignore[arg-type]
+    return Actor(user.name, Role(user.role), public_id("session", sid))
 
 
 @router.post(
@@ -38,40 +43,63 @@ def login(body: LoginRequest, request: Request, response: Response, services: Se
     """Log in: the session and CSRF cookies are set (HttpOnly and SameSite=Strict)."""
     address = request.client.host if request.client else "?"
     accounts = services.accounts
+
+    def refused(status: int, why: str) -> ApiError:
+        services.audit.record_later(
+            Entry(body.name, "", "login_failed", "login", outcome=why, address=address)
+        )
+        return ApiError(status, {"message": why})
+
     if accounts.throttled(address):
-        raise ApiError(429, {"message": "too many failed logins: wait a minute"})
-    me = accounts.check_password(body.name, body.password)
-    if me is None:
+        raise refused(429, "too many failed logins: wait a minute")
+    user = accounts.check_password(body.name, body.password)
+    if user is None:
         accounts.failed(address)
-        raise ApiError(401, {"message": "wrong name or password"})
-    _start_session(response, request, services, me)
-    return me
+        raise refused(401, "wrong name or password")
+    actor = _start_session(response, request, services, user)
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "login", "login with password", address=address)
+    )
+    return actor.me
 
 
 @router.post("/api/auth/logout", status_code=204, response_class=Response)
 def logout(request: Request, services: ServicesDep) -> Response:
     """End this session (the cookies go too)."""
     sid = request.cookies.get(SESSION_COOKIE)
-    if sid:
+    session = services.accounts.session(sid) if sid else None
+    if sid and session is not None:
         services.accounts.end_session(sid)
+        key = public_id("session", sid)
+        services.control.end_session(key, f"{session.user.name} logged out")
+        services.audit.record_later(Entry(session.user.name, key, "logout", "logout"))
     response = Response(status_code=204)
     response.delete_cookie(SESSION_COOKIE, path="/")
     response.delete_cookie(CSRF_COOKIE, path="/")
     return response
 
 
-@router.get("/api/auth/me", responses=responses(401))
+@router.get("/api/auth/me", dependencies=[permit(Action.OBSERVE)], responses=responses(401))
 async def me(actor: ActorDep) -> Me:
     """Who this session (or API token) is."""
-    return Me(name=actor.name, role=actor.role)
+    return actor.me
 
 
 @router.get("/auth/once", include_in_schema=False)
 def once(token: str, request: Request, services: ServicesDep) -> Response:
     """A one-time login link (printed at start on loopback): a session, then the HMI."""
-    me = services.accounts.redeem_once(token[:200])
-    if me is None:
+    user = services.accounts.redeem_once(token[:200])
+    address = request.client.host if request.client else "?"
+    if user is None:
+        services.audit.record_later(
+            Entry(
+                "", "", "login_failed", "one-time link", outcome="used or expired", address=address
+            )
+        )
         return HTMLResponse(_LINK_USED, status_code=401)
     response = RedirectResponse("/", status_code=303)
-    _start_session(response, request, services, me)
+    actor = _start_session(response, request, services, user)
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "login", "login with a one-time link", address=address)
+    )
     return response

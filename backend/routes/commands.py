@@ -1,11 +1,12 @@
-"""Commands to a machine."""
+"""Commands to a machine, and its emergency stop."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter
 
-from api.commands import Command, CommandResult
-from backend.deps import ActorDep, MachineDep
+from api.auth import Action
+from api.commands import Command, CommandResult, EmergencyStopCommand
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services.commands import execute
 
@@ -14,6 +15,7 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
 
 @router.post(
     "/{mid}/commands",
+    dependencies=[permit(Action.COMMAND)],
     responses=responses(
         403,
         404,
@@ -24,6 +26,22 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
         | WORKER_GONE,
     ),
 )
-async def command(cmd: Command, machine: MachineDep, actor: ActorDep) -> CommandResult:
-    """MDI block, spindle, gear, homing, jog, move, override, HLI, PLC, reset, E-stop."""
-    return await execute(actor, machine, cmd)
+async def command(
+    cmd: Command, machine: MachineDep, actor: ActorDep, services: ServicesDep
+) -> CommandResult:
+    """MDI block, spindle, gear, homing, jog, move, override, HLI, PLC, reset (only while
+    holding control of the machine: the first command takes a free one)."""
+    return await execute(actor, machine, cmd, services.audit)
+
+
+@router.post(
+    "/{mid}/emergency-stop",
+    dependencies=[permit(Action.STOP)],
+    responses=responses(403, 404, why=WORKER_GONE),
+)
+async def emergency_stop(
+    machine: MachineDep, actor: ActorDep, services: ServicesDep
+) -> CommandResult:
+    """Every axis brakes at a_emergency, the drives lose their enables; whoever may command
+    may stop, holding control or not. A reset (by the holder) ends it."""
+    return await execute(actor, machine, EmergencyStopCommand(), services.audit)

@@ -8,9 +8,9 @@ from api.auth import Action
 from api.machines import MachineCreate, SimulationControl, StepRequest
 from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
-from backend.deps import ActorDep, MachineDep, ServicesDep
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
-from backend.services.auth import authorize
+from backend.services.audit import Entry
 from backend.services.status import (
     machine_status,
     machine_summary,
@@ -22,51 +22,100 @@ from backend.workers.protocol import Pace, Step
 router = APIRouter(prefix="/api/machines", tags=["machines"])
 
 
-@router.get("")
+@router.get("", dependencies=[permit(Action.OBSERVE)])
 def list_machines(services: ServicesDep) -> list[MachineSummary]:
     return [machine_summary(m) for m in services.machines.proxies()]
 
 
-@router.post("", status_code=201, responses=responses(403, 409, 422, why=WORKER_GONE))
+@router.post(
+    "",
+    status_code=201,
+    dependencies=[permit(Action.MACHINES)],
+    responses=responses(403, 409, 422, why=WORKER_GONE),
+)
 def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -> MachineSummary:
     """A new machine from the demo or from native parameter lists; it starts running."""
-    return machine_summary(services.machines.create(actor, req))
+    machine = services.machines.create(req)
+    services.audit.record(
+        Entry(
+            actor.name,
+            actor.session,
+            "machine",
+            f"created machine {machine.id}",
+            machine.id,
+            {"name": machine.name, "source": machine.source},
+        )
+    )
+    return machine_summary(machine)
 
 
-@router.get("/{mid}/status", responses=responses(404, why=WORKER_GONE))
+@router.get(
+    "/{mid}/status",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(404, why=WORKER_GONE),
+)
 async def status(machine: MachineDep) -> MachineStatus:
     """Full snapshot: HLI objects, axis and spindle states, gear, job errors, PLC."""
     return await machine_status(machine)
 
 
-@router.get("/{mid}/signals", responses=responses(404))
+@router.get("/{mid}/signals", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
 def signals(machine: MachineDep) -> list[SignalInfo]:
     """Every signal the machine records each cycle (for telemetry subscriptions)."""
     return signal_infos(machine)
 
 
-@router.post("/{mid}/restart", responses=responses(403, 404, why=WORKER_GONE))
+@router.post(
+    "/{mid}/restart",
+    dependencies=[permit(Action.COMMAND)],
+    responses=responses(403, 404, why=WORKER_GONE),
+)
 def restart(mid: str, services: ServicesDep, actor: ActorDep) -> MachineSummary:
-    """Power off and on: cycle 0, every stored value (pending ones too) in force."""
-    return machine_summary(services.machines.restart(actor, mid))
+    """Power off and on (only while holding control): cycle 0, every stored value (pending
+    ones too) in force."""
+    machine = services.machines.restart(mid)
+    services.audit.record(Entry(actor.name, actor.session, "machine", "power cycle", mid))
+    return machine_summary(machine)
 
 
-@router.delete("/{mid}", status_code=204, responses=responses(403, 404))
+@router.delete(
+    "/{mid}", status_code=204, dependencies=[permit(Action.MACHINES)], responses=responses(403, 404)
+)
 def delete(mid: str, services: ServicesDep, actor: ActorDep) -> Response:
-    services.machines.delete(actor, mid)
+    services.machines.delete(mid)
+    services.audit.record(
+        Entry(actor.name, actor.session, "machine", f"deleted machine {mid}", mid)
+    )
     return Response(status_code=204)
 
 
-@router.post("/{mid}/simulation", responses=responses(403, 404, 422, why=WORKER_GONE))
-def pace(req: SimulationControl, machine: MachineDep, actor: ActorDep) -> SimulationStatus:
+@router.post(
+    "/{mid}/simulation",
+    dependencies=[permit(Action.SIMULATE)],
+    responses=responses(403, 404, 422, why=WORKER_GONE),
+)
+def pace(
+    req: SimulationControl, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> SimulationStatus:
     """Run in real time, pause, or run as fast as possible (until a cycle)."""
-    authorize(actor, Action.SIMULATE, machine.id)
+    until = f" until cycle {req.until_cycle}" if req.until_cycle is not None else ""
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "simulation", f"{req.mode}{until}", machine.id)
+    )
     return paced(machine, Pace(machine.id, req.mode, req.until_cycle))
 
 
-@router.post("/{mid}/simulation/step", responses=responses(403, 404, 422, why=WORKER_GONE))
-def step(req: StepRequest, machine: MachineDep, actor: ActorDep) -> SimulationStatus:
+@router.post(
+    "/{mid}/simulation/step",
+    dependencies=[permit(Action.SIMULATE)],
+    responses=responses(403, 404, 422, why=WORKER_GONE),
+)
+def step(
+    req: StepRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> SimulationStatus:
     """Pause and advance `cycles` cycles; an emergency stop, a pacing change or a restart
     meanwhile ends the step early (the answer's `cycle` says where it stopped)."""
-    authorize(actor, Action.SIMULATE, machine.id)
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "simulation", f"step {req.cycles} cycles", machine.id)
+    )
     return paced(machine, Step(machine.id, req.cycles))

@@ -8,6 +8,7 @@ from fastapi import APIRouter, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import PlainTextResponse, Response
 
+from api.auth import Action
 from api.parameters import (
     AuditEntry,
     ParameterDef,
@@ -17,7 +18,7 @@ from api.parameters import (
     ScopeName,
 )
 from backend.bodies import read_text, text_answer, text_body
-from backend.deps import ActorDep, MachineDep, ServicesDep
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services import parameters as params
 from nc_sim.params import Scope, registry
@@ -26,11 +27,12 @@ router = APIRouter(prefix="/api", tags=["parameters"])
 
 ScopeQ = Annotated[ScopeName, Query(description="axis, channel or tool list")]
 TargetQ = Annotated[str | None, Query(description="axis name for the axis list")]
+_STALE = {409: "written by someone else since it was read: both values, nothing applied"}
 _REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"} | WORKER_GONE
 MAX_LIST_BYTES = 1_000_000
 
 
-@router.get("/parameters")
+@router.get("/parameters", dependencies=[permit(Action.OBSERVE)])
 def definitions() -> list[ParameterDef]:
     """Every parameter the simulated NC knows: ID, list name, type, range, default, effect."""
     return [
@@ -52,25 +54,37 @@ def definitions() -> list[ParameterDef]:
     ]
 
 
-@router.get("/machines/{mid}/parameters", responses=responses(404, 422))
+@router.get(
+    "/machines/{mid}/parameters",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(404, 422),
+)
 def values(
-    machine: MachineDep, scope: ScopeQ = "axis", target: TargetQ = None
+    machine: MachineDep, services: ServicesDep, scope: ScopeQ = "axis", target: TargetQ = None
 ) -> list[ParameterValue]:
-    """Values of one list (every gear record for getriebe[i]), with pending values."""
-    return params.read(machine, Scope(scope), target)
+    """Values of one list (every gear record for getriebe[i]), with pending values and
+    versions."""
+    return params.read(machine, services.store, Scope(scope), target)
 
 
-@router.patch("/machines/{mid}/parameters", responses=responses(403, 404, why=_REJECTED))
+@router.patch(
+    "/machines/{mid}/parameters",
+    dependencies=[permit(Action.CONFIGURE)],
+    responses=responses(403, 404, why=_STALE | _REJECTED),
+)
 def write(
     req: ParameterWrite, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> ParameterWriteResult:
-    """Write one or many values: all are checked first, then stored, audited and applied."""
+    """Write one or many values (only while holding control of the machine): all are checked
+    first, then stored, audited and applied. A value based on an older version than the
+    parameter's is refused with both values (409): nobody overwrites another's change unseen."""
     return params.write(actor, machine, services.store, req.changes, req.comment)
 
 
 @router.get(
     "/machines/{mid}/parameters/export",
     response_class=Response,
+    dependencies=[permit(Action.OBSERVE)],
     responses=text_answer("text/plain", "the list") | responses(404, 422),
 )
 def export(
@@ -82,6 +96,7 @@ def export(
 
 @router.post(
     "/machines/{mid}/parameters/import",
+    dependencies=[permit(Action.CONFIGURE)],
     responses=responses(403, 404, 413, why=_REJECTED),
     openapi_extra=text_body("text/plain", MAX_LIST_BYTES, "a list in the native format"),
 )
@@ -100,9 +115,11 @@ async def import_list(
     )
 
 
-@router.get("/machines/{mid}/parameters/audit")
+@router.get("/machines/{mid}/parameters/audit", dependencies=[permit(Action.OBSERVE)])
 def audit(
     mid: str, services: ServicesDep, limit: Annotated[int, Query(ge=1, le=100000)] = 1000
 ) -> list[AuditEntry]:
-    """Accepted changes with time, actor, old and new value, oldest first."""
+    """Accepted changes with time, actor, old and new value, oldest first (the parameter
+    rows of the audit trail)."""
+    services.audit.flush()
     return params.audit(services.store, mid, limit)

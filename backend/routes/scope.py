@@ -9,10 +9,10 @@ from fastapi.responses import FileResponse, RedirectResponse, Response
 
 from api.auth import Action
 from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
-from backend.deps import ActorDep, MachineDep, ServicesDep
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services import scope
-from backend.services.auth import authorize
+from backend.services.audit import Entry
 from backend.services.viewer import viewer_url
 
 router = APIRouter(prefix="/api", tags=["scope"])
@@ -21,36 +21,44 @@ BINARY: dict[int | str, dict[str, Any]] = {
 }
 
 
-@router.get("/machines/{mid}/scope", responses=responses(403, 404, why=WORKER_GONE))
-def scope_status(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+@router.get(
+    "/machines/{mid}/scope",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(404, why=WORKER_GONE),
+)
+def scope_status(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     """State of the scope, its setup and the recent captures (newest first)."""
-    authorize(actor, Action.OBSERVE, machine.id)
     return scope.status(machine, services.traces, services.recorders)
 
 
 @router.put(
-    "/machines/{mid}/scope", responses=responses(403, 404, why={422: "bad setup"} | WORKER_GONE)
+    "/machines/{mid}/scope",
+    dependencies=[permit(Action.CAPTURE)],
+    responses=responses(403, 404, why={422: "bad setup"} | WORKER_GONE),
 )
-def scope_arm(
-    req: ScopeSetupModel, machine: MachineDep, services: ServicesDep, actor: ActorDep
-) -> ScopeStatus:
+def scope_arm(req: ScopeSetupModel, machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     """Arm (or start rolling) with this setup; the pre-trigger fills from recent history."""
-    authorize(actor, Action.OBSERVE, machine.id)
     scope.arm(machine, req)
     return scope.status(machine, services.traces, services.recorders)
 
 
-@router.post("/machines/{mid}/scope/force", responses=responses(403, 404, why=WORKER_GONE))
-def scope_force(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+@router.post(
+    "/machines/{mid}/scope/force",
+    dependencies=[permit(Action.CAPTURE)],
+    responses=responses(403, 404, why=WORKER_GONE),
+)
+def scope_force(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     """Trigger now (an armed scope only)."""
-    authorize(actor, Action.OBSERVE, machine.id)
     scope.force(machine)
     return scope.status(machine, services.traces, services.recorders)
 
 
-@router.post("/machines/{mid}/scope/stop", responses=responses(403, 404, why=WORKER_GONE))
-def scope_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
-    authorize(actor, Action.OBSERVE, machine.id)
+@router.post(
+    "/machines/{mid}/scope/stop",
+    dependencies=[permit(Action.CAPTURE)],
+    responses=responses(403, 404, why=WORKER_GONE),
+)
+def scope_stop(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     scope.stop(machine)
     return scope.status(machine, services.traces, services.recorders)
 
@@ -58,36 +66,59 @@ def scope_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> S
 @router.get(
     "/machines/{mid}/scope/roll",
     response_class=Response,
-    responses=BINARY | responses(403, 404, 409, 422, why=WORKER_GONE),
+    dependencies=[permit(Action.OBSERVE)],
+    responses=BINARY | responses(404, 409, 422, why=WORKER_GONE),
 )
 def scope_roll(
     machine: MachineDep,
-    actor: ActorDep,
     max_points: Annotated[int, Query(ge=100, le=200_000)] = 5000,
 ) -> Response:
     """The newest record length of a running scope (every stride-th cycle)."""
-    authorize(actor, Action.OBSERVE, machine.id)
     return Response(scope.roll_frame(machine, max_points), media_type="application/octet-stream")
 
 
-@router.post("/machines/{mid}/recording", status_code=201, responses=responses(403, 404, 409, 422))
+@router.post(
+    "/machines/{mid}/recording",
+    status_code=201,
+    dependencies=[permit(Action.RECORD)],
+    responses=responses(403, 404, 409, 422, why={507: "the recordings' disk quota is used up"}),
+)
 def recording_start(
     req: RecordingStart, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> RecordingInfo:
-    """Record these signals every cycle into a Rerun .rrd until stopped."""
-    authorize(actor, Action.OBSERVE, machine.id)
-    return services.recorders.begin(machine, req.signals)
+    """Record these signals every cycle into a Rerun .rrd until stopped (or until the
+    recordings' disk quota is reached)."""
+    info = services.recorders.begin(machine, req.signals)
+    services.audit.record_later(
+        Entry(
+            actor.name,
+            actor.session,
+            "recording",
+            f"started recording {info.id}",
+            machine.id,
+            {"signals": req.signals},
+        )
+    )
+    return info
 
 
-@router.delete("/machines/{mid}/recording", responses=responses(403, 404, 409))
+@router.delete(
+    "/machines/{mid}/recording",
+    dependencies=[permit(Action.RECORD)],
+    responses=responses(403, 404, 409),
+)
 def recording_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> RecordingInfo:
-    authorize(actor, Action.OBSERVE, machine.id)
-    return services.recorders.end(machine.id)
+    info = services.recorders.end(machine.id)
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "recording", f"stopped recording {info.id}", machine.id)
+    )
+    return info
 
 
 @router.get(
     "/recordings/{rid}/recording.rrd",
     response_class=FileResponse,
+    dependencies=[permit(Action.OBSERVE)],
     responses=BINARY | responses(404),
 )
 def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
@@ -100,9 +131,15 @@ def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
     "/recordings/{rid}/viewer",
     response_class=RedirectResponse,
     status_code=307,
+    dependencies=[permit(Action.CAPTURE)],
     responses=responses(404),
 )
-def recording_viewer(rid: str, request: Request, services: ServicesDep) -> RedirectResponse:
-    """Open the recording in the bundled Rerun web viewer."""
+def recording_viewer(
+    rid: str, request: Request, services: ServicesDep, actor: ActorDep
+) -> RedirectResponse:
+    """Open the recording in the bundled Rerun web viewer. Its loader fetches the .rrd
+    without the session cookie, so the URL carries a ticket for that one request."""
     services.recorders.path(rid)
-    return RedirectResponse(viewer_url(request, f"/api/recordings/{rid}/recording.rrd"))
+    path = f"/api/recordings/{rid}/recording.rrd"
+    ticket = services.accounts.issue_ticket(actor, path)
+    return RedirectResponse(viewer_url(request, f"{path}?ticket={ticket}"))

@@ -6,15 +6,16 @@ import time
 
 from fastapi import APIRouter
 
+from api.auth import Action
 from api.status import ServiceStatus
 from backend import VERSION
-from backend.deps import ServicesDep
+from backend.deps import ServicesDep, permit
 from backend.services.status import machine_simulation, worker_statuses
 
 router = APIRouter(prefix="/api", tags=["service"])
 
 
-@router.get("/service/status")
+@router.get("/service/status", dependencies=[permit(Action.OBSERVE)])
 def service_status(services: ServicesDep) -> ServiceStatus:
     """Each worker with its machines and loop figures, telemetry clients, and each machine's
     pacing and worker."""

@@ -9,9 +9,8 @@ from pydantic import ValidationError
 
 from api.auth import Action
 from api.telemetry import ErrorMessage, Hello, Subscribe
-from backend.deps import ActorDep, ServicesDep
+from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import ApiError
-from backend.services.auth import authorize
 from backend.services.status import signal_infos
 from backend.services.telemetry import CLOSE_POLICY, Subscriber
 
@@ -21,7 +20,7 @@ CLOSE_INVALID = 1007  # payload we cannot take apart
 router = APIRouter(prefix="/api/machines", tags=["telemetry"])
 
 
-@router.websocket("/{mid}/telemetry")
+@router.websocket("/{mid}/telemetry", dependencies=[permit(Action.OBSERVE)])
 async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: ActorDep) -> None:
     """Send `hello`, then binary frames for the subscribed signals and `event` messages.
 
@@ -32,13 +31,12 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
     """
     try:
         machine = services.machines.get(mid)
-        authorize(actor, Action.OBSERVE, mid)
     except ApiError as e:
-        await ws.close(code=4403 if e.status == 403 else 4404, reason=str(e)[:120])
+        await ws.close(code=4404, reason=str(e)[:120])
         return
     await ws.accept()
     hub = services.hub
-    sub = hub.add(ws, machine)
+    sub = hub.add(ws, machine, actor)
     sub.reply(
         Hello(
             machine=machine.id,

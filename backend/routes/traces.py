@@ -8,13 +8,13 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse, RedirectResponse
 
-from api.auth import Action, Me
+from api.auth import Action
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
 from backend.bodies import read_text, text_answer, text_body
-from backend.deps import ActorDep, ServicesDep
-from backend.errors import responses
+from backend.deps import ActorDep, ServicesDep, permit
+from backend.errors import ApiError, responses
 from backend.routes.scope import BINARY
-from backend.services.auth import authorize
+from backend.services.audit import Entry
 from backend.services.trace_csv import from_csv, to_csv
 from backend.services.viewer import viewer_url
 
@@ -22,13 +22,13 @@ router = APIRouter(prefix="/api/traces", tags=["traces"])
 MAX_CSV_BYTES = 64 * 1024 * 1024
 
 
-@router.get("")
+@router.get("", dependencies=[permit(Action.OBSERVE)])
 def library(services: ServicesDep, machine: str | None = None) -> list[TraceInfo]:
     """Stored traces, newest first (of one machine when given)."""
     return services.traces.library(machine)
 
 
-@router.get("/compare", responses=responses(404, 422))
+@router.get("/compare", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422))
 def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
     """Parameters that differ between two traces, and the channels they share."""
     return services.traces.compare(a, b)
@@ -37,6 +37,7 @@ def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
 @router.post(
     "/import",
     status_code=201,
+    dependencies=[permit(Action.CAPTURE)],
     responses=responses(403, 413, why={422: "bad CSV: which row or column, and why"}),
     openapi_extra=text_body("text/csv", MAX_CSV_BYTES, "a trace as CSV, e.g. one exported"),
 )
@@ -47,20 +48,26 @@ async def import_csv(
     name: Annotated[str, Query(max_length=200)] = "",
 ) -> TraceInfo:
     """Store a CSV trace (body text/csv), e.g. one exported earlier, to overlay it."""
-    authorize(actor, Action.OBSERVE, "")
     text = await read_text(request, MAX_CSV_BYTES, "CSV import")
     # parsing and writing take seconds for a big file: off the event loop
     trace = await run_in_threadpool(from_csv, text, name)
-    return await run_in_threadpool(services.traces.add, trace)
+    info = await run_in_threadpool(services.traces.add, trace)
+    _audit(services, actor, f"imported trace {info.id} ({info.name})")
+    return info
 
 
-@router.get("/{tid}", responses=responses(404))
+@router.get("/{tid}", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
 def detail(tid: str, services: ServicesDep) -> TraceDetail:
     """Description, parameters that differed from defaults, and the events in the record."""
     return services.traces.get(tid).detail
 
 
-@router.get("/{tid}/data", response_class=Response, responses=BINARY | responses(404))
+@router.get(
+    "/{tid}/data",
+    response_class=Response,
+    dependencies=[permit(Action.OBSERVE)],
+    responses=BINARY | responses(404),
+)
 def data(tid: str, services: ServicesDep) -> Response:
     """Every sample as one binary frame (api/telemetry.py format)."""
     return Response(services.traces.frame(tid), media_type="application/octet-stream")
@@ -69,6 +76,7 @@ def data(tid: str, services: ServicesDep) -> Response:
 @router.get(
     "/{tid}/csv",
     response_class=Response,
+    dependencies=[permit(Action.OBSERVE)],
     responses=text_answer("text/csv", "CSV text") | responses(404),
 )
 def csv(tid: str, services: ServicesDep) -> Response:
@@ -80,7 +88,12 @@ def csv(tid: str, services: ServicesDep) -> Response:
     )
 
 
-@router.get("/{tid}/trace.rrd", response_class=FileResponse, responses=BINARY | responses(404))
+@router.get(
+    "/{tid}/trace.rrd",
+    response_class=FileResponse,
+    dependencies=[permit(Action.OBSERVE)],
+    responses=BINARY | responses(404),
+)
 def rrd(tid: str, services: ServicesDep) -> FileResponse:
     """The trace as a Rerun recording."""
     path = services.traces.rrd_path(tid)
@@ -88,18 +101,26 @@ def rrd(tid: str, services: ServicesDep) -> FileResponse:
 
 
 @router.get(
-    "/{tid}/viewer", response_class=RedirectResponse, status_code=307, responses=responses(404)
+    "/{tid}/viewer",
+    response_class=RedirectResponse,
+    status_code=307,
+    dependencies=[permit(Action.CAPTURE)],
+    responses=responses(404),
 )
 def viewer(tid: str, request: Request, services: ServicesDep, actor: ActorDep) -> RedirectResponse:
     """Open the trace in the bundled Rerun web viewer. Its loader fetches the .rrd without
     the session cookie, so the URL carries a ticket for that one request."""
     services.traces.get(tid)
     path = f"/api/traces/{tid}/trace.rrd"
-    ticket = services.accounts.issue_ticket(Me(name=actor.name, role=actor.role), path)
+    ticket = services.accounts.issue_ticket(actor, path)
     return RedirectResponse(viewer_url(request, f"{path}?ticket={ticket}"))
 
 
-@router.get("/{tid}/measure", responses=responses(404, why={422: "unknown channel, empty window"}))
+@router.get(
+    "/{tid}/measure",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(404, why={422: "unknown channel, empty window"}),
+)
 def measure(
     tid: str,
     channel: str,
@@ -113,21 +134,43 @@ def measure(
     return services.traces.measure(tid, channel, t0_s, t1_s, band_pct, band_abs)
 
 
-@router.post("/{tid}/save", status_code=201, responses=responses(403, 404, 409, 422))
+@router.post(
+    "/{tid}/save",
+    status_code=201,
+    dependencies=[permit(Action.CAPTURE)],
+    responses=responses(403, 404, 409, 422),
+)
 def save(tid: str, req: TraceSave, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Keep a recent capture in the library, with a name and notes."""
-    authorize(actor, Action.OBSERVE, "")
-    return services.traces.save(tid, req)
+    info = services.traces.save(tid, req)
+    _audit(services, actor, f"saved trace {info.id} ({info.name})", info.machine)
+    return info
 
 
-@router.patch("/{tid}", responses=responses(403, 404, 409, 422))
+@router.patch(
+    "/{tid}", dependencies=[permit(Action.CAPTURE)], responses=responses(403, 404, 409, 422)
+)
 def patch(tid: str, req: TracePatch, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Rename a stored trace or change its notes."""
-    authorize(actor, Action.OBSERVE, "")
-    return services.traces.patch(tid, req)
+    info = services.traces.patch(tid, req)
+    _audit(services, actor, f"renamed or annotated trace {tid}", info.machine)
+    return info
 
 
-@router.delete("/{tid}", status_code=204, responses=responses(403, 404))
+@router.delete(
+    "/{tid}",
+    status_code=204,
+    dependencies=[permit(Action.DELETE_TRACE)],
+    responses=responses(403, 404),
+)
 def delete(tid: str, services: ServicesDep, actor: ActorDep) -> None:
-    authorize(actor, Action.OBSERVE, "")
+    try:
+        machine = services.traces.get(tid).detail.machine
+    except ApiError:  # a row that no longer reads is deleted all the same
+        machine = ""
     services.traces.delete(tid)
+    _audit(services, actor, f"deleted trace {tid}", machine)
+
+
+def _audit(services: ServicesDep, actor: ActorDep, what: str, machine: str = "") -> None:
+    services.audit.record_later(Entry(actor.name, actor.session, "trace", what, machine))

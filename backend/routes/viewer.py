@@ -8,7 +8,8 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import RedirectResponse, StreamingResponse
 from starlette.background import BackgroundTask
 
-from backend.deps import ServicesDep
+from api.auth import Action
+from backend.deps import ServicesDep, permit
 from backend.errors import ApiError
 
 router = APIRouter(include_in_schema=False)
@@ -18,12 +19,12 @@ _PASS = ("content-type", "content-encoding", "content-length", "cache-control", 
 _CSP = "connect-src 'self'; font-src 'self' data:; style-src 'self' 'unsafe-inline'"
 
 
-@router.get("/rerun")
+@router.get("/rerun", dependencies=[permit(Action.CAPTURE)])
 def rerun_root() -> RedirectResponse:
     return RedirectResponse("/rerun/")
 
 
-@router.get("/rerun/{path:path}")
+@router.get("/rerun/{path:path}", dependencies=[permit(Action.CAPTURE)])
 async def rerun_asset(path: str, request: Request, services: ServicesDep) -> StreamingResponse:
     """Stream one file of the viewer (index.html, its script, its wasm) from 127.0.0.1."""
     port = await run_in_threadpool(services.viewer.ensure)

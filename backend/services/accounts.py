@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError
 
-from api.auth import Me, Role
+from api.auth import Role
+from backend.services.auth import Actor
 from backend.services.store import Store
 
 SESSION_S = 12 * 3600.0  # a shift; then log in again
@@ -56,11 +57,23 @@ def _digest(secret: str) -> str:
     return hashlib.sha256(secret.encode()).hexdigest()
 
 
+def public_id(kind: str, secret: str) -> str:
+    """A session's or token's id that others may see (who holds control): a prefix of the
+    digest the store keeps, which gives nothing away."""
+    return f"{kind}-{_digest(secret)[:16]}"
+
+
+@dataclass(frozen=True)
+class User:
+    name: str
+    role: Role
+
+
 @dataclass(frozen=True)
 class Session:
     """A live login session: who, and the CSRF token its page must echo."""
 
-    me: Me
+    user: User
     csrf: str
 
 
@@ -77,13 +90,13 @@ class Accounts:
         self._hasher = PasswordHasher()
         self._dummy = self._hasher.hash(secrets.token_hex(16))  # for unknown names: same cost
         self._failures: dict[str, deque[float]] = {}
-        self._tickets: dict[str, tuple[Me, str, float]] = {}  # ticket -> (who, path, until)
+        self._tickets: dict[str, tuple[Actor, str, float]] = {}  # ticket -> (who, path, until)
         self._lock = threading.Lock()
 
     # --- users ------------------------------------------------------------------------------
-    def users(self) -> list[Me]:
+    def users(self) -> list[User]:
         rows = self.store.query("SELECT name, role FROM users ORDER BY created")
-        return [Me(name=r[0], role=Role(r[1])) for r in rows]
+        return [User(r[0], Role(r[1])) for r in rows]
 
     def add_user(self, name: str, role: Role, password: str | None) -> None:
         if self._user(name) is not None:
@@ -126,7 +139,7 @@ class Accounts:
         return (rows[0][0], rows[0][1]) if rows else None
 
     # --- logging in -------------------------------------------------------------------------
-    def check_password(self, name: str, password: str) -> Me | None:
+    def check_password(self, name: str, password: str) -> User | None:
         """The user if the password is theirs (as slow for an unknown name as for a known)."""
         user = self._user(name)
         hashed = user[1] if user and user[1] else self._dummy
@@ -135,7 +148,7 @@ class Accounts:
             ok = self._hasher.verify(hashed, password)
         except (VerificationError, InvalidHashError):
             ok = False
-        return Me(name=name, role=Role(user[0])) if ok and user and user[1] else None
+        return User(name, Role(user[0])) if ok and user and user[1] else None
 
     def throttled(self, address: str) -> bool:
         """Too many failed logins from this address lately."""
@@ -170,24 +183,24 @@ class Accounts:
         if not rows:
             return None
         user, role, csrf = rows[0]
-        return Session(Me(name=user, role=Role(role)), csrf)
+        return Session(User(user, Role(role)), csrf)
 
     def end_session(self, sid: str) -> None:
         self.store.run("DELETE FROM sessions WHERE digest = ?", (_digest(sid),))
 
     # --- tickets: one URL, once, soon ------------------------------------------------------
-    def issue_ticket(self, me: Me, path: str) -> str:
-        """A ticket that lets one request for `path` act as `me` within TICKET_S (for a
+    def issue_ticket(self, actor: Actor, path: str) -> str:
+        """A ticket that lets one request for `path` act as `actor` within TICKET_S (for a
         client of ours that cannot send the session cookie: the Rerun viewer's loader)."""
         ticket = secrets.token_urlsafe(24)
         now = time.monotonic()
         with self._lock:
             for t in [t for t, (_, _, until) in self._tickets.items() if until < now]:
                 del self._tickets[t]
-            self._tickets[ticket] = (me, path, now + TICKET_S)
+            self._tickets[ticket] = (actor, path, now + TICKET_S)
         return ticket
 
-    def redeem_ticket(self, ticket: str, path: str) -> Me | None:
+    def redeem_ticket(self, ticket: str, path: str) -> Actor | None:
         """Who the ticket is for, if it is for this path and still good; it is used up."""
         with self._lock:
             found = self._tickets.get(ticket)
@@ -216,21 +229,21 @@ class Accounts:
         )
         return token
 
-    def token_user(self, token: str) -> Me | None:
+    def token_user(self, token: str) -> User | None:
         """Whose API token this is."""
         return self._token("api", token)
 
-    def redeem_once(self, token: str) -> Me | None:
+    def redeem_once(self, token: str) -> User | None:
         """Whose login link this is; the link is used up."""
         me = self._token("once", token)
         if me is not None:
             self.store.run("DELETE FROM tokens WHERE digest = ?", (_digest(token),))
         return me
 
-    def _token(self, kind: str, token: str) -> Me | None:
+    def _token(self, kind: str, token: str) -> User | None:
         rows = self.store.query(
             "SELECT t.user, u.role FROM tokens t JOIN users u ON u.name = t.user "
             "WHERE t.digest = ? AND t.kind = ? AND (t.expires IS NULL OR t.expires > ?)",
             (_digest(token), kind, time.time()),
         )
-        return Me(name=rows[0][0], role=Role(rows[0][1])) if rows else None
+        return User(rows[0][0], Role(rows[0][1])) if rows else None

@@ -1,22 +1,36 @@
-"""The single authorization point. Every command, parameter write, simulation control and
-telemetry subscription asks `authorize` first.
+"""Who is acting, and the one check of the authorization matrix (api/auth.py ALLOWED).
 
 The actor is who the authentication middleware identified (backend/authn.py: an API token or
-a login session); a single-operator control lock plugs in here without changing routes.
+a login session). Routes declare their action with `backend.deps.permit`, which asks
+`authorize` and, for the actions only a control holder may do, the machine's control.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from api.auth import ALLOWED, Action, Role
+from api.auth import ALLOWED, Action, Me, Role
 from backend.errors import ApiError
 
 
 @dataclass(frozen=True)
 class Actor:
+    """A user acting through one login session or API token (`session`, a public id), from
+    one client (a browser tab's id, '' for scripts)."""
+
     name: str
     role: Role
+    session: str
+    client: str = ""
+
+    @property
+    def me(self) -> Me:
+        return Me(
+            name=self.name,
+            role=self.role,
+            session=self.session,
+            actions=sorted(ALLOWED[self.role]),
+        )
 
 
 def authorize(actor: Actor, action: Action, machine: str | None = None) -> None:

@@ -9,9 +9,9 @@ the column of a bad NC block.
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
-from api.auth import Action
 from api.commands import (
     Command,
     CommandResult,
@@ -30,8 +30,9 @@ from api.commands import (
     SpindlePositionCommand,
 )
 from api.common import JobErrorModel, Refusal
-from backend.errors import ApiError
-from backend.services.auth import Actor, authorize
+from backend.errors import ApiError, refusal_text
+from backend.services.audit import Audit, Entry
+from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.services.parameters import pending_values, took_pending
 from backend.workers.protocol import Submit, Submitted, Values
@@ -59,7 +60,7 @@ def _refuse(status: int, message: str, **kw: object) -> ApiError:
     return ApiError(status, Refusal.model_validate({"message": message, **kw}).model_dump())
 
 
-def to_nc(cmd: Command) -> nc.Command:
+def to_nc(cmd: Command | EmergencyStopCommand) -> nc.Command:
     """The nc_sim command an API command stands for (the host's jog lease aside)."""
     match cmd:
         case MdiCommand():
@@ -97,10 +98,53 @@ def to_nc(cmd: Command) -> nc.Command:
     raise _refuse(422, f"unknown command {cmd!r}")
 
 
-async def execute(actor: Actor, m: MachineProxy, cmd: Command) -> CommandResult:
-    """Authorize and carry out one command on the machine's worker; raises ApiError with the
-    refusal. Runs on the event loop: nothing here blocks, the worker's answer wakes it."""
-    authorize(actor, Action.COMMAND, m.id)
+def _describe(cmd: Command | EmergencyStopCommand) -> str:
+    """A command in words for the audit trail."""
+    fields = cmd.model_dump(exclude={"type"}, exclude_none=True)
+    return " ".join([cmd.type, *(f"{k}={v}" for k, v in fields.items())])
+
+
+def _renewal(m: MachineProxy, actor: Actor, cmd: Command | EmergencyStopCommand) -> bool:
+    """A held jog's renewal (the same start again within a second): audited once."""
+    if not isinstance(cmd, JogCommand) or cmd.action == "step":
+        return False
+    key = (cmd.axis, actor.session, actor.client)
+    if cmd.action == "stop":
+        m.jogs_audited.pop(key, None)
+        return False
+    now, last = time.monotonic(), m.jogs_audited.get(key)
+    m.jogs_audited[key] = (cmd.direction, cmd.feed_mm_min, now)
+    return last is not None and last[:2] == (cmd.direction, cmd.feed_mm_min) and now - last[2] < 1
+
+
+async def execute(
+    actor: Actor, m: MachineProxy, cmd: Command | EmergencyStopCommand, audit: Audit
+) -> CommandResult:
+    """Carry out one command on the machine's worker and audit it; raises ApiError with the
+    refusal. The route checked who may send it (backend/deps.py `permit`). Runs on the event
+    loop: nothing here blocks, the worker's answer wakes it."""
+    outcome = "ok"
+    try:
+        return await _execute(m, cmd)
+    except ApiError as e:
+        outcome = f"refused ({e.status}): {refusal_text(e)}"
+        raise
+    finally:
+        if not _renewal(m, actor, cmd) or outcome != "ok":
+            audit.record_later(
+                Entry(
+                    actor=actor.name,
+                    session=actor.session,
+                    kind="command",
+                    action=_describe(cmd),
+                    machine=m.id,
+                    detail=cmd.model_dump(mode="json"),
+                    outcome=outcome,
+                )
+            )
+
+
+async def _execute(m: MachineProxy, cmd: Command | EmergencyStopCommand) -> CommandResult:
     serial = m.next_serial()
     nc_cmd = replace(to_nc(cmd), serial=serial)
     jog_hold_s, jog_release = None, False

@@ -12,8 +12,7 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Mapping
 
-from api.auth import Action
-from api.common import ParameterProblem
+from api.common import ParameterProblem, StaleValue
 from api.parameters import (
     AppliedChange,
     AuditEntry,
@@ -22,9 +21,9 @@ from api.parameters import (
     ParameterWriteResult,
 )
 from backend.errors import ApiError
-from backend.services.auth import Actor, authorize
+from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, Pending
-from backend.services.store import Store, StoredChange
+from backend.services.store import Store, StoredChange, parameter_entry
 from backend.workers.protocol import ApplyValues, Values
 from nc_sim.params import (
     Effect,
@@ -109,8 +108,8 @@ def write(
     comment: str = "",
     lines: Mapping[str, int] | None = None,
 ) -> ParameterWriteResult:
-    """Validate all changes together, then store, audit and apply them."""
-    authorize(actor, Action.CONFIGURE, m.id)
+    """Validate all changes together (refused when based on a value someone else has
+    written since), then store, audit and apply them."""
     with m.lock:
         problems: list[ParameterProblem] = []
         parsed: list[tuple[Scope, str, ParamDef, str, Value]] = []
@@ -136,6 +135,16 @@ def write(
                 problems.append(_problem(err, scope, target, (lines or {}).get(err.name)))
         if problems:
             raise _rejected(problems)
+        stale = _stale(m, store, changes, parsed)
+        if stale:
+            raise ApiError(
+                409,
+                {
+                    "message": f"{stale[0].parameter} was written by {stale[0].by} since you "
+                    f"read it (now {stale[0].current}): nothing applied",
+                    "stale": [v.model_dump() for v in stale],
+                },
+            )
         applied: list[AppliedChange] = []
         stored: list[StoredChange] = []
         changed: list[tuple[Scope, str, ParamDef, str, Value]] = []
@@ -171,8 +180,45 @@ def write(
             m.call(ApplyValues(m.id, now))
             for scope_name, target, name, value in now:
                 m.cfg.list_values(Scope(scope_name), target)[name] = value
-        store.write(m.id, actor.name, comment, stored)
+        store.write(
+            m.id,
+            stored,
+            [parameter_entry(m.id, actor.name, actor.session, c, comment) for c in stored],
+        )
         return ParameterWriteResult(changes=applied)
+
+
+def _stale(
+    m: MachineProxy,
+    store: Store,
+    changes: list[ParameterChange],
+    parsed: list[tuple[Scope, str, ParamDef, str, Value]],
+) -> list[StaleValue]:
+    """Changes based on a version older than the parameter's: someone wrote it meanwhile."""
+    versions = store.versions(m.id)
+    stale = []
+    for c, (scope, target, _d, name, value) in zip(changes, parsed, strict=True):
+        key = (scope.value, target, name)
+        version = versions.get(key, 0)
+        if c.base_version is None or c.base_version == version:
+            continue
+        row = store.query("SELECT actor, time FROM audit_log WHERE seq = ?", (version,))
+        current = m.pending[key].value if key in m.pending else None
+        if current is None:
+            current = m.cfg.list_values(scope, target).get(name)
+        stale.append(
+            StaleValue(
+                parameter=name,
+                target=target or None,
+                yours=value,
+                current=current,
+                base_version=c.base_version,
+                version=version,
+                by=row[0][0] if row else "?",
+                time_unix=row[0][1] if row else None,
+            )
+        )
+    return stale
 
 
 def pending_values(m: MachineProxy, effects: set[str]) -> Values:
@@ -203,8 +249,10 @@ def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) 
     return names + sorted(n for n in written if n not in set(names))
 
 
-def read(m: MachineProxy, scope: Scope, target: str | None) -> list[ParameterValue]:
-    """Every parameter of one list with value, default, unit, effect and pending value."""
+def read(m: MachineProxy, store: Store, scope: Scope, target: str | None) -> list[ParameterValue]:
+    """Every parameter of one list with value, default, unit, effect, pending value and
+    version."""
+    versions = store.versions(m.id)
     with m.lock:
         tgt = _target(m, scope, target)
         written = m.cfg.list_values(scope, tgt)
@@ -233,6 +281,7 @@ def read(m: MachineProxy, scope: Scope, target: str | None) -> list[ParameterVal
                     max=hi,
                     eng_factor=to_eng(d.quantity, 1.0) if d.is_numeric else None,
                     eng_unit=d.eng_unit(kind) if d.is_numeric else "",
+                    version=versions.get((scope.value, tgt, name), 0),
                 )
             )
         return out
@@ -252,7 +301,6 @@ def import_list(
     actor: Actor, m: MachineProxy, store: Store, scope: Scope, target: str | None, text: str
 ) -> ParameterWriteResult:
     """Parse a native list (errors with line numbers) and write its values as one change."""
-    authorize(actor, Action.CONFIGURE, m.id)
     tgt = _target(m, scope, target)
     try:
         plist = parse_list(text, scope)
@@ -269,19 +317,20 @@ def import_list(
 
 
 def audit(store: Store, mid: str, limit: int) -> list[AuditEntry]:
+    """The machine's parameter changes from the audit trail, oldest first."""
     return [
         AuditEntry(
-            seq=r.seq,
-            time_unix=r.time,
-            machine=r.machine,
-            actor=r.actor,
-            scope=r.change.scope,
-            target=r.change.target or None,
-            name=r.change.name,
-            old=r.change.old,
-            new=r.change.new,
-            effect=r.change.effect,
-            comment=r.comment,
+            seq=seq,
+            time_unix=when,
+            machine=mid,
+            actor=actor,
+            scope=d["scope"],
+            target=d["target"] or None,
+            name=d["name"],
+            old=d["old"],
+            new=d["new"],
+            effect=d["effect"],
+            comment=d["comment"],
         )
-        for r in store.audit(mid, limit)
+        for seq, when, actor, d in store.parameter_history(mid, limit)
     ]

@@ -1,4 +1,4 @@
-"""SQLite storage: machines, their accepted parameter values, and the audit trail.
+"""SQLite storage: machines, their accepted parameter values, the audit trail, traces.
 
 One file, one connection guarded by a lock (the service writes rarely and briefly). Values are
 stored as JSON so numbers stay numbers and strings stay strings.
@@ -10,11 +10,15 @@ import json
 import sqlite3
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
+from backend.services import audit
 from nc_sim.params import Value
+
+T = TypeVar("T")
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS machines (
@@ -32,20 +36,8 @@ CREATE TABLE IF NOT EXISTS param_values (
     target TEXT NOT NULL,          -- axis name, '' for channel and tool lists
     name TEXT NOT NULL,
     value TEXT NOT NULL,           -- JSON
+    version INTEGER NOT NULL DEFAULT 0,  -- seq of the audit row that wrote it
     PRIMARY KEY (machine, scope, target, name)
-);
-CREATE TABLE IF NOT EXISTS audit (
-    seq INTEGER PRIMARY KEY AUTOINCREMENT,
-    time REAL NOT NULL,
-    machine TEXT NOT NULL,
-    actor TEXT NOT NULL,
-    scope TEXT NOT NULL,
-    target TEXT NOT NULL,
-    name TEXT NOT NULL,
-    old TEXT,                      -- JSON, NULL when the parameter was at its default
-    new TEXT NOT NULL,
-    effect TEXT NOT NULL,
-    comment TEXT NOT NULL
 );
 CREATE TABLE IF NOT EXISTS traces (
     id TEXT PRIMARY KEY,
@@ -68,6 +60,31 @@ class StoredMachine:
     tool_list: str = ""
 
 
+def parameter_entry(
+    mid: str, actor: str, session: str, c: StoredChange, comment: str, when: float | None = None
+) -> audit.Entry:
+    """The audit row of one accepted parameter change."""
+    where = f"{c.target}: " if c.target else ""
+    old = "default" if c.old is None else c.old
+    return audit.Entry(
+        actor=actor,
+        session=session,
+        kind="parameter",
+        action=f"{where}{c.name} {old} → {c.new}",
+        machine=mid,
+        detail={
+            "scope": c.scope,
+            "target": c.target,
+            "name": c.name,
+            "old": c.old,
+            "new": c.new,
+            "effect": c.effect,
+            "comment": comment,
+        },
+        time=when,
+    )
+
+
 @dataclass(frozen=True)
 class StoredChange:
     """One accepted change: (scope, target, name) went from old to new."""
@@ -80,16 +97,6 @@ class StoredChange:
     effect: str
 
 
-@dataclass(frozen=True)
-class AuditRow:
-    seq: int
-    time: float
-    machine: str
-    actor: str
-    change: StoredChange
-    comment: str
-
-
 class Store:
     """The service's SQLite file."""
 
@@ -97,8 +104,57 @@ class Store:
         path.parent.mkdir(parents=True, exist_ok=True)
         self._db = sqlite3.connect(str(path), check_same_thread=False, isolation_level=None)
         self._db.execute("PRAGMA journal_mode=WAL")
+        self._db.execute("PRAGMA synchronous=NORMAL")  # WAL stays consistent; no sync per row
         self._db.executescript(_SCHEMA)
+        self._db.executescript(audit.SCHEMA)
         self._lock = threading.Lock()
+        self._migrate()
+
+    def _migrate(self) -> None:
+        """Files of earlier versions: parameter values get versions, and the parameter audit
+        table becomes the start of the chained trail."""
+        columns = [r[1] for r in self._db.execute("PRAGMA table_info(param_values)")]
+        if "version" not in columns:
+            self._db.execute(
+                "ALTER TABLE param_values ADD COLUMN version INTEGER NOT NULL DEFAULT 0"
+            )
+        old = self._db.execute(
+            "SELECT name FROM sqlite_master WHERE type = 'table' AND name = 'audit'"
+        ).fetchone()
+        if old is None:
+            return
+        rows = self._db.execute(
+            "SELECT time, machine, actor, scope, target, name, old, new, effect, comment "
+            "FROM audit ORDER BY seq"
+        ).fetchall()
+        entries = [
+            parameter_entry(
+                r[1],
+                r[2],
+                "",
+                StoredChange(
+                    r[3],
+                    r[4],
+                    r[5],
+                    None if r[6] is None else json.loads(r[6]),
+                    json.loads(r[7]),
+                    r[8],
+                ),
+                r[9],
+                r[0],
+            )
+            for r in rows
+        ]
+        with self._db:
+            self._db.execute("BEGIN")
+            audit.append(self._db, entries)
+            self._db.execute("DROP TABLE audit")
+
+    def transaction(self, work: Callable[[sqlite3.Connection], T]) -> T:
+        """Run `work` on the connection in one transaction (the audit trail's chain)."""
+        with self._lock, self._db:
+            self._db.execute("BEGIN")
+            return work(self._db)
 
     def close(self) -> None:
         with self._lock:
@@ -161,59 +217,37 @@ class Store:
             ).fetchall()
         return [(r[0], r[1], r[2], json.loads(r[3])) for r in rows]
 
-    def write(self, mid: str, actor: str, comment: str, changes: list[StoredChange]) -> None:
-        """Store accepted changes and their audit rows in one transaction."""
-        now = time.time()
-        with self._lock, self._db:
-            self._db.execute("BEGIN")
-            for c in changes:
-                self._db.execute(
-                    "INSERT OR REPLACE INTO param_values VALUES (?, ?, ?, ?, ?)",
-                    (mid, c.scope, c.target, c.name, json.dumps(c.new)),
-                )
-                self._db.execute(
-                    "INSERT INTO audit (time, machine, actor, scope, target, name, old, new, "
-                    "effect, comment) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                    (
-                        now,
-                        mid,
-                        actor,
-                        c.scope,
-                        c.target,
-                        c.name,
-                        None if c.old is None else json.dumps(c.old),
-                        json.dumps(c.new),
-                        c.effect,
-                        comment,
-                    ),
+    def write(self, mid: str, changes: list[StoredChange], entries: list[audit.Entry]) -> None:
+        """Store accepted changes and their audit rows (one each) in one transaction; each
+        value's version is its audit row's seq."""
+
+        def work(db: sqlite3.Connection) -> None:
+            seqs = audit.append(db, entries)
+            for c, seq in zip(changes, seqs, strict=True):
+                db.execute(
+                    "INSERT OR REPLACE INTO param_values VALUES (?, ?, ?, ?, ?, ?)",
+                    (mid, c.scope, c.target, c.name, json.dumps(c.new), seq),
                 )
 
-    def audit(self, mid: str, limit: int = 1000) -> list[AuditRow]:
-        """The newest `limit` changes of a machine, oldest first."""
-        with self._lock:
-            rows = self._db.execute(
-                "SELECT seq, time, machine, actor, scope, target, name, old, new, effect, comment "
-                "FROM audit WHERE machine = ? ORDER BY seq DESC LIMIT ?",
-                (mid, limit),
-            ).fetchall()
-        return [
-            AuditRow(
-                r[0],
-                r[1],
-                r[2],
-                r[3],
-                StoredChange(
-                    r[4],
-                    r[5],
-                    r[6],
-                    None if r[7] is None else json.loads(r[7]),
-                    json.loads(r[8]),
-                    r[9],
-                ),
-                r[10],
-            )
-            for r in reversed(rows)
-        ]
+        self.transaction(work)
+
+    def versions(self, mid: str) -> dict[tuple[str, str, str], int]:
+        """(scope, target, name) → version of every written value of a machine."""
+        rows = self.query(
+            "SELECT scope, target, name, version FROM param_values WHERE machine = ?", (mid,)
+        )
+        return {(r[0], r[1], r[2]): r[3] for r in rows}
+
+    def parameter_history(
+        self, mid: str, limit: int = 1000
+    ) -> list[tuple[int, float, str, dict[str, Any]]]:
+        """(seq, time, actor, detail) of the newest `limit` parameter changes, oldest first."""
+        rows = self.query(
+            "SELECT seq, time, actor, detail FROM audit_log "
+            "WHERE machine = ? AND kind = ? AND outcome = 'ok' ORDER BY seq DESC LIMIT ?",
+            (mid, "parameter", limit),
+        )
+        return [(r[0], r[1], r[2], json.loads(r[3])) for r in reversed(rows)]
 
     # --- the trace library (samples live in files next to the database) -----------------------
     def add_trace(

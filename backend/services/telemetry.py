@@ -24,6 +24,7 @@ import asyncio
 import contextlib
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from fastapi import WebSocket
@@ -40,6 +41,7 @@ from api.telemetry import (
     Subscribed,
     encode_frame,
 )
+from backend.services.auth import Actor
 from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy
 from backend.services.status import RECENT_EVENTS, status_of
@@ -68,12 +70,14 @@ class Subscriber:
 
     ws: WebSocket
     machine: MachineProxy
+    actor: Actor
     signals: list[Signal] = field(default_factory=list)
     min_stride: int = 1
     cursor: int = 0  # next cycle to send
     event_cursor: int = 0  # sequence number of the next event to send
     epoch: int = 0
     status_seq: int = 0  # the newest pushed status sent
+    control_seq: int = -1  # the machine's control state sent with it
     notice_seq: int = 0  # the newest notice sent
     control: list[str] = field(default_factory=list)  # JSON replies, sent before the next frame
     sending: asyncio.Task[None] | None = None
@@ -121,12 +125,16 @@ class TelemetryHub:
         self.clients_dropped = 0  # closed by us: not reading, flooding, bad messages, failures
         self.restarts = 0  # times the hub task failed and was restarted
         self._task: asyncio.Task[None] | None = None
+        # who watches which machine (the control of a machine lapses without its holder)
+        self.on_connect: Callable[[Actor, MachineProxy], None] = lambda actor, m: None
+        self.on_disconnect: Callable[[Actor, MachineProxy], None] = lambda actor, m: None
 
-    def add(self, ws: WebSocket, m: MachineProxy) -> Subscriber:
+    def add(self, ws: WebSocket, m: MachineProxy, actor: Actor) -> Subscriber:
         """A new viewer of `m`: from now on its worker pushes the machine's status."""
         # the newest events first, as event messages: the viewer's log starts filled
         events = max(0, m.events.cursor - RECENT_EVENTS)
-        sub = Subscriber(ws, m, cursor=m.cycle + 1, event_cursor=events, epoch=m.epoch)
+        sub = Subscriber(ws, m, actor, cursor=m.cycle + 1, event_cursor=events, epoch=m.epoch)
+        self.on_connect(actor, m)
         sub.notice_seq = m.notices[-1].seq - 1 if m.notices else 0  # the newest notice again
         self.subscribers.add(sub)
         m.watchers += 1
@@ -137,6 +145,7 @@ class TelemetryHub:
     def remove(self, sub: Subscriber) -> None:
         if sub in self.subscribers:
             m = sub.machine
+            self.on_disconnect(sub.actor, m)
             m.watchers -= 1
             if m.watchers == 0:
                 m.post(Watch(m.id, False))
@@ -255,9 +264,10 @@ class TelemetryHub:
         ]
         if m.notices:
             sub.notice_seq = max(sub.notice_seq, m.notices[-1].seq)
-        if m.status is not None and sub.status_seq != m.status_seq:
-            sub.status_seq = m.status_seq
-            key = ("status", m.id, m.epoch, m.status_seq)
+        control = m.control.seq  # a control change goes out at once, not with the next push
+        if m.status is not None and (sub.status_seq, sub.control_seq) != (m.status_seq, control):
+            sub.status_seq, sub.control_seq = m.status_seq, control
+            key = ("status", m.id, m.epoch, m.status_seq, control)
             if key not in texts:
                 status = status_of(m, m.status, recent_events=False)
                 texts[key] = StatusMessage(status=status).model_dump_json()

@@ -17,7 +17,7 @@ from backend.workers.pool import WorkerPool
 from backend.workers.protocol import Pace, Step
 from backend.workers.threaded import InProcessWorker
 
-INSTRUCTOR = Actor("test", Role.INSTRUCTOR)
+INSTRUCTOR = Actor("test", Role.INSTRUCTOR, "session-test")
 
 
 @contextmanager
@@ -36,7 +36,7 @@ def machine_service(tmp: Path, workers: int = 1) -> Iterator[MachineService]:
 
 def paused_demo(service: MachineService, mid: str, powered: bool = True) -> MachineProxy:
     """A demo lathe, paused; powered on (stepped 100 cycles) unless told otherwise."""
-    m = service.create(INSTRUCTOR, MachineCreate(id=mid, name=mid, demo=True))
+    m = service.create(MachineCreate(id=mid, name=mid, demo=True))
     m.call(Pace(mid, "pause"))
     if powered:
         step(m, 100)

@@ -105,6 +105,9 @@ class Server:
     def command(self, mid: str, body: dict[str, Any]) -> httpx.Response:
         return self.http.post(f"/api/machines/{mid}/commands", json=body)
 
+    def emergency_stop(self, mid: str) -> httpx.Response:
+        return self.http.post(f"/api/machines/{mid}/emergency-stop")
+
     def status(self, mid: str = "demo") -> dict[str, Any]:
         r = self.http.get(f"/api/machines/{mid}/status")
         r.raise_for_status()

@@ -12,6 +12,7 @@ import pytest
 from pydantic import TypeAdapter
 
 from api.commands import Command as ApiCommand
+from api.commands import EmergencyStopCommand
 from backend.services.commands import to_nc
 from nc_sim.commands import Accepted, Refused
 from nc_sim.errors import Code, NcUsageError
@@ -54,7 +55,6 @@ PAIRS: list[tuple[dict[str, Any], dict[str, Any]]] = [
     ({"type": "plc_ack", "m": 8}, {"plc": {"ack": 8}}),
     ({"type": "plc_ack"}, {"plc": {"ack": "all"}}),
     ({"type": "reset"}, {"reset": True}),
-    ({"type": "emergency_stop"}, {"emergency_stop": True}),
 ]
 
 API: TypeAdapter[ApiCommand] = TypeAdapter(ApiCommand)
@@ -69,6 +69,10 @@ def test_the_api_and_a_scenario_action_are_the_same_command(
     _, m1, _ = make()
     _, m2, _ = make()
     assert m1.submit(cmd) == m2.submit(command(action))  # one dispatcher: one outcome
+
+
+def test_the_emergency_stop_route_and_a_scenario_action_are_the_same_command() -> None:
+    assert to_nc(EmergencyStopCommand()) == command({"emergency_stop": True})
 
 
 def test_a_refused_block_is_the_same_refusal_through_either_way_in() -> None:

@@ -14,9 +14,8 @@ from typing import cast
 import pytest
 from fastapi import WebSocket
 
-from api.auth import Role
 from api.commands import EmergencyStopCommand
-from backend.services.auth import Actor
+from backend.services.audit import Audit
 from backend.services.commands import execute
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.status import RECENT_EVENTS, machine_status
@@ -26,9 +25,8 @@ from nc_sim.commands import Mdi
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN
 from tests.backend.fakews import FakeSocket
-from tests.backend.inprocess import machine_service, paused_demo, step, wait_until
+from tests.backend.inprocess import INSTRUCTOR, machine_service, paused_demo, step, wait_until
 
-INSTRUCTOR = Actor("test", Role.INSTRUCTOR)
 
 
 @pytest.fixture
@@ -47,7 +45,7 @@ def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it(
     service: MachineService,
 ) -> None:
     host = paused_demo(service, "m")
-    stop = asyncio.run(execute(INSTRUCTOR, host, EmergencyStopCommand()))
+    stop = asyncio.run(execute(INSTRUCTOR, host, EmergencyStopCommand(), Audit(service.store)))
     step(host, 10)
     _flood(host, EVENT_LOG_LEN + 100)
     step(host, 10)
@@ -67,7 +65,7 @@ def test_a_telemetry_client_that_fell_behind_learns_how_many_events_it_missed(
     async def run() -> list[dict[str, object]]:
         hub = TelemetryHub(1.0, 1000)  # ticked by hand below
         ws = FakeSocket()
-        sub = hub.add(cast(WebSocket, ws), host)
+        sub = hub.add(cast(WebSocket, ws), host, INSTRUCTOR)
         start, cursor[0] = host.events.cursor, sub.event_cursor
         # more than the log holds before the next frame (blocking calls: off the loop)
         await asyncio.to_thread(_flood, host, EVENT_LOG_LEN + 250)

@@ -272,7 +272,7 @@ def test_plc_acknowledge_after_the_timeout_acknowledges_nothing(srv: Server, mid
 
 
 def test_emergency_stop_and_reset(srv: Server, mid: str) -> None:
-    srv.command(mid, {"type": "emergency_stop"})
+    srv.emergency_stop(mid)
     st = srv.status(mid)
     assert st["emergency_stop"]
     assert {a["state"] for a in st["axes"]} == {"ERROR"}
@@ -309,7 +309,7 @@ def test_emergency_stop_ends_a_long_step_instead_of_waiting_for_it(srv: Server, 
         )
         # status answers between the step's slices (before: only after the whole step)
         wait_for(lambda: srv.status(mid)["simulation"]["cycle"] > c0)
-        stop = srv.command(mid, {"type": "emergency_stop"})
+        stop = srv.emergency_stop(mid)
         assert stop.status_code == 200, stop.text
         stepped = stepping.result(timeout=120)
     assert stepped.status_code == 200, stepped.text
@@ -384,7 +384,7 @@ def test_every_command_gets_the_machine_s_next_serial(srv: Server, mid: str) -> 
     machine, so a client can match an answer to its command."""
     first = srv.command(mid, {"type": "mdi", "block": "M3 S500"})
     invalid = srv.command(mid, {"type": "mdi", "block": "G1 X"})
-    srv.command(mid, {"type": "emergency_stop"})
+    srv.emergency_stop(mid)
     refused = srv.command(mid, {"type": "mdi", "block": "M3 S500"})  # in E-stop: 90015
     assert (first.status_code, invalid.status_code, refused.status_code) == (200, 422, 409)
     n = first.json()["serial"]

@@ -19,14 +19,14 @@ from backend.services.telemetry import CLOSE_INTERNAL, Subscriber, TelemetryHub
 from backend.workers.protocol import Pace
 from backend.workers.threaded import InProcessWorker
 from tests.backend.fakews import FakeSocket
-from tests.backend.inprocess import machine_service, paused_demo, step, wait_until
+from tests.backend.inprocess import INSTRUCTOR, machine_service, paused_demo, step, wait_until
 
 FRAME_S = 0.005
 
 
 def _subscribe(hub: TelemetryHub, m: MachineProxy) -> tuple[Subscriber, FakeSocket]:
     ws = FakeSocket()
-    sub = hub.add(cast(WebSocket, ws), m)
+    sub = hub.add(cast(WebSocket, ws), m, INSTRUCTOR)
     sub.signals, sub.min_stride = [m.signal_by_name["X.pos_act_mm"]], 1
     return sub, ws
 

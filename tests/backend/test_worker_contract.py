@@ -39,7 +39,7 @@ from backend.workers.protocol import (
 from nc_sim.commands import Accepted, Command, EmergencyStop, HliWrite, Invalid, Mdi, Move, Refused
 from nc_sim.errors import Code
 from nc_sim.scope import LevelTrigger, ScopeMode, ScopeSetup
-from tests.backend.inprocess import INSTRUCTOR, machine_service, paused_demo, wait_until
+from tests.backend.inprocess import machine_service, paused_demo, wait_until
 
 PERIOD_S = 0.002
 _serial = itertools.count(1)
@@ -156,7 +156,7 @@ def test_a_removed_machine_is_gone_from_its_worker(service: MachineService) -> N
     m = paused_demo(service, f"c{next(_serial)}")
     worker = m.worker
     assert worker is not None
-    service.delete(INSTRUCTOR, m.id)
+    service.delete(m.id)
     with pytest.raises(WorkerRefused) as refused:
         worker.call(ReadStatus(m.id))
     assert refused.value.failure.kind == "not_found"
@@ -189,7 +189,7 @@ def test_machines_created_at_once_spread_over_the_workers(tmp_path: Path) -> Non
     with machine_service(tmp_path, workers=2) as service, ThreadPoolExecutor(4) as ex:
         made = list(
             ex.map(
-                lambda k: service.create(INSTRUCTOR, MachineCreate(id=f"s{k}", demo=True)),
+                lambda k: service.create(MachineCreate(id=f"s{k}", demo=True)),
                 range(4),
             )
         )

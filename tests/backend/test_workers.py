@@ -154,7 +154,7 @@ def test_an_emergency_stop_takes_effect_within_2_ms_under_a_flood(srv: Server, m
         wait_for(lambda: sent[0] > 300)
         latencies = []
         for _ in range(20):
-            r = srv.command(mid, {"type": "emergency_stop"})
+            r = srv.emergency_stop(mid)
             assert r.status_code == 200, r.text
             latencies.append(r.json()["latency_ms"])
             assert srv.command(mid, {"type": "reset"}).status_code == 200

@@ -1,0 +1,51 @@
+"""Control of a machine: one operator at a time (the control token HEIDENHAIN calls focus).
+
+A machine is free or held by one client of one session (a browser tab, or a script's API
+token). Others request it and the holder grants or refuses; an instructor or admin takes it;
+it is released on logout and after a grace period once the holder's connection is lost.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+from api.auth import Role
+
+GRACE_S = 20.0  # control outlives the holder's last connection this long (a reload, a blip)
+REQUEST_S = 60.0  # an unanswered request lapses after this long
+
+
+class ControlParty(BaseModel):
+    """Someone who holds or asks for control: a user through one session and client."""
+
+    user: str
+    role: Role
+    session: str = Field(description="public id of the session or API token")
+    client: str = Field(description="the browser tab's id ('' for a script)")
+    since_unix: float
+
+
+class ControlState(BaseModel):
+    """Who holds a machine, and who asks for it."""
+
+    holder: ControlParty | None = Field(None, description="None: the machine is free")
+    requests: list[ControlParty] = Field(default_factory=list, description="oldest first")
+    connected: bool = Field(True, description="the holder has a live connection (or is a script)")
+    release_at_unix: float | None = Field(
+        None, description="the holder lost its connection: control is released then"
+    )
+
+
+ControlVerb = Literal["take", "request", "cancel", "grant", "refuse", "release"]
+
+
+class ControlAction(BaseModel):
+    """`take` a free machine (an instructor or admin: a held one too), `request` it from its
+    holder or `cancel` the request; the holder may `grant` it to a requester (`session` and
+    `client` name whom), `refuse` a request, or `release` it."""
+
+    action: ControlVerb
+    session: str | None = Field(None, max_length=64, description="grant or refuse: whose request")
+    client: str | None = Field(None, max_length=64)

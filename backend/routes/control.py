@@ -1,0 +1,38 @@
+"""Control of a machine: who holds it; take, request, grant, refuse, release."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from api.auth import Action
+from api.control import ControlAction, ControlState
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
+from backend.errors import responses
+
+router = APIRouter(prefix="/api/machines", tags=["control"])
+
+
+@router.get("/{mid}/control", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
+def control_state(machine: MachineDep, services: ServicesDep) -> ControlState:
+    """Who holds the machine and who asks for it (also pushed with the status)."""
+    return machine.control.state(services.control.grace_s)
+
+
+@router.post(
+    "/{mid}/control",
+    dependencies=[permit(Action.CONTROL)],
+    responses=responses(
+        403,
+        404,
+        why={
+            409: "nothing to request (the machine is free, or yours)",
+        },
+    ),
+)
+def control(
+    req: ControlAction, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> ControlState:
+    """Take a free machine (an instructor or admin: a held one too), request it from its
+    holder or withdraw the request; the holder grants or refuses a request, or releases it.
+    A new holder's jogs are their own: the old holder's stop."""
+    return services.control.act(actor, machine, req)

@@ -1,0 +1,271 @@
+"""The audit trail: every command, parameter change, control change, login and failed login,
+with the real identity, time, machine and outcome, in the store.
+
+Append-only twice over: triggers refuse UPDATE and DELETE, and each row carries the SHA-256 of
+the row before it and of itself, so an edited, inserted or removed row breaks the chain where
+it happened (`verify`), even when someone edits the file with the triggers dropped.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import hashlib
+import io
+import json
+import logging
+import queue
+import sqlite3
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from api.audit import AuditKind, AuditPage, AuditRecord, AuditVerification
+
+if TYPE_CHECKING:
+    from backend.services.store import Store
+
+log = logging.getLogger(__name__)
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS audit_log (
+    seq INTEGER PRIMARY KEY,       -- 1, 2, 3, ...: a gap is a removed row
+    time REAL NOT NULL,
+    actor TEXT NOT NULL,
+    session TEXT NOT NULL,
+    address TEXT NOT NULL,
+    machine TEXT NOT NULL,         -- '' for service-wide rows
+    kind TEXT NOT NULL,
+    action TEXT NOT NULL,
+    detail TEXT NOT NULL,          -- JSON, keys sorted
+    outcome TEXT NOT NULL,
+    prev TEXT NOT NULL,            -- the row before's hash ('' before the first)
+    hash TEXT NOT NULL
+);
+CREATE INDEX IF NOT EXISTS audit_log_machine ON audit_log (machine, kind);
+CREATE TRIGGER IF NOT EXISTS audit_log_no_update BEFORE UPDATE ON audit_log
+BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
+CREATE TRIGGER IF NOT EXISTS audit_log_no_delete BEFORE DELETE ON audit_log
+BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
+"""
+_COLUMNS = "seq, time, actor, session, address, machine, kind, action, detail, outcome, prev, hash"
+MAX_PAGE = 1000
+CSV_ROWS = 100_000  # an export holds at most this many rows (newest)
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One thing to record. `time` is now unless given (rows carried over from older files)."""
+
+    actor: str
+    session: str
+    kind: AuditKind
+    action: str
+    machine: str = ""
+    detail: dict[str, Any] = field(default_factory=dict)
+    outcome: str = "ok"
+    address: str = ""
+    time: float | None = None
+
+
+def _row_hash(prev: str, fields: tuple[object, ...]) -> str:
+    text = "\x1f".join([prev, *(repr(f) if isinstance(f, float) else str(f) for f in fields)])
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def append(db: sqlite3.Connection, entries: list[Entry]) -> list[int]:
+    """Chain the entries onto the trail (inside the caller's transaction); their seqs."""
+    last = db.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
+    seq, prev = (last[0], last[1]) if last else (0, "")
+    now = time.time()
+    seqs = []
+    for e in entries:
+        seq += 1
+        fields = (
+            seq,
+            float(e.time if e.time is not None else now),
+            e.actor,
+            e.session,
+            e.address,
+            e.machine,
+            e.kind,
+            e.action,
+            json.dumps(e.detail, sort_keys=True, separators=(",", ":"), default=str),
+            e.outcome,
+        )
+        digest = _row_hash(prev, fields)
+        db.execute(
+            f"INSERT INTO audit_log ({_COLUMNS}) VALUES ({', '.join('?' * 12)})",
+            (*fields, prev, digest),
+        )
+        prev = digest
+        seqs.append(seq)
+    return seqs
+
+
+def _append_all(entries: list[Entry], db: sqlite3.Connection) -> list[int]:
+    return append(db, entries)
+
+
+@dataclass(frozen=True)
+class AuditFilter:
+    """Which rows: all given conditions hold."""
+
+    machine: str | None = None
+    kind: str | None = None
+    actor: str | None = None
+    since_unix: float | None = None
+    until_unix: float | None = None
+    text: str | None = None  # in the action or the outcome
+
+    def where(self) -> tuple[str, tuple[object, ...]]:
+        conds: list[str] = []
+        args: list[object] = []
+        for column, value in (
+            ("machine", self.machine),
+            ("kind", self.kind),
+            ("actor", self.actor),
+        ):
+            if value is not None:
+                conds.append(f"{column} = ?")
+                args.append(value)
+        if self.since_unix is not None:
+            conds.append("time >= ?")
+            args.append(self.since_unix)
+        if self.until_unix is not None:
+            conds.append("time < ?")
+            args.append(self.until_unix)
+        if self.text:
+            conds.append("(instr(lower(action), ?) > 0 OR instr(lower(outcome), ?) > 0)")
+            args += [self.text.lower(), self.text.lower()]
+        return (" WHERE " + " AND ".join(conds) if conds else ""), tuple(args)
+
+
+def _record(r: tuple[Any, ...]) -> AuditRecord:
+    return AuditRecord(
+        seq=r[0],
+        time_unix=r[1],
+        actor=r[2],
+        session=r[3],
+        address=r[4],
+        machine=r[5],
+        kind=r[6],
+        action=r[7],
+        detail=json.loads(r[8]),
+        outcome=r[9],
+        hash=r[11],
+    )
+
+
+class Audit:
+    """Recording into, reading and checking the store's audit trail."""
+
+    def __init__(self, store: Store) -> None:
+        self.store = store
+        # commands are recorded by a writer thread, in batches: the event loop that carries
+        # them out never waits for the disk
+        self._later: queue.Queue[Entry | None] = queue.Queue()
+        self._writer = threading.Thread(target=self._write, name="audit-writer", daemon=True)
+        self._writer.start()
+
+    def record(self, entry: Entry) -> int:
+        """Append one row now (after those waiting); its seq."""
+        self.flush()
+        return self.store.transaction(lambda db: append(db, [entry]))[0]
+
+    def record_later(self, entry: Entry) -> None:
+        """Append one row soon, in order, without waiting."""
+        self._later.put(entry)
+
+    def flush(self) -> None:
+        """Wait until every row given to `record_later` is written."""
+        self._later.join()
+
+    def stop(self) -> None:
+        self._later.put(None)
+        self._writer.join(timeout=5.0)
+
+    def _write(self) -> None:
+        while True:
+            batch = [self._later.get()]
+            while not self._later.empty() and len(batch) < 500:
+                batch.append(self._later.get_nowait())
+            entries = [e for e in batch if e is not None]
+            try:
+                if entries:
+                    self.store.transaction(functools.partial(_append_all, entries))
+            except Exception:  # the store is closed or failing: say so, keep serving
+                log.exception("audit rows lost: %d", len(entries))
+            finally:
+                for _ in batch:
+                    self._later.task_done()
+            if None in batch:
+                return
+
+    def page(self, f: AuditFilter, limit: int = 200, before_seq: int | None = None) -> AuditPage:
+        """Matching rows, newest first (older ones: `before_seq`), and how many match."""
+        self.flush()
+        where, args = f.where()
+        total = self.store.query(f"SELECT count(*) FROM audit_log{where}", args)[0][0]
+        if before_seq is not None:
+            where += (" AND" if where else " WHERE") + " seq < ?"
+            args += (before_seq,)
+        rows = self.store.query(
+            f"SELECT {_COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
+            (*args, min(limit, MAX_PAGE)),
+        )
+        return AuditPage(rows=[_record(r) for r in rows], total=total)
+
+    def csv(self, f: AuditFilter) -> str:
+        """Matching rows as CSV (oldest first, at most CSV_ROWS), for a spreadsheet."""
+        self.flush()
+        where, args = f.where()
+        rows = self.store.query(
+            f"SELECT {_COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
+            (*args, CSV_ROWS),
+        )
+        out = io.StringIO()
+        writer = csv.writer(out)
+        writer.writerow(
+            [
+                "seq",
+                "time_utc",
+                "actor",
+                "session",
+                "address",
+                "machine",
+                "kind",
+                "action",
+                "detail",
+                "outcome",
+                "hash",
+            ]
+        )
+        for r in reversed(rows):
+            stamp = (
+                time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(r[1]))
+                + f".{int(r[1] % 1 * 1000):03d}Z"
+            )
+            writer.writerow([r[0], stamp, *r[2:10], r[11]])
+        return out.getvalue()
+
+    def verify(self) -> AuditVerification:
+        """Recompute the chain from the first row: the first row edited, inserted or lost."""
+        self.flush()
+        rows = self.store.query(f"SELECT {_COLUMNS} FROM audit_log ORDER BY seq")
+        prev = ""
+        for i, r in enumerate(rows, start=1):
+            if r[0] != i:
+                return AuditVerification(
+                    ok=False, rows=i - 1, first_bad_seq=i, message=f"row {i} is missing"
+                )
+            if r[10] != prev or _row_hash(prev, tuple(r[:10])) != r[11]:
+                return AuditVerification(
+                    ok=False,
+                    rows=i - 1,
+                    first_bad_seq=r[0],
+                    message=f"row {r[0]} was changed after it was written",
+                )
+            prev = r[11]
+        return AuditVerification(ok=True, rows=len(rows), message=f"all {len(rows)} rows intact")

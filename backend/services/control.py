@@ -1,0 +1,268 @@
+"""One operator per machine: who holds control, who asks for it, and when it lapses.
+
+The state lives on each MachineProxy (`m.control`) and changes only here, under one lock.
+Every change is audited and pushed with the machine's status (its `seq` makes the telemetry
+hub send the status again at once). When control changes hands the old holder's jogs stop:
+a held jog belongs to its holder's session.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import threading
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from api.auth import Action
+from api.control import GRACE_S, REQUEST_S, ControlAction, ControlParty, ControlState
+from backend.errors import ApiError
+from backend.services.audit import Audit, Entry
+from backend.services.auth import Actor, authorize
+from backend.workers.protocol import Submit
+from nc_sim import commands as nc
+
+if TYPE_CHECKING:
+    from backend.services.machines import MachineProxy, MachineService
+
+SWEEP_S = 0.5  # how often lapsed holders and requests are looked for
+Key = tuple[str, str]  # (session, client)
+
+
+@dataclass
+class MachineControl:
+    """Control of one machine (kept on its MachineProxy)."""
+
+    holder: ControlParty | None = None
+    requests: list[ControlParty] = field(default_factory=list)
+    connections: Counter[Key] = field(default_factory=Counter)  # live websockets per client
+    lost_at: float | None = None  # wall time the holder's last connection closed
+    seq: int = 0  # changes, for the pushed status
+
+    def state(self, grace_s: float) -> ControlState:
+        lost = self.holder is not None and self.lost_at is not None
+        return ControlState(
+            holder=self.holder,
+            requests=list(self.requests),
+            connected=not lost,
+            release_at_unix=self.lost_at + grace_s if lost and self.lost_at else None,
+        )
+
+
+def _key(p: ControlParty | Actor) -> Key:
+    return p.session, p.client
+
+
+def _party(actor: Actor) -> ControlParty:
+    return ControlParty(
+        user=actor.name,
+        role=actor.role,
+        session=actor.session,
+        client=actor.client,
+        since_unix=time.time(),
+    )
+
+
+def _who(p: ControlParty) -> str:
+    return f"{p.user} ({p.role.value})"
+
+
+class Control:
+    """Takes, requests, grants and releases control of every machine."""
+
+    def __init__(self, machines: MachineService, audit: Audit, grace_s: float = GRACE_S) -> None:
+        self.machines = machines
+        self.audit = audit
+        self.grace_s = grace_s
+        self._lock = threading.Lock()
+        self._task: asyncio.Task[None] | None = None
+
+    # --- asked by every action only a holder may do ----------------------------------------
+    def hold(self, actor: Actor, m: MachineProxy) -> None:
+        """Pass if the actor holds the machine (taking it when free); 403 naming the holder
+        otherwise."""
+        with self._lock:
+            c = m.control
+            if c.holder is None:
+                self._change(m, _party(actor), actor, "took control of a free machine")
+                return
+            if _key(c.holder) == _key(actor):
+                if not c.connections[_key(actor)]:  # a script's request keeps it alive
+                    c.lost_at = time.time()
+                    c.seq += 1
+                return
+            holder = c.holder
+        elsewhere = " in another tab" if holder.session == actor.session else ""
+        raise ApiError(
+            403,
+            {
+                "message": f"control of {m.id} is held by {_who(holder)}{elsewhere}: "
+                "request it to act",
+            },
+        )
+
+    # --- the control route ------------------------------------------------------------------
+    def act(self, actor: Actor, m: MachineProxy, req: ControlAction) -> ControlState:
+        """Carry out a take, request, cancel, grant, refuse or release; the state after it."""
+        with self._lock:
+            self._act(actor, m, req)
+            return m.control.state(self.grace_s)
+
+    def _act(self, actor: Actor, m: MachineProxy, req: ControlAction) -> None:
+        c = m.control
+        mine = c.holder is not None and _key(c.holder) == _key(actor)
+        match req.action:
+            case "take":
+                if mine:
+                    return
+                if c.holder is not None and c.holder.session != actor.session:
+                    try:
+                        authorize(actor, Action.TAKE_CONTROL, m.id)
+                    except ApiError:
+                        raise ApiError(
+                            403,
+                            {
+                                "message": f"control of {m.id} is held by {_who(c.holder)}: "
+                                "request it (only an instructor or admin takes it)"
+                            },
+                        ) from None
+                was = f" from {_who(c.holder)}" if c.holder else ""
+                self._change(m, _party(actor), actor, f"took control{was}")
+            case "request":
+                if mine or c.holder is None:
+                    raise ApiError(
+                        409,
+                        {
+                            "message": "nothing to request: take the free machine"
+                            if c.holder is None
+                            else "you hold control already"
+                        },
+                    )
+                if all(_key(r) != _key(actor) for r in c.requests):
+                    c.requests.append(_party(actor))
+                    self._changed(m, actor, f"requested control from {_who(c.holder)}")
+            case "cancel":
+                before = len(c.requests)
+                c.requests = [r for r in c.requests if _key(r) != _key(actor)]
+                if len(c.requests) != before:
+                    self._changed(m, actor, "withdrew the request for control")
+            case "grant" | "refuse":
+                if not mine:
+                    raise ApiError(403, {"message": f"only the holder may {req.action} control"})
+                asked = [
+                    r for r in c.requests if (r.session, r.client) == (req.session, req.client)
+                ]
+                if not asked:
+                    raise ApiError(404, {"message": "no such request (withdrawn or lapsed)"})
+                c.requests.remove(asked[0])
+                if req.action == "refuse":
+                    self._changed(m, actor, f"refused control to {_who(asked[0])}")
+                else:
+                    to = asked[0].model_copy(update={"since_unix": time.time()})
+                    self._change(m, to, actor, f"granted control to {_who(to)}")
+            case "release":
+                if mine:
+                    self._change(m, None, actor, "released control")
+
+    # --- connections, sessions, lapse -------------------------------------------------------
+    def connected(self, actor: Actor, m: MachineProxy) -> None:
+        """A websocket of this client watches the machine."""
+        with self._lock:
+            c = m.control
+            c.connections[_key(actor)] += 1
+            if c.holder is not None and _key(c.holder) == _key(actor) and c.lost_at is not None:
+                c.lost_at = None
+                c.seq += 1
+
+    def disconnected(self, actor: Actor, m: MachineProxy) -> None:
+        """One of its websockets closed; the last one starts the grace period of a holder."""
+        with self._lock:
+            c = m.control
+            c.connections[_key(actor)] -= 1
+            if c.connections[_key(actor)] <= 0:
+                del c.connections[_key(actor)]
+                if c.holder is not None and _key(c.holder) == _key(actor):
+                    c.lost_at = time.time()
+                    c.seq += 1
+
+    def end_session(self, session: str, why: str) -> None:
+        """The session ended (logout, expiry, removal): its control and requests go."""
+        with self._lock:
+            for m in self.machines.proxies():
+                c = m.control
+                before = len(c.requests)
+                c.requests = [r for r in c.requests if r.session != session]
+                if len(c.requests) != before:
+                    c.seq += 1
+                if c.holder is not None and c.holder.session == session:
+                    self._lapse(m, f"control released: {why}")
+
+    def sweep(self, now: float | None = None) -> None:
+        """Release the control of holders whose connection is gone longer than the grace
+        period, and drop requests nobody answered."""
+        now = time.time() if now is None else now
+        with self._lock:
+            for m in self.machines.proxies():
+                c = m.control
+                lapsed = c.lost_at is not None and now - c.lost_at >= self.grace_s
+                if c.holder is not None and lapsed:
+                    self._lapse(m, f"control released: no connection for {self.grace_s:g} s")
+                fresh = [r for r in c.requests if now - r.since_unix < REQUEST_S]
+                if len(fresh) != len(c.requests):
+                    c.requests = fresh
+                    c.seq += 1
+
+    def start(self) -> None:
+        self._task = asyncio.get_running_loop().create_task(self._run())
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+
+    async def _run(self) -> None:
+        while True:
+            await asyncio.sleep(SWEEP_S)
+            self.sweep()
+
+    # --- changes (holding the lock) ---------------------------------------------------------
+    def _lapse(self, m: MachineProxy, why: str) -> None:
+        holder = m.control.holder
+        assert holder is not None
+        actor = Actor(holder.user, holder.role, holder.session, holder.client)
+        self._change(m, None, actor, why)
+
+    def _change(self, m: MachineProxy, to: ControlParty | None, by: Actor, what: str) -> None:
+        """A new holder (or none): the old holder's jogs stop, the change is audited."""
+        c = m.control
+        old = c.holder
+        c.holder = to
+        c.lost_at = None
+        if to is not None:
+            c.requests = [r for r in c.requests if _key(r) != _key(to)]
+            if not c.connections[_key(to)]:  # a script, or a tab whose socket is gone
+                c.lost_at = time.time()
+        if old is not None:
+            for axis in m.axes:  # a jog lease of the old holder must not outlive its control
+                m.post(Submit(m.id, nc.JogStop(axis), None, True, []))
+        self._changed(
+            m, by, what, {"from": old.user if old else None, "to": to.user if to else None}
+        )
+
+    def _changed(
+        self, m: MachineProxy, by: Actor, what: str, detail: dict[str, object] | None = None
+    ) -> None:
+        m.control.seq += 1
+        self.audit.record(
+            Entry(
+                actor=by.name,
+                session=by.session,
+                kind="control",
+                action=what,
+                machine=m.id,
+                detail=detail or {},
+            )
+        )
