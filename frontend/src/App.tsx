@@ -2,7 +2,9 @@
 // connection, user, emergency stop) and banners always, the machine view beside the workspaces (tabs).
 import { useEffect, useRef, useState } from "preact/hooks";
 import { http } from "./api/http";
+import { AuditPanel } from "./panels/AuditPanel";
 import { Banner } from "./panels/Banner";
+import { ControlStrip } from "./panels/ControlStrip";
 import { EventsPanel } from "./panels/EventsPanel";
 import { HliPanel } from "./panels/HliPanel";
 import { JogPanel } from "./panels/JogPanel";
@@ -16,27 +18,31 @@ import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
 import { TrialBar } from "./panels/TrialBar";
 import { me } from "./state/auth";
+import { commandBlocked, may } from "./state/control";
 import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
-const TABS = ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events"] as const;
+const TABS = ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
 function MachineControls() {
   const cmd = useCommand();
   const mode = status.value?.simulation.mode;
+  const blocked = commandBlocked.value; // another holder, or a role that may not command
+  // pacing is the instructor's (api/auth.py SIMULATE), holding control or not
+  const pace = may("simulate") ? "" : `a user in the role ${me.value?.role ?? ""} may not pace the simulation`;
   return (
     <div class="controls-apart" aria-label="reset and simulation">
-      <button type="button" class="secondary" data-testid="reset" disabled={!online.value}
-        onClick={() => void cmd.run({ type: "reset" })} title="CNC reset: clears job errors and the block queue, stops motion">
+      <button type="button" class="secondary" data-testid="reset" disabled={!online.value || !!blocked}
+        onClick={() => void cmd.run({ type: "reset" })} title={blocked || "CNC reset: clears job errors and the block queue, stops motion"}>
         ⟲ Reset
       </button>
       <span class="hint">Simulation</span>
-      <button type="button" class="secondary" aria-pressed={mode === "run"} disabled={!online.value || mode === "run"}
+      <button type="button" class="secondary" aria-pressed={mode === "run"} disabled={!online.value || mode === "run" || !!pace} title={pace}
         onClick={() => void http.post(machineUrl("/simulation"), { mode: "run" })}>
         ▶ run
       </button>
-      <button type="button" class="secondary" aria-pressed={mode === "pause"} disabled={!online.value || mode === "pause"}
+      <button type="button" class="secondary" aria-pressed={mode === "pause"} disabled={!online.value || mode === "pause" || !!pace} title={pace}
         onClick={() => void http.post(machineUrl("/simulation"), { mode: "pause" })}>
         ❚❚ pause
       </button>
@@ -68,6 +74,7 @@ function Hmi() {
           their own space (sticky, not fixed), and scrolling to a control keeps it below them */}
       <div class="head" ref={head}>
         <TopBar />
+        <ControlStrip />
         <Banner />
         <TrialBar />
       </div>
@@ -99,6 +106,7 @@ function Hmi() {
             {tab === "Parameters" ? <Parameters /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}
+            {tab === "Audit" ? <AuditPanel /> : null}
           </div>
         </main>
       </div>

@@ -1,5 +1,6 @@
 // fetch with the service's refusal bodies turned into one error type, the CSRF token on every
-// change, and a 401 reported as the end of the session. Every request of the HMI goes through here.
+// change, this tab's client id on every request, and a 401 reported as the end of the session.
+// Every request of the HMI goes through here.
 import type { Refusal, ValidationIssue } from "./types";
 
 /** A request the service answered with 4xx/5xx, or could not be reached. */
@@ -21,6 +22,19 @@ export const unauthorizedListeners = new Set<() => void>();
 const CSRF_COOKIE = "inbetrieb_csrf";
 const CSRF_HEADER = "X-CSRF-Token";
 
+// as api/auth.py CLIENT_HEADER: control of a machine is held by one tab, not by a browser
+const CLIENT_HEADER = "X-Inbetrieb-Client";
+
+function newClientId(): string {
+  const bytes = crypto.getRandomValues(new Uint8Array(12));
+  return Array.from(bytes, (b) => b.toString(16).padStart(2, "0")).join("");
+}
+
+/** This tab's id, new with every page load (a reload is a new tab as far as control goes; the
+ * grace period keeps the machine for the reloaded page's "Take over here"). The websocket
+ * sends it as its `client` query parameter. */
+export const clientId = newClientId();
+
 function csrfToken(): string | null {
   const pair = document.cookie.split("; ").find((c) => c.startsWith(`${CSRF_COOKIE}=`));
   return pair ? pair.slice(CSRF_COOKIE.length + 1) : null; // as set: the service compares it with the cookie
@@ -33,7 +47,7 @@ interface Options {
 }
 
 async function request<T>(method: string, url: string, body?: unknown, opts: Options = {}): Promise<T> {
-  const headers: Record<string, string> = {};
+  const headers: Record<string, string> = { [CLIENT_HEADER]: clientId };
   if (body !== undefined) headers["content-type"] = opts.contentType ?? "application/json";
   const csrf = method === "GET" || method === "HEAD" ? null : csrfToken();
   if (csrf) headers[CSRF_HEADER] = csrf;

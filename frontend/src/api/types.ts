@@ -36,8 +36,7 @@ export type Command =
   | S["HliCommand"]
   | S["PlcModeCommand"]
   | S["PlcAckCommand"]
-  | S["ResetCommand"]
-  | S["EmergencyStopCommand"];
+  | S["ResetCommand"];
 export type Scope = ParameterValue["scope"];
 export type ScopeStatus = S["ScopeStatus"];
 export type ScopeSetup = S["ScopeSetupModel"];
@@ -51,3 +50,12 @@ export type RecordingInfo = S["RecordingInfo"];
 export type Me = S["Me"];
 export type Role = S["Role"];
 export type LoginRequest = S["LoginRequest"];
+export type Action = S["Action"];
+export type ControlState = S["ControlState"];
+export type ControlParty = S["ControlParty"];
+export type ControlAction = S["ControlAction"];
+export type StaleValue = S["StaleValue"];
+export type AuditRecord = S["AuditRecord"];
+export type AuditPage = S["AuditPage"];
+export type AuditKind = AuditRecord["kind"];
+export type AuditVerification = S["AuditVerification"];

@@ -2,6 +2,7 @@
 // the PLC's mode and its pending M functions with a manual acknowledge.
 import { useState } from "preact/hooks";
 import type { HliUnit } from "../api/types";
+import { commandBlocked } from "../state/control";
 import { online, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { Panel } from "../ui/Panel";
@@ -13,9 +14,10 @@ const NUMERIC = new Set(["override"]); // written with the override sliders, not
 function Switch(props: { unit: string; value: number; axis: string | null; run: ReturnType<typeof useCommand>["run"] }) {
   const on = props.value !== 0;
   const id = `hli-${props.axis ?? "channel"}-${props.unit}`;
+  const blocked = commandBlocked.value;
   return (
-    <label class="switch" data-testid={id}>
-      <input type="checkbox" role="switch" checked={on} disabled={!online.value}
+    <label class="switch" data-testid={id} title={blocked}>
+      <input type="checkbox" role="switch" checked={on} disabled={!online.value || !!blocked}
         onChange={() => void props.run({ type: "hli", unit: props.unit as HliUnit, value: on ? 0 : 1, axis: props.axis })} />
       {props.unit} <span class="hint">{on ? "1" : "0"}</span>
     </label>
@@ -28,6 +30,7 @@ export function HliPanel() {
   const [delay, setDelay] = useState("");
   if (!s) return <Panel title="HLI / PLC" id="hli">Waiting for the service…</Panel>;
   const plc = s.plc;
+  const blocked = commandBlocked.value; // another holder, or a role that may not command
   return (
     <Panel title="HLI / PLC" id="hli">
       <div class="hli-grid">
@@ -79,7 +82,7 @@ export function HliPanel() {
           <div class="row">
             <label>
               Mode{" "}
-              <select data-testid="plc-mode" value={plc.mode} disabled={!online.value}
+              <select data-testid="plc-mode" value={plc.mode} disabled={!online.value || !!blocked} title={blocked}
                 onChange={(e) => void cmd.run({ type: "plc_mode", mode: (e.target as HTMLSelectElement).value as "auto", delay_s: delay ? Number(delay) : null })}>
                 <option value="auto">auto acknowledge</option>
                 <option value="manual">manual acknowledge</option>
@@ -109,7 +112,7 @@ export function HliPanel() {
                   <td>{p.axis}</td>
                   <td>{p.out_cycle}</td>
                   <td>
-                    <button type="button" data-testid={`ack-m${p.m}`} disabled={!online.value}
+                    <button type="button" data-testid={`ack-m${p.m}`} disabled={!online.value || !!blocked} title={blocked}
                       onClick={() => void cmd.run({ type: "plc_ack", m: p.m })}>
                       Acknowledge
                     </button>

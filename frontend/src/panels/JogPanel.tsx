@@ -3,6 +3,7 @@ import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { heldKey, holdJog, keyName, releaseJog } from "../state/jog";
+import { commandBlocked } from "../state/control";
 import { loadList, numbers, paramsVersion } from "../state/params";
 import { machineId, motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
@@ -98,10 +99,12 @@ export function JogPanel() {
     : !feedInLimit
       ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the G200 maximum of ${ax.name} (P-AXIS-00213)`
       : "";
-  const dis = !online.value;
+  const blocked = commandBlocked.value; // another holder, or a role that may not command
+  const dis = !online.value || !!blocked;
   // a jog feed the axis cannot take jogs nowhere (never at the default or the limit instead)
-  const noMotion = motionLocked.value || !feedOk;
-  const why = status.value?.emergency_stop ? "emergency stop: reset first" : feedError ? `jog feed: ${feedError}` : "";
+  const noMotion = motionLocked.value || !feedOk || !!blocked;
+  const estopWhy = status.value?.emergency_stop ? "emergency stop: reset first" : "";
+  const why = blocked || estopWhy || (feedError ? `jog feed: ${feedError}` : "");
   const pathOverride = (status.value?.channel_units.override ?? 1000) / 10;
   return (
     <Panel title="Jog" id="jog">
@@ -157,14 +160,14 @@ export function JogPanel() {
       <div class="row">
         <label class="slider">
           Feed override{" "}
-          <input type="range" data-testid="feed-override" min={0} max={overrideMax} step={1} value={pathOverride} disabled={dis}
+          <input type="range" data-testid="feed-override" min={0} max={overrideMax} step={1} value={pathOverride} disabled={dis} title={blocked}
             onChange={(e) => void cmd.run({ type: "override", axis: null, percent: Number((e.target as HTMLInputElement).value) })} />
           <b>{qty(pathOverride, 1, "%")}</b>
         </label>
       </div>
       <div class="row apart">
-        <button type="button" class="secondary" data-testid="jog-home" disabled={motionLocked.value}
-          title={status.value?.emergency_stop ? "emergency stop: reset first" : ""}
+        <button type="button" class="secondary" data-testid="jog-home" disabled={motionLocked.value || !!blocked}
+          title={blocked || estopWhy}
           onClick={() => void cmd.run({ type: "home", axis: ax.name })}>
           G74 home {ax.name}
         </button>

@@ -1,5 +1,6 @@
 // MDI: one block, a history (↑/↓), and a refused block shown with a caret under its column.
 import { useState } from "preact/hooks";
+import { commandBlocked } from "../state/control";
 import { motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine, useCommand } from "../ui/useCommand";
@@ -28,6 +29,7 @@ export function MdiPanel() {
   }
 
   const column = cmd.refusal?.column ?? null;
+  const blocked = commandBlocked.value; // another holder, or a role that may not command
   return (
     <Panel title="MDI" id="mdi">
       <form
@@ -45,15 +47,16 @@ export function MdiPanel() {
           value={line}
           spellcheck={false}
           autocomplete="off"
-          disabled={!online.value}
+          disabled={!online.value || !!blocked}
+          title={blocked}
           onInput={(e) => setLine((e.target as HTMLInputElement).value)}
           onKeyDown={(e) => {
             if (e.key === "ArrowUp") (e.preventDefault(), browse(1));
             if (e.key === "ArrowDown") (e.preventDefault(), browse(-1));
           }}
         />
-        <button type="submit" data-testid="mdi-send" disabled={motionLocked.value || !line.trim()}
-          title={status.value?.emergency_stop ? "emergency stop: reset first" : ""}>
+        <button type="submit" data-testid="mdi-send" disabled={motionLocked.value || !line.trim() || !!blocked}
+          title={blocked || (status.value?.emergency_stop ? "emergency stop: reset first" : "")}>
           Execute
         </button>
       </form>

@@ -3,8 +3,19 @@
 // import and export of the native list file. The trial bar (Keep/Revert) is TrialBar.
 import { useEffect, useMemo, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
-import type { ParameterProblem, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
-import { dtypes, listUrl, loadList, loadRegistry, paramsVersion, trial, trialMessage, writeChanges } from "../state/params";
+import type { ParameterProblem, ParameterValue, ParameterWriteResult, Scope, StaleValue } from "../api/types";
+import { configureBlocked } from "../state/control";
+import {
+  type Change,
+  dtypes,
+  listUrl,
+  loadList,
+  loadRegistry,
+  paramsVersion,
+  trial,
+  trialMessage,
+  writeChanges,
+} from "../state/params";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { qty } from "../ui/format";
@@ -35,6 +46,20 @@ export function checkValue(p: ParameterValue, text: string, dtype: string | unde
   return null;
 }
 
+/** A write refused because someone else wrote a value since it was read: what was sent, and
+ * the values in force now. */
+interface Conflict {
+  changes: Change[];
+  stale: StaleValue[];
+}
+
+const clock = (t: number | null) =>
+  t == null ? "" : ` at ${new Date(t * 1000).toLocaleTimeString([], { hour: "2-digit", minute: "2-digit" })}`;
+
+/** "NAME changed getriebe[0].kv to 1.5 at 10:31 — yours: 2.0" */
+const staleLine = (s: StaleValue) =>
+  `${s.by} changed ${s.parameter} to ${s.current === null ? "its default" : String(s.current)}${clock(s.time_unix)} — yours: ${String(s.yours)}`;
+
 /** "line 3: getriebe[0].kv: …" for an import's problems (the API gives the line). */
 const problemLine = (p: ParameterProblem) => `${p.line != null ? `line ${p.line}: ` : ""}${p.message}`;
 
@@ -54,6 +79,8 @@ export function Parameters() {
   const [edits, setEdits] = useState<Record<string, string>>({});
   const [problems, setProblems] = useState<ParameterProblem[]>([]);
   const [message, setMessage] = useState("");
+  const [conflict, setConflict] = useState<Conflict | null>(null);
+  const blocked = configureBlocked.value; // another holder, or a role that may not configure
   const types = dtypes.value;
   useEffect(() => void loadRegistry(), []);
   const check = (p: ParameterValue, text: string) => checkValue(p, text, types.get(p.id));
@@ -62,6 +89,7 @@ export function Parameters() {
   useEffect(() => {
     setEdits({});
     setProblems([]);
+    setConflict(null);
     void reload();
   }, [t?.label, machineId.value, paramsVersion.value]);
 
@@ -80,16 +108,19 @@ export function Parameters() {
   const invalid = Object.entries(edits).filter(([n, v]) => byName.has(n) && check(byName.get(n)!, v));
   const edited = Object.keys(edits).length;
 
-  async function write(changes: { name: string; value: number | string }[], comment: string) {
+  async function write(changes: Change[], comment: string) {
     if (!t) return null;
     try {
       const r = await writeChanges(t.scope, t.target, changes, comment);
       setProblems([]);
+      setConflict(null);
       return r;
     } catch (e) {
       if (e instanceof ApiError) {
         setProblems(e.refusal.problems ?? []);
         setMessage(e.refusal.message);
+        const stale = e.refusal.stale ?? [];
+        setConflict(e.status === 409 && stale.length ? { changes, stale } : null);
       }
       return null;
     }
@@ -98,8 +129,28 @@ export function Parameters() {
   async function apply() {
     const changes = Object.entries(edits).map(([name, text]) => {
       const p = byName.get(name)!;
-      return { name, value: typeof p.default === "string" ? text : Number(text) };
+      // the version read with the value: a write over someone else's newer value is refused
+      return { name, value: typeof p.default === "string" ? text : Number(text), base_version: p.version };
     });
+    await applyChanges(changes);
+  }
+
+  /** The same values again, now based on the versions in force: the user saw both and chose. */
+  async function writeMineAnyway(c: Conflict) {
+    const now = new Map(c.stale.map((s) => [s.parameter, s.version]));
+    await applyChanges(c.changes.map((ch) => ({ ...ch, base_version: now.get(ch.name) ?? ch.base_version })));
+  }
+
+  /** Drop the edits someone else overtook and show their values. */
+  function keepTheirs(c: Conflict) {
+    const overtaken = new Set(c.stale.map((s) => s.parameter));
+    setEdits(Object.fromEntries(Object.entries(edits).filter(([n]) => !overtaken.has(n))));
+    setConflict(null);
+    setMessage("");
+    void reload();
+  }
+
+  async function applyChanges(changes: Change[]) {
     const r = await write(changes, "editor: apply (trial)");
     if (r && t) {
       setEdits({});
@@ -155,9 +206,9 @@ export function Parameters() {
           download={`${machineId.value}-${t?.target ?? t?.scope}.lis`}>
           Export list
         </a>
-        <label class="button secondary">
+        <label class={`button secondary ${blocked ? "disabled" : ""}`} title={blocked} data-testid="param-import">
           Import list…
-          <input type="file" accept=".lis,.txt,text/plain" hidden
+          <input type="file" accept=".lis,.txt,text/plain" hidden disabled={!!blocked}
             onChange={(e) => {
               const f = (e.target as HTMLInputElement).files?.[0];
               if (f) void importFile(f);
@@ -167,8 +218,8 @@ export function Parameters() {
       </div>
       <div class="row apply-bar">
         {/* one trial at a time: a second Apply would take the first one's Revert away */}
-        <button type="button" data-testid="param-apply" disabled={!online.value || !edited || invalid.length > 0 || !!trial.value}
-          title={trial.value ? "Keep or Revert the values on trial first" : ""} onClick={() => void apply()}>
+        <button type="button" data-testid="param-apply" disabled={!online.value || !edited || invalid.length > 0 || !!trial.value || !!blocked}
+          title={blocked || (trial.value ? "Keep or Revert the values on trial first" : "")} onClick={() => void apply()}>
           Apply {edited ? `(${edited})` : ""}
         </button>
         <button type="button" class="secondary" disabled={!edited} onClick={() => (setEdits({}), setProblems([]))}>
@@ -176,6 +227,24 @@ export function Parameters() {
         </button>
         {message ? <span class="hint" data-testid="param-message">{message}</span> : null}
       </div>
+      {conflict ? (
+        <div class="param-conflict" data-testid="param-conflict" role="alert">
+          <ul>
+            {conflict.stale.map((s) => (
+              <li key={s.parameter} data-testid={`param-stale-${s.parameter}`}>
+                {staleLine(s)}
+              </li>
+            ))}
+          </ul>
+          <button type="button" data-testid="param-write-anyway" disabled={!online.value || !!blocked} title={blocked}
+            onClick={() => void writeMineAnyway(conflict)}>
+            Write mine anyway
+          </button>
+          <button type="button" class="secondary" data-testid="param-keep-theirs" onClick={() => keepTheirs(conflict)}>
+            Keep theirs
+          </button>
+        </div>
+      ) : null}
       <div class="table-scroll">
         <table class="params">
           <thead>

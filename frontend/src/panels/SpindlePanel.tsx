@@ -1,6 +1,7 @@
 // Spindle: S with M3/M4/M5, M19 orientation, gear stages with their range bars, override,
 // homing (kept apart from the motion buttons).
 import { useEffect, useRef, useState } from "preact/hooks";
+import { commandBlocked } from "../state/control";
 import { loadList, paramsVersion } from "../state/params";
 import { machineId, motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
@@ -45,9 +46,11 @@ export function SpindlePanel() {
   }, [sp?.name, machineId.value, paramsVersion.value]);
 
   if (!sp) return <Panel title="Spindle" id="spindle">No spindle on this machine.</Panel>;
-  const dis = !online.value;
-  const locked = motionLocked.value; // offline or emergency stop: nothing may start moving
-  const lockedWhy = status.value?.emergency_stop ? "emergency stop: reset first" : "";
+  const blocked = commandBlocked.value; // another holder, or a role that may not command
+  const dis = !online.value || !!blocked;
+  // offline, emergency stop or someone else's machine: nothing may start moving
+  const locked = motionLocked.value || !!blocked;
+  const lockedWhy = blocked || (status.value?.emergency_stop ? "emergency stop: reset first" : "");
   const rpm = Number(speed);
   const validS = speed.trim() !== "" && Number.isFinite(rpm) && rpm >= 0;
   const deg = Number(angle);
@@ -109,7 +112,7 @@ export function SpindlePanel() {
           onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 4, speed_rpm: rpm })}>
           M4 ⟲
         </button>
-        <button type="button" data-testid="m5" class="stop" disabled={dis}
+        <button type="button" data-testid="m5" class="stop" disabled={dis} title={blocked}
           onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 5 })}>
           M5 stop
         </button>
@@ -171,7 +174,7 @@ export function SpindlePanel() {
         <label class="slider">
           Override{" "}
           <input type="range" data-testid="spindle-override" min={0} max={params?.overrideMaxPct ?? 100} step={0.1}
-            value={overridePct} disabled={dis}
+            value={overridePct} disabled={dis} title={blocked}
             onInput={(e) => sendOverride(Number((e.target as HTMLInputElement).value))}
             onChange={(e) => {
               const pct = Number((e.target as HTMLInputElement).value);

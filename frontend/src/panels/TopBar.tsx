@@ -3,7 +3,8 @@ import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { logout, me } from "../state/auth";
-import { connection, machineId, machines, online, selectMachine, status } from "../state/session";
+import { may } from "../state/control";
+import { connection, emergencyStop, machineId, machines, online, selectMachine, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
@@ -52,9 +53,9 @@ export function TopBar() {
         <button
           class="estop"
           data-testid="estop"
-          disabled={!online.value}
-          onClick={() => void estop.run({ type: "emergency_stop" })}
-          title="Emergency stop: every axis brakes with a_emergency"
+          disabled={!online.value || !may("stop")}
+          onClick={() => void estop.run(emergencyStop)}
+          title={may("stop") ? "Emergency stop: every axis brakes with a_emergency (no control needed)" : `a user in the role ${me.value?.role ?? ""} may not stop the machine`}
         >
           EMERGENCY STOP
         </button>

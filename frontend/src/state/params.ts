@@ -5,7 +5,16 @@
 import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
 import type { ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
+import { loggedIn } from "./auth";
 import { machineId, machineUrl } from "./session";
+
+/** One edit: the value, and the version it was read at (refused when someone wrote since;
+ * null: no check). */
+export interface Change {
+  name: string;
+  value: number | string;
+  base_version: number | null;
+}
 
 export const paramsVersion = signal(0);
 
@@ -54,11 +63,11 @@ export const trialMessage = signal("");
 export async function writeChanges(
   scope: Scope,
   target: string | null,
-  changes: { name: string; value: number | string }[],
+  changes: Change[],
   comment: string,
 ): Promise<ParameterWriteResult> {
   const r = await http.patch<ParameterWriteResult>(machineUrl("/parameters"), {
-    changes: changes.map((c) => ({ scope, target, name: c.name, value: c.value })),
+    changes: changes.map((c) => ({ scope, target, name: c.name, value: c.value, base_version: c.base_version })),
     comment,
   });
   paramsVersion.value++;
@@ -70,12 +79,24 @@ export function keepTrial(): void {
   trialMessage.value = "Kept.";
 }
 
-/** Write the old values back; the trial stays when that is refused. */
+/** Write the old values back, unless someone wrote over the trial's values meanwhile (their
+ * value is not ours to revert); the trial stays when that is refused. */
 export async function revertTrial(): Promise<void> {
   const t = trial.value;
   if (!t) return;
-  const back = t.applied.filter((c) => c.old !== null).map((c) => ({ name: c.name, value: c.old as number | string }));
   try {
+    const now = new Map((await loadList(t.scope, t.target)).map((p) => [p.name, p]));
+    const changed = t.applied.filter((c) => {
+      const p = now.get(c.name);
+      return p && (c.pending ? p.pending : p.value) !== c.new;
+    });
+    if (changed.length) {
+      trialMessage.value = `Revert refused: ${changed.map((c) => c.name).join(", ")} changed by someone else since the trial (reload the list).`;
+      return;
+    }
+    const back = t.applied
+      .filter((c) => c.old !== null)
+      .map((c) => ({ name: c.name, value: c.old as number | string, base_version: now.get(c.name)?.version ?? null }));
     await writeChanges(t.scope, t.target, back, "editor: revert");
     trial.value = null;
     trialMessage.value = `Reverted ${back.length} value(s).`;
@@ -86,5 +107,12 @@ export async function revertTrial(): Promise<void> {
 
 effect(() => {
   void machineId.value; // a message belongs to the machine it was about
+  trialMessage.value = "";
+});
+
+effect(() => {
+  // a trial belongs to the session that applied it: the next user must not see its Keep/Revert
+  if (loggedIn.value) return;
+  trial.value = null;
   trialMessage.value = "";
 });

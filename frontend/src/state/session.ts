@@ -103,6 +103,11 @@ export function selectMachine(id: string): void {
   location.hash = id;
 }
 
+/** Emergency stop: needs no control, whoever may stop stops (api/auth.py STOP). */
+export async function emergencyStop(): Promise<CommandResult> {
+  return http.post<CommandResult>(machineUrl("/emergency-stop"), {});
+}
+
 /** Send one command; resolves to the acknowledgement, rejects with the refusal (ApiError). */
 export async function send(cmd: Command): Promise<CommandResult> {
   return http.post<CommandResult>(machineUrl("/commands"), cmd);

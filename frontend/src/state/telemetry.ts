@@ -14,6 +14,7 @@ import type {
   StatusMessage,
   Subscribed,
 } from "../api/types";
+import { clientId } from "../api/http";
 import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { Rings } from "./rings";
@@ -117,7 +118,9 @@ function onMessage(text: string): void {
 
 function connect(mid: string): void {
   const proto = location.protocol === "https:" ? "wss" : "ws";
-  const sock = new WebSocket(`${proto}://${location.host}/api/machines/${encodeURIComponent(mid)}/telemetry`);
+  // the tab's id: the socket keeps this tab's control of the machine alive
+  const query = new URLSearchParams({ client: clientId });
+  const sock = new WebSocket(`${proto}://${location.host}/api/machines/${encodeURIComponent(mid)}/telemetry?${query}`);
   sock.binaryType = "arraybuffer";
   ws = sock;
   sock.onmessage = (ev) => (typeof ev.data === "string" ? onMessage(ev.data) : onFrame(ev.data as ArrayBuffer));

@@ -7,10 +7,11 @@ import { send } from "../state/session";
 export function useCommand() {
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [busy, setBusy] = useState(false);
-  async function run(cmd: Command): Promise<CommandResult | null> {
+  /** Send `cmd` to the machine (or make another request that answers like one). */
+  async function run(cmd: Command | (() => Promise<CommandResult>)): Promise<CommandResult | null> {
     setBusy(true);
     try {
-      const r = await send(cmd);
+      const r = await (typeof cmd === "function" ? cmd() : send(cmd));
       setRefusal(null);
       return r;
     } catch (e) {

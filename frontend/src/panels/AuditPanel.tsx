@@ -1,0 +1,201 @@
+// The audit trail: who did what to this machine (or, for admins, to the whole service: logins
+// and failed logins too), newest first, filtered; older pages on demand; the same filter as
+// CSV; the hash chain's check.
+import { useEffect, useState } from "preact/hooks";
+import { ApiError, http } from "../api/http";
+import type { AuditKind, AuditPage, AuditRecord, AuditVerification } from "../api/types";
+import { may } from "../state/control";
+import { machineId } from "../state/session";
+import { Panel } from "../ui/Panel";
+
+const PAGE = 100;
+const KINDS: AuditKind[] = [
+  "command",
+  "parameter",
+  "control",
+  "simulation",
+  "machine",
+  "trace",
+  "recording",
+  "login",
+  "login_failed",
+  "logout",
+  "user",
+  "token",
+];
+/** Time range presets: how far back, in seconds (0: everything). */
+const RANGES: { label: string; back_s: number }[] = [
+  { label: "all time", back_s: 0 },
+  { label: "last 15 min", back_s: 15 * 60 },
+  { label: "last hour", back_s: 3600 },
+  { label: "last 24 h", back_s: 24 * 3600 },
+  { label: "last 7 days", back_s: 7 * 24 * 3600 },
+];
+
+interface Filter {
+  kind: AuditKind | "";
+  actor: string;
+  text: string;
+  back_s: number;
+  service: boolean; // the whole service's trail (admins)
+}
+
+/** The query of a filter (since is counted back from now, when the query is made). */
+function query(f: Filter): URLSearchParams {
+  const q = new URLSearchParams();
+  if (f.kind) q.set("kind", f.kind);
+  if (f.actor.trim()) q.set("actor", f.actor.trim());
+  if (f.text.trim()) q.set("text", f.text.trim());
+  if (f.back_s) q.set("since_unix", String(Math.floor(Date.now() / 1000 - f.back_s)));
+  return q;
+}
+
+const base = (f: Filter) => (f.service ? "/api/audit" : `/api/machines/${encodeURIComponent(machineId.value)}/audit`);
+
+const when = (t: number) => {
+  const d = new Date(t * 1000);
+  return `${d.toLocaleDateString()} ${d.toLocaleTimeString()}`;
+};
+
+export function AuditPanel() {
+  const [f, setF] = useState<Filter>({ kind: "", actor: "", text: "", back_s: 0, service: false });
+  const [rows, setRows] = useState<AuditRecord[]>([]);
+  const [total, setTotal] = useState(0);
+  const [error, setError] = useState("");
+  const [verified, setVerified] = useState<AuditVerification | null>(null);
+  const admin = may("users");
+
+  async function load(older: boolean) {
+    if (!machineId.value) return;
+    const q = query(f);
+    q.set("limit", String(PAGE));
+    if (older && rows.length) q.set("before_seq", String(rows[rows.length - 1].seq));
+    try {
+      const page = await http.get<AuditPage>(`${base(f)}?${q}`);
+      setRows(older ? [...rows, ...page.rows] : page.rows);
+      setTotal(page.total);
+      setError("");
+    } catch (e) {
+      setError(e instanceof ApiError ? e.refusal.message : String(e));
+    }
+  }
+
+  useEffect(() => void load(false), [f, machineId.value]);
+
+  async function verify() {
+    try {
+      setVerified(await http.get<AuditVerification>("/api/audit/verify"));
+    } catch (e) {
+      setError(e instanceof ApiError ? e.refusal.message : String(e));
+    }
+  }
+
+  const set = (patch: Partial<Filter>) => setF({ ...f, ...patch });
+  const csv = machineId.value ? `${base(f)}.csv?${query(f)}` : "#";
+  return (
+    <Panel title={f.service ? "Audit: whole service" : `Audit: machine ${machineId.value}`} id="audit">
+      <div class="row audit-filters">
+        <label>
+          Kind{" "}
+          <select data-testid="audit-kind" value={f.kind} onChange={(e) => set({ kind: (e.target as HTMLSelectElement).value as AuditKind })}>
+            <option value="">all</option>
+            {KINDS.filter((k) => f.service || !k.startsWith("log")).map((k) => (
+              <option key={k} value={k}>
+                {k}
+              </option>
+            ))}
+          </select>
+        </label>
+        <label>
+          User{" "}
+          <input data-testid="audit-actor" size={12} value={f.actor} placeholder="any"
+            onChange={(e) => set({ actor: (e.target as HTMLInputElement).value })} />
+        </label>
+        <label>
+          Text{" "}
+          <input type="search" data-testid="audit-text" size={18} value={f.text} placeholder="in action or outcome"
+            onChange={(e) => set({ text: (e.target as HTMLInputElement).value })} />
+        </label>
+        <label>
+          Time{" "}
+          <select data-testid="audit-range" value={String(f.back_s)}
+            onChange={(e) => set({ back_s: Number((e.target as HTMLSelectElement).value) })}>
+            {RANGES.map((r) => (
+              <option key={r.back_s} value={String(r.back_s)}>
+                {r.label}
+              </option>
+            ))}
+          </select>
+        </label>
+        {admin ? (
+          <label title="every machine, and logins, failed logins, users and tokens">
+            <input type="checkbox" data-testid="audit-service" checked={f.service}
+              onChange={(e) => set({ service: (e.target as HTMLInputElement).checked, kind: "" })} />{" "}
+            whole service
+          </label>
+        ) : null}
+        <button type="button" class="secondary" data-testid="audit-refresh" onClick={() => void load(false)}>
+          Refresh
+        </button>
+        <a class="button secondary" data-testid="audit-csv" href={csv}
+          download={f.service ? "audit.csv" : `audit-${machineId.value}.csv`}>
+          Export CSV
+        </a>
+        {admin ? (
+          <button type="button" class="secondary" data-testid="audit-verify" onClick={() => void verify()}>
+            Verify chain
+          </button>
+        ) : null}
+      </div>
+      {verified ? (
+        <p class={verified.ok ? "audit-verified ok" : "audit-verified bad"} data-testid="audit-verification" role="status">
+          {verified.ok ? "✓" : "✗"} {verified.message}
+        </p>
+      ) : null}
+      {error ? (
+        <p class="refusal" role="alert" data-testid="audit-error">
+          {error}
+        </p>
+      ) : null}
+      <div class="table-scroll">
+        <table class="audit">
+          <thead>
+            <tr>
+              <th>Time</th>
+              <th>User</th>
+              {f.service ? <th>Machine</th> : null}
+              <th>Kind</th>
+              <th>Action</th>
+              <th>Outcome</th>
+            </tr>
+          </thead>
+          <tbody>
+            {rows.map((r) => {
+              const refused = r.outcome !== "ok";
+              return (
+                <tr key={r.seq} data-testid="audit-row" data-seq={r.seq} data-kind={r.kind} class={refused ? "refused" : ""}>
+                  <td class="num">{when(r.time_unix)}</td>
+                  <td data-testid="audit-actor-cell">{r.actor}</td>
+                  {f.service ? <td>{r.machine || "—"}</td> : null}
+                  <td data-testid="audit-kind-cell">{r.kind}</td>
+                  <td data-testid="audit-action-cell">{r.action}</td>
+                  <td data-testid="audit-outcome-cell">{refused ? <b>✗ {r.outcome}</b> : "ok"}</td>
+                </tr>
+              );
+            })}
+          </tbody>
+        </table>
+        {!rows.length ? <p class="hint">No audit row matches.</p> : null}
+      </div>
+      <div class="row apart">
+        <span class="hint" data-testid="audit-count">
+          {rows.length} of {total} rows
+        </span>
+        <button type="button" class="secondary" data-testid="audit-older" disabled={rows.length >= total}
+          onClick={() => void load(true)}>
+          Load older
+        </button>
+      </div>
+    </Panel>
+  );
+}

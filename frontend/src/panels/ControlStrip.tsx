@@ -1,0 +1,79 @@
+// Who holds the machine on screen, under the top bar: free, this tab, this session in another
+// tab, or someone else; the way to ask for it, take it, hand it over or give it back; the
+// holder's lost connection counting down to the release.
+import { useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { ControlParty, Refusal } from "../api/types";
+import { act, control, may, requested, standing, who } from "../state/control";
+import { online } from "../state/session";
+import { RefusalLine } from "../ui/useCommand";
+
+export function ControlStrip() {
+  const c = control.value;
+  const [refusal, setRefusal] = useState<Refusal | null>(null);
+  if (!c) return null;
+  const h = c.holder;
+  const st = standing.value;
+  const dis = !online.value;
+  const run = (action: Parameters<typeof act>[0], party?: ControlParty) =>
+    act(action, party).then(
+      () => setRefusal(null),
+      (e: unknown) => setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
+    );
+  const button = (id: string, label: string, action: Parameters<typeof act>[0], party?: ControlParty, title = "") => (
+    <button type="button" class="secondary" data-testid={id} disabled={dis} title={title} onClick={() => void run(action, party)}>
+      {label}
+    </button>
+  );
+  const lapseS = c.release_at_unix != null ? Math.max(0, Math.ceil(c.release_at_unix - Date.now() / 1000)) : null;
+  return (
+    <div class={`control-strip ${st}`} data-testid="control-strip" role="status" aria-label="control of the machine">
+      <span class="control-holder" data-testid="control-holder">
+        {!h
+          ? "Free"
+          : st === "mine"
+            ? "You have control"
+            : st === "other-tab"
+              ? "You have control in another tab"
+              : `${who(h)} has control`}
+      </span>
+      {!h ? <span class="hint">the first command takes control</span> : null}
+      {h && lapseS !== null ? (
+        <span class="control-lost" data-testid="control-lost">
+          connection lost: released in {lapseS} s
+        </span>
+      ) : null}
+      {may("control") ? (
+        <span class="control-actions">
+          {!h ? button("control-take", "Take control", "take") : null}
+          {st === "mine" ? button("control-release", "Release", "release") : null}
+          {st === "other-tab" ? button("control-take-here", "Take over here", "take") : null}
+          {st === "other" && may("take_control")
+            ? button("control-take", "Take control", "take", undefined, `take it from ${who(h!)} without asking`)
+            : null}
+          {st === "other" && !may("take_control") && !requested.value
+            ? button("control-request", "Request control", "request", undefined, `ask ${who(h!)} to hand it over`)
+            : null}
+          {st === "other" && requested.value ? (
+            <>
+              <span class="hint" data-testid="control-requested">
+                requested…
+              </span>
+              {button("control-cancel", "Cancel request", "cancel")}
+            </>
+          ) : null}
+        </span>
+      ) : null}
+      {st === "mine"
+        ? (c.requests ?? []).map((r) => (
+            <span class="control-request" data-testid="control-incoming" key={`${r.session}/${r.client}`}>
+              <b>{who(r)}</b> asks for control
+              {button("control-grant", "Grant", "grant", r)}
+              {button("control-refuse", "Refuse", "refuse", r)}
+            </span>
+          ))
+        : null}
+      <RefusalLine refusal={refusal} id="control-refusal" />
+    </div>
+  );
+}
