@@ -36,20 +36,31 @@ def chromium() -> Iterator[Browser]:
             browser.close()
 
 
-def signed_in_page(browser: Browser, base: str, size: str = "desktop") -> Page:
-    """A fresh page (its own browser context) logged in as the test admin: the session
-    cookie is set through the context's request API, as the login form would set it."""
+def signed_in_page(
+    browser: Browser, base: str, size: str = "desktop", user: str = USER, password: str = PASSWORD
+) -> Page:
+    """A fresh page (its own browser context) logged in as `user` (the test admin unless
+    told): the session cookie is set through the context's request API, as the login form
+    would set it."""
     w, h = SIZES[size]
     page = browser.new_page(viewport={"width": w, "height": h})
     page.set_default_timeout(15_000)
-    r = page.request.post(f"{base}/api/auth/login", data={"name": USER, "password": PASSWORD})
+    r = page.request.post(f"{base}/api/auth/login", data={"name": user, "password": password})
     assert r.ok, r.text()
     return page
 
 
-def open_hmi(browser: Browser, base: str, machine: str, size: str = "desktop") -> Page:
-    """A fresh page on the HMI showing `machine` (the test's own), connected to the service."""
-    page = signed_in_page(browser, base, size)
+def open_hmi(
+    browser: Browser,
+    base: str,
+    machine: str,
+    size: str = "desktop",
+    user: str = USER,
+    password: str = PASSWORD,
+) -> Page:
+    """A fresh page on the HMI showing `machine` (the test's own), connected to the service,
+    logged in as `user` (the test admin unless told)."""
+    page = signed_in_page(browser, base, size, user, password)
     page.goto(f"{base}/#{machine}")
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
     return page

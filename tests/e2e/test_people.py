@@ -1,0 +1,166 @@
+"""People in the browser: one operator per machine (the control strip, request and grant),
+a parameter written by someone else meanwhile (both values, then the user's choice), and the
+audit trail of the machine (who did what, filters, CSV)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from collections.abc import Iterator
+
+import pytest
+from playwright.sync_api import Browser, Page, expect
+
+from api.auth import Role
+from tests.backend.server import Server
+from tests.e2e.browser import open_hmi, panel, poll
+
+ANA, BEN, OLE = "ana", "ben", "ole"  # two operators and an observer
+PASSWORD = "people-password"
+KV = "getriebe[0].kv"  # P-AXIS-00099, position loop gain of gear 1 [002]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def people(srv: Server) -> None:
+    srv.add_user(ANA, Role.OPERATOR, PASSWORD)
+    srv.add_user(BEN, Role.OPERATOR, PASSWORD)
+    srv.add_user(OLE, Role.OBSERVER, PASSWORD)
+
+
+@pytest.fixture
+def two(browser: Browser, srv: Server, mid: str) -> Iterator[tuple[Page, Page]]:
+    """Ana's and Ben's HMI on the same machine, each in a context of its own."""
+    a = open_hmi(browser, srv.base, mid, user=ANA, password=PASSWORD)
+    b = open_hmi(browser, srv.base, mid, user=BEN, password=PASSWORD)
+    for p in (a, b):
+        panel(p, "jog").get_by_test_id("jog-axis-X").check()
+    yield a, b
+    a.close()
+    b.close()
+
+
+def test_control_passes_from_one_operator_to_another_on_request(
+    two: tuple[Page, Page], srv: Server, mid: str
+) -> None:
+    a, b = two
+    strip_a, strip_b = a.get_by_test_id("control-strip"), b.get_by_test_id("control-strip")
+    expect(strip_b.get_by_test_id("control-holder")).to_have_text("Free")
+    expect(panel(b, "jog").get_by_test_id("jog-step-plus")).to_be_enabled()  # the first takes it
+    panel(a, "jog").get_by_test_id("jog-step-plus").click()  # Ana's first command takes control
+    expect(strip_a.get_by_test_id("control-holder")).to_have_text("You have control")
+    expect(strip_b.get_by_test_id("control-holder")).to_have_text("ana (operator) has control")
+    jog_b = panel(b, "jog").get_by_test_id("jog-plus")
+    expect(jog_b).to_be_disabled()
+    expect(jog_b).to_have_attribute("title", re.compile(r"ana \(operator\) has control"))
+    expect(panel(b, "mdi").get_by_test_id("mdi-input")).to_be_disabled()
+    expect(b.get_by_test_id("estop")).to_be_enabled()  # a stop needs no control
+    expect(strip_b.get_by_test_id("control-take")).to_have_count(0)  # operators ask
+
+    strip_b.get_by_test_id("control-request").click()
+    expect(strip_b.get_by_test_id("control-requested")).to_be_visible()
+    incoming = strip_a.get_by_test_id("control-incoming")
+    expect(incoming).to_contain_text("ben (operator) asks for control")
+    incoming.get_by_test_id("control-grant").click()
+
+    expect(strip_b.get_by_test_id("control-holder")).to_have_text("You have control")
+    expect(strip_a.get_by_test_id("control-holder")).to_have_text("ben (operator) has control")
+    expect(jog_b).to_be_enabled()
+    expect(panel(a, "jog").get_by_test_id("jog-plus")).to_be_disabled()
+    x0 = srv.axis("X", mid)["pos_cmd"]
+    panel(b, "jog").get_by_test_id("jog-step-plus").click()  # Ben commands now: 1 mm step
+    poll(lambda: abs(srv.axis("X", mid)["pos_cmd"] - (x0 + 1.0)) < 1e-6, "Ben's 1 mm step")
+    expect(panel(b, "jog").get_by_test_id("jog-refusal")).to_be_hidden()
+
+
+def test_an_observer_never_gets_a_command_button(browser: Browser, srv: Server, mid: str) -> None:
+    p = open_hmi(browser, srv.base, mid, user=OLE, password=PASSWORD)
+    try:
+        strip = p.get_by_test_id("control-strip")
+        expect(strip.get_by_test_id("control-holder")).to_have_text("Free")
+        jog = panel(p, "jog")
+        jog.get_by_test_id("jog-axis-X").check()
+        for key in ("jog-plus", "jog-step-plus", "jog-home", "feed-override"):
+            expect(jog.get_by_test_id(key)).to_be_disabled()
+        expect(jog.get_by_test_id("jog-plus")).to_have_attribute(
+            "title", re.compile("observer may not command")
+        )
+        expect(p.get_by_test_id("estop")).to_be_disabled()  # observers only watch
+        expect(strip.get_by_role("button")).to_have_count(0)  # nothing to take or request
+    finally:
+        p.close()
+
+
+def open_kv(p: Page) -> None:
+    p.get_by_test_id("tab-Parameters").click()
+    params = panel(p, "parameters")
+    params.get_by_test_id("param-search").fill("P-AXIS-00099")
+    expect(params.get_by_test_id(f"param-input-{KV}")).to_be_visible()
+
+
+def test_a_value_written_meanwhile_shows_both_and_mine_can_still_be_written(
+    two: tuple[Page, Page], srv: Server, mid: str
+) -> None:
+    a, b = two
+    open_kv(a)
+    open_kv(b)  # Ben reads the list now: the version before Ana's write
+    pa, pb = panel(a, "parameters"), panel(b, "parameters")
+    pa.get_by_test_id(f"param-input-{KV}").fill("1500")
+    pa.get_by_test_id("param-apply").click()  # Ana's write takes the free machine
+    a.get_by_test_id("trial-bar").get_by_test_id("param-keep").click()
+    a.get_by_test_id("control-strip").get_by_test_id("control-release").click()
+    expect(b.get_by_test_id("control-strip").get_by_test_id("control-holder")).to_have_text("Free")
+
+    pb.get_by_test_id(f"param-input-{KV}").fill("1800")
+    pb.get_by_test_id("param-apply").click()
+    stale = pb.get_by_test_id(f"param-stale-{KV}")
+    expect(stale).to_contain_text(re.compile(rf"ana changed {re.escape(KV)} to 1500 at \d"))
+    expect(stale).to_contain_text("yours: 1800")
+    assert value(srv, mid) == 1500  # nothing of Ben's was written
+
+    pb.get_by_test_id("param-write-anyway").click()
+    expect(pb.get_by_test_id("param-conflict")).to_be_hidden()
+    expect(b.get_by_test_id("trial-bar").get_by_test_id("param-trial")).to_contain_text(
+        f"{KV} 1500 → 1800"
+    )
+    assert value(srv, mid) == 1800
+
+
+def value(srv: Server, mid: str) -> float:
+    rows = srv.http.get(f"/api/machines/{mid}/parameters", params={"target": "X"}).json()
+    return float(next(p["value"] for p in rows if p["name"] == KV))
+
+
+def test_the_audit_panel_shows_who_commanded_filters_and_exports(
+    two: tuple[Page, Page], srv: Server, mid: str
+) -> None:
+    a, _ = two
+    panel(a, "jog").get_by_test_id("jog-step-plus").click()
+    strip = a.get_by_test_id("control-strip")
+    expect(strip.get_by_test_id("control-holder")).to_have_text("You have control")
+    a.get_by_test_id("tab-Audit").click()
+    audit = panel(a, "audit")
+    step = audit.get_by_test_id("audit-row").filter(has_text="jog axis=X action=step")
+    expect(step).to_have_count(1)
+    expect(step.get_by_test_id("audit-actor-cell")).to_have_text(ANA)
+    expect(step.get_by_test_id("audit-kind-cell")).to_have_text("command")
+    expect(step.get_by_test_id("audit-outcome-cell")).to_have_text("ok")
+    took = audit.get_by_test_id("audit-row").filter(has_text="took control")
+    expect(took).to_have_count(1)  # the step took the free machine first
+
+    audit.get_by_test_id("audit-kind").select_option("control")
+    expect(step).to_have_count(0)
+    expect(took).to_have_count(1)
+    kinds = audit.get_by_test_id("audit-kind-cell").all_inner_texts()
+    assert kinds and set(kinds) == {"control"}
+
+    audit.get_by_test_id("audit-kind").select_option("command")
+    expect(step).to_have_count(1)
+    href = audit.get_by_test_id("audit-csv").get_attribute("href")
+    assert href and "kind=command" in href
+    r = a.request.get(srv.base + href)  # with Ana's session, as the link would be followed
+    assert r.ok and r.headers["content-type"].startswith("text/csv")
+    rows = list(csv.DictReader(io.StringIO(r.text())))
+    assert {row["kind"] for row in rows} == {"command"}
+    mine = [row for row in rows if row["action"].startswith("jog axis=X action=step")]
+    assert len(mine) == 1 and mine[0]["actor"] == ANA and mine[0]["machine"] == mid
