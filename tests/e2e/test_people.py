@@ -138,6 +138,10 @@ def test_the_audit_panel_shows_who_commanded_filters_and_exports(
     panel(a, "jog").get_by_test_id("jog-step-plus").click()
     strip = a.get_by_test_id("control-strip")
     expect(strip.get_by_test_id("control-holder")).to_have_text("You have control")
+    mdi = panel(a, "mdi")
+    mdi.get_by_test_id("mdi-input").fill("M3 S20000")  # above the spindle's maximum: 90017
+    mdi.get_by_test_id("mdi-send").click()
+    expect(mdi.get_by_test_id("mdi-refusal")).to_contain_text("90017")
     a.get_by_test_id("tab-Audit").click()
     audit = panel(a, "audit")
     step = audit.get_by_test_id("audit-row").filter(has_text="jog axis=X action=step")
@@ -145,6 +149,9 @@ def test_the_audit_panel_shows_who_commanded_filters_and_exports(
     expect(step.get_by_test_id("audit-actor-cell")).to_have_text(ANA)
     expect(step.get_by_test_id("audit-kind-cell")).to_have_text("command")
     expect(step.get_by_test_id("audit-outcome-cell")).to_have_text("ok")
+    refused = audit.get_by_test_id("audit-row").filter(has_text="mdi block=M3 S20000")
+    expect(refused).to_have_class("refused")  # marked, with the reason
+    expect(refused.get_by_test_id("audit-outcome-cell")).to_contain_text("✗ refused (409)")
     took = audit.get_by_test_id("audit-row").filter(has_text="took control")
     expect(took).to_have_count(1)  # the step took the free machine first
 
@@ -164,3 +171,28 @@ def test_the_audit_panel_shows_who_commanded_filters_and_exports(
     assert {row["kind"] for row in rows} == {"command"}
     mine = [row for row in rows if row["action"].startswith("jog axis=X action=step")]
     assert len(mine) == 1 and mine[0]["actor"] == ANA and mine[0]["machine"] == mid
+
+
+def test_the_same_user_in_another_tab_takes_over_here(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    ctx = browser.new_context(viewport={"width": 1920, "height": 1080})  # one session
+    try:
+        assert ctx.request.post(
+            f"{srv.base}/api/auth/login", data={"name": ANA, "password": PASSWORD}
+        ).ok
+        first, second = ctx.new_page(), ctx.new_page()  # two tabs: a client id each
+        for p in (first, second):
+            p.goto(f"{srv.base}/#{mid}")
+            panel(p, "jog").get_by_test_id("jog-axis-X").check()
+        panel(first, "jog").get_by_test_id("jog-step-plus").click()
+        s1, s2 = first.get_by_test_id("control-strip"), second.get_by_test_id("control-strip")
+        expect(s1.get_by_test_id("control-holder")).to_have_text("You have control")
+        expect(s2.get_by_test_id("control-holder")).to_have_text("You have control in another tab")
+        expect(panel(second, "jog").get_by_test_id("jog-step-plus")).to_be_disabled()
+        s2.get_by_test_id("control-take-here").click()
+        expect(s2.get_by_test_id("control-holder")).to_have_text("You have control")
+        expect(panel(second, "jog").get_by_test_id("jog-step-plus")).to_be_enabled()
+        expect(panel(first, "jog").get_by_test_id("jog-step-plus")).to_be_disabled()
+    finally:
+        ctx.close()

@@ -1,5 +1,6 @@
 // Values applied on trial stay on screen in every workspace until Keep or Revert, so the
 // engineer can switch to Operate, test them, and still revert.
+import { configureBlocked } from "../state/control";
 import { keepTrial, revertTrial, shownTrial, trialMessage } from "../state/params";
 import { online } from "../state/session";
 
@@ -16,7 +17,8 @@ export function TrialBar() {
           <button type="button" data-testid="param-keep" onClick={keepTrial}>
             Keep
           </button>
-          <button type="button" data-testid="param-revert" class="secondary" disabled={!online.value}
+          <button type="button" data-testid="param-revert" class="secondary" disabled={!online.value || !!configureBlocked.value}
+            title={configureBlocked.value}
             onClick={() => void revertTrial()}>
             Revert
           </button>
