@@ -178,8 +178,8 @@ export function AuditPanel() {
                   <td data-testid="audit-actor-cell">{r.actor}</td>
                   {f.service ? <td>{r.machine || "—"}</td> : null}
                   <td data-testid="audit-kind-cell">{r.kind}</td>
-                  <td data-testid="audit-action-cell">{r.action}</td>
-                  <td data-testid="audit-outcome-cell">{refused ? <b>✗ {r.outcome}</b> : "ok"}</td>
+                  <td class="wrap" data-testid="audit-action-cell">{r.action}</td>
+                  <td class="wrap" data-testid="audit-outcome-cell">{refused ? <b>✗ {r.outcome}</b> : "ok"}</td>
                 </tr>
               );
             })}
