@@ -60,7 +60,7 @@ class Services:
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
         audit = Audit(store)
-        control = Control(machines, audit)
+        control = Control(machines, audit, settings.control_grace_s)
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
