@@ -50,10 +50,9 @@ def add_users(db: Path, users: dict[str, Role]) -> dict[str, str]:
     store = Store(db)
     try:
         accounts = Accounts(store)
-        return {
-            name: (accounts.add_user(name, role, OTHERS_PASSWORD), accounts.new_token(name))[1]
-            for name, role in users.items()
-        }
+        for name, role in users.items():
+            accounts.add_user(name, role, OTHERS_PASSWORD)
+        return {name: accounts.new_token(name) for name in users}
     finally:
         store.close()
 
