@@ -98,7 +98,8 @@ class Services:
             return
         token = self.accounts.new_token(admin, "printed at start", once=True)
         host = "localhost" if ":" in self.settings.host else self.settings.host
-        link = f"http://{host}:{self.settings.port}/auth/once?token={token}"
+        scheme = "https" if self.settings.https else "http"
+        link = f"{scheme}://{host}:{self.settings.port}/auth/once?token={token}"
         print(f"Log in as {admin} (once, within an hour): {link}", flush=True)
 
     async def stop(self) -> None:

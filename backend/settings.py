@@ -42,6 +42,7 @@ class Settings(BaseSettings):
     )
     host: str = Field("127.0.0.1", description="the address the service binds")
     port: int = Field(8000, ge=0, le=65535, description="its port (for the login link)")
+    https: bool = Field(False, description="it serves HTTPS itself (for the login link)")
     allowed_hosts: list[str] = Field(
         default_factory=list,
         description="Host names clients reach the service by, besides loopback and `host`",

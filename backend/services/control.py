@@ -256,7 +256,7 @@ class Control:
         self, m: MachineProxy, by: Actor, what: str, detail: dict[str, object] | None = None
     ) -> None:
         m.control.seq += 1
-        self.audit.record(
+        self.audit.record_later(  # the event loop may be here: never wait for the disk
             Entry(
                 actor=by.name,
                 session=by.session,

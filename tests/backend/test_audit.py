@@ -14,6 +14,8 @@ import httpx
 import pytest
 
 from api.auth import Role
+from backend.services.audit import Audit
+from backend.services.store import Store
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
 
 
@@ -113,3 +115,37 @@ def test_the_chain_shows_an_edited_and_a_removed_row(served: tuple[Server, dict[
     s.start()
     removed = s.http.get("/api/audit/verify").json()
     assert (removed["ok"], removed["first_bad_seq"]) == (False, 2)
+
+
+def test_a_store_of_an_earlier_version_keeps_its_parameter_history_in_the_chain(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "old.sqlite"
+    with sqlite3.connect(path) as db:  # the tables as the first slice wrote them
+        db.executescript(
+            """
+            CREATE TABLE param_values (machine TEXT, scope TEXT, target TEXT, name TEXT,
+                value TEXT, PRIMARY KEY (machine, scope, target, name));
+            CREATE TABLE audit (seq INTEGER PRIMARY KEY AUTOINCREMENT, time REAL, machine TEXT,
+                actor TEXT, scope TEXT, target TEXT, name TEXT, old TEXT, new TEXT,
+                effect TEXT, comment TEXT);
+            INSERT INTO param_values VALUES ('demo', 'axis', 'X', 'getriebe[0].kv', '150.0');
+            INSERT INTO audit VALUES (1, 1700000000.5, 'demo', 'local', 'axis', 'X',
+                'getriebe[0].kv', NULL, '150.0', 'now', 'tuning');
+            """
+        )
+    store = Store(path)
+    try:
+        audit = Audit(store)
+        [(seq, when, actor, detail)] = store.parameter_history("demo")
+        assert (when, actor, detail["new"], detail["comment"]) == (
+            1700000000.5,
+            "local",
+            150.0,
+            "tuning",
+        )
+        assert store.versions("demo") == {("axis", "X", "getriebe[0].kv"): 0}
+        assert audit.verify().ok and seq == 1
+        audit.stop()
+    finally:
+        store.close()
