@@ -122,14 +122,6 @@ class Server:
         self.stop()
 
     # --- helpers ----------------------------------------------------------------------------
-    def add_user(self, name: str, role: Role, password: str) -> None:
-        """A user in the running service's store (as `inbetrieb user add` would add them)."""
-        store = Store(self.db)
-        try:
-            Accounts(store).add_user(name, role, password)
-        finally:
-            store.close()
-
     def command(self, mid: str, body: dict[str, Any]) -> httpx.Response:
         return self.http.post(f"/api/machines/{mid}/commands", json=body)
 

@@ -13,19 +13,17 @@ import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from api.auth import Role
-from tests.backend.server import Server
+from tests.backend.server import OTHERS_PASSWORD as PASSWORD
+from tests.backend.server import Server, add_users
 from tests.e2e.browser import open_hmi, panel, poll
 
 ANA, BEN, OLE = "ana", "ben", "ole"  # two operators and an observer
-PASSWORD = "people-password"
 KV = "getriebe[0].kv"  # P-AXIS-00099, position loop gain of gear 1 [002]
 
 
 @pytest.fixture(scope="module", autouse=True)
 def people(srv: Server) -> None:
-    srv.add_user(ANA, Role.OPERATOR, PASSWORD)
-    srv.add_user(BEN, Role.OPERATOR, PASSWORD)
-    srv.add_user(OLE, Role.OBSERVER, PASSWORD)
+    add_users(srv.db, {ANA: Role.OPERATOR, BEN: Role.OPERATOR, OLE: Role.OBSERVER})
 
 
 @pytest.fixture

@@ -1,6 +1,6 @@
 // Who holds the machine on screen, under the top bar: free, this tab, this session in another
-// tab, or someone else; the way to ask for it, take it, hand it over or give it back; the
-// holder's lost connection counting down to the release.
+// tab, or someone else; the way to ask for it, take it, hand it over or give it back; a
+// holder without a live connection (a closed tab, a script) counting down to the release.
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ControlParty, Refusal } from "../api/types";
@@ -40,7 +40,7 @@ export function ControlStrip() {
       {!h ? <span class="hint">the first command takes control</span> : null}
       {h && lapseS !== null ? (
         <span class="control-lost" data-testid="control-lost">
-          connection lost: released in {lapseS} s
+          no live connection: released in {lapseS} s
         </span>
       ) : null}
       {may("control") ? (
