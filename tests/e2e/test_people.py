@@ -124,6 +124,23 @@ def test_a_value_written_meanwhile_shows_both_and_mine_can_still_be_written(
     assert value(srv, mid) == 1800
 
 
+def test_a_trial_ends_with_the_session(two: tuple[Page, Page]) -> None:
+    """The next user of the browser must not get the last one's Keep/Revert."""
+    a, _ = two
+    open_kv(a)
+    params = panel(a, "parameters")
+    params.get_by_test_id(f"param-input-{KV}").fill("1600")
+    params.get_by_test_id("param-apply").click()
+    expect(a.get_by_test_id("trial-bar").get_by_test_id("param-trial")).to_be_visible()
+    a.get_by_test_id("logout").click()
+    form = panel(a, "login")
+    form.get_by_test_id("login-name").fill(BEN)
+    form.get_by_test_id("login-password").fill(PASSWORD)
+    form.get_by_test_id("login-submit").click()
+    expect(a.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    expect(a.get_by_test_id("trial-bar")).to_have_count(0)
+
+
 def value(srv: Server, mid: str) -> float:
     rows = srv.http.get(f"/api/machines/{mid}/parameters", params={"target": "X"}).json()
     return float(next(p["value"] for p in rows if p["name"] == KV))
