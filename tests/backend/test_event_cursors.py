@@ -28,7 +28,6 @@ from tests.backend.fakews import FakeSocket
 from tests.backend.inprocess import INSTRUCTOR, machine_service, paused_demo, step, wait_until
 
 
-
 @pytest.fixture
 def service(tmp_path: Path) -> Iterator[MachineService]:
     with machine_service(tmp_path) as s:
