@@ -165,6 +165,8 @@ class Accounts:
 
     def set_role(self, name: str, role: Role) -> None:
         """A new role (never demoting the last admin); it applies from the next request."""
+        if self._user(name) is None:
+            raise AccountError(f"no user {name!r}", 404)
         if role != Role.ADMIN:
             self._keep_an_admin(name, "demote")
         self.store.run("UPDATE users SET role = ? WHERE name = ?", (role.value, name))
