@@ -3,6 +3,7 @@ import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { logout, me } from "../state/auth";
+import { AccountDialog, accountOpen } from "./Account";
 import { connection, machineId, machines, online, selectMachine, status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
@@ -75,11 +76,14 @@ function UserBox() {
   return (
     <span class="user" title="logged in as">
       <RefusalLine refusal={refusal} id="logout-error" />
-      <b data-testid="user-name">{user.name}</b>
-      <span data-testid="user-role">{user.role}</span>
+      <button type="button" class="secondary account-open" data-testid="account-open" title="your account: API tokens (and users)"
+        onClick={() => (accountOpen.value = true)}>
+        <b data-testid="user-name">{user.name}</b> <span data-testid="user-role">{user.role}</span>
+      </button>
       <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
         Log out
       </button>
+      <AccountDialog />
     </span>
   );
 }
