@@ -104,7 +104,9 @@ class TokenInfo(BaseModel):
 class TokenCreate(BaseModel):
     """A new API token of the requesting user."""
 
-    label: str = Field("", max_length=100, description="what it is for (shown in the audit)")
+    label: str = Field(
+        min_length=1, max_length=100, description="what it is for (shown in the list and audit)"
+    )
 
 
 class TokenCreated(BaseModel):

@@ -13,7 +13,7 @@ from pydantic import BaseModel, Field
 
 from api.auth import Role
 
-GRACE_S = 20.0  # control outlives the holder's last connection this long (a reload, a blip)
+GRACE_S = 20.0  # control outlives the holder's last connection (a reload, a blip), by default
 REQUEST_S = 60.0  # an unanswered request lapses after this long
 
 
@@ -32,9 +32,11 @@ class ControlState(BaseModel):
 
     holder: ControlParty | None = Field(None, description="None: the machine is free")
     requests: list[ControlParty] = Field(default_factory=list, description="oldest first")
-    connected: bool = Field(True, description="the holder has a live connection (or is a script)")
+    connected: bool = Field(True, description="the holder watches the machine live")
     release_at_unix: float | None = Field(
-        None, description="the holder lost its connection: control is released then"
+        None,
+        description="without a live connection (a closed tab, a script between requests) "
+        "control is released then, unless the holder comes back or acts",
     )
 
 

@@ -62,7 +62,7 @@ class Services:
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
         audit = Audit(store)
-        control = Control(machines, audit)
+        control = Control(machines, audit, settings.control_grace_s)
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
@@ -103,7 +103,8 @@ class Services:
             return
         token = self.accounts.new_token(admin, "printed at start", once=True)
         host = "localhost" if ":" in self.settings.host else self.settings.host
-        link = f"http://{host}:{self.settings.port}/auth/once?token={token}"
+        scheme = "https" if self.settings.https else "http"
+        link = f"{scheme}://{host}:{self.settings.port}/auth/once?token={token}"
         print(f"Log in as {admin} (once, within an hour): {link}", flush=True)
 
     async def stop(self) -> None:

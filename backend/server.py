@@ -62,7 +62,8 @@ class Exposure:
 def serve(host: str, port: int, overrides: Mapping[str, object], exposure: Exposure) -> int:
     """Start the service and block until it is stopped (SIGINT/SIGTERM); 2 when the
     exposure asked for is unsafe (nothing started)."""
-    settings = Settings.model_validate({**overrides, "host": host, "port": port})
+    https = exposure.tls_cert is not None
+    settings = Settings.model_validate({**overrides, "host": host, "port": port, "https": https})
     problem = exposure.problem(host, settings.allowed_hosts)
     if problem:
         print(f"inbetrieb serve: {problem}", file=sys.stderr)
@@ -82,7 +83,7 @@ def serve(host: str, port: int, overrides: Mapping[str, object], exposure: Expos
         ssl_certfile=exposure.tls_cert,
         ssl_keyfile=exposure.tls_key,
     )
-    scheme = "https" if exposure.tls_cert else "http"
+    scheme = "https" if https else "http"
     print(f"Inbetrieb at {scheme}://{host}:{port}  (API docs at /docs)", flush=True)
     uvicorn.Server(config).run(sockets=[sock])
     return 0

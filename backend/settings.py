@@ -7,6 +7,8 @@ from pathlib import Path
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from api.control import GRACE_S
+
 
 class Settings(BaseSettings):
     model_config = SettingsConfigDict(env_prefix="INBETRIEB_")
@@ -49,9 +51,17 @@ class Settings(BaseSettings):
     )
     host: str = Field("127.0.0.1", description="the address the service binds")
     port: int = Field(8000, ge=0, le=65535, description="its port (for the login link)")
+    https: bool = Field(False, description="it serves HTTPS itself (for the login link)")
     allowed_hosts: list[str] = Field(
         default_factory=list,
         description="Host names clients reach the service by, besides loopback and `host`",
+    )
+
+    control_grace_s: float = Field(
+        GRACE_S,
+        gt=0,
+        le=3600,
+        description="a machine's control outlives its holder's last connection this long, s",
     )
 
     @property

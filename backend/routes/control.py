@@ -13,9 +13,9 @@ router = APIRouter(prefix="/api/machines", tags=["control"])
 
 
 @router.get("/{mid}/control", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
-def control_state(machine: MachineDep, services: ServicesDep) -> ControlState:
+def control_state(machine: MachineDep) -> ControlState:
     """Who holds the machine and who asks for it (also pushed with the status)."""
-    return machine.control.state(services.control.grace_s)
+    return machine.control.state()
 
 
 @router.post(

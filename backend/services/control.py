@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from api.auth import Action
-from api.control import GRACE_S, REQUEST_S, ControlAction, ControlParty, ControlState
+from api.control import REQUEST_S, ControlAction, ControlParty, ControlState
 from backend.errors import ApiError
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor, authorize
@@ -38,16 +38,16 @@ class MachineControl:
     holder: ControlParty | None = None
     requests: list[ControlParty] = field(default_factory=list)
     connections: Counter[Key] = field(default_factory=Counter)  # live websockets per client
-    lost_at: float | None = None  # wall time the holder's last connection closed
+    release_at: float | None = None  # wall time: the holder has no connection since
     seq: int = 0  # changes, for the pushed status
 
-    def state(self, grace_s: float) -> ControlState:
-        lost = self.holder is not None and self.lost_at is not None
+    def state(self) -> ControlState:
+        lost = self.holder is not None and self.release_at is not None
         return ControlState(
             holder=self.holder,
             requests=list(self.requests),
             connected=not lost,
-            release_at_unix=self.lost_at + grace_s if lost and self.lost_at else None,
+            release_at_unix=self.release_at if lost else None,
         )
 
 
@@ -72,7 +72,7 @@ def _who(p: ControlParty) -> str:
 class Control:
     """Takes, requests, grants and releases control of every machine."""
 
-    def __init__(self, machines: MachineService, audit: Audit, grace_s: float = GRACE_S) -> None:
+    def __init__(self, machines: MachineService, audit: Audit, grace_s: float) -> None:
         self.machines = machines
         self.audit = audit
         self.grace_s = grace_s
@@ -90,7 +90,7 @@ class Control:
                 return
             if _key(c.holder) == _key(actor):
                 if not c.connections[_key(actor)]:  # a script's request keeps it alive
-                    c.lost_at = time.time()
+                    c.release_at = time.time() + self.grace_s
                     c.seq += 1
                 return
             holder = c.holder
@@ -108,7 +108,7 @@ class Control:
         """Carry out a take, request, cancel, grant, refuse or release; the state after it."""
         with self._lock:
             self._act(actor, m, req)
-            return m.control.state(self.grace_s)
+            return m.control.state()
 
     def _act(self, actor: Actor, m: MachineProxy, req: ControlAction) -> None:
         c = m.control
@@ -172,8 +172,8 @@ class Control:
         with self._lock:
             c = m.control
             c.connections[_key(actor)] += 1
-            if c.holder is not None and _key(c.holder) == _key(actor) and c.lost_at is not None:
-                c.lost_at = None
+            if c.holder is not None and _key(c.holder) == _key(actor) and c.release_at:
+                c.release_at = None
                 c.seq += 1
 
     def disconnected(self, actor: Actor, m: MachineProxy) -> None:
@@ -184,7 +184,7 @@ class Control:
             if c.connections[_key(actor)] <= 0:
                 del c.connections[_key(actor)]
                 if c.holder is not None and _key(c.holder) == _key(actor):
-                    c.lost_at = time.time()
+                    c.release_at = time.time() + self.grace_s
                     c.seq += 1
 
     def end_session(self, session: str, why: str) -> None:
@@ -206,7 +206,7 @@ class Control:
         with self._lock:
             for m in self.machines.proxies():
                 c = m.control
-                lapsed = c.lost_at is not None and now - c.lost_at >= self.grace_s
+                lapsed = c.release_at is not None and now >= c.release_at
                 if c.holder is not None and lapsed:
                     self._lapse(m, f"control released: no connection for {self.grace_s:g} s")
                 fresh = [r for r in c.requests if now - r.since_unix < REQUEST_S]
@@ -240,11 +240,11 @@ class Control:
         c = m.control
         old = c.holder
         c.holder = to
-        c.lost_at = None
+        c.release_at = None
         if to is not None:
             c.requests = [r for r in c.requests if _key(r) != _key(to)]
             if not c.connections[_key(to)]:  # a script, or a tab whose socket is gone
-                c.lost_at = time.time()
+                c.release_at = time.time() + self.grace_s
         if old is not None:
             for axis in m.axes:  # a jog lease of the old holder must not outlive its control
                 m.post(Submit(m.id, nc.JogStop(axis), None, True, []))
@@ -256,7 +256,7 @@ class Control:
         self, m: MachineProxy, by: Actor, what: str, detail: dict[str, object] | None = None
     ) -> None:
         m.control.seq += 1
-        self.audit.record(
+        self.audit.record_later(  # the event loop may be here: never wait for the disk
             Entry(
                 actor=by.name,
                 session=by.session,

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from typing import Literal
 
-from api.control import GRACE_S
 from api.status import (
     AxisStatus,
     LoopStatus,
@@ -132,7 +131,7 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
         recent_events=[job_error_model(e) for e in m.recent_events(RECENT_EVENTS)]
         if recent_events
         else [],
-        control=m.control.state(GRACE_S),
+        control=m.control.state(),
     )
 
 

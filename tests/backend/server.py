@@ -41,6 +41,26 @@ def seed_user(db: Path) -> str:
         store.close()
 
 
+OTHERS_PASSWORD = "a long password"
+
+
+def add_users(db: Path, users: dict[str, Role]) -> dict[str, str]:
+    """More users in the store (password OTHERS_PASSWORD), with an API token each: the
+    tokens by name."""
+    store = Store(db)
+    try:
+        accounts = Accounts(store)
+        for name, role in users.items():
+            accounts.add_user(name, role, OTHERS_PASSWORD)
+        return {name: accounts.new_token(name) for name in users}
+    finally:
+        store.close()
+
+
+def bearer(token: str) -> dict[str, str]:
+    return {"Authorization": f"Bearer {token}"}
+
+
 class Server:
     """One uvicorn process serving the app with its own SQLite file."""
 

@@ -143,10 +143,15 @@ def test_with_a_certificate_it_serves_https(tmp_path: Path) -> None:
     s.base = f"https://127.0.0.1:{s.port}"
     trust = ssl.create_default_context(cafile=str(cert))
     s.http = httpx.Client(base_url=s.base, timeout=10, verify=trust)
+    out = (tmp_path / "out.txt").open("w")
     try:
-        s.start()
+        s.start(stdout=out)
         r = s.http.get("/api/health")
         assert r.status_code == 200
         assert r.url.scheme == "https"
+        printed = (tmp_path / "out.txt").read_text()
+        assert "/auth/once?token=" in printed
+        assert f"https://127.0.0.1:{s.port}/auth/once" in printed  # the link speaks TLS too
     finally:
         s.close()
+        out.close()

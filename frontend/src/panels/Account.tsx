@@ -121,7 +121,7 @@ function Tokens() {
       <form class="account-form" onSubmit={create}>
         <label>
           Label{" "}
-          <input data-testid="token-label" value={label} maxLength={100} placeholder="what it is for"
+          <input data-testid="token-label" value={label} maxLength={100} placeholder="what it is for" required
             onInput={(e) => setLabel((e.target as HTMLInputElement).value)} />
         </label>
         <button type="submit" data-testid="token-create">

@@ -1,0 +1,248 @@
+"""The authorization matrix over real HTTP and websockets: every route of the OpenAPI schema
+(and the websocket and the viewer proxy, which the schema does not list) × every role ×
+holder / non-holder of the machine's control.
+
+The expected rule of each route is written here from the issue's roles, not read from the
+service: observers watch, capture and save traces; operators also command, jog and write
+parameters while holding control, record, delete traces and ask for control; instructors
+also pace the simulation and take control; admins also manage machines, users and the whole
+audit trail. A route missing from RULES (a new one) fails `test_every_route_has_a_rule`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+from websockets.asyncio.client import connect
+from websockets.exceptions import InvalidStatus
+
+from api.auth import Role
+from tests.backend.server import Server, add_users
+
+ROLES = ["observer", "operator", "instructor", "admin"]
+HELD = "held"  # only the control holder (a free machine is taken by the first such request)
+FREE = "free"
+
+# (method, path) -> (the least role that may, whether only the control holder may)
+RULES: dict[tuple[str, str], tuple[str, str]] = {
+    ("GET", "/api/auth/me"): ("observer", FREE),
+    ("GET", "/api/service/status"): ("observer", FREE),
+    ("GET", "/api/machines"): ("observer", FREE),
+    ("POST", "/api/machines"): ("admin", FREE),
+    ("GET", "/api/machines/{mid}/status"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/signals"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/restart"): ("operator", HELD),
+    ("DELETE", "/api/machines/{mid}"): ("admin", FREE),
+    ("POST", "/api/machines/{mid}/simulation"): ("instructor", FREE),
+    ("POST", "/api/machines/{mid}/simulation/step"): ("instructor", FREE),
+    ("POST", "/api/machines/{mid}/commands"): ("operator", HELD),
+    ("POST", "/api/machines/{mid}/emergency-stop"): ("operator", FREE),
+    ("GET", "/api/machines/{mid}/control"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/control"): ("operator", FREE),
+    ("GET", "/api/parameters"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/parameters"): ("observer", FREE),
+    ("PATCH", "/api/machines/{mid}/parameters"): ("operator", HELD),
+    ("GET", "/api/machines/{mid}/parameters/export"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/parameters/import"): ("operator", HELD),
+    ("GET", "/api/machines/{mid}/parameters/audit"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/scope"): ("observer", FREE),
+    ("PUT", "/api/machines/{mid}/scope"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/scope/force"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/scope/stop"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/scope/roll"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/recording"): ("operator", FREE),
+    ("DELETE", "/api/machines/{mid}/recording"): ("operator", FREE),
+    ("GET", "/api/recordings/{rid}/recording.rrd"): ("observer", FREE),
+    ("GET", "/api/recordings/{rid}/viewer"): ("observer", FREE),
+    ("GET", "/api/traces"): ("observer", FREE),
+    ("GET", "/api/traces/compare"): ("observer", FREE),
+    ("POST", "/api/traces/import"): ("observer", FREE),
+    ("GET", "/api/traces/{tid}"): ("observer", FREE),
+    ("PATCH", "/api/traces/{tid}"): ("observer", FREE),
+    ("DELETE", "/api/traces/{tid}"): ("operator", FREE),
+    ("GET", "/api/traces/{tid}/data"): ("observer", FREE),
+    ("GET", "/api/traces/{tid}/csv"): ("observer", FREE),
+    ("GET", "/api/traces/{tid}/trace.rrd"): ("observer", FREE),
+    ("GET", "/api/traces/{tid}/viewer"): ("observer", FREE),
+    ("GET", "/api/traces/{tid}/measure"): ("observer", FREE),
+    ("POST", "/api/traces/{tid}/save"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
+    ("GET", "/api/audit"): ("admin", FREE),
+    ("GET", "/api/audit.csv"): ("admin", FREE),
+    ("GET", "/api/audit/verify"): ("admin", FREE),
+    ("POST", "/api/auth/ws-ticket"): ("observer", FREE),
+    ("GET", "/api/auth/tokens"): ("observer", FREE),  # everyone's (?all=true): admins
+    ("POST", "/api/auth/tokens"): ("observer", FREE),
+    ("DELETE", "/api/auth/tokens/{tid}"): ("observer", FREE),  # another's: admins
+    ("GET", "/api/users"): ("admin", FREE),
+    ("POST", "/api/users"): ("admin", FREE),
+    ("PATCH", "/api/users/{name}"): ("admin", FREE),
+    ("DELETE", "/api/users/{name}"): ("admin", FREE),
+}
+OPEN = {("GET", "/api/health"), ("POST", "/api/auth/login"), ("POST", "/api/auth/logout")}
+MACHINE = "m1"  # the machine whose control matters; other routes name ones that do not exist
+
+
+def allowed(role: str, least: str) -> bool:
+    return ROLES.index(role) >= ROLES.index(least)
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Server, dict[str, str]]]:
+    """A service with a user of every role (and a second operator), each with a token."""
+    db = tmp_path_factory.mktemp("authz") / "db.sqlite"
+    tokens = add_users(
+        db,
+        {
+            "olga": Role.OBSERVER,
+            "otto": Role.OPERATOR,
+            "ona": Role.OPERATOR,
+            "ida": Role.INSTRUCTOR,
+            "ada": Role.ADMIN,
+        },
+    )
+    s = Server(db, "--no-demo").start()
+    s.http.post("/api/machines", json={"id": MACHINE, "demo": True}).raise_for_status()
+    try:
+        yield s, tokens
+    finally:
+        s.close()
+
+
+USER_OF = {"observer": "olga", "operator": "otto", "instructor": "ida", "admin": "ada"}
+
+
+def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Response:
+    """The route with placeholders filled and a body that fails validation (nothing is
+    changed by an allowed call: it stops at 422, or at 404 for an unknown id)."""
+    url = (
+        path.replace("{mid}", mid)
+        .replace("{tid}", "nope")
+        .replace("{rid}", "nope")
+        .replace("{id}", "nope")
+        .replace("{name}", "nobody")
+    )
+    kw: dict[str, Any] = {"headers": {"Authorization": f"Bearer {token}"}}
+    if method in ("POST", "PUT", "PATCH"):
+        kw["json"] = {"bad": True}
+    return s.http.request(method, url, **kw)
+
+
+def control(s: Server, token: str, action: str) -> dict[str, Any]:
+    r = s.http.post(
+        f"/api/machines/{MACHINE}/control",
+        json={"action": action},
+        headers={"Authorization": f"Bearer {token}"},
+    )
+    assert r.status_code == 200, r.text
+    body: dict[str, Any] = r.json()
+    return body
+
+
+def test_every_route_has_a_rule(srv: tuple[Server, dict[str, str]]) -> None:
+    s, _ = srv
+    schema = s.http.get("/openapi.json").json()
+    routes = {(m.upper(), p) for p, ops in schema["paths"].items() for m in ops}
+    assert routes - set(RULES) - OPEN == set(), "routes without a rule in this matrix"
+    assert set(RULES) - routes == set(), "rules of routes that are gone"
+
+
+@pytest.mark.parametrize(("method", "path"), sorted(RULES), ids=lambda v: str(v))
+def test_each_role_gets_what_its_rule_says(
+    srv: tuple[Server, dict[str, str]], method: str, path: str
+) -> None:
+    s, tokens = srv
+    least, held = RULES[(method, path)]
+    if held == HELD:
+        _check_held(s, tokens, method, path, least)
+        return
+    for role in ROLES:
+        r = call(s, tokens[USER_OF[role]], method, path, "gone")
+        if allowed(role, least):
+            assert r.status_code not in (401, 403), f"{role}: {r.status_code} {r.text}"
+        else:
+            assert r.status_code == 403, f"{role} was let through: {r.status_code} {r.text}"
+            assert USER_OF[role] in r.json()["detail"]["message"]
+
+
+def _check_held(s: Server, tokens: dict[str, str], method: str, path: str, least: str) -> None:
+    """Role first; then only the holder; a free machine goes to the first who acts."""
+    observer = call(s, tokens["olga"], method, path, MACHINE)
+    assert observer.status_code == 403 and "olga" in observer.text
+    assert control(s, tokens["otto"], "take")["holder"]["user"] == "otto"
+    try:
+        for other in ("ona", "ida", "ada"):  # another operator, and those who may take it
+            r = call(s, tokens[other], method, path, MACHINE)
+            assert r.status_code == 403, f"{other} acted without control: {r.text}"
+            assert "held by otto (operator)" in r.json()["detail"]["message"]
+        mine = call(s, tokens["otto"], method, path, MACHINE)
+        assert mine.status_code not in (401, 403), mine.text
+    finally:
+        control(s, tokens["otto"], "release")
+    free = call(s, tokens["ida"], method, path, MACHINE)
+    assert free.status_code not in (401, 403), free.text
+    state = s.http.get(f"/api/machines/{MACHINE}/control").json()
+    assert state["holder"]["user"] == "ida"  # the free machine went to who acted
+    control(s, tokens["ida"], "release")
+
+
+def test_a_stranger_gets_401_on_every_route(srv: tuple[Server, dict[str, str]]) -> None:
+    s, _ = srv
+    with httpx.Client(base_url=s.base, timeout=10) as c:
+        for method, path in RULES:
+            r = c.request(
+                method,
+                path.replace("{mid}", MACHINE)
+                .replace("{tid}", "x")
+                .replace("{rid}", "x")
+                .replace("{id}", "x")
+                .replace("{name}", "x"),
+            )
+            assert r.status_code == 401, (method, path, r.status_code)
+        assert c.get("/rerun/").status_code == 401
+
+
+def test_every_role_may_watch_the_telemetry_websocket_and_a_stranger_may_not(
+    srv: tuple[Server, dict[str, str]],
+) -> None:
+    s, tokens = srv
+
+    async def hello(headers: dict[str, str]) -> str:
+        url = f"{s.ws_base}/api/machines/{MACHINE}/telemetry"
+        async with connect(url, additional_headers=headers) as ws:
+            return str(await asyncio.wait_for(ws.recv(), 10))
+
+    for role, user in USER_OF.items():
+        text = asyncio.run(hello({"Authorization": f"Bearer {tokens[user]}"}))
+        assert '"type":"hello"' in text, role
+    with pytest.raises(InvalidStatus) as refused:
+        asyncio.run(hello({}))
+    assert refused.value.response.status_code == 403
+
+
+def test_the_viewer_proxy_needs_a_role_that_may_capture(
+    srv: tuple[Server, dict[str, str]],
+) -> None:
+    s, tokens = srv
+    r = s.http.get(
+        "/rerun", headers={"Authorization": f"Bearer {tokens['olga']}"}, follow_redirects=False
+    )
+    assert r.status_code == 307  # an observer may open the viewer (watching traces)
+
+
+def test_an_observer_cannot_take_request_or_grant_control(
+    srv: tuple[Server, dict[str, str]],
+) -> None:
+    s, tokens = srv
+    for action in ("take", "request", "release"):
+        r = s.http.post(
+            f"/api/machines/{MACHINE}/control",
+            json={"action": action},
+            headers={"Authorization": f"Bearer {tokens['olga']}"},
+        )
+        assert r.status_code == 403
