@@ -1,4 +1,5 @@
-"""What answers without a session: health, logging in and out, who am I, one-time links."""
+"""What answers without a session: health, logging in and out, one-time links; and who am I
+and the telemetry websocket tickets (with one)."""
 
 from __future__ import annotations
 
