@@ -77,3 +77,61 @@ class Me(BaseModel):
         description="public id of this login session or API token (who holds control)"
     )
     actions: list[Action] = Field(description="what this user may do (api/auth.py ALLOWED)")
+
+
+MIN_PASSWORD = 8  # characters (the CLI asks the same)
+USER_NAME = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"  # a path segment, a log entry's actor
+
+
+class WsTicket(BaseModel):
+    """Opens one telemetry websocket as this session: `?ticket=` on its URL (browsers cannot
+    send headers on a websocket, and the session cookie alone is refused there)."""
+
+    ticket: str
+    expires_in_s: float = Field(description="good once, within this many seconds")
+
+
+class TokenInfo(BaseModel):
+    """An API token as anybody may see it: its public id, never the token itself."""
+
+    id: str = Field(description="public id, as the audit trail and control name it")
+    user: str
+    label: str
+    created_unix: float
+    last_used_unix: float | None = Field(description="to within a minute; null: never used")
+
+
+class TokenCreate(BaseModel):
+    """A new API token of the requesting user."""
+
+    label: str = Field(
+        min_length=1, max_length=100, description="what it is for (shown in the list and audit)"
+    )
+
+
+class TokenCreated(BaseModel):
+    """The new token: shown this once (the service keeps only its hash)."""
+
+    token: str = Field(description="send as `Authorization: Bearer <token>`")
+    info: TokenInfo
+
+
+class UserInfo(BaseModel):
+    name: str
+    role: Role
+    created_unix: float
+
+
+class UserCreate(BaseModel):
+    """A new user with a password."""
+
+    name: str = Field(pattern=USER_NAME, description="letters, digits, _ . - (up to 64)")
+    role: Role = Role.OPERATOR
+    password: str = Field(min_length=MIN_PASSWORD, max_length=256)
+
+
+class UserChange(BaseModel):
+    """A new role and/or password (a new password ends the user's sessions)."""
+
+    role: Role | None = None
+    password: str | None = Field(None, min_length=MIN_PASSWORD, max_length=256)

@@ -183,6 +183,11 @@ class RecordingInfo(BaseModel):
         description="cycles lost because writing fell more than the service's ring behind"
     )
     started_unix: float
+    stopped_reason: str = Field(
+        "",
+        description="why it ended ('' while it runs): stopped on request, power cycle, "
+        "machine deleted, writing failed, or the recordings' disk quota used up",
+    )
 
 
 ScopeStatus.model_rebuild()

@@ -3,6 +3,11 @@ needs an API token (`Authorization: Bearer`) or a login session (cookie), checke
 request reaches a route (so even a malformed request of a stranger gets only 401), and a
 state-changing request on a session must echo the session's CSRF token.
 
+A websocket cannot send headers from a browser and a cookie alone would let any page the
+browser shows open one, so a websocket needs an API token or a one-time ticket its page
+fetched with the session (`POST /api/auth/ws-ticket`, as Moonraker does); the session cookie
+alone is refused.
+
 Open without either: health, logging in, one-time login links, and the static pages (the
 HMI shows its login screen; the docs describe the API).
 """
@@ -10,6 +15,7 @@ HMI shows its login screen; the docs describe the API).
 from __future__ import annotations
 
 import secrets
+from dataclasses import replace
 
 from starlette.requests import HTTPConnection
 from starlette.responses import JSONResponse
@@ -32,12 +38,15 @@ def guarded(path: str) -> bool:
 
 def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | tuple[int, str]:
     """The actor behind a request, or why there is none (status, message)."""
-    ticket = conn.query_params.get("ticket")
-    if ticket is not None and conn.scope["type"] == "http" and conn.scope["method"] == "GET":
-        actor = accounts.redeem_ticket(ticket, conn.scope["path"])
-        return actor if actor else (401, "unknown, used or expired ticket")
+    kind = conn.scope["type"]
     # a browser tab's id: websockets cannot send headers, so they name it in the query
     client = (conn.headers.get(CLIENT_HEADER) or conn.query_params.get("client") or "")[:64]
+    ticket = conn.query_params.get("ticket")
+    if ticket is not None and (kind == "websocket" or conn.scope["method"] == "GET"):
+        actor = accounts.redeem_ticket(ticket, kind, conn.scope["path"])
+        if actor is None:
+            return 401, "unknown, used or expired ticket"
+        return actor if actor.client or not client else replace(actor, client=client)
     auth = conn.headers.get("authorization", "")
     if auth[:7].lower() == "bearer ":
         token = auth[7:].strip()
@@ -45,11 +54,13 @@ def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | tuple[int, str
         if user is None:
             return 401, "unknown or revoked API token"
         return Actor(user.name, user.role, public_id("token", token), client)
+    if kind == "websocket":
+        return 401, "a websocket needs a ticket (POST /api/auth/ws-ticket) or an API token"
     sid = conn.cookies.get(SESSION_COOKIE)
     session = accounts.session(sid) if sid else None
     if session is None or not sid:
         return 401, "the session has ended: log in again" if sid else "not logged in"
-    if conn.scope["type"] == "http" and conn.scope["method"] not in SAFE_METHODS:
+    if conn.scope["method"] not in SAFE_METHODS:
         sent = conn.headers.get(CSRF_HEADER, "")
         if not secrets.compare_digest(sent.encode(), session.csrf.encode()):
             return 403, f"missing or wrong {CSRF_HEADER} header"

@@ -39,6 +39,12 @@ def main(argv: list[str] | None = None) -> int:
         help="a Host name clients reach the service by (repeat for more); loopback names "
         "and the --host address are always allowed",
     )
+    p_srv.add_argument(
+        "--recordings-quota-mb",
+        type=float,
+        metavar="MB",
+        help="disk space all recordings together may take (default 2048)",
+    )
     p_srv.add_argument("--tls-cert", type=Path, help="TLS certificate (PEM) to serve HTTPS")
     p_srv.add_argument("--tls-key", type=Path, help="its private key (PEM)")
     p_srv.add_argument(
@@ -84,6 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         overrides["workers"] = args.workers
     if args.cluster:
         overrides["cluster"] = args.cluster
+    if args.recordings_quota_mb is not None:
+        overrides["recordings_quota_mb"] = args.recordings_quota_mb
     if args.allowed_host:
         overrides["allowed_hosts"] = args.allowed_host
     exposure = Exposure(args.tls_cert, args.tls_key, args.behind_proxy)

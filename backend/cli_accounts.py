@@ -1,19 +1,19 @@
-"""`inbetrieb user add|list|remove|passwd` and `inbetrieb token create`: people on the
-command line, straight in the store (the service need not run)."""
+"""`inbetrieb user add|list|remove|passwd` and `inbetrieb token create|list|revoke`: people
+on the command line, straight in the store (the service need not run; a running one closes
+the websockets of what ended here within seconds)."""
 
 from __future__ import annotations
 
 import argparse
 import getpass
 import sys
+import time
 from pathlib import Path
 
-from api.auth import Role
+from api.auth import MIN_PASSWORD, Role
 from backend.services.accounts import AccountError, Accounts
 from backend.services.store import Store
 from backend.settings import Settings
-
-MIN_PASSWORD = 8
 
 
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -33,7 +33,11 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p_new = tokens.add_parser("create", help="print a new API token of a user")
     p_new.add_argument("--user", required=True)
     p_new.add_argument("--label", default="", help="what it is for (shown in the audit)")
-    for p in (p_add, p_list, p_rm, p_pw, p_new):
+    p_tlist = tokens.add_parser("list", help="API tokens (public ids, never the tokens)")
+    p_tlist.add_argument("--user", help="only this user's")
+    p_revoke = tokens.add_parser("revoke", help="revoke an API token by its public id")
+    p_revoke.add_argument("id", help="as `token list` shows it (token-...)")
+    for p in (p_add, p_list, p_rm, p_pw, p_new, p_tlist, p_revoke):
         p.add_argument("--db", type=Path, help=db_help)
     for p in (p_add, p_pw):
         p.add_argument("--password-stdin", action="store_true", help="read the password from stdin")
@@ -51,13 +55,28 @@ def _password(args: argparse.Namespace) -> str:
     return pw
 
 
+def _when(t: float | None) -> str:
+    return time.strftime("%Y-%m-%d %H:%M", time.localtime(t)) if t else "never"
+
+
+def _token(accounts: Accounts, args: argparse.Namespace) -> None:
+    if args.action == "create":
+        print(accounts.new_token(args.user, args.label))
+    elif args.action == "list":
+        for t in accounts.tokens(args.user):
+            used = _when(t.last_used)
+            print(f"{t.id}\t{t.user}\t{_when(t.created)}\tlast used {used}\t{t.label}")
+    elif args.action == "revoke":
+        accounts.revoke_token(args.id)
+
+
 def run(args: argparse.Namespace) -> int:
     """Carry out a `user` or `token` command; 0, or 2 with the reason on stderr."""
     store = Store(args.db or Settings().db_path)
     accounts = Accounts(store)
     try:
         if args.cmd == "token":
-            print(accounts.new_token(args.user, args.label))
+            _token(accounts, args)
         elif args.action == "add":
             accounts.add_user(args.name, Role(args.role), _password(args))
         elif args.action == "list":

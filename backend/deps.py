@@ -21,6 +21,7 @@ from backend.services.auth import Actor, authorize
 from backend.services.control import Control
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
+from backend.services.sessions import SessionWatch
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
@@ -46,6 +47,7 @@ class Services:
     traces: TraceService
     recorders: Recorders
     viewer: RerunViewer
+    sessions: SessionWatch
     started: float
 
     @classmethod
@@ -67,12 +69,14 @@ class Services:
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
         tdir = settings.traces_path
         traces = TraceService(store, tdir, machines)
-        recorders = Recorders(tdir / "recordings")
+        recorders = Recorders(tdir / "recordings", settings.recordings_quota_mb)
         viewer = RerunViewer(tdir / "rerun-viewer.log")
         hub.start()
         recorders.start()
         hub.on_connect, hub.on_disconnect = control.connected, control.disconnected
         control.start()
+        sessions = SessionWatch(accounts, hub, control)
+        sessions.start()
         services = cls(
             settings,
             store,
@@ -85,6 +89,7 @@ class Services:
             traces,
             recorders,
             viewer,
+            sessions,
             time.time(),
         )
         services.print_login_link()
@@ -103,6 +108,7 @@ class Services:
         print(f"Log in as {admin} (once, within an hour): {link}", flush=True)
 
     async def stop(self) -> None:
+        await self.sessions.stop()
         await self.control.stop()
         await self.hub.stop()
         self.recorders.stop()

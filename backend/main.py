@@ -22,7 +22,9 @@ from backend.routes import (
     scope,
     service,
     telemetry,
+    tokens,
     traces,
+    users,
     viewer,
 )
 from backend.security import Perimeter, host_names
@@ -64,6 +66,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         scope,
         traces,
         audit,
+        tokens,
+        users,
         viewer,
     ):
         app.include_router(module.router, responses=responses(401, 403))

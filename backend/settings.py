@@ -36,6 +36,15 @@ class Settings(BaseSettings):
     trace_dir: Path | None = Field(
         None, description="trace library files and recordings (default: traces/ beside the db)"
     )
+    recordings_quota_mb: float = Field(
+        2048.0,
+        gt=0,
+        description="disk space all recordings together may take (MB); a recording stops "
+        "when it is used up, and none starts",
+    )
+    ws_ticket_s: float = Field(
+        30.0, gt=0, le=300, description="a websocket ticket is good this long (once)"
+    )
     frontend_dir: Path = Field(
         Path(__file__).resolve().parents[1] / "frontend" / "dist",
         description="built browser HMI served at / (make builds it)",

@@ -1,11 +1,12 @@
-"""What answers without a session: health, logging in and out, who am I, one-time links."""
+"""What answers without a session: health, logging in and out, one-time links; and who am I
+and the telemetry websocket tickets (with one)."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter, Request, Response
 from fastapi.responses import HTMLResponse, RedirectResponse
 
-from api.auth import CSRF_COOKIE, SESSION_COOKIE, Action, LoginRequest, Me, Role
+from api.auth import CSRF_COOKIE, SESSION_COOKIE, Action, LoginRequest, Me, Role, WsTicket
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import ApiError, responses
 from backend.services.accounts import SESSION_S, User, public_id
@@ -72,6 +73,7 @@ def logout(request: Request, services: ServicesDep) -> Response:
         services.accounts.end_session(sid)
         key = public_id("session", sid)
         services.control.end_session(key, f"{session.user.name} logged out")
+        services.sessions.poke()  # its websockets close now
         services.audit.record_later(Entry(session.user.name, key, "logout", "logout"))
     response = Response(status_code=204)
     response.delete_cookie(SESSION_COOKIE, path="/")
@@ -83,6 +85,16 @@ def logout(request: Request, services: ServicesDep) -> Response:
 async def me(actor: ActorDep) -> Me:
     """Who this session (or API token) is."""
     return actor.me
+
+
+@router.post("/api/auth/ws-ticket", dependencies=[permit(Action.OBSERVE)], responses=responses(401))
+async def ws_ticket(actor: ActorDep, services: ServicesDep) -> WsTicket:
+    """A ticket that opens one telemetry websocket as this session (and browser tab) within
+    `expires_in_s`, once: `/api/machines/{mid}/telemetry?ticket=...`. Browsers cannot send
+    headers on a websocket, and the session cookie alone is refused there."""
+    lifetime_s = services.settings.ws_ticket_s
+    ticket = services.accounts.issue_ws_ticket(actor, lifetime_s)
+    return WsTicket(ticket=ticket, expires_in_s=lifetime_s)
 
 
 @router.get("/auth/once", include_in_schema=False)

@@ -8,6 +8,7 @@ SHA-256: a stolen database file lets nobody in. Passwords are argon2 hashes.
 from __future__ import annotations
 
 import hashlib
+import re
 import secrets
 import threading
 import time
@@ -23,6 +24,9 @@ from backend.services.store import Store
 
 SESSION_S = 12 * 3600.0  # a shift; then log in again
 TICKET_S = 300.0  # a ticket for one URL (a viewer that cannot send the session) lives this long
+WS_TICKET_S = 30.0  # a telemetry websocket's ticket: fetched just before the connect
+TELEMETRY_PATH = re.compile(r"/api/machines/[^/]+/telemetry")  # what a websocket ticket opens
+LAST_USED_S = 60.0  # a token's last use is written at most this often (not once per request)
 ONCE_S = 3600.0  # a one-time login link is good for an hour
 LOGIN_FAILURES = 5  # failed logins per address within LOGIN_WINDOW_S before 429
 LOGIN_WINDOW_S = 60.0
@@ -48,9 +52,11 @@ CREATE TABLE IF NOT EXISTS tokens (
     kind TEXT NOT NULL,            -- 'api' (scripts) or 'once' (a login link)
     label TEXT NOT NULL,
     created REAL NOT NULL,
-    expires REAL                   -- NULL: until revoked
+    expires REAL,                  -- NULL: until revoked
+    last_used REAL                 -- to within LAST_USED_S; NULL: never
 );
 """
+_DIGEST_CHARS = 16  # of a public id
 
 
 def _digest(secret: str) -> str:
@@ -60,7 +66,14 @@ def _digest(secret: str) -> str:
 def public_id(kind: str, secret: str) -> str:
     """A session's or token's id that others may see (who holds control): a prefix of the
     digest the store keeps, which gives nothing away."""
-    return f"{kind}-{_digest(secret)[:16]}"
+    return f"{kind}-{_digest(secret)[:_DIGEST_CHARS]}"
+
+
+def _digest_prefix(public: str, kind: str) -> str | None:
+    """The digest prefix a public id of this kind names (None: not such an id)."""
+    head, _, prefix = public.partition("-")
+    ok = head == kind and re.fullmatch(f"[0-9a-f]{{{_DIGEST_CHARS}}}", prefix)
+    return prefix if ok else None
 
 
 @dataclass(frozen=True)
@@ -77,8 +90,42 @@ class Session:
     csrf: str
 
 
+@dataclass(frozen=True)
+class UserEntry:
+    name: str
+    role: Role
+    created: float
+
+
+@dataclass(frozen=True)
+class TokenEntry:
+    """An API token as others may see it: its public id, never the token."""
+
+    id: str
+    user: str
+    label: str
+    created: float
+    last_used: float | None
+
+
+@dataclass(frozen=True)
+class Ticket:
+    """Lets one request of `scope_type` ('http' GETs or 'websocket') on a path matching `path`
+    act as `actor` until `until` (monotonic)."""
+
+    actor: Actor
+    scope_type: str
+    path: re.Pattern[str]
+    until: float
+
+
 class AccountError(ValueError):
-    """A user management request that cannot be carried out (unknown or duplicate name)."""
+    """A user management request that cannot be carried out: `status` 404 for an unknown
+    user or token, 409 for a conflict (duplicate name, the last admin)."""
+
+    def __init__(self, message: str, status: int = 409) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 class Accounts:
@@ -90,13 +137,17 @@ class Accounts:
         self._hasher = PasswordHasher()
         self._dummy = self._hasher.hash(secrets.token_hex(16))  # for unknown names: same cost
         self._failures: dict[str, deque[float]] = {}
-        self._tickets: dict[str, tuple[Actor, str, float]] = {}  # ticket -> (who, path, until)
+        self._tickets: dict[str, Ticket] = {}
+        self._used: dict[str, float] = {}  # token digest -> monotonic time last_used was written
         self._lock = threading.Lock()
+        columns = [r[1] for r in store.query("PRAGMA table_info(tokens)")]
+        if "last_used" not in columns:  # a store of an earlier version
+            store.run("ALTER TABLE tokens ADD COLUMN last_used REAL")
 
     # --- users ------------------------------------------------------------------------------
-    def users(self) -> list[User]:
-        rows = self.store.query("SELECT name, role FROM users ORDER BY created")
-        return [User(r[0], Role(r[1])) for r in rows]
+    def users(self) -> list[UserEntry]:
+        rows = self.store.query("SELECT name, role, created FROM users ORDER BY created")
+        return [UserEntry(r[0], Role(r[1]), r[2]) for r in rows]
 
     def add_user(self, name: str, role: Role, password: str | None) -> None:
         if self._user(name) is not None:
@@ -107,16 +158,32 @@ class Accounts:
         )
 
     def remove_user(self, name: str) -> None:
-        """Remove a user with their sessions and tokens."""
-        if self._user(name) is None:
-            raise AccountError(f"no user {name!r}")
+        """Remove a user with their sessions and tokens (never the last admin)."""
+        self._keep_an_admin(name, "remove")
         for table in ("users WHERE name", "sessions WHERE user", "tokens WHERE user"):
             self.store.run(f"DELETE FROM {table} = ?", (name,))
+
+    def set_role(self, name: str, role: Role) -> None:
+        """A new role (never demoting the last admin); it applies from the next request."""
+        if self._user(name) is None:
+            raise AccountError(f"no user {name!r}", 404)
+        if role != Role.ADMIN:
+            self._keep_an_admin(name, "demote")
+        self.store.run("UPDATE users SET role = ? WHERE name = ?", (role.value, name))
+
+    def _keep_an_admin(self, name: str, doing: str) -> None:
+        """Refuse to take away the last admin: nobody could manage users any more."""
+        user = self._user(name)
+        if user is None:
+            raise AccountError(f"no user {name!r}", 404)
+        admins = self.store.query("SELECT COUNT(*) FROM users WHERE role = ?", (Role.ADMIN.value,))
+        if user[0] == Role.ADMIN.value and admins[0][0] <= 1:
+            raise AccountError(f"{name} is the last admin: cannot {doing} them")
 
     def set_password(self, name: str, password: str) -> None:
         """A new password; the user's sessions end."""
         if self._user(name) is None:
-            raise AccountError(f"no user {name!r}")
+            raise AccountError(f"no user {name!r}", 404)
         self.store.run(
             "UPDATE users SET hash = ? WHERE name = ?", (self._hasher.hash(password), name)
         )
@@ -190,34 +257,61 @@ class Accounts:
 
     # --- tickets: one URL, once, soon ------------------------------------------------------
     def issue_ticket(self, actor: Actor, path: str) -> str:
-        """A ticket that lets one request for `path` act as `actor` within TICKET_S (for a
-        client of ours that cannot send the session cookie: the Rerun viewer's loader)."""
+        """A ticket that lets one GET of `path` act as `actor` within TICKET_S (for a client
+        of ours that cannot send the session cookie: the Rerun viewer's loader)."""
+        return self._issue(actor, "http", re.compile(re.escape(path)), TICKET_S)
+
+    def issue_ws_ticket(self, actor: Actor, lifetime_s: float = WS_TICKET_S) -> str:
+        """A ticket that opens one telemetry websocket as `actor` within `lifetime_s`
+        (browsers cannot send headers on a websocket, and the cookie alone is refused)."""
+        return self._issue(actor, "websocket", TELEMETRY_PATH, lifetime_s)
+
+    def _issue(
+        self, actor: Actor, scope_type: str, path: re.Pattern[str], lifetime_s: float
+    ) -> str:
         ticket = secrets.token_urlsafe(24)
         now = time.monotonic()
         with self._lock:
-            for t in [t for t, (_, _, until) in self._tickets.items() if until < now]:
+            for t in [t for t, found in self._tickets.items() if found.until < now]:
                 del self._tickets[t]
-            self._tickets[ticket] = (actor, path, now + TICKET_S)
+            self._tickets[ticket] = Ticket(actor, scope_type, path, now + lifetime_s)
         return ticket
 
-    def redeem_ticket(self, ticket: str, path: str) -> Actor | None:
-        """Who the ticket is for, if it is for this path and still good; it is used up."""
+    def redeem_ticket(self, ticket: str, scope_type: str, path: str) -> Actor | None:
+        """Who the ticket is for, if it is for this kind of request and path, still good, and
+        its session still live; it is used up."""
         with self._lock:
             found = self._tickets.get(ticket)
-            if found is None or found[1] != path:  # another path does not use it up
-                return None
+            if found is None or found.scope_type != scope_type or not found.path.fullmatch(path):
+                return None  # another path does not use it up
             del self._tickets[ticket]
-        return found[0] if found[2] >= time.monotonic() else None
+        if found.until < time.monotonic() or found.actor.session not in self.live():
+            return None
+        return found.actor
+
+    def live(self) -> dict[str, str]:
+        """Public id -> user of every live session and API token (what a websocket or a
+        control holder acts through: the rest have ended)."""
+        now = time.time()
+        n = _DIGEST_CHARS
+        rows = self.store.query(
+            f"SELECT 'session-' || substr(s.digest, 1, {n}), s.user FROM sessions s "
+            "JOIN users u ON u.name = s.user WHERE s.expires > ? "
+            f"UNION ALL SELECT 'token-' || substr(t.digest, 1, {n}), t.user FROM tokens t "
+            "JOIN users u ON u.name = t.user WHERE t.kind = 'api'",
+            (now,),
+        )
+        return {r[0]: r[1] for r in rows}
 
     # --- tokens and one-time links ----------------------------------------------------------
     def new_token(self, name: str, label: str = "", once: bool = False) -> str:
         """An API token for scripts, or a one-time login link's token (good for ONCE_S)."""
         if self._user(name) is None:
-            raise AccountError(f"no user {name!r}")
+            raise AccountError(f"no user {name!r}", 404)
         token = secrets.token_urlsafe(32)
         now = time.time()
         self.store.run(
-            "INSERT INTO tokens VALUES (?, ?, ?, ?, ?, ?)",
+            "INSERT INTO tokens VALUES (?, ?, ?, ?, ?, ?, NULL)",
             (
                 _digest(token),
                 name,
@@ -230,8 +324,41 @@ class Accounts:
         return token
 
     def token_user(self, token: str) -> User | None:
-        """Whose API token this is."""
-        return self._token("api", token)
+        """Whose API token this is (its last use noted, at most once a LAST_USED_S)."""
+        user = self._token("api", token)
+        if user is not None:
+            digest, now = _digest(token), time.monotonic()
+            with self._lock:
+                due = now - self._used.get(digest, -LAST_USED_S) >= LAST_USED_S
+                if due:
+                    self._used[digest] = now
+            if due:
+                sql = "UPDATE tokens SET last_used = ? WHERE digest = ?"
+                self.store.run(sql, (time.time(), digest))
+        return user
+
+    def tokens(self, user: str | None = None) -> list[TokenEntry]:
+        """The API tokens of a user (everyone's without one), oldest first."""
+        sql = "SELECT digest, user, label, created, last_used FROM tokens WHERE kind = 'api'"
+        args: tuple[object, ...] = ()
+        if user is not None:
+            sql, args = sql + " AND user = ?", (user,)
+        rows = self.store.query(sql + " ORDER BY created", args)
+        return [TokenEntry(f"token-{r[0][:_DIGEST_CHARS]}", r[1], r[2], r[3], r[4]) for r in rows]
+
+    def token(self, token_id: str) -> TokenEntry:
+        """An API token by its public id; 404 AccountError when there is none."""
+        prefix = _digest_prefix(token_id, "token")
+        found = [t for t in self.tokens() if prefix and t.id == token_id]
+        if not found:
+            raise AccountError(f"no API token {token_id}", 404)
+        return found[0]
+
+    def revoke_token(self, token_id: str) -> None:
+        """Revoke an API token by its public id: refused from the next request on."""
+        self.token(token_id)
+        sql = "DELETE FROM tokens WHERE kind = 'api' AND substr(digest, 1, ?) = ?"
+        self.store.run(sql, (_DIGEST_CHARS, _digest_prefix(token_id, "token")))
 
     def redeem_once(self, token: str) -> User | None:
         """Whose login link this is; the link is used up."""

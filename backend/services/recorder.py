@@ -4,6 +4,9 @@ A recorder reads the machine's sample ring behind a cursor (like a telemetry sub
 thread writes every recorder's new cycles every `period_s`; the worker's loop never waits
 for it. A power cycle of the machine ends
 its recording (simulated time starts again at zero), and so does deleting the machine.
+
+All files in the recordings folder together may take `quota_mb`: no recording starts when it
+is used up (507), and the running ones stop when they reach it (`stopped_reason` says so).
 """
 
 from __future__ import annotations
@@ -24,6 +27,9 @@ from nc_sim.events import Event
 
 log = logging.getLogger(__name__)
 
+QUOTA_MB = 2048.0  # the default disk quota of all recordings together
+MB = 1_000_000
+
 
 @dataclass
 class Recording:
@@ -37,6 +43,7 @@ class Recording:
     cursor: int  # next cycle to write
     started_unix: float
     active: bool = True
+    stopped_reason: str = ""  # why it ended ('' while it runs)
     skipped: int = 0  # cycles lost because the writer fell a whole ring behind
     events_from: int = 0
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -52,6 +59,7 @@ class Recording:
             bytes=self.path.stat().st_size if self.path.exists() else 0,
             skipped_cycles=self.skipped,
             started_unix=self.started_unix,
+            stopped_reason=self.stopped_reason,
         )
 
     def pump(self) -> None:
@@ -77,25 +85,29 @@ class Recording:
             self.writer.events(events)
             self.cursor = head + 1
             if ended:
-                self._close()
+                why = "the machine was deleted" if m.deleted else "the machine was power cycled"
+                self._close(why)
 
-    def stop(self) -> None:
+    def stop(self, reason: str) -> None:
+        """Write what is left and end the recording, saying why."""
         self.pump()
         with self.lock:
-            self._close()
+            self._close(reason)
 
-    def _close(self) -> None:
+    def _close(self, reason: str) -> None:
         if self.active:
             self.active = False
+            self.stopped_reason = reason
             rrd.close_stream(self.writer.stream)
 
 
 class Recorders:
     """Every continuous recording of the service, written by one thread."""
 
-    def __init__(self, directory: Path, period_s: float = 0.25) -> None:
+    def __init__(self, directory: Path, quota_mb: float = QUOTA_MB, period_s: float = 0.25) -> None:
         self.dir = directory
         self.dir.mkdir(parents=True, exist_ok=True)
+        self.quota_mb = quota_mb
         self.period_s = period_s
         self.all: dict[str, Recording] = {}
         self._stop = threading.Event()
@@ -108,22 +120,35 @@ class Recorders:
         self._stop.set()
         self._thread.join(timeout=5)
         for r in list(self.all.values()):
-            r.stop()
+            r.stop("the service stopped")
 
     def _run(self) -> None:
         while not self._stop.wait(self.period_s):
             self.pump()
 
     def pump(self) -> None:
-        """Write every active recording; one that fails is logged and ended, the others go on."""
+        """Write every active recording; one that fails is logged and ended, the others go on.
+        When the recordings reach their quota, the running ones stop."""
         for r in list(self.all.values()):
             try:
                 r.pump()
             except Exception:
                 log.exception("recording %s failed; ending it", r.id)
                 with r.lock, contextlib.suppress(Exception):  # the stream may be what failed
-                    r._close()
+                    r._close("writing it failed (see the service log)")
                 r.active = False
+        running = [r for r in self.all.values() if r.active]
+        if running and self.used_mb() >= self.quota_mb:
+            for r in running:
+                r.stop(f"the recordings' disk quota of {self.quota_mb:g} MB is used up")
+
+    def used_mb(self) -> float:
+        """What every file in the recordings folder takes together."""
+        total = 0
+        for f in self.dir.rglob("*"):
+            with contextlib.suppress(OSError):  # removed meanwhile
+                total += f.stat().st_size if f.is_file() else 0
+        return total / MB
 
     def begin(self, m: MachineProxy, signals: list[str]) -> RecordingInfo:
         """Start recording from the next cycle; 409 when the machine already records."""
@@ -132,6 +157,13 @@ class Recorders:
             raise ApiError(422, {"message": f"recording: unknown signals {bad}"})
         if self.active(m.id) is not None:
             raise ApiError(409, {"message": f"{m.id} is already recording: stop it first"})
+        used = self.used_mb()
+        if used >= self.quota_mb:
+            why = (
+                f"recordings use {used:.1f} MB of their {self.quota_mb:g} MB disk quota: "
+                f"remove some from {self.dir}"
+            )
+            raise ApiError(507, {"message": why})
         rid = uuid.uuid4().hex[:12]
         path = self.dir / f"{rid}.rrd"
         about = f"# continuous recording of {m.name} ({m.id})\n- signals: " + ", ".join(signals)
@@ -166,7 +198,7 @@ class Recorders:
         rec = self.active(mid)
         if rec is None:
             raise ApiError(409, {"message": f"{mid} is not recording"})
-        rec.stop()
+        rec.stop("stopped on request")
         return rec.info()
 
     def path(self, rid: str) -> Path:

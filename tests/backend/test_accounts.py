@@ -122,7 +122,9 @@ def test_the_printed_login_link_works_once(tmp_path: Path) -> None:
         s.close()
 
 
-def test_the_websocket_needs_a_session_or_a_token(srv: Server, mid: str) -> None:
+def test_the_websocket_needs_a_token_or_a_ticket(srv: Server, mid: str) -> None:
+    """Not the session cookie alone (any page the browser shows would send it): a token, or
+    a ticket (tests/backend/test_ws_sessions.py)."""
     url = f"{srv.ws_base}/api/machines/{mid}/telemetry"
 
     async def hello(**kw: object) -> str:
@@ -137,7 +139,7 @@ def test_the_websocket_needs_a_session_or_a_token(srv: Server, mid: str) -> None
     with browser_like(srv) as c:
         assert login(c).status_code == 200
         cookie = f"inbetrieb_session={c.cookies['inbetrieb_session']}"
-    assert '"hello"' in asyncio.run(hello(additional_headers={"Cookie": cookie}))
+    assert asyncio.run(hello(additional_headers={"Cookie": cookie})) == "refused 403"
 
 
 def test_users_and_tokens_on_the_command_line(tmp_path: Path) -> None:

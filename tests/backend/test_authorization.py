@@ -75,6 +75,14 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/audit"): ("admin", FREE),
     ("GET", "/api/audit.csv"): ("admin", FREE),
     ("GET", "/api/audit/verify"): ("admin", FREE),
+    ("POST", "/api/auth/ws-ticket"): ("observer", FREE),
+    ("GET", "/api/auth/tokens"): ("observer", FREE),  # everyone's (?all=true): admins
+    ("POST", "/api/auth/tokens"): ("observer", FREE),
+    ("DELETE", "/api/auth/tokens/{tid}"): ("observer", FREE),  # another's: admins
+    ("GET", "/api/users"): ("admin", FREE),
+    ("POST", "/api/users"): ("admin", FREE),
+    ("PATCH", "/api/users/{name}"): ("admin", FREE),
+    ("DELETE", "/api/users/{name}"): ("admin", FREE),
 }
 OPEN = {("GET", "/api/health"), ("POST", "/api/auth/login"), ("POST", "/api/auth/logout")}
 MACHINE = "m1"  # the machine whose control matters; other routes name ones that do not exist

@@ -387,3 +387,30 @@ def cmdline(pid: int) -> str:
         return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
     except OSError:
         return ""
+
+
+def test_recordings_stop_at_their_disk_quota(tmp_path: Path) -> None:
+    """All recordings together may take --recordings-quota-mb: a running one stops when it is
+    used up, and no new one starts (507 naming the use and the quota)."""
+    s = Server(tmp_path / "quota.sqlite", "--no-demo", "--recordings-quota-mb", "0.2").start()
+    try:
+        r = s.http.post("/api/machines", json={"id": "q", "name": "q", "demo": True})
+        assert r.status_code == 201, r.text
+        s.wait_powered("q")
+        s.pace("q", mode="pause")
+        sigs = [x["name"] for x in s.http.get("/api/machines/q/signals").json()][:16]
+        started = s.http.post("/api/machines/q/recording", json={"signals": sigs})
+        assert started.status_code == 201, started.text
+        for _ in range(20):  # 20 s of 16 signals every millisecond: far beyond 200 kB
+            s.step("q", 1000)
+            rec = s.http.get("/api/machines/q/scope").json()["recording"]
+            if not rec["active"]:
+                break
+            time.sleep(0.3)
+        assert not rec["active"] and "quota of 0.2 MB" in rec["stopped_reason"]
+        assert rec["bytes"] >= 0.2e6 and rec["cycles"] < 20_000
+        again = s.http.post("/api/machines/q/recording", json={"signals": sigs})
+        assert again.status_code == 507
+        assert re.search(r"use \d+\.\d MB of their 0\.2 MB", again.json()["detail"]["message"])
+    finally:
+        s.close()

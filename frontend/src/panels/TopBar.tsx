@@ -5,6 +5,7 @@ import type { Refusal } from "../api/types";
 import { logout, me } from "../state/auth";
 import { may } from "../state/control";
 import { connection, emergencyStop, machineId, machines, online, selectMachine, status } from "../state/session";
+import { AccountDialog, accountOpen } from "./Account";
 import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
@@ -76,11 +77,14 @@ function UserBox() {
   return (
     <span class="user" title="logged in as">
       <RefusalLine refusal={refusal} id="logout-error" />
-      <b data-testid="user-name">{user.name}</b>
-      <span data-testid="user-role">{user.role}</span>
+      <button type="button" class="secondary account-open" data-testid="account-open" title="your account: API tokens (and users)"
+        onClick={() => (accountOpen.value = true)}>
+        <b data-testid="user-name">{user.name}</b> <span data-testid="user-role">{user.role}</span>
+      </button>
       <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
         Log out
       </button>
+      <AccountDialog />
     </span>
   );
 }

@@ -2,7 +2,9 @@
 // the plots want), binary frames decoded into the rings, events into the log, the machine's
 // pushed status and notices. Reconnects by
 // itself; while it is down the session counts as lost (jog keys release on that). It opens only
-// while a machine is chosen, i.e. while someone is logged in (the session cookie admits it).
+// while a machine is chosen, i.e. while someone is logged in: each connect first fetches a
+// one-time ticket with the session (the service refuses a socket with the cookie alone), and
+// the service closes the socket (4401) when the session ends.
 import { effect, signal } from "@preact/signals";
 import type {
   ErrorMessage,
@@ -13,8 +15,9 @@ import type {
   SignalInfo,
   StatusMessage,
   Subscribed,
+  WsTicket,
 } from "../api/types";
-import { clientId } from "../api/http";
+import { clientId, http } from "../api/http";
 import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { Rings } from "./rings";
@@ -23,6 +26,7 @@ import { machineId, notice, socket, statusArrived } from "./session";
 const MAGIC = 0x54424e49; // "INBT" little-endian
 export const RING_SECONDS = 30;
 const RECONNECT_MS = 1000;
+const SESSION_ENDED = 4401; // close code: the session or token behind the socket ended
 
 export const catalogue = signal<SignalInfo[]>([]);
 /** Rings of the current subscription (replaced when the subscription changes). */
@@ -116,23 +120,35 @@ function onMessage(text: string): void {
   }
 }
 
-function connect(mid: string): void {
+let attempt = 0; // a newer connect (or machine) makes an older one's pending ticket moot
+
+async function connect(mid: string): Promise<void> {
+  const mine = ++attempt;
+  let ticket: WsTicket;
+  try {
+    ticket = await http.post<WsTicket>("/api/auth/ws-ticket", {});
+  } catch {
+    // a 401 ended the session already (the login screen shows); otherwise try again
+    if (mine === attempt) setTimeout(() => ws === null && machineId.value === mid && void connect(mid), RECONNECT_MS);
+    return;
+  }
+  if (mine !== attempt || machineId.value !== mid) return;
   const proto = location.protocol === "https:" ? "wss" : "ws";
   // the tab's id: the socket keeps this tab's control of the machine alive
-  const query = new URLSearchParams({ client: clientId });
+  const query = new URLSearchParams({ ticket: ticket.ticket, client: clientId });
   const sock = new WebSocket(`${proto}://${location.host}/api/machines/${encodeURIComponent(mid)}/telemetry?${query}`);
   sock.binaryType = "arraybuffer";
   ws = sock;
   sock.onmessage = (ev) => (typeof ev.data === "string" ? onMessage(ev.data) : onFrame(ev.data as ArrayBuffer));
   let opened = false;
   sock.onopen = () => void (opened = true);
-  sock.onclose = () => {
+  sock.onclose = (ev) => {
     if (ws !== sock) return; // replaced on purpose
     ws = null;
     socket.value = "lost";
     // a refused handshake looks like any failed connect: a 401 from `me` says the session ended
-    if (!opened) void loadMe();
-    setTimeout(() => ws === null && machineId.value === mid && connect(mid), RECONNECT_MS);
+    if (!opened || ev.code === SESSION_ENDED) void loadMe();
+    setTimeout(() => ws === null && machineId.value === mid && void connect(mid), RECONNECT_MS);
   };
 }
 
@@ -142,5 +158,6 @@ effect(() => {
   ws = null;
   old?.close();
   subscribedKey = "";
-  if (mid) connect(mid);
+  attempt++; // a ticket still on its way is for the machine before
+  if (mid) void connect(mid);
 });

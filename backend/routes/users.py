@@ -1,0 +1,105 @@
+"""Users, for admins: list, add, change role or password, remove. Nobody removes themselves,
+and the last admin stays one (409); a new password or a removal ends the user's sessions,
+whose websockets close within seconds."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Response
+
+from api.auth import Action, UserChange, UserCreate, UserInfo
+from backend.deps import ActorDep, ServicesDep, permit
+from backend.errors import ApiError, responses
+from backend.routes.tokens import account_error
+from backend.services.accounts import AccountError, Accounts
+from backend.services.audit import Entry
+
+router = APIRouter(prefix="/api/users", tags=["users"])
+
+
+def _info(accounts: Accounts, name: str) -> UserInfo:
+    user = next((u for u in accounts.users() if u.name == name), None)
+    if user is None:
+        raise ApiError(404, {"message": f"no user {name!r}"})
+    return UserInfo(name=user.name, role=user.role, created_unix=user.created)
+
+
+@router.get("", dependencies=[permit(Action.USERS)])
+def list_users(services: ServicesDep) -> list[UserInfo]:
+    """Every user with their role, oldest first."""
+    return [
+        UserInfo(name=u.name, role=u.role, created_unix=u.created)
+        for u in services.accounts.users()
+    ]
+
+
+@router.post(
+    "",
+    status_code=201,
+    dependencies=[permit(Action.USERS)],
+    responses=responses(409, why={409: "the name is taken"}),
+)
+def add_user(req: UserCreate, services: ServicesDep, actor: ActorDep) -> UserInfo:
+    """A new user with a role and password."""
+    try:
+        services.accounts.add_user(req.name, req.role, req.password)
+    except AccountError as e:
+        raise account_error(e) from None
+    services.audit.record_later(
+        Entry(
+            actor.name,
+            actor.session,
+            "user",
+            f"added user {req.name}",
+            detail={"user": req.name, "role": req.role.value},
+        )
+    )
+    return _info(services.accounts, req.name)
+
+
+@router.patch(
+    "/{name}",
+    dependencies=[permit(Action.USERS)],
+    responses=responses(404, 409, why={409: "the last admin", 422: "nothing to change"}),
+)
+def change_user(name: str, req: UserChange, services: ServicesDep, actor: ActorDep) -> UserInfo:
+    """A new role and/or password; a new password ends the user's sessions."""
+    if req.role is None and req.password is None:
+        raise ApiError(422, {"message": "give a role or a password to change"})
+    detail: dict[str, str] = {"user": name}
+    try:
+        if req.role is not None:
+            services.accounts.set_role(name, req.role)
+            detail["role"] = req.role.value
+        if req.password is not None:
+            services.accounts.set_password(name, req.password)
+            detail["password"] = "changed"  # never the password
+    except AccountError as e:
+        raise account_error(e) from None
+    if req.password is not None:
+        services.sessions.poke()
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "user", f"changed user {name}", detail=detail)
+    )
+    return _info(services.accounts, name)
+
+
+@router.delete(
+    "/{name}",
+    status_code=204,
+    response_class=Response,
+    dependencies=[permit(Action.USERS)],
+    responses=responses(404, 409, why={409: "yourself, or the last admin"}),
+)
+def remove_user(name: str, services: ServicesDep, actor: ActorDep) -> Response:
+    """Remove a user with their sessions and tokens."""
+    if name == actor.name:
+        raise ApiError(409, {"message": "you cannot remove yourself: ask another admin"})
+    try:
+        services.accounts.remove_user(name)
+    except AccountError as e:
+        raise account_error(e) from None
+    services.sessions.poke()
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "user", f"removed user {name}", detail={"user": name})
+    )
+    return Response(status_code=204)
