@@ -73,6 +73,7 @@ def test_an_emergency_stop_names_who_stopped_and_who_resets(
         expect(hint).to_have_count(0)
         assert srv.http.post(f"/api/machines/{mid}/emergency-stop").is_success  # the test admin
         expect(hint).to_have_text(f"Emergency stop by {USER}: the control holder resets (Reset)")
+        both_sizes(a, "estop-hint-and-banner")
         a.get_by_test_id("reset").click()
         expect(hint).to_have_count(0)
     finally:
