@@ -23,7 +23,7 @@ CSV_ANSWER = text_answer("text/csv", "the matching rows, oldest first")
 
 def _filter(
     kind: AuditKind | None = None,
-    actor: Text = None,
+    actor: Annotated[str | None, Query(max_length=200, description="part of a user name")] = None,
     since_unix: Annotated[float | None, Query(ge=0, le=1e11)] = None,
     until_unix: Annotated[float | None, Query(ge=0, le=1e11)] = None,
     text: Annotated[str | None, Query(max_length=200, description="in action or outcome")] = None,

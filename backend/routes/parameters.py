@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request
@@ -19,8 +21,9 @@ from api.parameters import (
 )
 from backend.bodies import read_text, text_answer, text_body
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import WORKER_GONE, ApiError, refusal_text, responses
 from backend.services import parameters as params
+from backend.services.audit import Entry
 from nc_sim.params import Scope, registry
 
 router = APIRouter(prefix="/api", tags=["parameters"])
@@ -78,7 +81,9 @@ def write(
     """Write one or many values (only while holding control of the machine): all are checked
     first, then stored, audited and applied. A value based on an older version than the
     parameter's is refused with both values (409): nobody overwrites another's change unseen."""
-    return params.write(actor, machine, services.store, req.changes, req.comment)
+    names = ", ".join(c.name for c in req.changes[:5]) + (" …" if len(req.changes) > 5 else "")
+    with _refusals_audited(services, actor, machine.id, f"write {names}"):
+        return params.write(actor, machine, services.store, req.changes, req.comment)
 
 
 @router.get(
@@ -110,9 +115,33 @@ async def import_list(
 ) -> ParameterWriteResult:
     """Import a native list (text/plain, UTF-8); a bad line is rejected with its line number."""
     text = await read_text(request, MAX_LIST_BYTES, "parameter list")
-    return await run_in_threadpool(
-        params.import_list, actor, machine, services.store, Scope(scope), target, text
-    )
+    where = f" of {target}" if target else ""
+    with _refusals_audited(services, actor, machine.id, f"import the {scope} list{where}"):
+        return await run_in_threadpool(
+            params.import_list, actor, machine, services.store, Scope(scope), target, text
+        )
+
+
+@contextmanager
+def _refusals_audited(
+    services: ServicesDep, actor: ActorDep, mid: str, what: str
+) -> Iterator[None]:
+    """A refused write is audited too (accepted ones are, change by change, with the values):
+    a stale write or rejected values, with why."""
+    try:
+        yield
+    except ApiError as e:
+        services.audit.record_later(
+            Entry(
+                actor.name,
+                actor.session,
+                "parameter",
+                what,
+                mid,
+                outcome=f"refused ({e.status}): {refusal_text(e)}",
+            )
+        )
+        raise
 
 
 @router.get("/machines/{mid}/parameters/audit", dependencies=[permit(Action.OBSERVE)])

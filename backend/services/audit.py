@@ -122,14 +122,13 @@ class AuditFilter:
     def where(self) -> tuple[str, tuple[object, ...]]:
         conds: list[str] = []
         args: list[object] = []
-        for column, value in (
-            ("machine", self.machine),
-            ("kind", self.kind),
-            ("actor", self.actor),
-        ):
+        for column, value in (("machine", self.machine), ("kind", self.kind)):
             if value is not None:
                 conds.append(f"{column} = ?")
                 args.append(value)
+        if self.actor:  # part of a name, in any case: "be" finds ben and Bert
+            conds.append("instr(lower(actor), ?) > 0")
+            args.append(self.actor.lower())
         if self.since_unix is not None:
             conds.append("time >= ?")
             args.append(self.since_unix)

@@ -94,7 +94,12 @@ class Control:
                     c.seq += 1
                 return
             holder = c.holder
-        elsewhere = " in another tab" if holder.session == actor.session else ""
+        if holder.session == actor.session:
+            elsewhere = " in another tab"
+        elif holder.user == actor.name:  # the same person through a browser and a token
+            elsewhere = " in another session (a browser or an API token): release it there"
+        else:
+            elsewhere = ""
         raise ApiError(
             403,
             {

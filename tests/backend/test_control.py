@@ -207,3 +207,20 @@ def test_a_write_over_a_newer_value_is_refused_with_both_values(
     again = _write(srv, ona, mid, 300.0, both["version"])  # "write mine anyway", knowingly
     assert again.status_code == 200 and _kv(srv, ona, mid)["value"] == 300.0
     assert _kv(srv, ona, mid)["version"] > both["version"]
+    audit = srv.http.get(
+        f"/api/machines/{mid}/audit", params={"kind": "parameter", "actor": "ON"}
+    ).json()["rows"]  # part of the name, any case
+    assert {r["actor"] for r in audit} == {"ona"}
+    assert [r["outcome"][:13] for r in audit] == ["ok", "refused (409)"]  # newest first
+
+
+def test_a_user_acting_through_another_session_is_told_to_release_it_there(
+    srv: Server, mid: str, tokens: dict[str, str]
+) -> None:
+    assert act(srv, tokens["otto"], mid, "take").status_code == 200  # otto's script
+    with httpx.Client(base_url=srv.base, timeout=10) as c:
+        c.post("/api/auth/login", json={"name": "otto", "password": OTHERS_PASSWORD})
+        csrf = {"X-CSRF-Token": c.cookies["inbetrieb_csrf"]}
+        r = c.post(f"/api/machines/{mid}/commands", json={"type": "reset"}, headers=csrf)
+    assert r.status_code == 403
+    assert "held by otto (operator) in another session" in r.json()["detail"]["message"]
