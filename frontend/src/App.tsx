@@ -5,6 +5,7 @@ import { http } from "./api/http";
 import { AuditPanel } from "./panels/AuditPanel";
 import { Banner } from "./panels/Banner";
 import { ControlStrip } from "./panels/ControlStrip";
+import { EstopHint } from "./panels/EstopHint";
 import { EventsPanel } from "./panels/EventsPanel";
 import { HliPanel } from "./panels/HliPanel";
 import { JogPanel } from "./panels/JogPanel";
@@ -37,6 +38,7 @@ function MachineControls() {
         onClick={() => void cmd.run({ type: "reset" })} title={blocked || "CNC reset: clears job errors and the block queue, stops motion"}>
         ⟲ Reset
       </button>
+      <EstopHint />
       <span class="hint">Simulation</span>
       <button type="button" class="secondary" aria-pressed={mode === "run"} disabled={!online.value || mode === "run" || !!pace} title={pace}
         onClick={() => void http.post(machineUrl("/simulation"), { mode: "run" })}>

@@ -9,6 +9,7 @@ import { machineId } from "../state/session";
 import { Panel } from "../ui/Panel";
 
 const PAGE = 100;
+const TYPING_MS = 300; // the user and text filters apply once typing pauses this long
 const KINDS: AuditKind[] = [
   "command",
   "parameter",
@@ -64,6 +65,12 @@ export function AuditPanel() {
   const [error, setError] = useState("");
   const [verified, setVerified] = useState<AuditVerification | null>(null);
   const admin = may("users");
+  // the user and text fields as typed; the filter follows them once typing pauses
+  const [typed, setTyped] = useState({ actor: "", text: "" });
+  useEffect(() => {
+    const t = setTimeout(() => setF((old) => (old.actor === typed.actor && old.text === typed.text ? old : { ...old, ...typed })), TYPING_MS);
+    return () => clearTimeout(t);
+  }, [typed.actor, typed.text]);
 
   async function load(older: boolean) {
     if (!machineId.value) return;
@@ -108,13 +115,13 @@ export function AuditPanel() {
         </label>
         <label>
           User{" "}
-          <input data-testid="audit-actor" size={12} value={f.actor} placeholder="any"
-            onChange={(e) => set({ actor: (e.target as HTMLInputElement).value })} />
+          <input data-testid="audit-actor" size={12} value={typed.actor} placeholder="any"
+            onInput={(e) => setTyped({ ...typed, actor: (e.target as HTMLInputElement).value })} />
         </label>
         <label>
           Text{" "}
-          <input type="search" data-testid="audit-text" size={18} value={f.text} placeholder="in action or outcome"
-            onChange={(e) => set({ text: (e.target as HTMLInputElement).value })} />
+          <input type="search" data-testid="audit-text" size={18} value={typed.text} placeholder="in action or outcome"
+            onInput={(e) => setTyped({ ...typed, text: (e.target as HTMLInputElement).value })} />
         </label>
         <label>
           Time{" "}

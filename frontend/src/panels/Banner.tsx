@@ -1,11 +1,11 @@
-// Connection loss, notices (a machine rebuilt after its worker died) and the newest job error,
-// until acknowledged.
-import { acknowledgeBanner, bannerError } from "../state/events";
+// Connection loss, notices (a machine rebuilt after its worker died) and the newest job error
+// still active, until acknowledged or reset.
+import { acknowledgeBanner, bannerErrors } from "../state/events";
 import { connection, notice } from "../state/session";
 import { qty } from "../ui/format";
 
 export function Banner() {
-  const err = bannerError.value;
+  const [err, ...more] = bannerErrors.value;
   const n = notice.value;
   return (
     <div class="banners">
@@ -26,6 +26,7 @@ export function Banner() {
         <div class="banner error" role="alert" data-testid="banner-error">
           <span>
             ✖ Job error <b>{err.code}</b> {err.axis ? `[${err.axis}]` : ""} at t = {qty(err.t_s, 3, "s")}: {err.message}
+            {more.length ? ` (+${more.length} more active)` : ""}
           </span>
           <button onClick={acknowledgeBanner}>Acknowledge</button>
         </div>

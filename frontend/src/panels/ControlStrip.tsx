@@ -1,10 +1,12 @@
 // Who holds the machine on screen, under the top bar: free, this tab, this session in another
 // tab, or someone else; the way to ask for it, take it, hand it over or give it back; a
-// holder without a live connection (a closed tab, a script) counting down to the release.
+// holder without a live connection (a closed tab, a script) counting down to the release; what
+// happened to this tab's control or request meanwhile (refused, taken, lapsed).
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ControlParty, Refusal } from "../api/types";
-import { act, control, may, requested, standing, who } from "../state/control";
+import { me } from "../state/auth";
+import { act, control, controlNote, dismissControlNote, may, requested, standing, who } from "../state/control";
 import { online } from "../state/session";
 import { RefusalLine } from "../ui/useCommand";
 
@@ -37,7 +39,13 @@ export function ControlStrip() {
               ? "You have control in another tab"
               : `${who(h)} has control`}
       </span>
-      {!h ? <span class="hint">the first command takes control</span> : null}
+      {!may("command") ? (
+        <span class="hint" data-testid="control-view-only">
+          view only ({me.value?.role})
+        </span>
+      ) : !h ? (
+        <span class="hint">the first command takes control</span>
+      ) : null}
       {h && lapseS !== null ? (
         <span class="control-lost" data-testid="control-lost">
           no live connection: released in {lapseS} s
@@ -73,6 +81,14 @@ export function ControlStrip() {
             </span>
           ))
         : null}
+      {controlNote.value ? (
+        <span class="control-note" data-testid="control-note">
+          {controlNote.value}
+          <button type="button" class="secondary" data-testid="control-note-dismiss" title="dismiss" onClick={dismissControlNote}>
+            ×
+          </button>
+        </span>
+      ) : null}
       <RefusalLine refusal={refusal} id="control-refusal" />
     </div>
   );

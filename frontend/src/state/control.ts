@@ -2,7 +2,7 @@
 // comes with every pushed status; this tab asks for it, grants or refuses, releases. What a
 // user may do at all is their role's actions (`me.actions`); what they may do now also
 // depends on who holds the machine.
-import { computed } from "@preact/signals";
+import { computed, effect, signal } from "@preact/signals";
 import { clientId, http } from "../api/http";
 import type { Action, ControlAction, ControlParty, ControlState } from "../api/types";
 import { me } from "./auth";
@@ -16,6 +16,7 @@ export const control = computed<ControlState | null>(() => status.value?.control
 /** "NAME (role)", as the service names a party in its refusals. */
 export const who = (p: ControlParty) => `${p.user} (${p.role})`;
 
+const partyKey = (p: ControlParty | null | undefined) => (p ? `${p.session}/${p.client}` : "");
 const isMe = (p: ControlParty) => p.session === me.value?.session && p.client === clientId;
 
 /** How this tab stands: the machine is free, this tab holds it, this session holds it in
@@ -48,8 +49,57 @@ export const configureBlocked = computed(() => blockedWhy("configure"));
 /** Take, request, cancel, grant, refuse or release; rejects with the refusal (ApiError). The
  * answer is shown at once; the pushed status confirms it. */
 export async function act(action: ControlAction["action"], party?: ControlParty): Promise<void> {
+  ownVerb = action; // what follows from it is no news to this tab
   const body: ControlAction = { action, session: party?.session ?? null, client: party?.client ?? null };
   const state = await http.post<ControlState>(machineUrl("/control"), body);
   const st = status.value;
   if (st) status.value = { ...st, control: state };
 }
+
+/** Who holds the machine, as a key that changes only when the holder does. */
+export const holderKey = computed(() => partyKey(control.value?.holder));
+
+const NOTE_MS = 10_000;
+/** What happened to this tab's control or request without its doing (refused, taken,
+ * lapsed), read from successive pushed states; fades after NOTE_MS or is dismissed. */
+export const controlNote = signal("");
+let noteTimer: ReturnType<typeof setTimeout> | undefined;
+function note(text: string): void {
+  clearTimeout(noteTimer);
+  controlNote.value = text;
+  if (text) noteTimer = setTimeout(() => (controlNote.value = ""), NOTE_MS);
+}
+export const dismissControlNote = () => note("");
+
+let ownVerb: ControlAction["action"] | null = null; // this tab's last control action
+let before: { holder: ControlParty | null; requested: boolean } | null = null;
+
+/** Why this tab lost control or its request between two states, or "" (nothing it should hear of). */
+function lossNote(was: NonNullable<typeof before>, now: NonNullable<typeof before>, verb: typeof ownVerb): string {
+  const h = now.holder;
+  if (was.holder && isMe(was.holder) && !(h && isMe(h))) {
+    if (!h) return verb === "release" ? "" : "control released: no live connection";
+    if (verb === "grant") return "";
+    return h.session === me.value?.session ? "you took control over in another tab" : `${who(h)} took control from you`;
+  }
+  if (was.requested && !now.requested && !(h && isMe(h)) && verb !== "cancel") {
+    if (partyKey(was.holder) === partyKey(h) && h) return `${who(h)} refused your request, or it lapsed`;
+  }
+  return "";
+}
+
+effect(() => {
+  const c = control.value;
+  if (!c || !me.value) {
+    before = null; // another machine, or logged out: a new story
+    note("");
+    return;
+  }
+  const now = { holder: c.holder ?? null, requested: !!c.requests?.some(isMe) };
+  const was = before;
+  before = now;
+  if (!was || (partyKey(was.holder) === partyKey(now.holder) && was.requested === now.requested)) return;
+  const text = lossNote(was, now, ownVerb);
+  ownVerb = null;
+  note(text);
+});

@@ -2,13 +2,13 @@
 // ones when it connects, then each new one).
 import { computed, effect, signal } from "@preact/signals";
 import type { JobError } from "../api/types";
-import { machineId } from "./session";
+import { machineId, status } from "./session";
 
 const MAX_EVENTS = 500;
 export const events = signal<JobError[]>([]);
 const seen = new Set<string>();
-/** Key of the newest error the operator acknowledged (banner hidden up to it). */
-export const acknowledged = signal("");
+/** Keys of the active errors the operator acknowledged (the banner hides them). */
+export const acknowledged = signal<ReadonlySet<string>>(new Set());
 
 export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 
@@ -17,7 +17,7 @@ export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 export function restartLog(message: string): void {
   events.value = [];
   seen.clear();
-  acknowledged.value = "";
+  acknowledged.value = new Set();
   addEvents([{ cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null }]);
 }
 
@@ -29,21 +29,20 @@ export function addEvents(list: JobError[]): void {
   events.value = all.slice(-MAX_EVENTS);
 }
 
-/** The newest job error not yet acknowledged: the banner shows it. */
-export const bannerError = computed(() => {
-  const errs = events.value.filter((e) => e.error);
-  const last = errs[errs.length - 1];
-  return last && keyOf(last) !== acknowledged.value ? last : null;
-});
+/** The job errors still active (the pushed status has one per axis, an emergency stop once)
+ * and not acknowledged, newest first: the banner shows them. A reset clears them there; the
+ * log (Events panel) keeps their history. */
+export const bannerErrors = computed(() =>
+  (status.value?.job_errors ?? []).filter((e) => !acknowledged.value.has(keyOf(e))).sort((a, b) => b.cycle - a.cycle),
+);
 
 export function acknowledgeBanner(): void {
-  const e = bannerError.value;
-  if (e) acknowledged.value = keyOf(e);
+  acknowledged.value = new Set([...acknowledged.value, ...bannerErrors.value.map(keyOf)]);
 }
 
 effect(() => {
   void machineId.value; // a new machine: a new log
   events.value = [];
   seen.clear();
-  acknowledged.value = "";
+  acknowledged.value = new Set();
 });

@@ -6,6 +6,7 @@ import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
 import type { ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
 import { loggedIn } from "./auth";
+import { holderKey } from "./control";
 import { machineId, machineUrl } from "./session";
 
 /** One edit: the value, and the version it was read at (refused when someone wrote since;
@@ -106,7 +107,8 @@ export async function revertTrial(): Promise<void> {
 }
 
 effect(() => {
-  void machineId.value; // a message belongs to the machine it was about
+  void machineId.value; // a message belongs to the machine it was about ...
+  void holderKey.value; // ... and to its holder at the time ("Kept." is old news to the next)
   trialMessage.value = "";
 });
 
