@@ -51,6 +51,7 @@ BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
 """
 _COLUMNS = "seq, time, actor, session, address, machine, kind, action, detail, outcome, prev, hash"
 MAX_PAGE = 1000
+BATCH_S = 0.05  # rows recorded later wait at most this long (plus the write) for the disk
 CSV_ROWS = 100_000  # an export holds at most this many rows (newest)
 
 
@@ -188,6 +189,8 @@ class Audit:
     def _write(self) -> None:
         while True:
             batch = [self._later.get()]
+            if batch[0] is not None:  # let a burst gather: one wake-up and one commit for it,
+                time.sleep(BATCH_S)  # not a GIL hand-over from the event loop per command
             while not self._later.empty() and len(batch) < 500:
                 batch.append(self._later.get_nowait())
             entries = [e for e in batch if e is not None]
