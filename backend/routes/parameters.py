@@ -82,6 +82,9 @@ def write(
     first, then stored, audited and applied. A value based on an older version than the
     parameter's is refused with both values (409): nobody overwrites another's change unseen."""
     names = ", ".join(c.name for c in req.changes[:5]) + (" …" if len(req.changes) > 5 else "")
+    # rows recorded before (control taken by this very request) first: the trail keeps the
+    # order things happened in, and a value's version is its row's place in it
+    services.audit.flush()
     with _refusals_audited(services, actor, machine.id, f"write {names}"):
         return params.write(actor, machine, services.store, req.changes, req.comment)
 
@@ -116,6 +119,7 @@ async def import_list(
     """Import a native list (text/plain, UTF-8); a bad line is rejected with its line number."""
     text = await read_text(request, MAX_LIST_BYTES, "parameter list")
     where = f" of {target}" if target else ""
+    await run_in_threadpool(services.audit.flush)  # as in `write`
     with _refusals_audited(services, actor, machine.id, f"import the {scope} list{where}"):
         return await run_in_threadpool(
             params.import_list, actor, machine, services.store, Scope(scope), target, text

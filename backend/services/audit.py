@@ -166,6 +166,7 @@ class Audit:
         # commands are recorded by a writer thread, in batches: the event loop that carries
         # them out never waits for the disk
         self._later: queue.Queue[Entry | None] = queue.Queue()
+        self._hurry = threading.Event()  # someone waits for the rows: write them now
         self._writer = threading.Thread(target=self._write, name="audit-writer", daemon=True)
         self._writer.start()
 
@@ -179,8 +180,11 @@ class Audit:
         self._later.put(entry)
 
     def flush(self) -> None:
-        """Wait until every row given to `record_later` is written."""
+        """Wait until every row given to `record_later` is written (at once, not after the
+        batch's gathering time)."""
+        self._hurry.set()
         self._later.join()
+        self._hurry.clear()
 
     def stop(self) -> None:
         self._later.put(None)
@@ -190,7 +194,7 @@ class Audit:
         while True:
             batch = [self._later.get()]
             if batch[0] is not None:  # let a burst gather: one wake-up and one commit for it,
-                time.sleep(BATCH_S)  # not a GIL hand-over from the event loop per command
+                self._hurry.wait(BATCH_S)  # not a GIL hand-over from the event loop per command
             while not self._later.empty() and len(batch) < 500:
                 batch.append(self._later.get_nowait())
             entries = [e for e in batch if e is not None]
