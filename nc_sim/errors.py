@@ -37,6 +37,8 @@ class Code(IntEnum):
     SEQUENCE_WATCHDOG = 90023
     CURVE_NO_ACCELERATION = 90024
     JOG_FEED_TOO_HIGH = 90025  # [002 §2.6.1] above the G200 maximum handbetrieb.hb.vb_max
+    ARC_GEOMETRY = 90026  # G02/G03 whose start and end radii differ, or no centre or radius
+    PROGRAM_STRUCTURE = 90027  # subprogram undefined or not ended, no program end, nesting
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -91,6 +93,10 @@ MESSAGES: dict[Code, str] = {
     "acceleration on the way to the commanded speed: speed change refused",
     Code.JOG_FEED_TOO_HIGH: "jog feed above the manual-mode maximum velocity (G200, "
     "P-AXIS-00213): jog refused",
+    Code.ARC_GEOMETRY: "circle not possible: start and end radius differ, or no centre (I/J/K) "
+    "or radius (R) programmed",
+    Code.PROGRAM_STRUCTURE: "program structure: subprogram not defined or without M17/M29, "
+    "program without M30/M02, or subprograms nested too deep",
     Code.EV_BLOCK_DONE: "block done",
     Code.EV_M_OUTPUT: "M function output to the PLC",
     Code.EV_M_ACK: "M function acknowledged by the PLC",

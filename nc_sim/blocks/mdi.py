@@ -79,7 +79,8 @@ def _spindle_ref(name: str, spindles: Iterable[str], col: int) -> str:
     raise BlockError(f"unknown spindle '{name}'", col)
 
 
-def _parse_specific(body: str, spindle: str, col: int) -> SpindleCmd:
+def parse_spindle_specific(body: str, spindle: str, col: int) -> SpindleCmd:
+    """The body of `S[M3 REV1000]` (axis-specific spindle syntax); `col` is its 1-based column."""
     cmd = SpindleCmd(spindle)
     for m in re.finditer(r"\S+", body):
         tok = m.group(0).upper()
@@ -140,7 +141,7 @@ def parse_block(text: str, axes: Iterable[str], spindles: Iterable[str] = ()) ->
         if m.group("spec"):
             name = _spindle_ref(m.group("spec_name"), spindles, col)
             block.spindles.append(
-                _parse_specific(m.group("spec_body"), name, m.start("spec_body") + 1)
+                parse_spindle_specific(m.group("spec_body"), name, m.start("spec_body") + 1)
             )
             continue
         if m.group("pos"):

@@ -1,0 +1,1 @@
+"""The NC channel: interpreter (text -> canonical calls) and, later, block queue and path."""

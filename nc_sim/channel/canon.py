@@ -1,0 +1,227 @@
+"""Canonical calls: the interpreter's only way out (as LinuxCNC's canon).
+
+The interpreter turns NC text into these calls and hands them to a `Sink`; path planning and
+the spindle consume them. Positions are absolute machine coordinates in mm (degrees for rotary
+axes), feeds in mm/min, times in s, speeds in rpm. Every call carries the 1-based source `line`.
+`text()` gives a stable one-line form for golden files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Protocol
+
+
+def _num(value: float) -> str:
+    """Stable number text: 4 decimals (0.1 µm), no trailing zeros, no negative zero."""
+    text = f"{value:.4f}".rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
+
+
+def _axes(axes: tuple[tuple[str, float], ...]) -> str:
+    return " ".join(f"{name}={_num(v)}" for name, v in axes)
+
+
+@dataclass(frozen=True)
+class Call:
+    """Base of every canonical call."""
+
+    line: int
+
+    def text(self) -> str:
+        """`NAME field=value ...` in field order (the golden-file form), without the line."""
+        parts = [_NAMES[type(self)]]
+        for f in fields(self):
+            if f.name == "line":
+                continue
+            value = getattr(self, f.name)
+            if value is None:
+                continue
+            if f.name in ("end", "axes"):
+                parts.append(_axes(value))
+            elif isinstance(value, bool):
+                parts.append(f"{f.name}={int(value)}")
+            elif isinstance(value, float):
+                parts.append(f"{f.name}={_num(value)}")
+            elif isinstance(value, tuple):
+                parts.append(f"{f.name}=" + ",".join(_num(v) for v in value))
+            else:
+                parts.append(f"{f.name}={value}")
+        return " ".join(p for p in parts if p)
+
+
+@dataclass(frozen=True)
+class StraightTraverse(Call):
+    """G00: rapid to `end` (every channel axis, absolute)."""
+
+    end: tuple[tuple[str, float], ...]
+
+
+@dataclass(frozen=True)
+class StraightFeed(Call):
+    """G01: straight line to `end` at the feed set by the last `SetFeedRate`."""
+
+    end: tuple[tuple[str, float], ...]
+
+
+@dataclass(frozen=True)
+class ArcFeed(Call):
+    """G02/G03 in `plane` (17 XY, 18 ZX, 19 YZ): to `end` about `centre`.
+
+    `centre` holds the plane's two coordinates in the plane's order (G17: X,Y; G18: Z,X;
+    G19: Y,Z). `turn` is +1 counter-clockwise (G03), -1 clockwise (G02), seen from the positive
+    end of the plane's normal axis. A change of the normal axis in `end` makes it a helix.
+    """
+
+    end: tuple[tuple[str, float], ...]
+    plane: int
+    centre: tuple[float, float]
+    turn: int
+
+
+@dataclass(frozen=True)
+class SetFeedRate(Call):
+    """F: path feed in mm/min (modal)."""
+
+    feed_mm_min: float
+
+
+@dataclass(frozen=True)
+class SelectPlane(Call):
+    """G17/G18/G19."""
+
+    plane: int
+
+
+@dataclass(frozen=True)
+class Dwell(Call):
+    """G04: wait `time_s` seconds."""
+
+    time_s: float
+
+
+@dataclass(frozen=True)
+class SpindleOn(Call):
+    """M3 (clockwise) or M4 with the speed in force (None: the spindle's last S)."""
+
+    spindle: str
+    m: int
+    speed_rpm: float | None
+
+
+@dataclass(frozen=True)
+class SpindleSpeed(Call):
+    """S alone: a new speed for the direction in force [000 §2.3.1]."""
+
+    spindle: str
+    speed_rpm: float
+
+
+@dataclass(frozen=True)
+class SpindleOff(Call):
+    """M5."""
+
+    spindle: str
+
+
+@dataclass(frozen=True)
+class SpindleOrient(Call):
+    """M19 S.POS=..: position to `pos_deg`; `direction` +1 with M3, -1 with M4, None: shortest."""
+
+    spindle: str
+    pos_deg: float | None
+    speed_rpm: float | None
+    direction: int | None
+
+
+@dataclass(frozen=True)
+class SelectGear(Call):
+    """M40-M45: gear stage of the main spindle (M40 automatic)."""
+
+    m: int
+
+
+@dataclass(frozen=True)
+class SelectTool(Call):
+    """T and D words: tool number and tool data (D: tool dynamics, 000 §2.8.5)."""
+
+    tool: int | None
+    d: int | None
+
+
+@dataclass(frozen=True)
+class Home(Call):
+    """G74: home the named axes in order (1 first); "S" or a spindle name homes a spindle."""
+
+    axes: tuple[tuple[str, float], ...]
+
+
+@dataclass(frozen=True)
+class SetSlope(Call):
+    """#SLOPE[TYPE=..]: acceleration profile for path motion (002 §2.2.1, P-CHAN-00071)."""
+
+    slope_type: int
+
+
+@dataclass(frozen=True)
+class ManualMode(Call):
+    """G200 exclusive manual mode, G201 manual mode with parallel path interpolation (002 §2.6)."""
+
+    g: int
+
+
+@dataclass(frozen=True)
+class MFunction(Call):
+    """An M function the interpreter does not act on itself: output to the PLC."""
+
+    m: int
+
+
+@dataclass(frozen=True)
+class ProgramEnd(Call):
+    """M30 or M02."""
+
+    m: int
+
+
+_NAMES: dict[type[Call], str] = {
+    StraightTraverse: "STRAIGHT_TRAVERSE",
+    StraightFeed: "STRAIGHT_FEED",
+    ArcFeed: "ARC_FEED",
+    SetFeedRate: "SET_FEED_RATE",
+    SelectPlane: "SELECT_PLANE",
+    Dwell: "DWELL",
+    SpindleOn: "SPINDLE_ON",
+    SpindleSpeed: "SPINDLE_SPEED",
+    SpindleOff: "SPINDLE_OFF",
+    SpindleOrient: "SPINDLE_ORIENT",
+    SelectGear: "SELECT_GEAR",
+    SelectTool: "SELECT_TOOL",
+    Home: "HOME",
+    SetSlope: "SET_SLOPE",
+    ManualMode: "MANUAL_MODE",
+    MFunction: "M_FUNCTION",
+    ProgramEnd: "PROGRAM_END",
+}
+
+
+class Sink(Protocol):
+    """Where the interpreter sends its calls."""
+
+    def emit(self, call: Call) -> None:
+        """Take one canonical call."""
+
+
+class ListSink:
+    """Collects the calls in order (tests, golden files)."""
+
+    def __init__(self) -> None:
+        self.calls: list[Call] = []
+
+    def emit(self, call: Call) -> None:
+        """Append `call`."""
+        self.calls.append(call)
+
+    def lines(self) -> list[str]:
+        """`<line>: <text>` per call, the golden-file form."""
+        return [f"{c.line}: {c.text()}" for c in self.calls]

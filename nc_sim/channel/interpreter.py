@@ -1,0 +1,411 @@
+"""DIN 66025 program text -> canonical calls (nc_sim/channel/canon.py), pure.
+
+`interpret(text, sink, ...)` runs the main program from its first line, subprograms (`LL name`,
+`L<n> P<repetitions>`) in place, until M30/M02. Modal words (G00-G03, G17-G19, G90/G91, F)
+carry over from block to block. A bad program raises `ProgramError` with line, column and job
+error code; calls emitted before it stay in the sink (the program stops there).
+
+Within a block the calls come in a fixed order: F, #SLOPE, T/D, M40-M45, spindle, G17-G19,
+G200/G201, G04, G74, motion, other M functions, subprogram call, end (M17/M29/M30/M02). When a
+spindle function acts relative to the motion is the synchronisation type's business (000 §2.5),
+decided where the calls are consumed; they carry the block's line for that.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+from nc_sim.blocks.mdi import SLOPE_TYPES, BlockError, SpindleCmd, parse_spindle_specific
+from nc_sim.channel import canon
+from nc_sim.channel.modal import CENTRE_LETTER, PLANES, Modal
+from nc_sim.channel.program import Program, split_program
+from nc_sim.channel.words import Line, ProgramError, Word, lex_line
+from nc_sim.errors import Code
+
+ARC_RADIUS_TOLERANCE_MM = 0.002  # start and end radius of G02/G03 may differ by this much
+MAX_NESTING = 8  # subprogram levels
+_END_PROGRAM = (30, 2)
+_END_SUB = (17, 29)
+
+
+def interpret(
+    text: str,
+    sink: canon.Sink,
+    axes: Iterable[str] = ("X", "Y", "Z"),
+    spindles: Iterable[str] = (),
+    start: Mapping[str, float] | None = None,
+    skip_blocks: bool = True,
+) -> None:
+    """Interpret a whole program into `sink`; `start` is where the axes are (default 0)."""
+    names = tuple(a.upper() for a in axes)
+    modal = Modal(position={a: float((start or {}).get(a, 0.0)) for a in names})
+    run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, modal, skip_blocks)
+    if not run.lines(run.prog.main, depth=0):
+        last = max(run.prog.main, default=0) + 1
+        raise ProgramError("program ends without M30 or M02", last, 1, Code.PROGRAM_STRUCTURE)
+
+
+class _Run:
+    """One interpretation: the program, the sink and the modal state."""
+
+    def __init__(
+        self,
+        prog: Program,
+        sink: canon.Sink,
+        axes: tuple[str, ...],
+        spindles: set[str],
+        modal: Modal,
+        skip_blocks: bool,
+    ) -> None:
+        self.prog = prog
+        self.sink = sink
+        self.axes = axes
+        self.spindles = spindles
+        self.modal = modal
+        self.skip_blocks = skip_blocks
+        self.ended = False
+
+    def lines(self, indexes: list[int], depth: int) -> bool:
+        """Run these lines; True when a block ended them (M30/M02, or M17/M29 in a subprogram)."""
+        for index in indexes:
+            lexed = lex_line(self.prog.lines[index], index + 1, self.skip_blocks)
+            if lexed.skipped or lexed.empty:
+                continue
+            end = _Block(self, lexed, index + 1, depth).run()
+            if self.ended:
+                return True
+            if end is not None:
+                if end in _END_SUB and depth == 0:
+                    raise ProgramError(f"M{end} outside a subprogram", index + 1, 1)
+                return True
+        return False
+
+    def call(self, name: str, repetitions: int, line: int, col: int, depth: int) -> None:
+        """Run subprogram `name` `repetitions` times."""
+        if name not in self.prog.subprograms:
+            raise ProgramError(
+                f"subprogram {name} is not defined", line, col, Code.PROGRAM_STRUCTURE
+            )
+        if depth >= MAX_NESTING:
+            raise ProgramError(
+                f"subprograms nested deeper than {MAX_NESTING}", line, col, Code.PROGRAM_STRUCTURE
+            )
+        for _ in range(repetitions):
+            if not self.lines(self.prog.subprograms[name], depth + 1):
+                at = self.prog.defined_at[name] + 1
+                raise ProgramError(
+                    f"subprogram {name} ends without M17 or M29", at, 1, Code.PROGRAM_STRUCTURE
+                )
+            if self.ended:
+                return
+
+
+def _whole(word: Word, line: int) -> int:
+    if word.value != int(word.value) or "." in word.text:
+        raise ProgramError(
+            f"{word.letter} takes a whole number, not {word.text}", line, word.column + 1
+        )
+    return int(word.value)
+
+
+class _Block:
+    """One block: collects its words, then emits its calls in the fixed order."""
+
+    def __init__(self, run: _Run, lexed: Line, line: int, depth: int) -> None:
+        self.run_ = run
+        self.lexed = lexed
+        self.line = line
+        self.depth = depth
+        self.g: dict[int, Word] = {}
+        self.m: list[tuple[int, Word]] = []
+        self.addr: dict[str, Word] = {}  # one each of the other addresses
+
+    def error(self, detail: str, col: int, code: Code = Code.BLOCK_SYNTAX) -> ProgramError:
+        return ProgramError(detail, self.line, col, code)
+
+    def run(self) -> int | None:
+        """Emit the block's calls; returns the M code that ends the (sub)program, if any."""
+        for w in self.lexed.words:
+            if w.letter == "G":
+                g = _whole(w, self.line)
+                if g not in (0, 1, 2, 3, 4, 17, 18, 19, 74, 90, 91, 200, 201):
+                    raise self.error(f"G{g} is not supported", w.column, Code.NOT_SUPPORTED)
+                self.g[g] = w
+            elif w.letter == "M":
+                self.m.append((_whole(w, self.line), w))
+            elif w.letter in self.addr:
+                raise self.error(f"{w.letter} twice in one block", w.column)
+            elif w.letter in "NFSTDIJKRLP" or w.letter in self.run_.axes:
+                self.addr[w.letter] = w
+            else:
+                raise self.error(f"unknown address '{w.letter}'", w.column)
+        motions = [g for g in self.g if g in (0, 1, 2, 3)]
+        if len(motions) > 1:
+            raise self.error("two motion G codes in one block", self.g[motions[1]].column)
+        self._preparatory()
+        self._spindle()
+        self._motion_and_g()
+        return self._m_and_calls()
+
+    def _emit(self, call: canon.Call) -> None:
+        self.run_.sink.emit(call)
+
+    def _preparatory(self) -> None:
+        if (n := self.addr.get("N")) is not None:
+            _whole(n, self.line)
+        if (f := self.addr.get("F")) is not None:
+            if f.value <= 0:
+                raise self.error("F must be positive", f.column + 1)
+            self.run_.modal.feed_mm_min = f.value
+            self._emit(canon.SetFeedRate(self.line, f.value))
+        for cmd, body, col in self.lexed.hashes:
+            if cmd != "SLOPE":
+                raise self.error(f"#{cmd} is not supported", col, Code.NOT_SUPPORTED)
+            key = "".join(body.split()).upper()
+            if not key.startswith("TYPE=") or key[5:] not in SLOPE_TYPES:
+                raise self.error(f"#SLOPE needs TYPE= one of {', '.join(SLOPE_TYPES)}", col)
+            self._emit(canon.SetSlope(self.line, SLOPE_TYPES[key[5:]]))
+        tool, d = self.addr.get("T"), self.addr.get("D")
+        if tool is not None or d is not None:
+            self._emit(
+                canon.SelectTool(
+                    self.line,
+                    None if tool is None else _whole(tool, self.line),
+                    None if d is None else _whole(d, self.line),
+                )
+            )
+        for m, _ in self.m:
+            if 40 <= m <= 45:
+                self._emit(canon.SelectGear(self.line, m))
+
+    def _spindle(self) -> None:
+        main = SpindleCmd("S")
+        for m, w in self.m:
+            if m in (3, 4, 5, 19):
+                self._spindle_m(main, m, w.column)
+        if (s := self.addr.get("S")) is not None and 74 not in self.g:
+            if s.value < 0:
+                raise self.error("S must not be negative: M3/M4 give the direction", s.column + 1)
+            main.speed_rpm = s.value
+        cmds = [main]
+        for name, deg, col in self.lexed.positions:
+            target = main if name == "S" else self._named(cmds, name, col)
+            target.pos_deg = deg
+        for name, body, col in self.lexed.specific:
+            self._spindle_name(name, col)
+            try:
+                cmds.append(parse_spindle_specific(body, name, col + len(name) + 1))
+            except BlockError as err:
+                raise self.error(err.detail, err.column) from err
+        for cmd in cmds:
+            self._spindle_calls(cmd)
+
+    def _spindle_name(self, name: str, col: int) -> None:
+        if name != "S" and name not in self.run_.spindles:
+            raise self.error(f"unknown spindle '{name}'", col, Code.UNKNOWN_AXIS)
+
+    def _named(self, cmds: list[SpindleCmd], name: str, col: int) -> SpindleCmd:
+        self._spindle_name(name, col)
+        cmds.append(SpindleCmd(name))
+        return cmds[-1]
+
+    def _spindle_m(self, cmd: SpindleCmd, m: int, col: int) -> None:
+        """M3/M4 next to M19 give the positioning direction [000 §2.3.2]."""
+        if cmd.m is None:
+            cmd.m = m
+        elif {cmd.m, m} in ({19, 3}, {19, 4}) and cmd.direction is None:
+            cmd.direction = 1 if 3 in (cmd.m, m) else -1
+            cmd.m = 19
+        else:
+            raise self.error("two spindle M functions for one spindle in one block", col)
+
+    def _spindle_calls(self, cmd: SpindleCmd) -> None:
+        col = 1
+        if cmd.g or cmd.default_dynamics:
+            if cmd.g != [74]:
+                raise self.error(
+                    f"{cmd.spindle}[G{cmd.g}] is not supported in programs", col, Code.NOT_SUPPORTED
+                )
+            self._emit(canon.Home(self.line, ((cmd.spindle, 1.0),)))
+        if cmd.m in (3, 4):
+            self._emit(canon.SpindleOn(self.line, cmd.spindle, cmd.m, cmd.speed_rpm))
+        elif cmd.m == 5:
+            self._emit(canon.SpindleOff(self.line, cmd.spindle))
+        elif cmd.m == 19:
+            self._emit(
+                canon.SpindleOrient(
+                    self.line, cmd.spindle, cmd.pos_deg, cmd.speed_rpm, cmd.direction
+                )
+            )
+        elif cmd.pos_deg is not None:
+            raise self.error(f"{cmd.spindle}.POS needs M19", col)
+        elif cmd.speed_rpm is not None:
+            self._emit(canon.SpindleSpeed(self.line, cmd.spindle, cmd.speed_rpm))
+
+    def _motion_and_g(self) -> None:
+        modal = self.run_.modal
+        for g in (17, 18, 19):
+            if g in self.g:
+                modal.plane = g
+                self._emit(canon.SelectPlane(self.line, g))
+        if 90 in self.g or 91 in self.g:
+            modal.absolute = 90 in self.g
+        for g in (200, 201):
+            if g in self.g:
+                self._emit(canon.ManualMode(self.line, g))
+        axis_words = [self.addr[a] for a in self.run_.axes if a in self.addr]
+        if 4 in self.g:
+            self._dwell(axis_words)
+            return
+        if 74 in self.g:
+            self._home(axis_words)
+            return
+        motion = next((g for g in (0, 1, 2, 3) if g in self.g), None)
+        if motion is not None:
+            modal.motion = motion
+        arc_words = [self.addr[a] for a in "IJKR" if a in self.addr]
+        if not axis_words and not (arc_words and modal.motion in (2, 3)):
+            if arc_words:
+                raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+            return
+        col = self.g[motion].column if motion is not None else (axis_words + arc_words)[0].column
+        end = dict(modal.position)
+        for w in axis_words:
+            end[w.letter] = w.value if modal.absolute else modal.position[w.letter] + w.value
+        target = tuple((a, end[a]) for a in self.run_.axes)
+        if modal.motion == 0:
+            if arc_words:
+                raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+            self._emit(canon.StraightTraverse(self.line, target))
+        elif modal.feed_mm_min is None:
+            raise self.error("G01/G02/G03 need a feed F first", col, Code.FEED_MISSING)
+        elif modal.motion == 1:
+            if arc_words:
+                raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+            self._emit(canon.StraightFeed(self.line, target))
+        else:
+            self._arc(modal.motion, end, target, col)
+        modal.position = end
+
+    def _dwell(self, axis_words: list[Word]) -> None:
+        x = self.addr.get("X")
+        if (
+            x is None
+            or any(w.letter != "X" for w in axis_words)
+            or self.g.keys() & {0, 1, 2, 3, 74}
+        ):
+            raise self.error("G04 takes only its dwell time X<s>", self.g[4].column)
+        if x.value < 0:
+            raise self.error("G04 dwell time must not be negative", x.column + 1)
+        self._emit(canon.Dwell(self.line, x.value))
+
+    def _home(self, axis_words: list[Word]) -> None:
+        if self.g.keys() & {0, 1, 2, 3}:
+            raise self.error("G74 cannot be combined with G00-G03", self.g[74].column)
+        order = [(w.letter, w) for w in axis_words]
+        if (s := self.addr.get("S")) is not None:
+            order.append(("S", s))
+        for name, w in order:
+            if w.value != int(w.value) or w.value < 1:
+                raise self.error(f"G74 takes a homing order 1, 2, ... for {name}", w.column + 1)
+        if not order:
+            raise self.error("G74 needs the axes to home with their order", self.g[74].column)
+        self._emit(canon.Home(self.line, tuple((n, w.value) for n, w in order)))
+
+    def _arc(
+        self, motion: int, end: dict[str, float], target: tuple[tuple[str, float], ...], col: int
+    ) -> None:
+        plane = self.run_.modal.plane
+        a, b, _ = PLANES[plane]
+        for axis in (a, b):
+            if axis not in self.run_.modal.position:
+                raise self.error(f"G{plane} needs axis {axis}", col, Code.UNKNOWN_AXIS)
+        start = self.run_.modal.position
+        sa, sb, ea, eb = start[a], start[b], end[a], end[b]
+        turn = 1 if motion == 3 else -1
+        offsets = [self.addr[CENTRE_LETTER[x]] for x in (a, b) if CENTRE_LETTER[x] in self.addr]
+        wrong = [
+            self.addr[c]
+            for c in "IJK"
+            if c in self.addr and c not in (CENTRE_LETTER[a], CENTRE_LETTER[b])
+        ]
+        if wrong:
+            raise self.error(
+                f"{wrong[0].letter} is not a centre offset in G{plane}", wrong[0].column
+            )
+        r_word = self.addr.get("R")
+        if r_word is not None and offsets:
+            raise self.error("R and I/J/K in one block", r_word.column)
+        if r_word is not None:
+            ca, cb = self._centre_from_radius(r_word, sa, sb, ea, eb, turn)
+        elif offsets:
+            ca = sa + (self.addr[CENTRE_LETTER[a]].value if CENTRE_LETTER[a] in self.addr else 0.0)
+            cb = sb + (self.addr[CENTRE_LETTER[b]].value if CENTRE_LETTER[b] in self.addr else 0.0)
+            r0, r1 = math.hypot(sa - ca, sb - cb), math.hypot(ea - ca, eb - cb)
+            if r0 == 0.0 or abs(r0 - r1) > ARC_RADIUS_TOLERANCE_MM:
+                raise self.error(
+                    f"start radius {r0:.4f} mm and end radius {r1:.4f} mm differ",
+                    offsets[0].column,
+                    Code.ARC_GEOMETRY,
+                )
+        else:
+            raise self.error(
+                f"G0{motion} needs a centre I/J/K or a radius R", col, Code.ARC_GEOMETRY
+            )
+        self._emit(canon.ArcFeed(self.line, target, plane, (ca, cb), turn))
+
+    def _centre_from_radius(
+        self, r_word: Word, sa: float, sb: float, ea: float, eb: float, turn: int
+    ) -> tuple[float, float]:
+        """R > 0: the arc up to 180°, R < 0: the longer one (DIN 66025)."""
+        chord = math.hypot(ea - sa, eb - sb)
+        radius = abs(r_word.value)
+        if chord == 0.0:
+            raise self.error("a full circle needs I/J/K, not R", r_word.column, Code.ARC_GEOMETRY)
+        if radius < chord / 2 - ARC_RADIUS_TOLERANCE_MM:
+            raise self.error(
+                f"radius {radius:g} mm is less than half the chord {chord:.4f} mm",
+                r_word.column,
+                Code.ARC_GEOMETRY,
+            )
+        h = math.sqrt(max(0.0, radius**2 - (chord / 2) ** 2))
+        # left of the chord for a counter-clockwise arc up to 180°, right for clockwise
+        side = turn * (1 if r_word.value > 0 else -1)
+        ua, ub = -(eb - sb) / chord, (ea - sa) / chord
+        return (sa + ea) / 2 + side * h * ua, (sb + eb) / 2 + side * h * ub
+
+    def _m_and_calls(self) -> int | None:
+        ending: int | None = None
+        for m, w in self.m:
+            if m in (3, 4, 5, 19) or 40 <= m <= 45:
+                continue
+            if m in _END_PROGRAM or m in _END_SUB:
+                if ending is not None:
+                    raise self.error("two program ends in one block", w.column)
+                ending = m
+            else:
+                self._emit(canon.MFunction(self.line, m))
+        self._subprogram_call()
+        if ending in _END_PROGRAM:
+            self._emit(canon.ProgramEnd(self.line, ending))
+            self.run_.ended = True
+        return ending
+
+    def _subprogram_call(self) -> None:
+        l_word, p_word = self.addr.get("L"), self.addr.get("P")
+        local = self.lexed.local_call
+        if l_word is not None and local is not None:
+            raise self.error("two subprogram calls in one block", l_word.column)
+        repetitions = 1
+        if p_word is not None:
+            if l_word is None:
+                raise self.error("P (repetitions) only with L<n>", p_word.column)
+            repetitions = _whole(p_word, self.line)
+            if repetitions < 1:
+                raise self.error("P takes the number of runs, 1 or more", p_word.column + 1)
+        if l_word is not None:
+            name = str(_whole(l_word, self.line))
+            self.run_.call(name, repetitions, self.line, l_word.column, self.depth)
+        elif local is not None:
+            self.run_.call(local[0], 1, self.line, local[1], self.depth)

@@ -1,0 +1,101 @@
+"""The interpreter against golden files: program (`interp/*.ngc`) -> canonical calls
+(`*.expected`, one `<line>: <call>` per line) or `ERROR <line>:<column> <job error>`.
+
+The expected numbers come from geometry worked by hand (the arc centres are noted in the
+programs' comments), not from the interpreter's output.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from nc_sim.channel import canon
+from nc_sim.channel.interpreter import interpret
+from nc_sim.channel.words import ProgramError
+from nc_sim.errors import Code
+
+GOLDEN = Path(__file__).parent / "interp"
+PROGRAMS = sorted(GOLDEN.glob("*.ngc"))
+
+
+def _run(text: str, skip_blocks: bool = True) -> canon.ListSink:
+    sink = canon.ListSink()
+    interpret(text, sink, axes=("X", "Y", "Z"), spindles=("S2",), skip_blocks=skip_blocks)
+    return sink
+
+
+@pytest.mark.parametrize("path", PROGRAMS, ids=[p.stem for p in PROGRAMS])
+def test_golden(path: Path) -> None:
+    expected = path.with_suffix(".expected").read_text().splitlines()
+    text = path.read_text()
+    if expected[0].startswith("ERROR"):
+        with pytest.raises(ProgramError) as err:
+            _run(text)
+        e = err.value
+        assert f"ERROR {e.line}:{e.column} {int(e.code)}" == expected[0], e.detail
+    else:
+        assert _run(text).lines() == expected
+
+
+def test_every_golden_arc_starts_and_ends_on_its_circle() -> None:
+    """Independent of the expected files: each ARC_FEED's start and end lie on one circle."""
+    planes = {17: ("X", "Y"), 18: ("Z", "X"), 19: ("Y", "Z")}
+    arcs = 0
+    for path in PROGRAMS:
+        if path.stem.startswith("bad_"):
+            continue
+        position = {"X": 0.0, "Y": 0.0, "Z": 0.0}
+        for call in _run(path.read_text()).calls:
+            end = dict(getattr(call, "end", ()))
+            if isinstance(call, canon.ArcFeed):
+                a, b = planes[call.plane]
+                r0 = math.hypot(position[a] - call.centre[0], position[b] - call.centre[1])
+                r1 = math.hypot(end[a] - call.centre[0], end[b] - call.centre[1])
+                assert r0 == pytest.approx(r1, abs=1e-9) and r0 > 0, (path.stem, call)
+                arcs += 1
+            position.update(end)
+    assert arcs >= 8
+
+
+def test_block_skip_off_runs_the_skipped_blocks() -> None:
+    lines = _run((GOLDEN / "block_skip.ngc").read_text(), skip_blocks=False).lines()
+    assert "2: STRAIGHT_TRAVERSE X=99 Y=0 Z=0" in lines
+    assert "4: M_FUNCTION m=8" in lines
+
+
+def test_calls_before_an_error_stay_in_the_sink() -> None:
+    sink = canon.ListSink()
+    with pytest.raises(ProgramError):
+        interpret("G00 X5\nG01 X6\nM30", sink)
+    assert sink.lines() == ["1: STRAIGHT_TRAVERSE X=5 Y=0 Z=0"]
+
+
+def test_start_position_is_where_incremental_moves_begin() -> None:
+    sink = canon.ListSink()
+    interpret("G91 G00 X1\nM30", sink, axes=("X", "Z"), start={"X": 10.0, "Z": -3.0})
+    assert sink.lines()[0] == "1: STRAIGHT_TRAVERSE X=11 Z=-3"
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "code"),
+    [
+        ("M17\nM30", "1:1", Code.BLOCK_SYNTAX),  # return outside a subprogram
+        ("%L1\nG00 X1\n%\nL1\nM30", "1:1", Code.PROGRAM_STRUCTURE),  # no M17/M29
+        ("%L1\nL1\nM17\n%\nL1\nM30", "2:1", Code.PROGRAM_STRUCTURE),  # calls itself forever
+        ("G04 F2\nM30", "1:1", Code.BLOCK_SYNTAX),  # G04 takes X seconds
+        ("G02 X10 F100\nM30", "1:1", Code.ARC_GEOMETRY),  # no centre, no radius
+        ("G01 X1 Y2 X3 F100\nM30", "1:11", Code.BLOCK_SYNTAX),  # X twice
+        ("G01 G00 X1\nM30", "1:5", Code.BLOCK_SYNTAX),  # two motion G codes
+        ("#SLOPE[TYPE=FAST]\nM30", "1:1", Code.BLOCK_SYNTAX),
+        ("M19 S.POS=90 S9[M3]\nM30", "1:14", Code.UNKNOWN_AXIS),
+        ("G00 X\nM30", "1:5", Code.BLOCK_SYNTAX),  # address without a value
+        ("S2[M3 REV-5]\nM30", "1:10", Code.BLOCK_SYNTAX),  # column inside S2[...]
+    ],
+)
+def test_bad_blocks(text: str, where: str, code: Code) -> None:
+    with pytest.raises(ProgramError) as err:
+        _run(text)
+    assert (f"{err.value.line}:{err.value.column}", err.value.code) == (where, code)
