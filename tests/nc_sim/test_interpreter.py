@@ -8,6 +8,7 @@ programs' comments), not from the interpreter's output.
 from __future__ import annotations
 
 import math
+import random
 from pathlib import Path
 
 import pytest
@@ -99,3 +100,15 @@ def test_bad_blocks(text: str, where: str, code: Code) -> None:
     with pytest.raises(ProgramError) as err:
         _run(text)
     assert (f"{err.value.line}:{err.value.column}", err.value.code) == (where, code)
+
+
+def test_random_text_gives_calls_or_a_program_error() -> None:
+    """Seeded garbage from NC characters: the interpreter never fails any other way."""
+    rng = random.Random(16)
+    alphabet = "GMXYZIJKRFSTDNLP0123456789.-+ ()[];/#%=\n" + "GXYZ01 " * 4
+    for _ in range(3000):
+        text = "".join(rng.choice(alphabet) for _ in range(rng.randint(1, 40)))
+        try:
+            _run(text)
+        except ProgramError as err:
+            assert err.line >= 1 and err.column >= 1, (text, err)
