@@ -133,8 +133,8 @@ async def get_actor(conn: HTTPConnection) -> Actor:
     return actor
 
 
-_KIND: dict[Action, AuditKind] = {
-    Action.OBSERVE: "command",
+_KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is recorded as
+    Action.OBSERVE: "command",  # never refused by role (every role observes): for the type
     Action.CAPTURE: "trace",
     Action.RECORD: "recording",
     Action.DELETE_TRACE: "trace",

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request
@@ -21,7 +19,7 @@ from api.parameters import (
 )
 from backend.bodies import read_text, text_answer, text_body
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, ApiError, refusal_text, responses
+from backend.errors import WORKER_GONE, responses
 from backend.services import parameters as params
 from backend.services.audit import Entry
 from nc_sim.params import Scope, registry
@@ -85,7 +83,8 @@ def write(
     # rows recorded before (control taken by this very request) first: the trail keeps the
     # order things happened in, and a value's version is its row's place in it
     services.audit.flush()
-    with _refusals_audited(services, actor, machine.id, f"write {names}"):
+    attempt = Entry(actor.name, actor.session, "parameter", f"write {names}", machine.id)
+    with services.audit.refusals(attempt):
         return params.write(actor, machine, services.store, req.changes, req.comment)
 
 
@@ -120,32 +119,11 @@ async def import_list(
     text = await read_text(request, MAX_LIST_BYTES, "parameter list")
     where = f" of {target}" if target else ""
     await run_in_threadpool(services.audit.flush)  # as in `write`
-    with _refusals_audited(services, actor, machine.id, f"import the {scope} list{where}"):
+    what = f"import the {scope} list{where}"
+    with services.audit.refusals(Entry(actor.name, actor.session, "parameter", what, machine.id)):
         return await run_in_threadpool(
             params.import_list, actor, machine, services.store, Scope(scope), target, text
         )
-
-
-@contextmanager
-def _refusals_audited(
-    services: ServicesDep, actor: ActorDep, mid: str, what: str
-) -> Iterator[None]:
-    """A refused write is audited too (accepted ones are, change by change, with the values):
-    a stale write or rejected values, with why."""
-    try:
-        yield
-    except ApiError as e:
-        services.audit.record_later(
-            Entry(
-                actor.name,
-                actor.session,
-                "parameter",
-                what,
-                mid,
-                outcome=f"refused ({e.status}): {refusal_text(e)}",
-            )
-        )
-        raise
 
 
 @router.get("/machines/{mid}/parameters/audit", dependencies=[permit(Action.OBSERVE)])

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Response
 
 from api.auth import Action, TokenCreate, TokenCreated, TokenInfo
 from backend.deps import ActorDep, ServicesDep, permit
-from backend.errors import ApiError, refusal_text, responses
+from backend.errors import ApiError, responses
 from backend.services.accounts import AccountError, TokenEntry, public_id
 from backend.services.audit import Entry
 from backend.services.auth import authorize
@@ -60,24 +60,15 @@ def create_token(req: TokenCreate, services: ServicesDep, actor: ActorDep) -> To
 )
 def revoke_token(tid: str, services: ServicesDep, actor: ActorDep) -> Response:
     """Revoke an API token (one's own; an admin anyone's)."""
+    attempt = Entry(actor.name, actor.session, "token", f"revoke API token {tid}")
     try:
-        token = services.accounts.token(tid)
-        if token.user != actor.name:
-            authorize(actor, Action.USERS)
+        with services.audit.refusals(attempt):  # another's token, and no admin
+            token = services.accounts.token(tid)
+            if token.user != actor.name:
+                authorize(actor, Action.USERS)
         services.accounts.revoke_token(tid)
     except AccountError as e:
         raise account_error(e) from None
-    except ApiError as e:  # another's token, and no admin: an attempt worth recording
-        services.audit.record_later(
-            Entry(
-                actor.name,
-                actor.session,
-                "token",
-                f"revoke API token {tid}",
-                outcome=f"refused ({e.status}): {refusal_text(e)}",
-            )
-        )
-        raise
     services.sessions.poke()  # its websockets and control go now
     services.audit.record_later(
         Entry(

@@ -10,26 +10,27 @@ from api.auth import Action, UserChange, UserCreate, UserInfo
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import ApiError, responses
 from backend.routes.tokens import account_error
-from backend.services.accounts import AccountError, Accounts
+from backend.services.accounts import AccountError, Accounts, UserEntry
 from backend.services.audit import Entry
 
 router = APIRouter(prefix="/api/users", tags=["users"])
+
+
+def _user_info(u: UserEntry) -> UserInfo:
+    return UserInfo(name=u.name, role=u.role, created_unix=u.created)
 
 
 def _info(accounts: Accounts, name: str) -> UserInfo:
     user = next((u for u in accounts.users() if u.name == name), None)
     if user is None:
         raise ApiError(404, {"message": f"no user {name!r}"})
-    return UserInfo(name=user.name, role=user.role, created_unix=user.created)
+    return _user_info(user)
 
 
 @router.get("", dependencies=[permit(Action.USERS)])
 def list_users(services: ServicesDep) -> list[UserInfo]:
     """Every user with their role, oldest first."""
-    return [
-        UserInfo(name=u.name, role=u.role, created_unix=u.created)
-        for u in services.accounts.users()
-    ]
+    return [_user_info(u) for u in services.accounts.users()]
 
 
 @router.post(

@@ -18,10 +18,13 @@ import queue
 import sqlite3
 import threading
 import time
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from api.audit import AuditKind, AuditPage, AuditRecord, AuditVerification
+from backend.errors import ApiError, refusal_text
 
 if TYPE_CHECKING:
     from backend.services.store import Store
@@ -174,6 +177,16 @@ class Audit:
         """Append one row now (after those waiting); its seq."""
         self.flush()
         return self.store.transaction(lambda db: append(db, [entry]))[0]
+
+    @contextmanager
+    def refusals(self, entry: Entry) -> Iterator[None]:
+        """Record `entry` with the refusal as its outcome if the block inside raises one (an
+        attempt that changed nothing is worth recording too)."""
+        try:
+            yield
+        except ApiError as e:
+            self.record_later(replace(entry, outcome=f"refused ({e.status}): {refusal_text(e)}"))
+            raise
 
     def record_later(self, entry: Entry) -> None:
         """Append one row soon, in order, without waiting."""

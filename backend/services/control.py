@@ -9,7 +9,6 @@ a held jog belongs to its holder's session.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import threading
 import time
 from collections import Counter
@@ -21,6 +20,7 @@ from api.control import REQUEST_S, ControlAction, ControlParty, ControlState
 from backend.errors import ApiError
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor, authorize
+from backend.tasks import cancel
 from backend.workers.protocol import Submit
 from nc_sim import commands as nc
 
@@ -223,10 +223,7 @@ class Control:
         self._task = asyncio.get_running_loop().create_task(self._run())
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await cancel(self._task)
 
     async def _run(self) -> None:
         while True:

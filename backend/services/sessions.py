@@ -16,6 +16,7 @@ import logging
 from backend.services.accounts import Accounts
 from backend.services.control import Control
 from backend.services.telemetry import TelemetryHub
+from backend.tasks import cancel
 
 log = logging.getLogger(__name__)
 
@@ -42,10 +43,7 @@ class SessionWatch:
         self._task = self._loop.create_task(self._run(), name="session-watch")
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await cancel(self._task)
 
     def poke(self) -> None:
         """Look now (from any thread): a route ended a session, a token or a user."""

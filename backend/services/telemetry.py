@@ -45,6 +45,7 @@ from backend.services.auth import Actor
 from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy
 from backend.services.status import RECENT_EVENTS, status_of
+from backend.tasks import cancel
 from backend.workers.protocol import Watch
 from nc_sim.signals import Signal
 
@@ -198,10 +199,7 @@ class TelemetryHub:
                 await asyncio.sleep(self.frame_s)
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await cancel(self._task)
 
     async def _run(self) -> None:
         loop = asyncio.get_running_loop()
