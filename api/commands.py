@@ -154,8 +154,62 @@ class EmergencyStopCommand(BaseModel):
     type: Literal["emergency_stop"] = "emergency_stop"
 
 
+ProgramName = Annotated[
+    str,
+    Field(
+        pattern=r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}$",
+        description="program name: letters, digits, _ . - (1-64, not starting with . or -)",
+    ),
+]
+PROGRAM_MAX_CHARS = 2_000_000  # about 50 000 blocks
+
+
+class ProgramLoadCommand(BaseModel):
+    """Load an NC program into the channel (it runs on `cycle_start`): the stored program
+    `name`, or `text` when given (then `name` is only its label). A program that does not
+    interpret is refused with the line and column of its first error."""
+
+    type: Literal["program_load"] = "program_load"
+    name: ProgramName
+    text: str | None = Field(None, max_length=PROGRAM_MAX_CHARS)
+
+
+class CycleStartCommand(BaseModel):
+    """Cycle start: run the loaded program from its start, or continue after feedhold or a
+    single-block stop."""
+
+    type: Literal["cycle_start"] = "cycle_start"
+
+
+class FeedholdCommand(BaseModel):
+    """Feedhold on: the path brakes on its contour and waits; off: it continues (as the
+    channel's HLI feedhold unit)."""
+
+    type: Literal["feedhold"] = "feedhold"
+    on: bool
+
+
+class SingleBlockCommand(BaseModel):
+    """Single block on: the program stops at the end of every block until `cycle_start`."""
+
+    type: Literal["single_block"] = "single_block"
+    on: bool
+
+
+class ProgramStopCommand(BaseModel):
+    """Stop the program: the path brakes on its contour, the program is rewound to its start
+    (it stays loaded); spindles keep turning as after M0 (a reset stops them)."""
+
+    type: Literal["program_stop"] = "program_stop"
+
+
 Command = Annotated[
     MdiCommand
+    | ProgramLoadCommand
+    | CycleStartCommand
+    | FeedholdCommand
+    | SingleBlockCommand
+    | ProgramStopCommand
     | SpindleCommand
     | SpindlePositionCommand
     | GearCommand

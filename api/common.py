@@ -33,6 +33,10 @@ class JobErrorModel(BaseModel):
         description="the gear stage 1..6 (M40..M45) it concerns: gear change started, gear "
         "changed, M40-M45 output of a gear change; null for none",
     )
+    line: int | None = Field(
+        None, description="program line (from 1) it concerns: a program error, a block"
+    )
+    column: int | None = Field(None, description="column (from 1) of a program error")
 
 
 class ParameterProblem(BaseModel):
@@ -66,7 +70,8 @@ class Refusal(BaseModel):
 
     message: str
     code: int | None = Field(None, description="job error number when the NC refused it")
-    column: int | None = Field(None, description="1-based column of a bad NC block")
+    line: int | None = Field(None, description="1-based line of a bad NC program")
+    column: int | None = Field(None, description="1-based column of a bad NC block or program")
     error: JobErrorModel | None = None
     serial: int | None = Field(
         None, description="the machine's number of the refused command (commands only)"

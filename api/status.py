@@ -85,6 +85,42 @@ class SimulationStatus(BaseModel):
     loop_work_p99_ms: float = Field(0.0, description="that loop's work per tick, 99th pct, ms")
 
 
+ChannelStateName = Literal["idle", "ready", "running", "held", "block_end", "error"]
+
+
+class ModalStatus(BaseModel):
+    """The channel's modal state: what the next block inherits."""
+
+    motion: Literal["G00", "G01", "G02", "G03"]
+    plane: Literal["G17", "G18", "G19"]
+    distance: Literal["G90", "G91"]
+    feed_mm_min: float | None = Field(description="F in force, mm/min; null before the first F")
+    slope: int = Field(description="acceleration profile (#SLOPE, P-CHAN-00071): 0 step ... 3 HSC")
+
+
+class ChannelStatus(BaseModel):
+    """The NC channel: its program, where it is in it, and what the path waits for."""
+
+    state: ChannelStateName = Field(
+        description="idle: no program loaded (MDI); ready: loaded, waiting for cycle start; "
+        "running; held: feedhold; block_end: single block stop; error: a job error stopped it"
+    )
+    program: str | None = Field(description="name of the loaded program")
+    block_line: int | None = Field(description="line (from 1) of the block the path is in")
+    blocks_done: int = Field(description="blocks of the program finished since cycle start")
+    single_block: bool
+    modal: ModalStatus
+    path_feed_mm_min: float = Field(description="commanded path velocity now, mm/min")
+    distance_to_go_mm: float | None = Field(description="path length left in the current block, mm")
+    waiting_for: str | None = Field(
+        description="what the path waits for, in the operator's words (speed reached of S, "
+        "the PLC's acknowledgement of M8, dwell), null when it moves or is done"
+    )
+    error: JobErrorModel | None = Field(
+        description="the program error or job error that stopped the program, with line"
+    )
+
+
 class MachineStatus(BaseModel):
     """A full snapshot of one machine."""
 
@@ -94,6 +130,7 @@ class MachineStatus(BaseModel):
     channel_units: dict[str, int] = Field(description="override (‰), feedhold, ...")
     emergency_stop: bool
     queued_blocks: int
+    channel: ChannelStatus
     axes: list[AxisStatus]
     plc: PlcStatus
     job_errors: list[JobErrorModel] = Field(description="active job errors, one per axis")

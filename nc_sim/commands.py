@@ -143,8 +143,52 @@ class EmergencyStop:
     serial: int = field(default=0, kw_only=True)
 
 
+@dataclass(frozen=True)
+class ProgramLoad:
+    """Load an NC program into the channel; it runs on `CycleStart`. `name` labels it."""
+
+    name: str
+    text: str
+    serial: int = field(default=0, kw_only=True)
+
+
+@dataclass(frozen=True)
+class CycleStart:
+    """Run the loaded program from its start, or continue after feedhold or single block."""
+
+    serial: int = field(default=0, kw_only=True)
+
+
+@dataclass(frozen=True)
+class Feedhold:
+    """Feedhold on (the path brakes on its contour and waits) or off (it continues)."""
+
+    on: bool
+    serial: int = field(default=0, kw_only=True)
+
+
+@dataclass(frozen=True)
+class SingleBlock:
+    """Single block on: the program stops at the end of each block until `CycleStart`."""
+
+    on: bool
+    serial: int = field(default=0, kw_only=True)
+
+
+@dataclass(frozen=True)
+class ProgramStop:
+    """Stop the program on its path and rewind it (it stays loaded)."""
+
+    serial: int = field(default=0, kw_only=True)
+
+
 Command = (
     Mdi
+    | ProgramLoad
+    | CycleStart
+    | Feedhold
+    | SingleBlock
+    | ProgramStop
     | SpindleRun
     | SpindlePosition
     | GearChange
@@ -208,8 +252,9 @@ class Invalid:
 
     serial: int  # the command's serial
     message: str  # what is wrong
-    column: int | None = None  # NC block: 1-based column of the error
+    column: int | None = None  # NC block or program: 1-based column of the error
     code: int | None = None  # the job error logged for it: 90010 for a block, else None
+    line: int | None = None  # NC program: 1-based line of the error
 
 
 Outcome = Accepted | Refused | Invalid

@@ -59,6 +59,9 @@ class Code(IntEnum):
     EV_M_START = 26  # a spindle M function begins; it acts from the next cycle on
     EV_POWERED = 27  # power-on done: every drive switched on and reporting ready
     EV_GEAR_CHANGE_START = 28  # a gear change begins (to the change position, then M4x)
+    EV_PROGRAM_LOADED = 29
+    EV_PROGRAM_START = 30  # cycle start of a program
+    EV_PROGRAM_STOP = 31  # stopped by the operator, rewound
 
 
 MESSAGES: dict[Code, str] = {
@@ -117,6 +120,9 @@ MESSAGES: dict[Code, str] = {
     Code.EV_M_START: "spindle M function started",
     Code.EV_POWERED: "machine ready: the PLC has switched every drive on",
     Code.EV_GEAR_CHANGE_START: "gear change started",
+    Code.EV_PROGRAM_LOADED: "program loaded",
+    Code.EV_PROGRAM_START: "program started",
+    Code.EV_PROGRAM_STOP: "program stopped",
 }
 """What each code means, in the operator's words; every code has one (the event log shows it
 when an event carries no detail of its own)."""

@@ -39,6 +39,8 @@ class Event:
     message: str  # in the operator's words; never parsed
     m: int | None = None  # the M function it concerns (M3, M19 in position, M41 output, ...)
     gear: int | None = None  # the gear stage 1..6 it concerns (gear change started, changed)
+    line: int | None = None  # the program line (from 1) it concerns: a program error, a block
+    column: int | None = None  # the column (from 1) of a program error
 
     @property
     def error(self) -> bool:

@@ -99,6 +99,42 @@ class PlcSnapshot:
     pending: tuple[PendingMSnapshot, ...]
 
 
+class ChannelState(IntEnum):
+    """Program execution state of the channel (recorded as `CH.state`)."""
+
+    IDLE = 0  # no program loaded: MDI
+    READY = 1  # a program is loaded and waits for cycle start
+    RUNNING = 2
+    HELD = 3  # feedhold
+    BLOCK_END = 4  # single block: stopped at the end of a block
+    ERROR = 5  # a job error stopped the program
+
+
+@dataclass(frozen=True)
+class ModalSnapshot:
+    motion: int  # 0..3 (G00..G03)
+    plane: int  # 17..19
+    absolute: bool  # G90
+    feed_mm_min: float | None
+    slope: int  # P-CHAN-00071 / #SLOPE
+
+
+@dataclass(frozen=True)
+class ChannelSnapshot:
+    """The channel: program, position in it, modal state, what the path waits for."""
+
+    state: ChannelState
+    program: str | None
+    block_line: int | None
+    blocks_done: int
+    single_block: bool
+    modal: ModalSnapshot
+    path_feed_mm_min: float
+    distance_to_go_mm: float | None
+    waiting_for: str | None
+    error: Event | None
+
+
 @dataclass(frozen=True)
 class MachineSnapshot:
     """A machine at the end of one cycle, consistent in itself."""
@@ -108,6 +144,7 @@ class MachineSnapshot:
     channel_units: dict[str, int]  # override (‰), feedhold, reduced_acceleration
     emergency_stop: bool
     queued_blocks: int  # MDI blocks waiting or running
+    channel: ChannelSnapshot
     axes: tuple[AxisSnapshot, ...]
     plc: PlcSnapshot
     job_errors: tuple[Event, ...]  # the event behind each active job error, once each

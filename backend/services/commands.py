@@ -15,7 +15,9 @@ from dataclasses import replace
 from api.commands import (
     Command,
     CommandResult,
+    CycleStartCommand,
     EmergencyStopCommand,
+    FeedholdCommand,
     GearCommand,
     HliCommand,
     HomeCommand,
@@ -25,7 +27,10 @@ from api.commands import (
     OverrideCommand,
     PlcAckCommand,
     PlcModeCommand,
+    ProgramLoadCommand,
+    ProgramStopCommand,
     ResetCommand,
+    SingleBlockCommand,
     SpindleCommand,
     SpindlePositionCommand,
 )
@@ -53,6 +58,8 @@ def job_error_model(e: Event) -> JobErrorModel:
         seq=e.seq,
         m=e.m,
         gear=e.gear,
+        line=e.line,
+        column=e.column,
     )
 
 
@@ -65,6 +72,18 @@ def to_nc(cmd: Command | EmergencyStopCommand) -> nc.Command:
     match cmd:
         case MdiCommand():
             return nc.Mdi(cmd.block)
+        case ProgramLoadCommand():
+            if cmd.text is None:
+                raise _refuse(422, "program_load needs the program text")
+            return nc.ProgramLoad(cmd.name, cmd.text)
+        case CycleStartCommand():
+            return nc.CycleStart()
+        case FeedholdCommand():
+            return nc.Feedhold(cmd.on)
+        case SingleBlockCommand():
+            return nc.SingleBlock(cmd.on)
+        case ProgramStopCommand():
+            return nc.ProgramStop()
         case SpindleCommand():
             return nc.SpindleRun(cmd.spindle, cmd.m, cmd.speed_rpm)
         case SpindlePositionCommand():
@@ -160,7 +179,9 @@ async def _execute(m: MachineProxy, cmd: Command | EmergencyStopCommand) -> Comm
     assert isinstance(done, Submitted)
     match done.outcome:
         case Invalid() as bad:
-            raise _refuse(422, bad.message, code=bad.code, column=bad.column, serial=serial)
+            raise _refuse(
+                422, bad.message, code=bad.code, line=bad.line, column=bad.column, serial=serial
+            )
         case Refused() as refused:
             e = refused.error
             model = job_error_model(e).model_dump()

@@ -7,9 +7,11 @@ from typing import Literal
 
 from api.status import (
     AxisStatus,
+    ChannelStatus,
     LoopStatus,
     MachineStatus,
     MachineSummary,
+    ModalStatus,
     OverrunRecord,
     PendingM,
     PlcStatus,
@@ -29,7 +31,7 @@ from backend.workers.protocol import (
     Step,
     WorkerNews,
 )
-from nc_sim.snapshot import AxisSnapshot, LoopMode, MachineSnapshot
+from nc_sim.snapshot import AxisSnapshot, ChannelSnapshot, LoopMode, MachineSnapshot
 from nc_sim.units import AxisKind
 
 RECENT_EVENTS = 50  # events a machine's status carries
@@ -108,6 +110,29 @@ def _axis_status(a: AxisSnapshot) -> AxisStatus:
     )
 
 
+def channel_status(c: ChannelSnapshot) -> ChannelStatus:
+    """The channel in the API's words."""
+    md = c.modal
+    return ChannelStatus(
+        state=c.state.name.lower(),
+        program=c.program,
+        block_line=c.block_line,
+        blocks_done=c.blocks_done,
+        single_block=c.single_block,
+        modal=ModalStatus(
+            motion=f"G0{md.motion}",
+            plane=f"G{md.plane}",
+            distance="G90" if md.absolute else "G91",
+            feed_mm_min=md.feed_mm_min,
+            slope=md.slope,
+        ),
+        path_feed_mm_min=c.path_feed_mm_min,
+        distance_to_go_mm=c.distance_to_go_mm,
+        waiting_for=c.waiting_for,
+        error=job_error_model(c.error) if c.error else None,
+    )
+
+
 def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> MachineStatus:
     """A machine's snapshot and pacing, as its worker read them, in the API's words, with
     the newest events of the gateway's copy of its log (`recent_events`; a viewer's pushed
@@ -120,6 +145,7 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
         channel_units=dict(snap.channel_units),
         emergency_stop=snap.emergency_stop,
         queued_blocks=snap.queued_blocks,
+        channel=channel_status(snap.channel),
         axes=[_axis_status(a) for a in snap.axes],
         plc=PlcStatus(
             mode=snap.plc.mode.value,

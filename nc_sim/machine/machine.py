@@ -18,10 +18,16 @@ from typing import assert_never
 import numpy as np
 
 from nc_sim.blocks import Block, BlockError, parse_block
+from nc_sim.channel.canon import ListSink
+from nc_sim.channel.interpreter import interpret
+from nc_sim.channel.state import ChannelProgress, LoadedProgram
+from nc_sim.channel.words import ProgramError
 from nc_sim.commands import (
     Accepted,
     Command,
+    CycleStart,
     EmergencyStop,
+    Feedhold,
     GearChange,
     HliWrite,
     Home,
@@ -33,8 +39,11 @@ from nc_sim.commands import (
     Move,
     Outcome,
     PlcAck,
+    ProgramLoad,
+    ProgramStop,
     Refused,
     Reset,
+    SingleBlock,
     SpindlePosition,
     SpindleRun,
 )
@@ -129,6 +138,7 @@ class Machine:
         self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
         self._m_gear: dict[int, Axis] = {}  # ... -> spindle waiting for its gear change
         self.sp = SpindleControl(self)
+        self.channel = ChannelProgress(slope=self.slope)
         for ax in self.axes:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
@@ -153,6 +163,16 @@ class Machine:
         match cmd:
             case Mdi():
                 return self._mdi(cmd.block, cmd.serial)
+            case ProgramLoad():
+                return self._program_load(cmd.name, cmd.text, cmd.serial)
+            case CycleStart() | ProgramStop():
+                answer = self._fail(
+                    None, Code.CHANNEL_ERROR_STATE, "program execution is not available yet"
+                )
+            case Feedhold():
+                self._channel_unit("feedhold", int(cmd.on))
+            case SingleBlock():
+                self.channel.single_block = cmd.on
             case SpindleRun():
                 answer = self._spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
             case SpindlePosition():
@@ -241,6 +261,8 @@ class Machine:
         *,
         m: int | None = None,
         gear: int | None = None,
+        line: int | None = None,
+        column: int | None = None,
     ) -> Event:
         """Record an error (its meaning, then the detail) or an event (its detail, which
         reads as a message of its own, else the meaning), numbered by the event log, with
@@ -257,6 +279,8 @@ class Machine:
             message=msg,
             m=m,
             gear=gear,
+            line=line,
+            column=column,
         )
         self.events.append(ev)
         return ev
@@ -824,6 +848,20 @@ class Machine:
         if run.error is not None:
             return Refused(serial, run.error)
         return Accepted(serial, self.cycle, block_id=bid)
+
+    def _program_load(self, name: str, text: str, serial: int) -> Outcome:
+        """Check a program by interpreting it from here; keep it when it has no error."""
+        names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
+        spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
+        start = {a.name: float(self.k.st[a.slot, L.S_P_CMD]) for a in self.axes}
+        try:
+            interpret(text, ListSink(), names, spindles, start)
+        except ProgramError as e:
+            self.log(Code(e.code), "", f"{name}: {e.detail}", line=e.line, column=e.column)
+            return Invalid(serial, e.detail, e.column, int(e.code), e.line)
+        self.channel.program = LoadedProgram(name, text)
+        self.log(Code.EV_PROGRAM_LOADED, "", f"program {name} loaded")
+        return Accepted(serial, self.cycle)
 
     def _abort_block(self, ax: Axis) -> None:
         if ax.block_id is not None and self._queue and self._queue[0].id == ax.block_id:

@@ -10,8 +10,10 @@ from nc_sim.machine.axis import Axis, target_and_distance
 from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.snapshot import (
     AxisSnapshot,
+    ChannelSnapshot,
     LoopMode,
     MachineSnapshot,
+    ModalSnapshot,
     PendingMSnapshot,
     PlcSnapshot,
     SpindleSnapshot,
@@ -75,6 +77,30 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
     )
 
 
+def channel_snapshot(m: Machine) -> ChannelSnapshot:
+    """The channel's program state and modal state now."""
+    c = m.channel
+    modal = c.modal
+    return ChannelSnapshot(
+        state=c.state,
+        program=c.program.name if c.program else None,
+        block_line=c.block_line,
+        blocks_done=c.blocks_done,
+        single_block=c.single_block,
+        modal=ModalSnapshot(
+            motion=modal.motion if modal else 0,
+            plane=modal.plane if modal else 17,
+            absolute=modal.absolute if modal else True,
+            feed_mm_min=modal.feed_mm_min if modal else None,
+            slope=m.slope,
+        ),
+        path_feed_mm_min=0.0,
+        distance_to_go_mm=None,
+        waiting_for=c.waiting_for,
+        error=c.error,
+    )
+
+
 def machine_snapshot(m: Machine) -> MachineSnapshot:
     """The whole machine now (its events are read from `m.events` by cursor)."""
     # the event that set each axis' job error, once: an emergency stop is one error
@@ -85,6 +111,7 @@ def machine_snapshot(m: Machine) -> MachineSnapshot:
         channel_units=dict(m.channel_units),
         emergency_stop=m.estop,
         queued_blocks=m.queued_blocks,
+        channel=channel_snapshot(m),
         axes=tuple(axis_snapshot(m, ax) for ax in m.axes),
         plc=PlcSnapshot(
             mode=m.plc.mode,

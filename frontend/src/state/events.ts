@@ -18,7 +18,9 @@ export function restartLog(message: string): void {
   events.value = [];
   seen.clear();
   acknowledged.value = new Set();
-  addEvents([{ cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null }]);
+  addEvents([
+    { cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null, line: null, column: null },
+  ]);
 }
 
 export function addEvents(list: JobError[]): void {
