@@ -39,6 +39,7 @@ class MachineChannelHost:
         self.path_axes = path_axes
         self.m_pending: dict[int, int] = {}  # action -> M functions not yet acknowledged
         self.stopping: dict[int, Axis] = {}  # M5 action -> its spindle (until standstill)
+        self.reaching: dict[int, Axis] = {}  # M3/M4/S action -> its spindle (speed reached)
         self.homing: dict[int, list[list[str]]] = {}  # G74 action -> order groups to come
         self.moving = False  # the path axes move for the channel (not for MDI or jog)
 
@@ -67,6 +68,8 @@ class MachineChannelHost:
                 sc = _spindle_cmd(call)
                 if isinstance(call, canon.SpindleOff):
                     self.stopping[action_id] = ax
+                elif isinstance(call, canon.SpindleOn | canon.SpindleSpeed):
+                    self.reaching[action_id] = ax
                 ok = m.sp.block(ax, sc, None, action_id)
                 if ok and sc.m is not None and m._synch_plc(ax, sc.m):
                     self.output(sc.m, ax.name, action_id)
@@ -124,6 +127,12 @@ class MachineChannelHost:
             if ax.state is not AxisState.STANDSTILL or not self.m.k.ist[ax.slot, L.I_STOPPED]:
                 return True
             del self.stopping[action_id]
+        ax = self.reaching.get(action_id)
+        if ax is not None:
+            turning = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
+            if turning and not self.m.k.ist[ax.slot, L.I_SPEED_REACHED]:
+                return True
+            del self.reaching[action_id]
         if action_id in self.homing:
             if not self._home_next(action_id):
                 self.homing.pop(action_id, None)
