@@ -1,11 +1,15 @@
 """Kernel throughput: simulated cycles per second for one demo machine, and how many demo
-machines one core steps at a 1 ms cycle in real time (one shared vectorised kernel)."""
+machines one core steps at a 1 ms cycle in real time (one shared vectorised kernel); with a
+program running on the X/Z path: cycles per second, the interpreter's cost per block, and the
+time to load and start a 10 000-block program."""
 
 from __future__ import annotations
 
 import time
 
-from nc_sim.commands import Mdi
+from nc_sim.channel.canon import ListSink
+from nc_sim.channel.interpreter import interpret
+from nc_sim.commands import CycleStart, Mdi, ProgramLoad
 from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
@@ -34,7 +38,52 @@ def cycles_per_second(machines: int, seconds: float = 2.0) -> float:
     return n / (time.perf_counter() - t0)
 
 
+def test_program(blocks: int) -> str:
+    """Back and forth on X/Z with half circles between: short blocks, look-ahead busy."""
+    lines = ["G18 G01 F3000"]
+    for i in range(blocks // 2):
+        z = -100.0 + (i % 50) * 0.5
+        lines.append(f"X{60 + (i % 2) * 2} Z{z:.3f}")
+        lines.append(
+            f"G03 X{60 + (i % 2) * 2} Z{z + 0.5:.3f} R0.25" if i % 2 else f"G01 Z{z + 0.5:.3f}"
+        )
+        lines.append("G01")
+    return "\n".join(lines[:blocks]) + "\nM30\n"
+
+
+def path_figures() -> None:
+    text = test_program(10_000)
+    t0 = time.perf_counter()
+    sink = ListSink()
+    interpret(text, sink, ("X", "Z"), ("S1",), {"X": 50.0, "Z": -100.0})
+    t_interp = time.perf_counter() - t0
+    blocks = text.count("\n")
+    print(f"interpreter: {t_interp / blocks * 1e6:.1f} µs per block ({blocks} blocks)")
+    sim = Simulation(CYCLE_S)
+    m = sim.add(demo_machine())
+    power_on(sim, m)
+    t0 = time.perf_counter()
+    m.submit(ProgramLoad("bench", text))
+    m.submit(CycleStart())
+    sim.run(1)
+    t_start = time.perf_counter() - t0
+    print(f"10 000-block program: load and start {t_start * 1e3:.0f} ms (bar: < 1000 ms)")
+    sim.run(2000)  # compile and get going
+    n = 0
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < 2.0:
+        sim.run(1000)
+        n += 1000
+    rate = n / (time.perf_counter() - t0)
+    line = m.channel.progress.block_line
+    print(
+        f"path running on X/Z: {rate:,.0f} cycles/s = {rate * CYCLE_S:,.0f}x real time "
+        f"(at line {line}, {m.channel.progress.blocks_done} blocks done)"
+    )
+
+
 def main() -> None:
+    path_figures()
     one = cycles_per_second(1)
     print(f"one demo machine: {one:,.0f} cycles/s = {one * CYCLE_S:,.0f}x real time (bar: >= 200x)")
     lo, hi = 1, 2

@@ -87,11 +87,27 @@ class SlottedAxis(Protocol):
     def slot(self) -> int: ...
 
 
-def machine_signals(axes: Iterable[SlottedAxis]) -> list[Signal]:
-    """Every signal of a machine's axes (`Machine.axes`), axis by axis, in a stable order."""
+CHANNEL = "CH"  # the signals' "axis" name for the channel
+
+
+def channel_signals(slot: int) -> list[Signal]:
+    """The channel's signals: program state, current block line, path velocity."""
+    rows = [
+        ("state", L.R_STATE, 1.0, "", "enum"),  # nc_sim.snapshot.ChannelState
+        ("block_line", L.R_LINE, 1.0, "", "enum"),
+        ("path_feed_mm_min", L.R_V_CMD, 60.0, "mm/min", "float"),
+    ]
+    return [Signal(f"{CHANNEL}.{n}", CHANNEL, slot, c, f, u, k) for n, c, f, u, k in rows]
+
+
+def machine_signals(axes: Iterable[SlottedAxis], channel_slot: int | None = None) -> list[Signal]:
+    """Every signal of a machine's axes (`Machine.axes`), axis by axis, in a stable order,
+    then the channel's (`Machine.channel_slot`)."""
     out: list[Signal] = []
     for ax in axes:
         out += _axis_signals(ax.name, ax.kind, ax.slot)
+    if channel_slot is not None:
+        out += channel_signals(channel_slot)
     return out
 
 

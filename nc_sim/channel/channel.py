@@ -89,6 +89,7 @@ class Channel:
         self.wait: _Wait | None = None
         self.last_line: int | None = None
         self.step_granted = False  # single block: cycle start lets one more block run
+        self.filling = True  # topping the window up (until full, then again at half)
         self.modal: tuple[int, int, bool, float | None] = (0, 17, True, None)
         self.feed_scale = 1.0 / 60.0  # F (mm/min) -> mm/s, times the override
         self.override = 1.0
@@ -207,7 +208,11 @@ class Channel:
                 self.step_granted = False
             self.last_line = step.line
             if step.element is not None:
-                if self.path.count >= self.lookahead:
+                # top the window up in batches: each new element means a new plan
+                if self.path.count <= self.lookahead // 2:
+                    self.filling = True
+                if self.path.count >= self.lookahead or not self.filling:
+                    self.filling = False
                     break
                 err = self.host.check_element(step.element)
                 if err is not None:

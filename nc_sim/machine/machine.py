@@ -145,6 +145,9 @@ class Machine:
         path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE][: L.MAX_PATH_AXES]
         self.channel_slot = kernel.claim(1)[0]
         self.ch_host = MachineChannelHost(self, path_axes)
+        self._interpreted: (
+            tuple[tuple[str, tuple[tuple[str, float], ...]], list[canon.Call]] | None
+        ) = None
         self.channel = Channel(
             Path(kernel, self.channel_slot, [a.slot for a in path_axes]),
             self.ch_host,
@@ -892,12 +895,17 @@ class Machine:
         return Accepted(serial, self.cycle, block_id=bid)
 
     def _interpret_here(self, text: str) -> list[canon.Call]:
-        """A program's canonical calls from where the axes are now (raises ProgramError)."""
+        """A program's canonical calls from where the axes are now (raises ProgramError);
+        the calls of the last load are reused while the axes have not moved since."""
         names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
         spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
         start = {a.name: float(self.k.st[a.slot, L.S_P_CMD]) for a in self.axes}
+        key = (text, tuple(start.items()))
+        if self._interpreted is not None and self._interpreted[0] == key:
+            return self._interpreted[1]
         sink = ListSink()
         interpret(text, sink, names, spindles, start)
+        self._interpreted = (key, sink.calls)
         return sink.calls
 
     def _program_load(self, name: str, text: str, serial: int) -> Outcome:
