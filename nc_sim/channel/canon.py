@@ -34,6 +34,8 @@ class Call:
         for f in fields(self):
             if f.name in ("line", "absolute"):
                 continue
+            if f.name == "exact_stop" and not getattr(self, f.name):
+                continue
             value = getattr(self, f.name)
             if value is None:
                 continue
@@ -56,6 +58,7 @@ class StraightTraverse(Call):
 
     end: tuple[tuple[str, float], ...]
     absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
+    exact_stop: bool = field(default=False, kw_only=True)  # G60: the path stops at its end
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,7 @@ class StraightFeed(Call):
 
     end: tuple[tuple[str, float], ...]
     absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
+    exact_stop: bool = field(default=False, kw_only=True)  # G60: the path stops at its end
 
 
 @dataclass(frozen=True)
@@ -80,6 +84,7 @@ class ArcFeed(Call):
     centre: tuple[float, float]
     turn: int
     absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
+    exact_stop: bool = field(default=False, kw_only=True)  # G60: the path stops at its end
 
 
 @dataclass(frozen=True)

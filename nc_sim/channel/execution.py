@@ -122,7 +122,7 @@ class Execution:
                         if isinstance(call, canon.ArcFeed):
                             g = 3 if call.turn > 0 else 2
                         e.modal = (g, self.plane, call.absolute, self.feed_mm_min)
-                        e.exact_stop = bool(after)
+                        e.exact_stop = bool(after) or call.exact_stop
                         self.steps.append(Step(line, element=e))
                         start = e.end.copy()
                 case canon.Dwell():

@@ -129,7 +129,7 @@ class _Block:
         for w in self.lexed.words:
             if w.letter == "G":
                 g = _whole(w, self.line)
-                if g not in (0, 1, 2, 3, 4, 17, 18, 19, 74, 90, 91, 200, 201):
+                if g not in (0, 1, 2, 3, 4, 17, 18, 19, 60, 74, 90, 91, 200, 201):
                     raise self.error(f"G{g} is not supported", w.column, Code.NOT_SUPPORTED)
                 self.g[g] = w
             elif w.letter == "M":
@@ -277,16 +277,20 @@ class _Block:
         if modal.motion == 0:
             if arc_words:
                 raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
-            self._emit(canon.StraightTraverse(self.line, target, absolute=self.run_.modal.absolute))
+            self._emit(canon.StraightTraverse(self.line, target, **self._motion_flags()))
         elif modal.feed_mm_min is None:
             raise self.error("G01/G02/G03 need a feed F first", col, Code.FEED_MISSING)
         elif modal.motion == 1:
             if arc_words:
                 raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
-            self._emit(canon.StraightFeed(self.line, target, absolute=self.run_.modal.absolute))
+            self._emit(canon.StraightFeed(self.line, target, **self._motion_flags()))
         else:
             self._arc(modal.motion, end, target, col)
         modal.position = end
+
+    def _motion_flags(self) -> dict[str, bool]:
+        """G90/G91 in force (for the status) and G60 exact stop (this block only)."""
+        return {"absolute": self.run_.modal.absolute, "exact_stop": 60 in self.g}
 
     def _dwell(self, axis_words: list[Word]) -> None:
         x = self.addr.get("X")
@@ -353,11 +357,7 @@ class _Block:
             raise self.error(
                 f"G0{motion} needs a centre I/J/K or a radius R", col, Code.ARC_GEOMETRY
             )
-        self._emit(
-            canon.ArcFeed(
-                self.line, target, plane, (ca, cb), turn, absolute=self.run_.modal.absolute
-            )
-        )
+        self._emit(canon.ArcFeed(self.line, target, plane, (ca, cb), turn, **self._motion_flags()))
 
     def _centre_from_radius(
         self, r_word: Word, sa: float, sb: float, ea: float, eb: float, turn: int

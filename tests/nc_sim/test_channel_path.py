@@ -181,3 +181,18 @@ def test_a_bad_program_is_refused_with_line_and_column() -> None:
     assert isinstance(out, Invalid)
     assert (out.line, out.column) == (2, 9)
     assert m.channel.state is ChannelState.IDLE
+
+
+def test_g60_stops_the_path_at_its_block_end_only() -> None:
+    _sim, m, rec = run("G01 X60 F600\nG60 X70\nX80\nM30\n", 5.0)
+    vx, _vz = cols(m, rec, L.R_V_CMD)
+    px, _pz = cols(m, rec, L.R_P_CMD)
+    moving = np.abs(vx) > 0
+    between_1_2 = (px > 59.0) & (px < 61.0)
+    between_2_3 = (px > 69.0) & (px < 71.0)
+    assert np.abs(vx[between_1_2]).min() == pytest.approx(10.0)  # X60: carried on at F
+    # G60: the speed falls to rest at X70 (sampled once a cycle: within the first cycle of
+    # jerk j = a/tr after rest, v ≤ j·cycle²/2 = 0.05 mm/s)
+    assert np.abs(vx[between_2_3]).min() < 0.05 + 1e-9
+    assert moving.any()
+    assert px[-1] == pytest.approx(80.0)
