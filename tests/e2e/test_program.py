@@ -1,14 +1,13 @@
 """The program workspace in the browser: upload, save and list a program; a syntax error shown
 at its line and column as one types; the tool path drawn; loading into the channel (and the
-refusal of a bad program with its line and column); cycle start (with the channel's
-execution)."""
+refusal of a bad program with its line and column); cycle start runs it and the actual path is
+drawn over the commanded one."""
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
 
-import pytest
 from playwright.sync_api import Browser, Locator, Page, expect
 
 from tests.backend.server import Server
@@ -126,7 +125,6 @@ def test_tablet_layout(browser: Browser, srv: Server, mid: str) -> None:
         page.close()
 
 
-@pytest.mark.skip(reason="channel execution lands with the path planner")
 def test_cycle_start_runs_the_program_and_draws_the_actual_path(
     page: Page, srv: Server, mid: str
 ) -> None:

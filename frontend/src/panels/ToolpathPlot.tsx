@@ -10,7 +10,7 @@ import { fmt } from "../ui/format";
 const MAX_ACTUAL = 20_000; // points of the actual path kept (the oldest go first)
 const MIN_STEP_MM = 0.001; // a new actual point only once the tool moved this far
 const MARGIN_PX = 40;
-const COLOURS = { rapid: "#7a8794", feed: "#0b63b6", current: "#f2a900", actual: "#d62728", grid: "#e4e9ef" };
+const COLOURS = { rapid: "#7a8794", feed: "#0b63b6", current: "#f2a900", actual: "rgba(214, 39, 40, 0.75)", grid: "#e4e9ef" };
 
 interface View {
   cx: number; // mm at the centre
