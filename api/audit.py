@@ -17,6 +17,7 @@ AuditKind = Literal[
     "machine",
     "trace",
     "recording",
+    "program",
     "user",
     "token",
 ]

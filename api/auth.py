@@ -11,8 +11,9 @@ from pydantic import BaseModel, Field
 class Role(StrEnum):
     """Roles of a user of the HMI, each allowed what the one before it may, and more."""
 
-    OBSERVER = "observer"  # watches; captures, saves and exports traces
-    OPERATOR = "operator"  # commands, jogs and writes parameters while holding control
+    OBSERVER = "observer"  # watches; captures, saves and exports traces; reads programs
+    OPERATOR = "operator"  # commands, jogs and writes parameters while holding control;
+    # writes programs
     INSTRUCTOR = "instructor"  # also takes control from others and paces the simulation
     ADMIN = "admin"  # everything, and users, machines and the service
 
@@ -20,10 +21,11 @@ class Role(StrEnum):
 class Action(StrEnum):
     """What a request does, as the authorization matrix sees it."""
 
-    OBSERVE = "observe"  # status, telemetry, parameters, traces, a machine's audit
+    OBSERVE = "observe"  # status, telemetry, parameters, traces, programs, a machine's audit
     CAPTURE = "capture"  # scope set-up, arm, force, stop; save, annotate, view traces
     RECORD = "record"  # long recordings to disk (within the recordings quota)
     DELETE_TRACE = "delete_trace"
+    PROGRAMS = "programs"  # write and delete stored NC programs (service-wide, no control)
     CONTROL = "control"  # take a free machine, request, release, grant or refuse control
     STOP = "stop"  # emergency stop: any operator, holding control or not
     COMMAND = "command"  # NC commands, jog, reset, power cycle: only while holding control
@@ -38,6 +40,7 @@ _OBSERVER = frozenset({Action.OBSERVE, Action.CAPTURE})
 _OPERATOR = _OBSERVER | {
     Action.RECORD,
     Action.DELETE_TRACE,
+    Action.PROGRAMS,
     Action.CONTROL,
     Action.STOP,
     Action.COMMAND,

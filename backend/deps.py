@@ -138,6 +138,7 @@ _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is r
     Action.CAPTURE: "trace",
     Action.RECORD: "recording",
     Action.DELETE_TRACE: "trace",
+    Action.PROGRAMS: "program",
     Action.CONTROL: "control",
     Action.STOP: "command",
     Action.COMMAND: "command",

@@ -8,6 +8,7 @@ from api.auth import Action
 from api.commands import Command, CommandResult, EmergencyStopCommand
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
+from backend.services import programs
 from backend.services.commands import execute
 
 router = APIRouter(prefix="/api/machines", tags=["commands"])
@@ -20,6 +21,7 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
         403,
         404,
         why={
+            404: "no such machine, or no stored program of that name (program_load)",
             409: "the NC refused the command (job error)",
             422: "bad input (an NC block with the column of the error)",
         }
@@ -29,9 +31,13 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
 async def command(
     cmd: Command, machine: MachineDep, actor: ActorDep, services: ServicesDep
 ) -> CommandResult:
-    """MDI block, spindle, gear, homing, jog, move, override, HLI, PLC, reset (only while
-    holding control of the machine: the first command takes a free one)."""
-    return await execute(actor, machine, cmd, services.audit)
+    """MDI block, program load (a stored program by name, or a text), cycle start, feedhold,
+    single block, program stop, spindle, gear, homing, jog, move, override, HLI, PLC, reset
+    (only while holding control of the machine: the first command takes a free one)."""
+    store = services.store
+    return await execute(
+        actor, machine, cmd, services.audit, lambda name: programs.stored_text(store, name)
+    )
 
 
 @router.post(

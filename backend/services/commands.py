@@ -10,6 +10,7 @@ the column of a bad NC block.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import replace
 
 from api.commands import (
@@ -67,15 +68,22 @@ def _refuse(status: int, message: str, **kw: object) -> ApiError:
     return ApiError(status, Refusal.model_validate({"message": message, **kw}).model_dump())
 
 
-def to_nc(cmd: Command | EmergencyStopCommand) -> nc.Command:
-    """The nc_sim command an API command stands for (the host's jog lease aside)."""
+StoredText = Callable[[str], str]
+"""The text of a stored program by name (raises ApiError 404 without one)."""
+
+
+def _no_store(name: str) -> str:
+    raise _refuse(422, f"program_load of {name} needs the program text here")
+
+
+def to_nc(cmd: Command | EmergencyStopCommand, stored: StoredText = _no_store) -> nc.Command:
+    """The nc_sim command an API command stands for (the host's jog lease aside); a
+    program_load without text loads the stored program of that name."""
     match cmd:
         case MdiCommand():
             return nc.Mdi(cmd.block)
         case ProgramLoadCommand():
-            if cmd.text is None:
-                raise _refuse(422, "program_load needs the program text")
-            return nc.ProgramLoad(cmd.name, cmd.text)
+            return nc.ProgramLoad(cmd.name, stored(cmd.name) if cmd.text is None else cmd.text)
         case CycleStartCommand():
             return nc.CycleStart()
         case FeedholdCommand():
@@ -137,14 +145,19 @@ def _renewal(m: MachineProxy, actor: Actor, cmd: Command | EmergencyStopCommand)
 
 
 async def execute(
-    actor: Actor, m: MachineProxy, cmd: Command | EmergencyStopCommand, audit: Audit
+    actor: Actor,
+    m: MachineProxy,
+    cmd: Command | EmergencyStopCommand,
+    audit: Audit,
+    stored: StoredText = _no_store,
 ) -> CommandResult:
     """Carry out one command on the machine's worker and audit it; raises ApiError with the
     refusal. The route checked who may send it (backend/deps.py `permit`). Runs on the event
-    loop: nothing here blocks, the worker's answer wakes it."""
+    loop: nothing here blocks but reading a stored program (`stored`, for program_load), the
+    worker's answer wakes it."""
     outcome = "ok"
     try:
-        return await _execute(m, cmd)
+        return await _execute(m, cmd, stored)
     except ApiError as e:
         outcome = f"refused ({e.status}): {refusal_text(e)}"
         raise
@@ -163,9 +176,11 @@ async def execute(
             )
 
 
-async def _execute(m: MachineProxy, cmd: Command | EmergencyStopCommand) -> CommandResult:
+async def _execute(
+    m: MachineProxy, cmd: Command | EmergencyStopCommand, stored: StoredText
+) -> CommandResult:
     serial = m.next_serial()
-    nc_cmd = replace(to_nc(cmd), serial=serial)
+    nc_cmd = replace(to_nc(cmd, stored), serial=serial)
     jog_hold_s, jog_release = None, False
     if isinstance(cmd, JogCommand) and cmd.action != "step":  # the dead-man lease of a jog
         jog_hold_s = cmd.hold_s if cmd.action == "start" else None

@@ -1,4 +1,5 @@
-"""SQLite storage: machines, their accepted parameter values, the audit trail, traces.
+"""SQLite storage: machines, their accepted parameter values, the audit trail, traces, NC
+programs.
 
 One file, one connection guarded by a lock (the service writes rarely and briefly). Values are
 stored as JSON so numbers stay numbers and strings stay strings.
@@ -11,7 +12,7 @@ import sqlite3
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -47,7 +48,28 @@ CREATE TABLE IF NOT EXISTS traces (
     notes TEXT NOT NULL,
     meta TEXT NOT NULL             -- JSON TraceDetail (its name and notes live in the columns)
 );
+CREATE TABLE IF NOT EXISTS programs (
+    name TEXT PRIMARY KEY,         -- as written; unique regardless of case
+    text TEXT NOT NULL,
+    size INTEGER NOT NULL,         -- characters
+    lines INTEGER NOT NULL,
+    updated REAL NOT NULL,         -- Unix time of the last write
+    updated_by TEXT NOT NULL
+);
+CREATE UNIQUE INDEX IF NOT EXISTS programs_name ON programs (name COLLATE NOCASE);
 """
+
+
+@dataclass(frozen=True)
+class StoredProgram:
+    """An NC program in the store (`text` empty when only the list was asked for)."""
+
+    name: str
+    size: int  # characters
+    lines: int
+    updated: float  # Unix time
+    updated_by: str
+    text: str = ""
 
 
 @dataclass(frozen=True)
@@ -286,3 +308,55 @@ class Store:
         with self._lock:
             cur = self._db.execute("DELETE FROM traces WHERE id = ?", (tid,))
         return cur.rowcount > 0
+
+    # --- NC programs (service-wide, by name) --------------------------------------------------
+    def programs(self) -> list[StoredProgram]:
+        """Every stored program without its text, by name."""
+        rows = self.query(
+            "SELECT name, size, lines, updated, updated_by FROM programs "
+            "ORDER BY name COLLATE NOCASE"
+        )
+        return [StoredProgram(*r) for r in rows]
+
+    def program(self, name: str) -> StoredProgram | None:
+        """The program `name` (any case) with its text, None when there is none."""
+        rows = self.query(
+            "SELECT name, size, lines, updated, updated_by, text FROM programs "
+            "WHERE name = ? COLLATE NOCASE",
+            (name,),
+        )
+        return StoredProgram(*rows[0]) if rows else None
+
+    def put_program(self, name: str, text: str, entry: audit.Entry) -> StoredProgram:
+        """Create or replace a program (one of another case is replaced and renamed) and
+        append its audit row, in one transaction."""
+        now = time.time() if entry.time is None else entry.time
+        stored = StoredProgram(name, len(text), _lines(text), now, entry.actor, text)
+
+        def work(db: sqlite3.Connection) -> None:
+            db.execute("DELETE FROM programs WHERE name = ? COLLATE NOCASE", (name,))
+            db.execute(
+                "INSERT INTO programs VALUES (?, ?, ?, ?, ?, ?)",
+                (name, text, stored.size, stored.lines, now, entry.actor),
+            )
+            audit.append(db, [replace(entry, time=now)])
+
+        self.transaction(work)
+        return stored
+
+    def delete_program(self, name: str, entry: audit.Entry) -> bool:
+        """Delete a program and audit it in one transaction; False when there was none."""
+
+        def work(db: sqlite3.Connection) -> bool:
+            cur = db.execute("DELETE FROM programs WHERE name = ? COLLATE NOCASE", (name,))
+            if cur.rowcount == 0:
+                return False
+            audit.append(db, [entry])
+            return True
+
+        return self.transaction(work)
+
+
+def _lines(text: str) -> int:
+    """Lines as an editor counts them (a last line without its newline counts)."""
+    return len(text.splitlines())

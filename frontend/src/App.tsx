@@ -14,6 +14,7 @@ import { MachineView } from "./panels/MachineView";
 import { MdiPanel } from "./panels/MdiPanel";
 import { Parameters } from "./panels/Parameters";
 import { Plots } from "./panels/Plots";
+import { ProgramPanel } from "./panels/ProgramPanel";
 import { Scope } from "./panels/Scope";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
@@ -23,7 +24,7 @@ import { commandBlocked, may } from "./state/control";
 import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
-const TABS = ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events", "Audit"] as const;
+const TABS = ["Operate", "Program", "Plots", "Scope", "Parameters", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
 function MachineControls() {
@@ -103,6 +104,7 @@ function Hmi() {
                 <Plots single />
               </div>
             ) : null}
+            {tab === "Program" ? <ProgramPanel /> : null}
             {tab === "Plots" ? <Plots /> : null}
             {tab === "Scope" ? <Scope /> : null}
             {tab === "Parameters" ? <Parameters /> : null}

@@ -3,10 +3,11 @@
 holder / non-holder of the machine's control.
 
 The expected rule of each route is written here from the issue's roles, not read from the
-service: observers watch, capture and save traces; operators also command, jog and write
-parameters while holding control, record, delete traces and ask for control; instructors
-also pace the simulation and take control; admins also manage machines, users and the whole
-audit trail. A route missing from RULES (a new one) fails `test_every_route_has_a_rule`.
+service: observers watch, capture and save traces and read programs; operators also command,
+jog and write parameters while holding control, record, delete traces, write programs and ask
+for control; instructors also pace the simulation and take control; admins also manage
+machines, users and the whole audit trail. A route missing from RULES (a new one) fails
+`test_every_route_has_a_rule`.
 """
 
 from __future__ import annotations
@@ -70,6 +71,11 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/traces/{tid}/viewer"): ("observer", FREE),
     ("GET", "/api/traces/{tid}/measure"): ("observer", FREE),
     ("POST", "/api/traces/{tid}/save"): ("observer", FREE),
+    ("GET", "/api/programs"): ("observer", FREE),
+    ("GET", "/api/programs/{name}"): ("observer", FREE),
+    ("PUT", "/api/programs/{name}"): ("operator", FREE),  # programs are service-wide
+    ("DELETE", "/api/programs/{name}"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/program-preview"): ("observer", FREE),  # changes nothing
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
     ("GET", "/api/audit"): ("admin", FREE),

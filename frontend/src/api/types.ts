@@ -36,7 +36,17 @@ export type Command =
   | S["HliCommand"]
   | S["PlcModeCommand"]
   | S["PlcAckCommand"]
-  | S["ResetCommand"];
+  | S["ResetCommand"]
+  | S["ProgramLoadCommand"]
+  | S["CycleStartCommand"]
+  | S["FeedholdCommand"]
+  | S["SingleBlockCommand"]
+  | S["ProgramStopCommand"];
+export type ChannelStatus = S["ChannelStatus"];
+export type ProgramInfo = S["ProgramInfo"];
+export type Program = S["Program"];
+export type ProgramPreview = S["ProgramPreview"];
+export type PreviewSegment = S["PreviewSegment"];
 export type Scope = ParameterValue["scope"];
 export type ScopeStatus = S["ScopeStatus"];
 export type ScopeSetup = S["ScopeSetupModel"];

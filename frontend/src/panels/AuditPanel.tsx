@@ -17,6 +17,7 @@ const KINDS: AuditKind[] = [
   "simulation",
   "machine",
   "trace",
+  "program",
   "recording",
   "login",
   "login_failed",

@@ -1,0 +1,83 @@
+"""NC programs: the stored ones (list, read, write, delete) and a program's preview on a
+machine (its first error and its commanded tool path)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Request, Response
+from fastapi.concurrency import run_in_threadpool
+
+from api.auth import Action
+from api.commands import PROGRAM_MAX_CHARS, ProgramName
+from api.programs import Program, ProgramInfo, ProgramPreview, ProgramText
+from backend.bodies import json_body, read_model
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
+from backend.errors import WORKER_GONE, responses
+from backend.services import programs
+from backend.workers.protocol import ReadStatus, StatusRead
+
+router = APIRouter(tags=["programs"])
+# a program's characters take up to 4 bytes in UTF-8, and JSON escapes some (newline: 2 bytes)
+MAX_BODY_BYTES = 4 * PROGRAM_MAX_CHARS + 1024
+NameDep = Annotated[ProgramName, Path()]
+BODY = json_body(ProgramText, MAX_BODY_BYTES)
+
+
+@router.get("/api/programs", dependencies=[permit(Action.OBSERVE)])
+def list_programs(services: ServicesDep) -> list[ProgramInfo]:
+    """Every stored program (without its text), by name."""
+    return [programs.program_info(p) for p in services.store.programs()]
+
+
+@router.get(
+    "/api/programs/{name}", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422)
+)
+def read_program(name: NameDep, services: ServicesDep) -> Program:
+    """A stored program with its text (names match regardless of case)."""
+    return programs.program_of(programs.get(services.store, name))
+
+
+@router.put(
+    "/api/programs/{name}",
+    dependencies=[permit(Action.PROGRAMS)],
+    responses=responses(403, 413, 422),
+    openapi_extra=BODY,
+)
+async def write_program(
+    name: NameDep, request: Request, services: ServicesDep, actor: ActorDep
+) -> ProgramInfo:
+    """Create or replace a program (body `{text}`); audited. It is stored as written, errors
+    and all: the preview and `program_load` check it."""
+    body = await read_model(request, ProgramText, MAX_BODY_BYTES, "program")
+    return await run_in_threadpool(programs.put, services.store, actor, name, body.text)
+
+
+@router.delete(
+    "/api/programs/{name}",
+    status_code=204,
+    response_class=Response,
+    dependencies=[permit(Action.PROGRAMS)],
+    responses=responses(403, 404, 422),
+)
+def delete_program(name: NameDep, services: ServicesDep, actor: ActorDep) -> Response:
+    """Delete a stored program; audited."""
+    programs.delete(services.store, actor, name)
+    return Response(status_code=204)
+
+
+@router.post(
+    "/api/machines/{mid}/program-preview",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(404, 413, 422, why=WORKER_GONE),
+    openapi_extra=BODY,
+)
+async def program_preview(request: Request, machine: MachineDep) -> ProgramPreview:
+    """Check a program on this machine and draw it: its first error (line, column, job
+    error) and the commanded tool path up to there, from the machine's commanded positions,
+    in the plane the program selects (else G17, or G18 on a lathe). Changes nothing."""
+    body = await read_model(request, ProgramText, MAX_BODY_BYTES, "program")
+    read = await machine.acall(ReadStatus(machine.id))
+    assert isinstance(read, StatusRead)
+    # a long program takes a while to interpret: off the event loop
+    return await run_in_threadpool(programs.program_preview, read.snapshot, body.text)

@@ -1,0 +1,94 @@
+"""NC programs: the stored ones (service-wide, by name, every write audited) and the preview
+of a program's tool path on a machine (interpreted here: the interpreter is pure and cheap,
+no kernel needed)."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+from typing import Literal
+
+from api.programs import PreviewError, PreviewSegment, Program, ProgramInfo, ProgramPreview
+from backend.errors import not_found
+from backend.services.audit import Entry
+from backend.services.auth import Actor
+from backend.services.store import Store, StoredProgram
+from nc_sim.channel import canon
+from nc_sim.channel.interpreter import interpret
+from nc_sim.channel.preview import preview
+from nc_sim.channel.words import ProgramError
+from nc_sim.snapshot import MachineSnapshot
+from nc_sim.units import AxisKind
+
+_PLANE: dict[int, Literal["G17", "G18", "G19"]] = {17: "G17", 18: "G18", 19: "G19"}
+
+
+def program_info(p: StoredProgram) -> ProgramInfo:
+    return ProgramInfo(
+        name=p.name,
+        size=p.size,
+        lines=p.lines,
+        updated_at=datetime.fromtimestamp(p.updated, UTC),
+        updated_by=p.updated_by,
+    )
+
+
+def program_of(p: StoredProgram) -> Program:
+    return Program(**program_info(p).model_dump(), text=p.text)
+
+
+def get(store: Store, name: str) -> StoredProgram:
+    """The stored program `name` (any case); 404 without one."""
+    p = store.program(name)
+    if p is None:
+        raise not_found(f"program {name}")
+    return p
+
+
+def put(store: Store, actor: Actor, name: str, text: str) -> ProgramInfo:
+    """Create or replace a program, audited with its size (the text is in the store)."""
+    before = store.program(name)
+    verb = "replaced" if before is not None else "created"
+    entry = Entry(
+        actor.name,
+        actor.session,
+        "program",
+        f"{verb} program {name} ({len(text)} characters)",
+        detail={"name": name, "size": len(text), "lines": len(text.splitlines())},
+    )
+    return program_info(store.put_program(name, text, entry))
+
+
+def delete(store: Store, actor: Actor, name: str) -> None:
+    """Delete a program (audited); 404 without one."""
+    entry = Entry(
+        actor.name, actor.session, "program", f"deleted program {name}", detail={"name": name}
+    )
+    if not store.delete_program(name, entry):
+        raise not_found(f"program {name}")
+
+
+def stored_text(store: Store, name: str) -> str:
+    """The text of a stored program, for `program_load` without a text; 404 without one."""
+    return get(store, name).text
+
+
+def program_preview(snapshot: MachineSnapshot, text: str) -> ProgramPreview:
+    """The program's commanded tool path on this machine from its commanded positions, up to
+    its first error."""
+    axes = [a.name for a in snapshot.axes if a.kind is not AxisKind.SPINDLE]
+    spindles = [a.name for a in snapshot.axes if a.kind is AxisKind.SPINDLE]
+    start = {a.name: a.pos_cmd for a in snapshot.axes if a.kind is not AxisKind.SPINDLE}
+    sink = canon.ListSink()
+    error = None
+    try:
+        interpret(text, sink, axes, spindles, start)
+    except ProgramError as e:
+        error = PreviewError(line=e.line, column=e.column, code=int(e.code), message=e.detail)
+    p = preview(sink.calls, start, axes)
+    return ProgramPreview(
+        error=error,
+        plane=_PLANE[p.plane],
+        axes=p.axes,
+        segments=[PreviewSegment(line=s.line, rapid=s.rapid, points=s.points) for s in p.segments],
+        truncated=p.truncated,
+    )
