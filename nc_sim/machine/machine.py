@@ -18,9 +18,11 @@ from typing import assert_never
 import numpy as np
 
 from nc_sim.blocks import Block, BlockError, parse_block
+from nc_sim.channel import canon
 from nc_sim.channel.canon import ListSink
+from nc_sim.channel.channel import Channel
 from nc_sim.channel.interpreter import interpret
-from nc_sim.channel.state import ChannelProgress, LoadedProgram
+from nc_sim.channel.path import Path
 from nc_sim.channel.words import ProgramError
 from nc_sim.commands import (
     Accepted,
@@ -62,6 +64,7 @@ from nc_sim.machine.axis import (
     power_on,
     push_params,
 )
+from nc_sim.machine.channel_host import MachineChannelHost
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.drive import READY_FOR_POWER_ON
 from nc_sim.machine.dynamics import (
@@ -77,10 +80,11 @@ from nc_sim.machine.spindle import SpindleControl
 from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
-from nc_sim.snapshot import AxisState, MachineSnapshot
+from nc_sim.snapshot import AxisState, ChannelState, MachineSnapshot
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
+_PROGRAM_ACTIVE = (ChannelState.RUNNING, ChannelState.HELD, ChannelState.BLOCK_END)
 AXIS_UNITS = (
     "override",
     "override_valid",
@@ -138,7 +142,17 @@ class Machine:
         self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
         self._m_gear: dict[int, Axis] = {}  # ... -> spindle waiting for its gear change
         self.sp = SpindleControl(self)
-        self.channel = ChannelProgress(slope=self.slope)
+        path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE][: L.MAX_PATH_AXES]
+        self.channel_slot = kernel.claim(1)[0]
+        self.ch_host = MachineChannelHost(self, path_axes)
+        self.channel = Channel(
+            Path(kernel, self.channel_slot, [a.slot for a in path_axes]),
+            self.ch_host,
+            tuple(a.name for a in path_axes),
+            self._interpret_here,
+            cfg.cycle_s,
+            int(cfg.channel_raw("lookahead_blocks")),
+        )
         for ax in self.axes:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
@@ -165,14 +179,16 @@ class Machine:
                 return self._mdi(cmd.block, cmd.serial)
             case ProgramLoad():
                 return self._program_load(cmd.name, cmd.text, cmd.serial)
-            case CycleStart() | ProgramStop():
-                answer = self._fail(
-                    None, Code.CHANNEL_ERROR_STATE, "program execution is not available yet"
-                )
+            case CycleStart():
+                answer = self._cycle_start()
+            case ProgramStop():
+                if self.channel.state in _PROGRAM_ACTIVE:
+                    self.channel.stop()
+                    self.log(Code.EV_PROGRAM_STOP)
             case Feedhold():
                 self._channel_unit("feedhold", int(cmd.on))
             case SingleBlock():
-                self.channel.single_block = cmd.on
+                self.channel.set_single_block(cmd.on)
             case SpindleRun():
                 answer = self._spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
             case SpindlePosition():
@@ -224,6 +240,9 @@ class Machine:
             times.append(due)
         times += [c + self._ack_timeout for c in self._m_out]
         times += [ax.deadline for ax in self.axes if ax.deadline is not None]
+        wake = self.channel.next_wakeup()
+        if wake is not None:
+            times.append(wake)
         if self.estop and any(ax.enables_ok() for ax in self.axes):
             times.append(self.cycle + 1)  # watch the braking axes settle (_estop_settled)
         return min(times) if times else None
@@ -432,6 +451,12 @@ class Machine:
         self._plan_move(ax, self._limits(ax, ax.motion), self._vmax(ax, ax.motion))
 
     def _check_motion(self, ax: Axis) -> Event | None:
+        if self.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS:
+            return self._fail(ax, Code.AXIS_BUSY, f"{ax.name} moves on the program's path")
+        return self.drive_refusal(ax)
+
+    def drive_refusal(self, ax: Axis) -> Event | None:
+        """Why the axis cannot move now (E-stop, error, enables, drive status), else None."""
         if self.estop:
             return self._fail(ax, Code.CHANNEL_ERROR_STATE, "emergency stop active")
         if ax.state is AxisState.ERROR:
@@ -717,7 +742,12 @@ class Machine:
         old = self.channel_units[unit]
         self.channel_units[unit] = max(0, min(value, 2000)) if unit == "override" else value
         self.log(Code.EV_HLI, "", f"channel {unit} = {value}")
+        if unit == "override":
+            cap = self.cfg.channel_eng("max_vb_override")
+            self.channel.override = min(self.channel_units["override"] * 1e-3, cap)
+            self.channel.replan()
         if unit == "feedhold" and value and not old:
+            self.channel.hold()
             use_set = bool(self.cfg.channel_raw("use_drive_curr_limit"))
             for ax in self.axes:
                 if (
@@ -729,6 +759,8 @@ class Machine:
                     lim = feedhold_limits(ax.cfg, ax.gear, ax.motion, ax.slope, use_set)
                     self._plan_move(ax, lim, 0.0)
         elif unit == "feedhold" and not value and old:
+            if self.channel.state is ChannelState.HELD:
+                self.channel.resume()
             for ax in self.axes:
                 if ax.hold:
                     ax.hold = False
@@ -772,6 +804,12 @@ class Machine:
         """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.estop = self.estop, False
+        if (
+            self.channel.state in _PROGRAM_ACTIVE
+            or self.channel.path.count
+            or self.channel.state is ChannelState.ERROR
+        ):
+            self.channel.abort(None)
         self._queue.clear()
         self._m_out.clear()
         self._m_gear.clear()
@@ -790,6 +828,7 @@ class Machine:
         self.estop = True
         self._queue.clear()
         stop = self.log(Code.EMERGENCY_STOP)  # one error, the active one of every axis
+        self.channel.abort(stop)  # the path axes brake on their own, leaving the path
         for ax in self.axes:
             moving = ax.state not in (AxisState.STANDSTILL, AxisState.ERROR)
             ax.motion, ax.hold, ax.homing, ax.task = None, False, HomingPhase.NONE, None
@@ -822,6 +861,7 @@ class Machine:
     def _m_acked(self, m: int, out_cycle: int) -> None:
         self.log(Code.EV_M_ACK, "", f"M{m} acknowledged", m=m)
         block = self._m_out.pop(out_cycle, None)
+        self.ch_host.acknowledged(block)
         if block is not None and self._queue and self._queue[0].id == block:
             self._queue[0].waiting_m -= 1
         spindle = self._m_gear.pop(out_cycle, None)
@@ -833,6 +873,8 @@ class Machine:
         """Queue one block and start it when the queue is free: a block that does not parse
         is invalid (with the column), one that fails while starting is refused with its job
         error, one that started or waits behind a running block is accepted."""
+        if self.channel.state in _PROGRAM_ACTIVE:
+            return Refused(serial, self._fail(None, Code.AXIS_BUSY, "a program is running"))
         bid = self._next_id
         self._next_id += 1
         names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
@@ -849,21 +891,74 @@ class Machine:
             return Refused(serial, run.error)
         return Accepted(serial, self.cycle, block_id=bid)
 
-    def _program_load(self, name: str, text: str, serial: int) -> Outcome:
-        """Check a program by interpreting it from here; keep it when it has no error."""
+    def _interpret_here(self, text: str) -> list[canon.Call]:
+        """A program's canonical calls from where the axes are now (raises ProgramError)."""
         names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
         spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
         start = {a.name: float(self.k.st[a.slot, L.S_P_CMD]) for a in self.axes}
+        sink = ListSink()
+        interpret(text, sink, names, spindles, start)
+        return sink.calls
+
+    def _program_load(self, name: str, text: str, serial: int) -> Outcome:
+        """Check a program by interpreting it from here; keep it when it has no error."""
+        if self.channel.state in _PROGRAM_ACTIVE:
+            return Refused(serial, self._fail(None, Code.AXIS_BUSY, "a program is running"))
         try:
-            interpret(text, ListSink(), names, spindles, start)
+            self._interpret_here(text)
         except ProgramError as e:
             self.log(Code(e.code), "", f"{name}: {e.detail}", line=e.line, column=e.column)
             return Invalid(serial, e.detail, e.column, int(e.code), e.line)
-        self.channel.program = LoadedProgram(name, text)
+        self.channel.load(name, text)
         self.log(Code.EV_PROGRAM_LOADED, "", f"program {name} loaded")
         return Accepted(serial, self.cycle)
 
+    def _cycle_start(self) -> Event | None:
+        """Run the loaded program, or continue after feedhold or a single-block stop."""
+        ch = self.channel
+        if ch.state in (ChannelState.HELD, ChannelState.BLOCK_END):
+            if self.channel_units["feedhold"]:
+                return self._fail(None, Code.CHANNEL_ERROR_STATE, "feedhold is on")
+            ch.resume()
+            return None
+        if ch.state is ChannelState.RUNNING:
+            return None
+        if self.estop:
+            return self._fail(None, Code.CHANNEL_ERROR_STATE, "emergency stop active")
+        if ch.state is ChannelState.IDLE:
+            return self._fail(None, Code.CHANNEL_ERROR_STATE, "no program loaded")
+        if ch.state is ChannelState.ERROR:
+            return self._fail(None, Code.CHANNEL_ERROR_STATE, "reset first")
+        if self._queue:
+            return self._fail(None, Code.AXIS_BUSY, "MDI blocks are running")
+        try:
+            ch.start()
+        except ProgramError as e:
+            return self.log(Code(e.code), "", e.detail, line=e.line, column=e.column)
+        self.log(
+            Code.EV_PROGRAM_START,
+            "",
+            f"program {ch.progress.program.name if ch.progress.program else ''}",
+        )
+        # the start may have ended in a job error at once (an axis not ready, a limit)
+        return ch.progress.error
+
+    def _channel_error(self, ev: Event | None) -> None:
+        """A job error stops the program: the path axes brake on their own."""
+        self.channel.abort(ev)
+        for a in self.ch_host.path_axes:
+            if a.state is AxisState.MOVING:
+                self._stop(a, self._limits(a, Motion.FEED))
+
     def _abort_block(self, ax: Axis) -> None:
+        on_path = self.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS
+        mdi = bool(self._queue) and self._queue[0].id == ax.block_id
+        if self.channel.state in _PROGRAM_ACTIVE and (
+            on_path or (ax.block_id is not None and not mdi)
+        ):
+            ax.block_id = None
+            self._channel_error(ax.error_event)
+            return
         if ax.block_id is not None and self._queue and self._queue[0].id == ax.block_id:
             self._queue.popleft()
         ax.block_id = None
@@ -984,7 +1079,7 @@ class Machine:
                 del self._m_out[out]
                 gone = self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
                 spindle = self._m_gear.pop(out, None)
-                self._fail(
+                late = self._fail(
                     spindle,
                     Code.PLC_ACK_TIMEOUT,
                     f"no acknowledgement after {timeout * self.k.cycle_s:g} s",
@@ -994,6 +1089,8 @@ class Machine:
                     self.sp.gear_timeout(spindle)
                 if self._queue and self._queue[0].id == bid:
                     self._queue.popleft()
+                elif bid in self.ch_host.m_pending:
+                    self._channel_error(late)
         for ax in self.axes:
             ev = int(self.k.ist[ax.slot, L.I_EVENTS])
             if ev:
@@ -1003,6 +1100,13 @@ class Machine:
                 self._watchdog_expired(ax)
         if self.estop:
             self._estop_settled()
+        ch_ev = int(self.k.ist[self.channel_slot, L.I_EVENTS])
+        if ch_ev:
+            self.k.ist[self.channel_slot, L.I_EVENTS] = 0
+            self.channel.on_path_events()
+        else:
+            self.channel.pump()
+        self.k.ist[self.channel_slot, L.I_STATE] = int(self.channel.state)
         self._pump()
 
     def _drive_status(self) -> None:
