@@ -41,6 +41,8 @@ def write_events(path: Path, result: ScenarioResult) -> None:
                 "message": e.message,
                 "m": e.m,
                 "gear": e.gear,
+                "line": e.line,
+                "column": e.column,
             }
             f.write(json.dumps(rec) + "\n")
 

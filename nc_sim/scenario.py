@@ -16,8 +16,11 @@ from typing import Any
 import numpy as np
 
 from nc_sim.commands import (
+    Accepted,
     Command,
+    CycleStart,
     EmergencyStop,
+    Feedhold,
     GearChange,
     HliWrite,
     Home,
@@ -29,7 +32,9 @@ from nc_sim.commands import (
     Move,
     PlcAck,
     PlcMode,
+    ProgramLoad,
     Reset,
+    SingleBlock,
     SpindlePosition,
     SpindleRun,
 )
@@ -71,8 +76,71 @@ def apply_parameters(cfg: MachineConfig, params: Mapping[str, Mapping[str, Any]]
         apply_overrides(cfg, scope, target, values)
 
 
-def command(action: Mapping[str, Any]) -> Command:
-    """The command a TOML action stands for (README: scenario format)."""
+ACTIONS = (
+    "mdi",
+    "program",
+    "cycle_start",
+    "feedhold",
+    "single_block",
+    "hli",
+    "plc",
+    "jog",
+    "move",
+    "home",
+    "spindle",
+    "reset",
+    "emergency_stop",
+)
+PROGRAM_NAME = "scenario"  # the label of a `program` action's text without `name`
+
+
+def commands(action: Mapping[str, Any]) -> tuple[Command, ...]:
+    """The commands a TOML action stands for, submitted in this order (README: scenario
+    format); `program` is a load and a cycle start. A missing or mistyped field is an
+    NcUsageError naming the action and the field."""
+    kind = next((k for k in ACTIONS if k in action), None)
+    if kind is None:
+        raise NcUsageError(f"unknown action {dict(action)}: one of {', '.join(ACTIONS)}")
+    try:
+        return _commands(kind, action)
+    except KeyError as e:
+        raise NcUsageError(f"action {kind}: field {e.args[0]} missing") from e
+    except (TypeError, ValueError) as e:
+        raise NcUsageError(f"action {kind}: {e}") from e
+
+
+def _flag(action: Mapping[str, Any], field: str) -> bool:
+    """A `true | false` field (TOML booleans only: `"yes"` or `1` is a typo, not a value)."""
+    value = action[field]
+    if not isinstance(value, bool):
+        raise ValueError(f"{field} must be true or false, not {value!r}")
+    return value
+
+
+def _text(action: Mapping[str, Any], field: str) -> str:
+    value = action[field]
+    if not isinstance(value, str):
+        raise ValueError(f"{field} must be a string, not {value!r}")
+    return value
+
+
+def _commands(kind: str, action: Mapping[str, Any]) -> tuple[Command, ...]:
+    if kind == "program":
+        name = _text(action, "name") if "name" in action else PROGRAM_NAME
+        return ProgramLoad(name, _text(action, "program")), CycleStart()
+    if kind == "cycle_start":
+        if not _flag(action, "cycle_start"):
+            raise ValueError("cycle_start must be true (there is no cycle start off)")
+        return (CycleStart(),)
+    if kind == "feedhold":
+        return (Feedhold(_flag(action, "feedhold")),)
+    if kind == "single_block":
+        return (SingleBlock(_flag(action, "single_block")),)
+    return (_command(action),)
+
+
+def _command(action: Mapping[str, Any]) -> Command:
+    """The one command of an action that is one command."""
     if "mdi" in action:
         return Mdi(str(action["mdi"]))
     if "hli" in action:
@@ -110,7 +178,7 @@ def command(action: Mapping[str, Any]) -> Command:
         return Reset()
     if action.get("emergency_stop"):
         return EmergencyStop()
-    raise NcUsageError(f"unknown action {dict(action)}")
+    raise NcUsageError(f"unknown action {dict(action)}")  # ACTIONS and this disagree
 
 
 def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.ndarray]:
@@ -155,9 +223,12 @@ def run_scenario(cfg: MachineConfig, scenario: Mapping[str, Any]) -> ScenarioRes
 
     for action in actions:
         run_to(min(n_total, round(float(action.get("t_s", 0.0)) / cfg.cycle_s)))
-        outcome = m.submit(command(action))  # a refusal or a bad block: in the event log
-        if isinstance(outcome, Invalid) and outcome.code is None:  # a fault of the scenario
-            raise NcUsageError(f"action {dict(action)}: {outcome.message}")
+        for cmd in commands(action):
+            outcome = m.submit(cmd)  # a refusal, a bad block or program: in the event log
+            if isinstance(outcome, Invalid) and outcome.code is None:  # a fault of the scenario
+                raise NcUsageError(f"action {dict(action)}: {outcome.message}")
+            if not isinstance(outcome, Accepted):  # a program that did not load is not started
+                break
         collect()
     run_to(n_total)
     events = [replace(e, t_s=(e.cycle - t0) * cfg.cycle_s) for e in events]

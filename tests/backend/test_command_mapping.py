@@ -17,7 +17,7 @@ from backend.services.commands import to_nc
 from nc_sim.commands import Accepted, Refused
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.machine.config import demo_machine
-from nc_sim.scenario import command, run_scenario
+from nc_sim.scenario import commands, run_scenario
 from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make
 
@@ -55,6 +55,10 @@ PAIRS: list[tuple[dict[str, Any], dict[str, Any]]] = [
     ({"type": "plc_ack", "m": 8}, {"plc": {"ack": 8}}),
     ({"type": "plc_ack"}, {"plc": {"ack": "all"}}),
     ({"type": "reset"}, {"reset": True}),
+    ({"type": "cycle_start"}, {"cycle_start": True}),
+    ({"type": "feedhold", "on": True}, {"feedhold": True}),
+    ({"type": "feedhold", "on": False}, {"feedhold": False}),
+    ({"type": "single_block", "on": True}, {"single_block": True}),
 ]
 
 API: TypeAdapter[ApiCommand] = TypeAdapter(ApiCommand)
@@ -65,14 +69,21 @@ def test_the_api_and_a_scenario_action_are_the_same_command(
     api: dict[str, Any], action: dict[str, Any]
 ) -> None:
     cmd = to_nc(API.validate_python(api))
-    assert cmd == command(action)
+    assert commands(action) == (cmd,)
     _, m1, _ = make()
     _, m2, _ = make()
-    assert m1.submit(cmd) == m2.submit(command(action))  # one dispatcher: one outcome
+    assert m1.submit(cmd) == m2.submit(commands(action)[0])  # one dispatcher: one outcome
 
 
 def test_the_emergency_stop_route_and_a_scenario_action_are_the_same_command() -> None:
-    assert to_nc(EmergencyStopCommand()) == command({"emergency_stop": True})
+    assert commands({"emergency_stop": True}) == (to_nc(EmergencyStopCommand()),)
+
+
+def test_a_program_action_is_the_api_program_load_then_cycle_start() -> None:
+    text = "G00 X10\nM30"
+    load = to_nc(API.validate_python({"type": "program_load", "name": "p1", "text": text}))
+    start = to_nc(API.validate_python({"type": "cycle_start"}))
+    assert commands({"program": text, "name": "p1"}) == (load, start)
 
 
 def test_a_refused_block_is_the_same_refusal_through_either_way_in() -> None:
@@ -81,8 +92,8 @@ def test_a_refused_block_is_the_same_refusal_through_either_way_in() -> None:
     out = m.submit(api)
     assert isinstance(out, Refused) and out.code == Code.GEAR_NO_RANGE
     _, m2, _ = make()
-    assert m2.submit(command({"mdi": "M3 S20000"})) == out
-    assert isinstance(m2.submit(command({"mdi": "M3 S1000"})), Accepted)
+    assert m2.submit(*commands({"mdi": "M3 S20000"})) == out
+    assert isinstance(m2.submit(*commands({"mdi": "M3 S1000"})), Accepted)
 
 
 def test_a_scenario_records_a_refusal_as_an_event_and_runs_on() -> None:

@@ -143,3 +143,34 @@ def test_spindle_sequences_scenario_exposes_the_spindle_signals(tmp_path: Path) 
     assert any(e["code"] == Code.EV_M_OUTPUT and (e["m"], e["gear"]) == (41, 2) for e in events)
     # in position after M19 (m 19), then after S[G74] homing (no M function)
     assert [e["m"] for e in events if e["code"] == Code.EV_IN_POSITION] == [19, None]
+
+
+def test_a_program_action_reaches_the_channel_with_line_and_column(tmp_path: Path) -> None:
+    """`program = \"\"\"...\"\"\"` through the console script. The G18 arc on line 3 starts at
+    X10 Z0 with its centre at X0 Z0 (I-10): start radius 10, but its end X0 Z12 lies 12 from the
+    centre, so the load fails at the I word (column 12); events.jsonl names line and column and
+    the run goes on to its next action."""
+    scenario = tmp_path / "program.toml"
+    scenario.write_text(
+        'duration_s = 0.2\n[[actions]]\nt_s = 0.05\nname = "bad_arc"\nprogram = """\n'
+        "G18 G00 X10 Z0\n(line 2: the arc starts at X10 Z0, centre Z0 X0)\n"
+        'G03 X0 Z12 I-10 F100\nM30\n"""\n'
+        "[[actions]]\nt_s = 0.1\nfeedhold = true\n",
+        encoding="utf-8",
+    )
+    res = run_cli(scenario, tmp_path / "out")
+    assert res.returncode == 0, res.stderr
+    lines = (tmp_path / "out" / "events.jsonl").read_text().splitlines()
+    events = [json.loads(line) for line in lines]
+    errors = [e for e in events if e["error"]]
+    assert [(e["code"], e["line"], e["column"]) for e in errors] == [(Code.ARC_GEOMETRY, 3, 12)]
+    assert errors[0]["t_s"] == pytest.approx(0.05)
+    assert any(e["message"] == "channel feedhold = 1" for e in events)  # the next action ran
+
+
+def test_a_mistyped_channel_action_stops_the_run_naming_it(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('duration_s = 0.1\n[[actions]]\nsingle_block = "on"\n', encoding="utf-8")
+    res = run_cli(bad, tmp_path / "out")
+    assert res.returncode == 2
+    assert "action single_block: single_block must be true or false, not 'on'" in res.stderr
