@@ -5,6 +5,7 @@ geometry (lines, circles) and the axis parameters, never from our own output."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -29,8 +30,8 @@ X0, Z0 = 50.0, -100.0
 def run(
     program: str,
     seconds: float,
-    axes: dict[str, dict[str, object]] | None = None,
-    channel: dict[str, object] | None = None,
+    axes: dict[str, dict[str, Any]] | None = None,
+    channel: dict[str, Any] | None = None,
 ) -> tuple[Simulation, Machine, np.ndarray]:
     sim, m, _cfg = make(axes, channel)
     assert isinstance(m.submit(ProgramLoad("test", program)), Accepted)
@@ -157,7 +158,8 @@ def test_feedhold_stops_on_the_path_and_release_finishes_it() -> None:
     rec = record(sim, 4.0)
     px, pz = cols(m, rec, L.R_P_CMD)
     assert (px[-1], pz[-1]) == (pytest.approx(90.0), pytest.approx(-80.0))
-    assert m.channel.state is ChannelState.READY  # M30: ready for the next cycle start
+    state: ChannelState = m.channel.state
+    assert state is ChannelState.READY  # M30: ready for the next cycle start
 
 
 def test_single_block_stops_at_each_block_end() -> None:
