@@ -17,6 +17,18 @@ from typing import assert_never
 
 import numpy as np
 
+from nc_sim import hli
+from nc_sim.axis.drive import READY_FOR_POWER_ON
+from nc_sim.axis.dynamics import (
+    Motion,
+    emergency_limits,
+    feedhold_limits,
+    motion_limits,
+    velocity_limit,
+)
+from nc_sim.axis.params import power_on, push_params
+from nc_sim.axis.state import Axis, HomingPhase, ToolLimits, drive_status
+from nc_sim.axis.watchdog import bound_s, plan_s, search_s
 from nc_sim.blocks import Block, BlockError, parse_block
 from nc_sim.channel.canon import ListSink
 from nc_sim.channel.interpreter import interpret
@@ -54,43 +66,15 @@ from nc_sim.errors import MESSAGES, Code, NcUsageError, is_error
 from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
-from nc_sim.machine.axis import (
-    Axis,
-    HomingPhase,
-    ToolLimits,
-    drive_status,
-    power_on,
-    push_params,
-)
 from nc_sim.machine.config import MachineConfig
-from nc_sim.machine.drive import READY_FOR_POWER_ON
-from nc_sim.machine.dynamics import (
-    Motion,
-    emergency_limits,
-    feedhold_limits,
-    motion_limits,
-    velocity_limit,
-)
-from nc_sim.machine.gears import m_of
 from nc_sim.machine.readout import machine_snapshot
-from nc_sim.machine.spindle import SpindleControl
-from nc_sim.machine.watchdog import bound_s, plan_s, search_s
 from nc_sim.plc import PlcMode, SimPlc
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
 from nc_sim.snapshot import AxisState, MachineSnapshot
+from nc_sim.spindle.control import SpindleControl
+from nc_sim.spindle.gears import m_of
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
-CHANNEL_UNITS = ("override", "feedhold", "reduced_acceleration")
-AXIS_UNITS = (
-    "override",
-    "override_valid",
-    "DriveOn",
-    "TorquePermission",
-    "ReleaseFeedhold",
-    "reduced_speed",
-    "spindle_stop_at_program_end",
-    "spindle_reset",
-)
 _FAR = 1e9  # jog target of a spindle (a modulo axis: no position range)
 # positions the NC represents: SGN32 in 0.1 µm | 0.0001° (the range of P-AXIS-00177/00178);
 # an unhomed axis may go anywhere within it, a target beyond it is meaningless (90003)
@@ -124,7 +108,7 @@ class Machine:
         ]
         self.by_name = {a.name: a for a in self.axes}
         self.main_spindle = cfg.main_spindle
-        self.channel_units = {"override": 1000, "feedhold": 0, "reduced_acceleration": 0}
+        self.channel_units = hli.channel_units()
         self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
         self.events: EventLog[Event] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
@@ -694,15 +678,11 @@ class Machine:
     def _hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
         """Write a control unit of the channel (axis=None) or of an axis."""
         if axis is None:
-            if unit not in CHANNEL_UNITS:
-                raise NcUsageError(f"unknown channel control unit '{unit}'")
+            hli.channel_write(unit, value)
             self._channel_unit(unit, int(value))
             return
         ax = self.axis(axis)
-        if unit not in AXIS_UNITS:
-            raise NcUsageError(f"unknown axis control unit '{unit}'")
-        if unit == "override":
-            value = max(0, min(int(value), 2000))
+        value = hli.axis_write(unit, value)
         if unit == "spindle_reset" and value:
             self._reset_axis(ax)
             return
@@ -715,7 +695,7 @@ class Machine:
 
     def _channel_unit(self, unit: str, value: int) -> None:
         old = self.channel_units[unit]
-        self.channel_units[unit] = max(0, min(value, 2000)) if unit == "override" else value
+        self.channel_units[unit] = hli.clamp(unit, value)
         self.log(Code.EV_HLI, "", f"channel {unit} = {value}")
         if unit == "feedhold" and value and not old:
             use_set = bool(self.cfg.channel_raw("use_drive_curr_limit"))

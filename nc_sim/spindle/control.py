@@ -17,22 +17,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from nc_sim.accel_curve import CurveParams
+from nc_sim.axis.dynamics import Motion
+from nc_sim.axis.params import changeover_speeds, push_params, speed_controlled
+from nc_sim.axis.state import Axis, SpindleTask, TaskPhase, ToolLimits
+from nc_sim.axis.watchdog import curve_s, plan_s
 from nc_sim.blocks import SpindleCmd
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import (
-    Axis,
-    SpindleTask,
-    TaskPhase,
-    ToolLimits,
-    changeover_speeds,
-    push_params,
-    speed_controlled,
-)
-from nc_sim.machine.dynamics import Motion
-from nc_sim.machine.gears import GearChoice, GearRange, m_of, select_gear
-from nc_sim.machine.watchdog import curve_s, plan_s
 from nc_sim.profiles.plan import (
     LIM_A_ACC,
     LIM_A_ACC2,
@@ -44,6 +36,7 @@ from nc_sim.profiles.plan import (
     velocity_change,
 )
 from nc_sim.snapshot import AxisState
+from nc_sim.spindle.gears import GearChoice, GearRange, m_of, select_gear
 from nc_sim.units import RPM_TO_DEG_S
 
 if TYPE_CHECKING:
