@@ -68,11 +68,10 @@ from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.readout import machine_snapshot
-from nc_sim.plc import PlcMode, SimPlc
+from nc_sim.plc import Handshake, PlcMode, SimPlc, Waiter
 from nc_sim.profiles.plan import new_plan, position_move, velocity_change
 from nc_sim.snapshot import AxisState, MachineSnapshot
 from nc_sim.spindle.control import SpindleControl
-from nc_sim.spindle.gears import m_of
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 
 _FAR = 1e9  # jog target of a spindle (a modulo axis: no position range)
@@ -112,15 +111,19 @@ class Machine:
         self.slope = int(cfg.channel_raw("prog_start.slope.profile"))
         self.events: EventLog[Event] = EventLog(EVENT_LOG_LEN)  # bounded, read by cursor
         self.plc = SimPlc(self._cycles(cfg.channel_eng("plc.m_ack_delay")))
-        # read once here and in refresh_params: the cycle boundary runs every few cycles
-        self._ack_timeout = self._cycles(cfg.channel_eng("plc.m_ack_timeout"))
+        # the timeout is read once here and in refresh_params: the cycle boundary runs often
+        self.handshake = Handshake(
+            self.plc,
+            self._cycles(cfg.channel_eng("plc.m_ack_timeout")),
+            kernel.cycle_s,
+            self.log,
+            lambda: self.cycle,
+        )
         self._queue: deque[_BlockRun] = deque()
         self._next_id = 1
         self.outcomes: EventLog[Outcome] = EventLog(OUTCOME_LOG_LEN)  # answers to submit
         self.estop = False
         self._powered = False  # power-on done: the PLC has switched every drive on
-        self._m_out: dict[int, int | None] = {}  # cycle an M function was output -> block id
-        self._m_gear: dict[int, Axis] = {}  # ... -> spindle waiting for its gear change
         self.sp = SpindleControl(self)
         self.channel = ChannelProgress(slope=self.slope)
         for ax in self.axes:
@@ -180,7 +183,7 @@ class Machine:
             case SetPlcMode():
                 self._plc_mode(cmd.mode, cmd.delay_s)
             case PlcAck():
-                answer = self._plc_acknowledge(cmd.m)
+                answer = self.handshake.acknowledge(cmd.m)
             case Reset():
                 self._reset()
             case EmergencyStop():
@@ -203,10 +206,9 @@ class Machine:
         """The next cycle at which the machine must act without a kernel event."""
         times = [self.plc.power_on_cycle] if self.cycle < self.plc.power_on_cycle else []
         times += [c for ax in self.axes if (c := ax.drive.next_change()) is not None]
-        due = self.plc.next_due()
+        due = self.handshake.next_wakeup()
         if due is not None:
             times.append(due)
-        times += [c + self._ack_timeout for c in self._m_out]
         times += [ax.deadline for ax in self.axes if ax.deadline is not None]
         if self.estop and any(ax.enables_ok() for ax in self.axes):
             times.append(self.cycle + 1)  # watch the braking axes settle (_estop_settled)
@@ -215,7 +217,7 @@ class Machine:
     def refresh_params(self) -> None:
         """Re-read the configuration after a parameter change (values that apply now)."""
         self.plc.delay_cycles = self._cycles(self.cfg.channel_eng("plc.m_ack_delay"))
-        self._ack_timeout = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
+        self.handshake.timeout_cycles = self._cycles(self.cfg.channel_eng("plc.m_ack_timeout"))
         for ax in self.axes:
             push_params(self.k, ax)
 
@@ -753,9 +755,7 @@ class Machine:
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.estop = self.estop, False
         self._queue.clear()
-        self._m_out.clear()
-        self._m_gear.clear()
-        self.plc.clear()
+        self.handshake.clear()
         for ax in self.axes:
             self._reset_axis(ax)
         if estop:
@@ -790,23 +790,6 @@ class Machine:
             PlcMode(mode), self.cycle, None if delay_s is None else self._cycles(delay_s)
         )
         self.log(Code.EV_PLC_MODE, "", f"PLC {mode}")
-
-    def _plc_acknowledge(self, m: int | None = None) -> int:
-        """Manual acknowledgement; returns how many M functions were acknowledged (0 when
-        none was pending, e.g. after its 90004 timeout)."""
-        acked = self.plc.acknowledge(m)
-        for p in acked:
-            self._m_acked(p.m, p.out_cycle)
-        return len(acked)
-
-    def _m_acked(self, m: int, out_cycle: int) -> None:
-        self.log(Code.EV_M_ACK, "", f"M{m} acknowledged", m=m)
-        block = self._m_out.pop(out_cycle, None)
-        if block is not None and self._queue and self._queue[0].id == block:
-            self._queue[0].waiting_m -= 1
-        spindle = self._m_gear.pop(out_cycle, None)
-        if spindle is not None:
-            self.sp.gear_acknowledged(spindle)
 
     # --- MDI and the external command channel -------------------------------------------
     def _mdi(self, text: str, serial: int) -> Outcome:
@@ -937,43 +920,31 @@ class Machine:
             return False
         return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & 0x20000)
 
-    def _m_output(self, m: int, axis: str, run: _BlockRun | None, gear: int | None = None) -> int:
-        p = self.plc.output(m, axis, self.cycle)
-        while p.out_cycle in self._m_out:  # one key per output
-            p.out_cycle += 1
-        self._m_out[p.out_cycle] = run.id if run else None
-        if run:
-            run.waiting_m += 1
-        self.log(Code.EV_M_OUTPUT, axis, f"M{m} output to the PLC", m=m, gear=gear)
-        return p.out_cycle
+    def _m_output(self, m: int, axis: str, run: _BlockRun | None) -> None:
+        """An M function of a block (or a free one) to the PLC; the block waits for its
+        acknowledgement and ends with its timeout."""
+        if run is None:
+            self.handshake.output(m, axis, Waiter())
+            return
+        run.waiting_m += 1
+        bid = run.id
 
-    def _m_output_gear(self, gear: int, ax: Axis) -> None:
-        """M40-M45 of a change to `gear`; its acknowledgement continues the change."""
-        self._m_gear[self._m_output(m_of(gear), ax.name, None, gear)] = ax
+        def acknowledged() -> None:
+            if self._queue and self._queue[0].id == bid:
+                self._queue[0].waiting_m -= 1
+
+        def timed_out(_ev: Event) -> None:
+            if self._queue and self._queue[0].id == bid:
+                self._queue.popleft()
+
+        self.handshake.output(m, axis, Waiter(acknowledged, timed_out))
 
     # --- the cycle boundary --------------------------------------------------------------
     def on_cycle(self, cycle: int) -> None:
         """Handle kernel events and timers after the kernel reached `cycle`."""
         self.cycle = cycle
         self._drive_status()
-        for p in self.plc.due(cycle):
-            self._m_acked(p.m, p.out_cycle)
-        timeout = self._ack_timeout
-        for out, bid in list(self._m_out.items()):
-            if cycle - out >= timeout:
-                del self._m_out[out]
-                gone = self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
-                spindle = self._m_gear.pop(out, None)
-                self._fail(
-                    spindle,
-                    Code.PLC_ACK_TIMEOUT,
-                    f"no acknowledgement after {timeout * self.k.cycle_s:g} s",
-                    m=gone.m if gone else None,
-                )
-                if spindle is not None:
-                    self.sp.gear_timeout(spindle)
-                if self._queue and self._queue[0].id == bid:
-                    self._queue.popleft()
+        self.handshake.on_cycle(cycle)
         for ax in self.axes:
             ev = int(self.k.ist[ax.slot, L.I_EVENTS])
             if ev:

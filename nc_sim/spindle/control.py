@@ -25,6 +25,7 @@ from nc_sim.blocks import SpindleCmd
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
+from nc_sim.plc import Waiter
 from nc_sim.profiles.plan import (
     LIM_A_ACC,
     LIM_A_ACC2,
@@ -565,7 +566,16 @@ class SpindleControl:
         if t.kind == "gear":
             t.phase = TaskPhase.WAIT_PLC
             self._state(ax, AxisState.GEAR_CHANGE)
-            self.m._m_output_gear(t.gear, ax)
+            self.m.handshake.output(
+                m_of(t.gear),
+                ax.name,
+                Waiter(
+                    lambda: self.gear_acknowledged(ax),
+                    lambda ev: self.gear_timeout(ax, ev),
+                    ax.name,
+                ),
+                t.gear,
+            )
             # the PLC's own timeout (90004) ends it first; this bounds it as every phase
             timeout = self.m.cfg.channel_eng("plc.m_ack_timeout")
             self.m._watch(ax, timeout, f"gear change: M{m_of(t.gear)} acknowledgement")
@@ -604,7 +614,9 @@ class SpindleControl:
             m, rpm = t.resume
             self.endless(ax, m, rpm)
 
-    def gear_timeout(self, ax: Axis) -> None:
+    def gear_timeout(self, ax: Axis, error: Event) -> None:
+        """No acknowledgement of the M40-M45 (job error `error`): the change ends in error."""
+        self.m._set_job_error(ax, error)
         if ax.task is not None and ax.task.kind == "gear":
             self.cancel_task(ax)
             self._state(ax, AxisState.ERROR)
