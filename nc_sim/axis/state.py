@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from enum import IntEnum
+from typing import Protocol
 
 from nc_sim.axis.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.axis.dynamics import Motion
@@ -17,33 +17,21 @@ from nc_sim.snapshot import AxisState
 from nc_sim.units import AxisKind, Quantity, eng_unit
 
 
-class HomingPhase(IntEnum):
-    NONE = 0
-    TO_CAM = 1
-    OFF_CAM = 2
-    TO_REF = 3
-    ZERO_MARK = 4  # spindle: rotate until the encoder's zero mark passes
+class Sequence(Protocol):
+    """A sequence an axis runs, advanced by its kernel events: the phases of homing, a
+    spindle task (M19, G74, M5 with homing), a gear change. `AxisMotion.on_events` offers it
+    every event of its axis (after the faults); each phase is bounded by the axis' watchdog
+    (`AxisMotion.watch`). It ends by taking itself off the axis (`ax.sequence = None`)."""
 
+    def on_event(self, ev: int) -> bool:
+        """React to kernel events `ev` (EV_* bits); True when they are consumed, so the end
+        of its plan is not taken for the end of a plain motion."""
+        ...
 
-class TaskPhase(IntEnum):
-    DECEL = 1  # down to the switch-back speed before position control resumes
-    SEEK_MARK = 2  # rotating until the zero mark passes (homing, automatic homing)
-    POSITION = 3  # position plan to the target, then exact stop
-    STOP = 4  # braking to standstill (gear change without positioning)
-    WAIT_PLC = 5  # gear change: M40-M45 output, waiting for the PLC
-
-
-@dataclass
-class SpindleTask:
-    """A spindle sequence in progress: M19, G74, a gear change, or M5 with homing."""
-
-    kind: str  # "M19", "G74", "gear", "M5" (stop homing on the way after the control limit)
-    pos_deg: float  # target angle 0..360
-    direction: int | None  # +1 M3, -1 M4, None = shortest way
-    speed: float  # positioning speed before override (°/s)
-    phase: TaskPhase = TaskPhase.DECEL
-    gear: int = 0  # gear change: the new stage
-    resume: tuple[int, float] | None = None  # gear change: (M3|M4, rpm) to run afterwards
+    def replan(self) -> bool:
+        """Plan the current phase again (override, feedhold released); True when done here,
+        False when the phase re-plans like a plain move to `ax.target`."""
+        ...
 
 
 @dataclass
@@ -69,10 +57,10 @@ class Axis:
     speed_prog: float = 0.0  # spindle: programmed signed speed (°/s) before override
     slope: int = 1
     hold: bool = False  # braked by feedhold, resumes on release
-    homing: HomingPhase = HomingPhase.NONE
     homed: bool = False
     error_event: Event | None = None  # the job error in force (what set it), None without
     block_id: int | None = None  # MDI block this motion belongs to
+    sequence: Sequence | None = None  # the sequence in progress (homing, spindle task)
     # spindle only
     override_suppressed: bool = False  # G167 until the next S[REV..]
     ff_weight: float = 0.0  # G135/G136/G137 feedforward weight 0..1
@@ -80,7 +68,6 @@ class Axis:
     tool_pending: ToolLimits | None = None  # adopted at the next start from standstill
     speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767
     ff_set: float = 1.0  # weighting for G135, set by G136
-    task: SpindleTask | None = None
     reference_lost: bool = False  # lost above the control limit: M5 homes again [000 §2.7]
     deadline: int | None = None  # watchdog: cycle by which the current phase must have ended
     deadline_s: float = 0.0  # ... its bound in seconds
