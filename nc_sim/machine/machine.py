@@ -63,7 +63,8 @@ from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.readout import machine_snapshot
 from nc_sim.plc import Handshake, PlcMode, SimPlc, Waiter
 from nc_sim.snapshot import MachineSnapshot
-from nc_sim.spindle.control import SpindleControl, spindle_index
+from nc_sim.spindle.control import SpindleControl
+from nc_sim.spindle.gear_change import spindle_index
 from nc_sim.spindle.program import program_end, spindle_block, tool_dynamics
 from nc_sim.units import AxisKind
 
@@ -325,7 +326,7 @@ class Machine:
         if not self.gear_change_enabled:  # then M40-M45 are free M functions
             self._m_output(m, "", None)
             return None
-        return self.sp.gear_only(ax, m - 39, None)
+        return self.sp.gears.only(ax, m - 39, None)
 
     @property
     def gear_change_enabled(self) -> bool:
@@ -495,7 +496,7 @@ class Machine:
             if self.main_spindle is None:
                 self.motion.fail(None, Code.GEAR_CHANGE_OFF, f"'{run.text}'")
                 return False
-            if self.sp.gear_only(self.axis(self.main_spindle), gear, run.id):
+            if self.sp.gears.only(self.axis(self.main_spindle), gear, run.id):
                 return False
         if b.homing:
             # G74 X2 Z1 S1: the lowest order digit first, equal digits together [000 §2.7]

@@ -32,20 +32,13 @@ from nc_sim.profiles.plan import (
     velocity_change,
 )
 from nc_sim.snapshot import AxisState
-from nc_sim.spindle.gears import GearChoice, GearRange, m_of, select_gear
-from nc_sim.spindle.task import V_EPS, SpindleTask, TaskPhase, sign
+from nc_sim.spindle.gear_change import GearStages
+from nc_sim.spindle.gears import m_of
+from nc_sim.spindle.task import V_EPS, SpindleTask, sign
 from nc_sim.units import RPM_TO_DEG_S
 
 ACHSMODE_KEINE_AUTO_RPF = 0x100  # P-AXIS-00015: no automatic homing before M19
 DIGITAL_DRIVES = (2, 8)  # SERCOS, CANopen: drive-controlled homing only [000 §2.3]
-
-
-def spindle_index(cfg: MachineConfig, name: str) -> int | None:
-    """Index i of spindel[i] in the channel list for this spindle."""
-    for i in range(6):
-        if cfg.channel.get(f"spindel[{i}].bezeichnung") == name:
-            return i
-    return None
 
 
 def _check_rpm(rpm: float | None) -> None:
@@ -68,6 +61,7 @@ class SpindleControl:
         self.motion = motion
         self.cfg = cfg
         self.handshake = handshake
+        self.gears = GearStages(self)
         motion.mode_events = self.on_loop_events
 
     # --- configuration ------------------------------------------------------------------
@@ -82,24 +76,6 @@ class SpindleControl:
         mode = int(ax.cfg.raw("kenngr.achs_mode"))
         drive = int(ax.cfg.raw("kenngr.antr_typ"))
         return not mode & ACHSMODE_KEINE_AUTO_RPF and drive not in DIGITAL_DRIVES
-
-    def gear_table(self, ax: Axis) -> tuple[int, list[GearRange]] | None:
-        """(spindel index, ranges) when gear change applies to this spindle."""
-        cfg = self.cfg
-        if not cfg.channel_raw("main_spindle_gear_change") or ax.name != self.cfg.main_spindle:
-            return None
-        i = spindle_index(self.cfg, ax.name)
-        if i is None:
-            return None
-        pre = f"spindel[{i}].range_table"
-        table = [
-            GearRange(
-                float(cfg.channel_raw(f"{pre}[{g}].min_speed")),
-                float(cfg.channel_raw(f"{pre}[{g}].max_speed")),
-            )
-            for g in range(6)
-        ]
-        return i, table
 
     def v_max(self, ax: Axis) -> float:
         v = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear)
@@ -232,38 +208,6 @@ class SpindleControl:
         self.switch_back(ax)
         return None
 
-    # --- gear selection -----------------------------------------------------------------
-    def _gear_for(self, ax: Axis, rpm: float, programmed: int | None) -> GearChoice:
-        gt = self.gear_table(ax)
-        if gt is None:
-            if programmed is not None:
-                return GearChoice(None, Code.GEAR_CHANGE_OFF, f"M{m_of(programmed)}")
-            return self._within_vb_max(ax, rpm) or GearChoice(ax.gear)
-        i, table = gt
-        automatic = bool(self.cfg.channel_raw(f"spindel[{i}].autom_range"))
-        way = int(self.cfg.channel_raw(f"spindel[{i}].range_way"))
-        return select_gear(table, ax.gear, rpm, automatic, way, programmed)
-
-    def _gear_refused(self, ax: Axis, choice: GearChoice, programmed: int | None) -> Event:
-        """The job error of a refused gear choice, with the programmed M40-M45 if any."""
-        assert choice.error is not None
-        detail = choice.detail or (f"M{m_of(programmed)}" if programmed is not None else "")
-        if programmed is None:
-            return self.motion.fail(ax, choice.error, detail)
-        return self.motion.fail(ax, choice.error, detail, m=m_of(programmed), gear=programmed)
-
-    def _within_vb_max(self, ax: Axis, rpm: float) -> GearChoice | None:
-        """The refusal of a speed above the active gear record's maximum (P-AXIS-00212)."""
-        top_rpm = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear) / RPM_TO_DEG_S
-        if abs(rpm) <= top_rpm + 1e-9:
-            return None
-        return GearChoice(
-            None,
-            Code.GEAR_NO_RANGE,
-            f"S{abs(rpm):.10g} rpm is above the maximum speed of {ax.name}, {top_rpm:.10g} rpm "
-            f"(getriebe[{ax.gear - 1}].dynamik.vb_max, P-AXIS-00212)",
-        )
-
     # --- M3/M4/M5 and S -----------------------------------------------------------------
     def endless(
         self,
@@ -283,15 +227,15 @@ class SpindleControl:
         if err:
             return err
         rpm = rpm if rpm is not None else abs(ax.speed_prog) / RPM_TO_DEG_S
-        choice = self._gear_for(ax, rpm, gear)
+        choice = self.gears.choose(ax, rpm, gear)
         if choice.error is not None:
-            return self._gear_refused(ax, choice, gear)
+            return self.gears.refused(ax, choice, gear)
         self.cancel_task(ax)
         self.motion.log(Code.EV_M_START, ax.name, f"M{m} S{rpm:g}", m=m)
         ax.speed_prog = d * rpm * RPM_TO_DEG_S
         assert choice.gear is not None
         if choice.gear != ax.gear:
-            self.start_gear(ax, choice.gear, (m, rpm), block_id)
+            self.gears.start(ax, choice.gear, (m, rpm), block_id)
             return None
         self.run_endless(ax)
         return None
@@ -316,16 +260,16 @@ class SpindleControl:
     def speed(self, ax: Axis, rpm: float, gear: int | None, block_id: int | None) -> Event | None:
         """S word alone (or S[REV..]): new speed, with a gear change when the table asks."""
         _check_rpm(rpm)
-        choice = self._gear_for(ax, rpm, gear)
+        choice = self.gears.choose(ax, rpm, gear)
         if choice.error is not None:
-            return self._gear_refused(ax, choice, gear)
+            return self.gears.refused(ax, choice, gear)
         assert choice.gear is not None
         ax.speed_prog = math.copysign(rpm * RPM_TO_DEG_S, ax.speed_prog or 1.0)
         if choice.gear != ax.gear:
             err = self.motion.check_motion(ax)
             if err:
                 return err
-            self.start_gear(ax, choice.gear, self._resume(ax), block_id)
+            self.gears.start(ax, choice.gear, self.gears.resume(ax), block_id)
         elif ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
             self.run_endless(ax)
         return None
@@ -373,7 +317,7 @@ class SpindleControl:
                 return err
         else:
             direction = self.preferred(ax)
-        too_fast = self._within_vb_max(ax, rpm) if rpm else None
+        too_fast = self.gears.within_vb_max(ax, rpm) if rpm else None
         if too_fast is not None:
             return self.motion.fail(ax, Code.GEAR_NO_RANGE, too_fast.detail)
         speed = rpm * RPM_TO_DEG_S if rpm else ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
@@ -399,30 +343,6 @@ class SpindleControl:
         self.motion.forget_reference(ax)
         self._run(task, block_id)
         return None
-
-    def start_gear(
-        self, ax: Axis, gear: int, resume: tuple[int, float] | None, block_id: int | None
-    ) -> None:
-        """Gear change: to the change position at vb_eilgang, M4x to the PLC, wait, adopt."""
-        self.cancel_task(ax)
-        pos = ax.cfg.eng("getriebe.getr_schalt_pos", ax.gear) % 360.0
-        speed = ax.cfg.eng("getriebe.vb_eilgang", ax.gear)
-        task = SpindleTask(self, ax, "gear", pos, self.preferred(ax), speed, gear, resume)
-        ax.sequence, ax.block_id = task, block_id
-        self.motion.log(Code.EV_M_START, ax.name, f"M{m_of(gear)}", m=m_of(gear), gear=gear)
-        self.motion.log(
-            Code.EV_GEAR_CHANGE_START,
-            ax.name,
-            f"{ax.name} gear change M{m_of(ax.gear)} -> M{m_of(gear)}",
-            gear=gear,
-        )
-        if not (ax.homed or self.auto_homing(ax)) or speed_controlled(ax.cfg):
-            # no position to go to: change at standstill where the spindle stops
-            task.phase = TaskPhase.STOP
-            self.set_state(ax, AxisState.GEAR_CHANGE)
-            self.velocity(ax, 0.0)
-            return
-        task.advance()
 
     def _run(self, task: SpindleTask, block_id: int | None) -> None:
         """Start a task on its spindle (for the block `block_id`)."""
@@ -454,35 +374,6 @@ class SpindleControl:
         elif ax.sequence is not None:
             ax.sequence.replan()
 
-    def gear_acknowledged(self, ax: Axis) -> None:
-        """The PLC has changed the gear: adopt the new record and resume."""
-        t = ax.sequence
-        if not isinstance(t, SpindleTask) or t.kind != "gear":
-            return
-        old = ax.gear
-        ax.gear = t.gear
-        push_params(self.motion.k, ax)
-        self.motion.log(
-            Code.EV_GEAR_CHANGED,
-            ax.name,
-            f"{ax.name} gear M{m_of(old)} -> M{m_of(ax.gear)}",
-            gear=ax.gear,
-        )
-        ax.sequence = None
-        ax.block_id = None
-        self.set_state(ax, AxisState.STANDSTILL)
-        if t.resume is not None:
-            m, rpm = t.resume
-            self.endless(ax, m, rpm)
-
-    def gear_timeout(self, ax: Axis, error: Event) -> None:
-        """No acknowledgement of the M40-M45 (job error `error`): the change ends in error."""
-        self.motion.set_job_error(ax, error)
-        t = ax.sequence
-        if isinstance(t, SpindleTask) and t.kind == "gear":
-            self.cancel_task(ax)
-            self.set_state(ax, AxisState.ERROR)
-
     # --- kernel events ------------------------------------------------------------------
     def on_loop_events(self, ax: Axis, ev: int) -> None:
         """The spindle's mode follows the kernel's loop: above the control limit the loop
@@ -503,29 +394,3 @@ class SpindleControl:
             log(Code.EV_LOOP_CLOSED, ax.name, f"{ax.name} position control")
             if ax.state is AxisState.OPEN_LOOP:
                 self.set_state(ax, AxisState.ENDLESS, True)
-
-    # --- M40-M45 alone ------------------------------------------------------------------
-    def gear_only(self, ax: Axis, gear: int, block_id: int | None) -> Event | None:
-        """M40-M45 without S (MDI or the gear buttons): the stage is checked against the speed
-        it will run with, as `M4x S..` is: the programmed S of a rotating spindle; at
-        standstill there is none, the next S is checked."""
-        if self.gear_table(ax) is None:
-            return self._gear_refused(ax, GearChoice(None, Code.GEAR_CHANGE_OFF), gear)
-        resume = self._resume(ax)
-        if resume is not None:
-            choice = self._gear_for(ax, resume[1], gear)
-            if choice.error is not None:
-                return self._gear_refused(ax, choice, gear)
-        if gear == ax.gear:
-            return None
-        err = self.motion.check_motion(ax)
-        if err:
-            return err
-        self.start_gear(ax, gear, resume, block_id)
-        return None
-
-    def _resume(self, ax: Axis) -> tuple[int, float] | None:
-        """What a rotating spindle runs again after a gear change: (M3|M4, rpm)."""
-        if ax.state not in (AxisState.ENDLESS, AxisState.OPEN_LOOP):
-            return None
-        return (3 if ax.speed_prog > 0 else 4, abs(ax.speed_prog) / RPM_TO_DEG_S)

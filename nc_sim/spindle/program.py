@@ -45,7 +45,7 @@ def spindle_block(
     elif sc.speed_rpm is not None:
         err = sp.speed(ax, sc.speed_rpm, gear, block_id)
     elif gear is not None:
-        err = sp.gear_only(ax, gear, block_id)
+        err = sp.gears.only(ax, gear, block_id)
     elif sc.g:  # G135-G137, G167 alone: the new weighting or override now
         sp.replan(ax)
     return err is None

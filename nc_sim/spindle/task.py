@@ -164,8 +164,8 @@ class SpindleTask:
                 m_of(self.gear),
                 ax.name,
                 Waiter(
-                    lambda: sp.gear_acknowledged(ax),
-                    lambda ev: sp.gear_timeout(ax, ev),
+                    lambda: sp.gears.acknowledged(ax),
+                    lambda ev: sp.gears.timed_out(ax, ev),
                     ax.name,
                 ),
                 self.gear,
