@@ -102,8 +102,14 @@ class AxisMotion:
         self.k.st[ax.slot, L.S_OVERRIDE] = fraction
 
     def check_motion(self, ax: Axis) -> Event | None:
-        """The job error that forbids starting a motion now (E-stop, error state, enables,
-        drive not ready), None when it may start."""
+        """The job error that forbids starting a single-axis motion now (the axis moves on
+        the program's path, or `drive_refusal`), None when it may start."""
+        if self.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS:
+            return self.fail(ax, Code.AXIS_BUSY, f"{ax.name} moves on the program's path")
+        return self.drive_refusal(ax)
+
+    def drive_refusal(self, ax: Axis) -> Event | None:
+        """Why the axis cannot move now (E-stop, error, enables, drive status), else None."""
         if self.ctx.estop:
             return self.fail(ax, Code.CHANNEL_ERROR_STATE, "emergency stop active")
         if ax.state is AxisState.ERROR:

@@ -8,7 +8,7 @@ axes), feeds in mm/min, times in s, speeds in rpm. Every call carries the 1-base
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Protocol
 
 
@@ -32,7 +32,7 @@ class Call:
         """`NAME field=value ...` in field order (the golden-file form), without the line."""
         parts = [_NAMES[type(self)]]
         for f in fields(self):
-            if f.name == "line":
+            if f.name in ("line", "absolute"):
                 continue
             value = getattr(self, f.name)
             if value is None:
@@ -55,6 +55,7 @@ class StraightTraverse(Call):
     """G00: rapid to `end` (every channel axis, absolute)."""
 
     end: tuple[tuple[str, float], ...]
+    absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,7 @@ class StraightFeed(Call):
     """G01: straight line to `end` at the feed set by the last `SetFeedRate`."""
 
     end: tuple[tuple[str, float], ...]
+    absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
 
 
 @dataclass(frozen=True)
@@ -77,6 +79,7 @@ class ArcFeed(Call):
     plane: int
     centre: tuple[float, float]
     turn: int
+    absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
 
 
 @dataclass(frozen=True)

@@ -277,13 +277,13 @@ class _Block:
         if modal.motion == 0:
             if arc_words:
                 raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
-            self._emit(canon.StraightTraverse(self.line, target))
+            self._emit(canon.StraightTraverse(self.line, target, absolute=self.run_.modal.absolute))
         elif modal.feed_mm_min is None:
             raise self.error("G01/G02/G03 need a feed F first", col, Code.FEED_MISSING)
         elif modal.motion == 1:
             if arc_words:
                 raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
-            self._emit(canon.StraightFeed(self.line, target))
+            self._emit(canon.StraightFeed(self.line, target, absolute=self.run_.modal.absolute))
         else:
             self._arc(modal.motion, end, target, col)
         modal.position = end
@@ -353,7 +353,11 @@ class _Block:
             raise self.error(
                 f"G0{motion} needs a centre I/J/K or a radius R", col, Code.ARC_GEOMETRY
             )
-        self._emit(canon.ArcFeed(self.line, target, plane, (ca, cb), turn))
+        self._emit(
+            canon.ArcFeed(
+                self.line, target, plane, (ca, cb), turn, absolute=self.run_.modal.absolute
+            )
+        )
 
     def _centre_from_radius(
         self, r_word: Word, sa: float, sb: float, ea: float, eb: float, turn: int

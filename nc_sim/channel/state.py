@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from nc_sim.channel.modal import Modal
 from nc_sim.events import Event
 from nc_sim.snapshot import ChannelState
 
@@ -32,5 +31,3 @@ class ChannelProgress:
     single_block: bool = False
     waiting_for: str | None = None
     error: Event | None = None
-    modal: Modal | None = None
-    slope: int = 0

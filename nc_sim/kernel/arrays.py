@@ -18,11 +18,18 @@ class Kernel:
     pr: np.ndarray  # float parameters, slots × P_COLS
     ist: np.ndarray  # integer state, slots × I_COLS
     seg: np.ndarray  # active plan, slots × MAX_SEGMENTS × SEG_COLS
+    pi: np.ndarray  # paths × PI_COLS: channel slot, axis slots, geometry ring head and count
+    pel: np.ndarray  # paths × PATH_ELEMENTS × E_COLS: the geometry ring
+    pplan: np.ndarray  # paths × PATH_SEGMENTS × SEG_COLS: the 1-D plan over path length
 
     def __init__(self, cycle_s: float = 0.001, capacity: int = 8) -> None:
         self.cycle_s = cycle_s
         self.n = 0
+        self.paths = 0
         self._alloc(capacity)
+        self.pi = np.zeros((0, L.PI_COLS), dtype=np.int64)
+        self.pel = np.zeros((0, L.PATH_ELEMENTS, L.E_COLS))
+        self.pplan = np.zeros((0, L.PATH_SEGMENTS, SEG_COLS))
 
     def _alloc(self, capacity: int) -> None:
         old = self.st if hasattr(self, "st") else None
@@ -51,6 +58,24 @@ class Kernel:
                 self.pr[s, col] = math.inf
             self.pr[s, L.P_DRV_ALPHA] = 1.0  # an ideal drive
         return range(first, self.n)
+
+    def claim_path(self, channel_slot: int, axis_slots: list[int]) -> int:
+        """Register a channel's path over these axis slots; returns the path index."""
+        if len(axis_slots) > L.MAX_PATH_AXES:
+            raise ValueError(f"at most {L.MAX_PATH_AXES} path axes")
+        p = self.paths
+        self.paths += 1
+        pi = np.zeros((self.paths, L.PI_COLS), dtype=np.int64)
+        pi[:p] = self.pi
+        self.pi = pi
+        self.pel = np.concatenate([self.pel, np.zeros((1, L.PATH_ELEMENTS, L.E_COLS))])
+        self.pplan = np.concatenate([self.pplan, np.zeros((1, L.PATH_SEGMENTS, SEG_COLS))])
+        self.pi[p, L.PI_SLOT] = channel_slot
+        self.pi[p, L.PI_NAX] = len(axis_slots)
+        for i, s in enumerate(axis_slots):
+            self.pi[p, L.PI_AX0 + i] = s
+        self.ist[channel_slot, L.I_ROLE] = L.ROLE_CHANNEL
+        return p
 
     def load_plan(self, slot: int, seg: np.ndarray, n: int, target: float) -> None:
         """Start a plan on a slot from its current commanded position and velocity."""
@@ -82,7 +107,18 @@ class Kernel:
             rec = _NO_REC
         k = self.n
         return int(
-            run_cycles(self.st[:k], self.pr[:k], self.ist[:k], self.seg[:k], rec, n, self.cycle_s)
+            run_cycles(
+                self.st[:k],
+                self.pr[:k],
+                self.ist[:k],
+                self.seg[:k],
+                self.pi,
+                self.pel,
+                self.pplan,
+                rec,
+                n,
+                self.cycle_s,
+            )
         )
 
 

@@ -88,7 +88,14 @@ I_IN_POS = 15  # position plan ended and the actual position is inside the windo
 I_MON_ACTIVE = 16  # speed monitoring active (endless rotation with a commanded speed)
 I_MON_INVALID = 17  # speed monitoring invalid (speed still changing, or no valid measurement)
 I_MARK_ARMED = 18  # spindle: report the zero mark (homing waits for it)
-I_COLS = 19
+I_ROLE = 19  # ROLE_*: what drives this slot's setpoint
+I_LINE = 20  # program line of the block the slot's motion belongs to (0 none)
+I_COLS = 21
+
+# I_ROLE values
+ROLE_AXIS = 0  # its own plan (jog, single-axis move, spindle)
+ROLE_PATH_AXIS = 1  # its channel's path writes its setpoint (coupled path mode)
+ROLE_CHANNEL = 2  # a channel: S_P_CMD path length, S_V_CMD path speed; no drive behind it
 
 # I_OPEN_LOOP values
 LOOP_CLOSED = 0
@@ -103,6 +110,7 @@ EV_CAM = 8
 EV_SPEED_REACHED = 16
 EV_LOOP = 32  # the kernel opened or closed the position loop
 EV_IN_POS = 64  # exact stop reached
+EV_BLOCK = 128  # channel: the path entered the next element (block)
 
 # --- rec: one row per cycle and slot --------------------------------------------------------
 R_P_CMD = 0
@@ -123,4 +131,34 @@ R_IN_POS = 14
 R_MON_ACTIVE = 15
 R_MON_INVALID = 16
 R_OVERRIDE = 17
-R_COLS = 18
+R_LINE = 18
+R_COLS = 19
+
+# --- the path of a channel (coupled path mode) ------------------------------------------------
+MAX_PATH_AXES = 6
+PATH_ELEMENTS = 64  # geometry ring: the element being run and the look-ahead behind it
+PATH_SEGMENTS = 512  # 1-D plan over the path length across the look-ahead window
+
+# pi: integer row per path
+PI_SLOT = 0  # the channel's own slot (ROLE_CHANNEL)
+PI_NAX = 1  # axes in the path
+PI_HEAD = 2  # ring index of the element being run
+PI_COUNT = 3  # elements in the ring (0: no path motion)
+PI_AX0 = 4  # slots of the path axes, MAX_PATH_AXES of them
+PI_COLS = PI_AX0 + MAX_PATH_AXES
+
+# pel: one geometry element (a block's line or arc) of the ring
+E_ARC = 0  # 0 line, 1 arc in the plane (E_I0, E_I1)
+E_S0 = 1  # path length at its start
+E_LEN = 2  # its length
+E_LINE = 3  # program line
+E_I0 = 4  # arc: index (in the path's axes) of the plane's first axis
+E_I1 = 5  # ... and second axis
+E_CX = 6  # arc centre in the plane
+E_CY = 7
+E_R = 8  # arc radius
+E_PHI0 = 9  # angle of the start point about the centre (rad)
+E_DPHI = 10  # swept angle, signed (+ counter-clockwise in the plane's orientation)
+E_P0 = 11  # start position per path axis (MAX_PATH_AXES columns)
+E_LIN = E_P0 + MAX_PATH_AXES  # per path axis: position change per unit path length (not arc)
+E_COLS = E_LIN + MAX_PATH_AXES

@@ -22,6 +22,20 @@ from numba import njit
 
 from nc_sim.kernel.curve import curve_accel
 from nc_sim.kernel.layout import (
+    E_ARC,
+    E_CX,
+    E_CY,
+    E_DPHI,
+    E_I0,
+    E_I1,
+    E_LEN,
+    E_LIN,
+    E_LINE,
+    E_P0,
+    E_PHI0,
+    E_R,
+    E_S0,
+    EV_BLOCK,
     EV_CAM,
     EV_IN_POS,
     EV_LAG,
@@ -38,12 +52,14 @@ from nc_sim.kernel.layout import (
     I_IN_POS,
     I_JOB_ERROR,
     I_LIMITS_ON,
+    I_LINE,
     I_MARK_ARMED,
     I_MON_ACTIVE,
     I_MON_INVALID,
     I_OPEN_LOOP,
     I_PLAN_K,
     I_PLAN_N,
+    I_ROLE,
     I_SPEED_CTRL_ARMED,
     I_SPEED_REACHED,
     I_STATE,
@@ -87,6 +103,11 @@ from nc_sim.kernel.layout import (
     P_V_RESO,
     P_V_SPEED_CTRL,
     P_V_ZERO,
+    PI_AX0,
+    PI_COUNT,
+    PI_HEAD,
+    PI_NAX,
+    PI_SLOT,
     R_A_CMD,
     R_DA,
     R_GEAR,
@@ -94,6 +115,7 @@ from nc_sim.kernel.layout import (
     R_IN_POS,
     R_JOB_ERROR,
     R_LAG,
+    R_LINE,
     R_MON_ACTIVE,
     R_MON_INVALID,
     R_OPEN_LOOP,
@@ -105,6 +127,8 @@ from nc_sim.kernel.layout import (
     R_STOPPED,
     R_V_ACT,
     R_V_CMD,
+    ROLE_AXIS,
+    ROLE_CHANNEL,
     S_A_CMD,
     S_DA,
     S_LAG,
@@ -169,25 +193,17 @@ def _advance_curve(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: 
 
 
 @njit(cache=True)
-def _advance_setpoint(
-    st: np.ndarray, pr: np.ndarray, ist: np.ndarray, seg: np.ndarray, s: int, dt: float
-) -> int:
-    """Move the setpoint of slot s by dt along its plan; returns EV_PLAN_DONE when it ends."""
+def _advance_plan(st: np.ndarray, ist: np.ndarray, plan: np.ndarray, s: int, dt: float) -> int:
+    """Move slot s by dt along its plan (segment rows `plan`); EV_PLAN_DONE when it ends."""
     n = ist[s, I_PLAN_N]
-    if n == 0 and ist[s, I_CURVE] == 1:
-        return _advance_curve(st, pr, ist, s, dt)
-    if n == 0:  # no plan: hold the commanded velocity
-        st[s, S_P_CMD] += st[s, S_V_CMD] * dt
-        st[s, S_A_CMD] = 0.0
-        return 0
     left = dt
     k = ist[s, I_PLAN_K]
     while True:
-        T = seg[s, k, SEG_T]
+        T = plan[k, SEG_T]
         tau = st[s, S_SEG_TAU]
-        a0 = seg[s, k, SEG_A0]
-        j = seg[s, k, SEG_J]
-        shape = seg[s, k, SEG_SHAPE]
+        a0 = plan[k, SEG_A0]
+        j = plan[k, SEG_J]
+        shape = plan[k, SEG_SHAPE]
         if tau + left < T:
             tau += left
             p, v, a = seg_eval(st[s, S_SEG_P0], st[s, S_SEG_V0], a0, j, shape, T, tau)
@@ -214,6 +230,81 @@ def _advance_setpoint(
                 st[s, S_V_CMD] = v
             st[s, S_A_CMD] = 0.0
             return EV_PLAN_DONE
+
+
+@njit(cache=True)
+def _advance_setpoint(
+    st: np.ndarray, pr: np.ndarray, ist: np.ndarray, seg: np.ndarray, s: int, dt: float
+) -> int:
+    """Move the setpoint of slot s by dt along its plan; returns EV_PLAN_DONE when it ends."""
+    n = ist[s, I_PLAN_N]
+    if n == 0 and ist[s, I_CURVE] == 1:
+        return _advance_curve(st, pr, ist, s, dt)
+    if n == 0:  # no plan: hold the commanded velocity
+        st[s, S_P_CMD] += st[s, S_V_CMD] * dt
+        st[s, S_A_CMD] = 0.0
+        return 0
+    return _advance_plan(st, ist, seg[s], s, dt)
+
+
+@njit(cache=True)
+def _advance_path(
+    st: np.ndarray,
+    ist: np.ndarray,
+    pi: np.ndarray,
+    pel: np.ndarray,
+    pplan: np.ndarray,
+    p: int,
+    dt: float,
+) -> int:
+    """Coupled path mode: advance path p's length along its plan (the channel slot) and set
+    every path axis' command position, velocity and acceleration from the geometry element
+    the length lies in. Returns EV_BLOCK on entering the next element, EV_PLAN_DONE when the
+    plan ends (the path at rest)."""
+    c = pi[p, PI_SLOT]
+    if pi[p, PI_COUNT] == 0:
+        return 0
+    ev = 0
+    if ist[c, I_PLAN_N] > 0:
+        ev |= _advance_plan(st, ist, pplan[p], c, dt)
+    s = st[c, S_P_CMD]
+    while pi[p, PI_COUNT] > 1:
+        e = pi[p, PI_HEAD]
+        if s < pel[p, e, E_S0] + pel[p, e, E_LEN]:
+            break
+        pi[p, PI_HEAD] = (e + 1) % pel.shape[1]
+        pi[p, PI_COUNT] -= 1
+        ev |= EV_BLOCK
+    e = pi[p, PI_HEAD]
+    length = pel[p, e, E_LEN]
+    u = min(max(s - pel[p, e, E_S0], 0.0), length)
+    v = st[c, S_V_CMD]
+    a = st[c, S_A_CMD]
+    line = int(pel[p, e, E_LINE])
+    ist[c, I_LINE] = line
+    for i in range(pi[p, PI_NAX]):
+        slot = pi[p, PI_AX0 + i]
+        lin = pel[p, e, E_LIN + i]
+        st[slot, S_P_CMD] = pel[p, e, E_P0 + i] + lin * u
+        st[slot, S_V_CMD] = lin * v
+        st[slot, S_A_CMD] = lin * a
+        ist[slot, I_LINE] = line
+    if pel[p, e, E_ARC] == 1.0 and length > 0.0:
+        r = pel[p, e, E_R]
+        w = pel[p, e, E_DPHI] / length  # rad per unit of path length
+        phi = pel[p, e, E_PHI0] + w * u
+        cs = math.cos(phi)
+        sn = math.sin(phi)
+        s0 = pi[p, PI_AX0 + int(pel[p, e, E_I0])]
+        s1 = pi[p, PI_AX0 + int(pel[p, e, E_I1])]
+        st[s0, S_P_CMD] = pel[p, e, E_CX] + r * cs
+        st[s1, S_P_CMD] = pel[p, e, E_CY] + r * sn
+        # d/ds of the point: r·w·(-sin, cos); second derivative: -r·w²·(cos, sin)
+        st[s0, S_V_CMD] = -r * w * sn * v
+        st[s1, S_V_CMD] = r * w * cs * v
+        st[s0, S_A_CMD] = -r * w * sn * a - r * w * w * cs * v * v
+        st[s1, S_A_CMD] = r * w * cs * a - r * w * w * sn * v * v
+    return ev
 
 
 @njit(cache=True)
@@ -406,25 +497,40 @@ def run_cycles(
     pr: np.ndarray,
     ist: np.ndarray,
     seg: np.ndarray,
+    pi: np.ndarray,
+    pel: np.ndarray,
+    pplan: np.ndarray,
     rec: np.ndarray,
     n: int,
     dt: float,
 ) -> int:
-    """Advance every slot by up to n cycles; stop after a cycle that raised an event.
+    """Advance every path and every slot by up to n cycles; stop after a cycle that raised
+    an event.
 
-    `rec` (cycles × slots × R_COLS) receives one sample per cycle when it has room
-    (pass an array with zero rows to record nothing). Returns the cycles done.
+    Paths first (they set their axes' setpoints), then each slot's own plan (unless a path
+    drives it), position loop, drive and monitors. `rec` (cycles × slots × R_COLS) receives
+    one sample per cycle when it has room (pass an array with zero rows to record nothing).
+    Returns the cycles done.
     """
     slots = st.shape[0]
     record = rec.shape[0] >= n and rec.shape[1] == slots
     for c in range(n):
         any_event = 0
+        for p in range(pi.shape[0]):
+            ev = _advance_path(st, ist, pi, pel, pplan, p, dt)
+            if ev != 0:
+                ist[pi[p, PI_SLOT], I_EVENTS] |= ev
+                any_event = 1
         for s in range(slots):
-            ev = _advance_setpoint(st, pr, ist, seg, s, dt)
-            ev |= _loop_mode(st, pr, ist, s)
-            _measure(st, pr, ist, s, dt)
-            _control_and_drive(st, pr, ist, s, dt)
-            ev |= _monitors(st, pr, ist, s, dt)
+            role = ist[s, I_ROLE]
+            if role == ROLE_CHANNEL:
+                ev = 0
+            else:
+                ev = _advance_setpoint(st, pr, ist, seg, s, dt) if role == ROLE_AXIS else 0
+                ev |= _loop_mode(st, pr, ist, s)
+                _measure(st, pr, ist, s, dt)
+                _control_and_drive(st, pr, ist, s, dt)
+                ev |= _monitors(st, pr, ist, s, dt)
             if ev != 0:
                 ist[s, I_EVENTS] |= ev
                 any_event = 1
@@ -447,6 +553,7 @@ def run_cycles(
                 rec[c, s, R_MON_ACTIVE] = ist[s, I_MON_ACTIVE]
                 rec[c, s, R_MON_INVALID] = ist[s, I_MON_INVALID]
                 rec[c, s, R_OVERRIDE] = st[s, S_OVERRIDE]
+                rec[c, s, R_LINE] = ist[s, I_LINE]
         if any_event == 1:
             return c + 1
     return n

@@ -23,9 +23,11 @@ from nc_sim.axis.moves import Moves
 from nc_sim.axis.params import power_on, push_params
 from nc_sim.axis.state import Axis, drive_status
 from nc_sim.blocks import Block, BlockError, parse_block
+from nc_sim.channel import canon
 from nc_sim.channel.canon import ListSink
+from nc_sim.channel.channel import Channel
 from nc_sim.channel.interpreter import interpret
-from nc_sim.channel.state import ChannelProgress, LoadedProgram
+from nc_sim.channel.path import Path
 from nc_sim.channel.words import ProgramError
 from nc_sim.commands import (
     Accepted,
@@ -59,14 +61,17 @@ from nc_sim.errors import MESSAGES, Code, NcUsageError, is_error
 from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
+from nc_sim.machine.channel_host import MachineChannelHost
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.readout import machine_snapshot
 from nc_sim.plc import Handshake, PlcMode, SimPlc, Waiter
-from nc_sim.snapshot import MachineSnapshot
+from nc_sim.snapshot import AxisState, ChannelState, MachineSnapshot
 from nc_sim.spindle.control import SpindleControl
 from nc_sim.spindle.gear_change import spindle_index
 from nc_sim.spindle.program import program_end, spindle_block, tool_dynamics
 from nc_sim.units import AxisKind
+
+_PROGRAM_ACTIVE = (ChannelState.RUNNING, ChannelState.HELD, ChannelState.BLOCK_END)
 
 
 @dataclass
@@ -116,7 +121,17 @@ class Machine:
         self.motion = AxisMotion(kernel, self.ctx, self.log, lambda: self.cycle, self._abort_block)
         self.sp = SpindleControl(self.motion, cfg, self.handshake)
         self.moves = Moves(self.motion, self.sp, cfg)
-        self.channel = ChannelProgress(slope=self.slope)
+        path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE][: L.MAX_PATH_AXES]
+        self.channel_slot = kernel.claim(1)[0]
+        self.ch_host = MachineChannelHost(self, path_axes)
+        self.channel = Channel(
+            Path(kernel, self.channel_slot, [a.slot for a in path_axes]),
+            self.ch_host,
+            tuple(a.name for a in path_axes),
+            self._interpret_here,
+            cfg.cycle_s,
+            int(cfg.channel_raw("lookahead_blocks")),
+        )
         for ax in self.axes:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
@@ -162,14 +177,16 @@ class Machine:
                 return self._mdi(cmd.block, cmd.serial)
             case ProgramLoad():
                 return self._program_load(cmd.name, cmd.text, cmd.serial)
-            case CycleStart() | ProgramStop():
-                answer = self.motion.fail(
-                    None, Code.CHANNEL_ERROR_STATE, "program execution is not available yet"
-                )
+            case CycleStart():
+                answer = self._cycle_start()
+            case ProgramStop():
+                if self.channel.state in _PROGRAM_ACTIVE:
+                    self.channel.stop()
+                    self.log(Code.EV_PROGRAM_STOP)
             case Feedhold():
                 self._channel_unit("feedhold", int(cmd.on))
             case SingleBlock():
-                self.channel.single_block = cmd.on
+                self.channel.set_single_block(cmd.on)
             case SpindleRun():
                 answer = self._spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
             case SpindlePosition():
@@ -222,6 +239,9 @@ class Machine:
         if due is not None:
             times.append(due)
         times += [ax.deadline for ax in self.axes if ax.deadline is not None]
+        wake = self.channel.next_wakeup()
+        if wake is not None:
+            times.append(wake)
         if self.estop and any(ax.enables_ok() for ax in self.axes):
             times.append(self.cycle + 1)  # watch the braking axes settle (_estop_settled)
         return min(times) if times else None
@@ -356,7 +376,15 @@ class Machine:
         old = self.channel_units[unit]
         self.channel_units[unit] = hli.clamp(unit, value)
         self.log(Code.EV_HLI, "", f"channel {unit} = {value}")
+        if unit == "override":
+            cap = self.cfg.channel_eng("max_vb_override")
+            self.channel.override = min(self.channel_units["override"] * 1e-3, cap)
+            self.channel.replan()
         if unit == "feedhold" and bool(value) != bool(old):
+            if value:
+                self.channel.hold()
+            elif self.channel.state is ChannelState.HELD:
+                self.channel.resume()
             self.moves.feedhold(bool(value), self.axes)
             return
         for ax in self.axes:
@@ -368,6 +396,12 @@ class Machine:
         """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.ctx.estop = self.ctx.estop, False
+        if (
+            self.channel.state in _PROGRAM_ACTIVE
+            or self.channel.path.count
+            or self.channel.state is ChannelState.ERROR
+        ):
+            self.channel.abort(None)
         self._queue.clear()
         self.handshake.clear()
         for ax in self.axes:
@@ -384,6 +418,7 @@ class Machine:
         self.ctx.estop = True
         self._queue.clear()
         stop = self.log(Code.EMERGENCY_STOP)  # one error, the active one of every axis
+        self.channel.abort(stop)  # the path axes brake on their own, leaving the path
         for ax in self.axes:
             self.motion.emergency_stop(ax, stop)
 
@@ -401,6 +436,8 @@ class Machine:
         """Queue one block and start it when the queue is free: a block that does not parse
         is invalid (with the column), one that fails while starting is refused with its job
         error, one that started or waits behind a running block is accepted."""
+        if self.channel.state in _PROGRAM_ACTIVE:
+            return Refused(serial, self.motion.fail(None, Code.AXIS_BUSY, "a program is running"))
         bid = self._next_id
         self._next_id += 1
         names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
@@ -417,21 +454,75 @@ class Machine:
             return Refused(serial, run.error)
         return Accepted(serial, self.cycle, block_id=bid)
 
-    def _program_load(self, name: str, text: str, serial: int) -> Outcome:
-        """Check a program by interpreting it from here; keep it when it has no error."""
+    def _interpret_here(self, text: str) -> list[canon.Call]:
+        """A program's canonical calls from where the axes are now (raises ProgramError)."""
         names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
         spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
         start = {a.name: float(self.k.st[a.slot, L.S_P_CMD]) for a in self.axes}
+        sink = ListSink()
+        interpret(text, sink, names, spindles, start)
+        return sink.calls
+
+    def _program_load(self, name: str, text: str, serial: int) -> Outcome:
+        """Check a program by interpreting it from here; keep it when it has no error."""
+        if self.channel.state in _PROGRAM_ACTIVE:
+            return Refused(serial, self.motion.fail(None, Code.AXIS_BUSY, "a program is running"))
         try:
-            interpret(text, ListSink(), names, spindles, start)
+            self._interpret_here(text)
         except ProgramError as e:
             self.log(Code(e.code), "", f"{name}: {e.detail}", line=e.line, column=e.column)
             return Invalid(serial, e.detail, e.column, int(e.code), e.line)
-        self.channel.program = LoadedProgram(name, text)
+        self.channel.load(name, text)
         self.log(Code.EV_PROGRAM_LOADED, "", f"program {name} loaded")
         return Accepted(serial, self.cycle)
 
+    def _cycle_start(self) -> Event | None:
+        """Run the loaded program, or continue after feedhold or a single-block stop."""
+        ch = self.channel
+        fail = self.motion.fail
+        if ch.state in (ChannelState.HELD, ChannelState.BLOCK_END):
+            if self.channel_units["feedhold"]:
+                return fail(None, Code.CHANNEL_ERROR_STATE, "feedhold is on")
+            ch.resume()
+            return None
+        if ch.state is ChannelState.RUNNING:
+            return None
+        if self.estop:
+            return fail(None, Code.CHANNEL_ERROR_STATE, "emergency stop active")
+        if ch.state is ChannelState.IDLE:
+            return fail(None, Code.CHANNEL_ERROR_STATE, "no program loaded")
+        if ch.state is ChannelState.ERROR:
+            return fail(None, Code.CHANNEL_ERROR_STATE, "reset first")
+        if self._queue:
+            return fail(None, Code.AXIS_BUSY, "MDI blocks are running")
+        try:
+            ch.start()
+        except ProgramError as e:
+            return self.log(Code(e.code), "", e.detail, line=e.line, column=e.column)
+        self.log(
+            Code.EV_PROGRAM_START,
+            "",
+            f"program {ch.progress.program.name if ch.progress.program else ''}",
+        )
+        # the start may have ended in a job error at once (an axis not ready, a limit)
+        return ch.progress.error
+
+    def _channel_error(self, ev: Event | None) -> None:
+        """A job error stops the program: the path axes brake on their own."""
+        self.channel.abort(ev)
+        for a in self.ch_host.path_axes:
+            if a.state is AxisState.MOVING:
+                self.moves.stop(a, Motion.FEED)
+
     def _abort_block(self, ax: Axis) -> None:
+        on_path = self.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS
+        mdi = bool(self._queue) and self._queue[0].id == ax.block_id
+        if self.channel.state in _PROGRAM_ACTIVE and (
+            on_path or (ax.block_id is not None and not mdi)
+        ):
+            ax.block_id = None
+            self._channel_error(ax.error_event)
+            return
         if ax.block_id is not None and self._queue and self._queue[0].id == ax.block_id:
             self._queue.popleft()
         ax.block_id = None
@@ -560,6 +651,13 @@ class Machine:
             for ax in self.axes:
                 if ax.enables_ok() and self.motion.settled(ax):
                     self.motion.power_off(ax)
+        ch_ev = int(self.k.ist[self.channel_slot, L.I_EVENTS])
+        if ch_ev:
+            self.k.ist[self.channel_slot, L.I_EVENTS] = 0
+            self.channel.on_path_events()
+        else:
+            self.channel.pump()
+        self.k.ist[self.channel_slot, L.I_STATE] = int(self.channel.state)
         self._pump()
 
     def _drive_status(self) -> None:

@@ -79,8 +79,9 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
 
 def channel_snapshot(m: Machine) -> ChannelSnapshot:
     """The channel's program state and modal state now."""
-    c = m.channel
-    modal = c.modal
+    ch = m.channel
+    c = ch.progress
+    g, plane, absolute, feed = ch.modal
     return ChannelSnapshot(
         state=c.state,
         program=c.program.name if c.program else None,
@@ -88,14 +89,10 @@ def channel_snapshot(m: Machine) -> ChannelSnapshot:
         blocks_done=c.blocks_done,
         single_block=c.single_block,
         modal=ModalSnapshot(
-            motion=modal.motion if modal else 0,
-            plane=modal.plane if modal else 17,
-            absolute=modal.absolute if modal else True,
-            feed_mm_min=modal.feed_mm_min if modal else None,
-            slope=m.slope,
+            motion=g, plane=plane, absolute=absolute, feed_mm_min=feed, slope=m.slope
         ),
-        path_feed_mm_min=0.0,
-        distance_to_go_mm=None,
+        path_feed_mm_min=ch.path_feed_mm_min(),
+        distance_to_go_mm=ch.distance_to_go_mm(),
         waiting_for=c.waiting_for,
         error=c.error,
     )

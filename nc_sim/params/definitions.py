@@ -1733,6 +1733,19 @@ DEFINITIONS: list[ParamDef] = [
         source="inbetrieb",
         title="Job error when the PLC has not acknowledged after this time",
     ),
+    _p(
+        "INB-CHAN-0006",
+        "lookahead_blocks",
+        C,
+        U16,
+        NONE,
+        16,
+        1,
+        60,
+        source="inbetrieb",
+        title="Motion blocks the path planner looks ahead (collinear and tangent blocks "
+        "within it do not stop)",
+    ),
     # --- tool [000 §2.8.5] -------------------------------------------------------------------
     _p(
         "P-TOOL-00012",

@@ -299,3 +299,94 @@ def make_limits(
     lim[LIM_A_DEC2] = a_dec2
     lim[LIM_V12] = v12
     return lim
+
+
+@njit(cache=True)
+def change_distance(
+    scratch: np.ndarray, v0: float, a0: float, v1: float, lim: np.ndarray, cycle_s: float
+) -> float:
+    """Distance a velocity change (v0, a0) -> (v1, 0) covers."""
+    k = velocity_change(scratch, 0, v0, a0, v1, lim, cycle_s)
+    d, _v = plan_distance(scratch, 0, k, v0)
+    return d
+
+
+@njit(cache=True)
+def speed_within(
+    dist: float, v_from: float, v_cap: float, braking: bool, lim: np.ndarray, cycle_s: float
+) -> float:
+    """The highest speed v ≤ v_cap (all speeds ≥ 0) that can still brake to v_from within
+    `dist` (braking), or that can be reached from v_from at rest acceleration within `dist`."""
+    scratch = np.zeros((MAX_SEGMENTS, SEG_COLS))
+
+    def fits(v: float) -> bool:
+        if braking:
+            return change_distance(scratch, v, 0.0, v_from, lim, cycle_s) <= dist
+        return change_distance(scratch, v_from, 0.0, v, lim, cycle_s) <= dist
+
+    if v_cap <= v_from or fits(v_cap):
+        return max(v_cap, 0.0) if v_cap > v_from else v_cap
+    lo = v_from
+    hi = v_cap
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if fits(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def move_through(
+    seg: np.ndarray,
+    k0: int,
+    v0: float,
+    a0: float,
+    dist: float,
+    v_cap: float,
+    v_end: float,
+    lim: np.ndarray,
+    cycle_s: float,
+) -> tuple[int, float]:
+    """Append segments covering `dist` (> 0) from (v0 ≥ 0, a0) to (v_end, 0) with a peak or
+    cruise speed ≤ v_cap: the fastest such profile. Returns (segment count, end speed): the
+    end speed is below v_end when v_end cannot be reached within `dist`; when braking from v0
+    to v_end needs more than `dist`, the profile brakes as planned and runs past `dist` (the
+    caller's look-ahead keeps that from happening)."""
+    scratch = np.zeros((MAX_SEGMENTS, SEG_COLS))
+    d_direct = change_distance(scratch, v0, a0, v_end, lim, cycle_s)
+    if d_direct > dist:
+        if v_end > v0:  # cannot reach v_end: accelerate as far as the distance allows
+            lo, hi = v0, v_end
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                if change_distance(scratch, v0, a0, mid, lim, cycle_s) <= dist:
+                    lo = mid
+                else:
+                    hi = mid
+            return velocity_change(seg, k0, v0, a0, lo, lim, cycle_s), lo
+        return velocity_change(seg, k0, v0, a0, v_end, lim, cycle_s), v_end
+
+    def through(vp: float) -> float:
+        k = velocity_change(scratch, 0, v0, a0, vp, lim, cycle_s)
+        k2 = velocity_change(scratch, k, vp, 0.0, v_end, lim, cycle_s)
+        d, _v = plan_distance(scratch, 0, k2, v0)
+        return d
+
+    lo = min(max(v_end, 0.0), v_cap)
+    hi = v_cap
+    if through(hi) <= dist:
+        lo = hi
+    else:
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if through(mid) <= dist:
+                lo = mid
+            else:
+                hi = mid
+    k = velocity_change(seg, k0, v0, a0, lo, lim, cycle_s)
+    d_used = through(lo)
+    if lo > 1e-9 and dist - d_used > 0.0:  # cruise the rest
+        k = _push(seg, k, (dist - d_used) / lo, 0.0, 0.0, SHAPE_LINEAR)
+    return velocity_change(seg, k, lo, 0.0, v_end, lim, cycle_s), v_end

@@ -1,0 +1,322 @@
+"""The NC channel: program state, the walk through a program's steps, its path.
+
+States (nc_sim/snapshot.py ChannelState): IDLE (no program) -> READY (loaded) -> RUNNING on
+cycle start -> HELD on feedhold, BLOCK_END at each block end in single block, back to READY at
+the program end (M30/M02) or on stop, ERROR when a job error stops it (a reset clears it).
+Steps that need the path at rest (dwell, synchronised spindle functions, M functions, homing,
+program end) wait until every queued element has run; the others go along with the path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from nc_sim.channel import canon
+from nc_sim.channel.execution import Execution, Step
+from nc_sim.channel.geometry import Element
+from nc_sim.channel.path import MAX_WINDOW, Path
+from nc_sim.channel.planner import AxisDynamics
+from nc_sim.channel.state import ChannelProgress, LoadedProgram
+from nc_sim.events import Event
+from nc_sim.snapshot import ChannelState
+
+
+class ChannelHost(Protocol):
+    """What the channel needs of its machine (nc_sim/machine)."""
+
+    @property
+    def cycle(self) -> int: ...
+
+    def new_action_id(self) -> int:
+        """A number for an action, unique among the machine's blocks and actions."""
+
+    def start_action(self, call: canon.Call, action_id: int) -> Event | None:
+        """Start a non-motion call; the job error (logged) when it failed."""
+
+    def busy(self, action_id: int) -> bool:
+        """The action still runs (spindle not at speed, M function not acknowledged, ...)."""
+
+    def sync_of(self, call: canon.Call) -> int:
+        """Synchronisation type in force for a spindle call [000 §2.5]."""
+
+    def check_element(self, e: Element) -> Event | None:
+        """None when the element may run, else the job error (logged) that forbids it."""
+
+    def dynamics(self, e: Element) -> list[AxisDynamics]:
+        """The path axes' limits for this element's kind of motion."""
+
+    def hold_limits(self, e: Element | None) -> np.ndarray:
+        """Path braking limits for feedhold."""
+
+    def path_moving(self, line: int | None) -> None:
+        """The path axes move (line) or stand (None)."""
+
+    def program_end(self, call: canon.ProgramEnd) -> None:
+        """M30/M02: what the machine does at program end (spindles per the HLI flag)."""
+
+
+@dataclass
+class _Wait:
+    action_id: int | None = None
+    until_cycle: int | None = None
+    what: str = ""
+
+
+class Channel:
+    """One channel: a path over its axes and the program running on it."""
+
+    def __init__(
+        self,
+        path: Path,
+        host: ChannelHost,
+        axes: tuple[str, ...],
+        interpret: Callable[[str], list[canon.Call]],
+        cycle_s: float,
+        lookahead: int,
+    ) -> None:
+        self.path = path
+        self.host = host
+        self.axes = axes
+        self.interpret = interpret  # text -> calls from the axes' positions now (raises)
+        self.cycle_s = cycle_s
+        self.lookahead = max(1, min(lookahead, MAX_WINDOW))
+        self.progress = ChannelProgress()
+        self.ex: Execution | None = None
+        self.wait: _Wait | None = None
+        self.last_line: int | None = None
+        self.step_granted = False  # single block: cycle start lets one more block run
+        self.modal: tuple[int, int, bool, float | None] = (0, 17, True, None)
+        self.feed_scale = 1.0 / 60.0  # F (mm/min) -> mm/s, times the override
+        self.override = 1.0
+
+    # --- commands -------------------------------------------------------------------------
+    def load(self, name: str, text: str) -> None:
+        """Keep an interpreted-without-error program (the caller checked it)."""
+        self.progress.program = LoadedProgram(name, text)
+        self.progress.error = None
+        self.progress.state = ChannelState.READY
+        self.progress.block_line = None
+
+    @property
+    def state(self) -> ChannelState:
+        return self.progress.state
+
+    def start(self) -> None:
+        """Cycle start from READY: interpret from where the axes are now and run."""
+        assert self.progress.program is not None
+        calls = self.interpret(self.progress.program.text)
+        self.ex = Execution(calls, self.axes, self.host.sync_of, self.host.new_action_id)
+        self.wait = None
+        self.last_line = None
+        self.step_granted = True
+        self.progress.blocks_done = 0
+        self.progress.error = None
+        self.progress.state = ChannelState.RUNNING
+        self.pump()
+
+    def resume(self) -> None:
+        """Cycle start in HELD or BLOCK_END."""
+        if self.progress.state is ChannelState.HELD:
+            self.progress.state = ChannelState.RUNNING
+            self.replan()
+        elif self.progress.state is ChannelState.BLOCK_END:
+            self.progress.state = ChannelState.RUNNING
+            self.step_granted = True
+        self.pump()
+
+    def hold(self) -> None:
+        """Feedhold: brake on the path and wait."""
+        if self.progress.state is ChannelState.RUNNING:
+            self.progress.state = ChannelState.HELD
+            if self.path.count:
+                self.path.hold(self.host.hold_limits(self.path.current))
+
+    def set_single_block(self, on: bool) -> None:
+        self.progress.single_block = on
+        if on and self.path.count:
+            self.replan()  # the blocks queued so far end at rest
+
+    def stop(self) -> None:
+        """Brake on the path and rewind (the path ends where it stopped)."""
+        if self.path.count:
+            self.path.hold(self.host.hold_limits(self.path.current))
+            self.path.queue.clear()  # what braking passes is not run any further
+        self._rewind(ChannelState.READY)
+
+    def abort(self, error: Event | None) -> None:
+        """A job error or reset ends the program; the axes keep braking on their own."""
+        if self.path.count or not self.path.at_rest():
+            self.path.abandon()
+        self.host.path_moving(None)
+        self._rewind(ChannelState.ERROR if error is not None else ChannelState.READY)
+        self.progress.error = error
+        if error is None and self.progress.program is None:
+            self.progress.state = ChannelState.IDLE
+
+    def _rewind(self, state: ChannelState) -> None:
+        self.ex = None
+        self.wait = None
+        self.progress.state = state if self.progress.program else ChannelState.IDLE
+        self.progress.waiting_for = None
+
+    # --- the cycle boundary ---------------------------------------------------------------
+    def on_path_events(self) -> None:
+        """After EV_BLOCK / EV_PLAN_DONE of the channel slot: actions bound to passed
+        elements start, the next blocks are queued."""
+        for e in self.path.sync():
+            self._passed(e)
+        if self.path.count and self.path.done():
+            for e in list(self.path.queue):
+                self._passed(e)
+            self.path.finish()
+            self.host.path_moving(None)
+        elif self.path.current is not None:
+            self.host.path_moving(self.path.current.line)
+            self.progress.block_line = self.path.current.line
+            self.modal = self.path.current.modal
+        self.pump()
+
+    def _passed(self, e: Element) -> None:
+        self.progress.blocks_done += 1
+        for call, aid in e.actions:
+            self._start(call, aid)
+
+    def pump(self) -> None:
+        """Queue and start what may go now; plan again when the window changed."""
+        changed = False
+        while self.progress.state is ChannelState.RUNNING and self.ex is not None:
+            if self.wait is not None and not self._wait_over():
+                break
+            self.wait = None
+            self.progress.waiting_for = None
+            if not self.ex.steps:
+                if not self.ex.more(list(self.path.position())):
+                    break
+                continue
+            step = self.ex.steps[0]
+            if self.progress.single_block and step.line != self.last_line:
+                if not self.path.done() and self.path.count:
+                    break
+                if not self.step_granted:
+                    self.progress.state = ChannelState.BLOCK_END
+                    break
+                self.step_granted = False
+            self.last_line = step.line
+            if step.element is not None:
+                if self.path.count >= self.lookahead:
+                    break
+                err = self.host.check_element(step.element)
+                if err is not None:
+                    self.abort(err)
+                    return
+                if self.progress.single_block:
+                    step.element.exact_stop = True
+                self.ex.steps.popleft()
+                if not self.path.count:
+                    self.progress.block_line = step.element.line
+                    self.modal = step.element.modal
+                    self.host.path_moving(step.element.line)
+                self.path.append(step.element)
+                changed = True
+                continue
+            rest = step.rest or step.waits_for is not None or step.dwell_s > 0
+            if rest and self.path.count:
+                if self.path.done():
+                    self.on_path_events()
+                    return
+                self.progress.waiting_for = None
+                break
+            self.ex.steps.popleft()
+            if not self._act(step):
+                return
+        if changed:
+            self.replan()
+
+    def _act(self, step: Step) -> bool:
+        assert self.ex is not None
+        self.progress.block_line = step.line
+        if step.dwell_s > 0:
+            until = self.host.cycle + max(1, round(step.dwell_s / self.cycle_s))
+            self.wait = _Wait(until_cycle=until, what=f"dwell {step.dwell_s:g} s")
+        if step.waits_for is not None:
+            self.wait = _Wait(step.waits_for, what=f"synchronisation of line {step.line}")
+        call = step.call
+        if call is None:
+            return True
+        if isinstance(call, canon.ProgramEnd):
+            self.host.program_end(call)
+            self._rewind(ChannelState.READY)
+            return False
+        aid = step.action_id or self.ex.new_id()
+        if not step.rest and step.waits_for is None and self.path.count:
+            self.path.queue[-1].actions.append((call, aid))  # when the path gets there
+            return True
+        if not self._start(call, aid):
+            return False
+        if step.wait:
+            self.wait = _Wait(aid, what=_describe(call))
+        return True
+
+    def _start(self, call: canon.Call, aid: int) -> bool:
+        """Start an action; on a job error the program stops (False)."""
+        if isinstance(call, canon.SelectPlane):
+            self.modal = (self.modal[0], call.plane, self.modal[2], self.modal[3])
+            return True
+        if isinstance(call, canon.ManualMode):
+            return True
+        err = self.host.start_action(call, aid)
+        if err is not None:
+            self.abort(err)
+            return False
+        return True
+
+    def _wait_over(self) -> bool:
+        w = self.wait
+        assert w is not None
+        self.progress.waiting_for = w.what
+        if w.until_cycle is not None and self.host.cycle < w.until_cycle:
+            return False
+        return not (w.action_id is not None and self.host.busy(w.action_id))
+
+    def next_wakeup(self) -> int | None:
+        """A dwell's end: the cycle at which the channel must look again."""
+        if self.wait is not None and self.wait.until_cycle is not None:
+            return self.wait.until_cycle
+        return None
+
+    def replan(self) -> None:
+        """Plan the window again (new blocks, override, feedhold released)."""
+        if self.progress.state is ChannelState.HELD or not self.path.count:
+            return
+        self.path.replan(self.host.dynamics, self.feed_scale * self.override, self.override)
+
+    # --- status ---------------------------------------------------------------------------
+    def path_feed_mm_min(self) -> float:
+        return self.path.speed * 60.0
+
+    def distance_to_go_mm(self) -> float | None:
+        return self.path.distance_to_go()
+
+
+def _describe(call: canon.Call) -> str:
+    """What the path waits for, in the operator's words."""
+    match call:
+        case canon.SpindleOn():
+            return f"speed reached of {call.spindle} (M{call.m})"
+        case canon.SpindleOff():
+            return f"{call.spindle} stopped (M5)"
+        case canon.SpindleOrient():
+            return f"{call.spindle} in position (M19)"
+        case canon.SpindleSpeed():
+            return f"speed reached of {call.spindle}"
+        case canon.MFunction():
+            return f"the PLC's acknowledgement of M{call.m}"
+        case canon.SelectGear():
+            return f"gear change M{call.m}"
+        case canon.Home():
+            return "homing (G74)"
+    return f"line {call.line}"

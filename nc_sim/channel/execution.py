@@ -1,0 +1,187 @@
+"""Program execution: canonical calls -> path elements and channel actions, in time.
+
+`Execution` walks the calls of an interpreted program. Motion calls become path elements,
+queued for the look-ahead (`Path`); everything else is an action the channel does between
+them. When an action acts and what the path waits for is the synchronisation type's business
+[000 §2.5]:
+
+- MVS_SVS: the path comes to rest, the action starts, the path waits until it is done, then
+  the block's motion follows. M3/M4/M5 always synchronise internally on speed reached or
+  standstill [000 §2.5.1], so NO_SYNCH means this for them (and for M19: in position);
+- MOS (and NO_SYNCH for S alone, s_synch P-CHAN-00081): the action starts when the path gets
+  there, the path does not wait;
+- MVS_SNS: starts when the path gets there, the path waits after the block's motion;
+- MNS_SNS (and MNE_SNS, no measuring events here): starts after the block's motion, waits;
+- MVS_SLM: starts when the path gets there, the path waits before the next G01/G02/G03;
+- MVS_SLP: starts when the path gets there, waits at the program end (no #EXPL SYN here);
+- PLC_INFO (additive): the M function also goes to the PLC, and its acknowledgement is waited
+  for with the same timing.
+Priority within a block M19 > M3/M4/M5 > S: only the highest spindle function of a block
+synchronises (the interpreter emits at most one per spindle and block).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nc_sim.channel import canon
+from nc_sim.channel.geometry import Element, arc, straight
+
+# synchronisation types [000 §2.5]
+NO_SYNCH = 0x0
+MOS = 0x1
+MVS_SVS = 0x2
+MVS_SNS = 0x4
+MNS_SNS = 0x8
+MNE_SNS = 0x20
+MVS_SLM = 0x4000
+MVS_SLP = 0x8000
+PLC_INFO = 0x20000
+
+_MOTION = (canon.StraightTraverse, canon.StraightFeed, canon.ArcFeed)
+
+
+@dataclass
+class Step:
+    """One thing the channel does in order: queue an element, or act (`rest`: only with the
+    path at rest; `wait`: the path then waits until it is done), or wait for an action."""
+
+    line: int
+    element: Element | None = None
+    call: canon.Call | None = None
+    rest: bool = False
+    wait: bool = False
+    waits_for: int | None = None  # wait (at rest) until this action is done
+    action_id: int | None = None  # the number to start `call` with (None: a new one)
+    dwell_s: float = 0.0
+
+
+@dataclass
+class _Late:
+    action_id: int
+    until: str  # "feed" (MVS_SLM) or "end" (MVS_SLP)
+
+
+@dataclass
+class Execution:
+    """The walk through one program's calls."""
+
+    calls: list[canon.Call]
+    axes: tuple[str, ...]
+    sync_of: Callable[[canon.Call], int]  # the synchronisation type of a spindle call
+    ids: Callable[[], int]  # numbers for actions, unique in the machine
+    pc: int = 0  # next call to translate
+    steps: deque[Step] = field(default_factory=deque)
+    late: list[_Late] = field(default_factory=list)
+    feed_mm_min: float | None = None
+    plane: int = 17
+
+    def new_id(self) -> int:
+        """A number for an action (what the host's `busy` is asked about)."""
+        return self.ids()
+
+    def more(self, position: list[float]) -> bool:
+        """Translate the next block's calls into steps; False at the end of the calls.
+        `position` is where the path will be when this block starts."""
+        if self.pc >= len(self.calls):
+            return False
+        line = self.calls[self.pc].line
+        block: list[canon.Call] = []
+        while self.pc < len(self.calls) and self.calls[self.pc].line == line:
+            block.append(self.calls[self.pc])
+            self.pc += 1
+        self._translate(block, position)
+        return True
+
+    def _translate(self, block: list[canon.Call], position: list[float]) -> None:
+        has_motion = any(isinstance(c, _MOTION) for c in block)
+        after: list[Step] = []
+        start = np.array(position, dtype=float)
+        for call in block:
+            line = call.line
+            match call:
+                case canon.SetFeedRate():
+                    self.feed_mm_min = call.feed_mm_min
+                case canon.StraightTraverse() | canon.StraightFeed() | canon.ArcFeed():
+                    is_feed = not isinstance(call, canon.StraightTraverse)
+                    if is_feed:
+                        for late in [x for x in self.late if x.until == "feed"]:
+                            self.steps.append(Step(line, waits_for=late.action_id))
+                            self.late.remove(late)
+                    e = (
+                        arc(self.axes, start, call, self.feed_mm_min)
+                        if isinstance(call, canon.ArcFeed)
+                        else straight(self.axes, start, call, self.feed_mm_min)
+                    )
+                    if e is not None:
+                        g = 0 if not is_feed else 1
+                        if isinstance(call, canon.ArcFeed):
+                            g = 3 if call.turn > 0 else 2
+                        e.modal = (g, self.plane, call.absolute, self.feed_mm_min)
+                        e.exact_stop = bool(after)
+                        self.steps.append(Step(line, element=e))
+                        start = e.end.copy()
+                case canon.Dwell():
+                    self.steps.append(Step(line, rest=True, dwell_s=call.time_s))
+                case canon.ProgramEnd():
+                    for late in self.late:
+                        self.steps.append(Step(line, waits_for=late.action_id))
+                    self.late.clear()
+                    self.steps.append(Step(line, call=call, rest=True, wait=True))
+                case (
+                    canon.SpindleOn()
+                    | canon.SpindleOff()
+                    | canon.SpindleOrient()
+                    | canon.SpindleSpeed()
+                ):
+                    self._spindle(call, has_motion, after)
+                case canon.SelectPlane():
+                    self.plane = call.plane
+                    self.steps.append(Step(line, call=call))
+                case canon.SelectTool() | canon.SetSlope() | canon.ManualMode():
+                    self.steps.append(Step(line, call=call))
+                case _:  # gear change, homing, other M functions: at rest, waited for
+                    self.steps.append(Step(line, call=call, rest=True, wait=True))
+        self.steps.extend(after)
+
+    def _spindle(self, call: canon.Call, has_motion: bool, after: list[Step]) -> None:
+        kind = sync_kind(call, self.sync_of(call))
+        line = call.line
+        if kind == "before" or (not has_motion and kind in ("after", "after_out")):
+            self.steps.append(Step(line, call=call, rest=True, wait=True))
+        elif kind == "none":
+            self.steps.append(Step(line, call=call))
+        elif kind == "after":  # MVS_SNS: out now, waited for after the block's motion
+            aid = self.new_id()
+            self.steps.append(Step(line, call=call, action_id=aid))
+            after.append(Step(line, waits_for=aid))
+        elif kind == "after_out":  # MNS_SNS: out and waited for after the block's motion
+            after.append(Step(line, call=call, rest=True, wait=True))
+        else:  # late: out now, waited for before the next feed block or at the end
+            aid = self.new_id()
+            self.steps.append(Step(line, call=call, action_id=aid))
+            self.late.append(_Late(aid, "feed" if kind == "late_feed" else "end"))
+
+
+def sync_kind(call: canon.Call, sync: int) -> str:
+    """When a spindle call acts and is waited for, from its synchronisation type."""
+    base = sync & ~PLC_INFO
+    if base & MVS_SVS:
+        return "before"
+    if base & MVS_SNS:
+        return "after"
+    if base & (MNS_SNS | MNE_SNS):
+        return "after_out"
+    if base & MVS_SLM:
+        return "late_feed"
+    if base & MVS_SLP:
+        return "late_end"
+    if base & MOS:
+        return "none"
+    # NO_SYNCH: M3/M4/M5 synchronise internally on speed reached / standstill [000 §2.5.1],
+    # M19 on in position; the S word alone does not wait (s_synch)
+    return "none" if isinstance(call, canon.SpindleSpeed) else "before"

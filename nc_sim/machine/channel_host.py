@@ -1,0 +1,267 @@
+"""The machine as its channel sees it (nc_sim/channel/channel.py `ChannelHost`): actions
+that are not path motion, the path axes' limits, and what runs for which action."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from nc_sim.axis.dynamics import Motion, feedhold_limits, motion_limits, velocity_limit
+from nc_sim.blocks.mdi import SpindleCmd
+from nc_sim.channel import canon
+from nc_sim.channel.geometry import Element, point_at
+from nc_sim.channel.planner import AxisDynamics, element_limits
+from nc_sim.errors import Code
+from nc_sim.events import Event
+from nc_sim.kernel import layout as L
+from nc_sim.plc import Waiter
+from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
+from nc_sim.snapshot import AxisState
+from nc_sim.spindle.gear_change import spindle_index
+from nc_sim.spindle.program import program_end, spindle_block, tool_dynamics
+from nc_sim.units import AxisKind
+
+if TYPE_CHECKING:
+    from nc_sim.axis.state import Axis
+    from nc_sim.machine.machine import Machine
+
+_SYNC_PARAM = {
+    canon.SpindleOff: "m5_synch",
+    canon.SpindleOrient: "m19_synch",
+    canon.SpindleSpeed: "s_synch",
+}
+
+
+class MachineChannelHost:
+    """Carries the channel's actions out on the machine's axes, spindles and PLC."""
+
+    def __init__(self, m: Machine, path_axes: list[Axis]) -> None:
+        self.m = m
+        self.path_axes = path_axes
+        self.m_pending: dict[int, int] = {}  # action -> M functions not yet acknowledged
+        self.stopping: dict[int, Axis] = {}  # M5 action -> its spindle (until standstill)
+        self.reaching: dict[int, Axis] = {}  # M3/M4/S action -> its spindle (speed reached)
+        self.homing: dict[int, list[list[str]]] = {}  # G74 action -> order groups to come
+        self.moving = False  # the path axes move for the channel (not for MDI or jog)
+
+    @property
+    def cycle(self) -> int:
+        return self.m.cycle
+
+    def new_action_id(self) -> int:
+        bid = self.m._next_id
+        self.m._next_id += 1
+        return bid
+
+    # --- actions --------------------------------------------------------------------------
+    def start_action(self, call: canon.Call, action_id: int) -> Event | None:
+        m = self.m
+        seen = m.events.cursor
+        ok = True
+        match call:
+            case (
+                canon.SpindleOn()
+                | canon.SpindleOff()
+                | canon.SpindleOrient()
+                | canon.SpindleSpeed()
+            ):
+                ax = m.axis(call.spindle)
+                sc = _spindle_cmd(call)
+                if isinstance(call, canon.SpindleOff):
+                    self.stopping[action_id] = ax
+                elif isinstance(call, canon.SpindleOn | canon.SpindleSpeed):
+                    self.reaching[action_id] = ax
+                ok = spindle_block(m.sp, ax, sc, None, action_id)
+                if ok and sc.m is not None and m._synch_plc(ax, sc.m):
+                    self.output(sc.m, ax.name, action_id)
+            case canon.SelectGear():
+                main = m.main_spindle
+                if m.gear_change_enabled and main:
+                    ok = m.sp.gears.only(m.axis(main), call.m - 39, action_id) is None
+                else:  # M40-M45 are free M functions (P-CHAN-00052)
+                    self.output(call.m, "", action_id)
+            case canon.SelectTool():
+                if call.d is not None:
+                    tool_dynamics(m.sp, m.axes, call.d)
+            case canon.SetSlope():
+                m.slope = call.slope_type
+            case canon.Home():
+                orders = sorted({o for _n, o in call.axes})
+                groups = [[n for n, o in call.axes if o == order] for order in orders]
+                self.homing[action_id] = groups
+                ok = self._home_next(action_id)
+            case canon.MFunction():
+                self.output(call.m, "", action_id)
+        if ok:
+            return None
+        return next((e for e in m.events.since(seen).entries if e.error), None) or m.log(
+            Code.CHANNEL_ERROR_STATE, "", f"line {call.line} could not start", line=call.line
+        )
+
+    def output(self, mfunc: int, axis: str, action_id: int) -> None:
+        """An M function to the PLC, waited for by `action_id`."""
+
+        def timed_out(ev: Event) -> None:
+            if action_id in self.m_pending:
+                self.m._channel_error(ev)
+
+        waiter = Waiter(lambda: self.acknowledged(action_id), timed_out)
+        self.m.handshake.output(mfunc, axis, waiter)
+        self.m_pending[action_id] = self.m_pending.get(action_id, 0) + 1
+
+    def acknowledged(self, action_id: int | None) -> None:
+        """The PLC acknowledged an M function of this action."""
+        if action_id in self.m_pending:
+            self.m_pending[action_id] -= 1
+            if self.m_pending[action_id] <= 0:
+                del self.m_pending[action_id]
+
+    def _home_next(self, action_id: int) -> bool:
+        groups = self.homing.get(action_id)
+        if not groups:
+            self.homing.pop(action_id, None)
+            return True
+        m = self.m
+        return all(m.moves.home(m.axis(name), action_id) is None for name in groups.pop(0))
+
+    def busy(self, action_id: int) -> bool:
+        if any(a.block_id == action_id for a in self.m.axes):
+            return True
+        if self.m_pending.get(action_id, 0) > 0:
+            return True
+        ax = self.stopping.get(action_id)
+        if ax is not None:
+            if ax.state is not AxisState.STANDSTILL or not self.m.k.ist[ax.slot, L.I_STOPPED]:
+                return True
+            del self.stopping[action_id]
+        ax = self.reaching.get(action_id)
+        if ax is not None:
+            turning = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
+            if turning and not self.m.k.ist[ax.slot, L.I_SPEED_REACHED]:
+                return True
+            del self.reaching[action_id]
+        if action_id in self.homing:
+            if not self._home_next(action_id):
+                self.homing.pop(action_id, None)
+            return action_id in self.homing or any(a.block_id == action_id for a in self.m.axes)
+        return False
+
+    def sync_of(self, call: canon.Call) -> int:
+        if not isinstance(
+            call, canon.SpindleOn | canon.SpindleOff | canon.SpindleOrient | canon.SpindleSpeed
+        ):
+            return 0
+        i = spindle_index(self.m.cfg, self.m.axis(call.spindle).name)
+        if i is None:
+            return 0
+        name = f"m{call.m}_synch" if isinstance(call, canon.SpindleOn) else _SYNC_PARAM[type(call)]
+        return int(self.m.cfg.channel_raw(f"spindel[{i}].{name}"))
+
+    def program_end(self, call: canon.ProgramEnd) -> None:
+        program_end(self.m.sp, self.m.axes)
+
+    # --- the path -------------------------------------------------------------------------
+    def check_element(self, e: Element) -> Event | None:
+        m = self.m
+        moved = np.abs(e.end - e.start) > 1e-12
+        if e.arc is not None:
+            moved[e.arc[0]] = moved[e.arc[1]] = True
+        for i, ax in enumerate(self.path_axes):
+            if not moved[i]:
+                continue
+            err = m.motion.drive_refusal(ax) or m.moves.homing_required(ax)
+            if err:
+                return err
+            if ax.state not in (AxisState.STANDSTILL, AxisState.MOVING):
+                return m.motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
+            if ax.homed and ax.kind is AxisKind.LINEAR:
+                lo, hi = m.k.pr[ax.slot, L.P_SWE_NEG], m.k.pr[ax.slot, L.P_SWE_POS]
+                samples = 2 if e.arc is None else 65
+                for j in range(samples):
+                    p = point_at(e, e.length * j / (samples - 1))[i]
+                    if not lo - 1e-9 <= p <= hi + 1e-9:
+                        return m.motion.fail(
+                            ax,
+                            Code.SOFTWARE_LIMIT,
+                            f"line {e.line}: {ax.name} {p:.4f} mm outside {lo:.4f} … {hi:.4f} mm",
+                        )
+        return None
+
+    def dynamics(self, e: Element) -> list[AxisDynamics]:
+        motion = Motion.RAPID if e.rapid else Motion.FEED
+        reduced = bool(self.m.channel_units["reduced_acceleration"])
+        cycle = self.m.k.cycle_s
+        corr = bool(self.m.cfg.channel_raw("corr_v_trans_jerk"))
+        out = []
+        for ax in self.path_axes:
+            g = ax.gear
+            lim = motion_limits(ax.cfg, g, motion, self.m.slope, reduced)
+            if motion is Motion.RAPID:
+                v_max = velocity_limit(ax.cfg, g, motion, None)
+            else:
+                v_max = ax.cfg.eng("getriebe.dynamik.vb_max", g)
+            a = float(lim[LIM_A_ACC])
+            tr = float(lim[LIM_TR_ACC_UP])
+            w = float(ax.cfg.raw("getriebe.dynamik.a_trans_weight", g))
+            # P-AXIS-00013: 0 weights the acceleration with cycle/ramp time [002 §2.3.1]
+            a_trans = a * w / 1000.0 if w > 0 else a * min(1.0, cycle / tr if tr > 0 else 1.0)
+            j_trans = math.inf
+            if corr:  # P-CHAN-00009 with P-AXIS-00154 [002 §2.3.2]
+                rw = float(ax.cfg.raw("getriebe.dynamik.r_trans_weight", g))
+                j_axis = a / max(tr, cycle)
+                j_trans = j_axis * (rw / 1000.0 if rw > 0 else min(1.0, cycle / max(tr, cycle)))
+            tr_geom = ax.cfg.eng("getriebe.dynamik.tr_geom", g) or ax.cfg.eng(
+                "getriebe.dynamik.tr_min", g
+            )
+            out.append(AxisDynamics(v_max, lim, a_trans, j_trans, tr_geom))
+        return out
+
+    def hold_limits(self, e: Element | None) -> np.ndarray:
+        use_set = bool(self.m.cfg.channel_raw("use_drive_curr_limit"))
+        motion = Motion.RAPID if e is not None and e.rapid else Motion.FEED
+        dyn = [
+            AxisDynamics(
+                math.inf,
+                feedhold_limits(ax.cfg, ax.gear, motion, self.m.slope, use_set),
+                0.0,
+                math.inf,
+                0.0,
+            )
+            for ax in self.path_axes
+        ]
+        if e is None:
+            return dyn[0].lim
+        return element_limits(e, dyn, math.inf).lim
+
+    def path_moving(self, line: int | None) -> None:
+        if line is None and not self.moving:
+            return
+        self.moving = line is not None
+        for ax in self.path_axes:
+            if line is not None and ax.state is AxisState.STANDSTILL:
+                ax.motion = Motion.FEED
+                self.m.motion.set_state(ax, AxisState.MOVING)
+            elif line is None and ax.state is AxisState.MOVING and ax.motion is Motion.FEED:
+                ax.motion = None
+                self.m.motion.set_state(ax, AxisState.STANDSTILL)
+
+
+def _spindle_cmd(call: canon.Call) -> SpindleCmd:
+    match call:
+        case canon.SpindleOn():
+            return SpindleCmd(call.spindle, m=call.m, speed_rpm=call.speed_rpm)
+        case canon.SpindleOff():
+            return SpindleCmd(call.spindle, m=5)
+        case canon.SpindleOrient():
+            return SpindleCmd(
+                call.spindle,
+                m=19,
+                speed_rpm=call.speed_rpm,
+                pos_deg=call.pos_deg,
+                direction=call.direction,
+            )
+        case canon.SpindleSpeed():
+            return SpindleCmd(call.spindle, speed_rpm=call.speed_rpm)
+    raise ValueError(f"not a spindle call: {call}")
