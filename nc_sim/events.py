@@ -17,9 +17,9 @@ from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
 from itertools import islice
-from typing import Generic, TypeVar
+from typing import Generic, Protocol, TypeVar
 
-from nc_sim.errors import is_error
+from nc_sim.errors import Code, is_error
 
 T = TypeVar("T")
 
@@ -46,6 +46,21 @@ class Event:
     def error(self) -> bool:
         """True for a job error, false for an information event."""
         return is_error(self.code)
+
+
+class Log(Protocol):
+    """Records an event of a machine (its code, the axis, the detail, the M function and gear
+    stage it concerns) and returns it: what the parts of a machine log with."""
+
+    def __call__(
+        self,
+        code: Code,
+        axis: str = "",
+        detail: str = "",
+        *,
+        m: int | None = None,
+        gear: int | None = None,
+    ) -> Event: ...
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from nc_sim.axis.dynamics import Motion, feedhold_limits, motion_limits, velocity_limit
 from nc_sim.blocks.mdi import SpindleCmd
 from nc_sim.channel import canon
 from nc_sim.channel.geometry import Element, point_at
@@ -15,13 +16,15 @@ from nc_sim.channel.planner import AxisDynamics, element_limits
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.machine.dynamics import Motion, feedhold_limits, motion_limits, velocity_limit
+from nc_sim.plc import Waiter
 from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
 from nc_sim.snapshot import AxisState
+from nc_sim.spindle.gear_change import spindle_index
+from nc_sim.spindle.program import program_end, spindle_block, tool_dynamics
 from nc_sim.units import AxisKind
 
 if TYPE_CHECKING:
-    from nc_sim.machine.axis import Axis
+    from nc_sim.axis.state import Axis
     from nc_sim.machine.machine import Machine
 
 _SYNC_PARAM = {
@@ -70,18 +73,18 @@ class MachineChannelHost:
                     self.stopping[action_id] = ax
                 elif isinstance(call, canon.SpindleOn | canon.SpindleSpeed):
                     self.reaching[action_id] = ax
-                ok = m.sp.block(ax, sc, None, action_id)
+                ok = spindle_block(m.sp, ax, sc, None, action_id)
                 if ok and sc.m is not None and m._synch_plc(ax, sc.m):
                     self.output(sc.m, ax.name, action_id)
             case canon.SelectGear():
                 main = m.main_spindle
                 if m.gear_change_enabled and main:
-                    ok = m.sp.gear_only(m.axis(main), call.m - 39, action_id) is None
+                    ok = m.sp.gears.only(m.axis(main), call.m - 39, action_id) is None
                 else:  # M40-M45 are free M functions (P-CHAN-00052)
                     self.output(call.m, "", action_id)
             case canon.SelectTool():
                 if call.d is not None:
-                    m._tool(call.d)
+                    tool_dynamics(m.sp, m.axes, call.d)
             case canon.SetSlope():
                 m.slope = call.slope_type
             case canon.Home():
@@ -99,8 +102,13 @@ class MachineChannelHost:
 
     def output(self, mfunc: int, axis: str, action_id: int) -> None:
         """An M function to the PLC, waited for by `action_id`."""
-        out = self.m._m_output(mfunc, axis, None)
-        self.m._m_out[out] = action_id
+
+        def timed_out(ev: Event) -> None:
+            if action_id in self.m_pending:
+                self.m._channel_error(ev)
+
+        waiter = Waiter(lambda: self.acknowledged(action_id), timed_out)
+        self.m.handshake.output(mfunc, axis, waiter)
         self.m_pending[action_id] = self.m_pending.get(action_id, 0) + 1
 
     def acknowledged(self, action_id: int | None) -> None:
@@ -115,7 +123,8 @@ class MachineChannelHost:
         if not groups:
             self.homing.pop(action_id, None)
             return True
-        return all(self.m._home(name, action_id) is None for name in groups.pop(0))
+        m = self.m
+        return all(m.moves.home(m.axis(name), action_id) is None for name in groups.pop(0))
 
     def busy(self, action_id: int) -> bool:
         if any(a.block_id == action_id for a in self.m.axes):
@@ -144,14 +153,14 @@ class MachineChannelHost:
             call, canon.SpindleOn | canon.SpindleOff | canon.SpindleOrient | canon.SpindleSpeed
         ):
             return 0
-        i = self.m.spindle_index(self.m.axis(call.spindle))
+        i = spindle_index(self.m.cfg, self.m.axis(call.spindle).name)
         if i is None:
             return 0
         name = f"m{call.m}_synch" if isinstance(call, canon.SpindleOn) else _SYNC_PARAM[type(call)]
         return int(self.m.cfg.channel_raw(f"spindel[{i}].{name}"))
 
     def program_end(self, call: canon.ProgramEnd) -> None:
-        self.m._program_end()
+        program_end(self.m.sp, self.m.axes)
 
     # --- the path -------------------------------------------------------------------------
     def check_element(self, e: Element) -> Event | None:
@@ -162,18 +171,18 @@ class MachineChannelHost:
         for i, ax in enumerate(self.path_axes):
             if not moved[i]:
                 continue
-            err = m.drive_refusal(ax) or m._homing_required(ax)
+            err = m.motion.drive_refusal(ax) or m.moves.homing_required(ax)
             if err:
                 return err
             if ax.state not in (AxisState.STANDSTILL, AxisState.MOVING):
-                return m._fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
+                return m.motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
             if ax.homed and ax.kind is AxisKind.LINEAR:
                 lo, hi = m.k.pr[ax.slot, L.P_SWE_NEG], m.k.pr[ax.slot, L.P_SWE_POS]
                 samples = 2 if e.arc is None else 65
                 for j in range(samples):
                     p = point_at(e, e.length * j / (samples - 1))[i]
                     if not lo - 1e-9 <= p <= hi + 1e-9:
-                        return m._fail(
+                        return m.motion.fail(
                             ax,
                             Code.SOFTWARE_LIMIT,
                             f"line {e.line}: {ax.name} {p:.4f} mm outside {lo:.4f} … {hi:.4f} mm",
@@ -233,10 +242,10 @@ class MachineChannelHost:
         for ax in self.path_axes:
             if line is not None and ax.state is AxisState.STANDSTILL:
                 ax.motion = Motion.FEED
-                self.m._set_state(ax, AxisState.MOVING)
+                self.m.motion.set_state(ax, AxisState.MOVING)
             elif line is None and ax.state is AxisState.MOVING and ax.motion is Motion.FEED:
                 ax.motion = None
-                self.m._set_state(ax, AxisState.STANDSTILL)
+                self.m.motion.set_state(ax, AxisState.STANDSTILL)
 
 
 def _spindle_cmd(call: canon.Call) -> SpindleCmd:

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from nc_sim.axis.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
+from nc_sim.axis.state import Axis, target_and_distance
 from nc_sim.kernel import layout as L
-from nc_sim.machine.axis import Axis, target_and_distance
-from nc_sim.machine.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.snapshot import (
     AxisSnapshot,
     ChannelSnapshot,

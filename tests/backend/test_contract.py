@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import get_args
 
 from api.commands import HliUnit
-from nc_sim.machine.machine import AXIS_UNITS, CHANNEL_UNITS
+from nc_sim.hli import AXIS_UNITS, CHANNEL_UNITS
 
 
 def test_hli_units_of_the_contract_are_the_machines() -> None:

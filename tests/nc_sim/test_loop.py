@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from nc_sim.axis.state import Axis
 from nc_sim.commands import (
     Accepted,
     EmergencyStop,
@@ -23,7 +24,6 @@ from nc_sim.commands import (
     Reset,
 )
 from nc_sim.errors import Code
-from nc_sim.machine.axis import Axis
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation

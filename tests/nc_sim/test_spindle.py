@@ -21,10 +21,10 @@ from nc_sim.commands import (
 from nc_sim.errors import Code
 from nc_sim.kernel.curve import curve_accel
 from nc_sim.kernel.step import V_ACT_FILTER_S
-from nc_sim.machine.gears import GearRange, select_gear
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation
 from nc_sim.snapshot import AxisState
+from nc_sim.spindle.gears import GearRange, select_gear
 from tests.nc_sim.sim_helpers import L, make, mdi, record
 
 DT = 0.001

@@ -1,0 +1,2 @@
+"""Single-axis motion: the axis' runtime state and kernel row, jog, moves, homing, limits,
+and the watchdog bounding each phase."""
