@@ -127,6 +127,9 @@ class Channel:
         elif self.progress.state is ChannelState.BLOCK_END:
             self.progress.state = ChannelState.RUNNING
             self.step_granted = True
+            if self.path.count:
+                self.host.path_moving(self.path.current.line if self.path.current else None)
+                self.replan()
         self.pump()
 
     def hold(self) -> None:
@@ -137,9 +140,12 @@ class Channel:
                 self.path.hold(self.host.hold_limits(self.path.current))
 
     def set_single_block(self, on: bool) -> None:
+        """Single block on or off; on during a run, the path stops at the end of the block
+        it is in (the blocks queued behind it wait for cycle start)."""
         self.progress.single_block = on
-        if on and self.path.count:
-            self.replan()  # the blocks queued so far end at rest
+        if self.path.count:
+            self.step_granted = False
+            self.replan()
 
     def stop(self) -> None:
         """Brake on the path and rewind (the path ends where it stopped)."""
@@ -170,6 +176,19 @@ class Channel:
         elements start, the next blocks are queued."""
         for e in self.path.sync():
             self._passed(e)
+            if self.progress.single_block:
+                self.step_granted = False  # that block is done: the next waits
+        if (
+            self.progress.single_block
+            and self.progress.state is ChannelState.RUNNING
+            and self.path.count
+            and self.path.at_rest()
+            and not self.path.done()
+            and not self.step_granted
+        ):
+            self.progress.state = ChannelState.BLOCK_END
+            self.host.path_moving(None)
+            return
         if self.path.count and self.path.done():
             for e in list(self.path.queue):
                 self._passed(e)
@@ -297,7 +316,12 @@ class Channel:
         """Plan the window again (new blocks, override, feedhold released)."""
         if self.progress.state is ChannelState.HELD or not self.path.count:
             return
-        self.path.replan(self.host.dynamics, self.feed_scale * self.override, self.override)
+        self.path.replan(
+            self.host.dynamics,
+            self.feed_scale * self.override,
+            self.override,
+            first_only=self.progress.single_block,
+        )
 
     # --- status ---------------------------------------------------------------------------
     def path_feed_mm_min(self) -> float:

@@ -112,13 +112,15 @@ class Path:
         dynamics: Callable[[Element], list[AxisDynamics]],
         feed_scale: float,
         override: float,
+        first_only: bool = False,
     ) -> None:
         """Plan the window from the state now: `dynamics(e)` the axes' limits for the element,
-        path feed F (mm/min) × `feed_scale` (1/60 × override), rapid × `override`."""
+        path feed F (mm/min) × `feed_scale` (1/60 × override), rapid × `override`; with
+        `first_only` (single block) to rest at the end of the element it is in."""
         self.held = False
         if not self.queue:
             return
-        elems = list(self.queue)
+        elems = list(self.queue)[:1] if first_only else list(self.queue)
         limits: list[Limits] = []
         junctions: list[float] = []
         axes = [dynamics(e) for e in elems]
@@ -154,7 +156,7 @@ class Path:
             junctions,
             self.k.cycle_s,
         )
-        self._load(n, self.s_end)
+        self._load(n, elems[-1].s0 + elems[-1].length)
 
     def hold(self, lim: np.ndarray) -> None:
         """Brake on the path to rest with `lim` (feedhold, override 0 %) and wait there."""

@@ -198,3 +198,24 @@ def test_g60_stops_the_path_at_its_block_end_only() -> None:
     assert np.abs(vx[between_2_3]).min() < 0.05 + 1e-9
     assert moving.any()
     assert px[-1] == pytest.approx(80.0)
+
+
+def test_single_block_switched_on_during_a_run_stops_at_the_end_of_that_block() -> None:
+    sim, m, _cfg = make()
+    m.submit(ProgramLoad("sb", "G01 X60 F600\nX70\nX80\nM30\n"))
+    m.submit(CycleStart())
+    record(sim, 0.5)  # in the first block (X50 -> X60 at 10 mm/s)
+    m.submit(SingleBlock(True))
+    rec = record(sim, 3.0)
+    px, _pz = cols(m, rec, L.R_P_CMD)
+    assert m.channel.state is ChannelState.BLOCK_END
+    assert px[-1] == pytest.approx(60.0)  # the end of the block it was in
+    m.submit(CycleStart())
+    rec = record(sim, 3.0)
+    px, _pz = cols(m, rec, L.R_P_CMD)
+    assert px[-1] == pytest.approx(70.0)
+    m.submit(SingleBlock(False))
+    m.submit(CycleStart())
+    rec = record(sim, 3.0)
+    px, _pz = cols(m, rec, L.R_P_CMD)
+    assert px[-1] == pytest.approx(80.0)
