@@ -198,10 +198,17 @@ def plan_duration(seg: np.ndarray, n: int) -> float:
 
 @njit(cache=True)
 def _move_distance(
-    seg: np.ndarray, v0: float, a0: float, vp: float, lim: np.ndarray, cycle_s: float
+    seg: np.ndarray,
+    v0: float,
+    a0: float,
+    vp: float,
+    lim: np.ndarray,
+    cycle_s: float,
+    v_end: float = 0.0,
 ) -> float:
+    """Distance of (v0, a0) -> peak vp -> (v_end, 0), without a cruise."""
     k = velocity_change(seg, 0, v0, a0, vp, lim, cycle_s)
-    k2 = velocity_change(seg, k, vp, 0.0, 0.0, lim, cycle_s)
+    k2 = velocity_change(seg, k, vp, 0.0, v_end, lim, cycle_s)
     d, _v = plan_distance(seg, 0, k2, v0)
     return d
 
@@ -369,10 +376,7 @@ def move_through(
         return velocity_change(seg, k0, v0, a0, v_end, lim, cycle_s), v_end
 
     def through(vp: float) -> float:
-        k = velocity_change(scratch, 0, v0, a0, vp, lim, cycle_s)
-        k2 = velocity_change(scratch, k, vp, 0.0, v_end, lim, cycle_s)
-        d, _v = plan_distance(scratch, 0, k2, v0)
-        return d
+        return _move_distance(scratch, v0, a0, vp, lim, cycle_s, v_end)
 
     lo = min(max(v_end, 0.0), v_cap)
     hi = v_cap
