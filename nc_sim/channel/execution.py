@@ -30,17 +30,17 @@ import numpy as np
 
 from nc_sim.channel import canon
 from nc_sim.channel.geometry import Element, arc, straight
+from nc_sim.params.definitions import SYNC_SYMBOLS
 
-# synchronisation types [000 §2.5]
-NO_SYNCH = 0x0
-MOS = 0x1
-MVS_SVS = 0x2
-MVS_SNS = 0x4
-MNS_SNS = 0x8
-MNE_SNS = 0x20
-MVS_SLM = 0x4000
-MVS_SLP = 0x8000
-PLC_INFO = 0x20000
+# synchronisation types [000 §2.5], as the parameter lists spell them
+MOS = SYNC_SYMBOLS["MOS"]
+MVS_SVS = SYNC_SYMBOLS["MVS_SVS"]
+MVS_SNS = SYNC_SYMBOLS["MVS_SNS"]
+MNS_SNS = SYNC_SYMBOLS["MNS_SNS"]
+MNE_SNS = SYNC_SYMBOLS["MNE_SNS"]
+MVS_SLM = SYNC_SYMBOLS["MVS_SLM"]
+MVS_SLP = SYNC_SYMBOLS["MVS_SLP"]
+PLC_INFO = SYNC_SYMBOLS["PLC_INFO"]
 
 _MOTION = (canon.StraightTraverse, canon.StraightFeed, canon.ArcFeed)
 

@@ -26,6 +26,7 @@ from nc_sim.blocks import Block, BlockError, parse_block
 from nc_sim.channel import canon
 from nc_sim.channel.canon import ListSink
 from nc_sim.channel.channel import Channel
+from nc_sim.channel.execution import PLC_INFO
 from nc_sim.channel.interpreter import interpret
 from nc_sim.channel.path import Path
 from nc_sim.channel.words import ProgramError
@@ -623,7 +624,7 @@ class Machine:
         i = spindle_index(self.cfg, ax.name)
         if i is None or m not in (3, 4, 5, 19):
             return False
-        return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & 0x20000)
+        return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & PLC_INFO)
 
     def _m_output(self, m: int, axis: str, run: _BlockRun | None) -> None:
         """An M function of a block (or a free one) to the PLC; the block waits for its
