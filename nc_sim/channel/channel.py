@@ -106,6 +106,11 @@ class Channel:
     def state(self) -> ChannelState:
         return self.progress.state
 
+    @property
+    def braking(self) -> bool:
+        """A stopped program's path is still braking (cycle start must wait)."""
+        return self.ex is None and self.path.count > 0
+
     def start(self) -> None:
         """Cycle start from READY: interpret from where the axes are now and run."""
         assert self.progress.program is not None
@@ -149,9 +154,8 @@ class Channel:
 
     def stop(self) -> None:
         """Brake on the path and rewind (the path ends where it stopped)."""
-        if self.path.count:
+        if self.path.count:  # once at rest, the axes are given back (on_path_events)
             self.path.hold(self.host.hold_limits(self.path.current))
-            self.path.queue.clear()  # what braking passes is not run any further
         self._rewind(ChannelState.READY)
 
     def abort(self, error: Event | None) -> None:
@@ -174,6 +178,12 @@ class Channel:
     def on_path_events(self) -> None:
         """After EV_BLOCK / EV_PLAN_DONE of the channel slot: actions bound to passed
         elements start, the next blocks are queued."""
+        if self.ex is None:  # stopped: braking on the path, no block runs any more
+            self.path.sync()
+            if self.path.count and self.path.at_rest():
+                self.path.finish()
+                self.host.path_moving(None)
+            return
         for e in self.path.sync():
             self._passed(e)
             if self.progress.single_block:

@@ -39,7 +39,6 @@ class Path:
         self.p = k.claim_path(channel_slot, axis_slots)
         self.queue: deque[Element] = deque()  # the ring from its head, as Python sees it
         self.s_end = 0.0  # path length at the end of the last queued element
-        self.held = False
 
     # --- the ring -------------------------------------------------------------------------
     @property
@@ -117,7 +116,6 @@ class Path:
         """Plan the window from the state now: `dynamics(e)` the axes' limits for the element,
         path feed F (mm/min) × `feed_scale` (1/60 × override), rapid × `override`; with
         `first_only` (single block) to rest at the end of the element it is in."""
-        self.held = False
         if not self.queue:
             return
         elems = list(self.queue)[:1] if first_only else list(self.queue)
@@ -160,7 +158,6 @@ class Path:
 
     def hold(self, lim: np.ndarray) -> None:
         """Brake on the path to rest with `lim` (feedhold, override 0 %) and wait there."""
-        self.held = True
         st = self.k.st
         n = velocity_change(
             self.k.pplan[self.p],

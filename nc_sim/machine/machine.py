@@ -504,6 +504,8 @@ class Machine:
             return fail(None, Code.CHANNEL_ERROR_STATE, "reset first")
         if self._queue:
             return fail(None, Code.AXIS_BUSY, "MDI blocks are running")
+        if ch.braking:
+            return fail(None, Code.AXIS_BUSY, "the stopped program's path is still braking")
         try:
             ch.start()
         except ProgramError as e:

@@ -15,7 +15,9 @@ from nc_sim.commands import (
     CycleStart,
     Feedhold,
     Invalid,
+    JogStep,
     ProgramLoad,
+    ProgramStop,
     SingleBlock,
 )
 from nc_sim.machine.machine import Machine
@@ -219,3 +221,21 @@ def test_single_block_switched_on_during_a_run_stops_at_the_end_of_that_block() 
     rec = record(sim, 3.0)
     px, _pz = cols(m, rec, L.R_P_CMD)
     assert px[-1] == pytest.approx(80.0)
+
+
+def test_stop_brakes_on_the_path_and_gives_the_axes_back() -> None:
+    sim, m, _cfg = make()
+    m.submit(ProgramLoad("stop", "G01 X90 Z-80 F1200\nM30\n"))
+    m.submit(CycleStart())
+    record(sim, 1.0)
+    m.submit(ProgramStop())
+    rec = record(sim, 1.0)
+    px, pz = cols(m, rec, L.R_P_CMD)
+    assert np.abs(20.0 * (px - X0) - 40.0 * (pz - Z0)).max() < 1e-9  # braked on the line
+    assert px[-1] < 90.0 - 1.0
+    assert m.channel.state is ChannelState.READY
+    x = m.axis("X")
+    assert x.state.name == "STANDSTILL"
+    assert isinstance(m.submit(JogStep("X", 1.0)), Accepted)  # the axis is free again
+    rec = record(sim, 2.0)
+    assert rec[-1, x.slot, L.R_P_CMD] == pytest.approx(px[-1] + 1.0)
