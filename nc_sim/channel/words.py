@@ -9,17 +9,26 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from nc_sim.errors import Code
 
 _NUM = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
-_WORD = re.compile(r"(?P<letter>[A-Z])\s*(?P<val>" + _NUM + ")", re.IGNORECASE | re.ASCII)
-_SPEC = re.compile(r"(?P<name>S[0-9]*)\[", re.IGNORECASE | re.ASCII)
-_POS = re.compile(
-    r"(?P<name>S[0-9]*)\.\s*POS\s*=?\s*(?P<val>" + _NUM + ")", re.IGNORECASE | re.ASCII
+# One pass per token: leading whitespace (any Unicode space, as str.isspace), then the first
+# of these that matches, in this order (the order decides: S1[ before S1.POS before S1).
+_TOKEN = re.compile(
+    r"\s*(?:"
+    r"(?P<end>;|\Z)"
+    r"|(?P<comment>\()"
+    r"|(?a:(?P<hash>#(?P<cmd>[A-Z_]+)\s*\[))"
+    r"|(?a:(?P<call>LL\s+(?P<name>[^;(]*)))"
+    r"|(?a:(?P<spec>(?P<sname>S[0-9]*)\[))"
+    r"|(?a:(?P<pos>(?P<pname>S[0-9]*)\.\s*POS\s*=?\s*(?P<pval>" + _NUM + r")))"
+    r"|(?a:(?P<word>(?P<letter>[A-Z])\s*(?P<val>" + _NUM + r")))"
+    r"|(?P<bad>[\s\S])"
+    r")",
+    re.IGNORECASE,
 )
-_HASH = re.compile(r"#(?P<cmd>[A-Z_]+)\s*\[", re.IGNORECASE | re.ASCII)
-_LOCAL_CALL = re.compile(r"LL\s+", re.IGNORECASE | re.ASCII)
 
 
 class ProgramError(ValueError):
@@ -33,8 +42,7 @@ class ProgramError(ValueError):
         super().__init__(f"line {line}, column {column}: {detail} ({int(code)})")
 
 
-@dataclass(frozen=True)
-class Word:
+class Word(NamedTuple):
     """An address letter with its value (`text` as written, for whole-number checks)."""
 
     letter: str
@@ -66,7 +74,7 @@ class Line:
 
 def _number(text: str, line: int, col: int) -> float:
     value = float(text)
-    if not math.isfinite(value):
+    if not math.isfinite(value):  # the pattern allows no inf/nan: only an overflow
         raise ProgramError(f"{text[:12]}… is too large", line, col)
     return value
 
@@ -88,43 +96,44 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
             out.skipped = True
             return out
         pos += 1
+    match = _TOKEN.match
+    words = out.words
     while True:
-        while pos < len(text) and text[pos].isspace():
-            pos += 1
-        if pos >= len(text) or text[pos] == ";":
+        m = match(text, pos)
+        assert m is not None  # `bad` takes any character the others do not
+        kind = m.lastgroup or "bad"  # each alternative is a named group
+        pos = m.end()
+        if kind == "word":  # the common case first, with as few calls as can be
+            letter, val = m.group("letter", "val")
+            value = float(val)
+            if not math.isfinite(value):
+                _number(val, line, m.start("val") + 1)
+            words.append(Word(letter.upper(), value, val, m.start(kind) + 1))
+            continue
+        if kind == "end":
             return out
-        col = pos + 1
-        ch = text[pos]
-        if ch == "(":
+        col = m.start(kind) + 1
+        if kind == "comment":
             close = text.find(")", pos)
             if close < 0:
                 raise ProgramError("comment '(' without ')'", line, col)
             pos = close + 1
-        elif m := _HASH.match(text, pos):
-            body, pos = _bracket_body(text, m.end() - 1, line, "#" + m.group("cmd"))
+        elif kind == "hash":
+            body, pos = _bracket_body(text, pos - 1, line, "#" + m.group("cmd"))
             out.hashes.append((m.group("cmd").upper(), body, col))
-        elif m := _LOCAL_CALL.match(text, pos):
-            end = len(text)
-            for stop in (";", "("):  # the name runs to the comment: "LL tapered thread"
-                if (k := text.find(stop, m.end())) >= 0:
-                    end = min(end, k)
-            name = " ".join(text[m.end() : end].split()).upper()
+        elif kind == "call":  # the name runs to the comment: "LL tapered thread"
+            name = " ".join(m.group("name").split()).upper()
             if not name:
                 raise ProgramError("LL needs a subprogram name", line, col)
             out.local_call = (name, col)
-            pos = end
-        elif m := _SPEC.match(text, pos):
-            body, pos = _bracket_body(text, m.end() - 1, line, m.group("name"))
-            out.specific.append((m.group("name").upper(), body, col))
-        elif m := _POS.match(text, pos):
-            deg = _number(m.group("val"), line, m.start("val") + 1)
-            out.positions.append((m.group("name").upper(), deg, col))
-            pos = m.end()
-        elif m := _WORD.match(text, pos):
-            value = _number(m.group("val"), line, m.start("val") + 1)
-            out.words.append(Word(m.group("letter").upper(), value, m.group("val"), col))
-            pos = m.end()
+        elif kind == "spec":
+            body, pos = _bracket_body(text, pos - 1, line, m.group("sname"))
+            out.specific.append((m.group("sname").upper(), body, col))
+        elif kind == "pos":
+            deg = _number(m.group("pval"), line, m.start("pval") + 1)
+            out.positions.append((m.group("pname").upper(), deg, col))
         else:
+            ch = m.group("bad")
             if ch.isalpha() and ch.isascii():
                 raise ProgramError(f"address '{ch}' without a value", line, col)
             raise ProgramError(f"unexpected '{ch}'", line, col)
