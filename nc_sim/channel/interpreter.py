@@ -245,25 +245,30 @@ class _Block:
 
     def _motion_and_g(self) -> None:
         modal = self.run_.modal
-        for g in (17, 18, 19):
-            if g in self.g:
-                modal.plane = g
-                self._emit(canon.SelectPlane(self.line, g))
-        if 90 in self.g or 91 in self.g:
-            modal.absolute = 90 in self.g
-        for g in (200, 201):
-            if g in self.g:
-                self._emit(canon.ManualMode(self.line, g))
+        gs = self.g
+        motion: int | None = None
+        if gs:  # most blocks of a contour have no G word (the checks are the hot path)
+            for g in (17, 18, 19):
+                if g in gs:
+                    modal.plane = g
+                    self._emit(canon.SelectPlane(self.line, g))
+            if 90 in gs or 91 in gs:
+                modal.absolute = 90 in gs
+            for g in (200, 201):
+                if g in gs:
+                    self._emit(canon.ManualMode(self.line, g))
         axis_words = [self.addr[a] for a in self.run_.axes if a in self.addr]
-        if 4 in self.g:
-            self._dwell(axis_words)
-            return
-        if 74 in self.g:
-            self._home(axis_words)
-            return
-        motion = next((g for g in (0, 1, 2, 3) if g in self.g), None)
-        if motion is not None:
-            modal.motion = motion
+        if gs:
+            if 4 in gs:
+                self._dwell(axis_words)
+                return
+            if 74 in gs:
+                self._home(axis_words)
+                return
+            for g in (0, 1, 2, 3):
+                if g in gs:
+                    motion = modal.motion = g
+                    break
         arc_words = [self.addr[a] for a in "IJKR" if a in self.addr]
         if not axis_words and not (arc_words and modal.motion in (2, 3)):
             if arc_words:
@@ -273,7 +278,7 @@ class _Block:
         end = dict(modal.position)
         for w in axis_words:
             end[w.letter] = w.value if modal.absolute else modal.position[w.letter] + w.value
-        target = tuple((a, end[a]) for a in self.run_.axes)
+        target = tuple([(a, end[a]) for a in self.run_.axes])
         if modal.motion == 0:
             if arc_words:
                 raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
