@@ -2,7 +2,8 @@
 
 A compiled function is loaded from numba's cache on its first call, which holds the GIL for
 milliseconds; if that first call came from a request handler, the loop thread would miss its
-deadline. A short scripted session on a scratch demo machine calls them all. Freezing the
+deadline. Short scripted sessions on scratch demo machines call them all (the path
+planner's with a program). Freezing the
 objects alive after start-up keeps later full garbage collections short for the same reason.
 """
 
@@ -26,10 +27,21 @@ _SESSION = {
         {"t_s": 2.5, "reset": True},
     ],
 }
+# a short contour (a corner, an arc) held on its way: the path planner's compiled functions
+_PROGRAM_SESSION = {
+    "duration_s": 1.0,
+    "actions": [
+        {"t_s": 0.01, "program": "G18 G01 X52 Z-99 F3000\nG03 X54 Z-98 R2\nG01 X56\nM30\n"},
+        {"t_s": 0.05, "feedhold": True},
+        {"t_s": 0.15, "feedhold": False},
+        {"t_s": 0.2, "cycle_start": True},
+    ],
+}
 
 
 def warm_up() -> None:
-    """Run the scratch session, then move every live object out of the GC's way."""
+    """Run the scratch sessions, then move every live object out of the GC's way."""
     run_scenario(demo_machine(), _SESSION)
+    run_scenario(demo_machine(), _PROGRAM_SESSION)
     gc.collect()
     gc.freeze()
