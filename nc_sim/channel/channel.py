@@ -11,61 +11,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
-
-import numpy as np
 
 from nc_sim.channel import canon
-from nc_sim.channel.execution import Execution, Step
+from nc_sim.channel.execution import Execution, Step, describe
 from nc_sim.channel.geometry import Element
+from nc_sim.channel.host import ChannelHost
 from nc_sim.channel.mdi import MdiBlock, MdiQueue
 from nc_sim.channel.modal import Modal
 from nc_sim.channel.path import MAX_WINDOW, Path
-from nc_sim.channel.planner import AxisDynamics
 from nc_sim.channel.state import ChannelProgress, LoadedProgram
 from nc_sim.events import Event
 from nc_sim.snapshot import ChannelState
-
-
-class ChannelHost(Protocol):
-    """What the channel needs of its machine (nc_sim/machine)."""
-
-    @property
-    def cycle(self) -> int: ...
-
-    def new_action_id(self) -> int:
-        """A number for an action, unique among the machine's blocks and actions."""
-
-    def start_action(self, call: canon.Call, action_id: int) -> Event | None:
-        """Start a non-motion call; the job error (logged) when it failed."""
-
-    def busy(self, action_id: int) -> bool:
-        """The action still runs (spindle not at speed, M function not acknowledged, ...)."""
-
-    def sync_of(self, call: canon.Call) -> int:
-        """Synchronisation type in force for a spindle call [000 §2.5]."""
-
-    def check_element(self, e: Element) -> Event | None:
-        """None when the element may run, else the job error (logged) that forbids it."""
-
-    def dynamics(self, e: Element) -> list[AxisDynamics]:
-        """The path axes' limits for this element's kind of motion."""
-
-    def hold_limits(self, e: Element | None) -> np.ndarray:
-        """Path braking limits for feedhold."""
-
-    def path_moving(self, line: int | None) -> None:
-        """The path axes move (line) or stand (None)."""
-
-    def program_end(self, call: canon.ProgramEnd) -> None:
-        """M30/M02: what the machine does at program end (spindles per the HLI flag)."""
-
-    def block_done(self, block_id: int, text: str) -> None:
-        """An MDI block has run completely."""
-
-    def path_left(self) -> None:
-        """The path was abandoned mid-way (job error, reset, E-stop): its axes brake on
-        their own."""
 
 
 @dataclass
@@ -206,16 +162,21 @@ class Channel:
             self.path.abandon()
         self.host.path_left()
         self.aborted_with = error
-        if error is None:  # a reset: the modal words back, an earlier error cleared
-            self.mdi.reset_modal()
-            self.mdi.return_to = ChannelState.READY
-        elif self.progress.mdi:
+        if error is not None and self.progress.mdi:
             self._rewind(ChannelState.READY)  # MDI leaves no program in error
             return
         self._rewind(ChannelState.ERROR if error is not None else ChannelState.READY)
         self.progress.error = error
         if error is None and self.progress.program is None:
             self.progress.state = ChannelState.IDLE
+
+    def reset(self) -> None:
+        """CNC reset: the program or the MDI blocks end, an error is cleared, the modal words
+        go back to G00 G17 G90 without F."""
+        self.mdi.return_to = ChannelState.READY
+        if self.state is not ChannelState.IDLE or self.path.count:
+            self.abort(None)
+        self.mdi.reset_modal()
 
     def _rewind(self, state: ChannelState) -> None:
         self.ex = None
@@ -382,7 +343,7 @@ class Channel:
         if not self._start(call, aid, step.block):
             return False
         if step.wait:
-            self.wait = _Wait(aid, what=_describe(call), block=step.block)
+            self.wait = _Wait(aid, what=describe(call), block=step.block)
         return True
 
     def _start(self, call: canon.Call, aid: int, block: int) -> bool:
@@ -444,23 +405,3 @@ class Channel:
 
     def distance_to_go_mm(self) -> float | None:
         return self.path.distance_to_go()
-
-
-def _describe(call: canon.Call) -> str:
-    """What the path waits for, in the operator's words."""
-    match call:
-        case canon.SpindleOn():
-            return f"speed reached of {call.spindle} (M{call.m})"
-        case canon.SpindleOff():
-            return f"{call.spindle} stopped (M5)"
-        case canon.SpindleOrient():
-            return f"{call.spindle} in position (M19)"
-        case canon.SpindleSpeed():
-            return f"speed reached of {call.spindle}"
-        case canon.MFunction():
-            return f"the PLC's acknowledgement of M{call.m}"
-        case canon.SelectGear():
-            return f"gear change M{call.stage + 39}"
-        case canon.Home():
-            return "homing (G74)"
-    return f"line {call.line}"

@@ -201,3 +201,23 @@ def sync_kind(call: canon.Call, sync: int) -> str:
     # NO_SYNCH: M3/M4/M5 synchronise internally on speed reached / standstill [000 §2.5.1],
     # M19 on in position; the S word alone does not wait (s_synch)
     return "none" if isinstance(call, canon.SpindleSpeed) else "before"
+
+
+def describe(call: canon.Call) -> str:
+    """What the path waits for, in the operator's words."""
+    match call:
+        case canon.SpindleOn():
+            return f"speed reached of {call.spindle} (M{call.m})"
+        case canon.SpindleOff():
+            return f"{call.spindle} stopped (M5)"
+        case canon.SpindleOrient():
+            return f"{call.spindle} in position (M19)"
+        case canon.SpindleSpeed():
+            return f"speed reached of {call.spindle}"
+        case canon.MFunction():
+            return f"the PLC's acknowledgement of M{call.m}"
+        case canon.SelectGear():
+            return f"gear change M{call.stage + 39}"
+        case canon.Home():
+            return "homing (G74)"
+    return f"line {call.line}"

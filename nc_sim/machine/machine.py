@@ -56,9 +56,10 @@ from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.channel_host import MachineChannelHost
 from nc_sim.machine.channel_ops import PROGRAM_ACTIVE, ChannelOps
 from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.panel import Panel
 from nc_sim.machine.readout import machine_snapshot
-from nc_sim.plc import Handshake, PlcMode, SimPlc, Waiter
-from nc_sim.snapshot import ChannelState, MachineSnapshot
+from nc_sim.plc import Handshake, PlcMode, SimPlc
+from nc_sim.snapshot import MachineSnapshot
 from nc_sim.spindle.control import SpindleControl
 from nc_sim.units import AxisKind
 
@@ -101,6 +102,7 @@ class Machine:
         self.channel_slot = kernel.claim(1)[0]
         self.ch_host = MachineChannelHost(self, path_axes)
         self.ops = ChannelOps(self)
+        self.panel = Panel(self)
         self.channel = Channel(
             Path(kernel, self.channel_slot, [a.slot for a in path_axes]),
             self.ch_host,
@@ -159,17 +161,17 @@ class Machine:
             case ProgramStop():
                 self.ops.stop()
             case Feedhold():
-                self._channel_unit("feedhold", int(cmd.on))
+                self.panel.channel_unit("feedhold", int(cmd.on))
             case SingleBlock():
                 self.channel.set_single_block(cmd.on)
             case SpindleRun():
-                answer = self._spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
+                answer = self.panel.spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
             case SpindlePosition():
-                answer = self._spindle_position(
+                answer = self.panel.spindle_position(
                     cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm
                 )
             case GearChange():
-                answer = self._spindle_gear(cmd.spindle, cmd.m)
+                answer = self.panel.spindle_gear(cmd.spindle, cmd.m)
             case Home():
                 answer = self.moves.home(self.axis(cmd.axis))
             case JogStart():
@@ -183,7 +185,7 @@ class Machine:
                     self.axis(cmd.axis), cmd.target, cmd.rapid, cmd.feed_mm_min
                 )
             case HliWrite():
-                self._hli_write(cmd.unit, cmd.value, cmd.axis)
+                self.panel.hli_write(cmd.unit, cmd.value, cmd.axis)
             case SetPlcMode():
                 self._plc_mode(cmd.mode, cmd.delay_s)
             case PlcAck():
@@ -288,95 +290,17 @@ class Machine:
             raise NcUsageError(f"no axis or spindle '{name}'")
         return ax
 
-    # --- commands: spindle [000] ---------------------------------------------------------
-    def _spindle(self, name: str) -> Axis:
-        ax = self.axis(name)
-        if ax.kind is not AxisKind.SPINDLE:
-            raise NcUsageError(f"{name} is not a spindle")
-        return ax
-
-    def _spindle_run(self, name: str, m: int, speed_rpm: float | None = None) -> Event | None:
-        """M3/M4 with speed (rpm), or M5."""
-        ax = self._spindle(name)
-        if m == 5:
-            self.sp.m5(ax)
-            return None
-        return self.sp.endless(ax, m, speed_rpm)
-
-    def _spindle_position(
-        self,
-        name: str,
-        pos_deg: float,
-        direction: int | None = None,
-        speed_rpm: float | None = None,
-    ) -> Event | None:
-        """M19 S.POS=pos_deg with M3 (+1) / M4 (-1) or the shortest way (None)."""
-        return self.sp.position(self._spindle(name), pos_deg, direction, speed_rpm)
-
-    def _spindle_gear(self, name: str, m: int) -> Event | None:
-        """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
-        if not 40 <= m <= 45:
-            raise NcUsageError("gear stage M40..M45")
-        ax = self._spindle(name)
-        if not self.gear_change_enabled:  # then M40-M45 are free M functions
-            self.handshake.output(m, "", Waiter())
-            return None
-        return self.sp.gears.only(ax, m - 39, None)
-
     @property
     def gear_change_enabled(self) -> bool:
         """P-CHAN-00052: M40-M45 change the main spindle's gear; else they are free M functions."""
         return bool(self.cfg.channel_raw("main_spindle_gear_change"))
-
-    # --- HLI ----------------------------------------------------------------------------
-    def _hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
-        """Write a control unit of the channel (axis=None) or of an axis."""
-        if axis is None:
-            hli.channel_write(unit, value)
-            self._channel_unit(unit, int(value))
-            return
-        ax = self.axis(axis)
-        value = hli.axis_write(unit, value)
-        if unit == "spindle_reset" and value:
-            self.moves.reset(ax)
-            return
-        ax.units[unit] = int(value)
-        self.log(Code.EV_HLI, ax.name, f"{unit} = {int(value)}")
-        if unit in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
-            self.motion.enables_changed(ax)
-        elif unit in ("override", "override_valid", "reduced_speed"):
-            self.moves.replan(ax)
-
-    def _channel_unit(self, unit: str, value: int) -> None:
-        old = self.channel_units[unit]
-        self.channel_units[unit] = hli.clamp(unit, value)
-        self.log(Code.EV_HLI, "", f"channel {unit} = {value}")
-        if unit == "override":
-            cap = self.cfg.channel_eng("max_vb_override")
-            self.channel.override = min(self.channel_units["override"] * 1e-3, cap)
-            self.channel.replan()
-        if unit == "feedhold" and bool(value) != bool(old):
-            if value:
-                self.channel.hold()
-            elif self.channel.state is ChannelState.HELD:
-                self.channel.resume()
-            self.moves.feedhold(bool(value), self.axes)
-            return
-        for ax in self.axes:
-            if self.moves.as_axis(ax):
-                self.moves.replan(ax)
 
     # --- reset, emergency stop ----------------------------------------------------------
     def _reset(self) -> None:
         """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.ctx.estop = self.ctx.estop, False
-        if (
-            self.channel.state in PROGRAM_ACTIVE
-            or self.channel.path.count
-            or self.channel.state is ChannelState.ERROR
-        ):
-            self.channel.abort(None)
+        self.channel.reset()
         self.handshake.clear()
         for ax in self.axes:
             self.moves.reset(ax)
