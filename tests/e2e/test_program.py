@@ -341,8 +341,11 @@ def layout_checks(page: Page, panel: Locator) -> None:
         k: panel.get_by_test_id(k).bounding_box()
         for k in ("program-text", "channel", "toolpath-canvas", "program-list")
     }
-    for k, b in boxes.items():
-        assert b is not None and b["width"] > 100 and b["x"] + b["width"] <= widths[1], (k, b)
+    for k, box in boxes.items():
+        assert box is not None and box["width"] > 100 and box["x"] + box["width"] <= widths[1], (
+            k,
+            box,
+        )
     names = list(boxes)
     for i, a in enumerate(names):
         for b in names[i + 1 :]:
