@@ -125,6 +125,10 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
             out.words.append(Word(m.group("letter").upper(), value, m.group("val"), col))
             pos = m.end()
         else:
-            if ch.isalpha() and ch.isascii():
+            after = text[pos + 1 : pos + 2]
+            if not ch.isascii() or (after and not after.isascii()):
+                odd = pos + (0 if not ch.isascii() else 1)  # e.g. full-width digits (CJK)
+                raise ProgramError(f"'{text[odd]}' is not an NC character", line, odd + 1)
+            if ch.isalpha():
                 raise ProgramError(f"address '{ch}' without a value", line, col)
             raise ProgramError(f"unexpected '{ch}'", line, col)

@@ -36,6 +36,9 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
     vel_cmd, vel_unit = display_velocity(float(st[L.S_V_CMD]), ax.kind)
     vel_act, _ = display_velocity(float(st[L.S_V_ACT]), ax.kind)
     target, to_go = target_and_distance(m.k, ax)
+    on_path = m.ch_host.block_target(ax)
+    if on_path is not None:
+        target, to_go = on_path, on_path - float(st[L.S_P_CMD])
     drive = ax.drive.reported()
     spindle = None
     if ax.kind is AxisKind.SPINDLE:
