@@ -343,7 +343,7 @@ class Channel:
         if not self._start(call, aid, step.block):
             return False
         if step.wait:
-            self.wait = _Wait(aid, what=describe(call), block=step.block)
+            self.wait = _Wait(aid, what=describe(call, self.host.spindle_name), block=step.block)
         return True
 
     def _start(self, call: canon.Call, aid: int, block: int) -> bool:

@@ -203,17 +203,17 @@ def sync_kind(call: canon.Call, sync: int) -> str:
     return "none" if isinstance(call, canon.SpindleSpeed) else "before"
 
 
-def describe(call: canon.Call) -> str:
-    """What the path waits for, in the operator's words."""
+def describe(call: canon.Call, spindle_name: Callable[[str], str]) -> str:
+    """What the path waits for, in the operator's words (spindles by their configured name)."""
     match call:
         case canon.SpindleOn():
-            return f"speed reached of {call.spindle} (M{call.m})"
+            return f"speed reached of {spindle_name(call.spindle)} (M{call.m})"
         case canon.SpindleOff():
-            return f"{call.spindle} stopped (M5)"
+            return f"{spindle_name(call.spindle)} stopped (M5)"
         case canon.SpindleOrient():
-            return f"{call.spindle} in position (M19)"
+            return f"{spindle_name(call.spindle)} in position (M19)"
         case canon.SpindleSpeed():
-            return f"speed reached of {call.spindle}"
+            return f"speed reached of {spindle_name(call.spindle)}"
         case canon.MFunction():
             return f"the PLC's acknowledgement of M{call.m}"
         case canon.SelectGear():

@@ -46,6 +46,9 @@ class ChannelHost(Protocol):
     def program_end(self, call: canon.ProgramEnd) -> None:
         """M30/M02: what the machine does at program end (spindles per the HLI flag)."""
 
+    def spindle_name(self, name: str) -> str:
+        """A spindle's configured name ("S", the main spindle, by its own)."""
+
     def block_done(self, block_id: int, text: str) -> None:
         """An MDI block has run completely."""
 

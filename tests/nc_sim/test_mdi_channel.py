@@ -65,6 +65,9 @@ def test_m3_with_a_move_holds_the_path_until_the_spindle_reached_its_speed() -> 
     x, s = m.axis("X"), m.axis("S1")
     band = cfg.axis("S1").eng("kenngr.vb_prozent")  # speed reached within this share
     mdi(m, "M3 S1000 G01 X60 F1000")
+    record(sim, 0.1)
+    # the demo's main spindle is S1: the status names it so, not "S"
+    assert m.snapshot().channel.waiting_for == "speed reached of S1 (M3)"
     rec = record(sim, 6.0)
     first_x = int(np.argmax(np.abs(rec[:, x.slot, L.R_V_CMD]) > 0))
     reached = next(e.cycle for e in m.events if e.code == Code.EV_SPEED_REACHED and e.axis == "S1")

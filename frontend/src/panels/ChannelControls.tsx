@@ -32,7 +32,6 @@ export function channelWords(ch: ChannelStatus | null | undefined): string {
 export const mainSpindle = (s: MachineStatus | null | undefined) => s?.axes.find((a) => a.kind === "spindle") ?? null;
 
 /** The channel's words with the spindle address S replaced by the spindle's name. */
-export const withSpindleName = (words: string, name: string | undefined) => (name ? words.replace(/\bS\b/g, name) : words);
 
 export function ChannelControls(props: {
   load: (() => Promise<CommandResult>) | null; // loads the program in the editor
@@ -110,7 +109,7 @@ export function ChannelControls(props: {
         ) : null}
         <div class="wide">
           <dt>Waiting for</dt>
-          <dd data-testid="channel-waiting">{ch?.waiting_for ? withSpindleName(ch.waiting_for, sp?.name) : "—"}</dd>
+          <dd data-testid="channel-waiting">{ch?.waiting_for ?? "—"}</dd>
         </div>
       </dl>
       {ch?.error ? (
