@@ -109,6 +109,10 @@ class ChannelStatus(BaseModel):
     block_line: int | None = Field(description="line (from 1) of the block the path is in")
     blocks_done: int = Field(description="blocks of the program finished since cycle start")
     single_block: bool
+    mdi: bool = Field(
+        description="MDI blocks run: the state is running while they do, block_line is null, "
+        "and the modal state is what the next MDI block starts from"
+    )
     modal: ModalStatus
     path_feed_mm_min: float = Field(description="commanded path velocity now, mm/min")
     distance_to_go_mm: float | None = Field(description="path length left in the current block, mm")

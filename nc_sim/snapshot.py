@@ -128,6 +128,7 @@ class ChannelSnapshot:
     block_line: int | None
     blocks_done: int
     single_block: bool
+    mdi: bool  # MDI blocks run (state RUNNING while they do)
     modal: ModalSnapshot
     path_feed_mm_min: float
     distance_to_go_mm: float | None

@@ -119,6 +119,7 @@ def channel_status(c: ChannelSnapshot) -> ChannelStatus:
         block_line=c.block_line,
         blocks_done=c.blocks_done,
         single_block=c.single_block,
+        mdi=c.mdi,
         modal=ModalStatus(
             motion=f"G0{md.motion}",
             plane=f"G{md.plane}",

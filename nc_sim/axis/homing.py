@@ -39,6 +39,8 @@ class Homing:
         err = motion.check_motion(ax)
         if err:
             return err
+        if ax.state is not AxisState.STANDSTILL:  # a jog or a move runs: it ends first
+            return motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
         ax.motion, ax.block_id, ax.slope = Motion.HOMING, block_id, 1
         motion.forget_reference(ax)
         motion.set_state(ax, AxisState.HOMING)

@@ -106,14 +106,21 @@ class Moves:
                 self.motion.plan_move(ax, lim, 0.0)
 
     # --- moves --------------------------------------------------------------------------
-    def _within_limits(self, ax: Axis, target: float) -> Event | None:
+    def position_limits(self, ax: Axis) -> tuple[float, float] | None:
+        """Where a programmed motion of `ax` may go: its software limits once homed, else
+        the positions the NC represents; None for a spindle (modulo, no range)."""
         if ax.kind is AxisKind.SPINDLE:
             return None
         pr = self.motion.k.pr
         if not ax.homed:  # no software limits yet, but no target beyond what the NC represents
-            lo, hi = -POSITION_RANGE, POSITION_RANGE
-        else:
-            lo, hi = pr[ax.slot, L.P_SWE_NEG], pr[ax.slot, L.P_SWE_POS]
+            return -POSITION_RANGE, POSITION_RANGE
+        return float(pr[ax.slot, L.P_SWE_NEG]), float(pr[ax.slot, L.P_SWE_POS])
+
+    def _within_limits(self, ax: Axis, target: float) -> Event | None:
+        limits = self.position_limits(ax)
+        if limits is None:
+            return None
+        lo, hi = limits
         if not lo - 1e-9 <= target <= hi + 1e-9:
             u = ax.pos_unit
             return self.motion.fail(
@@ -136,6 +143,9 @@ class Moves:
         err = self.motion.check_motion(ax) or self._within_limits(ax, target)
         if err is None and ax.kind is AxisKind.SPINDLE:
             err = self.spindle.as_rotary_axis(ax)
+        elif err is None and ax.state not in (AxisState.STANDSTILL, state):
+            # a new target for a move or a jog, but never across homing or another motion
+            err = self.motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
         if err:
             return err
         ax.target, ax.motion, ax.feed, ax.block_id = target, motion, feed, block_id

@@ -34,9 +34,9 @@ class Call:
         for f in fields(self):
             if f.name in ("line", "absolute"):
                 continue
-            if f.name == "exact_stop" and not getattr(self, f.name):
-                continue
             value = getattr(self, f.name)
+            if f.kw_only and value is False:  # flags show only when set
+                continue
             if value is None:
                 continue
             if f.name in ("end", "axes"):
@@ -110,19 +110,38 @@ class Dwell(Call):
 
 @dataclass(frozen=True)
 class SpindleOn(Call):
-    """M3 (clockwise) or M4 with the speed in force (None: the spindle's last S)."""
+    """M3 (clockwise) or M4 with the speed in force (None: the spindle's last S); `gear` the
+    programmed stage 1-6 (M40-M45) checked against the speed, `override_off` G167."""
 
     spindle: str
     m: int
     speed_rpm: float | None
+    gear: int | None = field(default=None, kw_only=True)
+    override_off: bool = field(default=False, kw_only=True)
 
 
 @dataclass(frozen=True)
 class SpindleSpeed(Call):
-    """S alone: a new speed for the direction in force [000 §2.3.1]."""
+    """S alone: a new speed for the direction in force [000 §2.3.1] (`gear`, `override_off`
+    as for `SpindleOn`)."""
 
     spindle: str
     speed_rpm: float
+    gear: int | None = field(default=None, kw_only=True)
+    override_off: bool = field(default=False, kw_only=True)
+
+
+@dataclass(frozen=True)
+class SpindleSettings(Call):
+    """G135/G136/G137 feedforward on/weighted/off [000 §2.8.1], G167 override off until the next
+    programmed speed [000 §2.4.1] (when the block programs no speed), DEFAULT_DYNAMIC_DATA
+    (the spindle's own dynamics again at its next start [000 §2.8.5])."""
+
+    spindle: str
+    feedforward: int | None = None
+    ff_weight_pct: float | None = None
+    override_off: bool = field(default=False, kw_only=True)
+    default_dynamics: bool = field(default=False, kw_only=True)
 
 
 @dataclass(frozen=True)
@@ -144,9 +163,9 @@ class SpindleOrient(Call):
 
 @dataclass(frozen=True)
 class SelectGear(Call):
-    """M40-M45: gear stage of the main spindle (M40 automatic)."""
+    """M40-M45 without a speed: gear stage 1-6 of the main spindle [000 §2.8.2]."""
 
-    m: int
+    stage: int
 
 
 @dataclass(frozen=True)
@@ -202,6 +221,7 @@ _NAMES: dict[type[Call], str] = {
     SpindleOn: "SPINDLE_ON",
     SpindleSpeed: "SPINDLE_SPEED",
     SpindleOff: "SPINDLE_OFF",
+    SpindleSettings: "SPINDLE_SETTINGS",
     SpindleOrient: "SPINDLE_ORIENT",
     SelectGear: "SELECT_GEAR",
     SelectTool: "SELECT_TOOL",

@@ -11,52 +11,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
-
-import numpy as np
 
 from nc_sim.channel import canon
-from nc_sim.channel.execution import Execution, Step
+from nc_sim.channel.execution import Execution, Step, describe
 from nc_sim.channel.geometry import Element
+from nc_sim.channel.host import ChannelHost
+from nc_sim.channel.mdi import MdiBlock, MdiQueue
+from nc_sim.channel.modal import Modal
 from nc_sim.channel.path import MAX_WINDOW, Path
-from nc_sim.channel.planner import AxisDynamics
 from nc_sim.channel.state import ChannelProgress, LoadedProgram
 from nc_sim.events import Event
 from nc_sim.snapshot import ChannelState
-
-
-class ChannelHost(Protocol):
-    """What the channel needs of its machine (nc_sim/machine)."""
-
-    @property
-    def cycle(self) -> int: ...
-
-    def new_action_id(self) -> int:
-        """A number for an action, unique among the machine's blocks and actions."""
-
-    def start_action(self, call: canon.Call, action_id: int) -> Event | None:
-        """Start a non-motion call; the job error (logged) when it failed."""
-
-    def busy(self, action_id: int) -> bool:
-        """The action still runs (spindle not at speed, M function not acknowledged, ...)."""
-
-    def sync_of(self, call: canon.Call) -> int:
-        """Synchronisation type in force for a spindle call [000 §2.5]."""
-
-    def check_element(self, e: Element) -> Event | None:
-        """None when the element may run, else the job error (logged) that forbids it."""
-
-    def dynamics(self, e: Element) -> list[AxisDynamics]:
-        """The path axes' limits for this element's kind of motion."""
-
-    def hold_limits(self, e: Element | None) -> np.ndarray:
-        """Path braking limits for feedhold."""
-
-    def path_moving(self, line: int | None) -> None:
-        """The path axes move (line) or stand (None)."""
-
-    def program_end(self, call: canon.ProgramEnd) -> None:
-        """M30/M02: what the machine does at program end (spindles per the HLI flag)."""
 
 
 @dataclass
@@ -64,6 +29,7 @@ class _Wait:
     action_id: int | None = None
     until_cycle: int | None = None
     what: str = ""
+    block: int = 0  # the MDI block waiting
 
 
 class Channel:
@@ -87,12 +53,14 @@ class Channel:
         self.progress = ChannelProgress()
         self.ex: Execution | None = None
         self.wait: _Wait | None = None
-        self.last_line: int | None = None
+        self.last_key: tuple[int, int] | None = None  # (MDI block, line) of the last step
         self.step_granted = False  # single block: cycle start lets one more block run
         self.filling = True  # topping the window up (until full, then again at half)
         self.modal: tuple[int, int, bool, float | None] = (0, 17, True, None)
         self.feed_scale = 1.0 / 60.0  # F (mm/min) -> mm/s, times the override
         self.override = 1.0
+        self.mdi = MdiQueue()
+        self.aborted_with: Event | None = None  # the job error of the last abort
 
     # --- commands -------------------------------------------------------------------------
     def load(self, name: str, text: str) -> None:
@@ -115,14 +83,44 @@ class Channel:
         """Cycle start from READY: interpret from where the axes are now and run."""
         assert self.progress.program is not None
         calls = self.interpret(self.progress.program.text)
+        self.mdi.reset_modal()
         self.ex = Execution(calls, self.axes, self.host.sync_of, self.host.new_action_id)
         self.wait = None
-        self.last_line = None
+        self.last_key = None
         self.step_granted = True
         self.progress.blocks_done = 0
         self.progress.error = None
         self.progress.state = ChannelState.RUNNING
         self.pump()
+
+    def mdi_modal(self) -> Modal:
+        """The modal state the next MDI block starts from (after the blocks queued, else
+        from where the axes are now)."""
+        if not self.progress.mdi:
+            self.mdi.modal.position = dict(
+                zip(self.axes, self.path.position().tolist(), strict=True)
+            )
+        return self.mdi.modal
+
+    def run_mdi(self, block_id: int, text: str, calls: list[canon.Call]) -> Event | None:
+        """Queue an interpreted MDI block behind those running (the caller checked that no
+        program runs); the job error when it ended in one at once."""
+        if not self.progress.mdi:
+            self.mdi.return_to = self.progress.state
+            modal = self.mdi.modal
+            self.ex = Execution([], self.axes, self.host.sync_of, self.host.new_action_id)
+            self.ex.feed_mm_min, self.ex.plane = modal.feed_mm_min, modal.plane
+            self.wait = None
+            self.last_key = None
+            self.step_granted = True
+            self.progress.mdi = True
+            self.progress.state = ChannelState.RUNNING
+        assert self.ex is not None
+        self.ex.mdi_blocks.append((block_id, calls))
+        self.mdi.add(block_id, text)
+        self.aborted_with = None
+        self.pump()
+        return self.aborted_with
 
     def resume(self) -> None:
         """Cycle start in HELD or BLOCK_END."""
@@ -162,17 +160,34 @@ class Channel:
         """A job error or reset ends the program; the axes keep braking on their own."""
         if self.path.count or not self.path.at_rest():
             self.path.abandon()
-        self.host.path_moving(None)
+        self.host.path_left()
+        self.aborted_with = error
+        if error is not None and self.progress.mdi:
+            self._rewind(ChannelState.READY)  # MDI leaves no program in error
+            return
         self._rewind(ChannelState.ERROR if error is not None else ChannelState.READY)
         self.progress.error = error
         if error is None and self.progress.program is None:
             self.progress.state = ChannelState.IDLE
 
+    def reset(self) -> None:
+        """CNC reset: the program or the MDI blocks end, an error is cleared, the modal words
+        go back to G00 G17 G90 without F."""
+        self.mdi.return_to = ChannelState.READY
+        if self.state is not ChannelState.IDLE or self.path.count:
+            self.abort(None)
+        self.mdi.reset_modal()
+
     def _rewind(self, state: ChannelState) -> None:
         self.ex = None
         self.wait = None
-        self.progress.state = state if self.progress.program else ChannelState.IDLE
         self.progress.waiting_for = None
+        if self.progress.mdi:  # back to where the channel was before the MDI blocks
+            self.progress.mdi = False
+            self.mdi.clear()
+            self.progress.block_line = None
+            state = self.mdi.return_to
+        self.progress.state = state if self.progress.program else ChannelState.IDLE
 
     # --- the cycle boundary ---------------------------------------------------------------
     def on_path_events(self) -> None:
@@ -206,14 +221,18 @@ class Channel:
             self.host.path_moving(None)
         elif self.path.current is not None:
             self.host.path_moving(self.path.current.line)
-            self.progress.block_line = self.path.current.line
+            self._at(self.path.current.line)
             self.modal = self.path.current.modal
         self.pump()
 
     def _passed(self, e: Element) -> None:
         self.progress.blocks_done += 1
         for call, aid in e.actions:
-            self._start(call, aid)
+            self._start(call, aid, e.block_id)
+
+    def _at(self, line: int) -> None:
+        """The program line the channel is at (none shown for MDI)."""
+        self.progress.block_line = None if self.progress.mdi else line
 
     def pump(self) -> None:
         """Queue and start what may go now; plan again when the window changed."""
@@ -228,14 +247,15 @@ class Channel:
                     break
                 continue
             step = self.ex.steps[0]
-            if self.progress.single_block and step.line != self.last_line:
+            key = (step.block, step.line)
+            if self.progress.single_block and key != self.last_key:
                 if not self.path.done() and self.path.count:
                     break
                 if not self.step_granted:
                     self.progress.state = ChannelState.BLOCK_END
                     break
                 self.step_granted = False
-            self.last_line = step.line
+            self.last_key = key
             if step.element is not None:
                 # top the window up in batches: each new element means a new plan
                 if self.path.count <= self.lookahead // 2:
@@ -245,13 +265,13 @@ class Channel:
                     break
                 err = self.host.check_element(step.element)
                 if err is not None:
-                    self.abort(err)
+                    self._fail(err, step.block)
                     return
                 if self.progress.single_block:
                     step.element.exact_stop = True
                 self.ex.steps.popleft()
                 if not self.path.count:
-                    self.progress.block_line = step.element.line
+                    self._at(step.element.line)
                     self.modal = step.element.modal
                     self.host.path_moving(step.element.line)
                 self.path.append(step.element)
@@ -269,15 +289,46 @@ class Channel:
                 return
         if changed:
             self.replan()
+        if self.progress.mdi:
+            self._mdi_progress()
+
+    def _mdi_progress(self) -> None:
+        """Report the MDI blocks that are done; when all are, the channel returns."""
+        for b in self.mdi.finished(self._mdi_running):
+            self.host.block_done(b.id, b.text)
+        ex = self.ex
+        if (
+            ex is not None
+            and not self.mdi.blocks
+            and not ex.steps
+            and not ex.mdi_blocks
+            and self.wait is None
+            and not self.path.count
+        ):
+            self._rewind(ChannelState.READY)
+
+    def _mdi_running(self, b: MdiBlock) -> bool:
+        ex = self.ex
+        if ex is None:
+            return False
+        return (
+            any(bid == b.id for bid, _calls in ex.mdi_blocks)
+            or (ex.block == b.id and ex.pc < len(ex.calls))
+            or any(st.block == b.id for st in ex.steps)
+            or any(e.block_id == b.id for e in self.path.queue)
+            or (self.wait is not None and self.wait.block == b.id)
+            or any(self.host.busy(aid) for aid in b.actions)
+        )
 
     def _act(self, step: Step) -> bool:
         assert self.ex is not None
-        self.progress.block_line = step.line
+        self._at(step.line)
         if step.dwell_s > 0:
             until = self.host.cycle + max(1, round(step.dwell_s / self.cycle_s))
-            self.wait = _Wait(until_cycle=until, what=f"dwell {step.dwell_s:g} s")
+            self.wait = _Wait(until_cycle=until, what=f"dwell {step.dwell_s:g} s", block=step.block)
         if step.waits_for is not None:
-            self.wait = _Wait(step.waits_for, what=f"synchronisation of line {step.line}")
+            what = f"synchronisation of line {step.line}"
+            self.wait = _Wait(step.waits_for, what=what, block=step.block)
         call = step.call
         if call is None:
             return True
@@ -289,14 +340,16 @@ class Channel:
         if not step.rest and step.waits_for is None and self.path.count:
             self.path.queue[-1].actions.append((call, aid))  # when the path gets there
             return True
-        if not self._start(call, aid):
+        if not self._start(call, aid, step.block):
             return False
         if step.wait:
-            self.wait = _Wait(aid, what=_describe(call))
+            self.wait = _Wait(aid, what=describe(call, self.host.spindle_name), block=step.block)
         return True
 
-    def _start(self, call: canon.Call, aid: int) -> bool:
-        """Start an action; on a job error the program stops (False)."""
+    def _start(self, call: canon.Call, aid: int, block: int) -> bool:
+        """Start an action (of MDI block `block`); on a job error the program stops (False)."""
+        if block:
+            self.mdi.started(block, aid)
         if isinstance(call, canon.SelectPlane):
             self.modal = (self.modal[0], call.plane, self.modal[2], self.modal[3])
             return True
@@ -304,9 +357,22 @@ class Channel:
             return True
         err = self.host.start_action(call, aid)
         if err is not None:
-            self.abort(err)
+            self._fail(err, block)
             return False
         return True
+
+    def _fail(self, err: Event, block: int) -> None:
+        """A job error of a block: a program stops; of an MDI block, that block and those
+        queued behind it are dropped, the ones before it run to their end."""
+        if not (self.progress.mdi and block and self.ex is not None):
+            self.abort(err)
+            return
+        self.aborted_with = err
+        self.ex.steps.clear()
+        self.ex.mdi_blocks.clear()
+        self.ex.pc = len(self.ex.calls)
+        self.ex.late.clear()
+        self.mdi.drop_from(block)
 
     def _wait_over(self) -> bool:
         w = self.wait
@@ -339,23 +405,3 @@ class Channel:
 
     def distance_to_go_mm(self) -> float | None:
         return self.path.distance_to_go()
-
-
-def _describe(call: canon.Call) -> str:
-    """What the path waits for, in the operator's words."""
-    match call:
-        case canon.SpindleOn():
-            return f"speed reached of {call.spindle} (M{call.m})"
-        case canon.SpindleOff():
-            return f"{call.spindle} stopped (M5)"
-        case canon.SpindleOrient():
-            return f"{call.spindle} in position (M19)"
-        case canon.SpindleSpeed():
-            return f"speed reached of {call.spindle}"
-        case canon.MFunction():
-            return f"the PLC's acknowledgement of M{call.m}"
-        case canon.SelectGear():
-            return f"gear change M{call.m}"
-        case canon.Home():
-            return "homing (G74)"
-    return f"line {call.line}"

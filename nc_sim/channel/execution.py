@@ -58,6 +58,7 @@ class Step:
     waits_for: int | None = None  # wait (at rest) until this action is done
     action_id: int | None = None  # the number to start `call` with (None: a new one)
     dwell_s: float = 0.0
+    block: int = 0  # the MDI block it belongs to (0 in a program)
 
 
 @dataclass
@@ -68,7 +69,8 @@ class _Late:
 
 @dataclass
 class Execution:
-    """The walk through one program's calls."""
+    """The walk through one program's calls, or through MDI blocks as they come
+    (`mdi_blocks`: each block's number and calls)."""
 
     calls: list[canon.Call]
     axes: tuple[str, ...]
@@ -79,6 +81,8 @@ class Execution:
     late: list[_Late] = field(default_factory=list)
     feed_mm_min: float | None = None
     plane: int = 17
+    mdi_blocks: deque[tuple[int, list[canon.Call]]] = field(default_factory=deque)
+    block: int = 0  # the MDI block being translated
 
     def new_id(self) -> int:
         """A number for an action (what the host's `busy` is asked about)."""
@@ -88,13 +92,25 @@ class Execution:
         """Translate the next block's calls into steps; False at the end of the calls.
         `position` is where the path will be when this block starts."""
         if self.pc >= len(self.calls):
-            return False
+            if not self.mdi_blocks:
+                return False
+            self.block, self.calls = self.mdi_blocks.popleft()
+            self.pc = 0
+            if not self.calls:  # a block of comments only
+                return True
         line = self.calls[self.pc].line
         block: list[canon.Call] = []
         while self.pc < len(self.calls) and self.calls[self.pc].line == line:
             block.append(self.calls[self.pc])
             self.pc += 1
+        first = len(self.steps)
         self._translate(block, position)
+        if self.block:
+            for i in range(first, len(self.steps)):
+                step = self.steps[i]
+                step.block = self.block
+                if step.element is not None:
+                    step.element.block_id = self.block
         return True
 
     def _translate(self, block: list[canon.Call], position: list[float]) -> None:
@@ -185,3 +201,23 @@ def sync_kind(call: canon.Call, sync: int) -> str:
     # NO_SYNCH: M3/M4/M5 synchronise internally on speed reached / standstill [000 §2.5.1],
     # M19 on in position; the S word alone does not wait (s_synch)
     return "none" if isinstance(call, canon.SpindleSpeed) else "before"
+
+
+def describe(call: canon.Call, spindle_name: Callable[[str], str]) -> str:
+    """What the path waits for, in the operator's words (spindles by their configured name)."""
+    match call:
+        case canon.SpindleOn():
+            return f"speed reached of {spindle_name(call.spindle)} (M{call.m})"
+        case canon.SpindleOff():
+            return f"{spindle_name(call.spindle)} stopped (M5)"
+        case canon.SpindleOrient():
+            return f"{spindle_name(call.spindle)} in position (M19)"
+        case canon.SpindleSpeed():
+            return f"speed reached of {spindle_name(call.spindle)}"
+        case canon.MFunction():
+            return f"the PLC's acknowledgement of M{call.m}"
+        case canon.SelectGear():
+            return f"gear change M{call.stage + 39}"
+        case canon.Home():
+            return "homing (G74)"
+    return f"line {call.line}"

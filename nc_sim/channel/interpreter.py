@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
+from dataclasses import replace
 
-from nc_sim.blocks.mdi import SLOPE_TYPES, BlockError, SpindleCmd, parse_spindle_specific
 from nc_sim.channel import canon
 from nc_sim.channel.modal import CENTRE_LETTER, PLANES, Modal
 from nc_sim.channel.program import Program, split_program
+from nc_sim.channel.spindle_words import MAIN, SPINDLE_G, SpindleWords
 from nc_sim.channel.words import Line, ProgramError, Word, lex_line
 from nc_sim.errors import Code
 
@@ -27,6 +28,14 @@ ARC_RADIUS_TOLERANCE_MM = 0.002  # start and end radius of G02/G03 may differ by
 MAX_NESTING = 8  # subprogram levels
 _END_PROGRAM = (30, 2)
 _END_SUB = (17, 29)
+SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}  # #SLOPE[TYPE=..] (P-CHAN-00071)
+_SUPPORTED_G = (0, 1, 2, 3, 4, 17, 18, 19, 60, 74, 90, 91, 200, 201, *SPINDLE_G)
+_EXCLUSIVE_G = (
+    ((0, 1, 2, 3), "motion G codes"),
+    ((17, 18, 19), "planes"),
+    ((90, 91), "of G90/G91"),
+    ((200, 201), "of G200/G201"),
+)
 
 
 def interpret(
@@ -36,14 +45,32 @@ def interpret(
     spindles: Iterable[str] = (),
     start: Mapping[str, float] | None = None,
     skip_blocks: bool = True,
+    home: Mapping[str, float] | None = None,
 ) -> None:
-    """Interpret a whole program into `sink`; `start` is where the axes are (default 0)."""
+    """Interpret a whole program into `sink`; `start` is where the axes are (default 0),
+    `home` where G74 leaves them (their reference positions; default: where they were)."""
     names = tuple(a.upper() for a in axes)
-    modal = Modal(position={a: float((start or {}).get(a, 0.0)) for a in names})
+    modal = Modal(
+        position={a: float((start or {}).get(a, 0.0)) for a in names},
+        home_position={a.upper(): float(p) for a, p in (home or {}).items()},
+    )
     run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, modal, skip_blocks)
     if not run.lines(run.prog.main, depth=0):
         last = max(run.prog.main, default=0) + 1
         raise ProgramError("program ends without M30 or M02", last, 1, Code.PROGRAM_STRUCTURE)
+
+
+def interpret_blocks(
+    text: str, sink: canon.Sink, modal: Modal, axes: Iterable[str], spindles: Iterable[str]
+) -> None:
+    """MDI: one or more blocks, no program end needed, starting from `modal` (what the
+    blocks before left in force) and leaving it for the next. `modal` is changed only when
+    every block interpreted without error."""
+    names = tuple(a.upper() for a in axes)
+    work = replace(modal, position=dict(modal.position))
+    run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, work, True)
+    run.lines(run.prog.main, depth=0)
+    modal.__dict__.update(work.__dict__)
 
 
 class _Run:
@@ -126,23 +153,29 @@ class _Block:
 
     def run(self) -> int | None:
         """Emit the block's calls; returns the M code that ends the (sub)program, if any."""
+        axes = self.run_.axes
         for w in self.lexed.words:
             if w.letter == "G":
                 g = _whole(w, self.line)
-                if g not in (0, 1, 2, 3, 4, 17, 18, 19, 60, 74, 90, 91, 200, 201):
+                if g not in _SUPPORTED_G:
                     raise self.error(f"G{g} is not supported", w.column, Code.NOT_SUPPORTED)
+                if g in self.g:
+                    raise self.error(f"G{g} twice in one block", w.column)
                 self.g[g] = w
             elif w.letter == "M":
                 self.m.append((_whole(w, self.line), w))
             elif w.letter in self.addr:
                 raise self.error(f"{w.letter} twice in one block", w.column)
-            elif w.letter in "NFSTDIJKRLP" or w.letter in self.run_.axes:
-                self.addr[w.letter] = w
+            elif w.letter in "NFSTDIJKRLP" or w.letter in axes or w.letter == "X":
+                self.addr[w.letter] = w  # X: also G04's dwell time on machines without X
             else:
                 raise self.error(f"unknown address '{w.letter}'", w.column)
-        motions = [g for g in self.g if g in (0, 1, 2, 3)]
-        if len(motions) > 1:
-            raise self.error("two motion G codes in one block", self.g[motions[1]].column)
+        if "X" in self.addr and "X" not in axes and 4 not in self.g:
+            raise self.error("unknown address 'X'", self.addr["X"].column)
+        for group, what in _EXCLUSIVE_G:
+            found = [g for g in self.g if g in group]
+            if len(found) > 1:
+                raise self.error(f"two {what} in one block", self.g[found[1]].column)
         self._preparatory()
         self._spindle()
         self._motion_and_g()
@@ -164,7 +197,8 @@ class _Block:
                 raise self.error(f"#{cmd} is not supported", col, Code.NOT_SUPPORTED)
             key = "".join(body.split()).upper()
             if not key.startswith("TYPE=") or key[5:] not in SLOPE_TYPES:
-                raise self.error(f"#SLOPE needs TYPE= one of {', '.join(SLOPE_TYPES)}", col)
+                body_col = col + len("#SLOPE[")
+                raise self.error(f"#SLOPE needs TYPE= one of {', '.join(SLOPE_TYPES)}", body_col)
             self._emit(canon.SetSlope(self.line, SLOPE_TYPES[key[5:]]))
         tool, d = self.addr.get("T"), self.addr.get("D")
         if tool is not None or d is not None:
@@ -175,73 +209,28 @@ class _Block:
                     None if d is None else _whole(d, self.line),
                 )
             )
-        for m, _ in self.m:
-            if 40 <= m <= 45:
-                self._emit(canon.SelectGear(self.line, m))
 
     def _spindle(self) -> None:
-        main = SpindleCmd("S")
+        words = SpindleWords(self.line, self.run_.spindles, self.error)
+        gear: Word | None = None
         for m, w in self.m:
             if m in (3, 4, 5, 19):
-                self._spindle_m(main, m, w.column)
+                words.m_function(words.spindle(MAIN, w.column), m, w.column)
+            elif 40 <= m <= 45:
+                if gear is not None:
+                    raise self.error("two gear stages M40-M45 in one block", w.column)
+                gear = w
         if (s := self.addr.get("S")) is not None and 74 not in self.g:
-            if s.value < 0:
-                raise self.error("S must not be negative: M3/M4 give the direction", s.column + 1)
-            main.speed_rpm = s.value
-        cmds = [main]
+            words.speed(words.spindle(MAIN, s.column), s.value, s.column + 1)
+        for g, w in self.g.items():
+            if g in SPINDLE_G:
+                words.g_word(words.spindle(MAIN, w.column), g, None, w.column)
         for name, deg, col in self.lexed.positions:
-            target = main if name == "S" else self._named(cmds, name, col)
-            target.pos_deg = deg
+            words.position(words.spindle(name, col), deg, col)
         for name, body, col in self.lexed.specific:
-            self._spindle_name(name, col)
-            try:
-                cmds.append(parse_spindle_specific(body, name, col + len(name) + 1))
-            except BlockError as err:
-                raise self.error(err.detail, err.column) from err
-        for cmd in cmds:
-            self._spindle_calls(cmd)
-
-    def _spindle_name(self, name: str, col: int) -> None:
-        if name != "S" and name not in self.run_.spindles:
-            raise self.error(f"unknown spindle '{name}'", col, Code.UNKNOWN_AXIS)
-
-    def _named(self, cmds: list[SpindleCmd], name: str, col: int) -> SpindleCmd:
-        self._spindle_name(name, col)
-        cmds.append(SpindleCmd(name))
-        return cmds[-1]
-
-    def _spindle_m(self, cmd: SpindleCmd, m: int, col: int) -> None:
-        """M3/M4 next to M19 give the positioning direction [000 §2.3.2]."""
-        if cmd.m is None:
-            cmd.m = m
-        elif {cmd.m, m} in ({19, 3}, {19, 4}) and cmd.direction is None:
-            cmd.direction = 1 if 3 in (cmd.m, m) else -1
-            cmd.m = 19
-        else:
-            raise self.error("two spindle M functions for one spindle in one block", col)
-
-    def _spindle_calls(self, cmd: SpindleCmd) -> None:
-        col = 1
-        if cmd.g or cmd.default_dynamics:
-            if cmd.g != [74]:
-                raise self.error(
-                    f"{cmd.spindle}[G{cmd.g}] is not supported in programs", col, Code.NOT_SUPPORTED
-                )
-            self._emit(canon.Home(self.line, ((cmd.spindle, 1.0),)))
-        if cmd.m in (3, 4):
-            self._emit(canon.SpindleOn(self.line, cmd.spindle, cmd.m, cmd.speed_rpm))
-        elif cmd.m == 5:
-            self._emit(canon.SpindleOff(self.line, cmd.spindle))
-        elif cmd.m == 19:
-            self._emit(
-                canon.SpindleOrient(
-                    self.line, cmd.spindle, cmd.pos_deg, cmd.speed_rpm, cmd.direction
-                )
-            )
-        elif cmd.pos_deg is not None:
-            raise self.error(f"{cmd.spindle}.POS needs M19", col)
-        elif cmd.speed_rpm is not None:
-            self._emit(canon.SpindleSpeed(self.line, cmd.spindle, cmd.speed_rpm))
+            words.specific(name, body, col)
+        for call in words.calls(gear):
+            self._emit(call)
 
     def _motion_and_g(self) -> None:
         modal = self.run_.modal
@@ -321,6 +310,10 @@ class _Block:
         if not order:
             raise self.error("G74 needs the axes to home with their order", self.g[74].column)
         self._emit(canon.Home(self.line, tuple((n, w.value) for n, w in order)))
+        modal = self.run_.modal
+        for name, _w in order:  # the axes end at their reference positions
+            if name in modal.position and name in modal.home_position:
+                modal.position[name] = modal.home_position[name]
 
     def _arc(
         self, motion: int, end: dict[str, float], target: tuple[tuple[str, float], ...], col: int
@@ -388,7 +381,7 @@ class _Block:
         ending: int | None = None
         for m, w in self.m:
             if m in (3, 4, 5, 19) or 40 <= m <= 45:
-                continue
+                continue  # the spindle's (SpindleWords)
             if m in _END_PROGRAM or m in _END_SUB:
                 if ending is not None:
                     raise self.error("two program ends in one block", w.column)

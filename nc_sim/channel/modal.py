@@ -26,3 +26,4 @@ class Modal:
     absolute: bool = True
     feed_mm_min: float | None = None
     position: dict[str, float] = field(default_factory=dict)
+    home_position: dict[str, float] = field(default_factory=dict)  # where G74 ends, per axis

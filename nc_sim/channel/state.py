@@ -29,5 +29,6 @@ class ChannelProgress:
     block_line: int | None = None
     blocks_done: int = 0
     single_block: bool = False
+    mdi: bool = False  # MDI blocks run (the state is RUNNING while they do)
     waiting_for: str | None = None
     error: Event | None = None

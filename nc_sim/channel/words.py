@@ -134,6 +134,11 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
             out.positions.append((m.group("pname").upper(), deg, col))
         else:
             ch = m.group("bad")
-            if ch.isalpha() and ch.isascii():
+            at = col - 1  # where ch is
+            after = text[at + 1 : at + 2]
+            if not ch.isascii() or (after and not after.isascii()):
+                odd = at + (0 if not ch.isascii() else 1)  # e.g. full-width digits (CJK)
+                raise ProgramError(f"'{text[odd]}' is not an NC character", line, odd + 1)
+            if ch.isalpha():
                 raise ProgramError(f"address '{ch}' without a value", line, col)
             raise ProgramError(f"unexpected '{ch}'", line, col)

@@ -225,7 +225,9 @@ def _advance_plan(st: np.ndarray, ist: np.ndarray, plan: np.ndarray, s: int, dt:
             if not math.isnan(target):  # position plan: end exactly on the target, at rest
                 st[s, S_P_CMD] = target
                 st[s, S_V_CMD] = 0.0
-            else:  # velocity plan: keep the final speed
+            else:  # velocity plan: keep the final speed (a stop ends at 0, not at round-off)
+                if abs(v) < 1e-9:
+                    v = 0.0
                 st[s, S_P_CMD] = p + v * left
                 st[s, S_V_CMD] = v
             st[s, S_A_CMD] = 0.0

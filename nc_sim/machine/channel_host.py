@@ -4,13 +4,14 @@ that are not path motion, the path axes' limits, and what runs for which action.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from nc_sim.axis.dynamics import Motion, feedhold_limits, motion_limits, velocity_limit
-from nc_sim.blocks.mdi import SpindleCmd
 from nc_sim.channel import canon
+from nc_sim.channel.execution import PLC_INFO
 from nc_sim.channel.geometry import Element, point_at
 from nc_sim.channel.planner import AxisDynamics, element_limits
 from nc_sim.errors import Code
@@ -20,13 +21,14 @@ from nc_sim.plc import Waiter
 from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
 from nc_sim.snapshot import AxisState
 from nc_sim.spindle.gear_change import spindle_index
-from nc_sim.spindle.program import program_end, spindle_block, tool_dynamics
+from nc_sim.spindle.program import program_end, spindle_call, tool_dynamics
 from nc_sim.units import AxisKind
 
 if TYPE_CHECKING:
     from nc_sim.axis.state import Axis
     from nc_sim.machine.machine import Machine
 
+_M_OF: dict[type[canon.Call], int] = {canon.SpindleOff: 5, canon.SpindleOrient: 19}
 _SYNC_PARAM = {
     canon.SpindleOff: "m5_synch",
     canon.SpindleOrient: "m19_synch",
@@ -44,16 +46,50 @@ class MachineChannelHost:
         self.stopping: dict[int, Axis] = {}  # M5 action -> its spindle (until standstill)
         self.reaching: dict[int, Axis] = {}  # M3/M4/S action -> its spindle (speed reached)
         self.homing: dict[int, list[list[str]]] = {}  # G74 action -> order groups to come
-        self.moving = False  # the path axes move for the channel (not for MDI or jog)
+        self.moving = False  # the path axes move for the channel (not for a jog)
+        self.next_id = 1  # numbers of actions
+        self.path_start: list[float] = []  # the path axes' positions where the path started
 
     @property
     def cycle(self) -> int:
         return self.m.cycle
 
     def new_action_id(self) -> int:
-        bid = self.m._next_id
-        self.m._next_id += 1
-        return bid
+        self.next_id += 1
+        return self.next_id - 1
+
+    def spindle_name(self, name: str) -> str:
+        return self.m.main_spindle or name if name == "S" else name
+
+    def block_done(self, block_id: int, text: str) -> None:
+        self.m.log(Code.EV_BLOCK_DONE, "", text)
+
+    def channel_error(self, ev: Event | None) -> None:
+        """A job error stops the program or the MDI blocks (nc_sim/channel `abort`)."""
+        self.m.channel.abort(ev)
+
+    def block_target(self, ax: Axis) -> float | None:
+        """A path axis' target: where the block the path is in ends for it [000 §2.9]."""
+        e = self.m.channel.path.current
+        if e is None or ax not in self.path_axes:
+            return None
+        return float(e.end[self.path_axes.index(ax)])
+
+    def path_left(self) -> None:
+        """The path was abandoned mid-way: each path axis still moving brakes on its own."""
+        if not self.moving:
+            return
+        self.moving = False
+        for a in self.path_axes:
+            if a.state is AxisState.MOVING:
+                self.m.moves.stop(a, Motion.FEED)
+
+    def synch_plc(self, ax: Axis, m: int) -> bool:
+        """M3/M4/M5/M19 with the PLC_INFO bit are output to the PLC [000 §2.5]."""
+        i = spindle_index(self.m.cfg, ax.name)
+        if i is None or m not in (3, 4, 5, 19):
+            return False
+        return bool(int(self.m.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & PLC_INFO)
 
     # --- actions --------------------------------------------------------------------------
     def start_action(self, call: canon.Call, action_id: int) -> Event | None:
@@ -66,28 +102,45 @@ class MachineChannelHost:
                 | canon.SpindleOff()
                 | canon.SpindleOrient()
                 | canon.SpindleSpeed()
+                | canon.SpindleSettings()
             ):
+                if call.spindle not in m.by_name and not (call.spindle == "S" and m.main_spindle):
+                    return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {call.line}: no spindle")
                 ax = m.axis(call.spindle)
-                sc = _spindle_cmd(call)
+                if ax.kind is not AxisKind.SPINDLE:
+                    return m.motion.fail(ax, Code.NOT_A_SPINDLE, f"line {call.line}")
+                if (
+                    isinstance(call, canon.SpindleOn | canon.SpindleSpeed)
+                    and call.gear is not None
+                    and not m.gear_change_enabled
+                ):
+                    self.output(call.gear + 39, "", action_id)  # a free M function then
+                    call = replace(call, gear=None)
                 if isinstance(call, canon.SpindleOff):
                     self.stopping[action_id] = ax
                 elif isinstance(call, canon.SpindleOn | canon.SpindleSpeed):
                     self.reaching[action_id] = ax
-                ok = spindle_block(m.sp, ax, sc, None, action_id)
-                if ok and sc.m is not None and m._synch_plc(ax, sc.m):
-                    self.output(sc.m, ax.name, action_id)
+                ok = spindle_call(m.sp, ax, call, action_id) is None
+                mfunc = _M_OF.get(type(call)) or getattr(call, "m", None)
+                if ok and mfunc is not None and self.synch_plc(ax, mfunc):
+                    self.output(mfunc, ax.name, action_id)
             case canon.SelectGear():
                 main = m.main_spindle
                 if m.gear_change_enabled and main:
-                    ok = m.sp.gears.only(m.axis(main), call.m - 39, action_id) is None
+                    ok = m.sp.gears.only(m.axis(main), call.stage, action_id) is None
+                elif m.gear_change_enabled:
+                    return m.motion.fail(None, Code.GEAR_CHANGE_OFF, f"line {call.line}")
                 else:  # M40-M45 are free M functions (P-CHAN-00052)
-                    self.output(call.m, "", action_id)
+                    self.output(call.stage + 39, "", action_id)
             case canon.SelectTool():
                 if call.d is not None:
                     tool_dynamics(m.sp, m.axes, call.d)
             case canon.SetSlope():
                 m.slope = call.slope_type
             case canon.Home():
+                for name, _order in call.axes:
+                    if name not in m.by_name and not (name == "S" and m.main_spindle):
+                        return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {call.line}: {name}")
                 orders = sorted({o for _n, o in call.axes})
                 groups = [[n for n, o in call.axes if o == order] for order in orders]
                 self.homing[action_id] = groups
@@ -105,7 +158,7 @@ class MachineChannelHost:
 
         def timed_out(ev: Event) -> None:
             if action_id in self.m_pending:
-                self.m._channel_error(ev)
+                self.channel_error(ev)
 
         waiter = Waiter(lambda: self.acknowledged(action_id), timed_out)
         self.m.handshake.output(mfunc, axis, waiter)
@@ -127,7 +180,16 @@ class MachineChannelHost:
         return all(m.moves.home(m.axis(name), action_id) is None for name in groups.pop(0))
 
     def busy(self, action_id: int) -> bool:
-        if any(a.block_id == action_id for a in self.m.axes):
+        axes = self.m.axes
+        if action_id in self.homing:
+            # the next G74 group starts when only spindles of this one still home: a spindle
+            # homes unsynchronised with the axes [000 §2.7]
+            mine = [a for a in axes if a.block_id == action_id]
+            if all(a.kind is AxisKind.SPINDLE for a in mine) and not self._home_next(action_id):
+                self.homing.pop(action_id, None)
+            if action_id in self.homing:
+                return True
+        if any(a.block_id == action_id for a in axes):
             return True
         if self.m_pending.get(action_id, 0) > 0:
             return True
@@ -142,11 +204,16 @@ class MachineChannelHost:
             if turning and not self.m.k.ist[ax.slot, L.I_SPEED_REACHED]:
                 return True
             del self.reaching[action_id]
-        if action_id in self.homing:
-            if not self._home_next(action_id):
-                self.homing.pop(action_id, None)
-            return action_id in self.homing or any(a.block_id == action_id for a in self.m.axes)
         return False
+
+    def next_wakeup(self) -> int | None:
+        """The next cycle to look again without a kernel event: a stopped spindle (M5) is
+        "spindle stopped" only once its actual speed has decayed, which raises no event."""
+        k = self.m.k
+        for ax in self.stopping.values():
+            if ax.state is AxisState.STANDSTILL and not k.ist[ax.slot, L.I_STOPPED]:
+                return self.m.cycle + 1
+        return None
 
     def sync_of(self, call: canon.Call) -> int:
         if not isinstance(
@@ -169,23 +236,34 @@ class MachineChannelHost:
         if e.arc is not None:
             moved[e.arc[0]] = moved[e.arc[1]] = True
         for i, ax in enumerate(self.path_axes):
+            if moved[i]:
+                err = m.motion.drive_refusal(ax) or m.moves.homing_required(ax)
+                if err:
+                    return err
+            # the path drives every path axis, so none may move on its own (jog, move)
+            on_path = self.moving and m.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS
+            standing = ax.state is AxisState.STANDSTILL or (
+                not moved[i] and ax.state is AxisState.ERROR
+            )
+            if not (standing or (on_path and ax.state is AxisState.MOVING)):
+                what = "moving on its own" if ax.state is AxisState.MOVING else ax.state.name
+                return m.motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {what.lower()}")
             if not moved[i]:
                 continue
-            err = m.motion.drive_refusal(ax) or m.moves.homing_required(ax)
-            if err:
-                return err
-            if ax.state not in (AxisState.STANDSTILL, AxisState.MOVING):
-                return m.motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {ax.state.name.lower()}")
-            if ax.homed and ax.kind is AxisKind.LINEAR:
-                lo, hi = m.k.pr[ax.slot, L.P_SWE_NEG], m.k.pr[ax.slot, L.P_SWE_POS]
+            limits = m.moves.position_limits(ax)
+            if limits is not None:
+                lo, hi = limits
                 samples = 2 if e.arc is None else 65
                 for j in range(samples):
                     p = point_at(e, e.length * j / (samples - 1))[i]
                     if not lo - 1e-9 <= p <= hi + 1e-9:
+                        where = "" if e.block_id else f"line {e.line}: "  # MDI: no line
+                        what = "target" if j == samples - 1 else "path point"
+                        u = ax.pos_unit
                         return m.motion.fail(
                             ax,
                             Code.SOFTWARE_LIMIT,
-                            f"line {e.line}: {ax.name} {p:.4f} mm outside {lo:.4f} … {hi:.4f} mm",
+                            f"{where}{ax.name} {what} {p:.4f} {u} outside {lo:.4f} … {hi:.4f} {u}",
                         )
         return None
 
@@ -238,30 +316,16 @@ class MachineChannelHost:
     def path_moving(self, line: int | None) -> None:
         if line is None and not self.moving:
             return
+        st = self.m.k.st
+        if line is not None and not self.moving:
+            self.path_start = [float(st[a.slot, L.S_P_CMD]) for a in self.path_axes]
         self.moving = line is not None
-        for ax in self.path_axes:
+        for i, ax in enumerate(self.path_axes):
             if line is not None and ax.state is AxisState.STANDSTILL:
                 ax.motion = Motion.FEED
                 self.m.motion.set_state(ax, AxisState.MOVING)
             elif line is None and ax.state is AxisState.MOVING and ax.motion is Motion.FEED:
                 ax.motion = None
                 self.m.motion.set_state(ax, AxisState.STANDSTILL)
-
-
-def _spindle_cmd(call: canon.Call) -> SpindleCmd:
-    match call:
-        case canon.SpindleOn():
-            return SpindleCmd(call.spindle, m=call.m, speed_rpm=call.speed_rpm)
-        case canon.SpindleOff():
-            return SpindleCmd(call.spindle, m=5)
-        case canon.SpindleOrient():
-            return SpindleCmd(
-                call.spindle,
-                m=19,
-                speed_rpm=call.speed_rpm,
-                pos_deg=call.pos_deg,
-                direction=call.direction,
-            )
-        case canon.SpindleSpeed():
-            return SpindleCmd(call.spindle, speed_rpm=call.speed_rpm)
-    raise ValueError(f"not a spindle call: {call}")
+                if st[ax.slot, L.S_P_CMD] != self.path_start[i]:  # it moved on the path
+                    self.m.log(Code.EV_MOTION_DONE, ax.name)

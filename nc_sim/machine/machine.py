@@ -11,25 +11,16 @@ phase bounded by the watchdog (nc_sim/axis/watchdog.py). Nothing here reads a cl
 
 from __future__ import annotations
 
-from collections import deque
-from dataclasses import dataclass, field
 from typing import assert_never
 
 from nc_sim import hli
 from nc_sim.axis.drive import READY_FOR_POWER_ON
-from nc_sim.axis.dynamics import Motion
 from nc_sim.axis.motion import AxisMotion, ChannelContext
 from nc_sim.axis.moves import Moves
 from nc_sim.axis.params import power_on, push_params
 from nc_sim.axis.state import Axis, drive_status
-from nc_sim.blocks import Block, BlockError, parse_block
-from nc_sim.channel import canon
-from nc_sim.channel.canon import ListSink
 from nc_sim.channel.channel import Channel
-from nc_sim.channel.execution import PLC_INFO
-from nc_sim.channel.interpreter import interpret
 from nc_sim.channel.path import Path
-from nc_sim.channel.words import ProgramError
 from nc_sim.commands import (
     Accepted,
     Command,
@@ -63,27 +54,14 @@ from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.channel_host import MachineChannelHost
+from nc_sim.machine.channel_ops import PROGRAM_ACTIVE, ChannelOps
 from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.panel import Panel
 from nc_sim.machine.readout import machine_snapshot
-from nc_sim.plc import Handshake, PlcMode, SimPlc, Waiter
-from nc_sim.snapshot import AxisState, ChannelState, MachineSnapshot
+from nc_sim.plc import Handshake, PlcMode, SimPlc
+from nc_sim.snapshot import MachineSnapshot
 from nc_sim.spindle.control import SpindleControl
-from nc_sim.spindle.gear_change import spindle_index
-from nc_sim.spindle.program import program_end, spindle_block, tool_dynamics
 from nc_sim.units import AxisKind
-
-_PROGRAM_ACTIVE = (ChannelState.RUNNING, ChannelState.HELD, ChannelState.BLOCK_END)
-
-
-@dataclass
-class _BlockRun:
-    id: int
-    text: str
-    block: Block | None = None
-    started: bool = False
-    waiting_m: int = 0
-    homing: list[list[str]] = field(default_factory=list)  # G74 order groups still to start
-    error: Event | None = None  # the job error it failed with while starting
 
 
 class Machine:
@@ -115,24 +93,21 @@ class Machine:
             self.log,
             lambda: self.cycle,
         )
-        self._queue: deque[_BlockRun] = deque()
-        self._next_id = 1
         self.outcomes: EventLog[Outcome] = EventLog(OUTCOME_LOG_LEN)  # answers to submit
         self._powered = False  # power-on done: the PLC has switched every drive on
-        self.motion = AxisMotion(kernel, self.ctx, self.log, lambda: self.cycle, self._abort_block)
+        self.motion = AxisMotion(kernel, self.ctx, self.log, lambda: self.cycle, self._axis_failed)
         self.sp = SpindleControl(self.motion, cfg, self.handshake)
         self.moves = Moves(self.motion, self.sp, cfg)
         path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE][: L.MAX_PATH_AXES]
         self.channel_slot = kernel.claim(1)[0]
         self.ch_host = MachineChannelHost(self, path_axes)
-        self._interpreted: (
-            tuple[tuple[str, tuple[tuple[str, float], ...]], list[canon.Call]] | None
-        ) = None
+        self.ops = ChannelOps(self)
+        self.panel = Panel(self)
         self.channel = Channel(
             Path(kernel, self.channel_slot, [a.slot for a in path_axes]),
             self.ch_host,
             tuple(a.name for a in path_axes),
-            self._interpret_here,
+            self.ops.interpret_here,
             cfg.cycle_s,
             int(cfg.channel_raw("lookahead_blocks")),
         )
@@ -178,27 +153,25 @@ class Machine:
         answer: Event | int | None = None
         match cmd:
             case Mdi():
-                return self._mdi(cmd.block, cmd.serial)
+                return self.ops.mdi(cmd.block, cmd.serial)
             case ProgramLoad():
-                return self._program_load(cmd.name, cmd.text, cmd.serial)
+                return self.ops.program_load(cmd.name, cmd.text, cmd.serial)
             case CycleStart():
-                answer = self._cycle_start()
+                answer = self.ops.cycle_start()
             case ProgramStop():
-                if self.channel.state in _PROGRAM_ACTIVE:
-                    self.channel.stop()
-                    self.log(Code.EV_PROGRAM_STOP)
+                self.ops.stop()
             case Feedhold():
-                self._channel_unit("feedhold", int(cmd.on))
+                self.panel.channel_unit("feedhold", int(cmd.on))
             case SingleBlock():
                 self.channel.set_single_block(cmd.on)
             case SpindleRun():
-                answer = self._spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
+                answer = self.panel.spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
             case SpindlePosition():
-                answer = self._spindle_position(
+                answer = self.panel.spindle_position(
                     cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm
                 )
             case GearChange():
-                answer = self._spindle_gear(cmd.spindle, cmd.m)
+                answer = self.panel.spindle_gear(cmd.spindle, cmd.m)
             case Home():
                 answer = self.moves.home(self.axis(cmd.axis))
             case JogStart():
@@ -212,7 +185,7 @@ class Machine:
                     self.axis(cmd.axis), cmd.target, cmd.rapid, cmd.feed_mm_min
                 )
             case HliWrite():
-                self._hli_write(cmd.unit, cmd.value, cmd.axis)
+                self.panel.hli_write(cmd.unit, cmd.value, cmd.axis)
             case SetPlcMode():
                 self._plc_mode(cmd.mode, cmd.delay_s)
             case PlcAck():
@@ -243,9 +216,9 @@ class Machine:
         if due is not None:
             times.append(due)
         times += [ax.deadline for ax in self.axes if ax.deadline is not None]
-        wake = self.channel.next_wakeup()
-        if wake is not None:
-            times.append(wake)
+        for wake in (self.channel.next_wakeup(), self.ch_host.next_wakeup()):
+            if wake is not None:
+                times.append(wake)
         if self.estop and any(ax.enables_ok() for ax in self.axes):
             times.append(self.cycle + 1)  # watch the braking axes settle (_estop_settled)
         return min(times) if times else None
@@ -272,7 +245,7 @@ class Machine:
     @property
     def queued_blocks(self) -> int:
         """MDI blocks waiting or running."""
-        return len(self._queue)
+        return len(self.channel.mdi.blocks)
 
     # --- events -------------------------------------------------------------------------
     def log(
@@ -317,96 +290,17 @@ class Machine:
             raise NcUsageError(f"no axis or spindle '{name}'")
         return ax
 
-    # --- commands: spindle [000] ---------------------------------------------------------
-    def _spindle(self, name: str) -> Axis:
-        ax = self.axis(name)
-        if ax.kind is not AxisKind.SPINDLE:
-            raise NcUsageError(f"{name} is not a spindle")
-        return ax
-
-    def _spindle_run(self, name: str, m: int, speed_rpm: float | None = None) -> Event | None:
-        """M3/M4 with speed (rpm), or M5."""
-        ax = self._spindle(name)
-        if m == 5:
-            self.sp.m5(ax)
-            return None
-        return self.sp.endless(ax, m, speed_rpm)
-
-    def _spindle_position(
-        self,
-        name: str,
-        pos_deg: float,
-        direction: int | None = None,
-        speed_rpm: float | None = None,
-    ) -> Event | None:
-        """M19 S.POS=pos_deg with M3 (+1) / M4 (-1) or the shortest way (None)."""
-        return self.sp.position(self._spindle(name), pos_deg, direction, speed_rpm)
-
-    def _spindle_gear(self, name: str, m: int) -> Event | None:
-        """M40-M45: change gear stage (main spindle with P-CHAN-00052)."""
-        if not 40 <= m <= 45:
-            raise NcUsageError("gear stage M40..M45")
-        ax = self._spindle(name)
-        if not self.gear_change_enabled:  # then M40-M45 are free M functions
-            self._m_output(m, "", None)
-            return None
-        return self.sp.gears.only(ax, m - 39, None)
-
     @property
     def gear_change_enabled(self) -> bool:
         """P-CHAN-00052: M40-M45 change the main spindle's gear; else they are free M functions."""
         return bool(self.cfg.channel_raw("main_spindle_gear_change"))
-
-    # --- HLI ----------------------------------------------------------------------------
-    def _hli_write(self, unit: str, value: int, axis: str | None = None) -> None:
-        """Write a control unit of the channel (axis=None) or of an axis."""
-        if axis is None:
-            hli.channel_write(unit, value)
-            self._channel_unit(unit, int(value))
-            return
-        ax = self.axis(axis)
-        value = hli.axis_write(unit, value)
-        if unit == "spindle_reset" and value:
-            self.moves.reset(ax)
-            return
-        ax.units[unit] = int(value)
-        self.log(Code.EV_HLI, ax.name, f"{unit} = {int(value)}")
-        if unit in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
-            self.motion.enables_changed(ax)
-        elif unit in ("override", "override_valid", "reduced_speed"):
-            self.moves.replan(ax)
-
-    def _channel_unit(self, unit: str, value: int) -> None:
-        old = self.channel_units[unit]
-        self.channel_units[unit] = hli.clamp(unit, value)
-        self.log(Code.EV_HLI, "", f"channel {unit} = {value}")
-        if unit == "override":
-            cap = self.cfg.channel_eng("max_vb_override")
-            self.channel.override = min(self.channel_units["override"] * 1e-3, cap)
-            self.channel.replan()
-        if unit == "feedhold" and bool(value) != bool(old):
-            if value:
-                self.channel.hold()
-            elif self.channel.state is ChannelState.HELD:
-                self.channel.resume()
-            self.moves.feedhold(bool(value), self.axes)
-            return
-        for ax in self.axes:
-            if self.moves.as_axis(ax):
-                self.moves.replan(ax)
 
     # --- reset, emergency stop ----------------------------------------------------------
     def _reset(self) -> None:
         """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.ctx.estop = self.ctx.estop, False
-        if (
-            self.channel.state in _PROGRAM_ACTIVE
-            or self.channel.path.count
-            or self.channel.state is ChannelState.ERROR
-        ):
-            self.channel.abort(None)
-        self._queue.clear()
+        self.channel.reset()
         self.handshake.clear()
         for ax in self.axes:
             self.moves.reset(ax)
@@ -420,7 +314,6 @@ class Machine:
         the PLC removes each axis' enables (DriveOn, TorquePermission) once it has braked and
         settled (stop category 1)."""
         self.ctx.estop = True
-        self._queue.clear()
         stop = self.log(Code.EMERGENCY_STOP)  # one error, the active one of every axis
         self.channel.abort(stop)  # the path axes brake on their own, leaving the path
         for ax in self.axes:
@@ -435,217 +328,13 @@ class Machine:
         )
         self.log(Code.EV_PLC_MODE, "", f"PLC {mode}")
 
-    # --- MDI and the external command channel -------------------------------------------
-    def _mdi(self, text: str, serial: int) -> Outcome:
-        """Queue one block and start it when the queue is free: a block that does not parse
-        is invalid (with the column), one that fails while starting is refused with its job
-        error, one that started or waits behind a running block is accepted."""
-        if self.channel.state in _PROGRAM_ACTIVE:
-            return Refused(serial, self.motion.fail(None, Code.AXIS_BUSY, "a program is running"))
-        bid = self._next_id
-        self._next_id += 1
-        names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
-        spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
-        try:
-            block = parse_block(text, names, spindles)
-        except BlockError as e:
-            self.log(Code.BLOCK_SYNTAX, "", f"{e.detail} (column {e.column}) in '{text}'")
-            return Invalid(serial, e.detail, e.column, int(Code.BLOCK_SYNTAX))
-        run = _BlockRun(bid, text, block)
-        self._queue.append(run)
-        self._pump()
-        if run.error is not None:
-            return Refused(serial, run.error)
-        return Accepted(serial, self.cycle, block_id=bid)
-
-    def _interpret_here(self, text: str) -> list[canon.Call]:
-        """A program's canonical calls from where the axes are now (raises ProgramError);
-        the calls of the last load are reused while the axes have not moved since."""
-        names = [a.name for a in self.axes if a.kind is not AxisKind.SPINDLE]
-        spindles = [a.name for a in self.axes if a.kind is AxisKind.SPINDLE]
-        start = {a.name: float(self.k.st[a.slot, L.S_P_CMD]) for a in self.axes}
-        key = (text, tuple(start.items()))
-        if self._interpreted is not None and self._interpreted[0] == key:
-            return self._interpreted[1]
-        sink = ListSink()
-        interpret(text, sink, names, spindles, start)
-        self._interpreted = (key, sink.calls)
-        return sink.calls
-
-    def _program_load(self, name: str, text: str, serial: int) -> Outcome:
-        """Check a program by interpreting it from here; keep it when it has no error."""
-        if self.channel.state in _PROGRAM_ACTIVE:
-            return Refused(serial, self.motion.fail(None, Code.AXIS_BUSY, "a program is running"))
-        try:
-            self._interpret_here(text)
-        except ProgramError as e:
-            self.log(Code(e.code), "", f"{name}: {e.detail}", line=e.line, column=e.column)
-            return Invalid(serial, e.detail, e.column, int(e.code), e.line)
-        self.channel.load(name, text)
-        self.log(Code.EV_PROGRAM_LOADED, "", f"program {name} loaded")
-        return Accepted(serial, self.cycle)
-
-    def _cycle_start(self) -> Event | None:
-        """Run the loaded program, or continue after feedhold or a single-block stop."""
-        ch = self.channel
-        fail = self.motion.fail
-        if ch.state in (ChannelState.HELD, ChannelState.BLOCK_END):
-            if self.channel_units["feedhold"]:
-                return fail(None, Code.CHANNEL_ERROR_STATE, "feedhold is on")
-            ch.resume()
-            return None
-        if ch.state is ChannelState.RUNNING:
-            return None
-        if self.estop:
-            return fail(None, Code.CHANNEL_ERROR_STATE, "emergency stop active")
-        if ch.state is ChannelState.IDLE:
-            return fail(None, Code.CHANNEL_ERROR_STATE, "no program loaded")
-        if ch.state is ChannelState.ERROR:
-            return fail(None, Code.CHANNEL_ERROR_STATE, "reset first")
-        if self._queue:
-            return fail(None, Code.AXIS_BUSY, "MDI blocks are running")
-        if ch.braking:
-            return fail(None, Code.AXIS_BUSY, "the stopped program's path is still braking")
-        try:
-            ch.start()
-        except ProgramError as e:
-            return self.log(Code(e.code), "", e.detail, line=e.line, column=e.column)
-        self.log(
-            Code.EV_PROGRAM_START,
-            "",
-            f"program {ch.progress.program.name if ch.progress.program else ''}",
-        )
-        # the start may have ended in a job error at once (an axis not ready, a limit)
-        return ch.progress.error
-
-    def _channel_error(self, ev: Event | None) -> None:
-        """A job error stops the program: the path axes brake on their own."""
-        self.channel.abort(ev)
-        for a in self.ch_host.path_axes:
-            if a.state is AxisState.MOVING:
-                self.moves.stop(a, Motion.FEED)
-
-    def _abort_block(self, ax: Axis) -> None:
+    def _axis_failed(self, ax: Axis) -> None:
+        """An axis' motion ended in a job error: the program or MDI block it moved for stops."""
         on_path = self.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS
-        mdi = bool(self._queue) and self._queue[0].id == ax.block_id
-        if self.channel.state in _PROGRAM_ACTIVE and (
-            on_path or (ax.block_id is not None and not mdi)
-        ):
-            ax.block_id = None
-            self._channel_error(ax.error_event)
-            return
-        if ax.block_id is not None and self._queue and self._queue[0].id == ax.block_id:
-            self._queue.popleft()
+        failed = ax.block_id is not None or on_path
         ax.block_id = None
-
-    def _pump(self) -> None:
-        """Start the head block when possible; finish it when its motions and Ms are done."""
-        while self._queue:
-            run = self._queue[0]
-            if not run.started:
-                run.started = True
-                seen = self.events.cursor
-                ok = self._start_block(run)
-                aborted = not self._queue or self._queue[0] is not run
-                if aborted or not ok:  # the first job error it raised is its refusal
-                    run.error = next((e for e in self.events.since(seen).entries if e.error), None)
-                if aborted:
-                    continue
-                if not ok:
-                    self._queue.popleft()
-                    continue
-            mine = [a for a in self.axes if a.block_id == run.id]
-            if run.homing and all(a.kind is AxisKind.SPINDLE for a in mine):
-                # the previous order group is homed (a spindle homes unsynchronised [000 §2.7])
-                if not self._home_next(run):
-                    self._queue.popleft()
-                continue
-            if mine or run.waiting_m > 0:
-                return
-            self._queue.popleft()
-            self.log(Code.EV_BLOCK_DONE, "", run.text)
-
-    def _start_block(self, run: _BlockRun) -> bool:
-        b = run.block
-        assert b is not None
-        if b.slope_type is not None:
-            self.slope = b.slope_type
-        if b.tool is not None:
-            tool_dynamics(self.sp, self.axes, b.tool)
-        for m in b.m_functions:
-            if m in (2, 30):
-                program_end(self.sp, self.axes)
-            self._m_output(m, "", run)
-        gear = None
-        if b.gear is not None:
-            if self.gear_change_enabled:
-                gear = b.gear - 39
-            else:  # M40-M45 are free M functions without gear change (P-CHAN-00052)
-                self._m_output(b.gear, "", run)
-        main_done = False
-        for sc in b.spindles:
-            ax = self.axis(sc.spindle)
-            is_main = ax.name == self.main_spindle
-            main_done |= is_main
-            if ax.kind is not AxisKind.SPINDLE:
-                self.motion.fail(ax, Code.NOT_A_SPINDLE, f"'{run.text}'")
-                return False
-            if not spindle_block(self.sp, ax, sc, gear if is_main else None, run.id):
-                return False
-            if sc.m is not None and self._synch_plc(ax, sc.m):
-                self._m_output(sc.m, ax.name, run)
-        if gear is not None and not main_done:
-            if self.main_spindle is None:
-                self.motion.fail(None, Code.GEAR_CHANGE_OFF, f"'{run.text}'")
-                return False
-            if self.sp.gears.only(self.axis(self.main_spindle), gear, run.id):
-                return False
-        if b.homing:
-            # G74 X2 Z1 S1: the lowest order digit first, equal digits together [000 §2.7]
-            orders = sorted(set(b.homing.values()))
-            run.homing = [[n for n, o in b.homing.items() if o == order] for order in orders]
-            if not self._home_next(run):
-                return False
-        if b.axes:
-            motion = Motion.RAPID if (b.motion or 0) == 0 else Motion.FEED
-            feed = b.feed / 60.0 if b.feed else None
-            for name, value in b.axes.items():
-                ax = self.axis(name)
-                target = value if b.absolute is not False else self.k.st[ax.slot, L.S_P_CMD] + value
-                moves = self.moves
-                if moves.homing_required(ax) or moves.start_move(ax, target, motion, feed, run.id):
-                    return False
-        return True
-
-    def _home_next(self, run: _BlockRun) -> bool:
-        """Start the next G74 order group of a block; False when one of them is refused."""
-        return all(self.moves.home(self.axis(n), run.id) is None for n in run.homing.pop(0))
-
-    def _synch_plc(self, ax: Axis, m: int) -> bool:
-        """M3/M4/M5/M19 with the PLC_INFO bit are output to the PLC [000 §2.5]."""
-        i = spindle_index(self.cfg, ax.name)
-        if i is None or m not in (3, 4, 5, 19):
-            return False
-        return bool(int(self.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & PLC_INFO)
-
-    def _m_output(self, m: int, axis: str, run: _BlockRun | None) -> None:
-        """An M function of a block (or a free one) to the PLC; the block waits for its
-        acknowledgement and ends with its timeout."""
-        if run is None:
-            self.handshake.output(m, axis, Waiter())
-            return
-        run.waiting_m += 1
-        bid = run.id
-
-        def acknowledged() -> None:
-            if self._queue and self._queue[0].id == bid:
-                self._queue[0].waiting_m -= 1
-
-        def timed_out(_ev: Event) -> None:
-            if self._queue and self._queue[0].id == bid:
-                self._queue.popleft()
-
-        self.handshake.output(m, axis, Waiter(acknowledged, timed_out))
+        if failed and self.channel.state in PROGRAM_ACTIVE:
+            self.ch_host.channel_error(ax.error_event)
 
     # --- the cycle boundary --------------------------------------------------------------
     def on_cycle(self, cycle: int) -> None:
@@ -669,7 +358,6 @@ class Machine:
         else:
             self.channel.pump()
         self.k.ist[self.channel_slot, L.I_STATE] = int(self.channel.state)
-        self._pump()
 
     def _drive_status(self) -> None:
         """Drive status at this cycle, and the PLC program's start-up [004 §4]: DriveOn once

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from nc_sim.axis.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.axis.state import Axis, target_and_distance
 from nc_sim.kernel import layout as L
+from nc_sim.machine.channel_ops import PROGRAM_ACTIVE
 from nc_sim.snapshot import (
     AxisSnapshot,
     ChannelSnapshot,
@@ -36,6 +37,9 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
     vel_cmd, vel_unit = display_velocity(float(st[L.S_V_CMD]), ax.kind)
     vel_act, _ = display_velocity(float(st[L.S_V_ACT]), ax.kind)
     target, to_go = target_and_distance(m.k, ax)
+    on_path = m.ch_host.block_target(ax)
+    if on_path is not None:
+        target, to_go = on_path, on_path - float(st[L.S_P_CMD])
     drive = ax.drive.reported()
     spindle = None
     if ax.kind is AxisKind.SPINDLE:
@@ -81,13 +85,17 @@ def channel_snapshot(m: Machine) -> ChannelSnapshot:
     """The channel's program state and modal state now."""
     ch = m.channel
     c = ch.progress
-    g, plane, absolute, feed = ch.modal
+    g, plane, absolute, feed = ch.modal  # of the block the program's path is in
+    if c.state not in PROGRAM_ACTIVE or c.mdi:  # what the next MDI block starts from
+        md = ch.mdi.modal
+        g, plane, absolute, feed = md.motion, md.plane, md.absolute, md.feed_mm_min
     return ChannelSnapshot(
         state=c.state,
         program=c.program.name if c.program else None,
         block_line=c.block_line,
         blocks_done=c.blocks_done,
         single_block=c.single_block,
+        mdi=c.mdi,
         modal=ModalSnapshot(
             motion=g, plane=plane, absolute=absolute, feed_mm_min=feed, slope=m.slope
         ),

@@ -1,54 +1,65 @@
-"""A spindle's part of a program block [000 §2.4-§2.8]: G135-G137 feedforward, G167, the D
-word's tool dynamics, M3/M4/M5/M19/G74/S/M40-M45, and the spindle stop at program end."""
+"""A spindle's part of a block [000 §2.4-§2.8]: its canonical calls (M3/M4/M5/M19/S with
+M40-M45, G135-G137 feedforward, G167), the D word's tool dynamics, and the spindle stop at
+program end."""
 
 from __future__ import annotations
 
 from nc_sim.axis.state import Axis, ToolLimits
-from nc_sim.blocks import SpindleCmd
+from nc_sim.channel import canon
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.spindle.control import SpindleControl
 from nc_sim.units import AxisKind
 
+SpindleCall = (
+    canon.SpindleOn
+    | canon.SpindleOff
+    | canon.SpindleOrient
+    | canon.SpindleSpeed
+    | canon.SpindleSettings
+)
 
-def spindle_block(
-    sp: SpindleControl, ax: Axis, sc: SpindleCmd, gear: int | None, block_id: int
-) -> bool:
-    """One spindle's part of an MDI block; False when it ended in a job error."""
-    for g in sc.g:
-        if g == 167:  # override off until the next S[REV..] [000 §2.4.1]
-            ax.override_suppressed = True
-        elif g == 135:
+
+def spindle_call(sp: SpindleControl, ax: Axis, call: SpindleCall, block_id: int) -> Event | None:
+    """Carry out one spindle call of a block on `ax`; the job error when it was refused."""
+    match call:
+        case canon.SpindleSettings():
+            _settings(sp, ax, call)
+            return None
+        case canon.SpindleOn():
+            if call.speed_rpm is not None:
+                ax.override_suppressed = call.override_off
+            return sp.endless(ax, call.m, call.speed_rpm, call.gear, block_id)
+        case canon.SpindleOff():
+            sp.m5(ax)
+            return None
+        case canon.SpindleOrient():
+            return sp.position(ax, call.pos_deg or 0.0, call.direction, call.speed_rpm, block_id)
+        case canon.SpindleSpeed():
+            ax.override_suppressed = call.override_off
+            return sp.speed(ax, call.speed_rpm, call.gear, block_id)
+
+
+def _settings(sp: SpindleControl, ax: Axis, call: canon.SpindleSettings) -> None:
+    """G135-G137 feedforward, G167 override off, DEFAULT_DYNAMIC_DATA."""
+    if call.feedforward == 135:
+        ax.ff_weight = ax.ff_set
+    elif call.feedforward == 136:
+        if call.ff_weight_pct is not None:
+            ax.ff_set = call.ff_weight_pct / 100.0
+        if ax.ff_weight > 0:
             ax.ff_weight = ax.ff_set
-        elif g == 136:
-            if sc.ff_weight is not None:
-                ax.ff_set = max(0.0, min(sc.ff_weight, 100.0)) / 100.0
-            if ax.ff_weight > 0:
-                ax.ff_weight = ax.ff_set
-        elif g == 137:
-            ax.ff_weight = 0.0
+    elif call.feedforward == 137:
+        ax.ff_weight = 0.0
+    if call.feedforward is not None:
         sp.motion.set_feedforward(ax, ax.ff_weight)
-    if sc.speed_rpm is not None and 167 not in sc.g and sc.m != 19:
-        ax.override_suppressed = False
-    if sc.default_dynamics:
+    if call.override_off:  # until the next programmed speed [000 §2.4.1]
+        ax.override_suppressed = True
+    if call.default_dynamics:
         ax.tool_pending = ToolLimits()
         sp.motion.log(Code.EV_TOOL_DYNAMICS, ax.name, f"{ax.name} default dynamics pending")
-    err: Event | None = None
-    if sc.m in (3, 4):
-        err = sp.endless(ax, sc.m, sc.speed_rpm, gear, block_id)
-    elif sc.m == 5:
-        sp.m5(ax)
-    elif sc.m == 19:
-        err = sp.position(ax, sc.pos_deg or 0.0, sc.direction, sc.speed_rpm, block_id)
-    elif 74 in sc.g:
-        err = sp.home(ax, block_id)
-    elif sc.speed_rpm is not None:
-        err = sp.speed(ax, sc.speed_rpm, gear, block_id)
-    elif gear is not None:
-        err = sp.gears.only(ax, gear, block_id)
-    elif sc.g:  # G135-G137, G167 alone: the new weighting or override now
-        sp.replan(ax)
-    return err is None
+    if call.feedforward is not None or call.override_off:
+        sp.replan(ax)  # the new weighting or override now
 
 
 def tool_dynamics(sp: SpindleControl, axes: list[Axis], number: int) -> None:

@@ -114,19 +114,19 @@ def test_a_block_with_a_syntax_error_is_invalid_with_its_column() -> None:
     assert m.events[-1].code == Code.BLOCK_SYNTAX and m.queued_blocks == 0
 
 
-def test_a_block_queued_behind_a_running_one_is_accepted_and_fails_later_in_the_log() -> None:
-    """The second block has not started when it is accepted; its 90003 (300 m is beyond the
-    SGN32 position range, ±214748.3647 mm) comes when the first block is done."""
+def test_a_block_queued_behind_a_running_one_is_refused_and_the_one_before_runs_on() -> None:
+    """The look-ahead checks a queued block when it is prepared: 300 m is beyond the SGN32
+    position range (±214748.3647 mm), so the second block is refused with 90003 while the
+    first still runs, and the first runs to its end."""
     sim, m, _ = make()
     first = m.submit(Mdi("G01 X60 F1000"))  # 10 mm at 1000 mm/min: 0.6 s plus ramps
     queued = m.submit(Mdi("G00 X300000"))
-    assert isinstance(first, Accepted) and isinstance(queued, Accepted)
-    assert m.queued_blocks == 2
-    assert Code.SOFTWARE_LIMIT not in [e.code for e in m.events]
+    assert isinstance(first, Accepted) and isinstance(queued, Refused)
+    assert queued.code == Code.SOFTWARE_LIMIT and queued.error.axis == "X"
+    assert m.queued_blocks == 1
     record(sim, 1.5)
-    done = next(e for e in m.events if e.code == Code.EV_BLOCK_DONE)
-    late = next(e for e in m.events if e.code == Code.SOFTWARE_LIMIT)
-    assert done.message == "G01 X60 F1000" and late.cycle >= done.cycle and late.axis == "X"
+    done = [e for e in m.events if e.code == Code.EV_BLOCK_DONE]
+    assert [e.message for e in done] == ["G01 X60 F1000"]
     assert m.queued_blocks == 0 and m.k.st[m.axis("X").slot, L.S_P_CMD] == 60.0
 
 

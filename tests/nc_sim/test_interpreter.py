@@ -80,17 +80,40 @@ def test_start_position_is_where_incremental_moves_begin() -> None:
     assert sink.lines()[0] == "1: STRAIGHT_TRAVERSE X=11 Z=-3"
 
 
+def test_after_g74_the_axes_stand_at_their_reference_positions() -> None:
+    """G74 ends at kenngr.ref_pos [000 §2.7]: an incremental move and an arc centre after it
+    count from there, not from where the axis was before homing."""
+    sink = canon.ListSink()
+    text = "G74 X1\nG91 G01 X5 F100\nG90 G17 G02 X25 Y0 I5 J0\nM30"
+    interpret(text, sink, axes=("X", "Y"), start={"X": 80.0, "Y": 0.0}, home={"X": 10.0})
+    assert sink.lines()[1:3] == ["2: SET_FEED_RATE feed_mm_min=100", "2: STRAIGHT_FEED X=15 Y=0"]
+    assert sink.lines()[4] == "3: ARC_FEED X=25 Y=0 plane=17 centre=20,0 turn=-1"
+
+
+def test_g04_takes_its_time_as_x_on_a_machine_without_x() -> None:
+    """X after G04 is the dwell time in seconds, an address of its own [002 §2.6 G04]; without
+    G04 it is an unknown axis there."""
+    sink = canon.ListSink()
+    interpret("G04 X1.5\nM30", sink, axes=("Z",))
+    assert sink.lines()[0] == "1: DWELL time_s=1.5"
+    with pytest.raises(ProgramError) as err:
+        interpret("G01 X5 F100\nM30", canon.ListSink(), axes=("Z",))
+    assert (err.value.line, err.value.column) == (1, 5)
+
+
 @pytest.mark.parametrize(
     ("text", "where", "code"),
     [
         ("M17\nM30", "1:1", Code.BLOCK_SYNTAX),  # return outside a subprogram
+        ("G90 G91 X1\nM30", "1:5", Code.BLOCK_SYNTAX),  # G90 and G91 in one block
+        ("M3 S.POS=90\nM30", "1:4", Code.BLOCK_SYNTAX),  # S.POS with M3, not M19
         ("%L1\nG00 X1\n%\nL1\nM30", "1:1", Code.PROGRAM_STRUCTURE),  # no M17/M29
         ("%L1\nL1\nM17\n%\nL1\nM30", "2:1", Code.PROGRAM_STRUCTURE),  # calls itself forever
         ("G04 F2\nM30", "1:1", Code.BLOCK_SYNTAX),  # G04 takes X seconds
         ("G02 X10 F100\nM30", "1:1", Code.ARC_GEOMETRY),  # no centre, no radius
         ("G01 X1 Y2 X3 F100\nM30", "1:11", Code.BLOCK_SYNTAX),  # X twice
         ("G01 G00 X1\nM30", "1:5", Code.BLOCK_SYNTAX),  # two motion G codes
-        ("#SLOPE[TYPE=FAST]\nM30", "1:1", Code.BLOCK_SYNTAX),
+        ("#SLOPE[TYPE=FAST]\nM30", "1:8", Code.BLOCK_SYNTAX),
         ("M19 S.POS=90 S9[M3]\nM30", "1:14", Code.UNKNOWN_AXIS),
         ("G00 X\nM30", "1:5", Code.BLOCK_SYNTAX),  # address without a value
         ("S2[M3 REV-5]\nM30", "1:10", Code.BLOCK_SYNTAX),  # column inside S2[...]

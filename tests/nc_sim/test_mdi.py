@@ -1,61 +1,82 @@
-"""MDI blocks: DIN and axis-specific syntax, errors with columns."""
+"""MDI blocks through the interpreter: DIN and axis-specific syntax, modal words carried from
+block to block, errors with columns (and nothing changed by a block with an error)."""
 
 from __future__ import annotations
 
 import pytest
 
-from nc_sim.blocks import BlockError, parse_block
+from nc_sim.channel import canon
+from nc_sim.channel.interpreter import interpret_blocks
+from nc_sim.channel.modal import Modal
+from nc_sim.channel.words import ProgramError
 
 AXES, SPINDLES = ["X", "Z"], ["S1"]
 
 
+def _mdi(text: str, modal: Modal | None = None) -> list[str]:
+    sink = canon.ListSink()
+    modal = modal or Modal(position={"X": 0.0, "Z": 0.0})
+    interpret_blocks(text, sink, modal, AXES, SPINDLES)
+    return [c.text() for c in sink.calls]
+
+
 def test_din_and_axis_specific_forms() -> None:
-    b = parse_block("N10 G01 X10 Z-2.5 F500", AXES, SPINDLES)
-    assert (b.number, b.motion, b.axes, b.feed) == (10, 1, {"X": 10.0, "Z": -2.5}, 500.0)
-    assert parse_block("G74 X1 Z2", AXES).homing == {"X": 1, "Z": 2}
-    assert parse_block("#SLOPE[TYPE=TRAPEZ]", AXES).slope_type == 1
-    (s,) = parse_block("M3 S1000", AXES, SPINDLES).spindles
-    assert (s.spindle, s.m, s.speed_rpm) == ("S", 3, 1000.0)
-    (s,) = parse_block("M19 S.POS=90 M4", AXES, SPINDLES).spindles
-    assert (s.m, s.pos_deg, s.direction) == (19, 90.0, -1)
-    (s,) = parse_block("S1[M19 REV200 POS100]", AXES, SPINDLES).spindles
-    assert (s.spindle, s.m, s.speed_rpm, s.pos_deg) == ("S1", 19, 200.0, 100.0)
-    assert parse_block("S[G74]", AXES, SPINDLES).spindles[0].g == [74]
-    assert parse_block("M8", AXES).m_functions == [8]
+    assert _mdi("N10 G01 X10 Z-2.5 F500") == [
+        "SET_FEED_RATE feed_mm_min=500",
+        "STRAIGHT_FEED X=10 Z=-2.5",
+    ]
+    assert _mdi("G74 X1 Z2") == ["HOME X=1 Z=2"]
+    assert _mdi("#SLOPE[TYPE=TRAPEZ]") == ["SET_SLOPE slope_type=1"]
+    assert _mdi("M3 S1000") == ["SPINDLE_ON spindle=S m=3 speed_rpm=1000"]
+    assert _mdi("M19 S.POS=90 M4") == ["SPINDLE_ORIENT spindle=S pos_deg=90 direction=-1"]
+    assert _mdi("S1[M19 REV200 POS100]") == ["SPINDLE_ORIENT spindle=S1 pos_deg=100 speed_rpm=200"]
+    assert _mdi("S[G74]") == ["HOME S=1"]
+    assert _mdi("M8") == ["M_FUNCTION m=8"]
+    assert _mdi("S1[G136=50]") == ["SPINDLE_SETTINGS spindle=S1 feedforward=136 ff_weight_pct=50"]
+
+
+def test_modal_words_carry_over_from_block_to_block() -> None:
+    """After `G01 X60 F500` a bare `X70` is a feed move at 500 mm/min (issue 16), and G91
+    stays in force: positions add up from the end of the block before."""
+    modal = Modal(position={"X": 50.0, "Z": 0.0})
+    assert _mdi("G01 X60 F500", modal) == [
+        "SET_FEED_RATE feed_mm_min=500",
+        "STRAIGHT_FEED X=60 Z=0",
+    ]
+    assert _mdi("X70", modal) == ["STRAIGHT_FEED X=70 Z=0"]
+    assert (modal.motion, modal.feed_mm_min) == (1, 500.0)
+    _mdi("G91 Z-5", modal)
+    assert _mdi("Z-5", modal) == ["STRAIGHT_FEED X=70 Z=-10"]
+
+
+def test_a_block_with_an_error_changes_no_modal_word() -> None:
+    modal = Modal(position={"X": 0.0, "Z": 0.0})
+    with pytest.raises(ProgramError):
+        _mdi("G01 G91 X5 F300 Q", modal)
+    assert (modal.motion, modal.absolute, modal.feed_mm_min) == (0, True, None)
+    assert modal.position == {"X": 0.0, "Z": 0.0}
 
 
 @pytest.mark.parametrize(
     ("text", "column"),
     [
-        ("G01 X10 Y5", 9),
+        ("G01 X10 Y5 F100", 9),
         ("G01 X1Q", 7),
         ("S[M3 FOO]", 6),
         ("#SLOPE[TYPE=FAST]", 8),
         ("G01 X1 X2", 8),
         ("G2.5 X1", 2),
+        ("G74 X1.5", 6),
+        ("G74 X0", 6),
+        ("M3 S-1000", 5),
+        ("S[M3 REV-1000]", 9),
+        ("M19 S-5", 6),
     ],
 )
 def test_bad_blocks_name_the_column(text: str, column: int) -> None:
-    with pytest.raises(BlockError) as exc:
-        parse_block(text, AXES, SPINDLES)
-    assert exc.value.column == column
-
-
-def test_g74_digits_are_the_homing_order_and_s_is_the_main_spindle() -> None:
-    """[000 §2.7] `G74 X2 Y1 S1`: S1 homes the spindle with order 1, it is no speed."""
-    b = parse_block("G74 X2 Z1 S1", AXES, SPINDLES)
-    assert b.homing == {"X": 2, "Z": 1, "S": 1} and b.spindles == []
-    assert parse_block("G74 S1", AXES, SPINDLES).homing == {"S": 1}
-
-
-@pytest.mark.parametrize(
-    ("text", "column"),
-    [("G74 X1.5", 6), ("G74 X0", 6), ("M3 S-1000", 5), ("S[M3 REV-1000]", 9), ("M19 S-5", 6)],
-)
-def test_bad_homing_order_and_negative_speed_name_the_column(text: str, column: int) -> None:
-    with pytest.raises(BlockError) as exc:
-        parse_block(text, AXES, SPINDLES)
-    assert exc.value.column == column
+    with pytest.raises(ProgramError) as exc:
+        _mdi(text)
+    assert (exc.value.line, exc.value.column) == (1, column)
 
 
 @pytest.mark.parametrize(
@@ -69,6 +90,6 @@ def test_bad_homing_order_and_negative_speed_name_the_column(text: str, column: 
     ],
 )
 def test_numbers_are_ascii_and_finite(text: str, column: int, why: str) -> None:
-    with pytest.raises(BlockError, match=why) as exc:
-        parse_block(text, AXES, SPINDLES)
+    with pytest.raises(ProgramError, match=why) as exc:
+        _mdi(text)
     assert exc.value.column == column

@@ -35,7 +35,7 @@ def _act(m: Machine, rng: random.Random) -> None:
     if choice == 0:
         m.submit(JogStep(axis, rng.uniform(-50, 50)))
     elif choice == 1:
-        m.submit(Move(axis, rng.uniform(-200, 400), rng.random() < 0.5, rng.uniform(100, 6000)))
+        m.submit(Move(axis, rng.uniform(-200, 400), rng.random() < 0.5, rng.uniform(600, 6000)))
     elif choice == 2:
         m.submit(Mdi(rng.choice(["G74 X1 Z2", "G74 Z1 X2 S1", "G74 X1 Z1", "G74 S1"])))
     elif choice == 3:

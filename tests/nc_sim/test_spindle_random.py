@@ -95,7 +95,7 @@ def _session(seed: int) -> None:
     errors = {e.code for e in m.events if is_error(e.code)}
     assert errors <= EXPECTED_ERRORS, errors
     # after reset every command has ended: standstill, no block left, no sequence running
-    assert s.state is AxisState.STANDSTILL and s.sequence is None and not m._queue
+    assert s.state is AxisState.STANDSTILL and s.sequence is None and not m.queued_blocks
     assert abs(v[-1]) == 0.0
     # every M19 that reported its position stood inside the window there (row = cycle - 21)
     for ev in m.events:

@@ -1,9 +1,10 @@
 // The program text: a textarea with a line-number gutter kept in scroll sync, the line of a
-// syntax error marked (with a caret at its column) and the block the channel runs highlighted.
+// syntax error marked (the character at its column boxed) and the block the channel runs
+// highlighted. The marks are a layer of text laid out like the textarea (one CSS rule,
+// .prog-metrics, gives both their font, line height and padding): a mark is the line's own
+// text up to the column, invisible, so it lands where the textarea draws that character,
+// whatever the font, tabs or zoom.
 import { useEffect, useRef, useState } from "preact/hooks";
-
-const LINE_PX = 18; // as .prog-editor's line-height
-const PAD_PX = 6; // as .prog-editor textarea's padding
 
 export interface Mark {
   line: number;
@@ -24,22 +25,36 @@ export function ProgramEditor(props: {
     const t = area.current;
     const line = props.running;
     if (!t || !line) return;
-    const y = (line - 1) * LINE_PX;
-    if (y < t.scrollTop || y + LINE_PX > t.scrollTop + t.clientHeight - 2 * PAD_PX) t.scrollTop = Math.max(0, y - t.clientHeight / 3);
+    const linePx = parseFloat(getComputedStyle(t).lineHeight) || 18;
+    const y = (line - 1) * linePx;
+    if (y < t.scrollTop || y + 2 * linePx > t.scrollTop + t.clientHeight) t.scrollTop = Math.max(0, y - t.clientHeight / 3);
   }, [props.running]);
-  const lines = props.text.split("\n").length;
-  const numbers = Array.from({ length: lines }, (_, i) => i + 1).join("\n");
-  const band = (m: Mark, cls: string, id: string) => (
-    <div class={cls} data-testid={id} data-line={m.line}
-      style={{ top: `${PAD_PX + (m.line - 1) * LINE_PX - scroll.top}px`, height: `${LINE_PX}px` }}>
-      {m.column ? (
-        <span class="prog-caret" style={{ left: `calc(${PAD_PX - scroll.left}px + ${m.column - 1}ch)` }}>▲</span>
-      ) : null}
-    </div>
-  );
+  const textLines = props.text.split("\n");
+  const numbers = textLines.map((_, i) => i + 1).join("\n");
+  const shift = { transform: `translate(${-scroll.left}px, ${-scroll.top}px)` };
+  // one row of the mark layer: blank rows before it keep it on its line
+  const band = (m: Mark, cls: string, id: string) => {
+    const line = textLines[m.line - 1] ?? "";
+    const col = m.column && m.column > 0 ? m.column : 0;
+    return (
+      <div class="prog-metrics prog-layer" data-testid={id} data-line={m.line} style={shift}>
+        {"\n".repeat(m.line - 1)}
+        <span class={`prog-band ${cls}`}>
+          {col ? (
+            <>
+              <span class="prog-ghost">{line.slice(0, col - 1)}</span>
+              <span class="prog-caret" data-testid={`${id}-caret`} data-column={col}>{line.charAt(col - 1) || " "}</span>
+            </>
+          ) : (
+            " "
+          )}
+        </span>
+      </div>
+    );
+  };
   return (
     <div class="prog-editor">
-      <pre class="prog-gutter" aria-hidden="true" style={{ transform: `translateY(${-scroll.top}px)` }}>
+      <pre class="prog-gutter prog-metrics" aria-hidden="true" style={{ transform: `translateY(${-scroll.top}px)` }}>
         {numbers}
       </pre>
       <div class="prog-text">
@@ -49,6 +64,7 @@ export function ProgramEditor(props: {
         </div>
         <textarea
           ref={area}
+          class="prog-metrics"
           data-testid="program-text"
           aria-label="program text"
           spellcheck={false}

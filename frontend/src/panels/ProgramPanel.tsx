@@ -1,9 +1,10 @@
-// The program workspace: stored programs, the editor (checked on the machine as one types),
-// save, upload and download, the channel (load, cycle start, feedhold, single block, stop)
+// The program workspace: stored programs, the editor (checked on the machine as one types;
+// its draft kept per machine, and whether it is what the channel has loaded), save, upload
+// and download, the channel (load, cycle start, feedhold, single block, stop)
 // and the tool path, commanded and actual.
 import { useEffect, useRef, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
-import type { Command, ProgramInfo, ProgramPreview, Refusal } from "../api/types";
+import type { ChannelStatus, CommandResult, ProgramInfo, ProgramPreview, Refusal } from "../api/types";
 import { may } from "../state/control";
 import {
   PROGRAM_NAME,
@@ -14,29 +15,46 @@ import {
   readProgram,
   writeProgram,
 } from "../state/programs";
-import { machineId, status } from "../state/session";
+import { type Draft, NEW_NAME, NEW_PROGRAM, readDraft, writeDraft } from "../state/programDraft";
+import { machineId, send, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { ChannelControls } from "./ChannelControls";
-import { ProgramEditor } from "./ProgramEditor";
+import { type Mark, ProgramEditor } from "./ProgramEditor";
 import { ProgramList } from "./ProgramList";
 import { ToolpathPlot } from "./ToolpathPlot";
 
 const CHECK_MS = 300; // the program is checked once typing pauses this long
-const EXAMPLE = "; a new program\nG18 G90\nG00 X40 Z5\nG01 Z-20 F300\nG02 X50 Z-25 K0 I5\nG00 X80 Z5\nM30\n";
 
 const refusalOf = (e: unknown): Refusal => (e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
 
+/** How the editor's text stands to the program in the channel. */
+function syncOf(draft: Draft, ch: ChannelStatus | undefined): { state: "none" | "loaded" | "edited"; words: string } {
+  const inChannel = ch && ch.state !== "idle" ? ch.program : null;
+  if (!inChannel) return { state: "none", words: "Not loaded — the channel has no program" };
+  const l = draft.loaded;
+  if (l && l.name === inChannel && l.text === draft.text) return { state: "loaded", words: `Loaded: ${inChannel}` };
+  return { state: "edited", words: `Edited — not loaded (the channel has ${inChannel})` };
+}
+
 export function ProgramPanel() {
+  const mid = machineId.value;
   const [programs, setPrograms] = useState<ProgramInfo[]>([]);
-  const [name, setName] = useState("new_program.nc");
-  const [text, setText] = useState(EXAMPLE);
-  const [saved, setSaved] = useState<string | null>(null); // the text as stored under `name`
+  const [draft, setDraft] = useState<Draft>(() => readDraft(mid));
   const [preview, setPreview] = useState<ProgramPreview | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const [loadMark, setLoadMark] = useState<(Mark & { text: string }) | null>(null); // a refused load's error
   const [note, setNote] = useState("");
   const file = useRef<HTMLInputElement>(null);
   const ask = useRef(0);
+  const { name, text, saved } = draft;
+  const update = (patch: Partial<Draft>) =>
+    setDraft((d) => {
+      const next = { ...d, ...patch };
+      writeDraft(mid, next);
+      return next;
+    });
+  useEffect(() => setDraft(readDraft(mid)), [mid]); // each machine has its own draft
 
   const refresh = () =>
     listPrograms()
@@ -47,7 +65,7 @@ export function ProgramPanel() {
   // check and draw the program on this machine as one types
   useEffect(() => {
     const n = ++ask.current;
-    if (!text.trim() || !machineId.value) {
+    if (!text.trim() || !mid) {
       setPreview(null);
       return;
     }
@@ -57,14 +75,12 @@ export function ProgramPanel() {
         .catch((e) => n === ask.current && setRefusal(refusalOf(e)));
     }, CHECK_MS);
     return () => clearTimeout(t);
-  }, [text, machineId.value]);
+  }, [text, mid]);
 
   async function open(n: string) {
     try {
       const p = await readProgram(n);
-      setName(p.name);
-      setText(p.text);
-      setSaved(p.text);
+      update({ name: p.name, text: p.text, saved: p.text });
       setRefusal(null);
       setNote(`opened ${p.name}`);
     } catch (e) {
@@ -75,7 +91,7 @@ export function ProgramPanel() {
   async function save() {
     try {
       const info = await writeProgram(name, text);
-      setSaved(text);
+      update({ saved: text });
       setRefusal(null);
       setNote(`saved ${info.name} (${info.lines} lines)`);
       await refresh();
@@ -87,7 +103,7 @@ export function ProgramPanel() {
   async function remove(n: string) {
     try {
       await deleteProgram(n);
-      if (n === name) setSaved(null);
+      if (n === name) update({ saved: null });
       setNote(`deleted ${n}`);
       await refresh();
     } catch (e) {
@@ -96,9 +112,7 @@ export function ProgramPanel() {
   }
 
   async function upload(f: File) {
-    setName(nameFromFile(f.name));
-    setText(await f.text());
-    setSaved(null);
+    update({ name: nameFromFile(f.name), text: await f.text(), saved: null });
     setNote(`read ${f.name}: not saved yet`);
   }
 
@@ -114,21 +128,36 @@ export function ProgramPanel() {
   const dirty = saved !== text;
   const writer = may("programs");
   const ch = status.value?.channel;
-  const loaded = ch?.program === name && ch?.state !== "idle";
+  const sync = syncOf(draft, ch);
+  const loaded = sync.state === "loaded"; // the editor shows what the channel runs
   // the stored program by name when the editor shows it unchanged, else the editor's text
-  const load: Command | null = badName ? null : dirty ? { type: "program_load", name, text } : { type: "program_load", name };
+  async function load(): Promise<CommandResult> {
+    const sent = text;
+    try {
+      const r = await send(dirty ? { type: "program_load", name, text } : { type: "program_load", name });
+      update({ loaded: { name, text: sent } });
+      setLoadMark(null);
+      return r;
+    } catch (e) {
+      const r = e instanceof ApiError ? e.refusal : null;
+      setLoadMark(r?.line ? { line: r.line, column: r.column ?? undefined, text: sent } : null);
+      throw e;
+    }
+  }
   const err = preview?.error ?? null;
+  // the preview's error, else where the channel refused this very text
+  const mark: Mark | null = err ?? (loadMark && loadMark.text === text ? loadMark : null);
   return (
     <Panel title="Program" id="program">
       <div class="program">
         <ProgramList programs={programs} open={saved !== null ? name : null} onOpen={(n) => void open(n)}
-          onNew={() => (setName("new_program.nc"), setText(EXAMPLE), setSaved(null), setNote(""))} onDelete={(n) => void remove(n)} />
+          onNew={() => (update({ name: NEW_NAME, text: NEW_PROGRAM, saved: null }), setNote(""))} onDelete={(n) => void remove(n)} />
         <div class="prog-main">
           <div class="row">
             <label>
               Name{" "}
               <input data-testid="program-name" value={name} aria-invalid={!!badName} title={badName}
-                onInput={(e) => setName((e.target as HTMLInputElement).value)} />
+                onInput={(e) => update({ name: (e.target as HTMLInputElement).value })} />
             </label>
             <button type="button" data-testid="program-save" disabled={!!badName || !writer}
               title={writer ? badName || "store the program under this name" : "your role may not write programs"} onClick={() => void save()}>
@@ -148,7 +177,9 @@ export function ProgramPanel() {
             </button>
             <span class="hint" data-testid="program-note">{note}</span>
           </div>
-          <ProgramEditor text={text} onInput={setText} error={err} running={loaded && ch?.state !== "ready" ? (ch?.block_line ?? null) : null} />
+          <p class={`prog-sync ${sync.state}`} data-testid="program-sync" data-state={sync.state}>{sync.words}</p>
+          <ProgramEditor text={text} onInput={(t) => update({ text: t })} error={mark}
+            running={loaded && ch?.state !== "ready" ? (ch?.block_line ?? null) : null} />
           {err ? (
             <p class="refusal" role="alert" data-testid="program-error" data-line={err.line} data-column={err.column}>
               line {err.line}, column {err.column}: {err.message} ({err.code})
@@ -157,7 +188,7 @@ export function ProgramPanel() {
             <p class="hint" data-testid="program-ok">{preview ? `no errors: ${preview.segments.length} moves` : "checking…"}</p>
           )}
           <RefusalLine refusal={refusal} id="program-store-refusal" />
-          <ChannelControls load={load} canLoad={badName} />
+          <ChannelControls load={badName ? null : load} canLoad={badName} />
         </div>
         <ToolpathPlot preview={preview} blockLine={loaded ? (ch?.block_line ?? null) : null} />
       </div>

@@ -1,15 +1,20 @@
 // The tool path in the program's plane, to scale (1 mm across = 1 mm up): the commanded path
 // from the preview (rapids dashed), and the actual path of the two axes drawn live from
-// telemetry (a bounded buffer). Wheel zooms about the pointer, drag pans, Fit resets.
+// telemetry (a bounded buffer, cleared when a new run of the program starts). Wheel zooms
+// about the pointer, drag pans, Fit resets.
 import { useEffect, useRef, useState } from "preact/hooks";
-import type { ProgramPreview } from "../api/types";
+import type { ChannelStatus, ProgramPreview } from "../api/types";
 import type { Rings } from "../state/rings";
+import { status } from "../state/session";
 import { frameListeners, unwant, want } from "../state/telemetry";
 import { fmt } from "../ui/format";
 
 const MAX_ACTUAL = 20_000; // points of the actual path kept (the oldest go first)
 const MIN_STEP_MM = 0.001; // a new actual point only once the tool moved this far
 const MARGIN_PX = 40;
+// a run continues from these states (cycle start after feedhold or a single-block stop);
+// from any other it starts anew
+const IN_A_RUN = new Set<ChannelStatus["state"]>(["running", "held", "block_end"]);
 const COLOURS = { rapid: "#7a8794", feed: "#0b63b6", current: "#f2a900", actual: "rgba(214, 39, 40, 0.75)", grid: "#e4e9ef" };
 
 interface View {
@@ -81,6 +86,20 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
     };
   }, [h, v]);
 
+  // a new run draws its own actual path: the trace of the runs before it is dropped (the
+  // status may skip "running" for a short block, so any entry into a run counts)
+  const runState = status.value?.channel.state;
+  const lastState = useRef(runState);
+  useEffect(() => {
+    const before = lastState.current;
+    lastState.current = runState;
+    if (runState && before && IN_A_RUN.has(runState) && !IN_A_RUN.has(before)) {
+      const a = actual.current;
+      actual.current = a.length ? a.slice(-2) : []; // from where the tool stands
+      dirty.current = true;
+    }
+  }, [runState]);
+
   useEffect(() => {
     dirty.current = true;
   }, [props.preview, props.blockLine]);
@@ -109,6 +128,9 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
       const ctx = el.getContext("2d");
       if (!ctx) return;
       paint(ctx, dpr, w, ht, view.current, props.preview, props.blockLine, actual.current);
+      const a = actual.current; // for tests and tools: how much of the actual path is drawn, from where
+      el.dataset.actualPoints = String(a.length / 2);
+      el.dataset.actualFrom = a.length ? `${a[0].toFixed(3)} ${a[1].toFixed(3)}` : "";
     };
     raf = requestAnimationFrame(draw);
     return () => cancelAnimationFrame(raf);
