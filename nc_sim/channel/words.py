@@ -51,7 +51,7 @@ class Word(NamedTuple):
     column: int
 
 
-@dataclass
+@dataclass(slots=True)
 class Line:
     """The parts of one line; `empty` when it holds nothing but comments."""
 
