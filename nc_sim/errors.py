@@ -39,6 +39,7 @@ class Code(IntEnum):
     JOG_FEED_TOO_HIGH = 90025  # [002 §2.6.1] above the G200 maximum handbetrieb.hb.vb_max
     ARC_GEOMETRY = 90026  # G02/G03 whose start and end radii differ, or no centre or radius
     PROGRAM_STRUCTURE = 90027  # subprogram undefined or not ended, no program end, nesting
+    FEEDHOLD_ACTIVE = 90028  # cycle start while the HLI feedhold holds the channel
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -100,6 +101,7 @@ MESSAGES: dict[Code, str] = {
     "or radius (R) programmed",
     Code.PROGRAM_STRUCTURE: "program structure: subprogram not defined or without M17/M29, "
     "program without M30/M02, or subprograms nested too deep",
+    Code.FEEDHOLD_ACTIVE: "feedhold is on: the channel goes on when feedhold is released",
     Code.EV_BLOCK_DONE: "block done",
     Code.EV_M_OUTPUT: "M function output to the PLC",
     Code.EV_M_ACK: "M function acknowledged by the PLC",

@@ -73,7 +73,10 @@ class Moves:
         return v
 
     def replan(self, ax: Axis) -> None:
-        """Re-plan the active motion from the current state (override, feedhold release)."""
+        """Re-plan the active motion from the current state (override, feedhold release);
+        an axis on the channel's path moves with the path's plan."""
+        if self.motion.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS:
+            return
         if not self.as_axis(ax):
             self.spindle.replan(ax)
             return
@@ -98,6 +101,7 @@ class Moves:
         for ax in axes:
             if (
                 self.as_axis(ax)
+                and self.motion.k.ist[ax.slot, L.I_ROLE] != L.ROLE_PATH_AXIS  # the path holds
                 and ax.state in (AxisState.MOVING, AxisState.JOG, AxisState.HOMING)
                 and ax.motion is not None
             ):

@@ -10,7 +10,7 @@ program end) wait until every queued element has run; the others go along with t
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from nc_sim.channel import canon
 from nc_sim.channel.execution import Execution, Step, describe
@@ -60,6 +60,7 @@ class Channel:
         self.feed_scale = 1.0 / 60.0  # F (mm/min) -> mm/s, times the override
         self.override = 1.0
         self.mdi = MdiQueue()
+        self.feedhold = False  # the channel's HLI feedhold (the machine sets it)
         self.aborted_with: Event | None = None  # the job error of the last abort
 
     # --- commands -------------------------------------------------------------------------
@@ -91,7 +92,13 @@ class Channel:
         self.progress.blocks_done = 0
         self.progress.error = None
         self.progress.state = ChannelState.RUNNING
+        self._held_if_feedhold()
         self.pump()
+
+    def _held_if_feedhold(self) -> None:
+        """A start with feedhold on waits in HELD until feedhold is released."""
+        if self.feedhold:
+            self.progress.state = ChannelState.HELD
 
     def mdi_modal(self) -> Modal:
         """The modal state the next MDI block starts from (after the blocks queued, else
@@ -115,6 +122,7 @@ class Channel:
             self.step_granted = True
             self.progress.mdi = True
             self.progress.state = ChannelState.RUNNING
+            self._held_if_feedhold()
         assert self.ex is not None
         self.ex.mdi_blocks.append((block_id, calls))
         self.mdi.add(block_id, text)
@@ -152,7 +160,10 @@ class Channel:
 
     def stop(self) -> None:
         """Brake on the path and rewind (the path ends where it stopped)."""
-        if self.path.count:  # once at rest, the axes are given back (on_path_events)
+        if self.path.count and self.path.at_rest():  # held already: give the axes back now
+            self.path.finish()
+            self.host.path_moving(None)
+        elif self.path.count:  # once at rest, the axes are given back (on_path_events)
             self.path.hold(self.host.hold_limits(self.path.current))
         self._rewind(ChannelState.READY)
 
@@ -165,7 +176,10 @@ class Channel:
         if error is not None and self.progress.mdi:
             self._rewind(ChannelState.READY)  # MDI leaves no program in error
             return
+        line = self.progress.block_line
         self._rewind(ChannelState.ERROR if error is not None else ChannelState.READY)
+        if error is not None and error.line is None and line is not None:
+            error = replace(error, line=line)  # the program line it stopped in
         self.progress.error = error
         if error is None and self.progress.program is None:
             self.progress.state = ChannelState.IDLE
@@ -187,6 +201,9 @@ class Channel:
             self.mdi.clear()
             self.progress.block_line = None
             state = self.mdi.return_to
+        else:  # MDI goes on with the modal words the program left
+            md = self.mdi.modal
+            md.motion, md.plane, md.absolute, md.feed_mm_min = self.modal
         self.progress.state = state if self.progress.program else ChannelState.IDLE
 
     # --- the cycle boundary ---------------------------------------------------------------
@@ -390,8 +407,8 @@ class Channel:
 
     def replan(self) -> None:
         """Plan the window again (new blocks, override, feedhold released)."""
-        if self.progress.state is ChannelState.HELD or not self.path.count:
-            return
+        if self.progress.state is ChannelState.HELD or not self.path.count or self.ex is None:
+            return  # (held, empty, or stopped and braking)
         self.path.replan(
             self.host.dynamics,
             self.feed_scale * self.override,

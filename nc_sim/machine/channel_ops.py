@@ -123,7 +123,7 @@ class ChannelOps:
         fail = m.motion.fail
         if ch.state in (ChannelState.HELD, ChannelState.BLOCK_END):
             if m.channel_units["feedhold"]:
-                return fail(None, Code.CHANNEL_ERROR_STATE, "feedhold is on")
+                return fail(None, Code.FEEDHOLD_ACTIVE)
             ch.resume()
             return None
         if ch.progress.mdi:

@@ -85,6 +85,7 @@ class Panel:
             cap = self.m.cfg.channel_eng("max_vb_override")
             self.m.channel.override = min(self.m.channel_units["override"] * 1e-3, cap)
             self.m.channel.replan()
+        self.m.channel.feedhold = bool(self.m.channel_units["feedhold"])
         if unit == "feedhold" and bool(value) != bool(old):
             if value:
                 self.m.channel.hold()

@@ -126,6 +126,20 @@ def test_bad_mdi_block_shows_the_error_under_its_column(page: Page) -> None:
     shot(page, "mdi-error-desktop")
 
 
+def test_mdi_shows_it_runs_and_the_modal_words_the_next_block_inherits(page: Page) -> None:
+    """`G01 X60 F500` then a bare `X70`: the MDI panel says the block runs, then shows
+    G01 … F500 in force, and X70 moves X at the feed (issue 16: modal words carry over)."""
+    panel = page.get_by_test_id("panel-mdi")
+    state = panel.get_by_test_id("mdi-state")
+    mdi(page, "G01 X60 F500")
+    expect(state).to_have_attribute("data-mdi", "1", timeout=5_000)
+    expect(state).to_have_attribute("data-mdi", "0", timeout=10_000)
+    expect(panel.get_by_test_id("mdi-modal")).to_have_text("G01 G17 G90 F500")
+    mdi(page, "X70")
+    expect(state).to_have_attribute("data-mdi", "1", timeout=5_000)
+    expect(state).to_have_attribute("data-mdi", "0", timeout=10_000)
+
+
 def test_job_error_is_shown_as_a_banner_until_acknowledged(page: Page) -> None:
     page.get_by_test_id("tab-HLI / PLC").click()
     drive_on = page.get_by_test_id("hli-X-DriveOn").locator("input")

@@ -18,8 +18,10 @@ from nc_sim.commands import (
     JogStep,
     ProgramLoad,
     ProgramStop,
+    Refused,
     SingleBlock,
 )
+from nc_sim.errors import Code
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation
 from nc_sim.snapshot import ChannelState
@@ -239,3 +241,54 @@ def test_stop_brakes_on_the_path_and_gives_the_axes_back() -> None:
     assert isinstance(m.submit(JogStep("X", 1.0)), Accepted)  # the axis is free again
     rec = record(sim, 2.0)
     assert rec[-1, x.slot, L.R_P_CMD] == pytest.approx(px[-1] + 1.0)
+
+
+def test_stop_in_feedhold_ends_the_run_where_it_holds_and_nothing_moves_afterwards() -> None:
+    """Stop while held: the path is at rest, so the axes are given back at once; releasing
+    feedhold or switching single block must not run the rest of the stopped block."""
+    sim, m, _cfg = make()
+    m.submit(ProgramLoad("stop", "G01 X90 Z-80 F1200\nM30\n"))
+    m.submit(CycleStart())
+    record(sim, 1.0)
+    m.submit(Feedhold(True))
+    record(sim, 1.0)
+    m.submit(ProgramStop())
+    x, z = m.axis("X"), m.axis("Z")
+    held_at = (m.k.st[x.slot, L.S_P_CMD], m.k.st[z.slot, L.S_P_CMD])
+    assert x.state.name == z.state.name == "STANDSTILL"
+    m.submit(Feedhold(False))
+    m.submit(SingleBlock(True))
+    rec = record(sim, 2.0)
+    assert np.all(rec[:, x.slot, L.R_V_CMD] == 0.0) and np.all(rec[:, z.slot, L.R_V_CMD] == 0.0)
+    assert (m.k.st[x.slot, L.S_P_CMD], m.k.st[z.slot, L.S_P_CMD]) == held_at
+    assert isinstance(m.submit(CycleStart()), Accepted)  # a new run may start
+
+
+def test_cycle_start_under_feedhold_waits_held_and_runs_when_it_is_released() -> None:
+    sim, m, _cfg = make()
+    x = m.axis("X")
+    m.submit(Feedhold(True))
+    m.submit(ProgramLoad("fh", "G01 X60 F1200\nM30\n"))
+    assert isinstance(m.submit(CycleStart()), Accepted)
+    rec = record(sim, 1.0)
+    assert m.channel.state is ChannelState.HELD and np.all(rec[:, x.slot, L.R_V_CMD] == 0.0)
+    refused = m.submit(CycleStart())
+    assert isinstance(refused, Refused) and refused.code == Code.FEEDHOLD_ACTIVE
+    m.submit(Feedhold(False))
+    record(sim, 3.0)
+    assert (
+        m.k.st[x.slot, L.S_P_CMD] == pytest.approx(60.0) and m.channel.state is ChannelState.READY
+    )
+
+
+def test_a_job_error_during_a_run_names_the_line_and_mdi_keeps_the_programs_modal_words() -> None:
+    """M3 S20000 fits no gear stage (above M45's 7000 rpm): the run stops at line 3 with
+    90017, and the G18 G01 F400 of lines 1-2 stay in force for MDI."""
+    sim, m, _cfg = make()
+    m.submit(ProgramLoad("err", "G18 G01 X55 F400\nZ-95\nM3 S20000\nM30\n"))
+    m.submit(CycleStart())
+    record(sim, 5.0)
+    ch = m.snapshot().channel
+    assert ch.state is ChannelState.ERROR and ch.error is not None
+    assert (ch.error.code, ch.error.line) == (Code.GEAR_NO_RANGE, 3)
+    assert (ch.modal.motion, ch.modal.plane, ch.modal.feed_mm_min) == (1, 18, 400.0)

@@ -68,6 +68,7 @@ export function MdiPanel() {
         </pre>
       ) : null}
       <RefusalLine refusal={cmd.refusal} id="mdi-refusal" />
+      <MdiState />
       {history.length ? (
         <ol class="history" aria-label="MDI history">
           {history.slice(0, 8).map((b) => (
@@ -80,5 +81,23 @@ export function MdiPanel() {
         </ol>
       ) : null}
     </Panel>
+  );
+}
+
+/** What MDI runs and which modal words the next block starts from (they carry over). */
+function MdiState() {
+  const s = status.value;
+  const ch = s?.channel;
+  if (!s || !ch) return null;
+  const md = ch.modal;
+  const words = [md.motion, md.plane, md.distance, md.feed_mm_min != null ? `F${md.feed_mm_min}` : "no F"].join(" ");
+  const running = ch.mdi ? `running, ${s.queued_blocks} block${s.queued_blocks === 1 ? "" : "s"} queued` : "idle";
+  const held = ch.mdi && ch.state === "held" ? " (feedhold)" : "";
+  return (
+    <p class="mdi-state muted" data-testid="mdi-state" data-mdi={ch.mdi ? "1" : "0"}
+      title="MDI blocks run through the channel; G00-G03, G17-G19, G90/G91 and F carry over to the next block (reset: G00 G17 G90, no F)">
+      MDI {running}{held} · in force: <span data-testid="mdi-modal">{words}</span>
+      {ch.mdi && ch.waiting_for ? ` · waiting for ${ch.waiting_for}` : ""}
+    </p>
   );
 }
