@@ -211,6 +211,11 @@ class _Block:
             )
 
     def _spindle(self) -> None:
+        lexed = self.lexed
+        if not (self.m or "S" in self.addr or lexed.positions or lexed.specific) and not any(
+            g in SPINDLE_G for g in self.g
+        ):
+            return  # no spindle word in this block
         words = SpindleWords(self.line, self.run_.spindles, self.error)
         gear: Word | None = None
         for m, w in self.m:

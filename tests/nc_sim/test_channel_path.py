@@ -276,9 +276,8 @@ def test_cycle_start_under_feedhold_waits_held_and_runs_when_it_is_released() ->
     assert isinstance(refused, Refused) and refused.code == Code.FEEDHOLD_ACTIVE
     m.submit(Feedhold(False))
     record(sim, 3.0)
-    assert (
-        m.k.st[x.slot, L.S_P_CMD] == pytest.approx(60.0) and m.channel.state is ChannelState.READY
-    )
+    state: ChannelState = m.channel.state  # (mypy narrowed it to HELD above)
+    assert m.k.st[x.slot, L.S_P_CMD] == pytest.approx(60.0) and state is ChannelState.READY
 
 
 def test_a_job_error_during_a_run_names_the_line_and_mdi_keeps_the_programs_modal_words() -> None:
