@@ -35,7 +35,7 @@ class Element:
     # (i0, i1, cx, cy, r, phi0, dphi): plane axes' indexes, centre, radius, angles (rad)
     exact_stop: bool = False  # G60: the path stops at its end
     s0: float = 0.0  # path length at its start (set when queued)
-    block_id: int = 0  # the channel's number of the block (for actions bound to it)
+    block_id: int = 0  # the MDI block it belongs to (0 in a program)
     modal: tuple[int, int, bool, float | None] = (0, 17, True, None)  # G, plane, G90, F
     actions: list[tuple[canon.Call, int]] = field(default_factory=list)  # start on leaving it
 

@@ -20,7 +20,7 @@ class ChannelHost(Protocol):
     def cycle(self) -> int: ...
 
     def new_action_id(self) -> int:
-        """A number for an action, unique among the machine's blocks and actions."""
+        """A number for an action, unique among the machine's actions."""
 
     def start_action(self, call: canon.Call, action_id: int) -> Event | None:
         """Start a non-motion call; the job error (logged) when it failed."""

@@ -33,7 +33,6 @@ class _Spindle:
     name: str
     column: int
     m: int | None = None  # 3, 4, 5, 19
-    m_column: int = 0
     speed_rpm: float | None = None
     pos_deg: float | None = None
     pos_column: int = 0
@@ -67,7 +66,7 @@ class SpindleWords:
     def m_function(self, sp: _Spindle, m: int, col: int) -> None:
         """M3/M4 next to M19 give the positioning direction [000 §2.3.2]."""
         if sp.m is None:
-            sp.m, sp.m_column = m, col
+            sp.m = m
         elif {sp.m, m} in ({19, 3}, {19, 4}) and sp.direction is None:
             sp.direction = 1 if 3 in (sp.m, m) else -1
             sp.m = 19

@@ -59,7 +59,7 @@ class MachineChannelHost:
         return self.next_id - 1
 
     def spindle_name(self, name: str) -> str:
-        return self.m.main_spindle or name if name == "S" else name
+        return (self.m.main_spindle or name) if name == "S" else name
 
     def block_done(self, block_id: int, text: str) -> None:
         self.m.log(Code.EV_BLOCK_DONE, "", text)
