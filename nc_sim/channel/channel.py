@@ -193,6 +193,7 @@ class Channel:
         self.mdi.reset_modal()
 
     def _rewind(self, state: ChannelState) -> None:
+        program_ran = self.ex is not None and not self.progress.mdi
         self.ex = None
         self.wait = None
         self.progress.waiting_for = None
@@ -201,7 +202,7 @@ class Channel:
             self.mdi.clear()
             self.progress.block_line = None
             state = self.mdi.return_to
-        else:  # MDI goes on with the modal words the program left
+        elif program_ran:  # MDI goes on with the modal words the program left
             md = self.mdi.modal
             md.motion, md.plane, md.absolute, md.feed_mm_min = self.modal
         self.progress.state = state if self.progress.program else ChannelState.IDLE

@@ -7,7 +7,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nc_sim.commands import Accepted, CycleStart, Mdi, ProgramLoad, Refused, Reset
+from nc_sim.commands import (
+    Accepted,
+    CycleStart,
+    EmergencyStop,
+    Mdi,
+    ProgramLoad,
+    Refused,
+    Reset,
+)
 from nc_sim.errors import Code
 from nc_sim.snapshot import ChannelState
 from tests.nc_sim.sim_helpers import L, make, mdi, record
@@ -97,3 +105,15 @@ def test_an_mdi_block_is_refused_while_a_program_runs() -> None:
     record(sim, 0.1)
     out = m.submit(Mdi("G01 Z-90 F600"))
     assert isinstance(out, Refused) and out.code == Code.AXIS_BUSY
+
+
+def test_an_emergency_stop_while_idle_keeps_the_modal_words_mdi_set() -> None:
+    """G91 typed alone stays in force: an E-stop with nothing running ends no program, so
+    nothing replaces MDI's modal words (only a reset sets them back)."""
+    sim, m, _ = make()
+    mdi(m, "G01 X60 F500")
+    record(sim, 2.0)
+    mdi(m, "G91")
+    m.submit(EmergencyStop())
+    modal = m.snapshot().channel.modal
+    assert (modal.motion, modal.absolute, modal.feed_mm_min) == (1, False, 500.0)
