@@ -88,6 +88,34 @@ class ArcFeed(Call):
 
 
 @dataclass(frozen=True)
+class ThreadFeed(Call):
+    """G33 thread cutting [000 §2.8.7]: straight to `end` with the path synchronised to the
+    zero passage of the endlessly rotating `spindle`. `pitch_mm` (K, I or J: modal) is the
+    lead per revolution measured along `pitch_axis` (K: Z, I: X, J: Y); the cut starts
+    `offset_deg` (S.OFFSET=, modal) after the zero passage, for multi-start threads."""
+
+    end: tuple[tuple[str, float], ...]
+    spindle: str
+    pitch_mm: float
+    pitch_axis: str
+    offset_deg: float = 0.0
+    absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
+
+
+@dataclass(frozen=True)
+class TapFeed(Call):
+    """G63 tapping without compensating chuck [000 §2.8.6]: straight to `end` with the path
+    coupled to `spindle`, which turns at `speed_rpm` (the last S; negative: left-hand thread
+    or retract); the pitch is `feed_mm_min` (the last F) / |S| mm per revolution."""
+
+    end: tuple[tuple[str, float], ...]
+    spindle: str
+    speed_rpm: float
+    feed_mm_min: float
+    absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
+
+
+@dataclass(frozen=True)
 class SetFeedRate(Call):
     """F: path feed in mm/min (modal)."""
 
@@ -215,6 +243,8 @@ _NAMES: dict[type[Call], str] = {
     StraightTraverse: "STRAIGHT_TRAVERSE",
     StraightFeed: "STRAIGHT_FEED",
     ArcFeed: "ARC_FEED",
+    ThreadFeed: "THREAD_FEED",
+    TapFeed: "TAP_FEED",
     SetFeedRate: "SET_FEED_RATE",
     SelectPlane: "SELECT_PLANE",
     Dwell: "DWELL",
