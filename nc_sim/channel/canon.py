@@ -190,6 +190,16 @@ class SpindleOrient(Call):
 
 
 @dataclass(frozen=True)
+class RotaryMode(Call):
+    """#CAX (`rotary` True) / #CAX OFF: the main spindle `spindle` becomes the rotary path axis
+    C, or a spindle again [000 §2.3.3, 003 §4.2]. Programming C, M3/M4/M5/M19, G33 or G63
+    switch as well; the channel inserts this call where its mode has to change."""
+
+    spindle: str
+    rotary: bool
+
+
+@dataclass(frozen=True)
 class SelectGear(Call):
     """M40-M45 without a speed: gear stage 1-6 of the main spindle [000 §2.8.2]."""
 
@@ -253,6 +263,7 @@ _NAMES: dict[type[Call], str] = {
     SpindleOff: "SPINDLE_OFF",
     SpindleSettings: "SPINDLE_SETTINGS",
     SpindleOrient: "SPINDLE_ORIENT",
+    RotaryMode: "ROTARY_MODE",
     SelectGear: "SELECT_GEAR",
     SelectTool: "SELECT_TOOL",
     Home: "HOME",
