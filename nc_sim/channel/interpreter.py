@@ -1,11 +1,12 @@
 """DIN 66025 program text -> canonical calls (nc_sim/channel/canon.py), pure.
 
 `interpret(text, sink, ...)` runs the main program from its first line, subprograms (`LL name`,
-`L<n> P<repetitions>`) in place, until M30/M02. Modal words (G00-G03, G17-G19, G90/G91, F)
-carry over from block to block. A bad program raises `ProgramError` with line, column and job
-error code; calls emitted before it stay in the sink (the program stops there).
+`L<n> P<repetitions>`) in place, until M30/M02. Modal words (G00-G03, G33, G63, G17-G19,
+G51/G52, G90/G91, F, S, the G33 pitch and offset) carry over from block to block. A bad
+program raises `ProgramError` with line, column and job error code; calls emitted before it
+stay in the sink (the program stops there).
 
-Within a block the calls come in a fixed order: F, #SLOPE, T/D, M40-M45, spindle, G17-G19,
+Within a block the calls come in a fixed order: F, #SLOPE/#CAX, T/D, M40-M45, spindle, G17-G19,
 G200/G201, G04, G74, motion, other M functions, subprogram call, end (M17/M29/M30/M02). When a
 spindle function acts relative to the motion is the synchronisation type's business (000 §2.5),
 decided where the calls are consumed; they carry the block's line for that.
@@ -21,6 +22,15 @@ from nc_sim.channel import canon
 from nc_sim.channel.modal import CENTRE_LETTER, PLANES, Modal
 from nc_sim.channel.program import Program, split_program
 from nc_sim.channel.spindle_words import MAIN, SPINDLE_G, SpindleWords
+from nc_sim.channel.thread_words import (
+    REFUSED_M,
+    pitch_not_moved,
+    set_pitch,
+    set_thread_offset,
+    tap_feed,
+    tapping,
+    thread_feed,
+)
 from nc_sim.channel.words import Line, ProgramError, Word, lex_line
 from nc_sim.errors import Code
 
@@ -29,10 +39,12 @@ MAX_NESTING = 8  # subprogram levels
 _END_PROGRAM = (30, 2)
 _END_SUB = (17, 29)
 SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}  # #SLOPE[TYPE=..] (P-CHAN-00071)
-_SUPPORTED_G = (0, 1, 2, 3, 4, 17, 18, 19, 60, 74, 90, 91, 200, 201, *SPINDLE_G)
+_MOTION_G = (0, 1, 2, 3, 33, 63)  # the modal block types; G04 is not one
+_SUPPORTED_G = (4, 17, 18, 19, 51, 52, 60, 74, 90, 91, 200, 201, *_MOTION_G, *SPINDLE_G)
 _EXCLUSIVE_G = (
-    ((0, 1, 2, 3), "motion G codes"),
+    (_MOTION_G, "motion G codes"),
     ((17, 18, 19), "planes"),
+    ((51, 52), "of G51/G52"),
     ((90, 91), "of G90/G91"),
     ((200, 201), "of G200/G201"),
 )
@@ -147,6 +159,8 @@ class _Block:
         self.g: dict[int, Word] = {}
         self.m: list[tuple[int, Word]] = []
         self.addr: dict[str, Word] = {}  # one each of the other addresses
+        self.motion_g: int | None = None  # the block's G00-G03/G33/G63
+        self.mode = 0  # the motion mode in force for this block (its own G or the modal one)
 
     def error(self, detail: str, col: int, code: Code = Code.BLOCK_SYNTAX) -> ProgramError:
         return ProgramError(detail, self.line, col, code)
@@ -176,6 +190,9 @@ class _Block:
             found = [g for g in self.g if g in group]
             if len(found) > 1:
                 raise self.error(f"two {what} in one block", self.g[found[1]].column)
+            if group is _MOTION_G and found:
+                self.motion_g = found[0]
+        self.mode = self.run_.modal.motion if self.motion_g is None else self.motion_g
         self._preparatory()
         self._spindle()
         self._motion_and_g()
@@ -192,14 +209,22 @@ class _Block:
                 raise self.error("F must be positive", f.column + 1)
             self.run_.modal.feed_mm_min = f.value
             self._emit(canon.SetFeedRate(self.line, f.value))
-        for cmd, body, col in self.lexed.hashes:
-            if cmd != "SLOPE":
+        for cmd, body, col, body_col in self.lexed.hashes:
+            key = "".join((body or "").split()).upper()
+            if cmd == "SLOPE":
+                if not key.startswith("TYPE=") or key[5:] not in SLOPE_TYPES:
+                    at = col + len("#SLOPE") if body is None else body_col
+                    raise self.error(f"#SLOPE needs [TYPE= one of {', '.join(SLOPE_TYPES)}]", at)
+                self._emit(canon.SetSlope(self.line, SLOPE_TYPES[key[5:]]))
+            elif cmd in ("CAX", "CAX OFF"):
+                if key not in ("", MAIN):  # the main spindle is the one that becomes C
+                    at = body_col + len(body or "") - len((body or "").lstrip())
+                    raise self.error(
+                        f"#{cmd}[{body}]: only the main spindle S", at, Code.NOT_SUPPORTED
+                    )
+                self._emit(canon.RotaryMode(self.line, MAIN, cmd == "CAX"))
+            else:
                 raise self.error(f"#{cmd} is not supported", col, Code.NOT_SUPPORTED)
-            key = "".join(body.split()).upper()
-            if not key.startswith("TYPE=") or key[5:] not in SLOPE_TYPES:
-                body_col = col + len("#SLOPE[")
-                raise self.error(f"#SLOPE needs TYPE= one of {', '.join(SLOPE_TYPES)}", body_col)
-            self._emit(canon.SetSlope(self.line, SLOPE_TYPES[key[5:]]))
         tool, d = self.addr.get("T"), self.addr.get("D")
         if tool is not None or d is not None:
             self._emit(
@@ -216,6 +241,8 @@ class _Block:
             g in SPINDLE_G for g in self.g
         ):
             return  # no spindle word in this block
+        modal = self.run_.modal
+        tapping = self.mode == 63  # the S word is the tapping speed, not a spindle call
         words = SpindleWords(self.line, self.run_.spindles, self.error)
         gear: Word | None = None
         for m, w in self.m:
@@ -226,21 +253,32 @@ class _Block:
                     raise self.error("two gear stages M40-M45 in one block", w.column)
                 gear = w
         if (s := self.addr.get("S")) is not None and 74 not in self.g:
-            words.speed(words.spindle(MAIN, s.column), s.value, s.column + 1)
+            if tapping:  # negative: left-hand thread or out of the bore [000 §2.8.6]
+                modal.speed_rpm = s.value
+            else:
+                words.speed(words.spindle(MAIN, s.column), s.value, s.column + 1)
         for g, w in self.g.items():
             if g in SPINDLE_G:
                 words.g_word(words.spindle(MAIN, w.column), g, None, w.column)
         for name, deg, col in self.lexed.positions:
             words.position(words.spindle(name, col), deg, col)
         for name, body, col in self.lexed.specific:
+            if tapping and name == MAIN:
+                raise self.error("under G63 the main spindle takes only its S word", col)
             words.specific(name, body, col)
+        if (main := words.by_name.get(MAIN)) is not None:
+            refused = REFUSED_M.get(self.mode, ())
+            for m, col in main.m_columns.items():  # the spindle is coupled to the path
+                if m in refused:
+                    raise self.error(f"M{m} cannot be programmed under G{self.mode}", col)
+            if main.speed_rpm is not None:
+                modal.speed_rpm = main.speed_rpm
         for call in words.calls(gear):
             self._emit(call)
 
     def _motion_and_g(self) -> None:
         modal = self.run_.modal
         gs = self.g
-        motion: int | None = None
         if gs:  # most blocks of a contour have no G word (the checks are the hot path)
             for g in (17, 18, 19):
                 if g in gs:
@@ -248,9 +286,13 @@ class _Block:
                     self._emit(canon.SelectPlane(self.line, g))
             if 90 in gs or 91 in gs:
                 modal.absolute = 90 in gs
+            if 51 in gs or 52 in gs:
+                modal.diameter = 51 in gs
             for g in (200, 201):
                 if g in gs:
                     self._emit(canon.ManualMode(self.line, g))
+        if self.lexed.offsets:
+            set_thread_offset(self.lexed.offsets, self.mode, modal, self.error)
         axis_words = [self.addr[a] for a in self.run_.axes if a in self.addr]
         if gs:
             if 4 in gs:
@@ -259,32 +301,44 @@ class _Block:
             if 74 in gs:
                 self._home(axis_words)
                 return
-            for g in (0, 1, 2, 3):
-                if g in gs:
-                    motion = modal.motion = g
-                    break
-        arc_words = [self.addr[a] for a in "IJKR" if a in self.addr]
-        if not axis_words and not (arc_words and modal.motion in (2, 3)):
-            if arc_words:
-                raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+            if self.motion_g is not None:
+                modal.motion = self.motion_g
+        mode = self.mode
+        axes = self.run_.axes
+        pitch = set_pitch(self.addr, axes, modal, self.error) if mode == 33 else None
+        arc_words = [self.addr[a] for a in ("R" if mode == 33 else "IJKR") if a in self.addr]
+        if arc_words and mode not in (2, 3):
+            raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+        col = self.g[self.motion_g].column if self.motion_g is not None else 0
+        if not axis_words and not arc_words:
+            if pitch is not None:  # under G33 I/J/K are the pitch
+                raise pitch_not_moved(pitch.letter, pitch.column, self.error)
+            if mode == 63 and 63 in gs:  # G63 selected: its feed and speed are checked now
+                tapping(modal, col, self.error)
             return
-        col = self.g[motion].column if motion is not None else (axis_words + arc_words)[0].column
+        col = col or (axis_words + arc_words)[0].column
         end = dict(modal.position)
         for w in axis_words:
-            end[w.letter] = w.value if modal.absolute else modal.position[w.letter] + w.value
-        target = tuple([(a, end[a]) for a in self.run_.axes])
-        if modal.motion == 0:
-            if arc_words:
-                raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+            value = w.value / 2 if w.letter == "X" and modal.diameter else w.value
+            end[w.letter] = value if modal.absolute else modal.position[w.letter] + value
+        target = tuple([(a, end[a]) for a in axes])
+        if mode == 0:
             self._emit(canon.StraightTraverse(self.line, target, **self._motion_flags()))
+        elif mode in (33, 63):
+            if 60 in self.g:  # the spindle-coupled calls carry no exact stop
+                g60 = self.g[60].column
+                raise self.error(f"G60 cannot be programmed with G{mode}", g60, Code.NOT_SUPPORTED)
+            self._emit(
+                thread_feed(self.line, end, modal, axes, pitch, col, self.error)
+                if mode == 33
+                else tap_feed(self.line, end, modal, axes, col, self.error)
+            )
         elif modal.feed_mm_min is None:
             raise self.error("G01/G02/G03 need a feed F first", col, Code.FEED_MISSING)
-        elif modal.motion == 1:
-            if arc_words:
-                raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
+        elif mode == 1:
             self._emit(canon.StraightFeed(self.line, target, **self._motion_flags()))
         else:
-            self._arc(modal.motion, end, target, col)
+            self._arc(mode, end, target, col)
         modal.position = end
 
     def _motion_flags(self) -> dict[str, bool]:
@@ -296,7 +350,7 @@ class _Block:
         if (
             x is None
             or any(w.letter != "X" for w in axis_words)
-            or self.g.keys() & {0, 1, 2, 3, 74}
+            or self.g.keys() & {*_MOTION_G, 74}
         ):
             raise self.error("G04 takes only its dwell time X<s>", self.g[4].column)
         if x.value < 0:
@@ -304,8 +358,8 @@ class _Block:
         self._emit(canon.Dwell(self.line, x.value))
 
     def _home(self, axis_words: list[Word]) -> None:
-        if self.g.keys() & {0, 1, 2, 3}:
-            raise self.error("G74 cannot be combined with G00-G03", self.g[74].column)
+        if self.motion_g is not None:
+            raise self.error(f"G74 cannot be combined with G{self.motion_g:02d}", self.g[74].column)
         order = [(w.letter, w) for w in axis_words]
         if (s := self.addr.get("S")) is not None:
             order.append(("S", s))

@@ -11,19 +11,27 @@ PLANES: dict[int, tuple[str, str, str]] = {
     19: ("Y", "Z", "X"),
 }
 CENTRE_LETTER = {"X": "I", "Y": "J", "Z": "K"}  # incremental centre offsets per axis
+PITCH_AXIS = {"I": "X", "J": "Y", "K": "Z"}  # G33: the axis each pitch letter is measured on
 
 
 @dataclass
 class Modal:
-    """Motion mode (0-3), plane (17-19), absolute (G90) or incremental (G91), feed in mm/min.
+    """Motion mode (0-3, 33 thread cutting, 63 tapping), plane (17-19), absolute (G90) or
+    incremental (G91), diameter programming (G51) or radius (G52), feed in mm/min, the main
+    spindle's last programmed speed (G63 taps at it), the G33 pitch and offset angle.
 
-    At program start: G00, G17, G90, no feed (G01/G02/G03 need an F first); the position is
-    where the program starts (the machine's, given to the interpreter).
+    At program start: G00, G17, G90, G52, no feed (G01/G02/G03 need an F first), no speed, no
+    pitch, offset 0°; the position is where the program starts (the machine's, given to the
+    interpreter). Pitch and offset stay until the program ends [000 §2.8.7].
     """
 
     motion: int = 0
     plane: int = 17
     absolute: bool = True
+    diameter: bool = False  # G51: X words are diameters (the machine's X is the radius)
     feed_mm_min: float | None = None
+    speed_rpm: float | None = None  # last S of the main spindle; negative only from G63
+    pitch: tuple[str, float] | None = None  # G33: letter I/J/K and mm per revolution
+    thread_offset_deg: float = 0.0  # G33 S.OFFSET=, 0 <= offset < 360
     position: dict[str, float] = field(default_factory=dict)
     home_position: dict[str, float] = field(default_factory=dict)  # where G74 ends, per axis

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from nc_sim.channel import canon
 from nc_sim.channel.words import ProgramError, Word
@@ -33,6 +33,7 @@ class _Spindle:
     name: str
     column: int
     m: int | None = None  # 3, 4, 5, 19
+    m_columns: dict[int, int] = field(default_factory=dict)  # each M function's column
     speed_rpm: float | None = None
     pos_deg: float | None = None
     pos_column: int = 0
@@ -65,6 +66,7 @@ class SpindleWords:
 
     def m_function(self, sp: _Spindle, m: int, col: int) -> None:
         """M3/M4 next to M19 give the positioning direction [000 §2.3.2]."""
+        sp.m_columns.setdefault(m, col)
         if sp.m is None:
             sp.m = m
         elif {sp.m, m} in ({19, 3}, {19, 4}) and sp.direction is None:

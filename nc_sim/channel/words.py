@@ -1,7 +1,8 @@
 """Lexing one NC program line into words, with 1-based columns for errors.
 
 N10 G01 X10 F500 (comment) ; comment      /N20 ... (block skip)
-#SLOPE[TYPE=TRAPEZ]   S[M3 REV1000]   M19 S.POS=90   LL tapered thread   L123 P2
+#SLOPE[TYPE=TRAPEZ]   #CAX   #CAX OFF   S[M3 REV1000]   M19 S.POS=90   G33 Z48 K1.5 S.OFFSET=180
+LL tapered thread   L123 P2
 """
 
 from __future__ import annotations
@@ -20,10 +21,10 @@ _TOKEN = re.compile(
     r"\s*(?:"
     r"(?P<end>;|\Z)"
     r"|(?P<comment>\()"
-    r"|(?a:(?P<hash>#(?P<cmd>[A-Z_]+)\s*\[))"
+    r"|(?a:(?P<hash>#(?P<cmd>[A-Z_]+(?:[ \t]+OFF\b)?)\s*(?P<open>\[)?))"
     r"|(?a:(?P<call>LL\s+(?P<name>[^;(]*)))"
     r"|(?a:(?P<spec>(?P<sname>S[0-9]*)\[))"
-    r"|(?a:(?P<pos>(?P<pname>S[0-9]*)\.\s*POS\s*=?\s*(?P<pval>" + _NUM + r")))"
+    r"|(?a:(?P<pos>(?P<pname>S[0-9]*)\.\s*(?P<pkey>POS|OFFSET)\s*=?\s*(?P<pval>" + _NUM + r")))"
     r"|(?a:(?P<word>(?P<letter>[A-Z])\s*(?P<val>" + _NUM + r")))"
     r"|(?P<bad>[\s\S])"
     r")",
@@ -56,20 +57,22 @@ class Line:
     """The parts of one line; `empty` when it holds nothing but comments."""
 
     words: list[Word] = field(default_factory=list)
-    hashes: list[tuple[str, str, int]] = field(default_factory=list)  # (command, body, column)
+    # (command, body or None without [...], column of #, column of the body)
+    hashes: list[tuple[str, str | None, int, int]] = field(default_factory=list)
     specific: list[tuple[str, str, int]] = field(
         default_factory=list
     )  # S[..]: name, body, name col
     positions: list[tuple[str, float, int]] = field(default_factory=list)  # S.POS: name, deg, col
+    offsets: list[tuple[str, float, int]] = field(default_factory=list)  # S.OFFSET: name, deg, col
     local_call: tuple[str, int] | None = None  # LL name
     skipped: bool = False
 
     @property
     def empty(self) -> bool:
         """Nothing to do on this line."""
-        return not (self.words or self.hashes or self.specific or self.positions) and (
-            self.local_call is None
-        )
+        return not (
+            self.words or self.hashes or self.specific or self.positions or self.offsets
+        ) and (self.local_call is None)
 
 
 def _number(text: str, line: int, col: int) -> float:
@@ -118,9 +121,12 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
             if close < 0:
                 raise ProgramError("comment '(' without ')'", line, col)
             pos = close + 1
-        elif kind == "hash":
-            body, pos = _bracket_body(text, pos - 1, line, "#" + m.group("cmd"))
-            out.hashes.append((m.group("cmd").upper(), body, col))
+        elif kind == "hash":  # `#CAX OFF`: OFF is part of the command
+            cmd = " ".join(m.group("cmd").split()).upper()
+            body: str | None = None
+            if m.group("open"):
+                body, pos = _bracket_body(text, pos - 1, line, "#" + cmd)
+            out.hashes.append((cmd, body, col, m.start("open") + 2))
         elif kind == "call":  # the name runs to the comment: "LL tapered thread"
             name = " ".join(m.group("name").split()).upper()
             if not name:
@@ -129,9 +135,10 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
         elif kind == "spec":
             body, pos = _bracket_body(text, pos - 1, line, m.group("sname"))
             out.specific.append((m.group("sname").upper(), body, col))
-        elif kind == "pos":
+        elif kind == "pos":  # S.POS (M19) or S.OFFSET (G33)
             deg = _number(m.group("pval"), line, m.start("pval") + 1)
-            out.positions.append((m.group("pname").upper(), deg, col))
+            dotted = out.positions if m.group("pkey").upper() == "POS" else out.offsets
+            dotted.append((m.group("pname").upper(), deg, col))
         else:
             ch = m.group("bad")
             at = col - 1  # where ch is

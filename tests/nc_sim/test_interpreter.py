@@ -1,5 +1,7 @@
 """The interpreter against golden files: program (`interp/*.ngc`) -> canonical calls
-(`*.expected`, one `<line>: <call>` per line) or `ERROR <line>:<column> <job error>`.
+(`*.expected`, one `<line>: <call>` per line) or `ERROR <line>:<column> <job error>`. The
+channel has the axes X, Y, Z and the spindle S2 besides the main spindle S, unless the
+program's first line names its axes: `; axes: X Z C`.
 
 The expected numbers come from geometry worked by hand (the arc centres are noted in the
 programs' comments), not from the interpreter's output.
@@ -22,9 +24,16 @@ GOLDEN = Path(__file__).parent / "interp"
 PROGRAMS = sorted(GOLDEN.glob("*.ngc"))
 
 
+def _axes(text: str) -> tuple[str, ...]:
+    first = text.split("\n", 1)[0]
+    if first.startswith("; axes:"):
+        return tuple(first.removeprefix("; axes:").split())
+    return ("X", "Y", "Z")
+
+
 def _run(text: str, skip_blocks: bool = True) -> canon.ListSink:
     sink = canon.ListSink()
-    interpret(text, sink, axes=("X", "Y", "Z"), spindles=("S2",), skip_blocks=skip_blocks)
+    interpret(text, sink, axes=_axes(text), spindles=("S2",), skip_blocks=skip_blocks)
     return sink
 
 
