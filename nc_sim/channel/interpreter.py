@@ -270,7 +270,9 @@ class _Block:
             refused = REFUSED_M.get(self.mode, ())
             for m, col in main.m_columns.items():  # the spindle is coupled to the path
                 if m in refused:
-                    raise self.error(f"M{m} cannot be programmed under G{self.mode}", col)
+                    raise self.error(
+                        f"M{m} cannot be programmed under G{self.mode} (G00/G01 end it)", col
+                    )
             if main.speed_rpm is not None:
                 modal.speed_rpm = main.speed_rpm
         for call in words.calls(gear):

@@ -1,11 +1,11 @@
 """The commanded tool path of a program as polylines in one plane, for a preview plot.
 
-Pure geometry on canonical calls (nc_sim/channel/canon.py): every straight move is one
-segment from where the axes are to its end; every arc (G02/G03, a helix too) is computed in its
-own plane as points on its circle, so close together that no chord strays more than
-`CHORD_TOLERANCE_MM` from the arc (at most `MAX_ARC_POINTS` per arc), then every point is
-projected onto the plane shown. Other calls (spindle, feed, dwell, M functions) do not move the
-tool and draw nothing.
+Pure geometry on canonical calls (nc_sim/channel/canon.py): every straight move (G33 thread
+cuts and G63 tapping too) is one segment from where the axes are to its end; every arc
+(G02/G03, a helix too) is computed in its own plane as points on its circle, so close together
+that no chord strays more than `CHORD_TOLERANCE_MM` from the arc (at most `MAX_ARC_POINTS` per
+arc), then every point is projected onto the plane shown. Other calls (spindle, feed, dwell,
+M functions) do not move the tool and draw nothing.
 """
 
 from __future__ import annotations
@@ -126,7 +126,9 @@ def preview(
         return (p.get(h, 0.0), p.get(v, 0.0))
 
     for call in calls:
-        if isinstance(call, canon.StraightTraverse | canon.StraightFeed):
+        if isinstance(
+            call, canon.StraightTraverse | canon.StraightFeed | canon.ThreadFeed | canon.TapFeed
+        ):
             path = [dict(call.end)]
         elif isinstance(call, canon.ArcFeed):
             path = arc_positions(pos, call)

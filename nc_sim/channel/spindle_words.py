@@ -81,7 +81,9 @@ class SpindleWords:
         """S word or REV: the programmed speed (never negative: M3/M4 give the direction)."""
         if rpm < 0:  # a negative S reverses only under G63 tapping [000 §2.8.6], not here
             raise self.error(
-                "S must not be negative: M3/M4 give the direction", col, Code.BLOCK_SYNTAX
+                "S must not be negative: M3/M4 give the direction (G63 excepted)",
+                col,
+                Code.BLOCK_SYNTAX,
             )
         if sp.speed_rpm is not None:
             raise self.error(f"two speeds for {sp.name} in one block", col, Code.BLOCK_SYNTAX)

@@ -42,7 +42,7 @@ def set_pitch(
     addr: Mapping[str, Word], axes: tuple[str, ...], modal: Modal, error: Error
 ) -> Word | None:
     """The block's pitch word I/J/K, checked and made modal (None: the modal pitch holds)."""
-    words = [addr[c] for c in "IJK" if c in addr]
+    words = sorted((addr[c] for c in "IJK" if c in addr), key=lambda w: w.column)
     if not words:
         return None
     if len(words) > 1:

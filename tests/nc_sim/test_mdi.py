@@ -7,6 +7,7 @@ import pytest
 
 from nc_sim.channel import canon
 from nc_sim.channel.interpreter import interpret_blocks
+from nc_sim.channel.mdi import MdiQueue
 from nc_sim.channel.modal import Modal
 from nc_sim.channel.words import ProgramError
 
@@ -93,3 +94,25 @@ def test_numbers_are_ascii_and_finite(text: str, column: int, why: str) -> None:
     with pytest.raises(ProgramError, match=why) as exc:
         _mdi(text)
     assert exc.value.column == column
+
+
+def test_diameter_programming_carries_over_until_a_reset() -> None:
+    """G51 stays in force from one MDI block to the next (X words are diameters, the machine's
+    X a radius); a reset brings back G52, radius programming."""
+    queue = MdiQueue()
+    queue.modal.position = {"X": 0.0, "Z": 0.0}
+    assert _mdi("G51 G00 X40", queue.modal) == ["STRAIGHT_TRAVERSE X=20 Z=0"]
+    assert _mdi("X30", queue.modal) == ["STRAIGHT_TRAVERSE X=15 Z=0"]
+    queue.reset_modal()
+    queue.modal.position = {"X": 15.0, "Z": 0.0}
+    assert _mdi("G00 X30", queue.modal) == ["STRAIGHT_TRAVERSE X=30 Z=0"]
+
+
+def test_g63_in_mdi_taps_at_the_speed_an_earlier_block_programmed() -> None:
+    """The last S of the main spindle, also from its axis-specific form, is G63's speed
+    [000 §2.8.6]: F 300 mm/min at 200 rpm, a 1.5 mm pitch."""
+    modal = Modal(position={"X": 0.0, "Z": 0.0})
+    assert _mdi("S[M19 POS0 REV200]", modal) == ["SPINDLE_ORIENT spindle=S pos_deg=0 speed_rpm=200"]
+    assert _mdi("G63 Z-30 F300", modal)[-1] == (
+        "TAP_FEED X=0 Z=-30 spindle=S speed_rpm=200 feed_mm_min=300"
+    )

@@ -125,3 +125,17 @@ def test_a_budget_cuts_the_preview_and_says_so() -> None:
     p = preview(_calls(text), {}, ("X", "Y", "Z"), max_points=20)
     assert p.truncated and sum(len(s.points) for s in p.segments) <= 20
     assert not preview(_calls(text), {}, ("X", "Y", "Z")).truncated
+
+
+def test_thread_cuts_and_tapping_are_drawn_as_the_straight_feeds_they_are() -> None:
+    """G33 and G63 move straight to their end (a lathe, G18: Z across, X up); the G00 after
+    them starts where they ended. G51: X72 is 36 mm radius, X80 40 mm."""
+    text = "G51 G00 X72 Z105\nM3 S400\nG33 Z48 K1.5\nG00 X80\nM5\nG63 Z40 F300 S200\nM30"
+    calls = _calls(text, axes=("X", "Z"))
+    p = preview(calls, {"X": 0.0, "Z": 0.0}, ("X", "Z"))
+    assert [(s.line, s.rapid, s.points) for s in p.segments] == [
+        (1, True, [(0.0, 0.0), (105.0, 36.0)]),
+        (3, False, [(105.0, 36.0), (48.0, 36.0)]),
+        (4, True, [(48.0, 36.0), (48.0, 40.0)]),
+        (6, False, [(48.0, 40.0), (40.0, 40.0)]),
+    ]
