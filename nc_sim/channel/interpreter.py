@@ -14,12 +14,12 @@ decided where the calls are consumed; they carry the block's line for that.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
 
 from nc_sim.channel import canon
-from nc_sim.channel.modal import CENTRE_LETTER, PLANES, Modal
+from nc_sim.channel.arc_words import arc_feed
+from nc_sim.channel.modal import Modal
 from nc_sim.channel.program import Program, split_program
 from nc_sim.channel.spindle_words import MAIN, SPINDLE_G, SpindleWords
 from nc_sim.channel.thread_words import (
@@ -34,7 +34,6 @@ from nc_sim.channel.thread_words import (
 from nc_sim.channel.words import Line, ProgramError, Word, lex_line
 from nc_sim.errors import Code
 
-ARC_RADIUS_TOLERANCE_MM = 0.002  # start and end radius of G02/G03 may differ by this much
 MAX_NESTING = 8  # subprogram levels
 _END_PROGRAM = (30, 2)
 _END_SUB = (17, 29)
@@ -340,7 +339,19 @@ class _Block:
         elif mode == 1:
             self._emit(canon.StraightFeed(self.line, target, **self._motion_flags()))
         else:
-            self._arc(mode, end, target, col)
+            self._emit(
+                arc_feed(
+                    self.line,
+                    mode,
+                    modal.plane,
+                    self.addr,
+                    modal.position,
+                    target,
+                    col,
+                    self.error,
+                    **self._motion_flags(),
+                )
+            )
         modal.position = end
 
     def _motion_flags(self) -> dict[str, bool]:
@@ -375,68 +386,6 @@ class _Block:
         for name, _w in order:  # the axes end at their reference positions
             if name in modal.position and name in modal.home_position:
                 modal.position[name] = modal.home_position[name]
-
-    def _arc(
-        self, motion: int, end: dict[str, float], target: tuple[tuple[str, float], ...], col: int
-    ) -> None:
-        plane = self.run_.modal.plane
-        a, b, _ = PLANES[plane]
-        for axis in (a, b):
-            if axis not in self.run_.modal.position:
-                raise self.error(f"G{plane} needs axis {axis}", col, Code.UNKNOWN_AXIS)
-        start = self.run_.modal.position
-        sa, sb, ea, eb = start[a], start[b], end[a], end[b]
-        turn = 1 if motion == 3 else -1
-        offsets = [self.addr[CENTRE_LETTER[x]] for x in (a, b) if CENTRE_LETTER[x] in self.addr]
-        wrong = [
-            self.addr[c]
-            for c in "IJK"
-            if c in self.addr and c not in (CENTRE_LETTER[a], CENTRE_LETTER[b])
-        ]
-        if wrong:
-            raise self.error(
-                f"{wrong[0].letter} is not a centre offset in G{plane}", wrong[0].column
-            )
-        r_word = self.addr.get("R")
-        if r_word is not None and offsets:
-            raise self.error("R and I/J/K in one block", r_word.column)
-        if r_word is not None:
-            ca, cb = self._centre_from_radius(r_word, sa, sb, ea, eb, turn)
-        elif offsets:
-            ca = sa + (self.addr[CENTRE_LETTER[a]].value if CENTRE_LETTER[a] in self.addr else 0.0)
-            cb = sb + (self.addr[CENTRE_LETTER[b]].value if CENTRE_LETTER[b] in self.addr else 0.0)
-            r0, r1 = math.hypot(sa - ca, sb - cb), math.hypot(ea - ca, eb - cb)
-            if r0 == 0.0 or abs(r0 - r1) > ARC_RADIUS_TOLERANCE_MM:
-                raise self.error(
-                    f"start radius {r0:.4f} mm and end radius {r1:.4f} mm differ",
-                    offsets[0].column,
-                    Code.ARC_GEOMETRY,
-                )
-        else:
-            raise self.error(
-                f"G0{motion} needs a centre I/J/K or a radius R", col, Code.ARC_GEOMETRY
-            )
-        self._emit(canon.ArcFeed(self.line, target, plane, (ca, cb), turn, **self._motion_flags()))
-
-    def _centre_from_radius(
-        self, r_word: Word, sa: float, sb: float, ea: float, eb: float, turn: int
-    ) -> tuple[float, float]:
-        """R > 0: the arc up to 180°, R < 0: the longer one (DIN 66025)."""
-        chord = math.hypot(ea - sa, eb - sb)
-        radius = abs(r_word.value)
-        if chord == 0.0:
-            raise self.error("a full circle needs I/J/K, not R", r_word.column, Code.ARC_GEOMETRY)
-        if radius < chord / 2 - ARC_RADIUS_TOLERANCE_MM:
-            raise self.error(
-                f"radius {radius:g} mm is less than half the chord {chord:.4f} mm",
-                r_word.column,
-                Code.ARC_GEOMETRY,
-            )
-        h = math.sqrt(max(0.0, radius**2 - (chord / 2) ** 2))
-        # left of the chord for a counter-clockwise arc up to 180°, right for clockwise
-        side = turn * (1 if r_word.value > 0 else -1)
-        ua, ub = -(eb - sb) / chord, (ea - sa) / chord
-        return (sa + ea) / 2 + side * h * ua, (sb + eb) / 2 + side * h * ub
 
     def _m_and_calls(self) -> int | None:
         ending: int | None = None

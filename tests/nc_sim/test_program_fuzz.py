@@ -18,7 +18,8 @@ from dataclasses import fields
 import pytest
 
 from nc_sim.channel import canon
-from nc_sim.channel.interpreter import ARC_RADIUS_TOLERANCE_MM, interpret
+from nc_sim.channel.arc_words import ARC_RADIUS_TOLERANCE_MM
+from nc_sim.channel.interpreter import interpret
 from nc_sim.channel.randprog import GeneratedProgram, mutate, random_program
 from nc_sim.channel.words import ProgramError
 
