@@ -126,6 +126,10 @@ def test_g04_takes_its_time_as_x_on_a_machine_without_x() -> None:
         ("M19 S.POS=90 S9[M3]\nM30", "1:14", Code.UNKNOWN_AXIS),
         ("G00 X\nM30", "1:5", Code.BLOCK_SYNTAX),  # address without a value
         ("S2[M3 REV-5]\nM30", "1:10", Code.BLOCK_SYNTAX),  # column inside S2[...]
+        ("#SLOPE G01\nM30", "1:7", Code.BLOCK_SYNTAX),  # #SLOPE needs its [TYPE=..]
+        ("#CAX[C]\nM30", "1:6", Code.NOT_SUPPORTED),  # only the main spindle becomes C
+        ("G33 G04 X1\nM30", "1:5", Code.BLOCK_SYNTAX),  # G04 takes no motion G code
+        ("G63 G74 Z1\nM30", "1:5", Code.BLOCK_SYNTAX),  # nor does G74
     ],
 )
 def test_bad_blocks(text: str, where: str, code: Code) -> None:
@@ -144,3 +148,35 @@ def test_random_text_gives_calls_or_a_program_error() -> None:
             _run(text)
         except ProgramError as err:
             assert err.line >= 1 and err.column >= 1, (text, err)
+
+
+def test_cax_with_an_empty_body_names_the_main_spindle() -> None:
+    sink = canon.ListSink()
+    interpret("#CAX[]\n#CAX OFF[ S ]\nM30", sink)
+    assert sink.lines()[:2] == [
+        "1: ROTARY_MODE spindle=S rotary=1",
+        "2: ROTARY_MODE spindle=S rotary=0",
+    ]
+
+
+def test_random_thread_and_tapping_words_give_calls_or_a_program_error() -> None:
+    """Seeded blocks of G33/G63/G51/#CAX words in any order: calls or ProgramError, never
+    another exception, and the coupled calls carry a positive pitch and a non-zero speed."""
+    rng = random.Random(17)
+    tokens = [
+        "G33", "G63", "G51", "G52", "G00", "G01", "G04", "G91", "K1.5", "I2", "J0", "K-1",
+        "S.OFFSET=400", "S.OFFSET=90", "#CAX", "#CAX OFF", "S200", "S-200", "S0", "Z-5", "X10",
+        "F100", "M3", "M5", "M19", "R3", "\n", "\n",
+    ]  # fmt: skip
+    for _ in range(2000):
+        text = " ".join(rng.choice(tokens) for _ in range(rng.randint(1, 12))) + "\nM30"
+        sink = canon.ListSink()
+        try:
+            interpret(text, sink, axes=("X", "Z"))
+        except ProgramError as err:
+            assert err.line >= 1 and err.column >= 1, (text, err)
+        for call in sink.calls:
+            if isinstance(call, canon.ThreadFeed):
+                assert call.pitch_mm > 0 and 0 <= call.offset_deg < 360, (text, call)
+            if isinstance(call, canon.TapFeed):
+                assert call.speed_rpm != 0 and call.feed_mm_min > 0, (text, call)
