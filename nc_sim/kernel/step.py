@@ -138,6 +138,7 @@ from nc_sim.kernel.layout import (
     R_V_CMD,
     ROLE_AXIS,
     ROLE_CHANNEL,
+    ROLE_PATH_AXIS,
     S_A_CMD,
     S_DA,
     S_LAG,
@@ -356,6 +357,8 @@ def _advance_path(
     ist[c, I_LINE] = line
     for i in range(pi[p, PI_NAX]):
         slot = pi[p, PI_AX0 + i]
+        if ist[slot, I_ROLE] != ROLE_PATH_AXIS:
+            continue  # not on the path now (a spindle in spindle mode)
         lin = pel[p, e, E_LIN + i]
         st[slot, S_P_CMD] = pel[p, e, E_P0 + i] + lin * u
         st[slot, S_V_CMD] = lin * v
