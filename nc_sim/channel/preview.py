@@ -126,7 +126,9 @@ def preview(
         return (p.get(h, 0.0), p.get(v, 0.0))
 
     for call in calls:
-        if isinstance(call, canon.StraightTraverse | canon.StraightFeed):
+        if isinstance(
+            call, canon.StraightTraverse | canon.StraightFeed | canon.ThreadFeed | canon.TapFeed
+        ):
             path = [dict(call.end)]
         elif isinstance(call, canon.ArcFeed):
             path = arc_positions(pos, call)
