@@ -91,7 +91,9 @@ ChannelStateName = Literal["idle", "ready", "running", "held", "block_end", "err
 class ModalStatus(BaseModel):
     """The channel's modal state: what the next block inherits."""
 
-    motion: Literal["G00", "G01", "G02", "G03"]
+    motion: Literal["G00", "G01", "G02", "G03", "G33", "G63"] = Field(
+        description="motion group: G00-G03, G33 thread cutting, G63 tapping"
+    )
     plane: Literal["G17", "G18", "G19"]
     distance: Literal["G90", "G91"]
     feed_mm_min: float | None = Field(description="F in force, mm/min; null before the first F")

@@ -40,6 +40,8 @@ class Code(IntEnum):
     ARC_GEOMETRY = 90026  # G02/G03 whose start and end radii differ, or no centre or radius
     PROGRAM_STRUCTURE = 90027  # subprogram undefined or not ended, no program end, nesting
     FEEDHOLD_ACTIVE = 90028  # cycle start while the HLI feedhold holds the channel
+    THREAD_NOT_POSSIBLE = 90029  # [000 §2.8.7] G33 without a rotating, measured spindle, ...
+    TAPPING_NOT_POSSIBLE = 90030  # [000 §2.8.6] G63 with a turning spindle, no encoder, ...
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -63,6 +65,7 @@ class Code(IntEnum):
     EV_PROGRAM_LOADED = 29
     EV_PROGRAM_START = 30  # cycle start of a program
     EV_PROGRAM_STOP = 31  # stopped by the operator, rewound
+    EV_COUPLED = 32  # G33/G63: the path follows the spindle
 
 
 MESSAGES: dict[Code, str] = {
@@ -102,6 +105,11 @@ MESSAGES: dict[Code, str] = {
     Code.PROGRAM_STRUCTURE: "program structure: subprogram not defined or without M17/M29, "
     "program without M30/M02, or subprograms nested too deep",
     Code.FEEDHOLD_ACTIVE: "feedhold is on: the channel goes on when feedhold is released",
+    Code.THREAD_NOT_POSSIBLE: "thread cutting G33 not possible: the spindle must rotate "
+    "(M3/M4) with its encoder, the thread's feed must be within the axes' limits and the "
+    "thread long enough to accelerate and brake",
+    Code.TAPPING_NOT_POSSIBLE: "tapping G63 not possible: the spindle must stand (M5 or M19 "
+    "first) and be position-controlled, and the feed within the axes' limits",
     Code.EV_BLOCK_DONE: "block done",
     Code.EV_M_OUTPUT: "M function output to the PLC",
     Code.EV_M_ACK: "M function acknowledged by the PLC",
@@ -125,6 +133,7 @@ MESSAGES: dict[Code, str] = {
     Code.EV_PROGRAM_LOADED: "program loaded",
     Code.EV_PROGRAM_START: "program started",
     Code.EV_PROGRAM_STOP: "program stopped",
+    Code.EV_COUPLED: "path coupled to the spindle",
 }
 """What each code means, in the operator's words; every code has one (the event log shows it
 when an event carries no detail of its own)."""

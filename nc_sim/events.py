@@ -49,8 +49,8 @@ class Event:
 
 
 class Log(Protocol):
-    """Records an event of a machine (its code, the axis, the detail, the M function and gear
-    stage it concerns) and returns it: what the parts of a machine log with."""
+    """Records an event of a machine (its code, the axis, the detail, the M function, gear
+    stage and program line it concerns) and returns it: what the parts of a machine log with."""
 
     def __call__(
         self,
@@ -60,6 +60,8 @@ class Log(Protocol):
         *,
         m: int | None = None,
         gear: int | None = None,
+        line: int | None = None,
+        column: int | None = None,
     ) -> Event: ...
 
 

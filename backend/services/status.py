@@ -121,7 +121,7 @@ def channel_status(c: ChannelSnapshot) -> ChannelStatus:
         single_block=c.single_block,
         mdi=c.mdi,
         modal=ModalStatus(
-            motion=f"G0{md.motion}",
+            motion=f"G{md.motion:02d}",
             plane=f"G{md.plane}",
             distance="G90" if md.absolute else "G91",
             feed_mm_min=md.feed_mm_min,

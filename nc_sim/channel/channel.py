@@ -144,11 +144,17 @@ class Channel:
         self.pump()
 
     def hold(self) -> None:
-        """Feedhold: brake on the path and wait."""
+        """Feedhold: brake on the path and wait. A thread or a tap runs to its end first (it
+        cannot stop in the material), then the channel holds."""
         if self.progress.state is ChannelState.RUNNING:
             self.progress.state = ChannelState.HELD
-            if self.path.count:
+            if self.path.count and not self._coupled():
                 self.path.hold(self.host.hold_limits(self.path.current))
+
+    def _coupled(self) -> bool:
+        """The path runs a spindle-coupled element (G33, G63)."""
+        e = self.path.current
+        return e is not None and e.coupling is not None
 
     def set_single_block(self, on: bool) -> None:
         """Single block on or off; on during a run, the path stops at the end of the block
@@ -159,8 +165,12 @@ class Channel:
             self.replan()
 
     def stop(self) -> None:
-        """Brake on the path and rewind (the path ends where it stopped)."""
-        if self.path.count and self.path.at_rest():  # held already: give the axes back now
+        """Brake on the path and rewind (the path ends where it stopped); a thread or a tap
+        is left, its axes and spindle braking on their own."""
+        if self._coupled():
+            self.path.abandon()
+            self.host.path_left()
+        elif self.path.count and self.path.at_rest():  # held already: give the axes back now
             self.path.finish()
             self.host.path_moving(None)
         elif self.path.count:  # once at rest, the axes are given back (on_path_events)
@@ -275,6 +285,14 @@ class Channel:
                 self.step_granted = False
             self.last_key = key
             if step.element is not None:
+                current = self.path.current
+                if current is not None and current.coupling is not None:
+                    break  # nothing joins a coupled element: it runs alone, then the rest
+                if step.element.coupling is not None and self.path.count:
+                    if self.path.done():  # it starts from rest, after the path before it
+                        self.on_path_events()
+                        return
+                    break
                 # top the window up in batches: each new element means a new plan
                 if self.path.count <= self.lookahead // 2:
                     self.filling = True
@@ -282,6 +300,8 @@ class Channel:
                     self.filling = False
                     break
                 err = self.host.check_element(step.element)
+                if err is None and step.element.coupling is not None:
+                    err = self.host.start_coupling(step.element)
                 if err is not None:
                     self._fail(err, step.block)
                     return
@@ -410,6 +430,8 @@ class Channel:
         """Plan the window again (new blocks, override, feedhold released)."""
         if self.progress.state is ChannelState.HELD or not self.path.count or self.ex is None:
             return  # (held, empty, or stopped and braking)
+        if self._coupled():
+            return  # the spindle leads, there is no plan
         self.path.replan(
             self.host.dynamics,
             self.feed_scale * self.override,

@@ -29,7 +29,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nc_sim.channel import canon
+from nc_sim.channel.coupling import Coupling
 from nc_sim.channel.geometry import Element, arc, straight
+from nc_sim.kernel import layout as L
 from nc_sim.params.definitions import SYNC_SYMBOLS
 
 # synchronisation types [000 §2.5], as the parameter lists spell them
@@ -42,7 +44,13 @@ MVS_SLM = SYNC_SYMBOLS["MVS_SLM"]
 MVS_SLP = SYNC_SYMBOLS["MVS_SLP"]
 PLC_INFO = SYNC_SYMBOLS["PLC_INFO"]
 
-_MOTION = (canon.StraightTraverse, canon.StraightFeed, canon.ArcFeed)
+_MOTION = (
+    canon.StraightTraverse,
+    canon.StraightFeed,
+    canon.ArcFeed,
+    canon.ThreadFeed,
+    canon.TapFeed,
+)
 
 
 @dataclass
@@ -141,6 +149,14 @@ class Execution:
                         e.exact_stop = bool(after) or call.exact_stop
                         self.steps.append(Step(line, element=e))
                         start = e.end.copy()
+                case canon.ThreadFeed() | canon.TapFeed():
+                    for late in [x for x in self.late if x.until == "feed"]:
+                        self.steps.append(Step(line, waits_for=late.action_id))
+                        self.late.remove(late)
+                    e = self._coupled(call, start)
+                    if e is not None:
+                        self.steps.append(Step(line, element=e))
+                        start = e.end.copy()
                 case canon.Dwell():
                     self.steps.append(Step(line, rest=True, dwell_s=call.time_s))
                 case canon.ProgramEnd():
@@ -163,6 +179,28 @@ class Execution:
                 case _:  # gear change, homing, other M functions: at rest, waited for
                     self.steps.append(Step(line, call=call, rest=True, wait=True))
         self.steps.extend(after)
+
+    def _coupled(self, call: canon.ThreadFeed | canon.TapFeed, start: np.ndarray) -> Element | None:
+        """The element of a G33/G63 block: a straight line whose path follows the spindle."""
+        if isinstance(call, canon.TapFeed):
+            e = straight(self.axes, start, call, call.feed_mm_min)
+            if e is None:
+                return None
+            pitch = call.feed_mm_min / abs(call.speed_rpm)
+            e.coupling = Coupling(L.COUPLE_TAP, call.spindle, pitch, speed_rpm=call.speed_rpm)
+            g = 63
+        else:
+            e = straight(self.axes, start, call, None)
+            if e is None:
+                return None
+            # the lead is measured along the pitch axis: path length per revolution
+            along = abs(float(e.lin[self.axes.index(call.pitch_axis)]))
+            pitch = call.pitch_mm / along if along > 1e-12 else call.pitch_mm
+            e.coupling = Coupling(L.COUPLE_THREAD, call.spindle, pitch, offset_deg=call.offset_deg)
+            g = 33
+        e.modal = (g, self.plane, call.absolute, self.feed_mm_min)
+        e.exact_stop = True  # it starts and ends at rest
+        return e
 
     def _spindle(self, call: canon.Call, has_motion: bool, after: list[Step]) -> None:
         kind = sync_kind(call, self.sync_of(call))

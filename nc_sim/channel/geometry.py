@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nc_sim.channel import canon
+from nc_sim.channel.coupling import Coupling
 from nc_sim.channel.modal import PLANES
 from nc_sim.kernel import layout as L
 
@@ -38,6 +39,7 @@ class Element:
     block_id: int = 0  # the MDI block it belongs to (0 in a program)
     modal: tuple[int, int, bool, float | None] = (0, 17, True, None)  # G, plane, G90, F
     actions: list[tuple[canon.Call, int]] = field(default_factory=list)  # start on leaving it
+    coupling: Coupling | None = None  # G33/G63: the path follows a spindle
 
     def tangent(self, at_end: bool) -> np.ndarray:
         """Unit tangent (d point / d u) at the start or the end."""
@@ -85,6 +87,8 @@ class Element:
             row[L.E_I0], row[L.E_I1] = i0, i1
             row[L.E_CX], row[L.E_CY], row[L.E_R] = cx, cy, r
             row[L.E_PHI0], row[L.E_DPHI] = phi0, dphi
+        if self.coupling is not None:
+            self.coupling.write(row)
 
 
 def _vector(
@@ -101,10 +105,10 @@ def _vector(
 def straight(
     axes: tuple[str, ...],
     start: np.ndarray,
-    call: canon.StraightTraverse | canon.StraightFeed,
+    call: canon.StraightTraverse | canon.StraightFeed | canon.ThreadFeed | canon.TapFeed,
     feed_mm_min: float | None,
 ) -> Element | None:
-    """The element of a G00/G01 block from `start`; None when it does not move."""
+    """The element of a G00/G01 (or G33/G63) block from `start`; None when it does not move."""
     end = _vector(axes, call.end, start)
     d = end - start
     length = float(np.linalg.norm(d))

@@ -34,6 +34,10 @@ class ChannelHost(Protocol):
     def check_element(self, e: Element) -> Event | None:
         """None when the element may run, else the job error (logged) that forbids it."""
 
+    def start_coupling(self, e: Element) -> Event | None:
+        """Couple a G33/G63 element to its spindle (the path is at rest where it starts);
+        None when it may run, else the job error (logged) that forbids it."""
+
     def dynamics(self, e: Element) -> list[AxisDynamics]:
         """The path axes' limits for this element's kind of motion."""
 
@@ -53,5 +57,5 @@ class ChannelHost(Protocol):
         """An MDI block has run completely."""
 
     def path_left(self) -> None:
-        """The path was abandoned mid-way (job error, reset, E-stop): its axes brake on
-        their own."""
+        """The path was abandoned mid-way (job error, reset, E-stop, a stopped thread): its
+        axes, and a tapping spindle, brake on their own."""

@@ -39,6 +39,11 @@ class Path:
         self.p = k.claim_path(channel_slot, axis_slots)
         self.queue: deque[Element] = deque()  # the ring from its head, as Python sees it
         self.s_end = 0.0  # path length at the end of the last queued element
+        # slots the path leaves alone: a spindle that is not in rotary (C axis) mode
+        self.inactive: set[int] = set()
+
+    def _on_path(self) -> list[int]:
+        return [s for s in self.axis_slots if s not in self.inactive]
 
     # --- the ring -------------------------------------------------------------------------
     @property
@@ -57,7 +62,7 @@ class Path:
         """Queue an element behind the others (the plan is made by `replan`)."""
         if not self.queue:
             self.s_end = float(self.k.st[self.slot, L.S_P_CMD])
-            for s in self.axis_slots:  # the path drives them from the next cycle on
+            for s in self._on_path():  # the path drives them from the next cycle on
                 self.k.ist[s, L.I_ROLE] = L.ROLE_PATH_AXIS
                 self.k.ist[s, L.I_PLAN_N] = 0
                 self.k.ist[s, L.I_CURVE] = 0
@@ -189,7 +194,7 @@ class Path:
         self.k.pi[self.p, L.PI_COUNT] = 0
         ist[self.slot, L.I_PLAN_N] = 0
         st[self.slot, L.S_V_CMD] = st[self.slot, L.S_A_CMD] = 0.0
-        for s in self.axis_slots:
+        for s in self._on_path():
             ist[s, L.I_ROLE] = L.ROLE_AXIS
             ist[s, L.I_PLAN_N] = 0
             st[s, L.S_V_CMD] = st[s, L.S_A_CMD] = 0.0
@@ -204,6 +209,6 @@ class Path:
         self.k.pi[self.p, L.PI_COUNT] = 0
         self.k.ist[self.slot, L.I_PLAN_N] = 0
         self.k.st[self.slot, L.S_V_CMD] = self.k.st[self.slot, L.S_A_CMD] = 0.0
-        for s in self.axis_slots:
+        for s in self._on_path():
             self.k.ist[s, L.I_ROLE] = L.ROLE_AXIS
             self.k.ist[s, L.I_PLAN_N] = 0

@@ -161,4 +161,17 @@ E_PHI0 = 9  # angle of the start point about the centre (rad)
 E_DPHI = 10  # swept angle, signed (+ counter-clockwise in the plane's orientation)
 E_P0 = 11  # start position per path axis (MAX_PATH_AXES columns)
 E_LIN = E_P0 + MAX_PATH_AXES  # per path axis: position change per unit path length (not arc)
-E_COLS = E_LIN + MAX_PATH_AXES
+# spindle-coupled elements (G33 thread cutting, G63 tapping): the path length follows the
+# spindle's actual angle instead of the plan
+E_SPDL = E_LIN + MAX_PATH_AXES  # the spindle's slot + 1 (0: not coupled)
+E_KIND = E_SPDL + 1  # COUPLE_THREAD or COUPLE_TAP
+E_K = E_SPDL + 2  # path length per degree of spindle rotation (> 0)
+E_DIR = E_SPDL + 3  # +1 / -1: the spindle's direction of rotation
+E_TH0 = E_SPDL + 4  # spindle angle at which the coupling starts (phi = 0)
+E_PHI_IN = E_SPDL + 5  # thread: angle over which the path accelerates (degrees of rotation)
+E_PHI_OUT = E_SPDL + 6  # thread: angle over which it brakes
+E_PHI_TOT = E_SPDL + 7  # thread: angle at which the element ends
+E_COLS = E_SPDL + 8
+
+COUPLE_THREAD = 1  # G33: the path follows the rotating spindle from its zero passage on
+COUPLE_TAP = 2  # G63: the path follows the spindle's own position move to its end

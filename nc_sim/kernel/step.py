@@ -22,19 +22,28 @@ from numba import njit
 
 from nc_sim.kernel.curve import curve_accel
 from nc_sim.kernel.layout import (
+    COUPLE_TAP,
     E_ARC,
     E_CX,
     E_CY,
+    E_DIR,
     E_DPHI,
     E_I0,
     E_I1,
+    E_K,
+    E_KIND,
     E_LEN,
     E_LIN,
     E_LINE,
     E_P0,
     E_PHI0,
+    E_PHI_IN,
+    E_PHI_OUT,
+    E_PHI_TOT,
     E_R,
     E_S0,
+    E_SPDL,
+    E_TH0,
     EV_BLOCK,
     EV_CAM,
     EV_IN_POS,
@@ -129,6 +138,7 @@ from nc_sim.kernel.layout import (
     R_V_CMD,
     ROLE_AXIS,
     ROLE_CHANNEL,
+    ROLE_PATH_AXIS,
     S_A_CMD,
     S_DA,
     S_LAG,
@@ -250,6 +260,64 @@ def _advance_setpoint(
 
 
 @njit(cache=True)
+def _advance_coupled(
+    st: np.ndarray, ist: np.ndarray, pel: np.ndarray, p: int, e: int, c: int
+) -> int:
+    """A spindle-coupled element: the path length u follows the spindle's actual angle.
+
+    phi = dir · (angle - E_TH0) is the rotation since the coupling point, k the path length
+    per degree. Tapping (G63): u = k·phi while the spindle runs its own position move; the
+    element ends when the spindle is in position. Thread (G33): the path waits for phi = 0
+    (the zero passage plus the offset), accelerates over E_PHI_IN degrees (u quadratic in phi),
+    runs at u = k·(phi - PHI_IN/2) and brakes over E_PHI_OUT degrees to the end at E_PHI_TOT:
+    u is a function of the angle alone, so every pass of a thread runs in the same groove.
+    Sets the channel slot's length, speed and acceleration; EV_PLAN_DONE at the end.
+    """
+    spdl = int(pel[p, e, E_SPDL]) - 1
+    d = pel[p, e, E_DIR]
+    k = pel[p, e, E_K]
+    length = pel[p, e, E_LEN]
+    phi = d * (st[spdl, S_P_ACT] - pel[p, e, E_TH0])
+    w = d * st[spdl, S_V_ACT]  # °/s along the thread
+    alpha = d * st[spdl, S_A_CMD]
+    du = 0.0  # du/dphi
+    ddu = 0.0  # d²u/dphi²
+    if int(pel[p, e, E_KIND]) == COUPLE_TAP:
+        done = ist[spdl, I_PLAN_N] == 0 and ist[spdl, I_IN_POS] == 1
+        u = min(max(k * phi, 0.0), length)
+        if 0.0 < u < length:
+            du = k
+    else:
+        f_in = pel[p, e, E_PHI_IN]
+        f_out = pel[p, e, E_PHI_OUT]
+        f_tot = pel[p, e, E_PHI_TOT]
+        done = phi >= f_tot
+        if phi <= 0.0:
+            u = 0.0
+        elif phi < f_in:
+            u = k * phi * phi / (2.0 * f_in)
+            du = k * phi / f_in
+            ddu = k / f_in
+        elif phi < f_tot - f_out:
+            u = k * (phi - 0.5 * f_in)
+            du = k
+        else:
+            r = f_tot - phi
+            u = length - k * r * r / (2.0 * f_out)
+            du = k * r / f_out
+            ddu = -k / f_out
+    ev = 0
+    if done:  # at the end at rest, decoupled
+        u, du, ddu = length, 0.0, 0.0
+        pel[p, e, E_SPDL] = 0.0
+        ev = EV_PLAN_DONE
+    st[c, S_P_CMD] = pel[p, e, E_S0] + u
+    st[c, S_V_CMD] = du * w
+    st[c, S_A_CMD] = ddu * w * w + du * alpha
+    return ev
+
+
+@njit(cache=True)
 def _advance_path(
     st: np.ndarray,
     ist: np.ndarray,
@@ -267,7 +335,10 @@ def _advance_path(
     if pi[p, PI_COUNT] == 0:
         return 0
     ev = 0
-    if ist[c, I_PLAN_N] > 0:
+    head = pi[p, PI_HEAD]
+    if pel[p, head, E_SPDL] > 0.0:
+        ev |= _advance_coupled(st, ist, pel, p, head, c)
+    elif ist[c, I_PLAN_N] > 0:
         ev |= _advance_plan(st, ist, pplan[p], c, dt)
     s = st[c, S_P_CMD]
     while pi[p, PI_COUNT] > 1:
@@ -286,6 +357,8 @@ def _advance_path(
     ist[c, I_LINE] = line
     for i in range(pi[p, PI_NAX]):
         slot = pi[p, PI_AX0 + i]
+        if ist[slot, I_ROLE] != ROLE_PATH_AXIS:
+            continue  # not on the path now (a spindle in spindle mode)
         lin = pel[p, e, E_LIN + i]
         st[slot, S_P_CMD] = pel[p, e, E_P0 + i] + lin * u
         st[slot, S_V_CMD] = lin * v

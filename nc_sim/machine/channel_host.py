@@ -18,8 +18,9 @@ from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
 from nc_sim.plc import Waiter
-from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
+from nc_sim.profiles.plan import LIM_A_ACC, LIM_A_ACC2, LIM_A_DEC, LIM_A_DEC2, LIM_TR_ACC_UP
 from nc_sim.snapshot import AxisState
+from nc_sim.spindle.coupled import start_tap, start_thread
 from nc_sim.spindle.gear_change import spindle_index
 from nc_sim.spindle.program import program_end, spindle_call, tool_dynamics
 from nc_sim.units import AxisKind
@@ -49,6 +50,7 @@ class MachineChannelHost:
         self.moving = False  # the path axes move for the channel (not for a jog)
         self.next_id = 1  # numbers of actions
         self.path_start: list[float] = []  # the path axes' positions where the path started
+        self.tapping: Axis | None = None  # the spindle a G63 element follows
 
     @property
     def cycle(self) -> int:
@@ -76,7 +78,12 @@ class MachineChannelHost:
         return float(e.end[self.path_axes.index(ax)])
 
     def path_left(self) -> None:
-        """The path was abandoned mid-way: each path axis still moving brakes on its own."""
+        """The path was abandoned mid-way: each path axis still moving brakes on its own,
+        and so does a tapping spindle."""
+        tap, self.tapping = self.tapping, None
+        if tap is not None and tap.state is AxisState.MOVING:
+            tap.block_id = None
+            self.m.motion.stop(tap, self.m.sp.limits(tap))
         if not self.moving:
             return
         self.moving = False
@@ -230,6 +237,29 @@ class MachineChannelHost:
         program_end(self.m.sp, self.m.axes)
 
     # --- the path -------------------------------------------------------------------------
+    def start_coupling(self, e: Element) -> Event | None:
+        c = e.coupling
+        assert c is not None
+        m = self.m
+        if c.spindle not in m.by_name and not (c.spindle == "S" and m.main_spindle):
+            return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {e.line}: no spindle")
+        ax = m.axis(c.spindle)
+        if ax.kind is not AxisKind.SPINDLE:
+            return m.motion.fail(ax, Code.NOT_A_SPINDLE, f"line {e.line}")
+        lim = element_limits(e, self.dynamics(e), math.inf)
+        a_acc = float(lim.lim[LIM_A_ACC])
+        a_dec = float(lim.lim[LIM_A_DEC])
+        if lim.lim[LIM_A_ACC2] > 0:  # step-shaped: the lower stage holds throughout
+            a_acc = min(a_acc, float(lim.lim[LIM_A_ACC2]))
+        if lim.lim[LIM_A_DEC2] > 0:
+            a_dec = min(a_dec, float(lim.lim[LIM_A_DEC2]))
+        if c.kind == L.COUPLE_TAP:
+            err = start_tap(m.sp, ax, e, lim.v_cap, a_acc, a_dec)
+            if err is None:
+                self.tapping = ax
+            return err
+        return start_thread(m.sp, ax, e, lim.v_cap, a_acc, a_dec)
+
     def check_element(self, e: Element) -> Event | None:
         m = self.m
         moved = np.abs(e.end - e.start) > 1e-12
@@ -320,6 +350,8 @@ class MachineChannelHost:
         if line is not None and not self.moving:
             self.path_start = [float(st[a.slot, L.S_P_CMD]) for a in self.path_axes]
         self.moving = line is not None
+        if line is None:
+            self.tapping = None  # the tap's spindle ends its move by itself
         for i, ax in enumerate(self.path_axes):
             if line is not None and ax.state is AxisState.STANDSTILL:
                 ax.motion = Motion.FEED

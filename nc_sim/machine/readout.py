@@ -81,6 +81,18 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
     )
 
 
+def _zero_passage(m: Machine) -> str | None:
+    """A G33 thread waiting for its coupling angle, in the operator's words."""
+    e = m.channel.path.current
+    if e is None or e.coupling is None:
+        return None
+    c = e.coupling
+    if c.kind != L.COUPLE_THREAD or m.channel.path.s > e.s0:
+        return None
+    name = m.ch_host.spindle_name(c.spindle)
+    return f"zero passage of {name} at {c.theta0_deg % 360.0:g}° (G33)"
+
+
 def channel_snapshot(m: Machine) -> ChannelSnapshot:
     """The channel's program state and modal state now."""
     ch = m.channel
@@ -101,7 +113,7 @@ def channel_snapshot(m: Machine) -> ChannelSnapshot:
         ),
         path_feed_mm_min=ch.path_feed_mm_min(),
         distance_to_go_mm=ch.distance_to_go_mm(),
-        waiting_for=c.waiting_for,
+        waiting_for=c.waiting_for or _zero_passage(m),
         error=c.error,
     )
 
