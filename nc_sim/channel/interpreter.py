@@ -325,10 +325,7 @@ class _Block:
         target = tuple([(a, end[a]) for a in axes])
         if mode == 0:
             self._emit(canon.StraightTraverse(self.line, target, **self._motion_flags()))
-        elif mode in (33, 63):
-            if 60 in self.g:  # the spindle-coupled calls carry no exact stop
-                g60 = self.g[60].column
-                raise self.error(f"G60 cannot be programmed with G{mode}", g60, Code.NOT_SUPPORTED)
+        elif mode in (33, 63):  # they start and end at rest: G60 holds without a flag
             self._emit(
                 thread_feed(self.line, end, modal, axes, pitch, col, self.error)
                 if mode == 33

@@ -150,6 +150,17 @@ def test_random_text_gives_calls_or_a_program_error() -> None:
             assert err.line >= 1 and err.column >= 1, (text, err)
 
 
+def test_g60_is_taken_with_g33_and_g63() -> None:
+    """A thread cut or a tap starts and ends at rest: exact stop G60 is allowed with them."""
+    sink = canon.ListSink()
+    interpret("G33 G60 Z-10 K1\nG63 G60 Z0 F300 S200\nM30", sink, axes=("X", "Z"))
+    assert sink.lines()[:3] == [
+        "1: THREAD_FEED X=0 Z=-10 spindle=S pitch_mm=1 pitch_axis=Z offset_deg=0",
+        "2: SET_FEED_RATE feed_mm_min=300",
+        "2: TAP_FEED X=0 Z=0 spindle=S speed_rpm=200 feed_mm_min=300",
+    ]
+
+
 def test_cax_with_an_empty_body_names_the_main_spindle() -> None:
     sink = canon.ListSink()
     interpret("#CAX[]\n#CAX OFF[ S ]\nM30", sink)
