@@ -70,9 +70,11 @@ class AxisMotion:
         *,
         m: int | None = None,
         gear: int | None = None,
+        line: int | None = None,
     ) -> Event:
-        """Log a job error; with an axis it becomes that axis' active job error."""
-        ev = self.log(code, ax.name if ax else "", detail, m=m, gear=gear)
+        """Log a job error (of program `line`); with an axis it becomes that axis' active job
+        error."""
+        ev = self.log(code, ax.name if ax else "", detail, m=m, gear=gear, line=line)
         if ax is not None:
             self.set_job_error(ax, ev)
         return ev

@@ -293,6 +293,10 @@ class Channel:
                         self.on_path_events()
                         return
                     break
+                if step.element.coupling is not None and not self.host.path_in_position():
+                    # exact stop first: the cut must not start while an axis still settles
+                    self.progress.waiting_for = "exact stop of the axes"
+                    break
                 # top the window up in batches: each new element means a new plan
                 if self.path.count <= self.lookahead // 2:
                     self.filling = True

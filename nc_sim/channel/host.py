@@ -38,6 +38,10 @@ class ChannelHost(Protocol):
         """Couple a G33/G63 element to its spindle (the path is at rest where it starts);
         None when it may run, else the job error (logged) that forbids it."""
 
+    def path_in_position(self) -> bool:
+        """Every path axis stands within its exact-stop window (an in-position event comes
+        when the last one gets there)."""
+
     def dynamics(self, e: Element) -> list[AxisDynamics]:
         """The path axes' limits for this element's kind of motion."""
 

@@ -260,6 +260,15 @@ class MachineChannelHost:
             return err
         return start_thread(m.sp, ax, e, lim.v_cap, a_acc, a_dec)
 
+    def path_in_position(self) -> bool:
+        k = self.m.k
+        inactive = self.m.channel.path.inactive
+        return all(
+            abs(k.st[a.slot, L.S_P_CMD] - k.st[a.slot, L.S_P_ACT]) <= k.pr[a.slot, L.P_INPOS_WIN]
+            for a in self.path_axes
+            if a.slot not in inactive
+        )
+
     def check_element(self, e: Element) -> Event | None:
         m = self.m
         moved = np.abs(e.end - e.start) > 1e-12

@@ -35,16 +35,18 @@ def start_thread(
     assert c is not None
     motion = sp.motion
     st = motion.k.st[ax.slot]
-    where = f"line {e.line}: G33"
+    where = "G33"
     if ax.cfg.flag("sim.sensorless"):
-        return motion.fail(ax, Code.THREAD_NOT_POSSIBLE, f"{where}: {ax.name} has no encoder")
+        return motion.fail(
+            ax, Code.THREAD_NOT_POSSIBLE, f"{where}: {ax.name} has no encoder", line=e.line
+        )
     if ax.state is not AxisState.ENDLESS or motion.loop_mode(ax) == L.LOOP_CONTROL_LIMIT:
         why = (
             "rotates above its control limit (no position)"
             if ax.state is AxisState.OPEN_LOOP
             else f"does not rotate ({ax.state.name.lower()}): M3/M4 first"
         )
-        return motion.fail(ax, Code.THREAD_NOT_POSSIBLE, f"{where}: {ax.name} {why}")
+        return motion.fail(ax, Code.THREAD_NOT_POSSIBLE, f"{where}: {ax.name} {why}", line=e.line)
     w = max(abs(float(st[L.S_V_CMD])), abs(float(st[L.S_V_GOAL])))
     v_path = c.k_mm_per_deg * w
     if v_path > v_cap * (1.0 + 1e-9):
@@ -53,6 +55,7 @@ def start_thread(
             Code.THREAD_NOT_POSSIBLE,
             f"{where}: {w / RPM_TO_DEG_S:g} rpm × {c.pitch_mm:g} mm needs "
             f"{v_path * MM_MIN:.1f} mm/min, the axes allow {v_cap * MM_MIN:.1f} mm/min",
+            line=e.line,
         )
     if thread_ramps(c, e.length, w, a_acc, a_dec) is None:
         return motion.fail(
@@ -60,6 +63,7 @@ def start_thread(
             Code.THREAD_NOT_POSSIBLE,
             f"{where}: the thread ({e.length:.3f} mm) is shorter than its lead-in and "
             f"lead-out at {w / RPM_TO_DEG_S:g} rpm ({ramp_length(c):.3f} mm)",
+            line=e.line,
         )
     c.slot = ax.slot
     c.direction = 1 if float(st[L.S_V_CMD]) >= 0 else -1
@@ -69,7 +73,7 @@ def start_thread(
     motion.log(
         Code.EV_COUPLED,
         ax.name,
-        f"G33 line {e.line}: waits for {ax.name} at {c.theta0_deg % 360.0:g}° "
+        f"G33: waits for {ax.name} at {c.theta0_deg % 360.0:g}° "
         f"(offset {c.offset_deg:g}°), lead {c.pitch_mm:g} mm",
         line=e.line,
     )
@@ -84,16 +88,20 @@ def start_tap(
     assert c is not None
     motion = sp.motion
     k = motion.k
-    where = f"line {e.line}: G63"
+    where = "G63"
     if speed_controlled(ax.cfg):
         return motion.fail(
-            ax, Code.TAPPING_NOT_POSSIBLE, f"{where}: {ax.name} cannot be position-controlled"
+            ax,
+            Code.TAPPING_NOT_POSSIBLE,
+            f"{where}: {ax.name} cannot be position-controlled",
+            line=e.line,
         )
     if ax.state is not AxisState.STANDSTILL or not k.ist[ax.slot, L.I_STOPPED]:
         return motion.fail(
             ax,
             Code.TAPPING_NOT_POSSIBLE,
             f"{where}: {ax.name} must stand ({ax.state.name.lower()}): M5 or M19 first",
+            line=e.line,
         )
     err = motion.check_motion(ax)
     if err is not None:
@@ -106,6 +114,7 @@ def start_tap(
             Code.TAPPING_NOT_POSSIBLE,
             f"{where}: F{kd * abs(c.speed_rpm) * RPM_TO_DEG_S * MM_MIN:g} above what the "
             f"axes allow ({v_cap * MM_MIN:.1f} mm/min)",
+            line=e.line,
         )
     w = min(w, sp.v_max(ax))
     c.slot = ax.slot
@@ -126,7 +135,7 @@ def start_tap(
     motion.log(
         Code.EV_COUPLED,
         ax.name,
-        f"G63 line {e.line}: {ax.name} {c.speed_rpm:g} rpm, pitch {c.pitch_mm:g} mm",
+        f"G63: {ax.name} {c.speed_rpm:g} rpm, pitch {c.pitch_mm:g} mm",
         line=e.line,
     )
     motion.plan_move(ax, lim, w, f"G63 tapping of line {e.line}")
