@@ -65,7 +65,9 @@ class Limits:
     lim: np.ndarray
 
 
-def _single_stage(lim: np.ndarray) -> tuple[float, float]:
+def single_stage(lim: np.ndarray) -> tuple[float, float]:
+    """Acceleration and deceleration of a limits row that hold at every speed (the lower
+    stage of a step-shaped profile)."""
     a_acc = lim[LIM_A_ACC] if lim[LIM_A_ACC2] <= 0 else min(lim[LIM_A_ACC], lim[LIM_A_ACC2])
     a_dec = lim[LIM_A_DEC] if lim[LIM_A_DEC2] <= 0 else min(lim[LIM_A_DEC], lim[LIM_A_DEC2])
     return float(a_acc), float(a_dec)
@@ -85,7 +87,7 @@ def element_limits(e: Element, axes: list[AxisDynamics], feed_mm_s: float) -> Li
     for i, (ax, wgt) in enumerate(zip(axes, weights, strict=True)):
         if wgt < _TINY:
             continue
-        acc, dec = _single_stage(ax.lim)
+        acc, dec = single_stage(ax.lim)
         share = (1.0 - CENTRIPETAL_SHARE) if i in plane else 1.0
         v_cap = min(v_cap, ax.v_max / wgt)
         a_acc = min(a_acc, share * acc / wgt)
@@ -165,4 +167,5 @@ __all__ = [
     "element_limits",
     "junction_speed",
     "plan_window",
+    "single_stage",
 ]

@@ -13,12 +13,12 @@ from nc_sim.axis.dynamics import Motion, feedhold_limits, motion_limits, velocit
 from nc_sim.channel import canon
 from nc_sim.channel.execution import PLC_INFO
 from nc_sim.channel.geometry import Element, point_at
-from nc_sim.channel.planner import AxisDynamics, element_limits
+from nc_sim.channel.planner import AxisDynamics, element_limits, single_stage
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
 from nc_sim.plc import Waiter
-from nc_sim.profiles.plan import LIM_A_ACC, LIM_A_ACC2, LIM_A_DEC, LIM_A_DEC2, LIM_TR_ACC_UP
+from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
 from nc_sim.snapshot import AxisState
 from nc_sim.spindle.coupled import start_tap, start_thread
 from nc_sim.spindle.gear_change import spindle_index
@@ -247,12 +247,7 @@ class MachineChannelHost:
         if ax.kind is not AxisKind.SPINDLE:
             return m.motion.fail(ax, Code.NOT_A_SPINDLE, f"line {e.line}")
         lim = element_limits(e, self.dynamics(e), math.inf)
-        a_acc = float(lim.lim[LIM_A_ACC])
-        a_dec = float(lim.lim[LIM_A_DEC])
-        if lim.lim[LIM_A_ACC2] > 0:  # step-shaped: the lower stage holds throughout
-            a_acc = min(a_acc, float(lim.lim[LIM_A_ACC2]))
-        if lim.lim[LIM_A_DEC2] > 0:
-            a_dec = min(a_dec, float(lim.lim[LIM_A_DEC2]))
+        a_acc, a_dec = single_stage(lim.lim)
         if c.kind == L.COUPLE_TAP:
             err = start_tap(m.sp, ax, e, lim.v_cap, a_acc, a_dec)
             if err is None:
