@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from nc_sim.commands import Accepted, Mdi
+from nc_sim.commands import Accepted, CycleStart, Mdi, ProgramLoad
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.machine.machine import Machine
@@ -44,4 +44,18 @@ def mdi(m: Machine, text: str) -> Accepted:
     return outcome
 
 
-__all__ = ["L", "make", "mdi", "record"]
+def run_program(
+    program: str,
+    seconds: float,
+    axes: dict[str, dict[str, Any]] | None = None,
+    channel: dict[str, Any] | None = None,
+) -> tuple[Simulation, Machine, np.ndarray]:
+    """Load and start `program` on a demo machine (with these parameter overrides) and record
+    `seconds` of it."""
+    sim, m, _cfg = make(axes, channel)
+    assert isinstance(m.submit(ProgramLoad("test", program)), Accepted)
+    assert isinstance(m.submit(CycleStart()), Accepted)
+    return sim, m, record(sim, seconds)
+
+
+__all__ = ["L", "make", "mdi", "record", "run_program"]

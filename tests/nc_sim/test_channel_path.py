@@ -5,7 +5,6 @@ geometry (lines, circles) and the axis parameters, never from our own output."""
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 import pytest
@@ -23,24 +22,14 @@ from nc_sim.commands import (
 )
 from nc_sim.errors import Code
 from nc_sim.machine.machine import Machine
-from nc_sim.sim import Simulation
 from nc_sim.snapshot import ChannelState
-from tests.nc_sim.sim_helpers import L, make, record
+from tests.nc_sim.sim_helpers import L, make, record, run_program
 
 # the demo lathe starts at X50 Z-100 (both unhomed: no software limits yet)
 X0, Z0 = 50.0, -100.0
 
 
-def run(
-    program: str,
-    seconds: float,
-    axes: dict[str, dict[str, Any]] | None = None,
-    channel: dict[str, Any] | None = None,
-) -> tuple[Simulation, Machine, np.ndarray]:
-    sim, m, _cfg = make(axes, channel)
-    assert isinstance(m.submit(ProgramLoad("test", program)), Accepted)
-    assert isinstance(m.submit(CycleStart()), Accepted)
-    return sim, m, record(sim, seconds)
+run = run_program
 
 
 def cols(m: Machine, rec: np.ndarray, col: int) -> tuple[np.ndarray, np.ndarray]:

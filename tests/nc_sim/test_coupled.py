@@ -8,31 +8,19 @@ encoder of Z), never from the coupling's own numbers.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import pytest
 
 from nc_sim.commands import Accepted, CycleStart, EmergencyStop, Feedhold, ProgramLoad
 from nc_sim.errors import Code
 from nc_sim.machine.machine import Machine
-from nc_sim.sim import Simulation
 from nc_sim.snapshot import ChannelState
-from tests.nc_sim.sim_helpers import L, make, record
+from tests.nc_sim.sim_helpers import L, make, record, run_program
 
 RPM = 6.0  # °/s per rpm
 
 
-def run(
-    program: str,
-    seconds: float,
-    axes: dict[str, dict[str, Any]] | None = None,
-    channel: dict[str, Any] | None = None,
-) -> tuple[Simulation, Machine, np.ndarray]:
-    sim, m, _cfg = make(axes, channel)
-    assert isinstance(m.submit(ProgramLoad("test", program)), Accepted)
-    assert isinstance(m.submit(CycleStart()), Accepted)
-    return sim, m, record(sim, seconds)
+run = run_program
 
 
 def actual(m: Machine, rec: np.ndarray, name: str) -> np.ndarray:
