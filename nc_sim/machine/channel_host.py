@@ -98,6 +98,16 @@ class MachineChannelHost:
             return False
         return bool(int(self.m.cfg.channel_raw(f"spindel[{i}].m{m}_synch")) & PLC_INFO)
 
+    def _spindle(self, name: str, line: int) -> Axis | Event:
+        """The spindle a call of program `line` names, else the job error (logged)."""
+        m = self.m
+        if name not in m.by_name and not (name == "S" and m.main_spindle):
+            return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {line}: no spindle")
+        ax = m.axis(name)
+        if ax.kind is not AxisKind.SPINDLE:
+            return m.motion.fail(ax, Code.NOT_A_SPINDLE, f"line {line}")
+        return ax
+
     # --- actions --------------------------------------------------------------------------
     def start_action(self, call: canon.Call, action_id: int) -> Event | None:
         m = self.m
@@ -111,11 +121,10 @@ class MachineChannelHost:
                 | canon.SpindleSpeed()
                 | canon.SpindleSettings()
             ):
-                if call.spindle not in m.by_name and not (call.spindle == "S" and m.main_spindle):
-                    return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {call.line}: no spindle")
-                ax = m.axis(call.spindle)
-                if ax.kind is not AxisKind.SPINDLE:
-                    return m.motion.fail(ax, Code.NOT_A_SPINDLE, f"line {call.line}")
+                found = self._spindle(call.spindle, call.line)
+                if isinstance(found, Event):
+                    return found
+                ax = found
                 if (
                     isinstance(call, canon.SpindleOn | canon.SpindleSpeed)
                     and call.gear is not None
@@ -241,11 +250,9 @@ class MachineChannelHost:
         c = e.coupling
         assert c is not None
         m = self.m
-        if c.spindle not in m.by_name and not (c.spindle == "S" and m.main_spindle):
-            return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {e.line}: no spindle")
-        ax = m.axis(c.spindle)
-        if ax.kind is not AxisKind.SPINDLE:
-            return m.motion.fail(ax, Code.NOT_A_SPINDLE, f"line {e.line}")
+        ax = self._spindle(c.spindle, e.line)
+        if isinstance(ax, Event):
+            return ax
         lim = element_limits(e, self.dynamics(e), math.inf)
         a_acc, a_dec = single_stage(lim.lim)
         if c.kind == L.COUPLE_TAP:
