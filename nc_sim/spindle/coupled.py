@@ -107,16 +107,17 @@ def start_tap(
     if err is not None:
         return err
     kd = c.k_mm_per_deg
-    w = abs(c.speed_rpm) * RPM_TO_DEG_S * sp.override(ax)
-    if kd * abs(c.speed_rpm) * RPM_TO_DEG_S > v_cap * (1.0 + 1e-9):
+    w_prog = abs(c.speed_rpm) * RPM_TO_DEG_S
+    if kd * w_prog > v_cap * (1.0 + 1e-9):
         return motion.fail(
             ax,
             Code.TAPPING_NOT_POSSIBLE,
-            f"{where}: F{kd * abs(c.speed_rpm) * RPM_TO_DEG_S * MM_MIN:g} above what the "
+            f"{where}: F{kd * w_prog * MM_MIN:g} above what the "
             f"axes allow ({v_cap * MM_MIN:.1f} mm/min)",
             line=e.line,
         )
-    w = min(w, sp.v_max(ax))
+    # the spindle override acts, within the spindle's and (through the pitch) the axes' limits
+    w = min(w_prog * sp.override(ax), sp.v_max(ax), v_cap / kd)
     c.slot = ax.slot
     c.direction = 1 if c.speed_rpm > 0 else -1
     c.theta0_deg = float(k.st[ax.slot, L.S_P_CMD])
