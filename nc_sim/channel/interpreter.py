@@ -10,16 +10,23 @@ Within a block the calls come in a fixed order: F, #SLOPE/#CAX, T/D, M40-M45, sp
 G200/G201, G04, G74, motion, other M functions, subprogram call, end (M17/M29/M30/M02). When a
 spindle function acts relative to the motion is the synchronisation type's business (000 §2.5),
 decided where the calls are consumed; they carry the block's line for that.
+
+A main spindle with a rotary-axis name (`c_axis`, P-CHAN-00010) is either a spindle or the
+rotary axis C [003 §4.2]: C in G00-G03 (or #CAX) makes it the axis, M3/M4/M5/M19, G33 and G63
+(or #CAX OFF) the spindle again. ROTARY_MODE comes where the mode changes, before the call that
+needs it. After a change C's position is known only from the machine, so until C is programmed
+absolute it is NaN here and G91 C is refused.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
 
 from nc_sim.channel import canon
 from nc_sim.channel.arc_words import arc_feed
-from nc_sim.channel.modal import Modal
+from nc_sim.channel.modal import Modal, target
 from nc_sim.channel.program import Program, split_program
 from nc_sim.channel.spindle_words import MAIN, SPINDLE_G, SpindleWords
 from nc_sim.channel.thread_words import (
@@ -57,29 +64,42 @@ def interpret(
     start: Mapping[str, float] | None = None,
     skip_blocks: bool = True,
     home: Mapping[str, float] | None = None,
+    c_axis: str | None = None,
+    rotary: bool = False,
 ) -> None:
     """Interpret a whole program into `sink`; `start` is where the axes are (default 0),
-    `home` where G74 leaves them (their reference positions; default: where they were)."""
+    `home` where G74 leaves them (their reference positions; default: where they were);
+    `c_axis` the main spindle's name as the rotary axis, `rotary` whether it is that now."""
     names = tuple(a.upper() for a in axes)
     modal = Modal(
+        rotary=rotary,
         position={a: float((start or {}).get(a, 0.0)) for a in names},
         home_position={a.upper(): float(p) for a, p in (home or {}).items()},
     )
-    run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, modal, skip_blocks)
+    if c_axis is not None and not rotary:
+        modal.position[c_axis] = math.nan
+    run = _Run(
+        split_program(text), sink, names, {s.upper() for s in spindles}, modal, skip_blocks, c_axis
+    )
     if not run.lines(run.prog.main, depth=0):
         last = max(run.prog.main, default=0) + 1
         raise ProgramError("program ends without M30 or M02", last, 1, Code.PROGRAM_STRUCTURE)
 
 
 def interpret_blocks(
-    text: str, sink: canon.Sink, modal: Modal, axes: Iterable[str], spindles: Iterable[str]
+    text: str,
+    sink: canon.Sink,
+    modal: Modal,
+    axes: Iterable[str],
+    spindles: Iterable[str],
+    c_axis: str | None = None,
 ) -> None:
     """MDI: one or more blocks, no program end needed, starting from `modal` (what the
     blocks before left in force) and leaving it for the next. `modal` is changed only when
     every block interpreted without error."""
     names = tuple(a.upper() for a in axes)
     work = replace(modal, position=dict(modal.position))
-    run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, work, True)
+    run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, work, True, c_axis)
     run.lines(run.prog.main, depth=0)
     modal.__dict__.update(work.__dict__)
 
@@ -95,8 +115,10 @@ class _Run:
         spindles: set[str],
         modal: Modal,
         skip_blocks: bool,
+        c_axis: str | None = None,
     ) -> None:
         self.prog = prog
+        self.c_axis = c_axis
         self.sink = sink
         self.axes = axes
         self.spindles = spindles
@@ -221,7 +243,13 @@ class _Block:
                     raise self.error(
                         f"#{cmd}[{body}]: only the main spindle S", at, Code.NOT_SUPPORTED
                     )
-                self._emit(canon.RotaryMode(self.line, MAIN, cmd == "CAX"))
+                if self.run_.c_axis is None:
+                    raise self.error(
+                        f"#{cmd}: the main spindle has no rotary-axis name (P-CHAN-00010)",
+                        col,
+                        Code.NOT_SUPPORTED,
+                    )
+                self._rotary(cmd == "CAX")
             else:
                 raise self.error(f"#{cmd} is not supported", col, Code.NOT_SUPPORTED)
         tool, d = self.addr.get("T"), self.addr.get("D")
@@ -233,6 +261,17 @@ class _Block:
                     None if d is None else _whole(d, self.line),
                 )
             )
+
+    def _rotary(self, rotary: bool) -> None:
+        """The main spindle becomes the rotary axis C or a spindle again, if it is not yet;
+        C's position is the machine's business from here."""
+        modal = self.run_.modal
+        if modal.rotary == rotary:
+            return
+        self._emit(canon.RotaryMode(self.line, MAIN, rotary))
+        modal.rotary = rotary
+        assert self.run_.c_axis is not None
+        modal.position[self.run_.c_axis] = math.nan
 
     def _spindle(self) -> None:
         lexed = self.lexed
@@ -274,6 +313,14 @@ class _Block:
                     )
             if main.speed_rpm is not None:
                 modal.speed_rpm = main.speed_rpm
+            c = self.run_.c_axis
+            if main.m is not None and c is not None:
+                if c in self.addr:  # one drive cannot turn and position at once [003 §4.2]
+                    col = self.addr[c].column
+                    raise self.error(
+                        f"{c} and M{main.m} in one block: the spindle is one or the other", col
+                    )
+                self._rotary(False)
         for call in words.calls(gear):
             self._emit(call)
 
@@ -318,13 +365,30 @@ class _Block:
                 tapping(modal, col, self.error)
             return
         col = col or (axis_words + arc_words)[0].column
+        c = self.run_.c_axis
+        if c is not None:
+            if mode in (33, 63) and c in self.addr:
+                raise self.error(
+                    f"{c} cannot be programmed under G{mode} (the spindle turns)",
+                    self.addr[c].column,
+                )
+            if mode in (33, 63):
+                self._rotary(False)
+            elif c in self.addr:
+                self._rotary(True)
+                if not modal.absolute and math.isnan(modal.position[c]):
+                    raise self.error(
+                        f"{c}'s position is known only after the changeover: "
+                        "program it absolute (G90) first",
+                        self.addr[c].column,
+                    )
         end = dict(modal.position)
         for w in axis_words:
             value = w.value / 2 if w.letter == "X" and modal.diameter else w.value
             end[w.letter] = value if modal.absolute else modal.position[w.letter] + value
-        target = tuple([(a, end[a]) for a in axes])
+        to = target(end, axes)
         if mode == 0:
-            self._emit(canon.StraightTraverse(self.line, target, **self._motion_flags()))
+            self._emit(canon.StraightTraverse(self.line, to, **self._motion_flags()))
         elif mode in (33, 63):  # they start and end at rest: G60 holds without a flag
             self._emit(
                 thread_feed(self.line, end, modal, axes, pitch, col, self.error)
@@ -334,7 +398,7 @@ class _Block:
         elif modal.feed_mm_min is None:
             raise self.error("G01/G02/G03 need a feed F first", col, Code.FEED_MISSING)
         elif mode == 1:
-            self._emit(canon.StraightFeed(self.line, target, **self._motion_flags()))
+            self._emit(canon.StraightFeed(self.line, to, **self._motion_flags()))
         else:
             self._emit(
                 arc_feed(
@@ -343,7 +407,7 @@ class _Block:
                     modal.plane,
                     self.addr,
                     modal.position,
-                    target,
+                    to,
                     col,
                     self.error,
                     **self._motion_flags(),

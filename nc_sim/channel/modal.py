@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 # plane -> (first axis, second axis, normal axis); G02/G03 turn as seen from +normal
@@ -33,5 +35,12 @@ class Modal:
     speed_rpm: float | None = None  # last S of the main spindle; negative only from G63
     pitch: tuple[str, float] | None = None  # G33: letter I/J/K and mm per revolution
     thread_offset_deg: float = 0.0  # G33 S.OFFSET=, 0 <= offset < 360
-    position: dict[str, float] = field(default_factory=dict)
+    rotary: bool = False  # the main spindle is the rotary axis C (003), not a spindle
+    position: dict[str, float] = field(default_factory=dict)  # NaN: not known (C as spindle)
     home_position: dict[str, float] = field(default_factory=dict)  # where G74 ends, per axis
+
+
+def target(end: Mapping[str, float], axes: tuple[str, ...]) -> tuple[tuple[str, float], ...]:
+    """A motion call's end point: the axes whose positions are known (C is not while the
+    main spindle is a spindle, so a block without C leaves it alone)."""
+    return tuple([(a, end[a]) for a in axes if not math.isnan(end[a])])

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 from nc_sim.channel import canon
-from nc_sim.channel.modal import PITCH_AXIS, Modal
+from nc_sim.channel.modal import PITCH_AXIS, Modal, target
 from nc_sim.channel.spindle_words import MAIN
 from nc_sim.channel.words import ProgramError, Word
 from nc_sim.errors import Code
@@ -86,9 +86,9 @@ def thread_feed(
     axis = PITCH_AXIS[letter]
     if end[axis] == modal.position[axis]:
         raise pitch_not_moved(letter, col if pitch_word is None else pitch_word.column, error)
-    target = tuple([(a, end[a]) for a in axes])
+    to = target(end, axes)
     return canon.ThreadFeed(
-        line, target, MAIN, pitch_mm, axis, modal.thread_offset_deg, absolute=modal.absolute
+        line, to, MAIN, pitch_mm, axis, modal.thread_offset_deg, absolute=modal.absolute
     )
 
 
@@ -106,5 +106,5 @@ def tap_feed(
 ) -> canon.TapFeed:
     """G63 from `modal.position` to `end`; `col` is the block's motion column."""
     speed_rpm, feed_mm_min = tapping(modal, col, error)
-    target = tuple([(a, end[a]) for a in axes])
-    return canon.TapFeed(line, target, MAIN, speed_rpm, feed_mm_min, absolute=modal.absolute)
+    to = target(end, axes)
+    return canon.TapFeed(line, to, MAIN, speed_rpm, feed_mm_min, absolute=modal.absolute)

@@ -1,7 +1,8 @@
 """The interpreter against golden files: program (`interp/*.ngc`) -> canonical calls
 (`*.expected`, one `<line>: <call>` per line) or `ERROR <line>:<column> <job error>`. The
 channel has the axes X, Y, Z and the spindle S2 besides the main spindle S, unless the
-program's first line names its axes: `; axes: X Z C`.
+program's first line names its axes: `; axes: X Z C`; then C is the main spindle's name as the
+rotary axis (P-CHAN-00010), and the spindle starts in spindle mode.
 
 The expected numbers come from geometry worked by hand (the arc centres are noted in the
 programs' comments), not from the interpreter's output.
@@ -33,7 +34,9 @@ def _axes(text: str) -> tuple[str, ...]:
 
 def _run(text: str, skip_blocks: bool = True) -> canon.ListSink:
     sink = canon.ListSink()
-    interpret(text, sink, axes=_axes(text), spindles=("S2",), skip_blocks=skip_blocks)
+    axes = _axes(text)
+    c_axis = "C" if "C" in axes else None
+    interpret(text, sink, axes, ("S2",), skip_blocks=skip_blocks, c_axis=c_axis)
     return sink
 
 
@@ -163,7 +166,7 @@ def test_g60_is_taken_with_g33_and_g63() -> None:
 
 def test_cax_with_an_empty_body_names_the_main_spindle() -> None:
     sink = canon.ListSink()
-    interpret("#CAX[]\n#CAX OFF[ S ]\nM30", sink)
+    interpret("#CAX[]\n#CAX OFF[ S ]\nM30", sink, ("X", "Z", "C"), c_axis="C")
     assert sink.lines()[:2] == [
         "1: ROTARY_MODE spindle=S rotary=1",
         "2: ROTARY_MODE spindle=S rotary=0",
@@ -171,22 +174,43 @@ def test_cax_with_an_empty_body_names_the_main_spindle() -> None:
 
 
 def test_random_thread_and_tapping_words_give_calls_or_a_program_error() -> None:
-    """Seeded blocks of G33/G63/G51/#CAX words in any order: calls or ProgramError, never
-    another exception, and the coupled calls carry a positive pitch and a non-zero speed."""
+    """Seeded blocks of G33/G63/G51/#CAX/C words in any order: calls or ProgramError, never
+    another exception; the coupled calls carry a positive pitch and a non-zero speed; the
+    spindle is one thing at a time [003 §4.2]: ROTARY_MODE only where the mode changes, C
+    moves only in rotary mode, spindle functions and G33/G63 only in spindle mode; no NaN."""
     rng = random.Random(17)
     tokens = [
         "G33", "G63", "G51", "G52", "G00", "G01", "G04", "G91", "K1.5", "I2", "J0", "K-1",
         "S.OFFSET=400", "S.OFFSET=90", "#CAX", "#CAX OFF", "S200", "S-200", "S0", "Z-5", "X10",
-        "F100", "M3", "M5", "M19", "R3", "\n", "\n",
+        "F100", "M3", "M5", "M19", "R3", "C90", "C-45", "G90", "\n", "\n",
     ]  # fmt: skip
     for _ in range(2000):
         text = " ".join(rng.choice(tokens) for _ in range(rng.randint(1, 12))) + "\nM30"
         sink = canon.ListSink()
         try:
-            interpret(text, sink, axes=("X", "Z"))
+            interpret(text, sink, ("X", "Z", "C"), c_axis="C")
         except ProgramError as err:
             assert err.line >= 1 and err.column >= 1, (text, err)
+        rotary = False
         for call in sink.calls:
+            if isinstance(call, canon.RotaryMode):
+                assert call.rotary != rotary, (text, sink.lines())
+                rotary = call.rotary
+            ends = dict(getattr(call, "end", ()))
+            assert not any(math.isnan(v) for v in ends.values()), (text, call)
+            if "C" in ends:
+                assert rotary and isinstance(
+                    call, canon.StraightTraverse | canon.StraightFeed | canon.ArcFeed
+                ), (text, call)
+            if isinstance(
+                call,
+                canon.SpindleOn
+                | canon.SpindleOff
+                | canon.SpindleOrient
+                | canon.ThreadFeed
+                | canon.TapFeed,
+            ):
+                assert not rotary, (text, sink.lines())
             if isinstance(call, canon.ThreadFeed):
                 assert call.pitch_mm > 0 and 0 <= call.offset_deg < 360, (text, call)
             if isinstance(call, canon.TapFeed):
