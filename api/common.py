@@ -37,6 +37,12 @@ class JobErrorModel(BaseModel):
         None, description="program line (from 1) it concerns: a program error, a block"
     )
     column: int | None = Field(None, description="column (from 1) of a program error")
+    signal: str | None = Field(
+        None,
+        max_length=16,
+        description="the PLC interface signal it concerns (ROTMOD, ROTMOD_Q, SPMOD, SPMOD_Q) "
+        "for signal set/reset events; null for none",
+    )
 
 
 class ParameterProblem(BaseModel):

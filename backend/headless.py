@@ -43,6 +43,7 @@ def write_events(path: Path, result: ScenarioResult) -> None:
                 "gear": e.gear,
                 "line": e.line,
                 "column": e.column,
+                "signal": e.signal,
             }
             f.write(json.dumps(rec) + "\n")
 

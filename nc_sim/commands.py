@@ -130,6 +130,17 @@ class PlcAck:
 
 
 @dataclass(frozen=True)
+class PlcSignal:
+    """The PLC sets or resets a mode acknowledgement by hand: ROTMOD_Q or SPMOD_Q [003 §4.1].
+    Setting one answers the NC's pending request; withdrawing the one of the mode in force is
+    a process error."""
+
+    signal: str
+    on: bool
+    serial: int = field(default=0, kw_only=True)
+
+
+@dataclass(frozen=True)
 class Reset:
     """CNC reset: clears job errors and the block queue, stops motion."""
 
@@ -200,6 +211,7 @@ Command = (
     | HliWrite
     | PlcMode
     | PlcAck
+    | PlcSignal
     | Reset
     | EmergencyStop
 )

@@ -42,6 +42,8 @@ class Code(IntEnum):
     FEEDHOLD_ACTIVE = 90028  # cycle start while the HLI feedhold holds the channel
     THREAD_NOT_POSSIBLE = 90029  # [000 §2.8.7] G33 without a rotating, measured spindle, ...
     TAPPING_NOT_POSSIBLE = 90030  # [000 §2.8.6] G63 with a turning spindle, no encoder, ...
+    MODE_ACK_WITHDRAWN = 90031  # [003 §4.1] ROTMOD_Q/SPMOD_Q withdrawn in its mode: process error
+    CHANGEOVER_NOT_POSSIBLE = 90032  # [003 §4.2] spindle <-> C axis: no encoder, in error, ...
     # events (information, not errors)
     EV_BLOCK_DONE = 10
     EV_M_OUTPUT = 11
@@ -66,6 +68,15 @@ class Code(IntEnum):
     EV_PROGRAM_START = 30  # cycle start of a program
     EV_PROGRAM_STOP = 31  # stopped by the operator, rewound
     EV_COUPLED = 32  # G33/G63: the path follows the spindle
+    EV_SIGNAL_ON = 33  # a PLC interface signal (Event.signal: ROTMOD, ROTMOD_Q, ...) goes to 1
+    EV_SIGNAL_OFF = 34  # ... goes to 0
+    EV_CHANGEOVER = 35  # [003 Fig. 4-1 (1)] spindle <-> rotary axis changeover activated
+    EV_CHANGEOVER_INTERNAL = 36  # (2) decelerated, speed control, drive parameter record
+    EV_CHANGEOVER_END = 37  # (4) the PLC's external changeover ended: de-activated
+    EV_ROTARY_MODE = 38  # (5)+(6) position control: the main spindle is the rotary axis C
+    EV_SPINDLE_MODE = 39  # (5)+(6) the main spindle is a spindle again
+    EV_CHANGEOVER_INTERRUPTED = 40  # [003 §2.3] immediate stop: the changeover stays pending
+    EV_CHANGEOVER_ABORTED = 41  # reset, or a jog/M3/M4/M5/M19 key, ends it
 
 
 MESSAGES: dict[Code, str] = {
@@ -75,7 +86,7 @@ MESSAGES: dict[Code, str] = {
     Code.NO_ENABLES: "drive enables missing: motion refused",
     Code.LAG_MONITORING: "lag monitoring: position lag exceeds its limit (getriebe[i].lag_max)",
     Code.SOFTWARE_LIMIT: "target beyond the software limit (P-AXIS-00177/P-AXIS-00178)",
-    Code.PLC_ACK_TIMEOUT: "the PLC did not acknowledge the M function in time",
+    Code.PLC_ACK_TIMEOUT: "the PLC did not acknowledge the M function or mode request in time",
     Code.EMERGENCY_STOP: "emergency stop",
     Code.AXIS_BUSY: "axis is moving: command refused",
     Code.DRIVE_NOT_READY: "drive not ready (drive status): motion refused",
@@ -110,6 +121,9 @@ MESSAGES: dict[Code, str] = {
     "thread long enough to accelerate and brake",
     Code.TAPPING_NOT_POSSIBLE: "tapping G63 not possible: the spindle must stand (M5 or M19 "
     "first) and be position-controlled, and the feed within the axes' limits",
+    Code.MODE_ACK_WITHDRAWN: "the PLC withdrew the acknowledgement of the mode in force "
+    "(ROTMOD_Q/SPMOD_Q): process error",
+    Code.CHANGEOVER_NOT_POSSIBLE: "changeover between spindle and rotary axis not possible",
     Code.EV_BLOCK_DONE: "block done",
     Code.EV_M_OUTPUT: "M function output to the PLC",
     Code.EV_M_ACK: "M function acknowledged by the PLC",
@@ -134,6 +148,15 @@ MESSAGES: dict[Code, str] = {
     Code.EV_PROGRAM_START: "program started",
     Code.EV_PROGRAM_STOP: "program stopped",
     Code.EV_COUPLED: "path coupled to the spindle",
+    Code.EV_SIGNAL_ON: "PLC signal set",
+    Code.EV_SIGNAL_OFF: "PLC signal reset",
+    Code.EV_CHANGEOVER: "changeover between spindle and rotary axis activated",
+    Code.EV_CHANGEOVER_INTERNAL: "internal changeover done",
+    Code.EV_CHANGEOVER_END: "changeover de-activated",
+    Code.EV_ROTARY_MODE: "rotary axis mode",
+    Code.EV_SPINDLE_MODE: "spindle mode",
+    Code.EV_CHANGEOVER_INTERRUPTED: "changeover interrupted",
+    Code.EV_CHANGEOVER_ABORTED: "changeover aborted",
 }
 """What each code means, in the operator's words; every code has one (the event log shows it
 when an event carries no detail of its own)."""

@@ -41,6 +41,7 @@ class Event:
     gear: int | None = None  # the gear stage 1..6 it concerns (gear change started, changed)
     line: int | None = None  # the program line (from 1) it concerns: a program error, a block
     column: int | None = None  # the column (from 1) of a program error
+    signal: str | None = None  # the PLC interface signal it concerns (ROTMOD, SPMOD_Q, ...)
 
     @property
     def error(self) -> bool:
@@ -62,6 +63,7 @@ class Log(Protocol):
         gear: int | None = None,
         line: int | None = None,
         column: int | None = None,
+        signal: str | None = None,
     ) -> Event: ...
 
 

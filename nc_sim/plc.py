@@ -1,13 +1,15 @@
-"""The simulated PLC: switches the drives on at start-up and acknowledges M functions; and
-the NC's side of that handshake.
+"""The simulated PLC: switches the drives on at start-up, acknowledges M functions and
+answers the spindle/rotary-axis mode requests [003 §4.1]; and the NC's side of that handshake.
 
-Modes: `auto` acknowledges after a delay, `manual` waits for `acknowledge()`, `fault` never
-answers (the NC then raises a job error after its timeout) - for training.
+Modes: `auto` acknowledges after a delay, `manual` waits for `acknowledge()` (an M function)
+or `set_signal()` (ROTMOD_Q/SPMOD_Q), `fault` never answers (the NC then raises a job error
+after its timeout) - for training.
 
-`Handshake` is the one way an M function goes to the PLC: output (event), acknowledgement
-(event, then whoever waits continues) or, after P-CHAN plc.m_ack_timeout, job error 90004
-(then whoever waits is told). A block waits for its M functions, a gear change for its
-M40-M45; each hands a `Waiter` with what to do.
+`Handshake` is the one way a request goes to the PLC: output (event), acknowledgement (event,
+then whoever waits continues) or, after P-CHAN plc.m_ack_timeout, job error 90004 (then whoever
+waits is told). A block waits for its M functions, a gear change for its M40-M45, a changeover
+for ROTMOD_Q or SPMOD_Q; each hands a `Waiter` with what to do. The mode acknowledgements are
+levels, not pulses: the PLC keeps the one of the mode in force set [003 §4.1].
 """
 
 from __future__ import annotations
@@ -26,14 +28,23 @@ class PlcMode(StrEnum):
     FAULT = "fault"
 
 
+MODE_SIGNALS = ("ROTMOD", "SPMOD")  # the NC's mode requests; the PLC answers with <name>_Q
+
+
 @dataclass
 class PendingM:
-    """An M function output to the PLC and not yet acknowledged."""
+    """An M function (or a mode request ROTMOD/SPMOD, `signal`) output to the PLC and not yet
+    acknowledged."""
 
-    m: int
+    m: int | None
     axis: str
     out_cycle: int
     due_cycle: int | None  # when auto mode will acknowledge it
+    signal: str | None = None
+
+    @property
+    def what(self) -> str:
+        return self.signal if self.signal is not None else f"M{self.m}"
 
 
 class SimPlc:
@@ -44,6 +55,8 @@ class SimPlc:
         self.delay_cycles = delay_cycles
         self.power_on_cycle = power_on_cycle
         self.pending: list[PendingM] = []
+        # the mode acknowledgements the PLC holds: at power-on it reports spindle mode
+        self.signals: dict[str, bool] = {"ROTMOD_Q": False, "SPMOD_Q": True}
 
     def set_mode(self, mode: PlcMode, now: int, delay_cycles: int | None = None) -> None:
         """Switch mode; pending functions get a due cycle in auto mode."""
@@ -53,16 +66,18 @@ class SimPlc:
         for p in self.pending:
             p.due_cycle = now + self.delay_cycles if mode is PlcMode.AUTO else None
 
-    def output(self, m: int, axis: str, now: int) -> PendingM:
-        """The NC outputs an M function; returns its pending entry."""
+    def output(self, m: int | None, axis: str, now: int, signal: str | None = None) -> PendingM:
+        """The NC outputs an M function (or sets a mode request `signal`); returns its
+        pending entry."""
         due = now + self.delay_cycles if self.mode is PlcMode.AUTO else None
-        p = PendingM(m, axis, now, due)
+        p = PendingM(m, axis, now, due, signal)
         self.pending.append(p)
         return p
 
     def acknowledge(self, m: int | None = None) -> list[PendingM]:
-        """Manual acknowledgement of one M function (or all with m=None); returns those acked."""
-        acked = [p for p in self.pending if m is None or p.m == m]
+        """Manual acknowledgement of one M function (or all with m=None); returns those acked.
+        Mode requests are answered by their signal (`answer`), not here."""
+        acked = [p for p in self.pending if p.signal is None and (m is None or p.m == m)]
         if m is not None:
             acked = acked[:1]
         for p in acked:
@@ -88,6 +103,13 @@ class SimPlc:
     def next_due(self) -> int | None:
         dues = [p.due_cycle for p in self.pending if p.due_cycle is not None]
         return min(dues) if dues else None
+
+    def answer(self, signal: str) -> list[PendingM]:
+        """The PLC sets `signal` (ROTMOD_Q/SPMOD_Q) by hand: the request it answers, if any."""
+        acked = [p for p in self.pending if p.signal is not None and f"{p.signal}_Q" == signal]
+        for p in acked:
+            self.pending.remove(p)
+        return acked
 
     def clear(self) -> None:
         self.pending.clear()
@@ -130,6 +152,20 @@ class Handshake:
         self._waiting[p.out_cycle] = waiter
         self.log(Code.EV_M_OUTPUT, axis, f"M{m} output to the PLC", m=m, gear=gear)
 
+    def request(self, signal: str, axis: str, waiter: Waiter) -> None:
+        """Set the mode request `signal` (ROTMOD/SPMOD) for `axis`; `waiter` continues when
+        the PLC sets its acknowledgement <signal>_Q."""
+        p = self.plc.output(None, axis, self.now(), signal)
+        while p.out_cycle in self._waiting:
+            p.out_cycle += 1
+        self._waiting[p.out_cycle] = waiter
+
+    def withdraw_request(self, signal: str) -> None:
+        """A changeover that ended without its answer: its request is pending no more."""
+        for p in [p for p in self.plc.pending if p.signal == signal]:
+            self.plc.pending.remove(p)
+            self._waiting.pop(p.out_cycle, None)
+
     def acknowledge(self, m: int | None = None) -> int:
         """Manual acknowledgement (of M`m`, or all); returns how many M functions were
         acknowledged (0 when none was pending, e.g. after its 90004 timeout)."""
@@ -137,6 +173,25 @@ class Handshake:
         for p in acked:
             self._acked(p)
         return len(acked)
+
+    def set_signal(self, signal: str, on: bool, axis: str = "") -> int:
+        """The PLC sets or resets a mode acknowledgement (ROTMOD_Q/SPMOD_Q) by hand; setting
+        one answers its pending request. Returns how many requests it answered."""
+        if on:
+            acked = self.plc.answer(signal)
+            for p in acked:
+                self._acked(p)
+            if not acked:
+                self._level(signal, True, axis)
+            return len(acked)
+        self._level(signal, False, axis)
+        return 0
+
+    def _level(self, signal: str, on: bool, axis: str) -> None:
+        if self.plc.signals.get(signal) == on:
+            return
+        self.plc.signals[signal] = on
+        self.log(Code.EV_SIGNAL_ON if on else Code.EV_SIGNAL_OFF, axis, signal=signal)
 
     def on_cycle(self, cycle: int) -> None:
         """The PLC's acknowledgements due in this cycle, then the timeouts that ran out."""
@@ -149,8 +204,10 @@ class Handshake:
                 ev = self.log(
                     Code.PLC_ACK_TIMEOUT,
                     waiter.error_axis,
-                    f"no acknowledgement after {self.timeout_cycles * self.cycle_s:g} s",
+                    f"no acknowledgement {'of ' + gone.what + ' ' if gone else ''}"
+                    f"after {self.timeout_cycles * self.cycle_s:g} s",
                     m=gone.m if gone else None,
+                    signal=gone.signal if gone else None,
                 )
                 waiter.timed_out(ev)
 
@@ -168,7 +225,13 @@ class Handshake:
         self.plc.clear()
 
     def _acked(self, p: PendingM) -> None:
-        self.log(Code.EV_M_ACK, "", f"M{p.m} acknowledged", m=p.m)
+        if p.signal is None:
+            self.log(Code.EV_M_ACK, "", f"M{p.m} acknowledged", m=p.m)
+        else:  # the acknowledgement of the new mode set, then the other one reset
+            self._level(f"{p.signal}_Q", True, p.axis)
+            for s in MODE_SIGNALS:
+                if s != p.signal:
+                    self._level(f"{s}_Q", False, p.axis)
         waiter = self._waiting.pop(p.out_cycle, None)
         if waiter is not None:
             waiter.acknowledged()

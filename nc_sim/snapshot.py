@@ -29,6 +29,7 @@ class AxisState(IntEnum):
     OPEN_LOOP = 7  # spindle rotating above the control limit vb_regelgrenze
     GEAR_CHANGE = 8  # spindle at the change position, waiting for the PLC
     ERROR = 9
+    CHANGEOVER = 10  # spindle <-> rotary axis C [003 Fig. 4-1]: braking, waiting for the PLC
 
 
 class LoopMode(StrEnum):
@@ -84,11 +85,13 @@ class AxisSnapshot:
 
 @dataclass(frozen=True)
 class PendingMSnapshot:
-    """An M function output to the PLC and not yet acknowledged."""
+    """An M function (or a mode request ROTMOD/SPMOD, `signal`) output to the PLC and not yet
+    acknowledged."""
 
-    m: int
+    m: int | None
     axis: str
     out_cycle: int
+    signal: str | None = None
 
 
 @dataclass(frozen=True)

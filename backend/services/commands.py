@@ -61,6 +61,7 @@ def job_error_model(e: Event) -> JobErrorModel:
         gear=e.gear,
         line=e.line,
         column=e.column,
+        signal=e.signal,
     )
 
 

@@ -68,6 +68,9 @@ class Trace:
                 message=e.message,
                 m=e.m,
                 gear=e.gear,
+                line=e.line,
+                column=e.column,
+                signal=e.signal,
             )
             for e in self.detail.events
         ]

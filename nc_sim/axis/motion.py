@@ -288,16 +288,21 @@ class AxisMotion:
         """The position latched at the reference mark becomes kenngr.ref_pos: the encoder
         offset and every position of the row shift by the difference."""
         s = ax.slot
-        shift = ax.cfg.eng("kenngr.ref_pos") - latched
-        self.k.pr[s, L.P_ENC_OFFSET] += shift
-        for col in (L.S_P_ACT, L.S_P_CMD, L.S_SEG_P0):
-            self.k.st[s, col] += shift
+        self.shift_positions(ax, ax.cfg.eng("kenngr.ref_pos") - latched)
         ax.homed = True
         self.k.ist[s, L.I_HOMED] = 1
         if ax.kind is AxisKind.SPINDLE:
             self.arm_zero_mark(ax, False)
         else:
             self.k.ist[s, L.I_LIMITS_ON] = int(ax.kind is AxisKind.LINEAR)
+
+    def shift_positions(self, ax: Axis, shift: float) -> None:
+        """Every position of the axis' row moves by `shift` (the encoder offset with them):
+        a new reference, or a rotary axis' position rebased into 0..360°."""
+        s = ax.slot
+        self.k.pr[s, L.P_ENC_OFFSET] += shift
+        for col in (L.S_P_ACT, L.S_P_CMD, L.S_SEG_P0, L.S_TARGET):
+            self.k.st[s, col] += shift
 
     def arm_zero_mark(self, ax: Axis, on: bool) -> None:
         """Report the encoder's zero mark (EV_CAM) while a spindle searches it."""

@@ -43,10 +43,12 @@ class Channel:
         interpret: Callable[[str], list[canon.Call]],
         cycle_s: float,
         lookahead: int,
+        rotary_axes: frozenset[str] = frozenset(),
     ) -> None:
         self.path = path
         self.host = host
         self.axes = axes
+        self.rotary_axes = rotary_axes  # degrees: F is over the linear axes (C alone: °/min)
         self.interpret = interpret  # text -> calls from the axes' positions now (raises)
         self.cycle_s = cycle_s
         self.lookahead = max(1, min(lookahead, MAX_WINDOW))
@@ -85,7 +87,7 @@ class Channel:
         assert self.progress.program is not None
         calls = self.interpret(self.progress.program.text)
         self.mdi.reset_modal()
-        self.ex = Execution(calls, self.axes, self.host.sync_of, self.host.new_action_id)
+        self.ex = self._execution(calls)
         self.wait = None
         self.last_key = None
         self.step_granted = True
@@ -94,6 +96,11 @@ class Channel:
         self.progress.state = ChannelState.RUNNING
         self._held_if_feedhold()
         self.pump()
+
+    def _execution(self, calls: list[canon.Call]) -> Execution:
+        return Execution(
+            calls, self.axes, self.host.sync_of, self.host.new_action_id, self.rotary_axes
+        )
 
     def _held_if_feedhold(self) -> None:
         """A start with feedhold on waits in HELD until feedhold is released."""
@@ -115,7 +122,7 @@ class Channel:
         if not self.progress.mdi:
             self.mdi.return_to = self.progress.state
             modal = self.mdi.modal
-            self.ex = Execution([], self.axes, self.host.sync_of, self.host.new_action_id)
+            self.ex = self._execution([])
             self.ex.feed_mm_min, self.ex.plane = modal.feed_mm_min, modal.plane
             self.wait = None
             self.last_key = None

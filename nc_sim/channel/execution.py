@@ -84,6 +84,7 @@ class Execution:
     axes: tuple[str, ...]
     sync_of: Callable[[canon.Call], int]  # the synchronisation type of a spindle call
     ids: Callable[[], int]  # numbers for actions, unique in the machine
+    rotary_axes: frozenset[str] = frozenset()  # in degrees: not part of the path length
     pc: int = 0  # next call to translate
     steps: deque[Step] = field(default_factory=deque)
     late: list[_Late] = field(default_factory=list)
@@ -111,6 +112,8 @@ class Execution:
         while self.pc < len(self.calls) and self.calls[self.pc].line == line:
             block.append(self.calls[self.pc])
             self.pc += 1
+            if isinstance(block[-1], canon.RotaryMode):
+                break  # the rest of the block starts where the changeover leaves C
         first = len(self.steps)
         self._translate(block, position)
         if self.block:
@@ -120,6 +123,9 @@ class Execution:
                 if step.element is not None:
                     step.element.block_id = self.block
         return True
+
+    def __post_init__(self) -> None:
+        self.linear = np.array([a not in self.rotary_axes for a in self.axes], dtype=float)
 
     def _translate(self, block: list[canon.Call], position: list[float]) -> None:
         has_motion = any(isinstance(c, _MOTION) for c in block)
@@ -137,9 +143,9 @@ class Execution:
                             self.steps.append(Step(line, waits_for=late.action_id))
                             self.late.remove(late)
                     e = (
-                        arc(self.axes, start, call, self.feed_mm_min)
+                        arc(self.axes, start, call, self.feed_mm_min, self.linear)
                         if isinstance(call, canon.ArcFeed)
-                        else straight(self.axes, start, call, self.feed_mm_min)
+                        else straight(self.axes, start, call, self.feed_mm_min, self.linear)
                     )
                     if e is not None:
                         g = 0 if not is_feed else 1
@@ -183,14 +189,14 @@ class Execution:
     def _coupled(self, call: canon.ThreadFeed | canon.TapFeed, start: np.ndarray) -> Element | None:
         """The element of a G33/G63 block: a straight line whose path follows the spindle."""
         if isinstance(call, canon.TapFeed):
-            e = straight(self.axes, start, call, call.feed_mm_min)
+            e = straight(self.axes, start, call, call.feed_mm_min, self.linear)
             if e is None:
                 return None
             pitch = call.feed_mm_min / abs(call.speed_rpm)
             e.coupling = Coupling(L.COUPLE_TAP, call.spindle, pitch, speed_rpm=call.speed_rpm)
             g = 63
         else:
-            e = straight(self.axes, start, call, None)
+            e = straight(self.axes, start, call, None, self.linear)
             if e is None:
                 return None
             # the lead is measured along the pitch axis: path length per revolution
@@ -258,4 +264,7 @@ def describe(call: canon.Call, spindle_name: Callable[[str], str]) -> str:
             return f"gear change M{call.stage + 39}"
         case canon.Home():
             return "homing (G74)"
+        case canon.RotaryMode():
+            into, ack = ("rotary axis", "ROTMOD_Q") if call.rotary else ("spindle", "SPMOD_Q")
+            return f"changeover to {into} mode (the PLC's {ack})"
     return f"line {call.line}"

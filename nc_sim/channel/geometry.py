@@ -107,19 +107,35 @@ def straight(
     start: np.ndarray,
     call: canon.StraightTraverse | canon.StraightFeed | canon.ThreadFeed | canon.TapFeed,
     feed_mm_min: float | None,
+    linear: np.ndarray | None = None,
 ) -> Element | None:
-    """The element of a G00/G01 (or G33/G63) block from `start`; None when it does not move."""
+    """The element of a G00/G01 (or G33/G63) block from `start`; None when it does not move.
+    Its path length is over the `linear` axes (mask, default all): a rotary axis follows in
+    proportion, and alone its degrees are the path (F in °/min)."""
     end = _vector(axes, call.end, start)
     d = end - start
-    length = float(np.linalg.norm(d))
+    length = _length(d, linear)
     if length < 1e-9:
         return None
     rapid = isinstance(call, canon.StraightTraverse)
     return Element(call.line, rapid, start, end, length, None if rapid else feed_mm_min, d / length)
 
 
+def _length(d: np.ndarray, linear: np.ndarray | None) -> float:
+    """Path length of a move `d`: over the linear axes, else (a rotary axis alone) all."""
+    if linear is not None:
+        along = float(np.linalg.norm(d * linear))
+        if along >= 1e-9:
+            return along
+    return float(np.linalg.norm(d))
+
+
 def arc(
-    axes: tuple[str, ...], start: np.ndarray, call: canon.ArcFeed, feed_mm_min: float | None
+    axes: tuple[str, ...],
+    start: np.ndarray,
+    call: canon.ArcFeed,
+    feed_mm_min: float | None,
+    linear: np.ndarray | None = None,
 ) -> Element | None:
     """The element of a G02/G03 block from `start` (a full circle when it ends where it
     starts); None when its plane's axes are not path axes."""
@@ -139,7 +155,8 @@ def arc(
         dphi = TWO_PI * call.turn  # a full circle
     other = end - start
     other[i0] = other[i1] = 0.0
-    length = math.hypot(r * abs(dphi), float(np.linalg.norm(other)))
+    along = other if linear is None else other * linear  # a rotary axis follows the arc
+    length = math.hypot(r * abs(dphi), float(np.linalg.norm(along)))
     lin = other / length
     # the arc ends on its circle: the next block starts there (within the 2 µm tolerance)
     end[i0] = cx + r * math.cos(phi0 + dphi)

@@ -87,8 +87,9 @@ class MachineChannelHost:
         if not self.moving:
             return
         self.moving = False
+        inactive = self.m.channel.path.inactive
         for a in self.path_axes:
-            if a.state is AxisState.MOVING:
+            if a.state is AxisState.MOVING and a.slot not in inactive:
                 self.m.moves.stop(a, Motion.FEED)
 
     def synch_plc(self, ax: Axis, m: int) -> bool:
@@ -125,6 +126,13 @@ class MachineChannelHost:
                 if isinstance(found, Event):
                     return found
                 ax = found
+                cax = m.cax
+                spindle_mode = isinstance(
+                    call, canon.SpindleOn | canon.SpindleOff | canon.SpindleOrient
+                )
+                if spindle_mode and cax is not None and ax is cax.ax and not cax.spindle_mode:
+                    # in neither mode (the PLC acknowledged none): change over first
+                    return self._after_changeover(call, action_id)
                 if (
                     isinstance(call, canon.SpindleOn | canon.SpindleSpeed)
                     and call.gear is not None
@@ -163,11 +171,31 @@ class MachineChannelHost:
                 ok = self._home_next(action_id)
             case canon.MFunction():
                 self.output(call.m, "", action_id)
+            case canon.RotaryMode():
+                if m.cax is None:
+                    return m.motion.fail(
+                        None, Code.CHANGEOVER_NOT_POSSIBLE, f"line {call.line}: no C axis"
+                    )
+                ok = m.cax.request(call.rotary, action_id) is None
         if ok:
             return None
         return next((e for e in m.events.since(seen).entries if e.error), None) or m.log(
             Code.CHANNEL_ERROR_STATE, "", f"line {call.line} could not start", line=call.line
         )
+
+    def _after_changeover(self, call: canon.Call, action_id: int) -> Event | None:
+        """A spindle function while the spindle is in no mode: the changeover to spindle
+        mode, then the function (its job error stops the block)."""
+        cax = self.m.cax
+        assert cax is not None
+
+        def then() -> Event | None:
+            err = self.start_action(call, action_id)
+            if err is not None:
+                self.channel_error(err)
+            return err
+
+        return cax.request(False, action_id, then)
 
     def output(self, mfunc: int, axis: str, action_id: int) -> None:
         """An M function to the PLC, waited for by `action_id`."""
@@ -276,7 +304,10 @@ class MachineChannelHost:
         moved = np.abs(e.end - e.start) > 1e-12
         if e.arc is not None:
             moved[e.arc[0]] = moved[e.arc[1]] = True
+        inactive = m.channel.path.inactive
         for i, ax in enumerate(self.path_axes):
+            if ax.slot in inactive:
+                continue  # the C axis while the main spindle is a spindle
             if moved[i]:
                 err = m.motion.drive_refusal(ax) or m.moves.homing_required(ax)
                 if err:
@@ -363,7 +394,10 @@ class MachineChannelHost:
         self.moving = line is not None
         if line is None:
             self.tapping = None  # the tap's spindle ends its move by itself
+        inactive = self.m.channel.path.inactive
         for i, ax in enumerate(self.path_axes):
+            if ax.slot in inactive:
+                continue
             if line is not None and ax.state is AxisState.STANDSTILL:
                 ax.motion = Motion.FEED
                 self.m.motion.set_state(ax, AxisState.MOVING)

@@ -8,6 +8,7 @@ operator sees.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 from nc_sim.channel import canon
@@ -34,7 +35,7 @@ class ChannelOps:
         self.m = m
         self.next_block = 1  # MDI block numbers
         self._interpreted: (
-            tuple[tuple[str, tuple[tuple[str, float], ...]], list[canon.Call]] | None
+            tuple[tuple[str, tuple[tuple[str, float | None], ...]], list[canon.Call]] | None
         ) = None
 
     @property
@@ -70,10 +71,15 @@ class ChannelOps:
             return refused
         modal = m.channel.mdi_modal()
         modal.home_position = self.home_positions()
+        cax = m.cax
+        if cax is not None and not m.channel.progress.mdi:  # from the machine's mode now
+            modal.rotary = cax.rotary
+            if not cax.rotary:
+                modal.position[cax.c_name] = math.nan
         sink = ListSink()
         axes, spindles = self._names
         try:
-            interpret_blocks(text, sink, modal, axes, spindles)
+            interpret_blocks(text, sink, modal, axes, spindles, cax.c_name if cax else None)
         except ProgramError as e:
             m.log(Code(e.code), "", f"{e.detail} (column {e.column}) in '{text}'")
             return Invalid(serial, e.detail, e.column, int(e.code), e.line)
@@ -90,12 +96,24 @@ class ChannelOps:
         the calls of the last load are reused while the axes have not moved since."""
         m = self.m
         start = {a.name: float(m.k.st[a.slot, L.S_P_CMD]) for a in m.axes}
-        key = (text, tuple(start.items()))
+        cax = m.cax
+        if cax is not None:  # C where the rotary axis is; unknown while a spindle
+            start[cax.c_name] = start[cax.ax.name] if cax.rotary else math.nan
+        key = (text, tuple((n, None if math.isnan(p) else p) for n, p in start.items()))
         if self._interpreted is not None and self._interpreted[0] == key:
             return self._interpreted[1]
         sink = ListSink()
         axes, spindles = self._names
-        interpret(text, sink, axes, spindles, start, home=self.home_positions())
+        interpret(
+            text,
+            sink,
+            axes,
+            spindles,
+            start,
+            home=self.home_positions(),
+            c_axis=cax.c_name if cax else None,
+            rotary=cax.rotary if cax else False,
+        )
         self._interpreted = (key, sink.calls)
         return sink.calls
 
@@ -150,5 +168,7 @@ class ChannelOps:
     def stop(self) -> None:
         """Program stop (or the end of the MDI blocks): brake on the path and rewind."""
         if self.m.channel.state in PROGRAM_ACTIVE:
+            if self.m.cax is not None:  # a mode change interrupts a changeover [003 §2.3]
+                self.m.cax.interrupt(estop=False)
             self.m.channel.stop()
             self.m.log(Code.EV_PROGRAM_STOP)

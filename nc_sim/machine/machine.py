@@ -11,6 +11,7 @@ phase bounded by the watchdog (nc_sim/axis/watchdog.py). Nothing here reads a cl
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import assert_never
 
 from nc_sim import hli
@@ -38,6 +39,7 @@ from nc_sim.commands import (
     Move,
     Outcome,
     PlcAck,
+    PlcSignal,
     ProgramLoad,
     ProgramStop,
     Refused,
@@ -59,7 +61,8 @@ from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.panel import Panel
 from nc_sim.machine.readout import machine_snapshot
 from nc_sim.plc import Handshake, PlcMode, SimPlc
-from nc_sim.snapshot import MachineSnapshot
+from nc_sim.snapshot import AxisState, MachineSnapshot
+from nc_sim.spindle.caxis import CAxis
 from nc_sim.spindle.control import SpindleControl
 from nc_sim.units import AxisKind
 
@@ -98,23 +101,43 @@ class Machine:
         self.motion = AxisMotion(kernel, self.ctx, self.log, lambda: self.cycle, self._axis_failed)
         self.sp = SpindleControl(self.motion, cfg, self.handshake)
         self.moves = Moves(self.motion, self.sp, cfg)
-        path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE][: L.MAX_PATH_AXES]
+        path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE]
+        # a main spindle with a rotary-axis name (P-CHAN-00010) is also the path axis C
+        c_name = str(cfg.channel_raw("default_ax_name_of_spindle") or "").strip().upper()
+        c_spindle = self.by_name.get(self.main_spindle or "") if c_name else None
+        if c_spindle is not None:
+            path_axes.append(c_spindle)
+        path_axes = path_axes[: L.MAX_PATH_AXES]
+        names = [c_name if a is c_spindle else a.name for a in path_axes]
         self.channel_slot = kernel.claim(1)[0]
         self.ch_host = MachineChannelHost(self, path_axes)
         self.ops = ChannelOps(self)
         self.panel = Panel(self)
+        path = Path(kernel, self.channel_slot, [a.slot for a in path_axes])
         self.channel = Channel(
-            Path(kernel, self.channel_slot, [a.slot for a in path_axes]),
+            path,
             self.ch_host,
-            tuple(a.name for a in path_axes),
+            tuple(names),
             self.ops.interpret_here,
             cfg.cycle_s,
             int(cfg.channel_raw("lookahead_blocks")),
+            rotary_axes=frozenset([c_name]) if c_spindle in path_axes else frozenset(),
         )
         for ax in self.axes:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
             power_on(kernel, ax)
+        self.cax: CAxis | None = None
+        if c_spindle is not None and c_spindle in path_axes:
+            slot = c_spindle.slot
+            self.cax = CAxis(
+                self.sp,
+                c_spindle,
+                c_name,
+                self.handshake,
+                lambda on: path.inactive.discard(slot) if on else path.inactive.add(slot),
+                self._axis_failed,
+            )
 
     @property
     def channel_units(self) -> dict[str, int]:
@@ -146,6 +169,9 @@ class Machine:
             outcome = self._dispatch(cmd)
         except NcUsageError as e:
             outcome = Invalid(cmd.serial, str(e))
+        # what a block waited for may be done now (a manual acknowledgement): it goes on from
+        # this cycle boundary, not from the next wake-up
+        self.channel.pump()
         self.outcomes.append(outcome)
         return outcome
 
@@ -165,24 +191,48 @@ class Machine:
             case SingleBlock():
                 self.channel.set_single_block(cmd.on)
             case SpindleRun():
-                answer = self.panel.spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm)
+                answer = self._as(
+                    cmd.spindle,
+                    False,
+                    lambda: self.panel.spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm),
+                )
             case SpindlePosition():
-                answer = self.panel.spindle_position(
-                    cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm
+                answer = self._as(
+                    cmd.spindle,
+                    False,
+                    lambda: self.panel.spindle_position(
+                        cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm
+                    ),
                 )
             case GearChange():
-                answer = self.panel.spindle_gear(cmd.spindle, cmd.m)
+                answer = self._as(
+                    cmd.spindle, False, lambda: self.panel.spindle_gear(cmd.spindle, cmd.m)
+                )
             case Home():
                 answer = self.moves.home(self.axis(cmd.axis))
             case JogStart():
-                answer = self.moves.jog_start(self.axis(cmd.axis), cmd.direction, cmd.feed_mm_min)
+                ax = self.axis(cmd.axis)
+                answer = self._as(
+                    cmd.axis,
+                    True,
+                    lambda: self.moves.jog_start(ax, cmd.direction, cmd.feed_mm_min),
+                )
             case JogStop():
-                self.moves.jog_stop(self.axis(cmd.axis))
+                ax = self.axis(cmd.axis)
+                if self.cax is not None and ax is self.cax.ax:
+                    self.cax.cancel_then()
+                self.moves.jog_stop(ax)
             case JogStep():
-                answer = self.moves.jog_step(self.axis(cmd.axis), cmd.distance, cmd.feed_mm_min)
+                ax = self.axis(cmd.axis)
+                answer = self._as(
+                    cmd.axis, True, lambda: self.moves.jog_step(ax, cmd.distance, cmd.feed_mm_min)
+                )
             case Move():
-                answer = self.moves.move(
-                    self.axis(cmd.axis), cmd.target, cmd.rapid, cmd.feed_mm_min
+                ax = self.axis(cmd.axis)
+                answer = self._as(
+                    cmd.axis,
+                    True,
+                    lambda: self.moves.move(ax, cmd.target, cmd.rapid, cmd.feed_mm_min),
                 )
             case HliWrite():
                 self.panel.hli_write(cmd.unit, cmd.value, cmd.axis)
@@ -190,6 +240,8 @@ class Machine:
                 self._plc_mode(cmd.mode, cmd.delay_s)
             case PlcAck():
                 answer = self.handshake.acknowledge(cmd.m)
+            case PlcSignal():
+                answer = self._plc_signal(cmd.signal, cmd.on)
             case Reset():
                 self._reset()
             case EmergencyStop():
@@ -199,6 +251,26 @@ class Machine:
         if isinstance(answer, Event):
             return Refused(cmd.serial, answer)
         return Accepted(cmd.serial, self.cycle, acknowledged=answer)
+
+    def _as(self, name: str, rotary: bool, then: Callable[[], Event | None]) -> Event | None:
+        """A key of the main spindle with rotary-axis capability: jog and moves need rotary
+        axis mode, the spindle keys spindle mode; `then` runs once it is in force [003 §4.2]."""
+        cax = self.cax
+        if cax is None or self.axis(name) is not cax.ax:
+            return then()
+        ax = cax.ax
+        if rotary and not cax.rotary and ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
+            # a key never stops a turning spindle to make it an axis: M5 first
+            what = ax.state.name.lower().replace("_", " ")
+            return self.motion.fail(ax, Code.AXIS_BUSY, f"{ax.name} is {what}: M5 first")
+        return cax.request(rotary, None, then)
+
+    def _plc_signal(self, signal: str, on: bool) -> int:
+        if signal not in ("ROTMOD_Q", "SPMOD_Q"):
+            raise NcUsageError(f"unknown PLC signal '{signal}' (ROTMOD_Q, SPMOD_Q)")
+        if self.cax is None:
+            raise NcUsageError("no spindle with rotary-axis capability (P-CHAN-00010)")
+        return self.cax.plc_signal(signal, on)
 
     # --- time ---------------------------------------------------------------------------
     def _cycles(self, seconds: float) -> int:
@@ -258,6 +330,7 @@ class Machine:
         gear: int | None = None,
         line: int | None = None,
         column: int | None = None,
+        signal: str | None = None,
     ) -> Event:
         """Record an error (its meaning, then the detail) or an event (its detail, which
         reads as a message of its own, else the meaning), numbered by the event log, with
@@ -276,15 +349,16 @@ class Machine:
             gear=gear,
             line=line,
             column=column,
+            signal=signal,
         )
         self.events.append(ev)
         return ev
 
     # --- lookup -------------------------------------------------------------------------
     def axis(self, name: str) -> Axis:
-        """Axis by name; the main spindle also answers to S."""
-        if name == "S" and self.main_spindle:
-            name = self.main_spindle
+        """Axis by name; the main spindle also answers to S, and to its rotary-axis name."""
+        if (name == "S" and self.main_spindle) or (self.cax and name == self.cax.c_name):
+            name = self.main_spindle or name
         ax = self.by_name.get(name)
         if ax is None:
             raise NcUsageError(f"no axis or spindle '{name}'")
@@ -301,6 +375,8 @@ class Machine:
         After an emergency stop the PLC switches the drives on again (their power-up time)."""
         estop, self.ctx.estop = self.ctx.estop, False
         self.channel.reset()
+        if self.cax is not None:
+            self.cax.reset()
         self.handshake.clear()
         for ax in self.axes:
             self.moves.reset(ax)
@@ -316,6 +392,8 @@ class Machine:
         self.ctx.estop = True
         stop = self.log(Code.EMERGENCY_STOP)  # one error, the active one of every axis
         self.channel.abort(stop)  # the path axes brake on their own, leaving the path
+        if self.cax is not None:
+            self.cax.interrupt(estop=True)
         for ax in self.axes:
             self.motion.emergency_stop(ax, stop)
 

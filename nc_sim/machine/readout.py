@@ -134,7 +134,9 @@ def machine_snapshot(m: Machine) -> MachineSnapshot:
             mode=m.plc.mode,
             ack_delay_s=m.plc.delay_cycles * m.k.cycle_s,
             drives_powered=m.powered,
-            pending=tuple(PendingMSnapshot(p.m, p.axis, p.out_cycle) for p in m.plc.pending),
+            pending=tuple(
+                PendingMSnapshot(p.m, p.axis, p.out_cycle, p.signal) for p in m.plc.pending
+            ),
         ),
         job_errors=tuple(active[s] for s in sorted(active)),
         event_cursor=m.events.cursor,

@@ -885,6 +885,18 @@ DEFINITIONS: list[ParamDef] = [
         title="Default gear step number at start-up",
     ),
     _p(
+        "P-AXIS-00052",
+        "kenngr.cax_getriebe_stufe",
+        A,
+        U16,
+        NONE,
+        1,
+        1,
+        6,
+        types="S",
+        title="Gear stage (drive parameter record) in C axis mode",
+    ),
+    _p(
         "P-AXIS-00216",
         "getriebe[i].vb_min_null",
         A,
