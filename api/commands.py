@@ -140,6 +140,16 @@ class PlcAckCommand(BaseModel):
     m: int | None = Field(None, ge=0, le=999)
 
 
+class PlcSignalCommand(BaseModel):
+    """The PLC sets or withdraws a mode acknowledgement by hand [003 §4.1]: setting ROTMOD_Q
+    (SPMOD_Q) answers the NC's pending ROTMOD (SPMOD) request; withdrawing the one of the mode
+    in force is a process error (90031)."""
+
+    type: Literal["plc_signal"] = "plc_signal"
+    signal: Literal["ROTMOD_Q", "SPMOD_Q"]
+    on: bool
+
+
 class ResetCommand(BaseModel):
     """CNC reset: clears job errors and the block queue, stops motion."""
 
@@ -220,6 +230,7 @@ Command = Annotated[
     | HliCommand
     | PlcModeCommand
     | PlcAckCommand
+    | PlcSignalCommand
     | ResetCommand,
     Field(discriminator="type"),
 ]
@@ -235,7 +246,10 @@ class CommandResult(BaseModel):
     )
     cycle: int = Field(description="cycle at which the command took effect")
     block_id: int | None = Field(None, description="MDI block number")
-    acknowledged: int | None = Field(None, description="M functions acknowledged (plc_ack)")
+    acknowledged: int | None = Field(
+        None,
+        description="M functions acknowledged (plc_ack); mode requests answered (plc_signal)",
+    )
     state: dict[str, str] = Field(
         default_factory=dict, description="state of every axis after the command"
     )

@@ -12,6 +12,30 @@ from api.control import ControlState
 SimMode = Literal["run", "pause", "fast"]
 
 
+SpindleModeName = Literal["spindle", "rotary", "none"]
+ChangeoverPhase = Literal["internal", "external", "interrupted"]
+
+
+class AxisSignals(BaseModel):
+    """The axis status signals of 003 §4.2 worth showing."""
+
+    homed: bool = Field(description="HOMED: the axis is homed")
+    mvpos: bool = Field(description="MVPOS: moving in the positive direction")
+    mvneg: bool = Field(description="MVNEG: moving in the negative direction")
+    ready: bool = Field(description="READY: the drive follows (enables and ready status)")
+    inpos: bool = Field(description="INPOS: in position")
+    n_act_eq_n_comm: bool | None = Field(None, description="N_NCMD: N_act = N_comm (spindles)")
+    n_act_zero: bool | None = Field(None, description="N_NMIN: N_act = 0 (spindles)")
+    gear_bits: list[bool] | None = Field(
+        None, description="GEAR1..GEAR3: the gear stage in binary, GEAR1 first (spindles)"
+    )
+    rotary_mode: bool | None = Field(
+        None,
+        description="rotary axis mode (true) or spindle mode (false) of a main spindle with "
+        "rotary-axis capability; null for other axes",
+    )
+
+
 class AxisStatus(BaseModel):
     """One axis or spindle: state, actual values and its HLI objects."""
 
@@ -52,12 +76,33 @@ class AxisStatus(BaseModel):
     loop: Literal["open", "closed", "control_limit", "speed_control"] = Field(
         description="position loop: open while the drive lacks its enables (servo off)"
     )
+    display_name: str = Field(
+        description="the name that follows the mode: the rotary-axis name (C) while a main "
+        "spindle with rotary-axis capability is the rotary axis, else `name` [003 §2.4]"
+    )
+    spindle_mode: SpindleModeName | None = Field(
+        None,
+        description="a main spindle with rotary-axis capability: spindle, rotary axis, or "
+        "none (changing over, or the PLC acknowledges no mode); null for other axes",
+    )
+    changeover: ChangeoverPhase | None = Field(
+        None,
+        description="the phase of a changeover in progress [003 Fig. 4-1]: internal (braking, "
+        "parameter record), external (waiting for ROTMOD_Q/SPMOD_Q), interrupted (by an "
+        "immediate stop: reset or a jog/spindle key ends it); null without one",
+    )
+    signals: AxisSignals
 
 
 class PendingM(BaseModel):
-    m: int
+    """An M function (or a mode request ROTMOD/SPMOD) waiting for the PLC's answer."""
+
+    m: int | None = Field(description="the M function; null for a mode request")
     axis: str
     out_cycle: int
+    signal: str | None = Field(
+        None, description="the mode request ROTMOD or SPMOD (answered by <signal>_Q)"
+    )
 
 
 class PlcStatus(BaseModel):
@@ -67,6 +112,11 @@ class PlcStatus(BaseModel):
         description="power-on done: every drive switched on and reporting ready"
     )
     pending: list[PendingM]
+    signals: dict[str, bool] = Field(
+        default_factory=dict,
+        description="the spindle/rotary-axis handshake [003 §4.1]: ROTMOD, SPMOD (the NC's "
+        "requests), ROTMOD_Q, SPMOD_Q (the PLC's acknowledgements); empty without a C axis",
+    )
 
 
 class SimulationStatus(BaseModel):

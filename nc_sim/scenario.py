@@ -32,6 +32,7 @@ from nc_sim.commands import (
     Move,
     PlcAck,
     PlcMode,
+    PlcSignal,
     ProgramLoad,
     Reset,
     SingleBlock,
@@ -150,6 +151,8 @@ def _command(action: Mapping[str, Any]) -> Command:
         p = action["plc"]
         if "ack" in p:
             return PlcAck(None if p["ack"] == "all" else int(p["ack"]))
+        if "signal" in p:
+            return PlcSignal(str(p["signal"]), bool(p["on"]))
         return PlcMode(str(p["mode"]), p.get("delay_s"))
     if "jog" in action:
         j = action["jog"]

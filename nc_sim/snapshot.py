@@ -51,6 +51,25 @@ class SpindleSnapshot:
     stopped: bool
     speed_monitoring_active: bool
     speed_monitoring_invalid: bool
+    # a main spindle with rotary-axis capability [003]: "spindle", "rotary" or "none" (in
+    # neither: changing over, or the PLC acknowledges none); None for other spindles
+    mode: str | None = None
+    changeover: str | None = None  # its phase: internal, external, interrupted; None
+
+
+@dataclass(frozen=True)
+class InterfaceSignals:
+    """The axis status signals of 003 §4.2 worth showing (the MTC's names in comments)."""
+
+    homed: bool  # HOMED
+    moving_positive: bool  # MVPOS: the actual speed is positive
+    moving_negative: bool  # MVNEG
+    ready: bool  # READY / BBDIG: the drive follows (enables and its ready status)
+    in_position: bool  # INPOS
+    speed_reached: bool | None  # N_NCMD: N_act = N_comm (spindles)
+    stopped: bool | None  # N_NMIN: N_act = 0 (spindles)
+    gear_bits: tuple[bool, bool, bool] | None  # GEAR1..GEAR3: the gear stage in binary
+    rotary_mode: bool | None  # rotary axis / main spindle operation; None without C
 
 
 @dataclass(frozen=True)
@@ -81,6 +100,8 @@ class AxisSnapshot:
     job_error: int  # code of the active job error, 0 none
     loop: LoopMode
     spindle: SpindleSnapshot | None  # None for axes
+    display_name: str = ""  # the name that follows the mode: C as the rotary axis, else name
+    signals: InterfaceSignals | None = None
 
 
 @dataclass(frozen=True)
@@ -100,6 +121,9 @@ class PlcSnapshot:
     ack_delay_s: float  # auto mode acknowledges this long after the output
     drives_powered: bool  # power-on done: every drive switched on and reporting ready
     pending: tuple[PendingMSnapshot, ...]
+    # the spindle/rotary-axis handshake [003 §4.1]: ROTMOD, SPMOD (the NC's requests) and
+    # ROTMOD_Q, SPMOD_Q (the PLC's acknowledgements); empty without a C axis
+    signals: tuple[tuple[str, bool], ...] = ()
 
 
 class ChannelState(IntEnum):

@@ -28,6 +28,7 @@ from api.commands import (
     OverrideCommand,
     PlcAckCommand,
     PlcModeCommand,
+    PlcSignalCommand,
     ProgramLoadCommand,
     ProgramStopCommand,
     ResetCommand,
@@ -119,6 +120,8 @@ def to_nc(cmd: Command | EmergencyStopCommand, stored: StoredText = _no_store) -
             return nc.PlcMode(cmd.mode, cmd.delay_s)
         case PlcAckCommand():
             return nc.PlcAck(cmd.m)
+        case PlcSignalCommand():
+            return nc.PlcSignal(cmd.signal, cmd.on)
         case ResetCommand():
             return nc.Reset()
         case EmergencyStopCommand():

@@ -3,10 +3,12 @@ machine list, and the workers of the service."""
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, cast
 
 from api.status import (
+    AxisSignals,
     AxisStatus,
+    ChangeoverPhase,
     ChannelStatus,
     LoopStatus,
     MachineStatus,
@@ -16,6 +18,7 @@ from api.status import (
     PendingM,
     PlcStatus,
     SimulationStatus,
+    SpindleModeName,
     WorkerStatus,
 )
 from api.telemetry import SignalInfo
@@ -77,6 +80,22 @@ def with_loop_health(sim: SimulationStatus, worker: WorkerClient | None) -> Simu
     return sim
 
 
+def _signals(a: AxisSnapshot) -> AxisSignals:
+    s = a.signals
+    assert s is not None
+    return AxisSignals(
+        homed=s.homed,
+        mvpos=s.moving_positive,
+        mvneg=s.moving_negative,
+        ready=s.ready,
+        inpos=s.in_position,
+        n_act_eq_n_comm=s.speed_reached,
+        n_act_zero=s.stopped,
+        gear_bits=list(s.gear_bits) if s.gear_bits is not None else None,
+        rotary_mode=s.rotary_mode,
+    )
+
+
 def _axis_status(a: AxisSnapshot) -> AxisStatus:
     sp = a.spindle
     return AxisStatus(
@@ -107,6 +126,10 @@ def _axis_status(a: AxisSnapshot) -> AxisStatus:
         speed_monitoring_active=sp.speed_monitoring_active if sp else None,
         speed_monitoring_invalid=sp.speed_monitoring_invalid if sp else None,
         loop=_LOOP[a.loop],
+        display_name=a.display_name or a.name,
+        spindle_mode=cast(SpindleModeName, sp.mode) if sp and sp.mode else None,
+        changeover=cast(ChangeoverPhase, sp.changeover) if sp and sp.changeover else None,
+        signals=_signals(a),
     )
 
 
@@ -152,7 +175,11 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
             mode=snap.plc.mode.value,
             ack_delay_s=snap.plc.ack_delay_s,
             drives_powered=snap.plc.drives_powered,
-            pending=[PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle) for p in snap.plc.pending],
+            pending=[
+                PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle, signal=p.signal)
+                for p in snap.plc.pending
+            ],
+            signals=dict(snap.plc.signals),
         ),
         job_errors=[job_error_model(e) for e in snap.job_errors],
         recent_events=[job_error_model(e) for e in m.recent_events(RECENT_EVENTS)]

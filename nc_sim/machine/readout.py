@@ -12,6 +12,7 @@ from nc_sim.machine.channel_ops import PROGRAM_ACTIVE
 from nc_sim.snapshot import (
     AxisSnapshot,
     ChannelSnapshot,
+    InterfaceSignals,
     LoopMode,
     MachineSnapshot,
     ModalSnapshot,
@@ -42,6 +43,7 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
         target, to_go = on_path, on_path - float(st[L.S_P_CMD])
     drive = ax.drive.reported()
     spindle = None
+    cax = m.cax if m.cax is not None and m.cax.ax is ax else None
     if ax.kind is AxisKind.SPINDLE:
         spindle = SpindleSnapshot(
             gear=ax.gear,
@@ -50,6 +52,8 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
             stopped=bool(ist[L.I_STOPPED]),
             speed_monitoring_active=bool(ist[L.I_MON_ACTIVE]),
             speed_monitoring_invalid=bool(ist[L.I_MON_INVALID]),
+            mode=cax.mode.value if cax else None,
+            changeover=cax.phase if cax else None,
         )
     return AxisSnapshot(
         name=ax.name,
@@ -78,6 +82,28 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
         if ist[L.I_ENABLED]
         else LoopMode.OPEN,
         spindle=spindle,
+        display_name=cax.display_name if cax else ax.name,
+        signals=_signals(m, ax, spindle is not None),
+    )
+
+
+def _signals(m: Machine, ax: Axis, spindle: bool) -> InterfaceSignals:
+    """The 003 §4.2 status signals: MVPOS/MVNEG above the noise of an axis at rest (one
+    exact-stop window per second)."""
+    st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
+    v_act = float(st[L.S_V_ACT])
+    noise = float(m.k.pr[ax.slot, L.P_INPOS_WIN])  # unit/s
+    cax = m.cax if m.cax is not None and m.cax.ax is ax else None
+    return InterfaceSignals(
+        homed=bool(ist[L.I_HOMED]),
+        moving_positive=v_act > noise,
+        moving_negative=v_act < -noise,
+        ready=ax.drive_follows(),
+        in_position=bool(ist[L.I_IN_POS]),
+        speed_reached=bool(ist[L.I_SPEED_REACHED]) if spindle else None,
+        stopped=bool(ist[L.I_STOPPED]) if spindle else None,
+        gear_bits=(bool(ax.gear & 1), bool(ax.gear & 2), bool(ax.gear & 4)) if spindle else None,
+        rotary_mode=cax.rotary if cax else None,
     )
 
 
@@ -137,6 +163,7 @@ def machine_snapshot(m: Machine) -> MachineSnapshot:
             pending=tuple(
                 PendingMSnapshot(p.m, p.axis, p.out_cycle, p.signal) for p in m.plc.pending
             ),
+            signals=tuple(sorted({**m.cax.requests, **m.plc.signals}.items())) if m.cax else (),
         ),
         job_errors=tuple(active[s] for s in sorted(active)),
         event_cursor=m.events.cursor,

@@ -54,6 +54,10 @@ PAIRS: list[tuple[dict[str, Any], dict[str, Any]]] = [
     ({"type": "plc_mode", "mode": "manual"}, {"plc": {"mode": "manual"}}),
     ({"type": "plc_ack", "m": 8}, {"plc": {"ack": 8}}),
     ({"type": "plc_ack"}, {"plc": {"ack": "all"}}),
+    (
+        {"type": "plc_signal", "signal": "ROTMOD_Q", "on": False},
+        {"plc": {"signal": "ROTMOD_Q", "on": False}},
+    ),
     ({"type": "reset"}, {"reset": True}),
     ({"type": "cycle_start"}, {"cycle_start": True}),
     ({"type": "feedhold", "on": True}, {"feedhold": True}),

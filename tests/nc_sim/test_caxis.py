@@ -75,6 +75,16 @@ TO_SPINDLE = [
 ]
 
 
+def mode(m: Machine) -> SpindleMode:
+    """The C spindle's mode now (a call, so each check reads it afresh)."""
+    assert m.cax is not None
+    return m.cax.mode
+
+
+def state(m: Machine, name: str = "S1") -> AxisState:
+    return m.axis(name).state
+
+
 def c_pos(m: Machine) -> float:
     return float(m.k.st[m.axis(C).slot, L.S_P_ACT])
 
@@ -82,7 +92,7 @@ def c_pos(m: Machine) -> float:
 def test_power_on_adopts_the_mode_the_plc_reports() -> None:
     """003 §2.3: at power-on the NC takes the mode the PLC acknowledges (SPMOD_Q)."""
     _sim, m, _ = make()
-    assert m.cax is not None and m.cax.mode is SpindleMode.SPINDLE
+    assert m.cax is not None and mode(m) is SpindleMode.SPINDLE
     assert m.cax.display_name == "S1" and m.channel.axes == ("X", "Z", "C")
     assert m.plc.signals == {"ROTMOD_Q": False, "SPMOD_Q": True}
 
@@ -95,7 +105,7 @@ def test_c_from_a_turning_spindle_in_the_manuals_order_then_to_its_exact_stop() 
     mdi(m, "M3 S1000")
     record(sim, 2.0)
     s1 = m.axis("S1")
-    assert s1.state is AxisState.ENDLESS and s1.gear == 3
+    assert state(m) is AxisState.ENDLESS and s1.gear == 3
     seen = m.events.cursor
     mdi(m, "G00 C90")
     rec = record(sim, 4.0)
@@ -109,11 +119,11 @@ def test_c_from_a_turning_spindle_in_the_manuals_order_then_to_its_exact_stop() 
     v = rec[:, s1.slot, L.R_V_CMD]
     first = m.cycle - rec.shape[0] + 1  # the cycle of the record's first row
     assert np.all(v[out.cycle - first : ack.cycle - first] == 0.0)
-    assert m.cax is not None and m.cax.mode is SpindleMode.ROTARY
+    assert m.cax is not None and mode(m) is SpindleMode.ROTARY
     assert m.cax.display_name == C and s1.gear == 1
     win = float(m.k.pr[s1.slot, L.P_INPOS_WIN])
     assert abs(c_pos(m) - 90.0) <= win
-    assert s1.state is AxisState.STANDSTILL and m.channel.state is not ChannelState.ERROR
+    assert state(m) is AxisState.STANDSTILL and m.channel.state is not ChannelState.ERROR
 
 
 def test_the_position_is_rebased_into_one_turn_at_the_changeover() -> None:
@@ -141,11 +151,11 @@ def test_manual_plc_the_block_waits_for_rotmod_q_then_goes_on() -> None:
     record(sim, 1.0)
     assert m.channel.progress.waiting_for == "changeover to rotary axis mode (the PLC's ROTMOD_Q)"
     assert [p.signal for p in m.plc.pending] == ["ROTMOD"]
-    assert m.axis("S1").state is AxisState.CHANGEOVER and m.cax is not None
-    assert m.cax.mode is SpindleMode.NONE and m.cax.phase == "external"
+    assert state(m) is AxisState.CHANGEOVER and m.cax is not None
+    assert mode(m) is SpindleMode.NONE and m.cax.phase == "external"
     assert isinstance(m.submit(PlcSignal("ROTMOD_Q", True)), Accepted)
     record(sim, 2.0)
-    assert m.cax.mode is SpindleMode.ROTARY and abs(c_pos(m) - 45.0) < 0.01
+    assert mode(m) is SpindleMode.ROTARY and abs(c_pos(m) - 45.0) < 0.01
 
 
 def test_fault_plc_the_changeover_times_out_and_a_reset_adopts_the_spindle() -> None:
@@ -156,11 +166,11 @@ def test_fault_plc_the_changeover_times_out_and_a_reset_adopts_the_spindle() -> 
     record(sim, TIMEOUT_S + 0.2)
     err = next(e for e in events(m, seen) if e.code == Code.PLC_ACK_TIMEOUT)
     assert err.signal == "ROTMOD" and err.axis == "S1"
-    assert m.axis("S1").state is AxisState.ERROR and m.cax is not None
-    assert m.cax.mode is SpindleMode.NONE and m.plc.pending == []
+    assert state(m) is AxisState.ERROR and m.cax is not None
+    assert mode(m) is SpindleMode.NONE and m.plc.pending == []
     m.submit(Reset())
     record(sim, 0.1)
-    assert m.cax.mode is SpindleMode.SPINDLE  # the PLC still holds SPMOD_Q
+    assert mode(m) is SpindleMode.SPINDLE  # the PLC still holds SPMOD_Q
     assert m.cax.requests == {"ROTMOD": False, "SPMOD": True}
 
 
@@ -174,22 +184,22 @@ def test_withdrawing_rotmod_q_in_rotary_mode_is_a_process_error() -> None:
     mdi(m, "G01 C3000 F20000")
     record(sim, 0.5)
     s1 = m.axis("S1")
-    assert s1.state is AxisState.MOVING
+    assert state(m) is AxisState.MOVING
     seen = m.events.cursor
     m.submit(PlcSignal("ROTMOD_Q", False))
     record(sim, 2.0)
     codes = [e.code for e in events(m, seen)]
     assert codes[:2] == [34, Code.MODE_ACK_WITHDRAWN]
-    assert s1.state is AxisState.ERROR and abs(float(m.k.st[s1.slot, L.S_V_CMD])) == 0.0
-    assert m.cax is not None and m.cax.mode is SpindleMode.NONE
+    assert state(m) is AxisState.ERROR and abs(float(m.k.st[s1.slot, L.S_V_CMD])) == 0.0
+    assert m.cax is not None and mode(m) is SpindleMode.NONE
     m.submit(Reset())
     record(sim, 0.1)
-    assert m.cax.mode is SpindleMode.NONE
+    assert mode(m) is SpindleMode.NONE
     seen = m.events.cursor
     mdi(m, "M3 S300")
     record(sim, 3.0)
     assert [c for c, _s in sequence(m, seen)][-1] == 39
-    assert s1.state is AxisState.ENDLESS
+    assert state(m) is AxisState.ENDLESS
 
 
 def test_estop_interrupts_the_changeover_and_reset_adopts_what_the_plc_answered() -> None:
@@ -205,11 +215,11 @@ def test_estop_interrupts_the_changeover_and_reset_adopts_what_the_plc_answered(
     assert 40 in [e.code for e in events(m, seen)]
     m.submit(PlcSignal("ROTMOD_Q", True))
     record(sim, 0.1)
-    assert m.cax is not None and m.cax.mode is SpindleMode.NONE
+    assert m.cax is not None and mode(m) is SpindleMode.NONE
     m.submit(Reset())
     record(sim, 1.0)
     assert [c for c, _s in sequence(m, seen)][-2:] == [41, 38]
-    assert m.cax.mode is SpindleMode.ROTARY
+    assert mode(m) is SpindleMode.ROTARY
 
 
 def test_program_stop_interrupts_and_a_jog_key_aborts_then_changes_over_itself() -> None:
@@ -230,10 +240,10 @@ def test_program_stop_interrupts_and_a_jog_key_aborts_then_changes_over_itself()
     p0 = c_pos(m)
     m.submit(PlcSignal("ROTMOD_Q", True))
     record(sim, 1.0)
-    assert m.axis(C).state is AxisState.JOG and c_pos(m) > p0 + 1.0
+    assert state(m, C) is AxisState.JOG and c_pos(m) > p0 + 1.0
     m.submit(JogStop(C))
     record(sim, 1.0)
-    assert m.axis(C).state is AxisState.STANDSTILL
+    assert state(m, C) is AxisState.STANDSTILL
 
 
 def test_spindle_key_in_rotary_mode_changes_over_then_turns_with_spindle_override() -> None:
@@ -251,7 +261,7 @@ def test_spindle_key_in_rotary_mode_changes_over_then_turns_with_spindle_overrid
     rec = record(sim, 4.0)
     assert [c for c, _s in sequence(m, seen)] == [c for c, _s in TO_SPINDLE]
     s1 = m.axis("S1")
-    assert s1.state is AxisState.ENDLESS and s1.gear == 3
+    assert state(m) is AxisState.ENDLESS and s1.gear == 3
     assert rec[-1, s1.slot, L.R_V_ACT] / 6.0 == pytest.approx(500.0, rel=0.01)
 
 
@@ -261,7 +271,7 @@ def test_a_jog_key_does_not_stop_a_turning_spindle() -> None:
     record(sim, 1.0)
     out = m.submit(JogStart(C, 1))
     assert isinstance(out, Refused) and out.code == Code.AXIS_BUSY
-    assert m.axis("S1").state is AxisState.ENDLESS
+    assert state(m) is AxisState.ENDLESS
 
 
 def test_feed_is_over_x_and_c_follows_with_the_feed_override() -> None:
