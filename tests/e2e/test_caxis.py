@@ -112,3 +112,34 @@ def test_screenshots_of_the_rotary_axis_and_the_handshake(
         panel(page, "hli").get_by_test_id("handshake").scroll_into_view_if_needed()
         shot(page, f"caxis-handshake-{size}")
         page.close()
+
+
+def test_the_cax_keys_change_over_and_back_with_the_plc_answering_by_itself(page: Page) -> None:
+    """In auto PLC mode the changeover completes without a hand: #CAX makes the spindle the
+    rotary axis C, #CAX OFF the spindle S1 again; the key of the mode in force is disabled and
+    says why, and the handshake levels follow the mode (ROTMOD_Q in rotary mode, SPMOD_Q in
+    spindle mode) [003 §4.1]."""
+    spindle, machine = panel(page, "spindle"), panel(page, "machine")
+    mode = spindle.get_by_test_id("spindle-mode")
+    on, off = spindle.get_by_test_id("cax-on"), spindle.get_by_test_id("cax-off")
+    expect(mode).to_have_text("spindle S1")
+    expect(off).to_be_disabled()
+    expect(off).to_have_attribute("title", "already spindle S1")
+    on.click()
+    expect(mode).to_have_text("rotary axis C")
+    expect(machine.get_by_test_id("name-S1")).to_have_text("C")
+    expect(on).to_be_disabled()
+    expect(on).to_have_attribute("title", "already rotary axis C")
+    page.get_by_test_id("tab-HLI / PLC").click()
+    hli = panel(page, "hli")
+    expect(hli.get_by_test_id("lamp-ROTMOD_Q")).to_have_attribute("data-on", "1")
+    expect(hli.get_by_test_id("lamp-SPMOD_Q")).to_have_attribute("data-on", "0")
+    # auto mode: no manual keys
+    expect(hli.get_by_test_id("plc-signal-ROTMOD_Q")).to_have_count(0)
+    page.get_by_test_id("tab-Operate").click()
+    off.click()
+    expect(mode).to_have_text("spindle S1")
+    expect(machine.get_by_test_id("name-S1")).to_have_text("S1")
+    page.get_by_test_id("tab-HLI / PLC").click()
+    expect(hli.get_by_test_id("lamp-SPMOD_Q")).to_have_attribute("data-on", "1")
+    expect(hli.get_by_test_id("lamp-ROTMOD_Q")).to_have_attribute("data-on", "0")
