@@ -357,3 +357,18 @@ def test_random_sessions_mixing_spindle_and_c(seed: int) -> None:
             assert not on_path or cax.mode is SpindleMode.ROTARY
             assert np.all(np.isfinite(m.k.st[s1.slot, [L.S_P_CMD, L.S_P_ACT, L.S_V_CMD]]))
             assert not math.isnan(float(m.k.st[m.axis("X").slot, L.S_P_CMD]))
+
+
+def test_g74_homes_c_on_its_zero_mark() -> None:
+    """003 §2.3: homing by G74 (or by M19 automatically); as the C axis too. C ends on its
+    reference position kenngr.ref_pos, homed."""
+    sim, m, cfg = make()
+    mdi(m, "G00 C100")
+    record(sim, 2.0)
+    assert not m.axis(C).homed
+    mdi(m, "G74 C1")
+    record(sim, 5.0)
+    s1 = m.axis("S1")
+    assert s1.homed and mode(m) is SpindleMode.ROTARY
+    ref = cfg.axis("S1").eng("kenngr.ref_pos") % 360.0
+    assert float(m.k.st[s1.slot, L.S_P_ACT]) % 360.0 == pytest.approx(ref, abs=0.01)
