@@ -46,7 +46,10 @@ class AxisStatus(BaseModel):
     pos_cmd: float
     pos_act: float
     lag: float = Field(description="position lag, same unit as the position")
-    vel_cmd: float = Field(description="unit/min (mm/min, °/min); rpm for spindles")
+    vel_cmd: float = Field(
+        description="unit/min (mm/min, °/min); rpm for spindles, °/min for a spindle while it "
+        "is the rotary axis C"
+    )
     vel_act: float
     homed: bool
     in_position: bool

@@ -35,15 +35,16 @@ _LOOP = {
 def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
     """One axis or spindle as the HLI shows it now."""
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
-    vel_cmd, vel_unit = display_velocity(float(st[L.S_V_CMD]), ax.kind)
-    vel_act, _ = display_velocity(float(st[L.S_V_ACT]), ax.kind)
+    cax = m.cax if m.cax is not None and m.cax.ax is ax else None
+    shown = AxisKind.ROTARY if cax is not None and cax.rotary else ax.kind  # C: °/min
+    vel_cmd, vel_unit = display_velocity(float(st[L.S_V_CMD]), shown)
+    vel_act, _ = display_velocity(float(st[L.S_V_ACT]), shown)
     target, to_go = target_and_distance(m.k, ax)
     on_path = m.ch_host.block_target(ax)
     if on_path is not None:
         target, to_go = on_path, on_path - float(st[L.S_P_CMD])
     drive = ax.drive.reported()
     spindle = None
-    cax = m.cax if m.cax is not None and m.cax.ax is ax else None
     if ax.kind is AxisKind.SPINDLE:
         spindle = SpindleSnapshot(
             gear=ax.gear,

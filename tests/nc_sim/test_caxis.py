@@ -419,3 +419,22 @@ def test_removing_the_drive_enables_while_waiting_for_the_plc_does_not_stop_it()
     m.submit(PlcSignal("ROTMOD_Q", True))
     record(sim, 0.2)
     assert mode(m) is SpindleMode.ROTARY and state(m) is AxisState.STANDSTILL
+
+
+def test_as_the_c_axis_its_speed_reads_in_degrees_per_minute() -> None:
+    """The position indication of a rotary axis [003 §2.4]: C at F3600 shows 3600 °/min, the
+    spindle S1 shows rpm."""
+    sim, m, _ = make()
+    mdi(m, "#CAX")
+    record(sim, 0.5)
+    mdi(m, "G01 C360 F3600")  # 6 s
+    record(sim, 3.0)
+    c = next(a for a in m.snapshot().axes if a.name == "S1")
+    assert c.display_name == C and c.vel_unit == "°/min"
+    assert c.vel_cmd == pytest.approx(3600.0, rel=1e-6)
+    record(sim, 4.0)
+    mdi(m, "M3 S1000")
+    record(sim, 3.0)
+    s = next(a for a in m.snapshot().axes if a.name == "S1")
+    assert s.display_name == "S1" and s.vel_unit == "rpm"
+    assert s.vel_cmd == pytest.approx(1000.0, rel=1e-6)

@@ -27,7 +27,7 @@ function AxisRow({ a }: { a: AxisStatus }) {
       <td class="num" data-testid={`vact-${a.name}`}>
         {fmt(a.vel_act, 1)}
       </td>
-      <td class="unit">{velUnit(a.unit === "deg" ? "°" : a.unit, a.kind)}</td>
+      <td class="unit">{velUnit(a.unit === "deg" ? "°" : a.unit, a.kind, a.spindle_mode)}</td>
       <td data-testid={`gear-${a.name}`}>{a.gear ? `M${39 + a.gear}` : "—"}</td>
       <td title={a.homed ? "homed" : "not homed"}>{a.homed ? "✓" : "✗"}</td>
     </tr>

@@ -146,7 +146,8 @@ export function SpindlePanel() {
           S prog <b data-testid="spindle-prog">{fmt(sp.speed_prog_rpm, 0)}</b> rpm
         </span>
         <span>
-          n act <b data-testid="spindle-speed">{fmt(sp.vel_act, 1)}</b> rpm
+          {rotary ? "v act" : "n act"} <b data-testid="spindle-speed">{fmt(sp.vel_act, 1)}</b>{" "}
+          {rotary ? "°/min" : "rpm"}
         </span>
         <span>
           {rotary ? sp.display_name : "position"} <b data-testid="spindle-pos">{fmt(sp.pos_act, rotary ? 3 : 2)}</b>°

@@ -11,7 +11,9 @@ export function qty(v: number | null | undefined, decimals: number, unit: string
   return unit ? `${fmt(v, decimals)}\u00a0${unit}` : fmt(v, decimals);
 }
 
-export const velUnit = (unit: string, kind: string) => (kind === "spindle" ? "rpm" : `${unit}/min`);
+/** A spindle's speed reads in rpm, except as the rotary axis C (°/min, like any rotary axis). */
+export const velUnit = (unit: string, kind: string, spindleMode?: string | null) =>
+  kind === "spindle" && spindleMode !== "rotary" ? "rpm" : `${unit}/min`;
 
 /** Axis tick labels: as many decimals as the tick spacing needs (so neighbouring ticks never
  * read the same), powers of ten for very small or large spacings, and never "−0". */
