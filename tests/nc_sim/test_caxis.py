@@ -438,3 +438,39 @@ def test_as_the_c_axis_its_speed_reads_in_degrees_per_minute() -> None:
     s = next(a for a in m.snapshot().axes if a.name == "S1")
     assert s.display_name == "S1" and s.vel_unit == "rpm"
     assert s.vel_cmd == pytest.approx(1000.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("plc", ["auto", "manual"])
+@pytest.mark.parametrize("rotary", [True, False])
+def test_the_changeover_runs_in_the_manuals_order_in_each_plc_mode(plc: str, rotary: bool) -> None:
+    """003 Fig. 4-1 (1)-(6), both ways, whether the PLC answers by itself or by hand."""
+    sim, m, _ = make()
+    if not rotary:
+        mdi(m, "#CAX")
+        record(sim, 0.5)
+    m.submit(PlcMode(plc))
+    seen = m.events.cursor
+    mdi(m, "#CAX" if rotary else "#CAX OFF")
+    record(sim, 0.5)
+    if plc == "manual":
+        assert mode(m) is SpindleMode.NONE
+        m.submit(PlcSignal("ROTMOD_Q" if rotary else "SPMOD_Q", True))
+        record(sim, 0.1)
+    assert sequence(m, seen) == (TO_ROTARY if rotary else TO_SPINDLE)
+    assert mode(m) is (SpindleMode.ROTARY if rotary else SpindleMode.SPINDLE)
+
+
+def test_feed_override_acts_on_c_in_rotary_mode() -> None:
+    """003 §2.4: in rotary axis mode the feed override acts on C (50 %: 360° at F3600 takes
+    12 s instead of 6); the spindle override does not."""
+    sim, m, _ = make()
+    mdi(m, "#CAX")
+    record(sim, 0.5)
+    m.submit(HliWrite("override", 500))
+    m.submit(HliWrite("override", 1000, axis="S1"))
+    mdi(m, "G01 C360 F3600")
+    rec = record(sim, 14.0)
+    pc = rec[:, m.axis(C).slot, L.R_P_CMD]
+    moving_s = np.count_nonzero(np.abs(np.diff(pc)) > 1e-12) * 0.001
+    assert pc[-1] == pytest.approx(360.0)
+    assert moving_s == pytest.approx(12.0, abs=0.5)
