@@ -161,6 +161,9 @@ class ChannelSnapshot:
     distance_to_go_mm: float | None
     waiting_for: str | None
     error: Event | None
+    axes: tuple[str, ...] = ()  # its path axes as NC text names them (X, Z, C)
+    rotary_axis: str | None = None  # the main spindle's rotary-axis name (C), None without
+    rotary: bool = False  # ... and whether the main spindle is that axis now
 
 
 @dataclass(frozen=True)

@@ -75,13 +75,19 @@ def stored_text(store: Store, name: str) -> str:
 def program_preview(snapshot: MachineSnapshot, text: str) -> ProgramPreview:
     """The program's commanded tool path on this machine from its commanded positions, up to
     its first error."""
-    axes = [a.name for a in snapshot.axes if a.kind is not AxisKind.SPINDLE]
+    ch = snapshot.channel
+    axes = list(ch.axes)
     spindles = [a.name for a in snapshot.axes if a.kind is AxisKind.SPINDLE]
     start = {a.name: a.pos_cmd for a in snapshot.axes if a.kind is not AxisKind.SPINDLE}
+    c = ch.rotary_axis
+    if c is not None:  # C from where the rotary axis is; 0 in the drawing while a spindle
+        start[c] = next(
+            (a.pos_cmd for a in snapshot.axes if a.display_name == c and ch.rotary), 0.0
+        )
     sink = canon.ListSink()
     error = None
     try:
-        interpret(text, sink, axes, spindles, start)
+        interpret(text, sink, axes, spindles, start, c_axis=c, rotary=ch.rotary)
     except ProgramError as e:
         error = PreviewError(line=e.line, column=e.column, code=int(e.code), message=e.detail)
     p = preview(sink.calls, start, axes)

@@ -330,7 +330,9 @@ class AxisMotion:
         ax.drive.update(self._now(), bool(ax.units["DriveOn"]))
         ok = ax.drive_follows()
         self.k.ist[ax.slot, L.I_ENABLED] = int(ok)
-        if not ok and ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
+        # a changeover waiting at standstill for the PLC goes on without them [003 §2.3]
+        waiting = ax.state is AxisState.CHANGEOVER and self.k.ist[ax.slot, L.I_PLAN_N] == 0
+        if not ok and ax.state not in (AxisState.STANDSTILL, AxisState.ERROR) and not waiting:
             self.k.ist[ax.slot, L.I_PLAN_N] = 0
             self.k.ist[ax.slot, L.I_CURVE] = 0
             self.monitor_speed(ax, False)

@@ -10,16 +10,14 @@ A full circle (end = start) needs I/J/K. Start and end radius may differ by
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 from nc_sim.channel import canon
 from nc_sim.channel.modal import CENTRE_LETTER, PLANES
-from nc_sim.channel.words import ProgramError, Word
+from nc_sim.channel.words import Error, Word
 from nc_sim.errors import Code
 
 ARC_RADIUS_TOLERANCE_MM = 0.002  # start and end radius of G02/G03 may differ by this much
-
-Error = Callable[[str, int, Code], ProgramError]
 
 
 def arc_feed(

@@ -26,6 +26,7 @@ from dataclasses import replace
 
 from nc_sim.channel import canon
 from nc_sim.channel.arc_words import arc_feed
+from nc_sim.channel.c_words import cax_command, check_known, motion_mode, spindle_function
 from nc_sim.channel.modal import Modal, target
 from nc_sim.channel.program import Program, split_program
 from nc_sim.channel.spindle_words import MAIN, SPINDLE_G, SpindleWords
@@ -238,18 +239,8 @@ class _Block:
                     raise self.error(f"#SLOPE needs [TYPE= one of {', '.join(SLOPE_TYPES)}]", at)
                 self._emit(canon.SetSlope(self.line, SLOPE_TYPES[key[5:]]))
             elif cmd in ("CAX", "CAX OFF"):
-                if key not in ("", MAIN):  # the main spindle is the one that becomes C
-                    at = body_col + len(body or "") - len((body or "").lstrip())
-                    raise self.error(
-                        f"#{cmd}[{body}]: only the main spindle S", at, Code.NOT_SUPPORTED
-                    )
-                if self.run_.c_axis is None:
-                    raise self.error(
-                        f"#{cmd}: the main spindle has no rotary-axis name (P-CHAN-00010)",
-                        col,
-                        Code.NOT_SUPPORTED,
-                    )
-                self._rotary(cmd == "CAX")
+                c = self.run_.c_axis
+                self._rotary(cax_command(cmd, body, key, col, body_col, c, self.error))
             else:
                 raise self.error(f"#{cmd} is not supported", col, Code.NOT_SUPPORTED)
         tool, d = self.addr.get("T"), self.addr.get("D")
@@ -315,11 +306,7 @@ class _Block:
                 modal.speed_rpm = main.speed_rpm
             c = self.run_.c_axis
             if main.m is not None and c is not None:
-                if c in self.addr:  # one drive cannot turn and position at once [003 §4.2]
-                    col = self.addr[c].column
-                    raise self.error(
-                        f"{c} and M{main.m} in one block: the spindle is one or the other", col
-                    )
+                spindle_function(c, main.m, self.addr, self.error)
                 self._rotary(False)
         for call in words.calls(gear):
             self._emit(call)
@@ -366,22 +353,9 @@ class _Block:
             return
         col = col or (axis_words + arc_words)[0].column
         c = self.run_.c_axis
-        if c is not None:
-            if mode in (33, 63) and c in self.addr:
-                raise self.error(
-                    f"{c} cannot be programmed under G{mode} (the spindle turns)",
-                    self.addr[c].column,
-                )
-            if mode in (33, 63):
-                self._rotary(False)
-            elif c in self.addr:
-                self._rotary(True)
-                if not modal.absolute and math.isnan(modal.position[c]):
-                    raise self.error(
-                        f"{c}'s position is known only after the changeover: "
-                        "program it absolute (G90) first",
-                        self.addr[c].column,
-                    )
+        if c is not None and (rotary := motion_mode(c, mode, self.addr, self.error)) is not None:
+            self._rotary(rotary)
+            check_known(c, self.addr, modal, self.error)
         end = dict(modal.position)
         for w in axis_words:
             value = w.value / 2 if w.letter == "X" and modal.diameter else w.value

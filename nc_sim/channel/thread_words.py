@@ -12,15 +12,14 @@ spindle M function at all.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 from nc_sim.channel import canon
 from nc_sim.channel.modal import PITCH_AXIS, Modal, target
 from nc_sim.channel.spindle_words import MAIN
-from nc_sim.channel.words import ProgramError, Word
+from nc_sim.channel.words import Error, ProgramError, Word
 from nc_sim.errors import Code
 
-Error = Callable[[str, int, Code], ProgramError]
 REFUSED_M = {33: (5, 19), 63: (3, 4, 5, 19)}  # spindle M functions a mode does not take
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -41,6 +42,10 @@ class ProgramError(ValueError):
         self.column = column
         self.code = code
         super().__init__(f"line {line}, column {column}: {detail} ({int(code)})")
+
+
+# how a word module reports a bad word: detail, column, job error code (BLOCK_SYNTAX default)
+Error = Callable[..., ProgramError]
 
 
 class Word(NamedTuple):

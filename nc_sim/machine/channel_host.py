@@ -163,7 +163,8 @@ class MachineChannelHost:
                 m.slope = call.slope_type
             case canon.Home():
                 for name, _order in call.axes:
-                    if name not in m.by_name and not (name == "S" and m.main_spindle):
+                    known = name in m.by_name or (m.cax is not None and name == m.cax.c_name)
+                    if not known and not (name == "S" and m.main_spindle):
                         return m.motion.fail(None, Code.UNKNOWN_AXIS, f"line {call.line}: {name}")
                 orders = sorted({o for _n, o in call.axes})
                 groups = [[n for n, o in call.axes if o == order] for order in orders]

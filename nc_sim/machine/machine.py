@@ -414,6 +414,8 @@ class Machine:
 
     def _axis_failed(self, ax: Axis) -> None:
         """An axis' motion ended in a job error: the program or MDI block it moved for stops."""
+        if self.cax is not None and ax is self.cax.ax:
+            self.cax.axis_failed()
         on_path = self.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS
         failed = ax.block_id is not None or on_path
         ax.block_id = None

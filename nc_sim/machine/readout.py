@@ -141,6 +141,9 @@ def channel_snapshot(m: Machine) -> ChannelSnapshot:
         distance_to_go_mm=ch.distance_to_go_mm(),
         waiting_for=c.waiting_for or _zero_passage(m),
         error=c.error,
+        axes=ch.axes,
+        rotary_axis=m.cax.c_name if m.cax else None,
+        rotary=m.cax.rotary if m.cax else False,
     )
 
 

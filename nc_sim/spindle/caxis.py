@@ -262,6 +262,16 @@ class CAxis:
             else:
                 sp.set_state(ax, AxisState.STANDSTILL)
 
+    def axis_failed(self) -> None:
+        """A job error of the drive during a changeover (enables lost while braking, the
+        watchdog): it ends unfinished, in no mode; a reset adopts the PLC's."""
+        c, self.change = self.change, None
+        if c is None or c.interrupted:
+            self.change = c
+            return
+        self.handshake.withdraw_request(c.request)
+        self.mode = SpindleMode.NONE
+
     def reset(self) -> None:
         """Control reset: a changeover ends, the NC adopts the mode the PLC acknowledges."""
         if self.change is not None:

@@ -174,3 +174,17 @@ def test_program_load_by_name_loads_the_stored_program(srv: Server, lathe: str) 
     r = srv.command(lathe, {"type": "program_load", "name": "bad_turn"})
     assert r.status_code == 422, r.text
     assert (r.json()["detail"]["line"], r.json()["detail"]["code"]) == (2, int(Code.FEED_MISSING))
+
+
+def test_preview_of_a_c_axis_program_draws_x_and_z(srv: Server, lathe: str) -> None:
+    """003 §1.2's switching example on the demo lathe (S1 is C): C words, #CAX and M3 change
+    the mode and are no errors; the drawing in ZX follows X and Z, C turns in place."""
+    text = (
+        "G18\nM19 S.POS=0\nG00 X100 Z200 M3 S1000\nG00 X100 Z250 C90\n"
+        "G01 G91 X40 C-270 F1200\n#CAX OFF\nG90 G00 X120 Z200 M3 S1200\nM30\n"
+    )
+    p = _preview(srv, lathe, text)
+    assert p["error"] is None, p["error"]
+    ends = {s["line"]: s["points"][-1] for s in p["segments"]}
+    assert ends[3] == [200.0, 100.0] and ends[4] == [250.0, 100.0]
+    assert ends[5] == [250.0, 140.0] and ends[7] == [200.0, 120.0]

@@ -29,6 +29,7 @@ from nc_sim.commands import (
     ProgramStop,
     Refused,
     Reset,
+    SpindlePosition,
     SpindleRun,
 )
 from nc_sim.errors import Code
@@ -357,3 +358,64 @@ def test_random_sessions_mixing_spindle_and_c(seed: int) -> None:
             assert not on_path or cax.mode is SpindleMode.ROTARY
             assert np.all(np.isfinite(m.k.st[s1.slot, [L.S_P_CMD, L.S_P_ACT, L.S_V_CMD]]))
             assert not math.isnan(float(m.k.st[m.axis("X").slot, L.S_P_CMD]))
+
+
+def test_g74_homes_c_on_its_zero_mark() -> None:
+    """003 §2.3: homing by G74 (or by M19 automatically); as the C axis too. C ends on its
+    reference position kenngr.ref_pos, homed."""
+    sim, m, cfg = make()
+    mdi(m, "G00 C100")
+    record(sim, 2.0)
+    assert not m.axis(C).homed
+    mdi(m, "G74 C1")
+    record(sim, 5.0)
+    s1 = m.axis("S1")
+    assert s1.homed and mode(m) is SpindleMode.ROTARY
+    ref = cfg.axis("S1").eng("kenngr.ref_pos") % 360.0
+    assert float(m.k.st[s1.slot, L.S_P_ACT]) % 360.0 == pytest.approx(ref, abs=0.01)
+
+
+@pytest.mark.parametrize(
+    ("key", "request_"),
+    [
+        (JogStart(C, 1), "ROTMOD"),
+        (JogStart(C, -1), "ROTMOD"),
+        (SpindleRun("S1", 3, 1000.0), "SPMOD"),
+        (SpindleRun("S1", 4, 1000.0), "SPMOD"),
+        (SpindleRun("S1", 5), "SPMOD"),
+        (SpindlePosition("S1", 90.0), "SPMOD"),
+    ],
+    ids=["JGPOS", "JGNEG", "M3", "M4", "M5", "M19"],
+)
+def test_each_key_of_003_aborts_an_interrupted_changeover_and_commands_its_own(
+    key: JogStart | SpindleRun | SpindlePosition, request_: str
+) -> None:
+    """003 §2.3 "Jogging movements": AxxCJGPOS/JGNEG, AxxCM3/M4/M5/M19 abort an interrupted
+    changeover before the NC commands the one the key needs."""
+    sim, m, _ = make()
+    m.submit(PlcMode("manual"))
+    assert isinstance(m.submit(ProgramLoad("c", "G00 C45\nM30")), Accepted)
+    assert isinstance(m.submit(CycleStart()), Accepted)
+    record(sim, 0.2)
+    m.submit(ProgramStop())
+    record(sim, 0.1)
+    seen = m.events.cursor
+    assert isinstance(m.submit(key), Accepted)
+    record(sim, 0.2)
+    assert [c for c, _s in sequence(m, seen)][:2] == [41, 35]
+    assert [p.signal for p in m.plc.pending] == [request_]
+
+
+def test_removing_the_drive_enables_while_waiting_for_the_plc_does_not_stop_it() -> None:
+    """003 §2.3 "Axis enabling signal": no immediate effect on the changeover."""
+    sim, m, _ = make()
+    m.submit(PlcMode("manual"))
+    mdi(m, "#CAX")
+    record(sim, 0.2)
+    m.submit(HliWrite("TorquePermission", 0, axis="S1"))
+    record(sim, 0.1)
+    assert state(m) is AxisState.CHANGEOVER
+    m.submit(HliWrite("TorquePermission", 1, axis="S1"))
+    m.submit(PlcSignal("ROTMOD_Q", True))
+    record(sim, 0.2)
+    assert mode(m) is SpindleMode.ROTARY and state(m) is AxisState.STANDSTILL

@@ -5,6 +5,8 @@ type S = components["schemas"];
 export type MachineStatus = S["MachineStatus"];
 export type MachineSummary = S["MachineSummary"];
 export type AxisStatus = S["AxisStatus"];
+export type AxisSignals = S["AxisSignals"];
+export type PendingM = S["PendingM"];
 export type JobError = S["JobErrorModel"];
 export type Refusal = S["Refusal"];
 export type ValidationIssue = S["ValidationIssue"];
@@ -36,6 +38,7 @@ export type Command =
   | S["HliCommand"]
   | S["PlcModeCommand"]
   | S["PlcAckCommand"]
+  | S["PlcSignalCommand"]
   | S["ResetCommand"]
   | S["ProgramLoadCommand"]
   | S["CycleStartCommand"]

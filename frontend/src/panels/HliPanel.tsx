@@ -1,9 +1,11 @@
 // HLI objects of every axis and the channel, live; switches for the writable control units;
-// the PLC's mode and its pending M functions with a manual acknowledge.
+// the PLC's mode and its pending M functions with a manual acknowledge; the spindle/rotary-axis
+// handshake ROTMOD/SPMOD -> ROTMOD_Q/SPMOD_Q [003 §4.1] with manual keys for the PLC's answers.
 import { useState } from "preact/hooks";
-import type { HliUnit } from "../api/types";
+import type { HliUnit, MachineStatus, PendingM } from "../api/types";
 import { commandBlocked } from "../state/control";
 import { online, status } from "../state/session";
+import { AxisSignalLamps } from "../ui/AxisSignalLamps";
 import { Lamp } from "../ui/Lamp";
 import { Panel } from "../ui/Panel";
 import { fmt, qty } from "../ui/format";
@@ -24,6 +26,74 @@ function Switch(props: { unit: string; value: number; axis: string | null; run: 
   );
 }
 
+type Run = ReturnType<typeof useCommand>["run"];
+const ACKS = ["ROTMOD_Q", "SPMOD_Q"] as const;
+
+/** The four handshake levels as lamps; in manual PLC mode keys to set or withdraw the PLC's
+ * acknowledgements (withdrawing the one of the mode in force is a process error, 90031). */
+function Handshake(props: { s: MachineStatus; run: Run; disabled: boolean; title: string }) {
+  const sig = props.s.plc.signals ?? {};
+  const manual = props.s.plc.mode === "manual";
+  // the acknowledgement of the mode in force: the one the NC's request keeps asking for
+  const inForce = (q: string) => !!sig[q] && !!sig[q.replace("_Q", "")];
+  return (
+    <div class="handshake" data-testid="handshake">
+      <div class="row">
+        <span class="hint dir">NC → PLC</span>
+        <Lamp id="lamp-ROTMOD" on={sig.ROTMOD} label="ROTMOD" tone="info" title="the NC requests rotary axis mode" />
+        <Lamp id="lamp-SPMOD" on={sig.SPMOD} label="SPMOD" tone="info" title="the NC requests spindle mode" />
+      </div>
+      <div class="row">
+        <span class="hint dir">PLC → NC</span>
+        <Lamp id="lamp-ROTMOD_Q" on={sig.ROTMOD_Q} label="ROTMOD_Q" title="the PLC acknowledges rotary axis mode" />
+        <Lamp id="lamp-SPMOD_Q" on={sig.SPMOD_Q} label="SPMOD_Q" title="the PLC acknowledges spindle mode" />
+        {manual
+          ? ACKS.map((q) => (
+              <button key={q} type="button" data-testid={`plc-signal-${q}`} class={sig[q] && inForce(q) ? "danger" : "secondary"}
+                disabled={props.disabled}
+                title={props.title || (sig[q] ? (inForce(q) ? `withdraw ${q}: the mode in force loses its acknowledgement — process error 90031` : `withdraw ${q}`) : `set ${q}`)}
+                onClick={() => void props.run({ type: "plc_signal", signal: q, on: !sig[q] })}>
+                {sig[q] ? "Withdraw" : "Set"} {q}
+              </button>
+            ))
+          : null}
+      </div>
+      {manual ? (
+        <p class="hint warn-note" role="note">
+          ⚠ Withdrawing the acknowledgement of the mode in force (ROTMOD_Q in rotary axis mode, SPMOD_Q in spindle mode) is a
+          process error (90031): the axis stops.
+        </p>
+      ) : (
+        <p class="hint">The PLC answers {props.s.plc.mode === "auto" ? "by itself" : "never (fault)"}; manual acknowledge sets the signals by hand.</p>
+      )}
+    </div>
+  );
+}
+
+/** A pending M function or mode request with its acknowledge key. */
+function PendingRow(props: { p: PendingM; run: Run; disabled: boolean; title: string }) {
+  const { p } = props;
+  const what = p.signal ?? `M${p.m}`;
+  const tid = p.signal ?? `m${p.m}`;
+  return (
+    <tr data-testid={`pending-${tid}`}>
+      <td>{p.signal ? `${p.signal} (mode request)` : what}</td>
+      <td>{p.axis}</td>
+      <td>{p.out_cycle}</td>
+      <td>
+        <button type="button" data-testid={`ack-${tid}`} disabled={props.disabled} title={props.title}
+          onClick={() =>
+            void props.run(
+              p.signal ? { type: "plc_signal", signal: p.signal === "SPMOD" ? "SPMOD_Q" : "ROTMOD_Q", on: true } : { type: "plc_ack", m: p.m },
+            )
+          }>
+          {p.signal ? `Set ${p.signal}_Q` : "Acknowledge"}
+        </button>
+      </td>
+    </tr>
+  );
+}
+
 export function HliPanel() {
   const s = status.value;
   const cmd = useCommand();
@@ -36,21 +106,22 @@ export function HliPanel() {
       <div class="hli-grid">
         {s.axes.map((a) => (
           <fieldset key={a.name} class="hli-axis">
-            <legend>{a.name}</legend>
+            <legend>
+              {a.display_name}
+              {a.display_name !== a.name ? <span class="hint"> (spindle {a.name})</span> : null}
+            </legend>
             <div class="lamps">
               <Lamp on={a.enabled} label="enables" title={a.missing_enables.join(", ")} />
-              <Lamp on={a.homed} label="homed" tone="info" />
-              <Lamp on={a.in_position} label="in position" tone="info" />
+              {/* homed, in position, speed reached, stopped: the 003 §4.2 lamps below */}
               {a.kind === "spindle" ? (
                 <>
-                  <Lamp on={a.speed_reached} label="speed reached" />
-                  <Lamp on={a.stopped} label="stopped" tone="info" />
                   <Lamp on={a.speed_monitoring_active} label="monitoring active" tone="info" />
                   <Lamp on={a.speed_monitoring_invalid} label="monitoring invalid" tone="warn" />
                 </>
               ) : null}
               <Lamp on={a.job_error !== 0} label={`job error ${a.job_error || ""}`} tone="bad" />
             </div>
+            <AxisSignalLamps a={a} />
             <div class="hint">
               state {a.state} · loop <span data-testid={`hli-loop-${a.name}`}>{a.loop}</span> · override{" "}
               {qty(a.override_pct, 1, "%")}
@@ -96,10 +167,13 @@ export function HliPanel() {
             <Lamp id="lamp-drives-powered" on={plc.drives_powered} label="drives powered"
               title="every drive switched on, ready and enabled (DriveOn, TorquePermission)" />
           </div>
+          {Object.keys(plc.signals ?? {}).length ? (
+            <Handshake s={s} run={cmd.run} disabled={!online.value || !!blocked} title={blocked} />
+          ) : null}
           <table class="pending-m">
             <thead>
               <tr>
-                <th>Pending M</th>
+                <th>Pending</th>
                 <th>Axis</th>
                 <th>since cycle</th>
                 <th />
@@ -107,17 +181,8 @@ export function HliPanel() {
             </thead>
             <tbody>
               {plc.pending.map((p) => (
-                <tr key={`${p.m}-${p.out_cycle}`} data-testid={`pending-m${p.m}`}>
-                  <td>M{p.m}</td>
-                  <td>{p.axis}</td>
-                  <td>{p.out_cycle}</td>
-                  <td>
-                    <button type="button" data-testid={`ack-m${p.m}`} disabled={!online.value || !!blocked} title={blocked}
-                      onClick={() => void cmd.run({ type: "plc_ack", m: p.m })}>
-                      Acknowledge
-                    </button>
-                  </td>
-                </tr>
+                <PendingRow key={`${p.signal ?? p.m}-${p.out_cycle}`} p={p} run={cmd.run} disabled={!online.value || !!blocked}
+                  title={blocked} />
               ))}
               {!plc.pending.length ? (
                 <tr>

@@ -3,6 +3,7 @@ import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { heldKey, holdJog, keyName, releaseJog } from "../state/jog";
+import { loadRotaryAxisName, rotaryAxisName } from "../state/caxis";
 import { commandBlocked } from "../state/control";
 import { loadList, numbers, paramsVersion } from "../state/params";
 import { machineId, motionLocked, online, status } from "../state/session";
@@ -88,7 +89,12 @@ export function JogPanel() {
       setFeedMax(p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor * 60 : null);
     }, () => undefined);
   }, [machineId.value, paramsVersion.value, axName]);
+  useEffect(() => void loadRotaryAxisName(), [machineId.value, paramsVersion.value]);
   if (!ax) return <Panel title="Jog" id="jog">Waiting for the service…</Panel>;
+  // the main spindle with rotary-axis capability jogs as the rotary axis C: a jog changes it
+  // over first [003 §2.3], then it moves in °/min under the feed override like any axis
+  const cName = ax.spindle_mode != null ? (rotaryAxisName.value ?? (ax.spindle_mode === "rotary" ? ax.display_name : null)) : null;
+  const jogName = cName ?? ax.name;
   const unit = ax.unit === "deg" ? "°" : "mm";
   const feedNum = feed.trim() === "" ? null : Number(feed);
   const feedPositive = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
@@ -97,7 +103,7 @@ export function JogPanel() {
   const feedError = !feedPositive
     ? "a feed > 0 is needed (empty: the G200 default)"
     : !feedInLimit
-      ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the G200 maximum of ${ax.name} (P-AXIS-00213)`
+      ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the G200 maximum of ${ax.display_name} (P-AXIS-00213)`
       : "";
   const blocked = commandBlocked.value; // another holder, or a role that may not command
   const dis = !online.value || !!blocked;
@@ -113,16 +119,16 @@ export function JogPanel() {
           <label key={a.name} class={`axis-choice ${a.name === ax.name ? "active" : ""}`}>
             <input type="radio" name="jog-axis" value={a.name} checked={a.name === ax.name}
               onChange={() => setName(a.name)} data-testid={`jog-axis-${a.name}`} />
-            {a.name}
+            {a.display_name}
           </label>
         ))}
         <span class="readout">
-          {ax.name} = <b data-testid="jog-pos">{fmt(ax.pos_act, 3)}</b> {unit}
+          {ax.display_name} = <b data-testid="jog-pos">{fmt(ax.pos_act, 3)}</b> {unit}
         </span>
       </div>
       <div class="row">
         {([-1, 1] as const).map((d) => (
-          <JogKey key={d} axis={ax.name} dir={d} feed={feedNum} disabled={noMotion} onRefused={setJogRefusal}
+          <JogKey key={d} axis={jogName} dir={d} feed={feedNum} disabled={noMotion} onRefused={setJogRefusal}
             title={why || "Hold to jog; release stops"} />
         ))}
         <label>
@@ -131,6 +137,11 @@ export function JogPanel() {
           {unit}/min
         </label>
       </div>
+      {cName && ax.spindle_mode !== "rotary" ? (
+        <p class="hint" data-testid="jog-changeover-hint">
+          A jog of {cName} changes {ax.name} over to the rotary axis {cName} first (M5 before, if it turns).
+        </p>
+      ) : null}
       <div class="field-note">
         {feedError ? (
           <span class="inline-error" role="alert" data-testid="jog-feed-error">
@@ -151,7 +162,7 @@ export function JogPanel() {
         </label>
         {([-1, 1] as const).map((d) => (
           <button key={d} type="button" data-testid={`jog-step-${d > 0 ? "plus" : "minus"}`} disabled={noMotion} title={why}
-            onClick={() => void cmd.run({ type: "jog", axis: ax.name, action: "step", direction: d, distance: step, feed_mm_min: feedNum })}>
+            onClick={() => void cmd.run({ type: "jog", axis: jogName, action: "step", direction: d, distance: step, feed_mm_min: feedNum })}>
             {d > 0 ? "+" : "−"}
             {step} {unit}
           </button>

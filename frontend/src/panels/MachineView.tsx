@@ -10,7 +10,8 @@ function AxisRow({ a }: { a: AxisStatus }) {
   const posDec = spindle ? 2 : 3;
   return (
     <tr data-testid={`axis-${a.name}`} class={a.job_error ? "has-error" : ""}>
-      <th scope="row">{a.name}</th>
+      {/* the name follows the mode: C while the main spindle is the rotary axis [003 §2.4] */}
+      <th scope="row" data-testid={`name-${a.name}`}>{a.display_name}</th>
       <td data-testid={`state-${a.name}`}>{a.state}</td>
       <td class="num" data-testid={`pos-${a.name}`}>
         {fmt(a.pos_act, posDec)}
@@ -71,7 +72,7 @@ export function MachineView() {
       <div class="lamps" aria-label="HLI state">
         {spindles.map((a) => (
           <div class="lamp-row" key={a.name}>
-            <b>{a.name}</b>
+            <b>{a.display_name}</b>
             <Lamp id={`lamp-speed-reached-${a.name}`} on={a.speed_reached} label="speed reached" />
             <Lamp id={`lamp-stopped-${a.name}`} on={a.stopped} label="stopped" tone="info" />
             <Lamp id={`lamp-in-position-${a.name}`} on={a.in_position} label="in position" tone="info" />

@@ -1,9 +1,13 @@
 // Spindle: S with M3/M4/M5, M19 orientation, gear stages with their range bars, override,
-// homing (kept apart from the motion buttons).
+// homing (kept apart from the motion buttons); for a main spindle with rotary-axis capability
+// its mode (spindle S1 / rotary axis C) and the changeover [003 Fig. 4-1].
 import { useEffect, useRef, useState } from "preact/hooks";
 import { commandBlocked } from "../state/control";
 import { loadList, paramsVersion } from "../state/params";
+import type { AxisStatus, MachineStatus } from "../api/types";
+import { loadRotaryAxisName, rotaryAxisName } from "../state/caxis";
 import { machineId, motionLocked, online, status } from "../state/session";
+import { AxisSignalLamps } from "../ui/AxisSignalLamps";
 import { Panel } from "../ui/Panel";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
@@ -29,6 +33,61 @@ async function spindleParams(name: string): Promise<SpindleParams> {
   return { ranges, overrideMaxPct: ovr ? Number(ovr.value) / 10 : 100 };
 }
 
+/** The mode of a main spindle with rotary-axis capability, the changeover in progress and the
+ * #CAX / #CAX OFF keys (MDI blocks: the NC changes over as a program would). */
+function ModeRow(props: { sp: AxisStatus; plc: MachineStatus["plc"]; locked: boolean; lockedWhy: string;
+  run: ReturnType<typeof useCommand>["run"] }) {
+  const { sp, plc } = props;
+  const c = rotaryAxisName.value ?? (sp.spindle_mode === "rotary" ? sp.display_name : "C");
+  const mode =
+    sp.spindle_mode === "rotary" ? `rotary axis ${sp.display_name}` : sp.spindle_mode === "spindle" ? `spindle ${sp.name}` : "none";
+  // in the external phase the request the NC has set names the mode and the acknowledgement
+  // it waits for (before, the requests still show the mode left)
+  const external = sp.changeover === "external";
+  const request = !external ? null : plc.signals?.ROTMOD ? "ROTMOD" : plc.signals?.SPMOD ? "SPMOD" : null;
+  const target = request === "SPMOD" ? ` to spindle ${sp.name}` : request === "ROTMOD" ? ` to rotary axis ${c}` : "";
+  const phase =
+    sp.changeover === "internal"
+      ? "internal: braking, drive parameter record"
+      : sp.changeover === "external"
+        ? `waiting for ${request ?? "the PLC"}_Q from the PLC`
+        : sp.changeover === "interrupted"
+          ? "interrupted: reset, or a jog or spindle key"
+          : "";
+  const busy = sp.changeover != null;
+  const whyRotary = props.lockedWhy || (busy ? "a changeover is in progress" : sp.spindle_mode === "rotary" ? `already rotary axis ${c}` : "");
+  const whySpindle = props.lockedWhy || (busy ? "a changeover is in progress" : sp.spindle_mode === "spindle" ? `already spindle ${sp.name}` : "");
+  return (
+    <div class="mode-row">
+      <div class="row">
+        <span>
+          Mode <b data-testid="spindle-mode" data-mode={sp.spindle_mode}>{mode}</b>
+        </span>
+        {busy ? (
+          <span class={`changeover ${sp.changeover}`} data-testid="spindle-changeover" role="status">
+            changeover{target}: {phase}
+          </span>
+        ) : null}
+      </div>
+      <div class="row">
+        <button type="button" data-testid="cax-on" disabled={props.locked || !!whyRotary}
+          title={whyRotary || `#CAX: change over to the rotary axis ${c} (M5 first if it turns)`}
+          onClick={() => void props.run({ type: "mdi", block: "#CAX" })}>
+          #CAX → rotary axis {c}
+        </button>
+        <button type="button" data-testid="cax-off" disabled={props.locked || !!whySpindle}
+          title={whySpindle || `#CAX OFF: change over to the spindle ${sp.name}`}
+          onClick={() => void props.run({ type: "mdi", block: "#CAX OFF" })}>
+          #CAX OFF → spindle {sp.name}
+        </button>
+        <span class="hint">
+          {busy ? "" : sp.spindle_mode === "rotary" ? `M3/M4/M5/M19 and the gear keys change over to spindle ${sp.name} first` : `G00–G03 with ${c} or a jog of ${c} change over to the rotary axis`}
+        </span>
+      </div>
+    </div>
+  );
+}
+
 export function SpindlePanel() {
   const spindles = status.value?.axes.filter((a) => a.kind === "spindle") ?? [];
   const [name, setName] = useState("");
@@ -41,6 +100,7 @@ export function SpindlePanel() {
   const ovrTimer = useRef<number | null>(null);
   const [ovr, setOvr] = useState<number | null>(null);
 
+  useEffect(() => void loadRotaryAxisName(), [machineId.value, paramsVersion.value]);
   useEffect(() => {
     if (sp) void spindleParams(sp.name).then(setParams, () => setParams(null));
   }, [sp?.name, machineId.value, paramsVersion.value]);
@@ -66,9 +126,10 @@ export function SpindlePanel() {
   }
 
   const overridePct = ovr ?? sp.override_pct;
+  const rotary = sp.spindle_mode === "rotary";
   return (
     <Panel
-      title={`Spindle ${sp.name}`}
+      title={rotary ? `Rotary axis ${sp.display_name} (spindle ${sp.name})` : `Spindle ${sp.name}`}
       id="spindle"
       actions={
         spindles.length > 1 ? (
@@ -88,12 +149,16 @@ export function SpindlePanel() {
           n act <b data-testid="spindle-speed">{fmt(sp.vel_act, 1)}</b> rpm
         </span>
         <span>
-          position <b data-testid="spindle-pos">{fmt(sp.pos_act, 2)}</b>°
+          {rotary ? sp.display_name : "position"} <b data-testid="spindle-pos">{fmt(sp.pos_act, rotary ? 3 : 2)}</b>°
         </span>
         <span>
           state <b>{sp.state}</b>
         </span>
       </div>
+      {sp.spindle_mode != null && status.value ? (
+        <ModeRow sp={sp} plc={status.value.plc} locked={locked} lockedWhy={lockedWhy} run={cmd.run} />
+      ) : null}
+      <AxisSignalLamps a={sp} />
       <form
         class="row"
         onSubmit={(e) => {
