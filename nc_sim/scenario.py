@@ -188,7 +188,7 @@ def trace_columns(m: Machine, rec: np.ndarray, t0_cycle: int) -> dict[str, np.nd
     """Named trace columns `t_s` and `<axis>.<signal>` (nc_sim.signals) from a kernel record."""
     n = rec.shape[0]
     cols: dict[str, np.ndarray] = {"t_s": (t0_cycle + 1 + np.arange(n)) * m.k.cycle_s}
-    sigs = machine_signals(m.axes, m.channel_slot)
+    sigs = machine_signals(m.axes, m.channel_slot, m.rotary_spindle)
     data = signal_columns(sigs, rec)
     for i, s in enumerate(sigs):
         cols[s.name] = data[i]

@@ -30,7 +30,7 @@ class Signal:
     kind: str  # "float", "bool" or "enum" (state, gear, loop mode, job error code)
 
 
-def _axis_signals(name: str, kind: AxisKind, slot: int) -> list[Signal]:
+def _axis_signals(name: str, kind: AxisKind, slot: int, rotary_capable: bool) -> list[Signal]:
     u = "mm" if kind is AxisKind.LINEAR else "deg"
     spindle = kind is AxisKind.SPINDLE
     rows: list[tuple[str, int, float, str, str]] = []
@@ -63,9 +63,14 @@ def _axis_signals(name: str, kind: AxisKind, slot: int) -> list[Signal]:
             ("open_loop", L.R_OPEN_LOOP, 1.0, "", "enum"),  # 1 control limit, 2 speed control
             ("override_pct", L.R_OVERRIDE, 100.0, "%", "float"),
         ]
-    rows += [
+    if rotary_capable:  # 1 while the spindle is the rotary axis C (named S1 all the same)
+        rows.append(("rotary_mode", L.R_ROTARY_MODE, 1.0, "", "bool"))
+    rows += [  # 003 §4.2: HOMED, INPOS, MVPOS/MVNEG, READY (N_act = N_comm, N_act = 0 above)
         ("homed", L.R_HOMED, 1.0, "", "bool"),
         ("in_position", L.R_IN_POS, 1.0, "", "bool"),
+        ("mvpos", L.R_MVPOS, 1.0, "", "bool"),
+        ("mvneg", L.R_MVNEG, 1.0, "", "bool"),
+        ("ready", L.R_READY, 1.0, "", "bool"),
         ("da_digits", L.R_DA, 1.0, "digits", "float"),
         ("state", L.R_STATE, 1.0, "", "enum"),
         ("job_error", L.R_JOB_ERROR, 1.0, "", "enum"),
@@ -100,12 +105,18 @@ def channel_signals(slot: int) -> list[Signal]:
     return [Signal(f"{CHANNEL}.{n}", CHANNEL, slot, c, f, u, k) for n, c, f, u, k in rows]
 
 
-def machine_signals(axes: Iterable[SlottedAxis], channel_slot: int | None = None) -> list[Signal]:
+def machine_signals(
+    axes: Iterable[SlottedAxis],
+    channel_slot: int | None = None,
+    rotary_spindle: str | None = None,
+) -> list[Signal]:
     """Every signal of a machine's axes (`Machine.axes`), axis by axis, in a stable order,
-    then the channel's (`Machine.channel_slot`)."""
+    then the channel's (`Machine.channel_slot`). `rotary_spindle` (`Machine.rotary_spindle`)
+    names the main spindle with rotary-axis capability: it has `rotary_mode` as well, under
+    its configured name in either mode, so a recording's columns never change."""
     out: list[Signal] = []
     for ax in axes:
-        out += _axis_signals(ax.name, ax.kind, ax.slot)
+        out += _axis_signals(ax.name, ax.kind, ax.slot, ax.name == rotary_spindle)
     if channel_slot is not None:
         out += channel_signals(channel_slot)
     return out

@@ -52,7 +52,9 @@ class MachineHost:
         self.epoch = epoch
         self.sim = Simulation(cfg.cycle_s)
         self.machine: Machine = self.sim.add(cfg)
-        self.signals: list[Signal] = machine_signals(self.machine.axes, self.machine.channel_slot)
+        self.signals: list[Signal] = machine_signals(
+            self.machine.axes, self.machine.channel_slot, self.machine.rotary_spindle
+        )
         self.signal_by_name = {s.name: s for s in self.signals}
         self.ring = SampleRing.create(ring_path, self.sim.kernel.n)
         self.scope = Scope(self.sim.kernel.cycle_s)

@@ -90,7 +90,8 @@ I_MON_INVALID = 17  # speed monitoring invalid (speed still changing, or no vali
 I_MARK_ARMED = 18  # spindle: report the zero mark (homing waits for it)
 I_ROLE = 19  # ROLE_*: what drives this slot's setpoint
 I_LINE = 20  # program line of the block the slot's motion belongs to (0 none)
-I_COLS = 21
+I_ROTARY_MODE = 21  # 1: a main spindle is the rotary axis C (written by the Python layer)
+I_COLS = 22
 
 # I_ROLE values
 ROLE_AXIS = 0  # its own plan (jog, single-axis move, spindle)
@@ -132,7 +133,11 @@ R_MON_ACTIVE = 15
 R_MON_INVALID = 16
 R_OVERRIDE = 17
 R_LINE = 18
-R_COLS = 19
+R_ROTARY_MODE = 19
+R_MVPOS = 20  # actual speed above the noise of an axis at rest (P_INPOS_WIN per second)
+R_MVNEG = 21
+R_READY = 22  # the drive follows (I_ENABLED)
+R_COLS = 23
 
 # --- the path of a channel (coupled path mode) ------------------------------------------------
 MAX_PATH_AXES = 6

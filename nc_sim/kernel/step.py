@@ -69,6 +69,7 @@ from nc_sim.kernel.layout import (
     I_PLAN_K,
     I_PLAN_N,
     I_ROLE,
+    I_ROTARY_MODE,
     I_SPEED_CTRL_ARMED,
     I_SPEED_REACHED,
     I_STATE,
@@ -127,10 +128,14 @@ from nc_sim.kernel.layout import (
     R_LINE,
     R_MON_ACTIVE,
     R_MON_INVALID,
+    R_MVNEG,
+    R_MVPOS,
     R_OPEN_LOOP,
     R_OVERRIDE,
     R_P_ACT,
     R_P_CMD,
+    R_READY,
+    R_ROTARY_MODE,
     R_SPEED_REACHED,
     R_STATE,
     R_STOPPED,
@@ -629,6 +634,11 @@ def run_cycles(
                 rec[c, s, R_MON_INVALID] = ist[s, I_MON_INVALID]
                 rec[c, s, R_OVERRIDE] = st[s, S_OVERRIDE]
                 rec[c, s, R_LINE] = ist[s, I_LINE]
+                rec[c, s, R_ROTARY_MODE] = ist[s, I_ROTARY_MODE]
+                v_act, noise = st[s, S_V_ACT], pr[s, P_INPOS_WIN]  # 003 §4.2 MVPOS/MVNEG
+                rec[c, s, R_MVPOS] = 1.0 if v_act > noise else 0.0
+                rec[c, s, R_MVNEG] = 1.0 if v_act < -noise else 0.0
+                rec[c, s, R_READY] = ist[s, I_ENABLED]
         if any_event == 1:
             return c + 1
     return n

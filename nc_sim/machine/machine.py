@@ -145,6 +145,12 @@ class Machine:
         return self.ctx.units
 
     @property
+    def rotary_spindle(self) -> str | None:
+        """The configured name of the main spindle with rotary-axis capability (the C axis
+        in rotary axis mode, P-CHAN-00010), None without one."""
+        return self.cax.ax.name if self.cax is not None else None
+
+    @property
     def slope(self) -> int:
         """Slope type in force (P-CHAN-00071, #SLOPE[TYPE=...])."""
         return self.ctx.slope

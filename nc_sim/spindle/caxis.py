@@ -95,6 +95,16 @@ class CAxis:
 
     # --- what the others ask ------------------------------------------------------------
     @property
+    def mode(self) -> SpindleMode:
+        """The mode in force: rotary axis, spindle, or none (changing over, no acknowledgement)."""
+        return self._mode
+
+    @mode.setter
+    def mode(self, mode: SpindleMode) -> None:
+        self._mode = mode  # the kernel records it every cycle (`S1.rotary_mode`)
+        self.sp.motion.k.ist[self.ax.slot, L.I_ROTARY_MODE] = int(mode is SpindleMode.ROTARY)
+
+    @property
     def rotary(self) -> bool:
         return self.mode is SpindleMode.ROTARY
 

@@ -174,3 +174,37 @@ def test_a_mistyped_channel_action_stops_the_run_naming_it(tmp_path: Path) -> No
     res = run_cli(bad, tmp_path / "out")
     assert res.returncode == 2
     assert "action single_block: single_block must be true or false, not 'on'" in res.stderr
+
+
+CHANGEOVER = """duration_s = 1.0
+[[actions]]
+t_s = 0.0
+plc = { mode = "manual" }
+[[actions]]
+t_s = 0.1
+mdi = "#CAX"
+[[actions]]
+t_s = 0.5
+plc = { signal = "ROTMOD_Q", on = true }
+"""
+
+
+def test_a_changeover_to_c_keeps_the_trace_columns_and_records_the_mode(tmp_path: Path) -> None:
+    """#CAX with a manual PLC: S1 is in no mode from the activation until the scenario sets
+    ROTMOD_Q at 0.5 s, then the rotary axis C. The columns keep the configured name S1 (no
+    `C.*`), the same header as a run in which S1 stays the spindle."""
+    (tmp_path / "cax.toml").write_text(CHANGEOVER, encoding="utf-8")
+    (tmp_path / "idle.toml").write_text("duration_s = 0.1\n", encoding="utf-8")
+    for name in ("cax", "idle"):
+        res = run_cli(tmp_path / f"{name}.toml", tmp_path / name)
+        assert res.returncode == 0, res.stderr
+    header = (tmp_path / "cax" / "trace.csv").read_text().splitlines()[0].split(",")
+    assert header == (tmp_path / "idle" / "trace.csv").read_text().splitlines()[0].split(",")
+    assert "S1.rotary_mode" in header and not [c for c in header if c.startswith("C.")]
+    for col in ("mvpos", "mvneg", "ready"):
+        assert f"S1.{col}" in header and f"X.{col}" in header
+    rows = list(csv.DictReader((tmp_path / "cax" / "trace.csv").read_text().splitlines()))
+    at = {round(float(r["t_s"]), 3): r for r in rows}
+    assert at[0.05]["S1.rotary_mode"] == "0" and at[0.45]["S1.rotary_mode"] == "0"
+    assert at[0.6]["S1.rotary_mode"] == "1" and at[0.999]["S1.rotary_mode"] == "1"
+    assert at[0.6]["S1.ready"] == "1" and at[0.6]["S1.mvpos"] == at[0.6]["S1.mvneg"] == "0"

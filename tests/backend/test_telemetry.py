@@ -125,6 +125,33 @@ def test_every_cycle_with_events(srv: Server, mid: str) -> None:
     asyncio.run(run())
 
 
+def test_the_c_changeover_streams_under_the_spindles_name(srv: Server, mid: str) -> None:
+    """The 003 §4.2 signals are live signals: `S1.rotary_mode` (only the C-capable S1 has it)
+    goes to 1 once #CAX has changed S1 over (the demo PLC acknowledges ROTMOD after 20 ms)
+    and the subscription keeps its names meanwhile."""
+    watched = ["S1.rotary_mode", "S1.ready", "S1.mvpos", "S1.mvneg"]
+
+    async def run() -> None:
+        async with connect(f"{srv.ws_base}/api/machines/{mid}/telemetry", **srv.ws_auth) as ws:
+            hello = await _json(ws, "hello")
+            kinds = {s["name"]: s["kind"] for s in hello["signals"]}
+            assert all(kinds[n] == "bool" for n in watched)
+            assert [n for n in kinds if n.endswith(".rotary_mode")] == ["S1.rotary_mode"]
+            assert not [n for n in kinds if n.startswith("C.")]
+            await ws.send(json.dumps({"type": "subscribe", "signals": watched}))
+            await _json(ws, "subscribed")
+            r = await asyncio.to_thread(srv.command, mid, {"type": "mdi", "block": "#CAX"})
+            assert r.status_code == 200
+            frames, _events = await _step_watched(srv, mid, ws, 1000)
+        assert all(h.signals == watched for h, _ in frames)
+        mode = np.concatenate([d[0] for _, d in frames])
+        assert mode[0] == 0.0 and mode[-1] == 1.0
+        assert np.all(np.diff(mode) >= 0.0)  # one rise, no flicker
+        assert np.concatenate([d[1] for _, d in frames]).min() == 1.0  # drive follows
+
+    asyncio.run(run())
+
+
 def test_max_rate_decimates_on_a_fixed_grid(srv: Server, mid: str) -> None:
     async def run() -> None:
         url = f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_cmd_mm"
