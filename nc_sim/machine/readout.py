@@ -99,7 +99,7 @@ def _signals(m: Machine, ax: Axis, spindle: bool) -> InterfaceSignals:
         homed=bool(ist[L.I_HOMED]),
         moving_positive=v_act > noise,
         moving_negative=v_act < -noise,
-        ready=ax.drive_follows(),
+        ready=bool(ist[L.I_ENABLED]),  # as recorded (R_READY): the drive follows the NC
         in_position=bool(ist[L.I_IN_POS]),
         speed_reached=bool(ist[L.I_SPEED_REACHED]) if spindle else None,
         stopped=bool(ist[L.I_STOPPED]) if spindle else None,
