@@ -154,11 +154,13 @@ class Handshake:
 
     def request(self, signal: str, axis: str, waiter: Waiter) -> None:
         """Set the mode request `signal` (ROTMOD/SPMOD) for `axis`; `waiter` continues when
-        the PLC sets its acknowledgement <signal>_Q."""
+        the PLC's acknowledgements read that mode: <signal>_Q set and the other reset (at once
+        when they do already: they are levels)."""
         p = self.plc.output(None, axis, self.now(), signal)
         while p.out_cycle in self._waiting:
             p.out_cycle += 1
         self._waiting[p.out_cycle] = waiter
+        self._match()
 
     def withdraw_request(self, signal: str) -> None:
         """A changeover that ended without its answer: its request is pending no more."""
@@ -181,17 +183,35 @@ class Handshake:
             acked = self.plc.answer(signal)
             for p in acked:
                 self._acked(p)
-            if not acked:
-                self._level(signal, True, axis)
-            return len(acked)
-        self._level(signal, False, axis)
-        return 0
+            if acked:
+                return len(acked)
+        self._level(signal, on, axis)
+        return self._match()
+
+    def _match(self) -> int:
+        """Pending mode requests whose acknowledgement the levels already give (the
+        requested one set, the other reset) are answered; returns how many."""
+        on = self.plc.signals
+        matched = [
+            p
+            for p in self.plc.pending
+            if p.signal is not None
+            and on.get(f"{p.signal}_Q")
+            and not any(on.get(f"{s}_Q") for s in MODE_SIGNALS if s != p.signal)
+        ]
+        for p in matched:
+            self.plc.pending.remove(p)
+            waiter = self._waiting.pop(p.out_cycle, None)
+            if waiter is not None:
+                waiter.acknowledged()
+        return len(matched)
 
     def _level(self, signal: str, on: bool, axis: str) -> None:
         if self.plc.signals.get(signal) == on:
             return
         self.plc.signals[signal] = on
-        self.log(Code.EV_SIGNAL_ON if on else Code.EV_SIGNAL_OFF, axis, signal=signal)
+        code = Code.EV_SIGNAL_ON if on else Code.EV_SIGNAL_OFF
+        self.log(code, axis, f"{signal} = {int(on)}", signal=signal)
 
     def on_cycle(self, cycle: int) -> None:
         """The PLC's acknowledgements due in this cycle, then the timeouts that ran out."""
@@ -201,11 +221,13 @@ class Handshake:
             if cycle - out >= self.timeout_cycles:
                 del self._waiting[out]
                 gone = self.plc.withdraw(out)  # timed out means gone: a late ack finds nothing
+                what = "" if gone is None else f"of {gone.what} "
+                if gone is not None and gone.signal is not None:
+                    what = f"{gone.signal}_Q for the request {gone.signal} "
                 ev = self.log(
                     Code.PLC_ACK_TIMEOUT,
                     waiter.error_axis,
-                    f"no acknowledgement {'of ' + gone.what + ' ' if gone else ''}"
-                    f"after {self.timeout_cycles * self.cycle_s:g} s",
+                    f"no acknowledgement {what}after {self.timeout_cycles * self.cycle_s:g} s",
                     m=gone.m if gone else None,
                     signal=gone.signal if gone else None,
                 )

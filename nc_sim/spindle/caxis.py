@@ -225,7 +225,9 @@ class CAxis:
             return  # the PLC answered an interrupted changeover: a reset adopts its answer
         ax = self.ax
         self.sp.motion.log(
-            Code.EV_CHANGEOVER_END, ax.name, f"{c.request}_Q: changeover de-activated"
+            Code.EV_CHANGEOVER_END,
+            ax.name,
+            f"{c.request}_Q from the PLC: the changeover is complete and de-activated",
         )
         self.change = None
         ax.sequence, ax.block_id = None, None
@@ -326,7 +328,7 @@ class CAxis:
             if self.requests[signal] != on:
                 self.requests[signal] = on
                 code = Code.EV_SIGNAL_ON if on else Code.EV_SIGNAL_OFF
-                self.sp.motion.log(code, self.ax.name, signal=signal)
+                self.sp.motion.log(code, self.ax.name, f"{signal} = {int(on)}", signal=signal)
 
     # --- the modes ------------------------------------------------------------------------
     def _enter(self, mode: SpindleMode, record: bool = False) -> None:
@@ -343,6 +345,7 @@ class CAxis:
             motion.shift_positions(ax, -360.0 * math.floor(p / 360.0))
             motion.close_loop(ax)
             p = float(motion.k.st[ax.slot, L.S_P_CMD])
+            motion.k.st[ax.slot, L.S_TARGET] = p  # it holds its position: in position there
             motion.log(
                 Code.EV_ROTARY_MODE,
                 ax.name,
@@ -355,7 +358,11 @@ class CAxis:
             if record and ax.gear != self.spindle_gear:
                 ax.gear = self.spindle_gear
                 push_params(motion.k, ax)
-            motion.log(Code.EV_SPINDLE_MODE, ax.name, f"{self.c_name} is the spindle {ax.name}")
+            motion.log(
+                Code.EV_SPINDLE_MODE,
+                ax.name,
+                f"spindle mode: {self.c_name} is the spindle {ax.name}",
+            )
 
     def _fail(self, ev: Event) -> None:
         """A job error of the changeover or the mode: the spindle brakes and is in error,

@@ -44,7 +44,7 @@ def test_g00_c45_waits_for_rotmod_q_set_by_hand_then_c_reaches_45(page: Page) ->
     waiting = spindle.get_by_test_id("spindle-changeover")
     expect(waiting).to_contain_text("waiting for ROTMOD_Q")
     # the mode changes only once the changeover completed: still not C while it waits
-    expect(spindle.get_by_test_id("spindle-mode")).to_have_text("none")
+    expect(spindle.get_by_test_id("spindle-mode")).to_have_text("changing over")
     expect(machine.get_by_test_id("name-S1")).to_have_text("S1")
 
     page.get_by_test_id("tab-HLI / PLC").click()

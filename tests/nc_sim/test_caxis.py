@@ -391,7 +391,8 @@ def test_each_key_of_003_aborts_an_interrupted_changeover_and_commands_its_own(
     key: JogStart | SpindleRun | SpindlePosition, request_: str
 ) -> None:
     """003 §2.3 "Jogging movements": AxxCJGPOS/JGNEG, AxxCM3/M4/M5/M19 abort an interrupted
-    changeover before the NC commands the one the key needs."""
+    changeover before the NC commands the one the key needs (here the interrupted one was to
+    rotary axis mode, and the manual PLC had not answered it)."""
     sim, m, _ = make()
     m.submit(PlcMode("manual"))
     assert isinstance(m.submit(ProgramLoad("c", "G00 C45\nM30")), Accepted)
@@ -403,7 +404,10 @@ def test_each_key_of_003_aborts_an_interrupted_changeover_and_commands_its_own(
     assert isinstance(m.submit(key), Accepted)
     record(sim, 0.2)
     assert [c for c, _s in sequence(m, seen)][:2] == [41, 35]
-    assert [p.signal for p in m.plc.pending] == [request_]
+    if request_ == "ROTMOD":
+        assert [p.signal for p in m.plc.pending] == ["ROTMOD"]
+    else:  # the PLC never left spindle mode: its levels (SPMOD_Q) answer SPMOD at once
+        assert m.plc.pending == [] and mode(m) is SpindleMode.SPINDLE
 
 
 def test_removing_the_drive_enables_while_waiting_for_the_plc_does_not_stop_it() -> None:
@@ -474,3 +478,30 @@ def test_feed_override_acts_on_c_in_rotary_mode() -> None:
     moving_s = np.count_nonzero(np.abs(np.diff(pc)) > 1e-12) * 0.001
     assert pc[-1] == pytest.approx(360.0)
     assert moving_s == pytest.approx(12.0, abs=0.5)
+
+
+def test_the_acknowledgements_are_levels_a_request_they_already_answer_goes_on() -> None:
+    """003 §4.1: ROTMOD_Q/SPMOD_Q report the PLC's state continually. The PLC holds both
+    (its mistake): #CAX waits; once SPMOD_Q goes (no process error: the NC is changing over),
+    the levels read rotary axis mode and the changeover completes without another edge."""
+    sim, m, _ = make()
+    m.submit(PlcMode("manual"))
+    m.submit(PlcSignal("ROTMOD_Q", True))
+    assert mode(m) is SpindleMode.SPINDLE
+    mdi(m, "#CAX")
+    record(sim, 0.5)
+    assert mode(m) is SpindleMode.NONE and [p.signal for p in m.plc.pending] == ["ROTMOD"]
+    seen = m.events.cursor
+    assert m.submit(PlcSignal("SPMOD_Q", False)) == Accepted(0, m.cycle, acknowledged=1)
+    record(sim, 0.1)
+    assert mode(m) is SpindleMode.ROTARY and Code.MODE_ACK_WITHDRAWN not in [
+        e.code for e in events(m, seen)
+    ]
+
+
+def test_as_the_c_axis_at_rest_it_is_in_position() -> None:
+    """Position control holds where the changeover left it: INPOS (003 §4.2) at once."""
+    sim, m, _ = make()
+    mdi(m, "#CAX")
+    record(sim, 0.5)
+    assert m.k.ist[m.axis(C).slot, L.I_IN_POS] == 1

@@ -40,7 +40,15 @@ function ModeRow(props: { sp: AxisStatus; plc: MachineStatus["plc"]; locked: boo
   const { sp, plc } = props;
   const c = rotaryAxisName.value ?? (sp.spindle_mode === "rotary" ? sp.display_name : "C");
   const mode =
-    sp.spindle_mode === "rotary" ? `rotary axis ${sp.display_name}` : sp.spindle_mode === "spindle" ? `spindle ${sp.name}` : "none";
+    sp.spindle_mode === "rotary"
+      ? `rotary axis ${sp.display_name}`
+      : sp.spindle_mode === "spindle"
+        ? `spindle ${sp.name}`
+        : sp.changeover != null
+          ? "changing over"
+          : "none";
+  const noneWhy =
+    "the PLC acknowledges neither mode (or both, ROTMOD_Q and SPMOD_Q): the next command that needs one changes over";
   // in the external phase the request the NC has set names the mode and the acknowledgement
   // it waits for (before, the requests still show the mode left)
   const external = sp.changeover === "external";
@@ -48,7 +56,7 @@ function ModeRow(props: { sp: AxisStatus; plc: MachineStatus["plc"]; locked: boo
   const target = request === "SPMOD" ? ` to spindle ${sp.name}` : request === "ROTMOD" ? ` to rotary axis ${c}` : "";
   const phase =
     sp.changeover === "internal"
-      ? "internal: braking, drive parameter record"
+      ? "braking, drive parameter record (internal changeover)"
       : sp.changeover === "external"
         ? `waiting for ${request ?? "the PLC"}_Q from the PLC`
         : sp.changeover === "interrupted"
@@ -61,7 +69,11 @@ function ModeRow(props: { sp: AxisStatus; plc: MachineStatus["plc"]; locked: boo
     <div class="mode-row">
       <div class="row">
         <span>
-          Mode <b data-testid="spindle-mode" data-mode={sp.spindle_mode}>{mode}</b>
+          Mode{" "}
+          <b data-testid="spindle-mode" data-mode={sp.spindle_mode}
+            title={sp.spindle_mode === "none" && sp.changeover == null ? noneWhy : undefined}>
+            {mode}
+          </b>
         </span>
         {busy ? (
           <span class={`changeover ${sp.changeover}`} data-testid="spindle-changeover" role="status">
@@ -71,7 +83,7 @@ function ModeRow(props: { sp: AxisStatus; plc: MachineStatus["plc"]; locked: boo
       </div>
       <div class="row">
         <button type="button" data-testid="cax-on" disabled={props.locked || !!whyRotary}
-          title={whyRotary || `#CAX: change over to the rotary axis ${c} (M5 first if it turns)`}
+          title={whyRotary || `#CAX: change over to the rotary axis ${c} (a turning spindle brakes first)`}
           onClick={() => void props.run({ type: "mdi", block: "#CAX" })}>
           #CAX → rotary axis {c}
         </button>
