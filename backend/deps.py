@@ -16,6 +16,7 @@ from api.auth import HELD, Action
 from backend.errors import ApiError, refusal_text
 from backend.security import SAFE_METHODS, is_loopback
 from backend.services.accounts import Accounts
+from backend.services.assist import Assistants
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor, authorize
 from backend.services.control import Control
@@ -48,6 +49,7 @@ class Services:
     recorders: Recorders
     viewer: RerunViewer
     sessions: SessionWatch
+    assistants: Assistants
     started: float
 
     @classmethod
@@ -90,6 +92,7 @@ class Services:
             recorders,
             viewer,
             sessions,
+            Assistants(),
             time.time(),
         )
         services.print_login_link()
@@ -113,6 +116,7 @@ class Services:
         await self.hub.stop()
         self.recorders.stop()
         self.viewer.stop()
+        self.assistants.stop()
         self.pool.stop()
         self.audit.stop()
         self.store.close()
@@ -143,6 +147,7 @@ _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is r
     Action.STOP: "command",
     Action.COMMAND: "command",
     Action.CONFIGURE: "parameter",
+    Action.ASSIST: "parameter",  # assistants propose parameters
     Action.TAKE_CONTROL: "control",
     Action.SIMULATE: "simulation",
     Action.MACHINES: "machine",

@@ -13,6 +13,7 @@ from backend.authn import Authentication, guarded
 from backend.deps import Services, rule_of
 from backend.errors import responses
 from backend.routes import (
+    assist,
     audit,
     auth,
     commands,
@@ -58,6 +59,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(auth.router)
     # every other route needs a token or a session (backend/authn.py)
     for module in (
+        assist,
         service,
         machines,
         commands,

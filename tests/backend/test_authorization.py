@@ -76,6 +76,9 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("PUT", "/api/programs/{name}"): ("operator", FREE),  # programs are service-wide
     ("DELETE", "/api/programs/{name}"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/program-preview"): ("observer", FREE),  # changes nothing
+    # on a copy of the machine: changes nothing, but runs a process for seconds
+    ("POST", "/api/machines/{mid}/assist/multi-gain"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/sign-check"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
     ("GET", "/api/audit"): ("admin", FREE),

@@ -1,0 +1,70 @@
+"""Commissioning assistants [004 §3.5, §3.6.2]: what to run, and what they answer."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+from api.commands import AxisName
+
+
+class MultiGainRequest(BaseModel):
+    """multi_gain by experiment (004 §3.6.2): an axis at constant feed, or a spindle turning
+    position-controlled at constant speed; the lag averaged over `window_s`."""
+
+    axis: AxisName
+    feed_mm_min: float | None = Field(
+        None, gt=0, le=1e6, description="axis feed, mm/min (°/min for a rotary axis)"
+    )
+    speed_rpm: float | None = Field(None, gt=0, le=1e5, description="spindle speed, rpm")
+    window_s: float = Field(1.0, ge=0.2, le=30, description="averaged over, s")
+    direction: Literal[1, -1] = 1
+
+
+class SignCheckRequest(BaseModel):
+    """The sign check (004 §3.5): a short move; `observed` is the way the machine moved as
+    the engineer saw it (+1 as commanded, -1 the other way; null: the simulated plant's)."""
+
+    axis: AxisName
+    distance: float = Field(1.0, ge=-100, le=100, description="mm (° for rotary)")
+    feed_mm_min: float = Field(100.0, gt=0, le=1e5, description="mm/min (°/min)")
+    observed: Literal[1, -1] | None = None
+
+
+class AssistFigure(BaseModel):
+    name: str
+    value: float
+    unit: str
+    text: str = ""
+
+
+class AssistChange(BaseModel):
+    """A proposed parameter change, in raw list units (as PATCH parameters takes it)."""
+
+    target: str = Field(description="axis name, or channel")
+    parameter: str = Field(description="list name, e.g. getriebe[0].multi_gain_z")
+    before: float | int | str
+    after: float | int | str
+    why: str = ""
+
+
+class AssistSeries(BaseModel):
+    name: str
+    x: list[float]
+    y: list[float]
+    x_unit: str = ""
+    y_unit: str = ""
+
+
+class AssistResult(BaseModel):
+    """An assistant's answer: measured figures, proposed changes, plot series, notes. `ok`
+    false: the run found a fault the changes do not cure (the notes say which)."""
+
+    assistant: str
+    ok: bool
+    inputs: dict[str, float | int | str]
+    figures: list[AssistFigure]
+    changes: list[AssistChange]
+    series: list[AssistSeries]
+    notes: list[str]

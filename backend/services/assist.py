@@ -1,0 +1,64 @@
+"""Commissioning assistants on a copy of a machine (nc_sim/assist): the machine's parameters
+as the gateway holds them, an experiment in simulated time in a process of its own (so
+neither the gateway's event loop nor a worker's real-time loop waits for it), the answer as
+the API model. Nothing here touches the live machine: Apply is a parameter write.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import copy
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
+
+from api.assist import AssistResult, MultiGainRequest, SignCheckRequest
+from backend.errors import ApiError
+from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+from nc_sim.machine.config import MachineConfig
+
+RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
+
+
+def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
+    """In the assistants' process: run one experiment; its answer or {"error": why}."""
+    try:
+        if name == "multi-gain":
+            return multi_gain_experiment(cfg, **args).as_json()
+        return sign_check(cfg, **args).as_json()
+    except ExperimentError as e:
+        return {"error": str(e)}
+
+
+class Assistants:
+    """One process for the assistants' runs, started on the first and kept (a queue of one)."""
+
+    def __init__(self) -> None:
+        self._pool: ProcessPoolExecutor | None = None
+
+    def _executor(self) -> ProcessPoolExecutor:
+        if self._pool is None:
+            ctx = multiprocessing.get_context("spawn")  # no copy of the gateway's threads
+            self._pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx)
+        return self._pool
+
+    async def run(
+        self, cfg: MachineConfig, req: MultiGainRequest | SignCheckRequest
+    ) -> AssistResult:
+        """Run the experiment `req` asks for on a copy of `cfg`; 422 when it cannot run."""
+        name = "multi-gain" if isinstance(req, MultiGainRequest) else "sign-check"
+        args = req.model_dump()
+        loop = asyncio.get_running_loop()
+        fut = loop.run_in_executor(self._executor(), _run, name, copy.deepcopy(cfg), args)
+        try:
+            answer = await asyncio.wait_for(fut, RUN_TIMEOUT_S)
+        except TimeoutError:
+            why = f"the {name} experiment did not end within {RUN_TIMEOUT_S:g} s"
+            raise ApiError(504, {"message": why}) from None
+        if "error" in answer:
+            raise ApiError(422, {"message": f"{name}: {answer['error']}"})
+        return AssistResult.model_validate(answer)
+
+    def stop(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
