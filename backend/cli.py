@@ -1,4 +1,5 @@
-"""The `inbetrieb` command: `sim` runs a scenario headless, `serve` starts the service,
+"""The `inbetrieb` command: `sim` runs a scenario headless, `assist` a commissioning
+assistant, `serve` starts the service,
 `openapi` writes the API schema the browser's types are generated from."""
 
 from __future__ import annotations
@@ -7,7 +8,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from backend import cli_accounts
+from backend import cli_accounts, cli_assist
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 
@@ -56,9 +57,12 @@ def main(argv: list[str] | None = None) -> int:
     p_api = sub.add_parser("openapi", help="write the OpenAPI schema (with websocket models)")
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
     cli_accounts.add_parsers(sub)
+    cli_assist.add_parsers(sub)
     args = parser.parse_args(argv)
     if args.cmd in ("user", "token"):
         return cli_accounts.run(args)
+    if args.cmd == "assist":
+        return cli_assist.run(args)
     if args.cmd == "openapi":
         import json
 

@@ -127,3 +127,13 @@ def display_velocity(v_eng: float, kind: AxisKind) -> tuple[float, str]:
     if kind is AxisKind.SPINDLE:
         return v_eng / RPM_TO_DEG_S, "rpm"
     return v_eng * MM_MIN_PER_MM_S, "mm/min" if kind is AxisKind.LINEAR else "°/min"
+
+
+# exact integer scales the commissioning calculators build list fractions from [004 §3.4-3.6]
+POSITION_UNITS_PER_MM = 10000  # wegaufn: 0.1 µm
+POSITION_UNITS_PER_DEG = 10000  # wegaufn: 0.0001°
+DEG_PER_REV = 360
+V_RESO_UNITS_PER_MM = 1000  # v_reso_denom: 1 µm [P-AXIS-00205]
+V_RESO_UNITS_PER_DEG = 1000  # v_reso_denom: 0.001°
+MULTI_GAIN_SPEED_MM_MIN = 1000  # multi_gain: the output for 1 m/min ...
+MULTI_GAIN_SPEED_DEG_MIN = 1000  # ... or 1000 °/min
