@@ -16,6 +16,7 @@ from pathlib import Path
 
 from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
 from nc_sim.assist.curve_fit import curve_fit
+from nc_sim.assist.experiments import multi_gain_experiment, sign_check
 from nc_sim.assist.result import Result
 from nc_sim.assist.run_up import curve_run_up
 from nc_sim.errors import NcUsageError
@@ -204,7 +205,40 @@ def _run_curve_run_up(args: argparse.Namespace, machine: Callable[[], MachineCon
     )
 
 
+def _setup_multi_gain(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--axis", required=True, help="axis or spindle name (X, S1)")
+    speed = p.add_mutually_exclusive_group(required=True)
+    speed.add_argument("--feed", type=float, help="axis feed, mm/min (°/min for a rotary axis)")
+    speed.add_argument("--speed", type=float, help="spindle speed, rpm (position-controlled)")
+    p.add_argument("--window", type=float, default=1.0, help="averaged over, s (default 1)")
+
+
+def _run_multi_gain(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
+    return multi_gain_experiment(
+        machine(), args.axis, feed_mm_min=args.feed, speed_rpm=args.speed, window_s=args.window
+    )
+
+
+def _setup_sign_check(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--axis", required=True, help="axis name (X)")
+    p.add_argument("--distance", type=float, default=1.0, help="mm or ° (default 1)")
+    p.add_argument("--feed", type=float, default=100.0, help="mm/min (default 100)")
+    p.add_argument(
+        "--observed",
+        type=int,
+        choices=(1, -1),
+        help="the way the machine moved as you saw it: 1 as commanded, -1 the other way "
+        "(default: the simulated plant's)",
+    )
+
+
+def _run_sign_check(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
+    return sign_check(machine(), args.axis, args.distance, args.feed, args.observed)
+
+
 ASSISTANTS: dict[str, tuple[Setup, Run]] = {
+    "multi-gain": (_setup_multi_gain, _run_multi_gain),
+    "sign-check": (_setup_sign_check, _run_sign_check),
     "resolution": (_setup_resolution, _run_resolution),
     "multi-gain-calc": (_setup_multi_gain_calc, _run_multi_gain_calc),
     "speed-scaling": (_setup_speed_scaling, _run_speed_scaling),

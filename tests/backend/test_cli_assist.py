@@ -104,3 +104,21 @@ def test_bad_options_are_a_message_and_exit_2(args: list[str], message: str) -> 
     assert done.returncode == 2
     assert message in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_the_issues_multi_gain_experiment_from_the_command_line() -> None:
+    """`inbetrieb assist multi-gain --axis X --feed 200 --set X.sim.drive_gain=22857 --json`:
+    the drive gives 22857 digits per 1 m/min where the NC assumes 10000, so f = 2.2857."""
+    out = answer("multi-gain", "--axis", "X", "--feed", "200", "--set", "X.sim.drive_gain=22857")
+    assert out["ok"] and figure(out, "f") == pytest.approx(2.2857, rel=0.01)
+    new = after(out)
+    ratio = new["getriebe[0].multi_gain_z"] / new["getriebe[0].multi_gain_n"]
+    assert ratio == pytest.approx(22857, rel=0.01)
+    assert new["getriebe[0].kv"] == pytest.approx(875, abs=1)
+
+
+def test_the_sign_check_from_the_command_line() -> None:
+    out = answer("sign-check", "--axis", "X", "--set", "X.sim.motor_inverted=1")
+    assert after(out) == {"lr_hw[0].vz_stellgr": 1}
+    bad = assist("multi-gain", "--axis", "X", "--json")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
