@@ -43,6 +43,9 @@ from nc_sim.units import AxisKind, to_eng
 
 Key = tuple[str, str, str]  # scope, target ('' for channel and tool), name
 _GEAR = "getriebe[i]."
+# an axis's indexed records and how many it has: six gear records, one control loop hardware
+# record (lr_hw[0].vz_stellgr, vz_istw of 004 §3.5); each listed per record, written or not
+_RECORDS = {_GEAR: 6, "lr_hw[i].": 1}
 _KIND_LETTER = {AxisKind.LINEAR: "T", AxisKind.ROTARY: "R", AxisKind.SPINDLE: "S"}
 
 
@@ -242,8 +245,10 @@ def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) 
     for d in registry():
         if d.scope is not scope or (scope is Scope.AXIS and letter not in d.axis_types):
             continue
-        if d.name.startswith(_GEAR) and "[" not in d.name[len(_GEAR) :]:
-            names += [f"getriebe[{g}].{d.name[len(_GEAR) :]}" for g in range(6)]
+        record = next((r for r in _RECORDS if d.name.startswith(r)), None)
+        if record and "[" not in d.name[len(record) :]:
+            stem, rest = record[: -len("[i].")], d.name[len(record) :]
+            names += [f"{stem}[{i}].{rest}" for i in range(_RECORDS[record])]
         elif "[" not in d.name:
             names.append(d.name)
     return names + sorted(n for n in written if n not in set(names))

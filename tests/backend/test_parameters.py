@@ -84,6 +84,14 @@ def test_registry_and_values_per_gear_record(srv: Server, mid: str) -> None:
     # a bound that names another entry is resolved from the list: a_emergency ≤ 2·a_max
     a_max = values(srv, mid)["getriebe[0].dynamik.a_max"]["value"]
     assert values(srv, mid)["getriebe[0].dynamik.a_emergency"]["max"] == 2 * a_max
+    # the sign parameters of 004 §3.5 are in the axis list before anyone wrote them
+    x_list = values(srv, mid)
+    for sign in ("lr_hw[0].vz_stellgr", "lr_hw[0].vz_istw"):
+        assert (x_list[sign]["value"], x_list[sign]["set"], x_list[sign]["effect"]) == (
+            0,
+            False,
+            "restart",
+        )
 
 
 def test_write_applies_now_and_the_loop_follows(srv: Server, mid: str) -> None:
