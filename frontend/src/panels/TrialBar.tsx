@@ -13,7 +13,7 @@ export function TrialBar() {
       {t ? (
         <span class="trial" data-testid="param-trial" role="status">
           Parameters on trial{t.target ? ` (${t.target})` : ` (${t.scope})`}:{" "}
-          {t.applied.map((c) => `${c.name} ${c.old} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`).join(", ")}
+          {t.applied.map((c) => `${c.name} ${c.old ?? "default"} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`).join(", ")}
           <button type="button" data-testid="param-keep" onClick={keepTrial}>
             Keep
           </button>

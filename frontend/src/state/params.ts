@@ -95,9 +95,10 @@ export async function revertTrial(): Promise<void> {
       trialMessage.value = `Revert refused: ${changed.map((c) => c.name).join(", ")} changed by someone else since the trial (reload the list).`;
       return;
     }
+    // a value that was at its default (old null: never written) goes back to the default
     const back = t.applied
-      .filter((c) => c.old !== null)
-      .map((c) => ({ name: c.name, value: c.old as number | string, base_version: now.get(c.name)?.version ?? null }));
+      .map((c) => ({ name: c.name, value: c.old ?? now.get(c.name)?.default ?? null, base_version: now.get(c.name)?.version ?? null }))
+      .filter((c): c is Change => c.value !== null);
     await writeChanges(t.scope, t.target, back, "editor: revert");
     trial.value = null;
     trialMessage.value = `Reverted ${back.length} value(s).`;
