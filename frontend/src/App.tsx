@@ -4,6 +4,7 @@ import { useEffect, useRef, useState } from "preact/hooks";
 import { http } from "./api/http";
 import { AuditPanel } from "./panels/AuditPanel";
 import { Banner } from "./panels/Banner";
+import { Commissioning } from "./panels/Commissioning";
 import { ControlStrip } from "./panels/ControlStrip";
 import { EstopHint } from "./panels/EstopHint";
 import { EventsPanel } from "./panels/EventsPanel";
@@ -24,7 +25,7 @@ import { commandBlocked, may } from "./state/control";
 import { connection, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
-const TABS = ["Operate", "Program", "Plots", "Scope", "Parameters", "HLI / PLC", "Events", "Audit"] as const;
+const TABS = ["Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
 function MachineControls() {
@@ -108,6 +109,7 @@ function Hmi() {
             {tab === "Plots" ? <Plots /> : null}
             {tab === "Scope" ? <Scope /> : null}
             {tab === "Parameters" ? <Parameters /> : null}
+            {tab === "Commissioning" ? <Commissioning /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}
             {tab === "Audit" ? <AuditPanel /> : null}

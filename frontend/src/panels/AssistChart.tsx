@@ -1,0 +1,55 @@
+// An assistant's series (the lag over time) in uPlot, with reference levels drawn as dashed
+// lines (the lag kv alone would give, the measured mean): fixed data, drawn once per result.
+import { useEffect, useRef } from "preact/hooks";
+import uPlot from "uplot";
+import "uplot/dist/uPlot.min.css";
+import type { AssistSeries } from "../api/types";
+import { fmt, tickLabels } from "../ui/format";
+import { COLOURS } from "./LivePlot";
+
+/** A horizontal line across the chart: a level to compare the series with. */
+export interface Level {
+  label: string;
+  value: number;
+}
+
+const HEIGHT = 240;
+
+export function AssistChart(props: { series: AssistSeries; levels: Level[]; testid?: string }) {
+  const box = useRef<HTMLDivElement>(null);
+  const { series, levels } = props;
+  useEffect(() => {
+    const el = box.current;
+    if (!el) return;
+    const unit = series.y_unit ? ` [${series.y_unit}]` : "";
+    const opts: uPlot.Options = {
+      width: Math.max(300, el.clientWidth),
+      height: HEIGHT,
+      series: [
+        { label: `t [${series.x_unit || "s"}]`, value: (_u, v) => fmt(v, 3) },
+        { label: `${series.name}${unit}`, stroke: COLOURS[0], width: 1.5, value: (_u, v) => fmt(v, 5) },
+        ...levels.map((l, i) => ({
+          label: `${l.label}${unit}`,
+          stroke: COLOURS[(i + 1) % COLOURS.length],
+          width: 1.25,
+          dash: [6, 4],
+          value: (_u: uPlot, v: number | null) => fmt(v, 5),
+        })),
+      ],
+      scales: { x: { time: false } },
+      axes: [
+        { label: `time on the copy [${series.x_unit || "s"}]`, values: (_u, splits) => tickLabels(splits) },
+        { label: `${series.name}${unit}`, values: (_u, splits) => tickLabels(splits), size: 70 },
+      ],
+    };
+    const data: uPlot.AlignedData = [series.x, series.y, ...levels.map((l) => series.x.map(() => l.value))];
+    const plot = new uPlot(opts, data, el);
+    const ro = new ResizeObserver(() => plot.setSize({ width: Math.max(300, el.clientWidth), height: HEIGHT }));
+    ro.observe(el);
+    return () => {
+      ro.disconnect();
+      plot.destroy();
+    };
+  }, [series, levels.map((l) => `${l.label}=${l.value}`).join(",")]);
+  return <div class="assist-chart" ref={box} data-testid={props.testid} />;
+}

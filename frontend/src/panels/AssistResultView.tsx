@@ -1,0 +1,176 @@
+// What an assistant answered: the figures with their units and the manual's formula, the
+// lag over time, the notes, the verdict (the sign check) or the check f ≈ 1 (multi_gain),
+// and the proposed changes before → after.
+import type { AssistResult } from "../api/types";
+import { figure } from "../state/assist";
+import { fmt } from "../ui/format";
+import { AssistChart, type Level } from "./AssistChart";
+
+/** Names the manual gives the figures, and the decimals they read with. */
+const FIGURES: Record<string, { label: string; decimals: number }> = {
+  v: { label: "v", decimals: 1 },
+  s: { label: "s", decimals: 5 },
+  k: { label: "k", decimals: 3 },
+  kv: { label: "kv", decimals: 2 },
+  f: { label: "f", decimals: 3 },
+  multi_gain: { label: "multi_gain now", decimals: 4 },
+  multi_gain_new: { label: "multi_gain new", decimals: 4 },
+  kv_new: { label: "kv new", decimals: 2 },
+  window_s: { label: "averaged over", decimals: 3 },
+  max_lag: { label: "max lag", decimals: 4 },
+  lag_max: { label: "lag_max", decimals: 4 },
+};
+const HIDDEN = new Set(["runaway", "observed"]); // the sign check's verdict says them in words
+
+/** |f − 1| within this: k equals kv (004 §3.6.2 equation 1), nothing left to correct. */
+export const F_TOLERANCE = 0.01;
+
+/** The multi_gain run found k = kv already: its proposal is residue, not a correction. */
+export const settled = (r: AssistResult): boolean => {
+  const f = figure(r, "f");
+  return f !== null && Math.abs(f - 1) <= F_TOLERANCE;
+};
+
+/** The sign check's verdict, from the parameters it proposes to flip. */
+export function signVerdict(r: AssistResult): string {
+  const flips = r.changes.map((c) => c.parameter.replace(/^lr_hw\[\d+\]\./, ""));
+  if (!r.ok) return "no verdict: lag monitoring tripped first (see the notes)";
+  if (!flips.length) return "signs right";
+  return flips.length === 2 ? "flip both vz_stellgr and vz_istw" : `flip ${flips[0]}`;
+}
+
+/** The lag kv alone would give (v/kv) and the measured mean, as levels on the lag chart. */
+function levels(r: AssistResult, spindle: boolean): Level[] {
+  const v = figure(r, "v");
+  const kv = figure(r, "kv");
+  const s = figure(r, "s");
+  if (v === null || kv === null || s === null) return [];
+  const perS = spindle ? v * 6 : v / 60; // rpm -> °/s; mm/min (°/min) -> per s
+  const sign = Math.sign(s) || 1;
+  return [
+    { label: "v/kv (expected)", value: (sign * perS) / kv },
+    { label: "s (measured mean)", value: s },
+  ];
+}
+
+export function AssistResultView(props: { result: AssistResult; spindle: boolean }) {
+  const r = props.result;
+  const f = figure(r, "f");
+  const lag = r.series.find((s) => s.name === "lag");
+  const shown = r.figures.filter((x) => !HIDDEN.has(x.name));
+  return (
+    <div class="assist-result" data-testid="assist-result">
+      {r.assistant === "sign-check" ? <SignVerdict result={r} /> : null}
+      {f !== null ? (
+        settled(r) ? (
+          <p class="assist-check ok" data-testid="assist-check" data-ok="1">
+            ✓ f = {fmt(f, 3)} ≈ 1: k equals kv, multi_gain matches the drive (004 §3.6.2 equation 1)
+          </p>
+        ) : (
+          <p class="assist-check off" data-testid="assist-check" data-ok="0">
+            f = {fmt(f, 3)}: k is {f > 1 ? "lower" : "higher"} than kv — apply the proposal, then run again
+          </p>
+        )
+      ) : null}
+      <div class="assist-figures">
+        <table class="meas-table" data-testid="assist-figures">
+          <thead>
+            <tr>
+              <th>Figure</th>
+              <th class="num">Value</th>
+              <th>Unit</th>
+              <th>What it is</th>
+            </tr>
+          </thead>
+          <tbody>
+            {shown.map((x) => (
+              <tr key={x.name} data-testid={`assist-fig-row-${x.name}`}>
+                <td class="mono">{FIGURES[x.name]?.label ?? x.name}</td>
+                <td class="num" data-testid={`assist-fig-${x.name}`}>
+                  {fmt(x.value, FIGURES[x.name]?.decimals ?? 4)}
+                </td>
+                <td>{x.unit}</td>
+                <td class="hint">{x.text}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+        {lag ? (
+          <div class="assist-plot">
+            <AssistChart series={lag} levels={levels(r, props.spindle)} testid="assist-chart" />
+          </div>
+        ) : null}
+      </div>
+      {r.notes.length ? (
+        <ul class="assist-notes" data-testid="assist-notes">
+          {r.notes.map((n) => (
+            <li key={n} class={/^f = .*> 1|tripped|job error|ran away/.test(n) ? "warn" : ""}>
+              {n}
+            </li>
+          ))}
+        </ul>
+      ) : null}
+      {r.changes.length ? (
+        <table class="meas-table assist-changes" data-testid="assist-changes">
+          <caption>
+            {settled(r) ? "Residual proposal: f is within 1 % of 1, nothing needs applying" : "Proposed parameter changes (list units)"}
+          </caption>
+          <thead>
+            <tr>
+              <th>List</th>
+              <th>Parameter</th>
+              <th class="num">Before</th>
+              <th />
+              <th class="num">After</th>
+              <th>Why</th>
+            </tr>
+          </thead>
+          <tbody>
+            {r.changes.map((c) => (
+              <tr key={c.parameter} data-testid={`assist-change-${c.parameter}`}>
+                <td>{c.target}</td>
+                <td class="mono">{c.parameter}</td>
+                <td class="num">{String(c.before)}</td>
+                <td>→</td>
+                <td class="num">
+                  <b>{String(c.after)}</b>
+                </td>
+                <td class="hint">{c.why}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+      ) : (
+        <p class="hint" data-testid="assist-no-changes">
+          No parameter change proposed.
+        </p>
+      )}
+    </div>
+  );
+}
+
+function SignVerdict(props: { result: AssistResult }) {
+  const r = props.result;
+  const verdict = signVerdict(r);
+  const maxLag = figure(r, "max_lag") ?? 0;
+  const limit = figure(r, "lag_max") ?? 0;
+  const unit = r.figures.find((x) => x.name === "max_lag")?.unit ?? "";
+  const share = limit > 0 ? Math.min(1, maxLag / limit) : 0;
+  const good = verdict === "signs right";
+  return (
+    <div class="sign-verdict">
+      <p class={`assist-check ${good ? "ok" : "off"}`} data-testid="assist-verdict">
+        {good ? "✓ " : "⚠ "}
+        {verdict}
+      </p>
+      <div class="lag-gauge" title="largest lag during the check against lag monitoring's limit">
+        <span>
+          max lag <b data-testid="assist-max-lag">{fmt(maxLag, 4)}</b> of lag_max {fmt(limit, 4)} {unit}
+        </span>
+        <span class="gauge">
+          <span class={share > 0.8 ? "fill bad" : "fill"} style={{ width: `${(share * 100).toFixed(1)}%` }} />
+        </span>
+      </div>
+    </div>
+  );
+}

@@ -1,0 +1,310 @@
+// The commissioning assistants as a guided procedure: choose the assistant and the axis (the
+// panel says what will happen, in the manual's words), run it on a copy of the machine,
+// read the figures, the lag and the proposal, Apply on trial (Keep / Revert in the trial
+// bar), and run again to check.
+import { useEffect, useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { AssistResult, AxisStatus, Refusal } from "../api/types";
+import { type AssistantName, applyProposal, runAssistant } from "../state/assist";
+import { configureBlocked, may } from "../state/control";
+import { numbers, paramsVersion, trial } from "../state/params";
+import { me } from "../state/auth";
+import { machineId, online, status } from "../state/session";
+import { Panel } from "../ui/Panel";
+import { RefusalLine } from "../ui/useCommand";
+import { AssistResultView, settled } from "./AssistResultView";
+
+const ASSISTANTS: { name: AssistantName; label: string; section: string }[] = [
+  { name: "multi-gain", label: "multi_gain by experiment", section: "004 §3.6.2" },
+  { name: "sign-check", label: "Direction and sign check", section: "004 §3.5" },
+];
+
+/** The limits of api/assist.py, checked as the engineer types (the service checks again). */
+interface Inputs {
+  feed: string; // mm/min (°/min) of the multi_gain run
+  speed: string; // rpm of a spindle's multi_gain run
+  window: string; // s
+  direction: 1 | -1;
+  distance: string; // mm (°) of the sign check
+  signFeed: string; // mm/min (°/min) of the sign check
+  observed: "" | "1" | "-1"; // "": the simulated plant's
+}
+
+const START: Inputs = { feed: "200", speed: "100", window: "1", direction: 1, distance: "1", signFeed: "100", observed: "" };
+
+/** The number in `text` within (lo, hi] or [lo, hi], or why not. */
+function inRange(text: string, what: string, lo: number, hi: number, unit: string, loOpen: boolean): number | string {
+  const v = Number(text.trim());
+  if (text.trim() === "" || !Number.isFinite(v)) return `${what}: a number is needed`;
+  if ((loOpen ? v <= lo : v < lo) || v > hi) return `${what}: ${loOpen ? `> ${lo}` : `≥ ${lo}`} and ≤ ${hi} ${unit}`;
+  return v;
+}
+
+/** Per input: its value, or an error to show beside it. */
+function checked(inp: Inputs, unit: string) {
+  return {
+    feed: inRange(inp.feed, "feed", 0, 1e6, `${unit}/min`, true),
+    speed: inRange(inp.speed, "speed", 0, 1e5, "rpm", true),
+    window: inRange(inp.window, "window", 0.2, 30, "s", false),
+    distance: ((v) => (v === 0 ? "distance: not 0" : v))(inRange(inp.distance, "distance", -100, 100, unit, false)),
+    signFeed: inRange(inp.signFeed, "feed", 0, 1e5, `${unit}/min`, true),
+  };
+}
+
+const n1 = (v: number) => String(+v.toPrecision(3));
+
+export function Commissioning() {
+  const axes = status.value?.axes ?? [];
+  const [name, setName] = useState<AssistantName>("multi-gain");
+  const [axisName, setAxisName] = useState("X");
+  const [inp, setInp] = useState<Inputs>(START);
+  const [result, setResult] = useState<AssistResult | null>(null);
+  const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const [busySince, setBusySince] = useState<number | null>(null);
+  const [elapsed, setElapsed] = useState(0);
+  const [applied, setApplied] = useState(false);
+  const [kv, setKv] = useState<number | null>(null); // 1/s, for the run's expected duration
+
+  const choices = axes.filter((a) => name === "multi-gain" || a.kind !== "spindle");
+  const ax: AxisStatus | undefined = choices.find((a) => a.name === axisName) ?? choices[0];
+  const spindle = ax?.kind === "spindle";
+  const unit = ax?.unit ?? "mm";
+  const values = checked(inp, unit);
+  const used =
+    name === "multi-gain" ? [spindle ? values.speed : values.feed, values.window] : [values.distance, values.signFeed];
+  const errors = used.filter((v): v is string => typeof v === "string");
+  const mayAssist = may("assist");
+  const busy = busySince !== null;
+  const blocked = configureBlocked.value;
+
+  useEffect(() => {
+    // a result belongs to its machine, assistant and axis
+    setResult(null);
+    setRefusal(null);
+    setApplied(false);
+  }, [machineId.value, name, ax?.name]);
+  useEffect(() => {
+    if (!ax || !machineId.value) return;
+    numbers("axis", ax.name).then(
+      (m) => setKv(((m.get(`getriebe[${Math.max(0, (ax.gear ?? 1) - 1)}].kv`) ?? NaN) as number) / 100),
+      () => setKv(null),
+    );
+  }, [machineId.value, ax?.name, paramsVersion.value]);
+  useEffect(() => {
+    if (busySince === null) return;
+    const id = setInterval(() => setElapsed((performance.now() - busySince) / 1000), 100);
+    return () => clearInterval(id);
+  }, [busySince]);
+
+  async function run() {
+    if (!ax || errors.length) return;
+    setBusySince(performance.now());
+    setElapsed(0);
+    setRefusal(null);
+    try {
+      const r =
+        name === "multi-gain"
+          ? await runAssistant("multi-gain", {
+              axis: ax.name,
+              feed_mm_min: spindle ? null : (values.feed as number),
+              speed_rpm: spindle ? (values.speed as number) : null,
+              window_s: values.window as number,
+              direction: inp.direction,
+            })
+          : await runAssistant("sign-check", {
+              axis: ax.name,
+              distance: values.distance as number,
+              feed_mm_min: values.signFeed as number,
+              observed: inp.observed === "" ? null : (Number(inp.observed) as 1 | -1),
+            });
+      setResult(r);
+    } catch (e) {
+      setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
+    } finally {
+      setBusySince(null);
+    }
+  }
+
+  async function apply() {
+    if (!result) return;
+    setRefusal(null);
+    try {
+      await applyProposal(result.assistant, result.changes);
+      setApplied(true);
+    } catch (e) {
+      setRefusal(e instanceof ApiError ? e.refusal : { message: e instanceof Error ? e.message : String(e), problems: [] });
+    }
+  }
+
+  const set = (patch: Partial<Inputs>) => setInp({ ...inp, ...patch });
+  const field = (key: keyof Inputs, label: string, u: string, testid: string) => {
+    const err = (values as Record<string, number | string>)[key];
+    return (
+      <label class="assist-field">
+        <span>{label}</span>
+        <span class="row">
+          <input data-testid={testid} size={8} value={inp[key] as string} aria-invalid={typeof err === "string"}
+            disabled={busy} onInput={(e) => set({ [key]: (e.target as HTMLInputElement).value })} />
+          <span>{u}</span>
+        </span>
+        {typeof err === "string" ? (
+          <span class="inline-error" data-testid={`${testid}-error`} role="alert">
+            {err}
+          </span>
+        ) : null}
+      </label>
+    );
+  };
+
+  const step = !result ? (busy ? 2 : 1) : applied ? 4 : 3;
+  const onTrial = !!trial.value;
+  return (
+    <Panel title="Commissioning assistants" id="assist">
+      <ol class="assist-steps" aria-label="steps">
+        {["Choose", "Run on a copy", "Read the result", "Apply on trial, run again"].map((s, i) => (
+          <li key={s} class={i + 1 === step ? "active" : i + 1 < step ? "done" : ""}>
+            {s}
+          </li>
+        ))}
+      </ol>
+      {!mayAssist ? (
+        <p class="assist-readonly" role="status" data-testid="assist-readonly">
+          Read-only: running an assistant needs the role operator (you are {me.value?.role ?? "not logged in"}).
+        </p>
+      ) : null}
+      <div class="assist">
+        <div class="assist-setup">
+          <fieldset class="assist-choice" disabled={busy}>
+            <legend>Assistant</legend>
+            {ASSISTANTS.map((a) => (
+              <label key={a.name}>
+                <input type="radio" name="assistant" data-testid={`assist-pick-${a.name}`} checked={a.name === name}
+                  onChange={() => setName(a.name)} />
+                {a.label} <span class="hint">({a.section})</span>
+              </label>
+            ))}
+          </fieldset>
+          <label class="assist-field">
+            <span>Axis</span>
+            <select data-testid="assist-axis" value={ax?.name} disabled={busy}
+              onChange={(e) => setAxisName((e.target as HTMLSelectElement).value)}>
+              {choices.map((a) => (
+                <option key={a.name} value={a.name}>
+                  {a.name} ({a.kind})
+                </option>
+              ))}
+            </select>
+          </label>
+          {name === "multi-gain" ? (
+            <>
+              {spindle
+                ? field("speed", "Speed", "rpm", "assist-speed")
+                : field("feed", "Feed", `${unit}/min`, "assist-feed")}
+              {field("window", "Average the lag over", "s", "assist-window")}
+              <label class="assist-field">
+                <span>Direction</span>
+                <select data-testid="assist-direction" value={String(inp.direction)} disabled={busy}
+                  onChange={(e) => set({ direction: Number((e.target as HTMLSelectElement).value) as 1 | -1 })}>
+                  <option value="1">+ (positive)</option>
+                  <option value="-1">− (negative)</option>
+                </select>
+              </label>
+            </>
+          ) : (
+            <>
+              {field("distance", "Distance", unit, "assist-distance")}
+              {field("signFeed", "Feed", `${unit}/min`, "assist-sign-feed")}
+              <label class="assist-field">
+                <span>The machine moved</span>
+                <select data-testid="assist-observed" value={inp.observed} disabled={busy}
+                  onChange={(e) => set({ observed: (e.target as HTMLSelectElement).value as Inputs["observed"] })}>
+                  <option value="">as the simulated plant moves</option>
+                  <option value="1">+ as commanded</option>
+                  <option value="-1">− the other way</option>
+                </select>
+              </label>
+            </>
+          )}
+          {ax ? <p class="assist-what" data-testid="assist-what">{describe(name, ax, inp, values, kv)}</p> : null}
+          <div class="row">
+            <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
+              title={mayAssist ? "" : `a user in the role ${me.value?.role ?? ""} may not run assistants`} onClick={() => void run()}>
+              {busy ? "Running…" : applied ? "Run again to check" : result ? "Run again" : "Run"}
+            </button>
+            {busy ? (
+              <span class="assist-busy" role="status" data-testid="assist-busy">
+                <span class="spinner" aria-hidden="true" /> running on a copy of the machine… {elapsed.toFixed(1)} s
+              </span>
+            ) : null}
+          </div>
+          <RefusalLine refusal={refusal} id="assist-refusal" />
+        </div>
+        <div class="assist-out">
+          {result ? (
+            <>
+              <AssistResultView result={result} spindle={spindle} />
+              <div class="row apply-bar">
+                <button type="button" data-testid="assist-apply" class={settled(result) ? "secondary" : ""}
+                  disabled={!online.value || !result.changes.length || onTrial || !!blocked || busy}
+                  title={blocked || (onTrial ? "Keep or Revert the values on trial first" : "")} onClick={() => void apply()}>
+                  Apply on trial
+                </button>
+                {applied ? (
+                  <span class="hint" data-testid="assist-applied">
+                    Applied: Keep or Revert in the trial bar above.
+                    {name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the next restart."}
+                  </span>
+                ) : blocked ? (
+                  <span class="hint" data-testid="assist-apply-blocked">
+                    {blocked}
+                  </span>
+                ) : null}
+              </div>
+            </>
+          ) : (
+            <p class="hint assist-empty">{busy ? "The result follows when the run ends." : "Choose, check what it will do, Run."}</p>
+          )}
+        </div>
+      </div>
+    </Panel>
+  );
+}
+
+/** What the run will do, in the manual's words, with the motion it needs. */
+function describe(
+  name: AssistantName,
+  ax: AxisStatus,
+  inp: Inputs,
+  values: ReturnType<typeof checked>,
+  kv: number | null,
+): string {
+  const unit = ax.unit;
+  const copy = "on a copy of the machine, in simulated time; the live machine does not move.";
+  if (name === "sign-check") {
+    const d = typeof values.distance === "number" ? values.distance : null;
+    const f = typeof values.signFeed === "number" ? values.signFeed : null;
+    const motion = d !== null && f !== null ? `${ax.name} moves ${d > 0 ? "+" : ""}${n1(d)} ${unit} at ${n1(f)} ${unit}/min ` : `${ax.name} moves a short distance `;
+    return (
+      `${motion}${copy} A wrong sign of the manipulated variable (vz_stellgr) or of the actual value (vz_istw) ` +
+      "turns the loop into positive feedback: the actual position runs away, the servo is switched off at once, " +
+      "before lag monitoring (lag_max) trips (004 §3.5)."
+    );
+  }
+  const w = typeof values.window === "number" ? values.window : 1;
+  // as nc_sim/assist/experiments.py: the ramp, five time constants at a third of kv to
+  // settle, the window, and a second more recorded
+  const settle = kv && Number.isFinite(kv) && kv > 0 ? 15 / kv : null;
+  const runS = settle !== null ? 3 + settle + Math.max(w, 0.2) : null;
+  const dir = inp.direction > 0 ? "+" : "−";
+  const formula =
+    `The lag s is averaged at constant speed once the loop has settled (at least ${n1(w)} s); ` +
+    "k = v/s, f = (kv/100)/k, and multi_gain · f with kv / f are proposed (004 §3.6.2).";
+  const about = runS !== null ? ` for about ${n1(runS)} s` : "";
+  if (ax.kind === "spindle") {
+    const sp = typeof values.speed === "number" ? `${n1(values.speed)} rpm` : "the speed";
+    return `${ax.name} runs up to ${sp} (${dir}), then turns position-controlled at constant speed${about} ${copy} ${formula}`;
+  }
+  const feed = typeof values.feed === "number" ? values.feed : null;
+  const travel = feed !== null && runS !== null ? ` (about ${dir}${n1((feed / 60) * runS)} ${unit})` : "";
+  return `${ax.name} moves at ${feed !== null ? `${n1(feed)} ${unit}/min` : "the feed"} (${dir}) at constant speed${about}${travel} ${copy} ${formula}`;
+}

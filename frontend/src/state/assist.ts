@@ -1,0 +1,44 @@
+// The commissioning assistants (api/assist.py): run one on a copy of the machine, and apply
+// its proposal through the parameter write the editor uses, on trial (Keep / Revert).
+import { http } from "../api/http";
+import type { AssistChange, AssistResult, MultiGainRequest, ParameterWriteResult, Scope, SignCheckRequest } from "../api/types";
+import { type Change, loadList, trial, trialMessage, writeChanges } from "./params";
+import { machineId, machineUrl } from "./session";
+
+export type AssistantName = "multi-gain" | "sign-check";
+
+/** Run an assistant; rejects with the service's refusal (ApiError: 422 says which input). */
+export function runAssistant(name: "multi-gain", body: MultiGainRequest): Promise<AssistResult>;
+export function runAssistant(name: "sign-check", body: SignCheckRequest): Promise<AssistResult>;
+export function runAssistant(name: AssistantName, body: MultiGainRequest | SignCheckRequest): Promise<AssistResult> {
+  return http.post<AssistResult>(machineUrl(`/assist/${name}`), body);
+}
+
+/** The value of figure `name`, or null. */
+export const figure = (r: AssistResult, name: string): number | null => r.figures.find((f) => f.name === name)?.value ?? null;
+
+/** A change's list: an axis by name, or the channel. */
+function listOf(target: string): { scope: Scope; target: string | null } {
+  return target === "channel" ? { scope: "channel", target: null } : { scope: "axis", target };
+}
+
+/** Write the proposed changes (one list) and put them on trial. Each is written against the
+ * version read now, and only when its value is still the one the run measured with: a value
+ * changed since the run makes the proposal stale (run again), not something to overwrite. */
+export async function applyProposal(assistant: string, changes: AssistChange[]): Promise<ParameterWriteResult> {
+  const targets = [...new Set(changes.map((c) => c.target))];
+  if (targets.length !== 1) throw new Error(`the proposal spans ${targets.join(", ")}: one list at a time`);
+  const { scope, target } = listOf(targets[0]);
+  const now = new Map((await loadList(scope, target)).map((p) => [p.name, p]));
+  const writes: Change[] = changes.map((c) => {
+    const p = now.get(c.parameter);
+    if (!p) throw new Error(`${c.parameter} is not in the list of ${targets[0]}`);
+    if (String(p.pending ?? p.value) !== String(c.before))
+      throw new Error(`${c.parameter} is ${String(p.pending ?? p.value)} now, not ${String(c.before)} as in the run: run it again`);
+    return { name: c.parameter, value: c.after, base_version: p.version };
+  });
+  const r = await writeChanges(scope, target, writes, `assistant ${assistant}: apply (trial)`);
+  trial.value = r.changes.length ? { machine: machineId.value, scope, target, applied: r.changes } : null;
+  trialMessage.value = "";
+  return r;
+}
