@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nc_sim.assist.result import Change, Figure, Result, Series
-from nc_sim.commands import Accepted, HliWrite, Move, SpindleRun
+from nc_sim.commands import Accepted, HliWrite, Move, Refused, SpindleRun
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
@@ -76,6 +76,12 @@ def _thin(t: np.ndarray, y: np.ndarray) -> tuple[tuple[float, ...], tuple[float,
     return tuple(float(v) for v in t[::step]), tuple(float(v) for v in y[::step])
 
 
+def _refusal(out: object) -> ExperimentError:
+    """The NC's refusal of the experiment's motion, in its own words (the job error's text)."""
+    why = out.error.message if isinstance(out, Refused) else str(out)
+    return ExperimentError(f"the motion was refused: {why}")
+
+
 def _fraction(value: float, denominator: int) -> tuple[int, int]:
     """A factor as the integer pair the lists hold: 2.2857 -> 2286/1000 (the manual's form);
     a denominator that is already large is kept."""
@@ -118,7 +124,7 @@ def multi_gain_experiment(
         target = p0 + direction * abs(v) * (total_s + 2.0)
         out = m.submit(Move(ax.name, target, rapid=False, feed_mm_min=feed_mm_min))
     if not isinstance(out, Accepted):
-        raise ExperimentError(f"the motion was refused: {out}")
+        raise _refusal(out)
     if spindle:  # up to speed first (a gear change, the acceleration curve): not measured
         limit = run.sim.cycle + round(SPINDLE_UP_S / cfg.cycle_s)
         while not m.k.ist[run.slot, L.I_SPEED_REACHED] and run.sim.cycle < limit:
@@ -210,7 +216,7 @@ def sign_check(
     lag_max = ax.cfg.eng("getriebe.lag_max", ax.gear)
     out = m.submit(Move(ax.name, float(m.k.st[s, L.S_P_CMD]) + distance, False, feed_mm_min))
     if not isinstance(out, Accepted):
-        raise ExperimentError(f"the motion was refused: {out}")
+        raise _refusal(out)
     inc = max(float(m.k.pr[s, L.P_ENC_INC]), 1e-6)
     runaway_at = 10.0 * inc  # the actual running the wrong way by this much: positive feedback
     t_move = abs(distance) / (feed_mm_min / 60.0)

@@ -166,6 +166,19 @@ def test_the_sign_check_finds_an_inverted_encoder_and_applies_the_flip(
         p.close()
 
 
+def test_a_run_the_nc_refuses_shows_the_services_message(page: Page) -> None:
+    page.get_by_test_id("tab-Commissioning").click()
+    box = panel(page, "assist")
+    box.get_by_test_id("assist-axis").select_option("S1")
+    box.get_by_test_id("assist-speed").fill("50000")  # in the API's range, beyond every gear
+    box.get_by_test_id("assist-run").click()
+    # the demo's highest gear stage M45 ends at 7000 rpm [000 §2.8.2]
+    expect(box.get_by_test_id("assist-refusal")).to_contain_text(
+        "spindle speed out of reach: S50000 rpm is above the highest gear stage, M45 up to 7000"
+    )
+    expect(box.get_by_test_id("assist-result")).to_have_count(0)
+
+
 def test_an_observer_reads_the_panel_but_runs_nothing(
     browser: Browser, srv: Server, mid: str
 ) -> None:

@@ -88,6 +88,13 @@ def test_a_refused_experiment_says_why() -> None:
         multi_gain_experiment(lathe(), "X")
     with pytest.raises(ExperimentError, match="Q"):
         multi_gain_experiment(lathe(), "Q", feed_mm_min=100)
+    # the NC's own words, as the HMI shows them: the job error's text, not a repr of it
+    with pytest.raises(ExperimentError) as refused:
+        multi_gain_experiment(lathe(), "S1", speed_rpm=50000)
+    assert str(refused.value) == (
+        "the motion was refused: spindle speed out of reach: S50000 rpm is above the highest "
+        "gear stage, M45 up to 7000 rpm (range_table[5].max_speed, P-CHAN-00055)"
+    )
 
 
 @pytest.mark.parametrize(
