@@ -27,7 +27,7 @@ export function AssistChart(props: { series: AssistSeries; levels: Level[]; test
       height: HEIGHT,
       series: [
         { label: `t [${series.x_unit || "s"}]`, value: (_u, v) => fmt(v, 3) },
-        { label: `${series.name}${unit}`, stroke: COLOURS[0], width: 1.5, value: (_u, v) => fmt(v, 5) },
+        { label: `${series.name}${unit}`, stroke: COLOURS[0], width: 1.5, points: { show: false }, value: (_u, v) => fmt(v, 5) },
         ...levels.map((l, i) => ({
           label: `${l.label}${unit}`,
           stroke: COLOURS[(i + 1) % COLOURS.length],

@@ -229,7 +229,7 @@ export function Commissioning() {
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
               title={mayAssist ? "" : `a user in the role ${me.value?.role ?? ""} may not run assistants`} onClick={() => void run()}>
-              {busy ? "Running…" : applied ? "Run again to check" : result ? "Run again" : "Run"}
+              {busy ? "Running…" : applied && name === "multi-gain" ? "Run again to check" : result ? "Run again" : "Run"}
             </button>
             {busy ? (
               <span class="assist-busy" role="status" data-testid="assist-busy">
@@ -252,7 +252,7 @@ export function Commissioning() {
                 {applied ? (
                   <span class="hint" data-testid="assist-applied">
                     Applied: Keep or Revert in the trial bar above.
-                    {name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the next restart."}
+                    {name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the machine's next restart (the copy too): run again after it to check."}
                   </span>
                 ) : blocked ? (
                   <span class="hint" data-testid="assist-apply-blocked">
