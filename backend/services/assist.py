@@ -14,14 +14,16 @@ from typing import Any
 
 from api.assist import AssistResult, MultiGainRequest, SignCheckRequest
 from backend.errors import ApiError
-from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
 from nc_sim.machine.config import MachineConfig
 
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 
 
 def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
-    """In the assistants' process: run one experiment; its answer or {"error": why}."""
+    """In the assistants' process: run one experiment; its answer or {"error": why}. The
+    kernel is imported here, in that process: the gateway itself never loads it."""
+    from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+
     try:
         if name == "multi-gain":
             return multi_gain_experiment(cfg, **args).as_json()
