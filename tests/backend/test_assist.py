@@ -7,7 +7,6 @@ where the NC assumes multi_gain 10000): physics gives f = 22857 / 10000 [004 §3
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -21,16 +20,6 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s = Server(tmp_path_factory.mktemp("assist") / "assist.sqlite").start()
     yield s
     s.close()
-
-
-@pytest.fixture
-def lathe(srv: Server) -> Iterator[str]:
-    name = f"lathe{time.monotonic_ns()}"
-    r = srv.http.post("/api/machines", json={"id": name, "demo": True})
-    assert r.status_code == 201, r.text
-    srv.wait_powered(name)
-    yield name
-    srv.http.delete(f"/api/machines/{name}")
 
 
 def _assist(srv: Server, mid: str, name: str, body: dict[str, Any]) -> Any:

@@ -105,16 +105,6 @@ def test_oversized_and_malformed_bodies_are_refused_and_store_nothing(srv: Serve
     assert "big" not in {p["name"] for p in srv.http.get("/api/programs").json()}
 
 
-@pytest.fixture
-def lathe(srv: Server) -> Iterator[str]:
-    name = f"lathe{time.monotonic_ns()}"
-    r = srv.http.post("/api/machines", json={"id": name, "demo": True})
-    assert r.status_code == 201, r.text
-    srv.wait_powered(name)
-    yield name
-    srv.http.delete(f"/api/machines/{name}")
-
-
 def _preview(srv: Server, mid: str, text: str) -> dict[str, Any]:
     r = srv.http.post(f"/api/machines/{mid}/program-preview", json={"text": text})
     assert r.status_code == 200, r.text
