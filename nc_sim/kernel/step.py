@@ -547,6 +547,17 @@ def _monitors(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float
 
 
 @njit(cache=True)
+def moving_direction(v_act: float, inpos_window: float) -> int:
+    """003 §4.2 MVPOS (+1) / MVNEG (-1), 0 at rest: the actual speed beyond the noise of an
+    axis at rest, one exact-stop window per second (the status reads it between cycles)."""
+    if v_act > inpos_window:
+        return 1
+    if v_act < -inpos_window:
+        return -1
+    return 0
+
+
+@njit(cache=True)
 def _loop_mode(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int) -> int:
     """Open the position loop above the control limit or the changeover speed; close it
     again below the control limit [000 §2.4.2, 001 §2.3]. Returns EV_LOOP on a change."""
@@ -635,9 +646,9 @@ def run_cycles(
                 rec[c, s, R_OVERRIDE] = st[s, S_OVERRIDE]
                 rec[c, s, R_LINE] = ist[s, I_LINE]
                 rec[c, s, R_ROTARY_MODE] = ist[s, I_ROTARY_MODE]
-                v_act, noise = st[s, S_V_ACT], pr[s, P_INPOS_WIN]  # 003 §4.2 MVPOS/MVNEG
-                rec[c, s, R_MVPOS] = 1.0 if v_act > noise else 0.0
-                rec[c, s, R_MVNEG] = 1.0 if v_act < -noise else 0.0
+                way = moving_direction(st[s, S_V_ACT], pr[s, P_INPOS_WIN])
+                rec[c, s, R_MVPOS] = 1.0 if way > 0 else 0.0
+                rec[c, s, R_MVNEG] = 1.0 if way < 0 else 0.0
                 rec[c, s, R_READY] = ist[s, I_ENABLED]
         if any_event == 1:
             return c + 1

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from nc_sim.axis.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.axis.state import Axis, target_and_distance
 from nc_sim.kernel import layout as L
+from nc_sim.kernel.step import moving_direction
 from nc_sim.machine.channel_ops import PROGRAM_ACTIVE
 from nc_sim.snapshot import (
     AxisSnapshot,
@@ -89,16 +90,14 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
 
 
 def _signals(m: Machine, ax: Axis, spindle: bool) -> InterfaceSignals:
-    """The 003 §4.2 status signals: MVPOS/MVNEG above the noise of an axis at rest (one
-    exact-stop window per second)."""
+    """The 003 §4.2 status signals, as the kernel records them."""
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
-    v_act = float(st[L.S_V_ACT])
-    noise = float(m.k.pr[ax.slot, L.P_INPOS_WIN])  # unit/s
+    way = moving_direction(float(st[L.S_V_ACT]), float(m.k.pr[ax.slot, L.P_INPOS_WIN]))
     cax = m.cax if m.cax is not None and m.cax.ax is ax else None
     return InterfaceSignals(
         homed=bool(ist[L.I_HOMED]),
-        moving_positive=v_act > noise,
-        moving_negative=v_act < -noise,
+        moving_positive=way > 0,
+        moving_negative=way < 0,
         ready=bool(ist[L.I_ENABLED]),  # as recorded (R_READY): the drive follows the NC
         in_position=bool(ist[L.I_IN_POS]),
         speed_reached=bool(ist[L.I_SPEED_REACHED]) if spindle else None,
