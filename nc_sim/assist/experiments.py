@@ -26,10 +26,10 @@ from nc_sim.commands import Accepted, HliWrite, Move, Refused, SpindleRun
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
+from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
 from nc_sim.units import RPM_TO_DEG_S, AxisKind
 
-POWER_ON_S = 5.0  # a machine not powered by then has a configuration fault
 MAX_PLOT_POINTS = 2000
 MIN_WINDOW_S = 0.2  # the averaging window at constant speed must be at least this long
 SPINDLE_UP_S = 60.0  # a spindle not at speed by then has a fault of its own
@@ -55,13 +55,9 @@ def _start(cfg: MachineConfig, name: str) -> _Run:
     m = sim.add(cfg)
     try:
         m.axis(name)
-    except ValueError as e:
+        power_on(sim, m)
+    except ValueError as e:  # (an unknown axis, a machine that never gets ready)
         raise ExperimentError(str(e)) from None
-    limit = round(POWER_ON_S / cfg.cycle_s)
-    while not m.powered and sim.cycle < limit:
-        sim.run(10)
-    if not m.powered:
-        raise ExperimentError(f"the machine is not ready after {POWER_ON_S:g} s (drive enables)")
     return _Run(sim, m, m.axis(name).name)
 
 
