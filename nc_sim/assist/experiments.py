@@ -28,7 +28,7 @@ from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
-from nc_sim.units import RPM_TO_DEG_S, AxisKind
+from nc_sim.units import MM_MIN_PER_MM_S, RPM_TO_DEG_S, AxisKind
 
 MAX_PLOT_POINTS = 2000
 MIN_WINDOW_S = 0.2  # the averaging window at constant speed must be at least this long
@@ -107,7 +107,7 @@ def multi_gain_experiment(
     else:
         if not feed_mm_min or feed_mm_min <= 0:
             raise ExperimentError("an axis needs its feed: feed_mm_min > 0")
-        v = feed_mm_min / 60.0 * direction
+        v = feed_mm_min / MM_MIN_PER_MM_S * direction
         unit = "mm" if ax.kind is AxisKind.LINEAR else "°"
         v_shown, v_unit = feed_mm_min, f"{unit}/min"
     # the loop settles within a few time constants, even when its gain is a third of kv
@@ -215,7 +215,7 @@ def sign_check(
         raise _refusal(out)
     inc = max(float(m.k.pr[s, L.P_ENC_INC]), 1e-6)
     runaway_at = 10.0 * inc  # the actual running the wrong way by this much: positive feedback
-    t_move = abs(distance) / (feed_mm_min / 60.0)
+    t_move = abs(distance) / (feed_mm_min / MM_MIN_PER_MM_S)
     limit = round((t_move + 2.0) / cfg.cycle_s)
     trace_t: list[float] = []
     trace_lag: list[float] = []
