@@ -25,6 +25,7 @@ from nc_sim.units import AxisKind, Quantity, display_velocity, to_raw
 
 if TYPE_CHECKING:
     from nc_sim.machine.machine import Machine
+    from nc_sim.spindle.caxis import CAxis
 
 _LOOP = {
     L.LOOP_CLOSED: LoopMode.CLOSED,
@@ -85,15 +86,14 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
         else LoopMode.OPEN,
         spindle=spindle,
         display_name=cax.display_name if cax else ax.name,
-        signals=_signals(m, ax, spindle is not None),
+        signals=_signals(m, ax, spindle is not None, cax),
     )
 
 
-def _signals(m: Machine, ax: Axis, spindle: bool) -> InterfaceSignals:
+def _signals(m: Machine, ax: Axis, spindle: bool, cax: CAxis | None) -> InterfaceSignals:
     """The 003 §4.2 status signals, as the kernel records them."""
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
     way = moving_direction(float(st[L.S_V_ACT]), float(m.k.pr[ax.slot, L.P_INPOS_WIN]))
-    cax = m.cax if m.cax is not None and m.cax.ax is ax else None
     return InterfaceSignals(
         homed=bool(ist[L.I_HOMED]),
         moving_positive=way > 0,
