@@ -28,7 +28,7 @@ async def multi_gain(
     axis at constant feed (a spindle at constant speed, position-controlled), the averaged
     lag, k = v/s, f = (kv/100)/k and the proposed multi_gain · f and kv / f. The live machine
     does not move; Apply is a parameter write."""
-    return await services.assistants.run(machine.cfg, body)
+    return await services.assistants.run(machine.cfg, "multi-gain", body)
 
 
 @router.post(
@@ -42,4 +42,4 @@ async def sign_check(
     """004 §3.5 on a copy of the machine: a short slow move; a wrong sign of the manipulated
     variable (vz_stellgr) or of the actual value (vz_istw) is found before lag monitoring
     trips, from the way the machine moved (`observed`, else the simulated plant's)."""
-    return await services.assistants.run(machine.cfg, body)
+    return await services.assistants.run(machine.cfg, "sign-check", body)

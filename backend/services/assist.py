@@ -9,10 +9,13 @@ from __future__ import annotations
 import asyncio
 import copy
 import multiprocessing
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
-from api.assist import AssistResult, MultiGainRequest, SignCheckRequest
+from pydantic import BaseModel
+
+from api.assist import AssistResult
 from backend.errors import ApiError
 from nc_sim.machine.config import MachineConfig
 
@@ -23,11 +26,14 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     """In the assistants' process: run one experiment; its answer or {"error": why}. The
     kernel is imported here, in that process: the gateway itself never loads it."""
     from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+    from nc_sim.assist.result import Result
 
+    experiments: dict[str, Callable[..., Result]] = {
+        "multi-gain": multi_gain_experiment,
+        "sign-check": sign_check,
+    }
     try:
-        if name == "multi-gain":
-            return multi_gain_experiment(cfg, **args).as_json()
-        return sign_check(cfg, **args).as_json()
+        return experiments[name](cfg, **args).as_json()
     except ExperimentError as e:
         return {"error": str(e)}
 
@@ -44,11 +50,9 @@ class Assistants:
             self._pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx)
         return self._pool
 
-    async def run(
-        self, cfg: MachineConfig, req: MultiGainRequest | SignCheckRequest
-    ) -> AssistResult:
-        """Run the experiment `req` asks for on a copy of `cfg`; 422 when it cannot run."""
-        name = "multi-gain" if isinstance(req, MultiGainRequest) else "sign-check"
+    async def run(self, cfg: MachineConfig, name: str, req: BaseModel) -> AssistResult:
+        """Run experiment `name` with the arguments of `req` on a copy of `cfg`; 422 when it
+        cannot run."""
         args = req.model_dump()
         loop = asyncio.get_running_loop()
         fut = loop.run_in_executor(self._executor(), _run, name, copy.deepcopy(cfg), args)
