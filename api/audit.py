@@ -20,6 +20,7 @@ AuditKind = Literal[
     "program",
     "user",
     "token",
+    "report",
 ]
 
 

@@ -13,7 +13,7 @@ class Role(StrEnum):
 
     OBSERVER = "observer"  # watches; captures, saves and exports traces; reads programs
     OPERATOR = "operator"  # commands, jogs and writes parameters while holding control;
-    # writes programs
+    # writes programs, runs assistants, signs commissioning reports off
     INSTRUCTOR = "instructor"  # also takes control from others and paces the simulation
     ADMIN = "admin"  # everything, and users, machines and the service
 
@@ -31,6 +31,7 @@ class Action(StrEnum):
     COMMAND = "command"  # NC commands, jog, reset, power cycle: only while holding control
     CONFIGURE = "configure"  # parameter writes and imports: only while holding control
     ASSIST = "assist"  # commissioning assistants on a copy of a machine (a process for seconds)
+    SIGN_OFF = "sign_off"  # sign a machine's commissioning report off
     TAKE_CONTROL = "take_control"  # from another holder without asking
     SIMULATE = "simulate"  # run, pause, step, fast
     MACHINES = "machines"  # create and delete machines
@@ -47,6 +48,7 @@ _OPERATOR = _OBSERVER | {
     Action.COMMAND,
     Action.CONFIGURE,
     Action.ASSIST,
+    Action.SIGN_OFF,
 }
 _INSTRUCTOR = _OPERATOR | {Action.TAKE_CONTROL, Action.SIMULATE}
 

@@ -17,11 +17,13 @@ from backend.errors import ApiError, refusal_text
 from backend.security import SAFE_METHODS, is_loopback
 from backend.services.accounts import Accounts
 from backend.services.assist import Assistants
+from backend.services.assist_runs import AssistRuns
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor, authorize
 from backend.services.control import Control
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
+from backend.services.report import Reports
 from backend.services.sessions import SessionWatch
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
@@ -51,6 +53,8 @@ class Services:
     sessions: SessionWatch
     assistants: Assistants
     started: float
+    assist_runs: AssistRuns
+    reports: Reports
 
     @classmethod
     async def start(cls, settings: Settings) -> Services:
@@ -79,6 +83,7 @@ class Services:
         control.start()
         sessions = SessionWatch(accounts, hub, control)
         sessions.start()
+        assist_runs = AssistRuns(store)
         services = cls(
             settings,
             store,
@@ -94,6 +99,8 @@ class Services:
             sessions,
             Assistants(),
             time.time(),
+            assist_runs,
+            Reports(store, audit, assist_runs, traces),
         )
         services.print_login_link()
         return services
@@ -148,6 +155,7 @@ _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is r
     Action.COMMAND: "command",
     Action.CONFIGURE: "parameter",
     Action.ASSIST: "parameter",  # assistants propose parameters
+    Action.SIGN_OFF: "report",
     Action.TAKE_CONTROL: "control",
     Action.SIMULATE: "simulation",
     Action.MACHINES: "machine",

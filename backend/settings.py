@@ -49,6 +49,9 @@ class Settings(BaseSettings):
         Path(__file__).resolve().parents[1] / "frontend" / "dist",
         description="built browser HMI served at / (make builds it)",
     )
+    chromium: Path = Field(
+        Path("/usr/bin/chromium"), description="Chromium, to print the report as PDF"
+    )
     host: str = Field("127.0.0.1", description="the address the service binds")
     port: int = Field(8000, ge=0, le=65535, description="its port (for the login link)")
     https: bool = Field(False, description="it serves HTTPS itself (for the login link)")

@@ -6,7 +6,7 @@ from fastapi import APIRouter
 
 from api.assist import AssistResult, MultiGainRequest, SignCheckRequest
 from api.auth import Action
-from backend.deps import MachineDep, ServicesDep, permit
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import responses
 
 router = APIRouter(prefix="/api/machines/{mid}/assist", tags=["assistants"])
@@ -22,13 +22,15 @@ _WHY = {
     responses=responses(404, 422, why=_WHY),
 )
 async def multi_gain(
-    body: MultiGainRequest, machine: MachineDep, services: ServicesDep
+    body: MultiGainRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> AssistResult:
     """004 §3.6.2 on a copy of the machine with its parameters now, in simulated time: the
     axis at constant feed (a spindle at constant speed, position-controlled), the averaged
     lag, k = v/s, f = (kv/100)/k and the proposed multi_gain · f and kv / f. The live machine
-    does not move; Apply is a parameter write."""
-    return await services.assistants.run(machine.cfg, "multi-gain", body)
+    does not move; Apply is a parameter write. Stored (GET .../assist/runs)."""
+    result = await services.assistants.run(machine.cfg, "multi-gain", body)
+    await services.assist_runs.record(machine.id, actor.name, result, live=False)
+    return result
 
 
 @router.post(
@@ -37,9 +39,11 @@ async def multi_gain(
     responses=responses(404, 422, why=_WHY),
 )
 async def sign_check(
-    body: SignCheckRequest, machine: MachineDep, services: ServicesDep
+    body: SignCheckRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> AssistResult:
     """004 §3.5 on a copy of the machine: a short slow move; a wrong sign of the manipulated
     variable (vz_stellgr) or of the actual value (vz_istw) is found before lag monitoring
-    trips, from the way the machine moved (`observed`, else the simulated plant's)."""
-    return await services.assistants.run(machine.cfg, "sign-check", body)
+    trips, from the way the machine moved (`observed`, else the simulated plant's). Stored."""
+    result = await services.assistants.run(machine.cfg, "sign-check", body)
+    await services.assist_runs.record(machine.id, actor.name, result, live=False)
+    return result

@@ -122,6 +122,7 @@ class AuditFilter:
     since_unix: float | None = None
     until_unix: float | None = None
     text: str | None = None  # in the action or the outcome
+    kinds_left_out: tuple[str, ...] = ()
 
     def where(self) -> tuple[str, tuple[object, ...]]:
         conds: list[str] = []
@@ -130,6 +131,9 @@ class AuditFilter:
             if value is not None:
                 conds.append(f"{column} = ?")
                 args.append(value)
+        if self.kinds_left_out:
+            conds.append(f"kind NOT IN ({', '.join('?' * len(self.kinds_left_out))})")
+            args += self.kinds_left_out
         if self.actor:  # part of a name, in any case: "be" finds ben and Bert
             conds.append("instr(lower(actor), ?) > 0")
             args.append(self.actor.lower())

@@ -1,5 +1,5 @@
 """SQLite storage: machines, their accepted parameter values, the audit trail, traces, NC
-programs.
+programs, assistant runs and sign-offs.
 
 One file, one connection guarded by a lock (the service writes rarely and briefly). Values are
 stored as JSON so numbers stay numbers and strings stay strings.
@@ -57,6 +57,28 @@ CREATE TABLE IF NOT EXISTS programs (
     updated_by TEXT NOT NULL
 );
 CREATE UNIQUE INDEX IF NOT EXISTS programs_name ON programs (name COLLATE NOCASE);
+CREATE TABLE IF NOT EXISTS assist_runs (  -- backend/services/assist_runs.py
+    id INTEGER PRIMARY KEY,
+    machine TEXT NOT NULL,
+    assistant TEXT NOT NULL,
+    user TEXT NOT NULL,
+    time REAL NOT NULL,
+    live INTEGER NOT NULL,         -- 1: on the live machine, 0: on a copy
+    ok INTEGER NOT NULL,
+    axis TEXT NOT NULL,
+    summary TEXT NOT NULL,
+    result TEXT NOT NULL           -- JSON AssistResult (inputs, figures, changes, series, notes)
+);
+CREATE INDEX IF NOT EXISTS assist_runs_machine ON assist_runs (machine, id);
+CREATE TABLE IF NOT EXISTS sign_offs (  -- backend/services/report.py
+    id INTEGER PRIMARY KEY,
+    machine TEXT NOT NULL,
+    name TEXT NOT NULL,
+    role TEXT NOT NULL,
+    remark TEXT NOT NULL,
+    user TEXT NOT NULL,
+    time REAL NOT NULL
+);
 """
 
 
@@ -225,11 +247,13 @@ class Store:
             )
 
     def delete_machine(self, mid: str) -> None:
-        """Forget a machine and its values; its audit trail stays."""
+        """Forget a machine, its values, assistant runs and sign-offs; its audit trail stays."""
         with self._lock, self._db:
             self._db.execute("BEGIN")
             self._db.execute("DELETE FROM machines WHERE id = ?", (mid,))
             self._db.execute("DELETE FROM param_values WHERE machine = ?", (mid,))
+            self._db.execute("DELETE FROM assist_runs WHERE machine = ?", (mid,))
+            self._db.execute("DELETE FROM sign_offs WHERE machine = ?", (mid,))
 
     def values(self, mid: str) -> list[tuple[str, str, str, Value]]:
         """(scope, target, name, value) of every accepted value of a machine."""

@@ -4,10 +4,10 @@ holder / non-holder of the machine's control.
 
 The expected rule of each route is written here from the issue's roles, not read from the
 service: observers watch, capture and save traces and read programs; operators also command,
-jog and write parameters while holding control, record, delete traces, write programs and ask
-for control; instructors also pace the simulation and take control; admins also manage
-machines, users and the whole audit trail. A route missing from RULES (a new one) fails
-`test_every_route_has_a_rule`.
+jog and write parameters while holding control, record, delete traces, write programs, sign
+reports off and ask for control; instructors also pace the simulation and take control; admins
+also manage machines, users and the whole audit trail. A route missing from RULES (a new one)
+fails `test_every_route_has_a_rule`.
 """
 
 from __future__ import annotations
@@ -79,6 +79,13 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     # on a copy of the machine: changes nothing, but runs a process for seconds
     ("POST", "/api/machines/{mid}/assist/multi-gain"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/sign-check"): ("operator", FREE),
+    ("GET", "/api/machines/{mid}/assist/runs"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/assist/runs/{run_id}"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/report"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/report.pdf"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/report/sign-offs"): ("observer", FREE),
+    # a statement about the machine, not a change to it: no control needed
+    ("POST", "/api/machines/{mid}/report/sign-off"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
     ("GET", "/api/audit"): ("admin", FREE),
@@ -134,6 +141,7 @@ def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Respo
         .replace("{tid}", "nope")
         .replace("{rid}", "nope")
         .replace("{id}", "nope")
+        .replace("{run_id}", "1")
         .replace("{name}", "nobody")
     )
     kw: dict[str, Any] = {"headers": {"Authorization": f"Bearer {token}"}}
@@ -210,6 +218,7 @@ def test_a_stranger_gets_401_on_every_route(srv: tuple[Server, dict[str, str]]) 
                 .replace("{tid}", "x")
                 .replace("{rid}", "x")
                 .replace("{id}", "x")
+                .replace("{run_id}", "1")
                 .replace("{name}", "x"),
             )
             assert r.status_code == 401, (method, path, r.status_code)

@@ -19,6 +19,7 @@ const KINDS: AuditKind[] = [
   "trace",
   "program",
   "recording",
+  "report",
   "login",
   "login_failed",
   "logout",

@@ -1,0 +1,1 @@
+"""The commissioning report: HTML with inline SVG plots, and its PDF."""

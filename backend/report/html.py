@@ -1,0 +1,383 @@
+"""The commissioning report as one printable HTML document (A4, a page break between
+sections, page numbers in the margin), rendered with the standard library: every text from
+the store is escaped, every plot is inline SVG drawn from the stored data (backend/report/svg.py).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from html import escape
+
+from api.audit import AuditRecord
+from api.report import AssistRun, SignOff
+from backend.report import svg
+
+# the manual's name and section of each assistant (others are shown by their name)
+ASSISTANTS = {
+    "multi-gain": ("multi_gain by experiment", "004 §3.6.2"),
+    "sign-check": ("Direction and sign check", "004 §3.5"),
+}
+AXIS_KINDS = {"linear": "linear axis", "rotary": "rotary axis", "spindle": "spindle"}
+
+
+@dataclass(frozen=True)
+class MachineFacts:
+    id: str
+    name: str
+    kind: str  # "demo lathe", "from parameter lists"
+    axes: list[tuple[str, str]]  # (name, kind)
+
+
+@dataclass(frozen=True)
+class Commissioner:
+    """Someone who worked on the machine: assistant runs and parameter changes, first/last."""
+
+    user: str
+    runs: int
+    changes: int
+    first_unix: float
+    last_unix: float
+
+
+@dataclass(frozen=True)
+class BaselineRow:
+    target: str
+    parameter: str
+    before: object
+    after: object
+    unit: str
+
+
+@dataclass(frozen=True)
+class TracePlot:
+    """A stored trace's main series (its first channel) and what identifies it."""
+
+    id: str
+    name: str
+    notes: str
+    created_unix: float
+    trigger: str
+    channel: str
+    unit: str
+    others: list[str]  # the trace's other channels (named, not drawn)
+    t_s: Sequence[float]
+    values: Sequence[float]
+
+
+@dataclass(frozen=True)
+class ReportData:
+    machine: MachineFacts
+    generated_unix: float
+    generated_by: str
+    commissioners: list[Commissioner]
+    runs: list[AssistRun]  # oldest first
+    runs_left_out: int  # older runs beyond the report's bound
+    baseline: list[BaselineRow] | None  # None: no baseline set
+    traces: list[TracePlot]
+    audit: list[AuditRecord]  # newest first
+    audit_total: int  # matching rows in all
+    audit_commands: int  # command rows left out (in the Audit workspace and audit.csv)
+    sign_offs: list[SignOff]
+
+
+def when(t: float) -> str:
+    """A time as the report prints it (UTC, to the second)."""
+    return time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(t))
+
+
+def number(v: object) -> str:
+    """A figure or parameter value: numbers to 6 significant digits, the rest as text."""
+    if isinstance(v, bool):
+        return str(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f"{v:.6g}" if math.isfinite(v) else str(v)
+    return str(v)
+
+
+def css_string(text: str) -> str:
+    """`text` as a CSS string literal that cannot end the string or the <style> element."""
+    safe = (c if c.isalnum() or c in " _.-()" else f"\\{ord(c):x} " for c in text)
+    return '"' + "".join(safe) + '"'
+
+
+def e(v: object) -> str:
+    return escape(str(v))
+
+
+def _table(head: Sequence[str], rows: list[str], cls: str = "") -> str:
+    th = "".join(f"<th>{e(h)}</th>" for h in head)
+    body = "".join(rows)
+    return f'<table class="{cls}"><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>'
+
+
+def _assistant(name: str) -> str:
+    label, section = ASSISTANTS.get(name, (name, ""))
+    return f"{label} [{section}]" if section else label
+
+
+def _cover(d: ReportData) -> str:
+    m = d.machine
+    axes = ", ".join(f"{n} ({AXIS_KINDS.get(k, k)})" for n, k in m.axes) or "none"
+    if d.commissioners:
+        first = min(c.first_unix for c in d.commissioners)
+        last = max(c.last_unix for c in d.commissioners)
+        who = "".join(
+            f"<li><b>{e(c.user)}</b>: {c.runs} assistant run{'s' * (c.runs != 1)}, "
+            f"{c.changes} parameter change{'s' * (c.changes != 1)} "
+            f"({e(when(c.first_unix))} – {e(when(c.last_unix))})</li>"
+            for c in d.commissioners
+        )
+        span = f"from {e(when(first))} to {e(when(last))}" if len(d.commissioners) > 1 else ""
+        commissioned = f'<ul class="who">{who}</ul>{span}'
+    else:
+        commissioned = "nobody yet (no assistant run, no parameter change recorded)"
+    if d.sign_offs:
+        s = d.sign_offs[-1]
+        signed = f"<b>{e(s.name)}</b>{', ' + e(s.role) if s.role else ''} on {e(when(s.time_unix))}"
+    else:
+        signed = '<span class="open">not signed off</span>'
+    rows = [
+        ("Machine", f"<b>{e(m.name)}</b>"),
+        ("Machine id", f"<code>{e(m.id)}</code>"),
+        ("Kind", e(m.kind)),
+        ("Axes and spindles", e(axes)),
+        ("Commissioned by", commissioned),
+        ("Signed off", signed),
+        ("Report generated", f"{e(when(d.generated_unix))} by {e(d.generated_by)}"),
+    ]
+    body = "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows)
+    contents = "".join(
+        f"<li>{t}</li>"
+        for t in (
+            f"Assistant runs ({len(d.runs)})",
+            "Parameter differences against the baseline",
+            f"Traces ({len(d.traces)})",
+            "Audit excerpt",
+            "Sign-off",
+        )
+    )
+    return (
+        '<section class="cover" id="machine"><h1>Commissioning report</h1>'
+        f'<p class="subtitle">{e(m.name)}</p>'
+        f'<table class="facts">{body}</table>'
+        f'<h2 class="small">Contents</h2><ol class="contents">{contents}</ol></section>'
+    )
+
+
+def _run_plot(run: AssistRun) -> str:
+    out = []
+    for s in run.result.series:
+        # figures in the series' own unit are levels worth seeing on it (the mean lag, the
+        # lag monitoring limit)
+        refs = [
+            (f"{f.name} = {number(f.value)} {f.unit}", f.value)
+            for f in run.result.figures
+            if s.y_unit and f.unit == s.y_unit
+        ]
+        plot = svg.Plot([svg.Line(s.name, s.x, s.y)], "time", s.x_unit, s.name, s.y_unit, refs=refs)
+        out.append(
+            f'<figure class="plot">{svg.render(plot)}<figcaption>{e(s.name)} over time'
+            f" (run #{run.id}, {len(s.x)} stored points)</figcaption></figure>"
+        )
+    return "".join(out)
+
+
+def _run(run: AssistRun) -> str:
+    r = run.result
+    where = "on the live machine" if run.live else "on a copy of the machine (simulated time)"
+    inputs = ", ".join(f"{e(k)} = {e(number(v))}" for k, v in r.inputs.items()) or "—"
+    verdict = "" if r.ok else ' <span class="open">(found a fault the changes do not cure)</span>'
+    figures = [
+        f'<tr data-figure="{e(f.name)}"><td><code>{e(f.name)}</code></td>'
+        f'<td class="num">{e(number(f.value))}</td><td>{e(f.unit)}</td><td>{e(f.text)}</td></tr>'
+        for f in r.figures
+    ]
+    changes = [
+        f"<tr><td>{e(c.target)}</td><td><code>{e(c.parameter)}</code></td>"
+        f'<td class="num">{e(number(c.before))}</td><td class="num">{e(number(c.after))}</td>'
+        f"<td>{e(c.why)}</td></tr>"
+        for c in r.changes
+    ]
+    notes = "".join(f"<li>{e(n)}</li>" for n in r.notes)
+    return (
+        f'<article class="run" id="run-{run.id}" data-run="{run.id}">'
+        f"<h3>#{run.id} {e(_assistant(run.assistant))}"
+        f"{' — ' + e(run.axis) if run.axis else ''}{verdict}</h3>"
+        f'<p class="meta">Run by <b>{e(run.user)}</b> on {e(when(run.time_unix))}, {where}. '
+        f"Inputs: {inputs}.</p>"
+        + _table(["Figure", "Value", "Unit", "Meaning"], figures, "figures")
+        + (
+            _table(["Target", "Parameter", "Before", "Proposed", "Why"], changes, "changes")
+            if changes
+            else '<p class="meta">No parameter change proposed.</p>'
+        )
+        + _run_plot(run)
+        + (f'<ul class="notes">{notes}</ul>' if notes else "")
+        + "</article>"
+    )
+
+
+def _runs(d: ReportData) -> str:
+    if not d.runs:
+        body = '<p class="empty">No assistant has run on this machine.</p>'
+    else:
+        body = "".join(_run(r) for r in d.runs)
+        if d.runs_left_out:
+            body += f'<p class="meta">{d.runs_left_out} older runs are not in this report.</p>'
+    return f'<section id="runs"><h2>1 Assistant runs</h2>{body}</section>'
+
+
+def _baseline(d: ReportData) -> str:
+    if d.baseline is None:
+        body = (
+            '<p class="empty" data-testid="no-baseline">No baseline set: set one at the start '
+            "of commissioning to see what changed since.</p>"
+        )
+    elif not d.baseline:
+        body = '<p class="empty">No parameter differs from the baseline.</p>'
+    else:
+        rows = [
+            f"<tr><td>{e(b.target)}</td><td><code>{e(b.parameter)}</code></td>"
+            f'<td class="num">{e(number(b.before))}</td>'
+            f'<td class="num">{e(number(b.after))}</td><td>{e(b.unit)}</td></tr>'
+            for b in d.baseline
+        ]
+        body = _table(["Target", "Parameter", "Baseline", "Now", "Unit"], rows, "diff")
+    title = "2 Parameter differences against the baseline"
+    return f'<section id="baseline"><h2>{title}</h2>{body}</section>'
+
+
+def _traces(d: ReportData) -> str:
+    if not d.traces:
+        body = '<p class="empty">No trace chosen for this report.</p>'
+    else:
+        parts = []
+        for t in d.traces:
+            plot = svg.Plot(
+                [svg.Line(t.channel, t.t_s, t.values)],
+                "time from the trigger",
+                "s",
+                t.channel,
+                t.unit,
+            )
+            others = f" Also recorded: {e(', '.join(t.others))}." if t.others else ""
+            notes = f'<p class="meta">{e(t.notes)}</p>' if t.notes else ""
+            parts.append(
+                f'<article class="trace" data-trace="{e(t.id)}"><h3>{e(t.name or t.id)}</h3>'
+                f'<p class="meta">Captured {e(when(t.created_unix))}, trigger: {e(t.trigger)}, '
+                f"{len(t.t_s)} samples; plotted: {e(t.channel)}.{others}</p>{notes}"
+                f'<figure class="plot">{svg.render(plot)}</figure></article>'
+            )
+        body = "".join(parts)
+    return f'<section id="traces"><h2>3 Traces</h2>{body}</section>'
+
+
+def _audit(d: ReportData) -> str:
+    rows = [
+        f'<tr class="{"refused" if a.outcome != "ok" else ""}"><td>{e(when(a.time_unix))}</td>'
+        f"<td>{e(a.actor)}</td><td>{e(a.kind)}</td><td>{e(a.action)}</td>"
+        f"<td>{e(a.outcome)}</td></tr>"
+        for a in d.audit
+    ]
+    shown = (
+        f"The newest {len(d.audit)} of {d.audit_total} entries"
+        if len(d.audit) < d.audit_total
+        else f"All {d.audit_total} entries"
+    )
+    left = (
+        f"; {d.audit_commands} NC commands (jog, MDI, …) are left out" if d.audit_commands else ""
+    )
+    body = (
+        f'<p class="meta">{shown} of this machine, newest first{left}. The whole trail: '
+        "the Audit workspace or <code>GET /api/machines/{mid}/audit.csv</code>.</p>"
+        + (_table(["Time", "User", "Kind", "Action", "Outcome"], rows, "audit") if rows else "")
+    )
+    return f'<section id="audit"><h2>4 Audit excerpt</h2>{body}</section>'
+
+
+def _sign_off(d: ReportData) -> str:
+    if d.sign_offs:
+        rows = [
+            f'<tr data-sign-off="{s.id}"><td><b>{e(s.name)}</b></td><td>{e(s.role)}</td>'
+            f"<td>{e(s.remark)}</td><td>{e(when(s.time_unix))}</td><td>{e(s.user)}</td></tr>"
+            for s in d.sign_offs
+        ]
+        body = _table(["Name", "Function", "Remark", "Signed", "Recorded by"], rows, "signoff")
+    else:
+        body = '<p class="empty">Not signed off yet.</p>'
+    lines = "".join(
+        f'<div class="sig"><div class="line"></div><span>{t}</span></div>'
+        for t in ("Place, date", "Commissioning engineer", "Customer")
+    )
+    return (
+        f'<section id="sign-off"><h2>5 Sign-off</h2>{body}'
+        '<p class="meta">Signatures on the printed copy:</p>'
+        f'<div class="sigs">{lines}</div></section>'
+    )
+
+
+CSS = """
+@page { size: A4; margin: 16mm 15mm 18mm 15mm;
+  @bottom-left { content: "Commissioning report · " var(--machine);
+    font: 8pt sans-serif; color: #555; }
+  @bottom-right { content: "page " counter(page) " of " counter(pages);
+    font: 8pt sans-serif; color: #555; } }
+* { box-sizing: border-box; }
+html { background: #e5e7eb; }
+body { font: 10pt/1.4 "DejaVu Sans", "Liberation Sans", Arial, sans-serif; color: #111;
+  margin: 0 auto; padding: 12mm 15mm; max-width: 210mm; background: #fff; }
+h1 { font-size: 22pt; margin: 0 0 2mm; }
+h2 { font-size: 14pt; border-bottom: 1.5pt solid #1f5fa8; padding-bottom: 1mm; margin: 0 0 4mm; }
+h2.small { font-size: 11pt; margin-top: 8mm; }
+h3 { font-size: 11pt; margin: 5mm 0 1mm; }
+.subtitle { font-size: 14pt; color: #1f5fa8; margin: 0 0 8mm; }
+section + section { break-before: page; margin-top: 12mm; }
+article { break-inside: avoid; padding-top: 1mm; }
+article + article { border-top: 0.5pt solid #ccc; margin-top: 4mm; }
+table { border-collapse: collapse; width: 100%; margin: 2mm 0 3mm; font-size: 9pt; }
+th, td { text-align: left; vertical-align: top; padding: 1mm 2mm; border-bottom: 0.5pt solid #ddd; }
+thead th { background: #f1f5f9; border-bottom: 1pt solid #999; }
+table.facts th { width: 42mm; background: none; color: #444; font-weight: normal; }
+table.facts td, table.facts th { font-size: 10pt; padding: 1.5mm 2mm; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+code { font: 8.5pt "DejaVu Sans Mono", monospace; }
+tr.refused td { color: #9a3412; }
+ul.who { margin: 0 0 1mm; padding-left: 5mm; }
+.meta { color: #333; margin: 1mm 0; }
+.empty { color: #555; font-style: italic; }
+.open { color: #9a3412; font-weight: bold; }
+ul.notes { margin: 1mm 0 2mm; padding-left: 5mm; color: #333; }
+figure.plot { margin: 2mm 0; }
+figure.plot svg { width: 100%; height: auto; max-width: 170mm; display: block; }
+figcaption { font-size: 8.5pt; color: #555; }
+svg.plot text { font: 11px "DejaVu Sans", Arial, sans-serif; fill: #222; }
+.sigs { display: flex; gap: 8mm; margin-top: 18mm; }
+.sig { flex: 1; }
+.sig .line { border-bottom: 0.75pt solid #111; height: 12mm; }
+.sig span { font-size: 8.5pt; color: #444; }
+@media print { html { background: none; } body { padding: 0; max-width: none; }
+  section + section { margin-top: 0; } }
+"""
+
+
+def render(d: ReportData) -> str:
+    """The whole report as one HTML document."""
+    title = f"Commissioning report {d.machine.name} ({d.machine.id})"
+    machine_css = f":root {{ --machine: {css_string(d.machine.name)}; }}"
+    return (
+        '<!doctype html><html lang="en"><head><meta charset="utf-8">'
+        f"<title>{e(title)}</title>"
+        f"<style>{CSS}{machine_css}</style></head><body>"
+        + _cover(d)
+        + _runs(d)
+        + _baseline(d)
+        + _traces(d)
+        + _audit(d)
+        + _sign_off(d)
+        + "</body></html>"
+    )

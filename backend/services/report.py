@@ -1,0 +1,198 @@
+"""The commissioning report of a machine: its facts, who commissioned it and when (assistant
+runs and parameter changes), every stored assistant run, the parameter differences against
+the baseline, chosen traces, an audit excerpt and the sign-offs, gathered from the store for
+backend/report/html.py. Sign-offs are stored here (table `sign_offs`) and audited.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Sequence
+from typing import Any, Protocol
+
+from api.report import SignOff, SignOffRequest
+from backend.errors import ApiError
+from backend.report import html
+from backend.services.assist_runs import AssistRuns
+from backend.services.audit import Audit, AuditFilter, Entry, append
+from backend.services.auth import Actor
+from backend.services.machines import MachineProxy
+from backend.services.store import Store
+from backend.services.traces import TraceService
+
+MAX_RUNS = 50  # the newest runs in a report
+MAX_TRACES = 8  # traces chosen for one report
+MAX_AUDIT = 100  # rows of the audit excerpt (newest)
+EXCERPT_LEAVES_OUT = ("command",)  # jog renewals and MDI blocks would crowd out the rest
+IMPORTED = "imported"  # the machine of a trace imported from CSV without a description
+
+
+class BaselineSource(Protocol):
+    """The parameter versions' service (backend/services/versions.py): the differences of a
+    machine's values against its baseline, None while it has none."""
+
+    async def baseline_diff(self, mid: str) -> Sequence[Any] | None: ...
+
+
+class Reports:
+    """Builds reports and records sign-offs."""
+
+    def __init__(
+        self,
+        store: Store,
+        audit: Audit,
+        runs: AssistRuns,
+        traces: TraceService,
+        versions: BaselineSource | None = None,
+    ) -> None:
+        self.store, self.audit, self.runs, self.traces = store, audit, runs, traces
+        self.versions = versions  # None: no baselines in this service ("no baseline set")
+
+    # --- sign-off ---------------------------------------------------------------------------
+    def sign_off(self, mid: str, actor: Actor, req: SignOffRequest) -> SignOff:
+        """Record who signs the machine's commissioning off, with its audit row, in one
+        transaction."""
+        now = time.time()
+        entry = Entry(
+            actor.name,
+            actor.session,
+            "report",
+            f"signed off by {req.name}" + (f" ({req.role})" if req.role else ""),
+            mid,
+            req.model_dump(),
+            time=now,
+        )
+
+        def work(db: Any) -> int:
+            cur = db.execute(
+                "INSERT INTO sign_offs (machine, name, role, remark, user, time) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                (mid, req.name, req.role, req.remark, actor.name, now),
+            )
+            append(db, [entry])
+            return int(cur.lastrowid)
+
+        self.audit.flush()  # rows waiting to be written go first: the trail stays in order
+        sid = self.store.transaction(work)
+        return SignOff(
+            id=sid,
+            machine=mid,
+            name=req.name,
+            role=req.role,
+            remark=req.remark,
+            user=actor.name,
+            time_unix=now,
+        )
+
+    def sign_offs(self, mid: str) -> list[SignOff]:
+        """The machine's sign-offs, oldest first."""
+        rows = self.store.query(
+            "SELECT id, machine, name, role, remark, user, time FROM sign_offs "
+            "WHERE machine = ? ORDER BY id",
+            (mid,),
+        )
+        return [
+            SignOff(
+                id=r[0], machine=r[1], name=r[2], role=r[3], remark=r[4], user=r[5], time_unix=r[6]
+            )
+            for r in rows
+        ]
+
+    # --- the report -------------------------------------------------------------------------
+    async def build(self, m: MachineProxy, trace_ids: list[str], viewer: str) -> str:
+        """The report of machine `m` as HTML, with the traces `trace_ids` (of this machine)
+        plotted; 404 for an unknown trace, 422 for one of another machine or too many."""
+        baseline = await self._baseline(m.id)
+        data = await asyncio.to_thread(self._gather, m, trace_ids, viewer, baseline)
+        return await asyncio.to_thread(html.render, data)
+
+    async def _baseline(self, mid: str) -> list[html.BaselineRow] | None:
+        if self.versions is None:
+            return None
+        diff = await self.versions.baseline_diff(mid)
+        if diff is None:
+            return None
+        return [html.BaselineRow(d.target, d.parameter, d.before, d.after, d.unit) for d in diff]
+
+    def _gather(
+        self,
+        m: MachineProxy,
+        trace_ids: list[str],
+        viewer: str,
+        baseline: list[html.BaselineRow] | None,
+    ) -> html.ReportData:
+        if len(trace_ids) > MAX_TRACES:
+            raise ApiError(422, {"message": f"trace: at most {MAX_TRACES} traces in one report"})
+        traces = [self._trace(m.id, tid) for tid in dict.fromkeys(trace_ids)]
+        runs = self.runs.runs(m.id, MAX_RUNS)
+        total_runs = self.store.query(
+            "SELECT count(*) FROM assist_runs WHERE machine = ?", (m.id,)
+        )[0][0]
+        f = AuditFilter(machine=m.id, kinds_left_out=EXCERPT_LEAVES_OUT)
+        page = self.audit.page(f, MAX_AUDIT)
+        commands = self.audit.page(AuditFilter(machine=m.id, kind="command"), 0).total
+        return html.ReportData(
+            machine=html.MachineFacts(
+                m.id,
+                m.name,
+                "demo lathe" if m.source == "demo" else "from parameter lists",
+                [(a.name, a.kind.name.lower()) for a in m.cfg.axes],
+            ),
+            generated_unix=time.time(),
+            generated_by=viewer,
+            commissioners=self._commissioners(m.id),
+            runs=runs,
+            runs_left_out=max(0, total_runs - len(runs)),
+            baseline=baseline,
+            traces=traces,
+            audit=page.rows,
+            audit_total=page.total,
+            audit_commands=commands,
+            sign_offs=self.sign_offs(m.id),
+        )
+
+    def _trace(self, mid: str, tid: str) -> html.TracePlot:
+        t = self.traces.get(tid)  # 404 when unknown
+        d = t.detail
+        if d.machine not in (mid, IMPORTED):  # an import without a machine may go anywhere
+            raise ApiError(
+                422, {"message": f"trace: {tid} was recorded on machine {d.machine}, not {mid}"}
+            )
+        if not d.channels or t.data.shape[-1] == 0:
+            raise ApiError(422, {"message": f"trace: {tid} holds no samples"})
+        main = d.channels[0]
+        return html.TracePlot(
+            id=d.id,
+            name=d.name,
+            notes=d.notes,
+            created_unix=d.created_unix,
+            trigger=f"{d.trigger} (forced)" if d.forced else d.trigger,
+            channel=main.name,
+            unit=main.unit,
+            others=[c.name for c in d.channels[1:]],
+            t_s=t.times_s().tolist(),
+            values=t.data[0].tolist(),
+        )
+
+    def _commissioners(self, mid: str) -> list[html.Commissioner]:
+        """Who ran assistants or changed parameters on the machine, first to last."""
+        seen: dict[str, list[float]] = {}  # user -> [runs, changes, first, last]
+        rows = self.store.query(
+            "SELECT user, count(*), min(time), max(time) FROM assist_runs WHERE machine = ? "
+            "GROUP BY user",
+            (mid,),
+        )
+        for user, n, first, last in rows:
+            seen[user] = [n, 0, first, last]
+        self.audit.flush()
+        rows = self.store.query(
+            "SELECT actor, count(*), min(time), max(time) FROM audit_log WHERE machine = ? "
+            "AND kind = 'parameter' AND outcome = 'ok' GROUP BY actor",
+            (mid,),
+        )
+        for user, n, first, last in rows:
+            s = seen.setdefault(user, [0, 0, first, last])
+            s[1], s[2], s[3] = n, min(s[2], first), max(s[3], last)
+        out = [html.Commissioner(u, int(v[0]), int(v[1]), v[2], v[3]) for u, v in seen.items()]
+        return sorted(out, key=lambda c: c.first_unix)
