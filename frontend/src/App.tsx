@@ -16,6 +16,7 @@ import { MdiPanel } from "./panels/MdiPanel";
 import { Parameters } from "./panels/Parameters";
 import { Plots } from "./panels/Plots";
 import { ProgramPanel } from "./panels/ProgramPanel";
+import { ReportPanel } from "./panels/ReportPanel";
 import { Scope } from "./panels/Scope";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
@@ -110,6 +111,7 @@ function Hmi() {
             {tab === "Scope" ? <Scope /> : null}
             {tab === "Parameters" ? <Parameters /> : null}
             {tab === "Commissioning" ? <Commissioning /> : null}
+            {tab === "Commissioning" ? <ReportPanel /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}
             {tab === "Audit" ? <AuditPanel /> : null}

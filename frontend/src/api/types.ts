@@ -84,3 +84,6 @@ export type SignCheckRequest = S["SignCheckRequest"];
 export type AssistResult = S["AssistResult"];
 export type AssistChange = S["AssistChange"];
 export type AssistSeries = S["AssistSeries"];
+export type AssistRunInfo = S["AssistRunInfo"];
+export type SignOff = S["SignOff"];
+export type SignOffRequest = S["SignOffRequest"];
