@@ -25,12 +25,13 @@ RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     """In the assistants' process: run one experiment; its answer or {"error": why}. The
     kernel is imported here, in that process: the gateway itself never loads it."""
-    from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+    from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
+    from nc_sim.assist.procedure import ExperimentError
     from nc_sim.assist.result import Result
 
     experiments: dict[str, Callable[..., Result]] = {
         "multi-gain": multi_gain_experiment,
-        "sign-check": sign_check,
+        "sign-check": sign_check_experiment,
     }
     try:
         return experiments[name](cfg, **args).as_json()
