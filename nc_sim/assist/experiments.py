@@ -17,6 +17,7 @@ a preview on a copy) and answers with a `Result`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -44,7 +45,9 @@ def _check_axis(m: Machine, axis: str) -> Axis:
 
 def _stop(m: Machine, ax: Axis) -> None:
     """The run was cancelled: stop what it started (M5 for a spindle, a CNC reset's braking
-    for an axis)."""
+    for an axis); after an emergency stop nothing is left to stop."""
+    if m.estop:
+        return
     m.submit(SpindleRun(ax.name, 5) if ax.kind is AxisKind.SPINDLE else Reset())
 
 
@@ -293,3 +296,11 @@ def sign_check(
         not tripped,
         {"axis": ax.name, "distance": distance, "feed_mm_min": feed_mm_min},
     )
+
+
+PROCEDURES: dict[str, Callable[..., Procedure]] = {
+    "multi-gain": multi_gain,
+    "sign-check": sign_check,
+}
+"""The experiments that can also run live, by name: each takes the machine, then its
+arguments as keywords."""
