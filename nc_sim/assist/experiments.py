@@ -132,13 +132,14 @@ def multi_gain(
                     f"{ax.name} is not position-controlled at {speed_rpm:g} rpm (speed control "
                     "above P-AXIS-00767 or the control limit): a lower speed"
                 )
-        planned_s = total_s + 1.0
+        recorded_s = total_s + 1.0
+        whole_s = recorded_s if spindle else total_s + 2.0  # an axis goes on to its target
         phase = f"{ax.name} at {v_shown:g} {v_unit}: the lag is recorded"
-        rec = yield Wait(round(planned_s / cycle_s), phase, planned_s)
+        rec = yield Wait(round(recorded_s / cycle_s), phase, whole_s)
         if spindle:
             m.submit(SpindleRun(ax.name, 5))
         while ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):  # (live: at rest)
-            yield Wait(10, f"{ax.name} comes to rest", planned_s)
+            yield Wait(10, f"{ax.name} comes to rest", whole_s)
     except GeneratorExit:
         _stop(m, ax)
         raise

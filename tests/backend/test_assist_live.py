@@ -66,14 +66,16 @@ def test_live_multi_gain_moves_the_machine_and_proposes_the_correction(
     run = _Background(srv, lathe, "multi-gain", {"axis": "X", "feed_mm_min": 200})
     seen = _progress(srv, lathe)
     assert seen["name"] == "multi-gain" and seen["axis"] == "X" and seen["by"]
-    # the plan: 2 s ramp allowance + 5·3/kv (kv 20/s) + 1 s window + 1 s
-    assert seen["planned_s"] == pytest.approx(4.75)
+    # the plan: 2 s ramp allowance + 5·3/kv (kv 20/s) + 1 s window, and the move goes on
+    # 2 s more to its target
+    planned_s = 2 + 15 / 20 + 1 + 2
+    assert seen["planned_s"] == pytest.approx(planned_s)
     r = run.result()
     assert r.status_code == 200, r.text
     fig = {f["name"]: f["value"] for f in r.json()["figures"]}
     assert fig["f"] == pytest.approx(2.2857, rel=0.01)
-    # the machine itself moved: 200 mm/min for the planned time + 2 s, to its end
-    assert srv.axis("X", lathe)["pos_cmd"] - x0 == pytest.approx(200 / 60 * (4.75 - 1 + 2), 1e-6)
+    # the machine itself moved: 200 mm/min for the planned time, to its target
+    assert srv.axis("X", lathe)["pos_cmd"] - x0 == pytest.approx(200 / 60 * planned_s, 1e-6)
     assert srv.status(lathe)["assist"] is None
     audit = srv.http.get(f"/api/machines/{lathe}/audit").json()["rows"]
     live = [a for a in audit if a["action"] == "assist live multi-gain"]

@@ -53,8 +53,9 @@ def test_progress_names_the_phase_and_the_planned_time() -> None:
     run = LiveRun(m, lambda m: multi_gain(m, "X", feed_mm_min=200), sim.kernel.cycle_s)
     phase, elapsed_s, planned_s = run.progress()
     assert "200" in phase and elapsed_s == 0.0
-    # 2 s ramp allowance + 5 · 3 / kv(20/s) settling + 1 s window + 1 s: 4.75 s
-    assert abs(planned_s - (2.0 + 15.0 / 20.0 + 1.0 + 1.0)) < 1e-9
+    # 2 s ramp allowance + 5 · 3 / kv(20/s) settling + 1 s window, recorded 1 s more, and
+    # the move's target a further second away: 5.75 s
+    assert abs(planned_s - (2.0 + 15.0 / 20.0 + 1.0 + 2.0)) < 1e-9
 
 
 def test_cancel_brakes_the_axis_the_run_moved() -> None:
