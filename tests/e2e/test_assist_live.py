@@ -81,3 +81,45 @@ def test_cancel_ends_a_live_run(page: Page, srv: Server, mid: str) -> None:
     expect(box.get_by_test_id("assist-refusal")).to_contain_text("cancelled")
     expect(box.get_by_test_id("assist-live")).to_have_count(0)
     expect(box.get_by_test_id("assist-result")).to_have_count(0)
+
+
+def test_the_sign_check_on_the_machine_flip_restart_and_check_again(
+    page: Page, srv: Server, mid: str
+) -> None:
+    """004 §3.5 on the machine itself: an inverted encoder runs away and the servo goes off
+    before lag monitoring trips; the proposed vz_istw flip, a restart from the panel, and the
+    check on the machine is clean."""
+    body = {
+        "changes": [{"scope": "axis", "target": "X", "name": "sim.encoder_inverted", "value": 1}]
+    }
+    assert srv.http.patch(f"/api/machines/{mid}/parameters", json=body).status_code == 200
+    assert srv.http.post(f"/api/machines/{mid}/restart").status_code == 200
+    srv.wait_powered(mid)
+    assert srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"}).is_success
+    page.get_by_test_id("tab-Commissioning").click()
+    box = panel(page, "assist")
+    box.get_by_test_id("assist-pick-sign-check").check()
+    box.get_by_test_id("assist-axis").select_option("X")
+    box.get_by_test_id("assist-run-live").click()
+    expect(box.get_by_test_id("assist-confirm")).to_contain_text("X moves +1 mm at 100 mm/min")
+    box.get_by_test_id("assist-confirm-live").click()
+    expect(box.get_by_test_id("assist-verdict")).to_have_text(
+        "⚠ flip vz_istw", timeout=RUN_TIMEOUT_MS
+    )
+    assert read(box, "assist-max-lag") < 0.1 * float(
+        box.get_by_test_id("assist-fig-lag_max").inner_text()
+    )
+    # the servo went off on the machine itself: its torque permission is withdrawn
+    assert srv.axis("X", mid)["state"] in ("STANDSTILL", "ERROR")
+    box.get_by_test_id("assist-apply").click()
+    expect(page.get_by_test_id("param-trial")).to_contain_text("lr_hw[0].vz_istw")
+    box.get_by_test_id("assist-restart").click()
+    expect(box.get_by_test_id("assist-applied")).to_contain_text("Restarted")
+    srv.wait_powered(mid)
+    box.get_by_test_id("assist-run-live").click()
+    box.get_by_test_id("assist-confirm-live").click()
+    expect(box.get_by_test_id("assist-verdict")).to_have_text(
+        "✓ signs right", timeout=RUN_TIMEOUT_MS
+    )
+    shot(page, "assist-live-sign-check-clean-desktop")
+    page.get_by_test_id("param-keep").click()

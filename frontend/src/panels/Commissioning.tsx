@@ -6,7 +6,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { AssistResult, AxisStatus, Refusal } from "../api/types";
-import { type AssistantName, type Where, applyProposal, liveRun, runAssistant } from "../state/assist";
+import { type AssistantName, type Where, applyProposal, liveRun, restartMachine, runAssistant } from "../state/assist";
 import { commandBlocked, configureBlocked, may } from "../state/control";
 import { numbers, paramsVersion, trial } from "../state/params";
 import { me } from "../state/auth";
@@ -67,6 +67,7 @@ export function Commissioning() {
   const [applied, setApplied] = useState(false);
   const [confirming, setConfirming] = useState(false); // the live run's motion, to confirm
   const [where, setWhere] = useState<Where>("copy"); // of the run going on or shown
+  const [restarted, setRestarted] = useState(false); // since the proposal was applied
   const [kv, setKv] = useState<number | null>(null); // 1/s, for the run's expected duration
 
   const choices = axes.filter((a) => name === "multi-gain" || a.kind !== "spindle");
@@ -138,8 +139,19 @@ export function Commissioning() {
     try {
       await applyProposal(result.assistant, result.changes);
       setApplied(true);
+      setRestarted(false);
     } catch (e) {
       setRefusal(e instanceof ApiError ? e.refusal : { message: e instanceof Error ? e.message : String(e), problems: [] });
+    }
+  }
+
+  async function restart() {
+    setRefusal(null);
+    try {
+      await restartMachine();
+      setRestarted(true);
+    } catch (e) {
+      setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
     }
   }
 
@@ -291,9 +303,20 @@ export function Commissioning() {
                 {applied ? (
                   <span class="hint" data-testid="assist-applied">
                     Applied: Keep or Revert in the trial bar above.
-                    {name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the machine's next restart (the copy too): run again after it to check."}
+                    {name === "multi-gain"
+                      ? " Run again to check: k must now equal kv (f ≈ 1)."
+                      : restarted
+                        ? " Restarted: the new signs are in force. Run again to check."
+                        : " The signs take effect at the machine's restart (the copy's too): restart, then run again to check."}
                   </span>
-                ) : blocked ? (
+                ) : null}
+                {applied && name === "sign-check" && !restarted ? (
+                  <button type="button" data-testid="assist-restart" disabled={!online.value || !!commandBlocked.value || busy}
+                    title={commandBlocked.value || "power off and on: every stored value in force, the axes at rest, not homed"}
+                    onClick={() => void restart()}>
+                    Restart the machine
+                  </button>
+                ) : !applied && blocked ? (
                   <span class="hint" data-testid="assist-apply-blocked">
                     {blocked}
                   </span>

@@ -55,3 +55,9 @@ export async function applyProposal(assistant: string, changes: AssistChange[]):
   trialMessage.value = "";
   return r;
 }
+
+/** Power the machine off and on: values that take effect at restart (the signs of 004 §3.5)
+ * come into force. Needs control, like a command. */
+export function restartMachine(): Promise<unknown> {
+  return http.post<unknown>(machineUrl("/restart"), {});
+}
