@@ -86,6 +86,9 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/machines/{mid}/report/sign-offs"): ("observer", FREE),
     # a statement about the machine, not a change to it: no control needed
     ("POST", "/api/machines/{mid}/report/sign-off"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/live/multi-gain"): ("operator", HELD),
+    ("POST", "/api/machines/{mid}/assist/live/sign-check"): ("operator", HELD),
+    ("POST", "/api/machines/{mid}/assist/live/cancel"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
     ("GET", "/api/audit"): ("admin", FREE),

@@ -87,3 +87,4 @@ export type AssistSeries = S["AssistSeries"];
 export type AssistRunInfo = S["AssistRunInfo"];
 export type SignOff = S["SignOff"];
 export type SignOffRequest = S["SignOffRequest"];
+export type AssistProgress = S["AssistProgress"];
