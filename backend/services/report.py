@@ -113,7 +113,17 @@ class Reports:
         diff = await self.versions.baseline_diff(mid)
         if diff is None:
             return None
-        return [html.BaselineRow(d.target, d.parameter, d.before, d.after, d.unit) for d in diff]
+        # a channel or tool parameter has no target: its list names it
+        return [
+            html.BaselineRow(
+                d.target or getattr(d, "scope", "") or "channel",
+                d.parameter,
+                d.before,
+                d.after,
+                d.unit,
+            )
+            for d in diff
+        ]
 
     def _gather(
         self,

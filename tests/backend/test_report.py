@@ -8,6 +8,7 @@ SVG frame declares (x tight to the data, y taking it in).
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import json
 import math
@@ -15,10 +16,13 @@ import re
 import time
 from collections.abc import Iterator
 from html.parser import HTMLParser
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
 
+from backend.report import html as report_html
+from backend.services.report import Reports
 from tests.backend.server import Server
 
 F_PHYSICS = 22857 / 10000  # the drive's gain over the one the NC assumes
@@ -226,6 +230,8 @@ def test_a_chosen_trace_is_plotted_from_its_stored_samples(srv: Server, lathe: s
     assert other.status_code == 422 and lathe in other.json()["detail"]["message"]
     gone = srv.http.get(f"/api/machines/{lathe}/report", params={"trace": "nope"})
     assert gone.status_code == 404 and "nope" in gone.text
+    many = srv.http.get(f"/api/machines/{lathe}/report", params=[("trace", tid)] * 9)
+    assert many.status_code == 422 and "trace" in many.text
 
 
 def test_sign_off_is_recorded_audited_and_shown(srv: Server, lathe: str) -> None:
@@ -267,3 +273,40 @@ def test_without_chromium_the_pdf_is_a_clear_503(tmp_path: Any) -> None:
         assert s.http.get("/api/machines/demo/report").status_code == 200
     finally:
         s.close()
+
+
+def test_the_baseline_section_lists_what_the_versions_service_finds() -> None:
+    """Against the interface of the parameter versions' service (`baseline_diff`): its rows
+    are the section's table; None is 'no baseline set'."""
+
+    class Versions:
+        def __init__(self, diff: list[Any] | None) -> None:
+            self.diff = diff
+
+        async def baseline_diff(self, mid: str) -> list[Any] | None:
+            return self.diff
+
+    kv = SimpleNamespace(
+        target="X", parameter="getriebe[0].kv", before=2000, after=875, unit="0.01/s"
+    )
+    feed = SimpleNamespace(
+        scope="channel", target=None, parameter="max_vb_override", before=1000, after=1200,
+        unit="0.1 %",
+    )  # fmt: skip
+
+    def section(diff: list[Any] | None) -> str:
+        reports = Reports(None, None, None, None, Versions(diff))  # type: ignore[arg-type]
+        rows = asyncio.run(reports._baseline("m"))
+        data = report_html.ReportData(
+            report_html.MachineFacts("m", "M", "demo lathe", []), 0.0, "t", [], [], 0, rows, [], [],
+            0, 0, [],
+        )  # fmt: skip
+        text = report_html.render(data)
+        return text[text.index('<section id="baseline">') : text.index('<section id="traces">')]
+
+    table = section([kv, feed])
+    assert "<td>X</td><td><code>getriebe[0].kv</code></td>" in table
+    assert '<td class="num">2000</td><td class="num">875</td><td>0.01/s</td>' in table
+    assert "<td>channel</td><td><code>max_vb_override</code></td>" in table
+    assert "No baseline set" in section(None)
+    assert "No parameter differs from the baseline" in section([])
