@@ -179,9 +179,11 @@ def _run_plot(run: AssistRun) -> str:
             for f in run.result.figures
             if s.y_unit and f.unit == s.y_unit
         ]
-        plot = svg.Plot([svg.Line(s.name, s.x, s.y)], "time", s.x_unit, s.name, s.y_unit, refs=refs)
+        x_title = "time" if s.x_unit == "s" else ""  # else the unit says (a speed: °/s)
+        plot = svg.Plot([svg.Line(s.name, s.x, s.y)], x_title, s.x_unit, s.name, s.y_unit, refs)
+        over = f" over {x_title}" if x_title else ""
         out.append(
-            f'<figure class="plot">{svg.render(plot)}<figcaption>{e(s.name)} over time'
+            f'<figure class="plot">{svg.render(plot)}<figcaption>{e(s.name)}{over}'
             f" (run #{run.id}, {len(s.x)} stored points)</figcaption></figure>"
         )
     return "".join(out)
@@ -279,7 +281,8 @@ def _traces(d: ReportData) -> str:
 
 def _audit(d: ReportData) -> str:
     rows = [
-        f'<tr class="{"refused" if a.outcome != "ok" else ""}"><td>{e(when(a.time_unix))}</td>'
+        f'<tr class="{"refused" if a.outcome != "ok" else ""}">'
+        f'<td class="time">{e(when(a.time_unix))}</td>'
         f"<td>{e(a.actor)}</td><td>{e(a.kind)}</td><td>{e(a.action)}</td>"
         f"<td>{e(a.outcome)}</td></tr>"
         for a in d.audit
@@ -294,7 +297,7 @@ def _audit(d: ReportData) -> str:
     )
     body = (
         f'<p class="meta">{shown} of this machine, newest first{left}. The whole trail: '
-        "the Audit workspace or <code>GET /api/machines/{mid}/audit.csv</code>.</p>"
+        f"the Audit workspace or <code>GET /api/machines/{e(d.machine.id)}/audit.csv</code>.</p>"
         + (_table(["Time", "User", "Kind", "Action", "Outcome"], rows, "audit") if rows else "")
     )
     return f'<section id="audit"><h2>4 Audit excerpt</h2>{body}</section>'
@@ -344,6 +347,7 @@ th, td { text-align: left; vertical-align: top; padding: 1mm 2mm; border-bottom:
 thead th { background: #f1f5f9; border-bottom: 1pt solid #999; }
 table.facts th { width: 42mm; background: none; color: #444; font-weight: normal; }
 table.facts td, table.facts th { font-size: 10pt; padding: 1.5mm 2mm; }
+td.time { white-space: nowrap; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 code { font: 8.5pt "DejaVu Sans Mono", monospace; }
 tr.refused td { color: #9a3412; }

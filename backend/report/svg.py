@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from html import escape
 
 MAX_POINTS = 2000  # per polyline; longer series are thinned to min/max per column
+Y_PAD = 0.05  # of the data's span, above and below
 COLOURS = ("#1f5fa8", "#c2410c", "#15803d", "#7e22ce")
 
 
@@ -115,8 +116,8 @@ def _range(values: list[float]) -> tuple[float, float]:
 
 
 def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | None:
-    """The plot area and the range it shows: x tight to the data, y out to whole ticks and
-    taking in the reference levels; None without a single finite point."""
+    """The plot area and the range it shows: x tight to the data, y taking in the data and the
+    reference levels near it, with a margin; None without a single finite point."""
     xs = [p[0] for pts in points for p in pts]
     ys = [p[1] for pts in points for p in pts]
     if not xs:
@@ -127,11 +128,8 @@ def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | Non
     # the plot's edge instead)
     near = [v for _, v in plot.refs if y0 - (y1 - y0) <= v <= y1 + (y1 - y0)]
     y0, y1 = min([y0, *near]), max([y1, *near])
-    ticks = nice_ticks(y0, y1)
-    if len(ticks) >= 2:
-        step = ticks[1] - ticks[0]
-        y0 = min(y0, ticks[0] if ticks[0] <= y0 else ticks[0] - step)
-        y1 = max(y1, ticks[-1] if ticks[-1] >= y1 else ticks[-1] + step)
+    pad = (y1 - y0) * Y_PAD  # the line clear of the frame
+    y0, y1 = y0 - pad, y1 + pad
     left, right, top, bottom = 64.0, 16.0, 12.0, 44.0
     return Frame(left, top, plot.width - left - right, plot.height - top - bottom, x0, x1, y0, y1)
 
@@ -168,8 +166,8 @@ def render(plot: Plot) -> str:
             f'stroke="#ddd"/><text x="{f.left - 6}" y="{y + 4:.2f}" text-anchor="end">'
             f"{_fmt(t)}</text>"
         )
-    x_title = f"{plot.x_title} [{plot.x_unit}]" if plot.x_unit else plot.x_title
-    y_title = f"{plot.y_title} [{plot.y_unit}]" if plot.y_unit else plot.y_title
+    x_title = f"{plot.x_title} [{plot.x_unit}]".strip() if plot.x_unit else plot.x_title
+    y_title = f"{plot.y_title} [{plot.y_unit}]".strip() if plot.y_unit else plot.y_title
     out.append(
         f'<text x="{f.left + f.width / 2}" y="{h - 6}" text-anchor="middle">'
         f"{escape(x_title)}</text>"
