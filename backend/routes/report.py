@@ -56,7 +56,7 @@ def run(run_id: int, machine: MachineDep, services: ServicesDep) -> AssistRun:
 
 @router.get(
     "/report",
-    response_class=HTMLResponse,
+    response_class=Response,  # its errors are JSON, as every route's
     dependencies=[permit(Action.OBSERVE)],
     responses=text_answer("text/html", "the report, printable (A4)")
     | responses(404, 422, why=_TRACE_WHY),
