@@ -132,3 +132,28 @@ def test_calculators_screenshots(browser: Browser, srv: Server, mid: str, size: 
         shot(page, f"calc-multi-gain-{size}")
     finally:
         page.close()
+
+
+def test_curve_from_a_run_up_on_a_copy(page: Page, srv: Server, mid: str) -> None:
+    """S1's gear 6 carries the manual's polynomial; run up on a copy, the fit finds it."""
+    poly: dict[str, float] = {"typ": 2, "n_grenz": 12000000, "a_konst": 16000, "a_min": 2000}
+    poly |= {"b1": -0.88888888, "b2": 2.08333333e-5, "b3": -1.92901234e-10}
+    changes = [
+        {"scope": "axis", "target": "S1", "name": f"getriebe[5].beschl_kennlinie.{k}", "value": v}
+        for k, v in poly.items()
+    ]
+    assert srv.http.patch(f"/api/machines/{mid}/parameters", json={"changes": changes}).is_success
+    srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"})
+    page.get_by_test_id("tab-Commissioning").click()
+    box = panel(page, "calc")
+    box.get_by_test_id("calc-pick-curve-fit").click()
+    box.get_by_test_id("curve-gear").select_option("6")
+    box.get_by_test_id("curve-source-run-up").check()
+    expect(box.get_by_test_id("curve-what")).to_contain_text("the live spindle does not turn")
+    box.get_by_test_id("curve-run").click()
+    expect(box.get_by_test_id("assist-result")).to_be_visible(timeout=90_000)
+    assert read(box, "assist-fig-n_limit") == pytest.approx(12000, rel=0.03)
+    assert read(box, "assist-fig-a_konst") == pytest.approx(16000, rel=0.02)
+    expect(box.get_by_test_id("curve-chart").locator(".u-legend")).to_contain_text("type 3")
+    box.get_by_test_id("curve-chart").scroll_into_view_if_needed()
+    shot(page, "calc-curve-run-up")
