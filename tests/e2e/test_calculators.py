@@ -98,6 +98,19 @@ def test_gear_editor_previews_the_selection_for_a_typed_s(
     expect(box.get_by_test_id("gear-row-2")).to_have_attribute("data-chosen", "1")
     expect(box.get_by_test_id("gear-changes")).to_contain_text("range_table[1].max_speed")
     shot(page, "calc-gear-ranges")
+    # dragging M41's upper end to the right widens it further (the input follows)
+    handle = box.get_by_test_id("gear-handle-2-max").bounding_box()
+    assert handle is not None
+    cx, cy = handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 60, cy, steps=6)
+    page.mouse.up()
+    dragged = int(box.get_by_test_id("gear-max-2").input_value())
+    assert dragged > 900 and dragged % 10 == 0
+    expect(box.get_by_test_id("gear-changes")).to_contain_text(str(dragged))
+    box.get_by_test_id("gear-max-2").fill("900")
+    expect(box.get_by_test_id("gear-changes")).to_contain_text("900")
     box.get_by_test_id("gear-apply").click()
     expect(box.get_by_test_id("gear-applied")).to_be_visible()
     rows = srv.http.get(f"/api/machines/{mid}/parameters?scope=channel").json()
