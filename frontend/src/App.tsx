@@ -80,7 +80,7 @@ function Hmi() {
       <div class="head" ref={head}>
         <TopBar />
         <ControlStrip />
-        <Banner />
+        <Banner liveRun={tab !== "Commissioning"} />
         <TrialBar />
       </div>
       <div class="body">

@@ -92,3 +92,4 @@ export type CurveRunUpRequest = S["CurveRunUpRequest"];
 export type GearSelectionRequest = S["GearSelectionRequest"];
 export type GearSelectionResult = S["GearSelectionResult"];
 export type GearRangeValues = S["GearRangeValues"];
+export type AssistProgress = S["AssistProgress"];
