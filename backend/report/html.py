@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from html import escape
 
+from api.assist import AssistSeries
 from api.audit import AuditRecord
 from api.report import AssistRun, SignOff
 from backend.report import svg
@@ -19,6 +20,7 @@ from backend.report import svg
 ASSISTANTS = {
     "multi-gain": ("multi_gain by experiment", "004 §3.6.2"),
     "sign-check": ("Direction and sign check", "004 §3.5"),
+    "curve-run-up": ("Acceleration curve from a run-up", "000 §2.8.4"),
 }
 AXIS_KINDS = {"linear": "linear axis", "rotary": "rotary axis", "spindle": "spindle"}
 
@@ -170,21 +172,30 @@ def _cover(d: ReportData) -> str:
 
 
 def _run_plot(run: AssistRun) -> str:
-    out = []
+    """One plot per pair of units: series over the same quantities share it (measured
+    points and their fit)."""
+    groups: dict[tuple[str, str], list[AssistSeries]] = {}
     for s in run.result.series:
+        groups.setdefault((s.x_unit, s.y_unit), []).append(s)
+    out = []
+    for (x_unit, y_unit), series in groups.items():
         # figures in the series' own unit are levels worth seeing on it (the mean lag, the
         # lag monitoring limit)
         refs = [
             (f"{f.name} = {number(f.value)} {f.unit}", f.value)
             for f in run.result.figures
-            if s.y_unit and f.unit == s.y_unit
+            if y_unit and f.unit == y_unit
         ]
-        x_title = "time" if s.x_unit == "s" else ""  # else the unit says (a speed: °/s)
-        plot = svg.Plot([svg.Line(s.name, s.x, s.y)], x_title, s.x_unit, s.name, s.y_unit, refs)
+        x_title = "time" if x_unit == "s" else ""  # else the unit says (a speed: °/s)
+        y_title = series[0].name if len(series) == 1 else ""
+        lines = [svg.Line(s.name, s.x, s.y) for s in series]
+        plot = svg.Plot(lines, x_title, x_unit, y_title, y_unit, refs)
+        names = ", ".join(s.name for s in series)
         over = f" over {x_title}" if x_title else ""
+        stored = ", ".join(str(len(s.x)) for s in series)
         out.append(
-            f'<figure class="plot">{svg.render(plot)}<figcaption>{e(s.name)}{over}'
-            f" (run #{run.id}, {len(s.x)} stored points)</figcaption></figure>"
+            f'<figure class="plot">{svg.render(plot)}<figcaption>{e(names)}{over}'
+            f" (run #{run.id}, {stored} stored points)</figcaption></figure>"
         )
     return "".join(out)
 

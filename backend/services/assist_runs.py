@@ -17,7 +17,11 @@ from backend.services.store import Store
 
 MAX_LIST = 200  # runs in one list (newest)
 # the figures that say what a run found, per assistant (others: its first three)
-_SUMMARY = {"multi-gain": ("k", "f", "kv_new"), "sign-check": ("max_lag", "lag_max", "runaway")}
+_SUMMARY = {
+    "multi-gain": ("k", "f", "kv_new"),
+    "sign-check": ("max_lag", "lag_max", "runaway"),
+    "curve-run-up": ("max_error", "run_up_s"),
+}
 _INFO = "id, machine, assistant, user, time, live, ok, axis, summary"
 
 
@@ -60,7 +64,7 @@ class AssistRuns:
 
     def add(self, mid: str, user: str, result: AssistResult, live: bool, when: float) -> int:
         """`record` on the calling thread, at a given time."""
-        axis = result.inputs.get("axis", "")
+        axis = result.inputs.get("axis", result.inputs.get("spindle", ""))
         row = (
             mid,
             result.assistant,

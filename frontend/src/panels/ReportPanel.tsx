@@ -14,7 +14,11 @@ const RUNS_SHOWN = 20;
 const REFRESH_MS = 3000; // a run ends in the assistant's panel: the list follows within this
 
 const when = (unix: number) => new Date(unix * 1000).toLocaleString();
-const LABELS: Record<string, string> = { "multi-gain": "multi_gain by experiment", "sign-check": "Direction and sign check" };
+const LABELS: Record<string, string> = {
+  "multi-gain": "multi_gain by experiment",
+  "sign-check": "Direction and sign check",
+  "curve-run-up": "Acceleration curve from a run-up",
+};
 
 function refusalOf(e: unknown): Refusal {
   return e instanceof ApiError ? e.refusal : { message: e instanceof Error ? e.message : String(e), problems: [] };
