@@ -310,3 +310,29 @@ def test_the_baseline_section_lists_what_the_versions_service_finds() -> None:
     assert "<td>channel</td><td><code>max_vb_override</code></td>" in table
     assert "No baseline set" in section(None)
     assert "No parameter differs from the baseline" in section([])
+
+
+def test_a_curve_run_up_is_stored_and_plots_points_and_fit_together(
+    srv: Server, lathe: str
+) -> None:
+    """000 §2.8.4's polynomial on S1's gear 6, run up on a copy: the run is listed under the
+    spindle, and its measured a(n) and the fitted curve share one plot (same units)."""
+    poly: dict[str, float] = {"typ": 2, "n_grenz": 12000000, "a_konst": 16000, "a_min": 2000}
+    poly |= {"b1": -0.88888888, "b2": 2.08333333e-5, "b3": -1.92901234e-10}
+    changes = [
+        {"scope": "axis", "target": "S1", "name": f"getriebe[5].beschl_kennlinie.{k}", "value": v}
+        for k, v in poly.items()
+    ]
+    assert srv.http.patch(f"/api/machines/{lathe}/parameters", json={"changes": changes}).is_success
+    r = srv.http.post(
+        f"/api/machines/{lathe}/assist/curve-run-up",
+        json={"axis": "S1", "gear": 6, "typ": 2},
+        timeout=120,
+    )
+    assert r.status_code == 200, r.text
+    (run,) = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    assert (run["assistant"], run["axis"]) == ("curve-run-up", "S1")
+    doc = _read(srv.http.get(f"/api/machines/{lathe}/report").text)
+    (plot,) = [p for p in doc.plots if p["in"] == str(run["id"])]
+    assert len(plot["points"]) == len(r.json()["series"]) == 2
+    assert "Acceleration curve from a run-up [000 §2.8.4]" in "".join(doc.text)
