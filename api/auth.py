@@ -30,6 +30,7 @@ class Action(StrEnum):
     STOP = "stop"  # emergency stop: any operator, holding control or not
     COMMAND = "command"  # NC commands, jog, reset, power cycle: only while holding control
     CONFIGURE = "configure"  # parameter writes and imports: only while holding control
+    VERSIONS = "versions"  # take, delete parameter versions of a machine, set its baseline
     ASSIST = "assist"  # commissioning assistants on a copy of a machine (a process for seconds)
     TAKE_CONTROL = "take_control"  # from another holder without asking
     SIMULATE = "simulate"  # run, pause, step, fast
@@ -46,6 +47,7 @@ _OPERATOR = _OBSERVER | {
     Action.STOP,
     Action.COMMAND,
     Action.CONFIGURE,
+    Action.VERSIONS,
     Action.ASSIST,
 }
 _INSTRUCTOR = _OPERATOR | {Action.TAKE_CONTROL, Action.SIMULATE}

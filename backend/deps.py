@@ -26,6 +26,7 @@ from backend.services.sessions import SessionWatch
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
+from backend.services.versions import Versions
 from backend.services.viewer import RerunViewer
 from backend.settings import Settings
 from backend.workers.pool import WorkerPool
@@ -50,6 +51,7 @@ class Services:
     viewer: RerunViewer
     sessions: SessionWatch
     assistants: Assistants
+    versions: Versions
     started: float
 
     @classmethod
@@ -93,6 +95,7 @@ class Services:
             viewer,
             sessions,
             Assistants(),
+            Versions(store, machines),
             time.time(),
         )
         services.print_login_link()
@@ -147,6 +150,7 @@ _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is r
     Action.STOP: "command",
     Action.COMMAND: "command",
     Action.CONFIGURE: "parameter",
+    Action.VERSIONS: "version",
     Action.ASSIST: "parameter",  # assistants propose parameters
     Action.TAKE_CONTROL: "control",
     Action.SIMULATE: "simulation",
