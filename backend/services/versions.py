@@ -99,8 +99,15 @@ def _compared(m: MachineProxy, a: Lists, b: Lists) -> Iterator[tuple[ListKey, Pa
                 yield key, d, name
 
 
+def _value(d: ParamDef, values: dict[str, Value], name: str) -> Value:
+    """The value in force: written, else the default; an enum's symbol as its code, so the
+    default `ACHSTYP_TRANSLATOR` and a written 1 are the same value."""
+    v = values.get(name, d.default)
+    return d.symbols.get(v, v) if isinstance(v, str) and d.symbols else v
+
+
 def _eng(d: ParamDef, v: Value | None) -> float | None:
-    if not d.is_numeric or isinstance(v, str) or v is None:
+    if not d.is_numeric or d.symbols or isinstance(v, str) or v is None:
         return None
     return to_eng(d.quantity, float(v))
 
@@ -110,8 +117,8 @@ def diff(m: MachineProxy, a: Lists, b: Lists) -> list[ParamDiff]:
     kinds = {ax.name: axis_kind_of(ax.values) for ax in m.cfg.axes}
     out = []
     for (scope, target), d, name in _compared(m, a, b):
-        before = a.get((scope, target), {}).get(name, d.default)
-        after = b.get((scope, target), {}).get(name, d.default)
+        before = _value(d, a.get((scope, target), {}), name)
+        after = _value(d, b.get((scope, target), {}), name)
         if before == after:
             continue
         kind = kinds.get(target, AxisKind.LINEAR)

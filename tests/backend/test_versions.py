@@ -140,6 +140,10 @@ def test_against_the_manuals_defaults(srv: Server, lathe: str) -> None:
     assert (kv["before"], kv["after"]) == (KV.default, 250)
     # a value nobody wrote is its default on both sides: no difference
     assert not [c for c in changes if c["parameter"] == "lr_hw[0].vz_istw"]
+    # nor is a symbol's code: X is linear, achs_typ 1 = the default ACHSTYP_TRANSLATOR
+    assert value(srv, lathe, "kenngr.achs_typ")["value"] == 1
+    assert resolve(Scope.AXIS, "kenngr.achs_typ").symbols["ACHSTYP_TRANSLATOR"] == 1
+    assert not [c for c in changes if c["parameter"] == "kenngr.achs_typ" and c["target"] == "X"]
     assert all(c["before"] != c["after"] for c in changes)
 
 
