@@ -87,3 +87,4 @@ export type SignCheckRequest = S["SignCheckRequest"];
 export type AssistResult = S["AssistResult"];
 export type AssistChange = S["AssistChange"];
 export type AssistSeries = S["AssistSeries"];
+export type AssistProgress = S["AssistProgress"];
