@@ -4,14 +4,21 @@ the baseline, the audit trail, bad input, and everything surviving a restart of 
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 
+from api.parameters import ParameterChange
+from api.versions import ParamDiff
+from backend.services import parameters
+from backend.services.versions import Versions
 from nc_sim.params import Scope, registry
 from nc_sim.params.listfile import resolve
+from tests.backend.inprocess import INSTRUCTOR, machine_service, paused_demo
 from tests.backend.server import USER, Server
 
 KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv, in 0.01/s (004 §3.6)
@@ -227,3 +234,25 @@ def test_versions_survive_a_restart_and_go_with_their_machine(
         assert s.http.get(url("m2")).json() == []  # a new machine of the same name has none
     finally:
         s.close()
+
+
+def test_baseline_diff_for_the_commissioning_report(tmp_path: Path) -> None:
+    """`Versions.baseline_diff`, as the report calls it: None without a baseline, else the
+    live parameters against it."""
+    with machine_service(tmp_path) as service:
+        m = paused_demo(service, "lathe")
+        versions = Versions(service.store, service)
+        assert asyncio.run(versions.baseline_diff("lathe")) is None
+        versions.take(INSTRUCTOR, "lathe", "as delivered", "", baseline=True)
+        assert asyncio.run(versions.baseline_diff("lathe")) == []
+        kv = ParameterChange(scope="axis", target="X", name="getriebe[0].kv", value=2500)
+        parameters.write(INSTRUCTOR, m, service.store, [kv])
+        (change,) = asyncio.run(versions.baseline_diff("lathe")) or []
+        assert isinstance(change, ParamDiff)
+        assert (change.target, change.parameter, change.before, change.after, change.unit) == (
+            "X",
+            "getriebe[0].kv",
+            2000,
+            2500,
+            "0.01/s",
+        )
