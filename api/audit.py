@@ -12,6 +12,7 @@ AuditKind = Literal[
     "logout",
     "command",
     "parameter",
+    "version",
     "control",
     "simulation",
     "machine",

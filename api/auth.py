@@ -30,6 +30,7 @@ class Action(StrEnum):
     STOP = "stop"  # emergency stop: any operator, holding control or not
     COMMAND = "command"  # NC commands, jog, reset, power cycle: only while holding control
     CONFIGURE = "configure"  # parameter writes and imports: only while holding control
+    VERSIONS = "versions"  # take, delete parameter versions of a machine, set its baseline
     ASSIST = "assist"  # commissioning assistants on a copy of a machine (a process for seconds)
     SIGN_OFF = "sign_off"  # sign a machine's commissioning report off
     TAKE_CONTROL = "take_control"  # from another holder without asking
@@ -47,6 +48,7 @@ _OPERATOR = _OBSERVER | {
     Action.STOP,
     Action.COMMAND,
     Action.CONFIGURE,
+    Action.VERSIONS,
     Action.ASSIST,
     Action.SIGN_OFF,
 }

@@ -28,6 +28,7 @@ from backend.services.sessions import SessionWatch
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
+from backend.services.versions import Versions
 from backend.services.viewer import RerunViewer
 from backend.settings import Settings
 from backend.workers.pool import WorkerPool
@@ -52,6 +53,7 @@ class Services:
     viewer: RerunViewer
     sessions: SessionWatch
     assistants: Assistants
+    versions: Versions
     started: float
     assist_runs: AssistRuns
     reports: Reports
@@ -84,6 +86,7 @@ class Services:
         sessions = SessionWatch(accounts, hub, control)
         sessions.start()
         assist_runs = AssistRuns(store)
+        versions = Versions(store, machines)
         services = cls(
             settings,
             store,
@@ -98,9 +101,10 @@ class Services:
             viewer,
             sessions,
             Assistants(),
+            versions,
             time.time(),
             assist_runs,
-            Reports(store, audit, assist_runs, traces),
+            Reports(store, audit, assist_runs, traces, versions),
         )
         services.print_login_link()
         return services
@@ -154,6 +158,7 @@ _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is r
     Action.STOP: "command",
     Action.COMMAND: "command",
     Action.CONFIGURE: "parameter",
+    Action.VERSIONS: "version",
     Action.ASSIST: "parameter",  # assistants propose parameters
     Action.SIGN_OFF: "report",
     Action.TAKE_CONTROL: "control",

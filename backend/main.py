@@ -28,6 +28,7 @@ from backend.routes import (
     tokens,
     traces,
     users,
+    versions,
     viewer,
 )
 from backend.security import Perimeter, host_names
@@ -74,6 +75,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         audit,
         tokens,
         users,
+        versions,
         viewer,
     ):
         app.include_router(module.router, responses=responses(401, 403))

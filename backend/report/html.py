@@ -46,11 +46,16 @@ class Commissioner:
 
 @dataclass(frozen=True)
 class BaselineRow:
+    """A parameter that differs from the baseline: list values in `unit`, and the same in
+    engineering units when they differ ('20 → 25 1/s' for a kv in 0.01/s)."""
+
     target: str
     parameter: str
+    id: str  # the manual's, e.g. P-AXIS-00099
     before: object
     after: object
     unit: str
+    engineering: str
 
 
 @dataclass(frozen=True)
@@ -255,12 +260,19 @@ def _baseline(d: ReportData) -> str:
         body = '<p class="empty">No parameter differs from the baseline.</p>'
     else:
         rows = [
-            f"<tr><td>{e(b.target)}</td><td><code>{e(b.parameter)}</code></td>"
+            f'<tr data-parameter="{e(b.target)}.{e(b.parameter)}"><td>{e(b.target)}</td>'
+            f'<td><code>{e(b.parameter)}</code><div class="id">{e(b.id)}</div></td>'
             f'<td class="num">{e(number(b.before))}</td>'
-            f'<td class="num">{e(number(b.after))}</td><td>{e(b.unit)}</td></tr>'
+            f'<td class="num">{e(number(b.after))}</td><td>{e(b.unit)}</td>'
+            f"<td>{e(b.engineering)}</td></tr>"
             for b in d.baseline
         ]
-        body = _table(["Target", "Parameter", "Baseline", "Now", "Unit"], rows, "diff")
+        head = ["Target", "Parameter", "Baseline", "Now", "Unit", "Engineering"]
+        body = (
+            f'<p class="meta">{len(d.baseline)} parameters differ from the baseline '
+            "(list values; a value not written counts as the manual's default).</p>"
+            + _table(head, rows, "diff")
+        )
     title = "2 Parameter differences against the baseline"
     return f'<section id="baseline"><h2>{title}</h2>{body}</section>'
 
@@ -360,6 +372,7 @@ table.facts th { width: 42mm; background: none; color: #444; font-weight: normal
 table.facts td, table.facts th { font-size: 10pt; padding: 1.5mm 2mm; }
 td.time { white-space: nowrap; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+div.id { font-size: 8pt; color: #555; }
 code { font: 8.5pt "DejaVu Sans Mono", monospace; }
 tr.refused td { color: #9a3412; }
 ul.who { margin: 0 0 1mm; padding-left: 5mm; }

@@ -94,7 +94,7 @@ def _parse(d: ParamDef, name: str, value: Value) -> Value:
     return parse_value(d, name, str(value))
 
 
-def _effective(m: MachineProxy, scope: Scope, target: str) -> dict[str, Value]:
+def effective(m: MachineProxy, scope: Scope, target: str) -> dict[str, Value]:
     """A list as it stands with pending values: what the next restart would load."""
     values = dict(m.cfg.list_values(scope, target))
     for (s, t, n), p in m.pending.items():
@@ -132,7 +132,7 @@ def write(
                 problems.append(_problem(e, scope, target, (lines or {}).get(c.name)))
         lists: dict[tuple[Scope, str], dict[str, Value]] = {}
         for scope, target, _d, name, value in parsed:
-            lists.setdefault((scope, target), _effective(m, scope, target))[name] = value
+            lists.setdefault((scope, target), effective(m, scope, target))[name] = value
         for (scope, target), values in lists.items():
             for err in validate_values(scope, values):
                 problems.append(_problem(err, scope, target, (lines or {}).get(err.name)))
@@ -296,7 +296,7 @@ def export_list(m: MachineProxy, scope: Scope, target: str | None) -> str:
     """The list in native format as the next restart would load it (pending included)."""
     with m.lock:
         tgt = _target(m, scope, target)
-        values = _effective(m, scope, tgt)
+        values = effective(m, scope, tgt)
     where = f" axis {tgt}" if tgt else ""
     title = f"Inbetrieb export: machine {m.id}, {scope.value} list{where}"
     return format_list(values, scope, [title])

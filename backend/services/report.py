@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Sequence
-from typing import Any, Protocol
+from typing import Any
 
 from api.report import SignOff, SignOffRequest
 from backend.errors import ApiError
@@ -20,19 +19,13 @@ from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.services.store import Store
 from backend.services.traces import TraceService
+from backend.services.versions import Versions
 
 MAX_RUNS = 50  # the newest runs in a report
 MAX_TRACES = 8  # traces chosen for one report
 MAX_AUDIT = 100  # rows of the audit excerpt (newest)
 EXCERPT_LEAVES_OUT = ("command",)  # jog renewals and MDI blocks would crowd out the rest
 IMPORTED = "imported"  # the machine of a trace imported from CSV without a description
-
-
-class BaselineSource(Protocol):
-    """The parameter versions' service (backend/services/versions.py): the differences of a
-    machine's values against its baseline, None while it has none."""
-
-    async def baseline_diff(self, mid: str) -> Sequence[Any] | None: ...
 
 
 class Reports:
@@ -44,7 +37,7 @@ class Reports:
         audit: Audit,
         runs: AssistRuns,
         traces: TraceService,
-        versions: BaselineSource | None = None,
+        versions: Versions | None = None,
     ) -> None:
         self.store, self.audit, self.runs, self.traces = store, audit, runs, traces
         self.versions = versions  # None: no baselines in this service ("no baseline set")
@@ -113,14 +106,15 @@ class Reports:
         diff = await self.versions.baseline_diff(mid)
         if diff is None:
             return None
-        # a channel or tool parameter has no target: its list names it
         return [
             html.BaselineRow(
-                d.target or getattr(d, "scope", "") or "channel",
+                d.target or d.scope,  # a channel or tool parameter: its list names it
                 d.parameter,
+                d.id,
                 d.before,
                 d.after,
                 d.unit,
+                _eng(d.before_eng, d.after_eng, d.eng_unit) if d.eng_unit != d.unit else "",
             )
             for d in diff
         ]
@@ -206,3 +200,10 @@ class Reports:
             s[1], s[2], s[3] = n, min(s[2], first), max(s[3], last)
         out = [html.Commissioner(u, int(v[0]), int(v[1]), v[2], v[3]) for u, v in seen.items()]
         return sorted(out, key=lambda c: c.first_unix)
+
+
+def _eng(before: float | None, after: float | None, unit: str) -> str:
+    """Baseline → now in engineering units ('20 → 25 1/s'), '' when not numbers."""
+    if before is None or after is None:
+        return ""
+    return f"{html.number(before)} → {html.number(after)} {unit}".strip()

@@ -1,5 +1,5 @@
-"""SQLite storage: machines, their accepted parameter values, the audit trail, traces, NC
-programs, assistant runs and sign-offs.
+"""SQLite storage: machines, their accepted parameter values and versions, the audit trail,
+traces, NC programs, assistant runs and sign-offs.
 
 One file, one connection guarded by a lock (the service writes rarely and briefly). Values are
 stored as JSON so numbers stay numbers and strings stay strings.
@@ -57,6 +57,19 @@ CREATE TABLE IF NOT EXISTS programs (
     updated_by TEXT NOT NULL
 );
 CREATE UNIQUE INDEX IF NOT EXISTS programs_name ON programs (name COLLATE NOCASE);
+-- parameter versions of a machine (backend/services/versions.py)
+CREATE TABLE IF NOT EXISTS param_versions (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,  -- never reused: an old link never shows another
+    machine TEXT NOT NULL,
+    name TEXT NOT NULL,
+    note TEXT NOT NULL,
+    created REAL NOT NULL,
+    created_by TEXT NOT NULL,
+    baseline INTEGER NOT NULL DEFAULT 0,   -- 1 for the machine's baseline (at most one)
+    lists TEXT NOT NULL                    -- JSON [[scope, target, name, value], ...]
+);
+CREATE UNIQUE INDEX IF NOT EXISTS param_versions_name
+    ON param_versions (machine, name COLLATE NOCASE);
 CREATE TABLE IF NOT EXISTS assist_runs (  -- backend/services/assist_runs.py
     id INTEGER PRIMARY KEY,
     machine TEXT NOT NULL,
@@ -247,11 +260,13 @@ class Store:
             )
 
     def delete_machine(self, mid: str) -> None:
-        """Forget a machine, its values, assistant runs and sign-offs; its audit trail stays."""
+        """Forget a machine, its values, versions, assistant runs and sign-offs; its audit trail
+        stays."""
         with self._lock, self._db:
             self._db.execute("BEGIN")
             self._db.execute("DELETE FROM machines WHERE id = ?", (mid,))
             self._db.execute("DELETE FROM param_values WHERE machine = ?", (mid,))
+            self._db.execute("DELETE FROM param_versions WHERE machine = ?", (mid,))
             self._db.execute("DELETE FROM assist_runs WHERE machine = ?", (mid,))
             self._db.execute("DELETE FROM sign_offs WHERE machine = ?", (mid,))
 

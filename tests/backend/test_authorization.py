@@ -50,6 +50,13 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/machines/{mid}/parameters/export"): ("observer", FREE),
     ("POST", "/api/machines/{mid}/parameters/import"): ("operator", HELD),
     ("GET", "/api/machines/{mid}/parameters/audit"): ("observer", FREE),
+    # versions change no value (a rollback writes values: held, as a parameter write)
+    ("GET", "/api/machines/{mid}/versions"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/versions"): ("operator", FREE),
+    ("GET", "/api/machines/{mid}/versions/diff"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/versions/{vid}/baseline"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/versions/{vid}/rollback"): ("operator", HELD),
+    ("DELETE", "/api/machines/{mid}/versions/{vid}"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/scope"): ("observer", FREE),
     ("PUT", "/api/machines/{mid}/scope"): ("observer", FREE),
     ("POST", "/api/machines/{mid}/scope/force"): ("observer", FREE),
@@ -152,6 +159,7 @@ def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Respo
         .replace("{rid}", "nope")
         .replace("{id}", "nope")
         .replace("{run_id}", "1")
+        .replace("{vid}", "nope")
         .replace("{name}", "nobody")
     )
     kw: dict[str, Any] = {"headers": {"Authorization": f"Bearer {token}"}}
@@ -229,6 +237,7 @@ def test_a_stranger_gets_401_on_every_route(srv: tuple[Server, dict[str, str]]) 
                 .replace("{rid}", "x")
                 .replace("{id}", "x")
                 .replace("{run_id}", "1")
+                .replace("{vid}", "x")
                 .replace("{name}", "x"),
             )
             assert r.status_code == 401, (method, path, r.status_code)

@@ -8,7 +8,6 @@ SVG frame declares (x tight to the data, y taking it in).
 
 from __future__ import annotations
 
-import asyncio
 import itertools
 import json
 import math
@@ -16,13 +15,10 @@ import re
 import time
 from collections.abc import Iterator
 from html.parser import HTMLParser
-from types import SimpleNamespace
 from typing import Any
 
 import pytest
 
-from backend.report import html as report_html
-from backend.services.report import Reports
 from tests.backend.server import Server
 
 F_PHYSICS = 22857 / 10000  # the drive's gain over the one the NC assumes
@@ -275,41 +271,25 @@ def test_without_chromium_the_pdf_is_a_clear_503(tmp_path: Any) -> None:
         s.close()
 
 
-def test_the_baseline_section_lists_what_the_versions_service_finds() -> None:
-    """Against the interface of the parameter versions' service (`baseline_diff`): its rows
-    are the section's table; None is 'no baseline set'."""
-
-    class Versions:
-        def __init__(self, diff: list[Any] | None) -> None:
-            self.diff = diff
-
-        async def baseline_diff(self, mid: str) -> list[Any] | None:
-            return self.diff
-
-    kv = SimpleNamespace(
-        target="X", parameter="getriebe[0].kv", before=2000, after=875, unit="0.01/s"
+def test_the_report_lists_the_parameters_changed_since_the_baseline(
+    srv: Server, lathe: str
+) -> None:
+    r = srv.http.post(
+        f"/api/machines/{lathe}/versions", json={"name": "as delivered", "baseline": True}
     )
-    feed = SimpleNamespace(
-        scope="channel", target=None, parameter="max_vb_override", before=1000, after=1200,
-        unit="0.1 %",
-    )  # fmt: skip
-
-    def section(diff: list[Any] | None) -> str:
-        reports = Reports(None, None, None, None, Versions(diff))  # type: ignore[arg-type]
-        rows = asyncio.run(reports._baseline("m"))
-        data = report_html.ReportData(
-            report_html.MachineFacts("m", "M", "demo lathe", []), 0.0, "t", [], [], 0, rows, [], [],
-            0, 0, [],
-        )  # fmt: skip
-        text = report_html.render(data)
-        return text[text.index('<section id="baseline">') : text.index('<section id="traces">')]
-
-    table = section([kv, feed])
-    assert "<td>X</td><td><code>getriebe[0].kv</code></td>" in table
-    assert '<td class="num">2000</td><td class="num">875</td><td>0.01/s</td>' in table
-    assert "<td>channel</td><td><code>max_vb_override</code></td>" in table
-    assert "No baseline set" in section(None)
-    assert "No parameter differs from the baseline" in section([])
+    assert r.status_code == 201, r.text
+    doc = _read(srv.http.get(f"/api/machines/{lathe}/report").text)
+    assert "No parameter differs from the baseline" in "".join(doc.text)
+    body = {"changes": [{"scope": "axis", "target": "X", "name": "getriebe[0].kv", "value": 2500}]}
+    assert srv.http.patch(f"/api/machines/{lathe}/parameters", json=body).status_code == 200
+    text = srv.http.get(f"/api/machines/{lathe}/report").text
+    row = re.search(r'<tr data-parameter="X.getriebe\[0\].kv">(.*?)</tr>', text)
+    assert row is not None
+    cells = re.findall(r"<td[^>]*>(.*?)</td>", row.group(1))
+    # the demo's X kv 20/s (2000 in 0.01/s, P-AXIS-00099) as delivered, 25/s now
+    assert cells[0] == "X" and "P-AXIS-00099" in cells[1]
+    assert cells[2:6] == ["2000", "2500", "0.01/s", "20 → 25 1/s"]
+    assert "No baseline set" not in text
 
 
 def test_a_curve_run_up_is_stored_and_plots_points_and_fit_together(

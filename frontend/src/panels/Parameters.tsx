@@ -19,7 +19,9 @@ import {
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { qty } from "../ui/format";
+import { paramView } from "../state/versions";
 import { groupOf } from "./paramGroups";
+import { BaselineNudge, Versions } from "./Versions";
 
 interface Target {
   scope: Scope;
@@ -63,7 +65,27 @@ const staleLine = (s: StaleValue) =>
 /** "line 3: getriebe[0].kv: …" for an import's problems (the API gives the line). */
 const problemLine = (p: ParameterProblem) => `${p.line != null ? `line ${p.line}: ` : ""}${p.message}`;
 
+/** The workspace: the list editor, or the parameter versions (with a nudge to set the
+ * baseline until there is one). */
 export function Parameters() {
+  const view = paramView.value;
+  return (
+    <>
+      <div class="row subviews" role="tablist" aria-label="parameter views">
+        {(["list", "versions"] as const).map((v) => (
+          <button key={v} type="button" role="tab" class="secondary" aria-selected={view === v} aria-pressed={view === v}
+            data-testid={`param-view-${v}`} onClick={() => (paramView.value = v)}>
+            {v === "list" ? "Lists" : "Versions"}
+          </button>
+        ))}
+        {view === "list" ? <BaselineNudge /> : null}
+      </div>
+      {view === "list" ? <ParameterList /> : <Versions />}
+    </>
+  );
+}
+
+function ParameterList() {
   const axes = status.value?.axes ?? [];
   const targets: Target[] = [
     ...axes.map((a) => ({ scope: "axis" as const, target: a.name, label: `Axis ${a.name}` })),

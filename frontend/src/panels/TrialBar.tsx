@@ -4,6 +4,8 @@ import { configureBlocked } from "../state/control";
 import { keepTrial, revertTrial, shownTrial, trialMessage } from "../state/params";
 import { online } from "../state/session";
 
+const SHOWN = 6; // changes listed; a rollback may bring many
+
 export function TrialBar() {
   const t = shownTrial.value;
   const msg = trialMessage.value;
@@ -12,8 +14,12 @@ export function TrialBar() {
     <div class="trial-bar" data-testid="trial-bar">
       {t ? (
         <span class="trial" data-testid="param-trial" role="status">
-          Parameters on trial{t.target ? ` (${t.target})` : ` (${t.scope})`}:{" "}
-          {t.applied.map((c) => `${c.name} ${c.old ?? "default"} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`).join(", ")}
+          Parameters on trial ({t.label ?? t.target ?? t.scope}):{" "}
+          {t.applied
+            .slice(0, SHOWN)
+            .map((c) => `${t.label && c.target ? `${c.target}: ` : ""}${c.name} ${c.old ?? "default"} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`)
+            .join(", ")}
+          {t.applied.length > SHOWN ? ` … and ${t.applied.length - SHOWN} more` : ""}
           <button type="button" data-testid="param-keep" onClick={keepTrial}>
             Keep
           </button>

@@ -4,7 +4,7 @@
 // switching workspaces to test the values.
 import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
-import type { ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
+import type { ParameterChange, ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
 import { loggedIn } from "./auth";
 import { holderKey } from "./control";
 import { machineId, machineUrl } from "./session";
@@ -52,6 +52,9 @@ export interface Trial {
   scope: Scope;
   target: string | null;
   applied: ParameterWriteResult["changes"];
+  /** What was applied, when it is not one list's edit (e.g. "rollback to 'as delivered'");
+   * each applied change names its own list, so a trial may span several. */
+  label?: string;
 }
 
 /** Values applied on trial, waiting for Keep or Revert (one trial at a time). */
@@ -67,10 +70,15 @@ export async function writeChanges(
   changes: Change[],
   comment: string,
 ): Promise<ParameterWriteResult> {
-  const r = await http.patch<ParameterWriteResult>(machineUrl("/parameters"), {
-    changes: changes.map((c) => ({ scope, target, name: c.name, value: c.value, base_version: c.base_version })),
+  return writeAll(
+    changes.map((c) => ({ scope, target, name: c.name, value: c.value, base_version: c.base_version })),
     comment,
-  });
+  );
+}
+
+/** One write of values of any lists (all are applied or none). */
+export async function writeAll(changes: ParameterChange[], comment: string): Promise<ParameterWriteResult> {
+  const r = await http.patch<ParameterWriteResult>(machineUrl("/parameters"), { changes, comment });
   paramsVersion.value++;
   return r;
 }
@@ -81,25 +89,35 @@ export function keepTrial(): void {
 }
 
 /** Write the old values back, unless someone wrote over the trial's values meanwhile (their
- * value is not ours to revert); the trial stays when that is refused. */
+ * value is not ours to revert); the trial stays when that is refused. Each change goes back to
+ * its own list (a rollback's trial spans several). */
 export async function revertTrial(): Promise<void> {
   const t = trial.value;
   if (!t) return;
+  type Applied = Trial["applied"][number];
+  const key = (c: Applied) => `${c.scope}/${c.target ?? ""}`;
   try {
-    const now = new Map((await loadList(t.scope, t.target)).map((p) => [p.name, p]));
+    const lists = new Map<string, Map<string, ParameterValue>>();
+    for (const c of t.applied) {
+      if (!lists.has(key(c))) lists.set(key(c), new Map((await loadList(c.scope, c.target ?? null)).map((p) => [p.name, p])));
+    }
+    const now = (c: Applied) => lists.get(key(c))?.get(c.name);
+    const named = (c: Applied) => (lists.size > 1 && c.target ? `${c.target}: ${c.name}` : c.name);
     const changed = t.applied.filter((c) => {
-      const p = now.get(c.name);
+      const p = now(c);
       return p && (c.pending ? p.pending : p.value) !== c.new;
     });
     if (changed.length) {
-      trialMessage.value = `Revert refused: ${changed.map((c) => c.name).join(", ")} changed by someone else since the trial (reload the list).`;
+      trialMessage.value = `Revert refused: ${changed.map(named).join(", ")} changed by someone else since the trial (reload the list).`;
       return;
     }
     // a value that was at its default (old null: never written) goes back to the default
-    const back = t.applied
-      .map((c) => ({ name: c.name, value: c.old ?? now.get(c.name)?.default ?? null, base_version: now.get(c.name)?.version ?? null }))
-      .filter((c): c is Change => c.value !== null);
-    await writeChanges(t.scope, t.target, back, "editor: revert");
+    const back: ParameterChange[] = [];
+    for (const c of t.applied) {
+      const value = c.old ?? now(c)?.default ?? null;
+      if (value !== null) back.push({ scope: c.scope, target: c.target, name: c.name, value, base_version: now(c)?.version ?? null });
+    }
+    await writeAll(back, "editor: revert");
     trial.value = null;
     trialMessage.value = `Reverted ${back.length} value(s).`;
   } catch (e) {
