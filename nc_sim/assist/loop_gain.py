@@ -1,0 +1,387 @@
+"""The position loop gain assistant [004 §3.6: "to further optimise the position control loop,
+P-AXIS-00099 (getriebe[].kv) is used exclusively"]: step and ramp responses of an axis at
+several kv, each on a fresh copy of the machine, measured as an engineer reads them
+(nc_sim/measure.py), and the highest kv that meets an overshoot and settling target.
+
+- Step: the NC has no position command jump; its interpolator ramps every move. The step is a
+  short G00 move of a small distance (default 20 exact-stop windows), so the axis' rapid
+  dynamics make the command nearly a jump and the loop shapes what follows. Overshoot is the
+  actual position past the target (mm and % of the step), settling the time from the end of
+  the command until the actual position stays inside the exact-stop window
+  (kenngr.exact_stop_window): the in-position delay the machine waits for.
+- Ramp: a G01 move at constant feed; the lag settles to v/kv (DOMAIN.md §2, without
+  feedforward; a wrong multi_gain shows as v/k with k ≠ kv). The lag's transient after the
+  command reaches constant speed is measured like the step: overshoot beyond the steady lag,
+  settling into ±exact-stop window of it.
+
+The loop is a P controller on a drive with a velocity time constant T (DOMAIN.md §2): for
+kv·T < 1/4 it is aperiodic, above it overshoots, so overshoot grows with kv while the
+settling time first falls as about 1/kv. Axes only: a spindle's position control (M19, C
+axis) runs through orientation and gear logic whose timing is not the loop's.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from nc_sim.assist.experiments import ExperimentError, _refusal, _Run, _start
+from nc_sim.assist.result import Change, Figure, Result, Series
+from nc_sim.commands import Accepted, Move
+from nc_sim.kernel import layout as L
+from nc_sim.machine.config import MachineConfig, apply_overrides
+from nc_sim.measure import measure
+from nc_sim.params import Scope
+from nc_sim.units import MM_MIN_PER_MM_S, AxisKind
+
+NAME = "loop-gain"
+SWEEP_FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0)  # × the axis' kv when none are given
+MAX_KVS = 12  # a sweep longer than this is not read by anyone
+STEP_WINDOWS = 20.0  # default step: this many exact-stop windows (settling from 5 % of it)
+FEED_SHARE = 0.05  # default ramp feed: this share of the rapid speed (vb_eilgang)
+SETTLE_TAUS = 10.0  # recorded after the command ends: 1/kv of the lowest kv this many times
+RAMP_WINDOW_S = 0.5  # the steady lag is averaged over this at constant speed
+MOVE_LIMIT_S = 60.0  # a command still moving by then: the feed or the dynamics are wrong
+PLOT_POINTS = 400  # per response series (a sweep carries two per kv)
+
+
+@dataclass(frozen=True)
+class StepResponse:
+    """A G00 step, measured on the actual position."""
+
+    overshoot_pct: float  # past the target, % of the step
+    overshoot: float  # past the target, mm | °
+    settling_s: float | None  # end of command -> inside the window for good; None: never
+    t: np.ndarray
+    y: np.ndarray  # actual position from the start, mm | °
+
+
+@dataclass(frozen=True)
+class RampResponse:
+    """A G01 move at constant speed, measured on the lag."""
+
+    lag: float  # steady lag, mm | °
+    lag_overshoot_pct: float  # the lag beyond its steady value, % of it
+    lag_settling_s: float | None  # constant speed reached -> lag inside ±window for good
+    t: np.ndarray
+    y: np.ndarray  # lag, mm | °
+
+
+@dataclass(frozen=True)
+class KvResponse:
+    """What one kv gave."""
+
+    kv: float  # 1/s
+    step: StepResponse
+    ramp: RampResponse
+    error: str | None  # a job error during either run
+
+    def meets(self, overshoot_pct: float, settling_s: float) -> bool:
+        """Within the target: overshoot and settling of the step, no job error."""
+        return (
+            self.error is None
+            and self.step.overshoot_pct <= overshoot_pct
+            and self.step.settling_s is not None
+            and self.step.settling_s <= settling_s
+        )
+
+
+def _with_kv(cfg: MachineConfig, axis: str, gear: int, kv: float) -> _Run:
+    """A fresh machine from `cfg` with getriebe[gear-1].kv = kv (1/s)."""
+    c = copy.deepcopy(cfg)
+    apply_overrides(c, Scope.AXIS, axis, {f"getriebe[{gear - 1}].kv": round(kv * 100.0)})
+    return _start(c, axis)
+
+
+def _until_done(run: _Run, target: float, chunks: list[np.ndarray]) -> None:
+    """Record until the interpolator holds `target` (the command has ended)."""
+    s = run.slot
+    limit = round(MOVE_LIMIT_S / run.sim.kernel.cycle_s)
+    n = 0
+    while n < limit:
+        rec = run.sim.new_record(10)
+        run.sim.run(10, rec)
+        chunks.append(rec)
+        n += 10
+        st = run.m.k.st[s]
+        if st[L.S_V_CMD] == 0.0 and abs(st[L.S_P_CMD] - target) < 1e-9:
+            return
+        if run.m.axis(run.name).error_event is not None:
+            return
+    raise ExperimentError(f"the move did not end within {MOVE_LIMIT_S:g} s")
+
+
+def _record_s(run: _Run, seconds: float, chunks: list[np.ndarray]) -> None:
+    rec = run.sim.new_record(max(1, round(seconds / run.sim.kernel.cycle_s)))
+    run.sim.run(rec.shape[0], rec)
+    chunks.append(rec)
+
+
+def _error(run: _Run) -> str | None:
+    e = run.m.axis(run.name).error_event
+    return None if e is None else e.message
+
+
+def _step(run: _Run, distance: float, after_s: float, window: float) -> StepResponse:
+    """A G00 move of `distance`, then `after_s` more: overshoot and settling of the actual."""
+    s = run.slot
+    p0 = float(run.m.k.st[s, L.S_P_CMD])
+    target = p0 + distance
+    out = run.m.submit(Move(run.name, target, rapid=True))
+    if not isinstance(out, Accepted):
+        raise _refusal(out)
+    chunks: list[np.ndarray] = []
+    _until_done(run, target, chunks)
+    # the command ended within the last chunk: the cycle it reached the target
+    rec = np.concatenate(chunks)
+    moving = np.flatnonzero(
+        (rec[:, s, L.R_V_CMD] != 0.0) | (np.abs(rec[:, s, L.R_P_CMD] - target) > 1e-9)
+    )
+    dt = run.sim.kernel.cycle_s
+    t_end = (int(moving[-1]) + 1) * dt if moving.size else 0.0
+    _record_s(run, after_s, chunks)
+    rec = np.concatenate(chunks)
+    t = np.arange(rec.shape[0]) * dt
+    p = rec[:, s, L.R_P_ACT]
+    m = measure(t, p, band_abs=window, t_ref_s=t_end, final=target)
+    past = float(np.max((p - target) * math.copysign(1.0, distance)))
+    return StepResponse(m.overshoot_pct or 0.0, max(0.0, past), m.settling_time_s, t, p - p0)
+
+
+def _ramp(run: _Run, v: float, feed: float, after_s: float, window: float) -> RampResponse:
+    """A G01 move at `feed` (v in unit/s, signed): the steady lag and its transient."""
+    s = run.slot
+    p0 = float(run.m.k.st[s, L.S_P_CMD])
+    target = p0 + v * MOVE_LIMIT_S
+    out = run.m.submit(Move(run.name, target, rapid=False, feed_mm_min=feed))
+    if not isinstance(out, Accepted):
+        raise _refusal(out)
+    dt = run.sim.kernel.cycle_s
+    chunks: list[np.ndarray] = []
+    for _ in range(round(MOVE_LIMIT_S / dt / 10)):  # up to speed first
+        rec = run.sim.new_record(10)
+        run.sim.run(10, rec)
+        chunks.append(rec)
+        if abs(run.m.k.st[s, L.S_V_CMD] - v) <= 1e-9 * abs(v) or _error(run):
+            break
+    _record_s(run, after_s + RAMP_WINDOW_S, chunks)
+    rec = np.concatenate(chunks)
+    t = np.arange(rec.shape[0]) * dt
+    lag = rec[:, s, L.R_LAG]
+    steady = np.flatnonzero(np.abs(rec[:, s, L.R_V_CMD] - v) <= 1e-9 * abs(v))
+    if steady.size == 0:
+        raise ExperimentError("the ramp never reached constant speed: a lower feed")
+    t_const = float(t[steady[0]])
+    last = t >= t[-1] - RAMP_WINDOW_S
+    lag_steady = float(np.mean(lag[last]))
+    m = measure(t, lag, band_abs=window, t_ref_s=t_const, final=lag_steady)
+    return RampResponse(lag_steady, m.overshoot_pct or 0.0, m.settling_time_s, t, lag)
+
+
+def _thin(t: np.ndarray, y: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    step = max(1, math.ceil(len(t) / PLOT_POINTS))
+    return tuple(float(v) for v in t[::step]), tuple(float(v) for v in y[::step])
+
+
+def sweep(kv_now: float, kvs: Sequence[float] | None) -> list[float]:
+    """The kv values to try (1/s), ascending: `kvs`, or SWEEP_FACTORS × the axis' kv."""
+    chosen = list(kvs) if kvs else [round(kv_now * f, 2) for f in SWEEP_FACTORS]
+    if any(not math.isfinite(k) or k <= 0 for k in chosen):
+        raise ExperimentError("kv values must be > 0 (1/s)")
+    if len(chosen) > MAX_KVS:
+        raise ExperimentError(f"at most {MAX_KVS} kv values, not {len(chosen)}")
+    return sorted(set(chosen))
+
+
+def loop_gain(
+    cfg: MachineConfig,
+    axis: str,
+    kvs: Sequence[float] | None = None,
+    overshoot_pct: float = 5.0,
+    settle_ms: float = 200.0,
+    step: float | None = None,
+    feed_mm_min: float | None = None,
+    direction: int = 1,
+) -> Result:
+    """Step and ramp of `axis` at each kv of `kvs` (1/s; default a sweep around its kv): a
+    G00 `step` (mm | °, default 20 exact-stop windows) and a G01 ramp at `feed_mm_min`
+    (default 5 % of the rapid speed), in `direction`. Proposes the highest kv whose step
+    overshoots at most `overshoot_pct` % and settles into the exact-stop window within
+    `settle_ms` after the command ends."""
+    probe = _start(cfg, axis)
+    ax = probe.m.axis(axis)
+    if ax.kind is AxisKind.SPINDLE:
+        raise ExperimentError(f"{ax.name} is a spindle: the loop gain assistant tunes axes")
+    if direction not in (1, -1):
+        raise ExperimentError("direction must be 1 or -1")
+    if overshoot_pct < 0 or settle_ms <= 0:
+        raise ExperimentError("targets: overshoot_pct ≥ 0 %, settle_ms > 0 ms")
+    g, unit = ax.gear, ax.pos_unit
+    kv_raw = int(ax.cfg.raw("getriebe.kv", g))
+    kv_now = kv_raw / 100.0
+    window = ax.cfg.eng("kenngr.exact_stop_window")
+    distance = (step if step else STEP_WINDOWS * window) * direction
+    if distance == 0:
+        raise ExperimentError("the step needs a distance: exact_stop_window is 0, give step")
+    feed = feed_mm_min or float(f"{FEED_SHARE * ax.cfg.eng('getriebe.vb_eilgang', g) * 60:.2g}")
+    if feed <= 0:
+        raise ExperimentError("the ramp needs a feed: feed_mm_min > 0")
+    v = feed / MM_MIN_PER_MM_S * direction
+    ff = ax.cfg.eng("lr_param.ff_weight")
+    kv_list = sweep(kv_now, kvs)
+    after_s = SETTLE_TAUS / kv_list[0]  # the same length for every kv: one time axis
+    responses: list[KvResponse] = []
+    for kv in kv_list:
+        step_run = _with_kv(cfg, ax.name, g, kv)
+        st = _step(step_run, distance, after_s, window)
+        ramp_run = _with_kv(cfg, ax.name, g, kv)
+        rp = _ramp(ramp_run, v, feed, after_s, window)
+        responses.append(KvResponse(kv, st, rp, _error(step_run) or _error(ramp_run)))
+    target = Target(overshoot_pct, settle_ms / 1000.0)
+    setup = Setup(ax.name, g, unit, kv_raw, distance, feed, v, ff, window)
+    return _answer(setup, target, responses)
+
+
+@dataclass(frozen=True)
+class Target:
+    """What the step must meet."""
+
+    overshoot_pct: float
+    settling_s: float
+
+
+@dataclass(frozen=True)
+class Setup:
+    """The sweep's fixed inputs, as the answer reports them."""
+
+    axis: str
+    gear: int
+    unit: str  # mm | °
+    kv_raw: int  # getriebe[g].kv now, 0.01/s
+    step: float  # signed, mm | °
+    feed: float  # unit/min
+    v: float  # signed, unit/s
+    ff: float  # feedforward weight, 0..1
+    window: float  # exact-stop window, mm | °
+
+
+def _figures(su: Setup, r: KvResponse) -> list[Figure]:
+    """One kv's figures, named `quantity@kv` (kv in 1/s)."""
+    u, at = su.unit, f"@{r.kv:g}"
+    expected = abs(su.v) * (1.0 - su.ff) / r.kv
+    out = [
+        Figure("overshoot_pct" + at, r.step.overshoot_pct, "%", "step: past the target"),
+        Figure("overshoot" + at, r.step.overshoot, u, "step: past the target"),
+    ]
+    if r.step.settling_s is not None:
+        out.append(
+            Figure("settling_ms" + at, r.step.settling_s * 1000, "ms", "step: into the window")
+        )
+    out += [
+        Figure("lag" + at, abs(r.ramp.lag), u, "ramp: steady lag"),
+        Figure("lag_expected" + at, expected, u, "ramp: v/kv (·(1 − ff))"),
+        Figure("lag_overshoot_pct" + at, r.ramp.lag_overshoot_pct, "%", "ramp: lag past steady"),
+    ]
+    if r.ramp.lag_settling_s is not None:
+        out.append(
+            Figure("lag_settling_ms" + at, r.ramp.lag_settling_s * 1000, "ms", "ramp: lag settled")
+        )
+    return out
+
+
+def _answer(su: Setup, target: Target, responses: list[KvResponse]) -> Result:
+    gi = su.gear - 1
+    meeting = [r for r in responses if r.meets(target.overshoot_pct, target.settling_s)]
+    chosen = meeting[-1] if meeting else None
+    figures = [
+        Figure("kv", su.kv_raw / 100.0, "1/s", f"getriebe[{gi}].kv (P-AXIS-00099) now"),
+        Figure("step", abs(su.step), su.unit, "G00 step"),
+        Figure("feed", su.feed, f"{su.unit}/min", "G01 ramp"),
+        Figure("window", su.window, su.unit, "exact-stop window (settling band)"),
+        Figure("overshoot_max_pct", target.overshoot_pct, "%", "target: step overshoot"),
+        Figure("settle_max_ms", target.settling_s * 1000, "ms", "target: step settling"),
+    ]
+    if chosen is not None:
+        figures.append(Figure("kv_new", chosen.kv, "1/s", "the highest kv meeting the target"))
+    series: list[Series] = []
+    for r in responses:
+        figures += _figures(su, r)
+        series.append(Series(f"step@{r.kv:g}", *_thin(r.step.t, r.step.y), "s", su.unit))
+    for r in responses:
+        series.append(Series(f"ramp_lag@{r.kv:g}", *_thin(r.ramp.t, r.ramp.y), "s", su.unit))
+    kvs = tuple(r.kv for r in responses)
+    settled = [r for r in responses if r.step.settling_s is not None]
+    series += [
+        Series("overshoot_vs_kv", kvs, tuple(r.step.overshoot_pct for r in responses), "1/s", "%"),
+        Series(
+            "settling_vs_kv",
+            tuple(r.kv for r in settled),
+            tuple(r.step.settling_s * 1000 for r in settled if r.step.settling_s is not None),
+            "1/s",
+            "ms",
+        ),
+        Series("lag_vs_kv", kvs, tuple(abs(r.ramp.lag) for r in responses), "1/s", su.unit),
+    ]
+    notes = [
+        f"kv = {r.kv:g}/s: the run ended in a job error: {r.error}" for r in responses if r.error
+    ]
+    aim = f"overshoot ≤ {target.overshoot_pct:g} %, settling ≤ {target.settling_s * 1000:g} ms"
+    changes: list[Change] = []
+    if chosen is None:
+        slow = all(
+            r.step.settling_s is None or r.step.settling_s > target.settling_s for r in responses
+        )
+        why = (
+            "none settles in time: a longer settling target"
+            if slow
+            else "a lower overshoot target is not met"
+        )
+        notes.append(f"no kv in the sweep meets the target ({aim}): {why}, or another sweep")
+    else:
+        kv_new_raw = round(chosen.kv * 100.0)
+        if kv_new_raw != su.kv_raw:
+            changes.append(
+                Change(
+                    su.axis,
+                    f"getriebe[{gi}].kv",
+                    su.kv_raw,
+                    kv_new_raw,
+                    f"the highest kv with {aim}",
+                )
+            )
+        else:
+            notes.append(f"kv = {chosen.kv:g}/s now is already the highest meeting the target")
+        if chosen is responses[-1]:
+            notes.append(
+                "the highest kv of the sweep meets the target: the limit lies above it; "
+                "sweep higher to find it"
+            )
+    if su.ff > 0:
+        notes.append(
+            f"feedforward ff_weight = {su.ff:g}: the ramp's lag is v/kv·(1 − ff), less than v/kv"
+        )
+    notes.append(
+        "measured on a copy: the simulated drive (its time constant and limits) sets the limit; "
+        "a real machine's mechanics (resonances) may set a lower one: raise kv in steps there"
+    )
+    return Result(
+        NAME,
+        tuple(figures),
+        tuple(changes),
+        tuple(series),
+        tuple(notes),
+        chosen is not None,
+        {
+            "axis": su.axis,
+            "kvs": ",".join(f"{r.kv:g}" for r in responses),
+            "overshoot_pct": target.overshoot_pct,
+            "settle_ms": target.settling_s * 1000,
+            "step": abs(su.step),
+            "feed_mm_min": su.feed,
+            "direction": 1 if su.step > 0 else -1,
+        },
+    )
