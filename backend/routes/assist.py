@@ -1,10 +1,11 @@
-"""Commissioning assistants on a copy of a machine: multi_gain by experiment, sign check."""
+"""Commissioning assistants on a copy of a machine: multi_gain by experiment, sign check,
+position loop gain."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter
 
-from api.assist import AssistResult, MultiGainRequest, SignCheckRequest
+from api.assist import AssistResult, LoopGainRequest, MultiGainRequest, SignCheckRequest
 from api.auth import Action
 from backend.deps import MachineDep, ServicesDep, permit
 from backend.errors import responses
@@ -43,3 +44,17 @@ async def sign_check(
     variable (vz_stellgr) or of the actual value (vz_istw) is found before lag monitoring
     trips, from the way the machine moved (`observed`, else the simulated plant's)."""
     return await services.assistants.run(machine.cfg, "sign-check", body)
+
+
+@router.post(
+    "/loop-gain",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_WHY),
+)
+async def loop_gain(
+    body: LoopGainRequest, machine: MachineDep, services: ServicesDep
+) -> AssistResult:
+    """004 §3.6 on copies of the machine, one per kv: a G00 step (overshoot, settling into the
+    exact-stop window) and a G01 ramp (steady lag v/kv); the highest kv meeting the target
+    is proposed as getriebe[g].kv. The live machine does not move."""
+    return await services.assistants.run(machine.cfg, "loop-gain", body)

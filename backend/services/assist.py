@@ -26,11 +26,13 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     """In the assistants' process: run one experiment; its answer or {"error": why}. The
     kernel is imported here, in that process: the gateway itself never loads it."""
     from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+    from nc_sim.assist.loop_gain import loop_gain
     from nc_sim.assist.result import Result
 
     experiments: dict[str, Callable[..., Result]] = {
         "multi-gain": multi_gain_experiment,
         "sign-check": sign_check,
+        "loop-gain": loop_gain,
     }
     try:
         return experiments[name](cfg, **args).as_json()

@@ -79,6 +79,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     # on a copy of the machine: changes nothing, but runs a process for seconds
     ("POST", "/api/machines/{mid}/assist/multi-gain"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/sign-check"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/loop-gain"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
     ("GET", "/api/audit"): ("admin", FREE),
