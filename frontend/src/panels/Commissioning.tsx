@@ -13,10 +13,12 @@ import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { AssistResultView, settled } from "./AssistResultView";
+import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
 
 const ASSISTANTS: { name: AssistantName; label: string; section: string }[] = [
   { name: "multi-gain", label: "multi_gain by experiment", section: "004 §3.6.2" },
   { name: "sign-check", label: "Direction and sign check", section: "004 §3.5" },
+  { name: "loop-gain", label: "Position loop gain (kv sweep)", section: "004 §3.6" },
 ];
 
 /** The limits of api/assist.py, checked as the engineer types (the service checks again). */
@@ -72,7 +74,11 @@ export function Commissioning() {
   const values = checked(inp, unit);
   const used =
     name === "multi-gain" ? [spindle ? values.speed : values.feed, values.window] : [values.distance, values.signFeed];
-  const errors = used.filter((v): v is string => typeof v === "string");
+  // loop gain (LoopGainSetup.tsx): its own inputs, checked as typed
+  const [lg, setLg] = useState(LOOP_GAIN_START);
+  const lgValues = checkLoopGain(lg);
+  const axNow = useAxisNow(ax);
+  const errors = name === "loop-gain" ? loopGainErrors(lgValues) : used.filter((v): v is string => typeof v === "string");
   const mayAssist = may("assist");
   const busy = busySince !== null;
   const blocked = configureBlocked.value;
@@ -103,7 +109,9 @@ export function Commissioning() {
     setRefusal(null);
     try {
       const r =
-        name === "multi-gain"
+        name === "loop-gain"
+          ? await runAssistant("loop-gain", loopGainRequest(ax.name, lgValues))
+          : name === "multi-gain"
           ? await runAssistant("multi-gain", {
               axis: ax.name,
               feed_mm_min: spindle ? null : (values.feed as number),
@@ -210,6 +218,8 @@ export function Commissioning() {
                 </select>
               </label>
             </>
+          ) : name === "loop-gain" ? (
+            <LoopGainFields inp={lg} set={setLg} values={lgValues} busy={busy} />
           ) : (
             <>
               {field("distance", "Distance", unit, "assist-distance")}
@@ -225,7 +235,7 @@ export function Commissioning() {
               </label>
             </>
           )}
-          {ax ? <p class="assist-what" data-testid="assist-what">{describe(name, ax, inp, values, kv)}</p> : null}
+          {ax ? <p class="assist-what" data-testid="assist-what">{name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name, ax, inp, values, kv)}</p> : null}
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
               title={mayAssist ? "" : `a user in the role ${me.value?.role ?? ""} may not run assistants`} onClick={() => void run()}>
@@ -252,7 +262,7 @@ export function Commissioning() {
                 {applied ? (
                   <span class="hint" data-testid="assist-applied">
                     Applied: Keep or Revert in the trial bar above.
-                    {name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the machine's next restart (the copy too): run again after it to check."}
+                    {name === "loop-gain" ? " Run again to see the sweep around the new kv." : name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the machine's next restart (the copy too): run again after it to check."}
                   </span>
                 ) : blocked ? (
                   <span class="hint" data-testid="assist-apply-blocked">

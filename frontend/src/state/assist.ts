@@ -1,16 +1,25 @@
 // The commissioning assistants (api/assist.py): run one on a copy of the machine, and apply
 // its proposal through the parameter write the editor uses, on trial (Keep / Revert).
 import { http } from "../api/http";
-import type { AssistChange, AssistResult, MultiGainRequest, ParameterWriteResult, Scope, SignCheckRequest } from "../api/types";
+import type {
+  AssistChange,
+  AssistResult,
+  LoopGainRequest,
+  MultiGainRequest,
+  ParameterWriteResult,
+  Scope,
+  SignCheckRequest,
+} from "../api/types";
 import { type Change, loadList, trial, trialMessage, writeChanges } from "./params";
 import { machineId, machineUrl } from "./session";
 
-export type AssistantName = "multi-gain" | "sign-check";
+export type AssistantName = "multi-gain" | "sign-check" | "loop-gain";
 
 /** Run an assistant; rejects with the service's refusal (ApiError: 422 says which input). */
 export function runAssistant(name: "multi-gain", body: MultiGainRequest): Promise<AssistResult>;
 export function runAssistant(name: "sign-check", body: SignCheckRequest): Promise<AssistResult>;
-export function runAssistant(name: AssistantName, body: MultiGainRequest | SignCheckRequest): Promise<AssistResult> {
+export function runAssistant(name: "loop-gain", body: LoopGainRequest): Promise<AssistResult>;
+export function runAssistant(name: AssistantName, body: MultiGainRequest | SignCheckRequest | LoopGainRequest): Promise<AssistResult> {
   return http.post<AssistResult>(machineUrl(`/assist/${name}`), body);
 }
 
