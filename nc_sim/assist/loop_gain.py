@@ -46,6 +46,7 @@ FEED_SHARE = 0.05  # default ramp feed: this share of the rapid speed (vb_eilgan
 SETTLE_TAUS = 10.0  # recorded after the command ends: 1/kv of the lowest kv this many times
 RAMP_WINDOW_S = 0.5  # the steady lag is averaged over this at constant speed
 MOVE_LIMIT_S = 60.0  # a command still moving by then: the feed or the dynamics are wrong
+RAMP_MARGIN_S = 2.0  # the ramp's travel: up to speed and braking within this much more
 PLOT_POINTS = 400  # per response series (a sweep carries two per kv)
 
 
@@ -156,13 +157,14 @@ def _ramp(run: _Run, v: float, feed: float, after_s: float, window: float) -> Ra
     """A G01 move at `feed` (v in unit/s, signed): the steady lag and its transient."""
     s = run.slot
     p0 = float(run.m.k.st[s, L.S_P_CMD])
-    target = p0 + v * MOVE_LIMIT_S
+    # as far as the recording needs, and no further (the soft limits stay out of it)
+    target = p0 + v * (after_s + RAMP_WINDOW_S + RAMP_MARGIN_S)
     out = run.m.submit(Move(run.name, target, rapid=False, feed_mm_min=feed))
     if not isinstance(out, Accepted):
         raise _refusal(out)
     dt = run.sim.kernel.cycle_s
     chunks: list[np.ndarray] = []
-    for _ in range(round(MOVE_LIMIT_S / dt / 10)):  # up to speed first
+    for _ in range(round(RAMP_MARGIN_S / dt / 10)):  # up to speed first
         rec = run.sim.new_record(10)
         run.sim.run(10, rec)
         chunks.append(rec)
@@ -177,6 +179,8 @@ def _ramp(run: _Run, v: float, feed: float, after_s: float, window: float) -> Ra
         raise ExperimentError("the ramp never reached constant speed: a lower feed")
     t_const = float(t[steady[0]])
     last = t >= t[-1] - RAMP_WINDOW_S
+    if np.any(np.abs(rec[last, s, L.R_V_CMD] - v) > 1e-9 * abs(v)):
+        raise ExperimentError("the ramp did not hold constant speed to the end: a lower feed")
     lag_steady = float(np.mean(lag[last]))
     m = measure(t, lag, band_abs=window, t_ref_s=t_const, final=lag_steady)
     return RampResponse(lag_steady, m.overshoot_pct or 0.0, m.settling_time_s, t, lag)

@@ -12,6 +12,7 @@ const STEP_WINDOWS = 20;
 const FEED_SHARE = 0.05;
 const SETTLE_TAUS = 10;
 const RAMP_WINDOW_S = 0.5;
+const RAMP_MARGIN_S = 2;
 
 export interface LoopGainInputs {
   kvs: string; // "10, 20, 40" in 1/s; "": the default sweep
@@ -94,9 +95,9 @@ export function describeLoopGain(ax: AxisStatus, v: ReturnType<typeof checkLoopG
   let plan = "";
   if (kvs && feed !== null) {
     const settle = SETTLE_TAUS / kvs[0];
-    const rampS = settle + RAMP_WINDOW_S + 0.1;
+    const travel = (feed / 60) * (settle + RAMP_WINDOW_S + RAMP_MARGIN_S);
     const total = kvs.length * (2 * settle + RAMP_WINDOW_S + 0.2);
-    plan = ` Each ramp runs about ${n3(rampS)} s (+${n3((feed / 60) * rampS)} ${unit}); all runs together about ${n3(total)} s of simulated time.`;
+    plan = ` Each ramp commands +${n3(travel)} ${unit} and is recorded for about ${n3(settle + RAMP_WINDOW_S + 0.1)} s; all runs together take about ${n3(total)} s of simulated time.`;
   }
   return (
     `For each of ${which}, on a fresh copy of the machine in simulated time (the live machine does not move): ` +
