@@ -55,6 +55,23 @@ class LoopGainRequest(BaseModel):
     direction: Literal[1, -1] = 1
 
 
+class LiveCancel(BaseModel):
+    """End the live run now (its motion brakes as at a CNC reset; a spindle stops with M5)."""
+
+    why: str = Field("cancelled by the engineer", max_length=200)
+
+
+class AssistProgress(BaseModel):
+    """A live assistant run as everyone watching the machine sees it (simulated seconds)."""
+
+    name: str
+    axis: str
+    phase: str = Field(description="what the machine does now")
+    elapsed_s: float
+    planned_s: float = Field(description="the run's expected length as known now")
+    by: str = Field(description="who started it")
+
+
 class AssistFigure(BaseModel):
     name: str
     value: float

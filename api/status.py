@@ -6,6 +6,7 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
+from api.assist import AssistProgress
 from api.common import JobErrorModel
 from api.control import ControlState
 
@@ -195,6 +196,9 @@ class MachineStatus(BaseModel):
     job_errors: list[JobErrorModel] = Field(description="active job errors, one per axis")
     recent_events: list[JobErrorModel] = Field(description="the newest 50 events and errors")
     control: ControlState = Field(description="who holds the machine, who asks for it")
+    assist: AssistProgress | None = Field(
+        None, description="a commissioning assistant running live on the machine"
+    )
 
 
 class MachineSummary(BaseModel):

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
 from nc_sim.assist.curve_fit import curve_fit
-from nc_sim.assist.experiments import multi_gain_experiment, sign_check
+from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
 from nc_sim.assist.loop_gain import loop_gain
 from nc_sim.assist.result import Result
 from nc_sim.assist.run_up import curve_run_up
@@ -234,7 +234,7 @@ def _setup_sign_check(p: argparse.ArgumentParser) -> None:
 
 
 def _run_sign_check(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
-    return sign_check(machine(), args.axis, args.distance, args.feed, args.observed)
+    return sign_check_experiment(machine(), args.axis, args.distance, args.feed, args.observed)
 
 
 def _kvs(text: str) -> list[float]:

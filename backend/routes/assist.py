@@ -5,10 +5,11 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from api.assist import AssistResult, LoopGainRequest, MultiGainRequest, SignCheckRequest
+from api.assist import AssistResult, LiveCancel, LoopGainRequest, MultiGainRequest, SignCheckRequest
 from api.auth import Action
-from backend.deps import MachineDep, ServicesDep, permit
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import responses
+from backend.services.assist import cancel_live, run_live
 
 router = APIRouter(prefix="/api/machines/{mid}/assist", tags=["assistants"])
 _WHY = {
@@ -58,3 +59,51 @@ async def loop_gain(
     exact-stop window) and a G01 ramp (steady lag v/kv); the highest kv meeting the target
     is proposed as getriebe[g].kv. The live machine does not move."""
     return await services.assistants.run(machine.cfg, "loop-gain", body)
+
+
+_LIVE_WHY = {
+    409: "another assistant runs, the run was cancelled (E-stop, cancel) or the machine rebuilt",
+    422: "the NC refused the run's motion (not ready, limits, busy) or bad inputs",
+    503: "the machine has no worker now, or the run did not end in time (then it is cancelled)",
+}
+
+
+@router.post(
+    "/live/multi-gain",
+    dependencies=[permit(Action.COMMAND)],
+    responses=responses(403, 404, 409, 422, 503, why=_LIVE_WHY),
+)
+async def multi_gain_live(
+    body: MultiGainRequest, machine: MachineDep, actor: ActorDep, services: ServicesDep
+) -> AssistResult:
+    """004 §3.6.2 on the machine itself, as paced (real time, fast or stepped): the axis
+    moves (the spindle turns) for the run's planned time, which the machine's status shows
+    as `assist` with its phase while it runs. Needs control of the machine."""
+    return await run_live(machine, "multi-gain", body, actor, services.audit)
+
+
+@router.post(
+    "/live/sign-check",
+    dependencies=[permit(Action.COMMAND)],
+    responses=responses(403, 404, 409, 422, 503, why=_LIVE_WHY),
+)
+async def sign_check_live(
+    body: SignCheckRequest, machine: MachineDep, actor: ActorDep, services: ServicesDep
+) -> AssistResult:
+    """004 §3.5 on the machine itself: the short move, watched cycle by cycle; a runaway
+    switches the servo off (TorquePermission 0) in the cycle it is seen. Needs control."""
+    return await run_live(machine, "sign-check", body, actor, services.audit)
+
+
+@router.post(
+    "/live/cancel",
+    status_code=204,
+    dependencies=[permit(Action.STOP)],
+    responses=responses(403, 404, 409, why={409: "no assistant runs on the machine"}),
+)
+async def cancel(
+    body: LiveCancel, machine: MachineDep, actor: ActorDep, services: ServicesDep
+) -> None:
+    """End the machine's live run now: an axis brakes as at a CNC reset, a spindle stops
+    (M5). Like the emergency stop, any operator may, holding control or not."""
+    await cancel_live(machine, body.why, actor, services.audit)

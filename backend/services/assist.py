@@ -11,12 +11,17 @@ import copy
 import multiprocessing
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 from typing import Any
 
 from pydantic import BaseModel
 
 from api.assist import AssistResult
 from backend.errors import ApiError
+from backend.services.audit import Audit, Entry
+from backend.services.auth import Actor
+from backend.services.machines import MachineProxy
+from backend.workers.protocol import AssistCancel, AssistStart
 from nc_sim.machine.config import MachineConfig
 
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
@@ -25,13 +30,14 @@ RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     """In the assistants' process: run one experiment; its answer or {"error": why}. The
     kernel is imported here, in that process: the gateway itself never loads it."""
-    from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+    from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
     from nc_sim.assist.loop_gain import loop_gain
+    from nc_sim.assist.procedure import ExperimentError
     from nc_sim.assist.result import Result
 
     experiments: dict[str, Callable[..., Result]] = {
         "multi-gain": multi_gain_experiment,
-        "sign-check": sign_check,
+        "sign-check": sign_check_experiment,
         "loop-gain": loop_gain,
     }
     try:
@@ -70,3 +76,37 @@ class Assistants:
     def stop(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(wait=False, cancel_futures=True)
+
+
+LIVE_TIMEOUT_S = 600.0  # a paused machine holds a live run: after this it is cancelled
+
+
+async def run_live(
+    machine: MachineProxy, name: str, req: BaseModel, actor: Actor, audit: Audit
+) -> AssistResult:
+    """Run assistant `name` live on the machine itself, paced by its worker (real time, fast
+    or stepped alike); answered when it ends. Audited as the commands it gives."""
+    args = req.model_dump()
+    detail = {"assistant": name, **args}
+    entry = Entry(actor.name, actor.session, "command", f"assist live {name}", machine.id, detail)
+    start = AssistStart(machine.id, name, args, actor.name)
+    with audit.refusals(entry):
+        try:
+            answer = await machine.acall(start, LIVE_TIMEOUT_S)
+        except ApiError as e:
+            if e.status == 503:  # no answer in time: the run must not go on unattended
+                machine.post(AssistCancel(machine.id, "the run did not end in time"))
+            raise
+    assert isinstance(answer, dict)
+    result = AssistResult.model_validate(answer)
+    figures = {f.name: round(f.value, 6) for f in result.figures}
+    audit.record(replace(entry, detail={**detail, "figures": figures}))
+    return result
+
+
+async def cancel_live(machine: MachineProxy, why: str, actor: Actor, audit: Audit) -> None:
+    """End the machine's live run now (409 when none runs)."""
+    entry = Entry(actor.name, actor.session, "command", "assist live cancel", machine.id)
+    with audit.refusals(entry):
+        await machine.acall(AssistCancel(machine.id, f"{why} ({actor.name})"))
+    audit.record(entry)

@@ -24,7 +24,7 @@ from api.machines import MachineCreate
 from backend.errors import ApiError, not_found
 from backend.services.control import MachineControl
 from backend.services.store import Store, StoredMachine
-from backend.workers.client import WorkerClient, WorkerGone, WorkerRefused
+from backend.workers.client import CALL_TIMEOUT_S, WorkerClient, WorkerGone, WorkerRefused
 from backend.workers.pool import WorkerPool
 from backend.workers.protocol import (
     AddMachine,
@@ -161,10 +161,10 @@ class MachineProxy:
         except (WorkerGone, WorkerRefused) as e:
             raise self._answer(e) from None
 
-    async def acall(self, request: Request) -> object:
+    async def acall(self, request: Request, timeout_s: float = CALL_TIMEOUT_S) -> object:
         """`call` from the event loop (no thread waits for the worker)."""
         try:
-            return await self._worker().acall(request)
+            return await self._worker().acall(request, timeout_s)
         except (WorkerGone, WorkerRefused) as e:
             raise self._answer(e) from None
 

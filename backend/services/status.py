@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Literal, cast
 
+from api.assist import AssistProgress
 from api.status import (
     AxisSignals,
     AxisStatus,
@@ -186,6 +187,7 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
         if recent_events
         else [],
         control=m.control.state(),
+        assist=AssistProgress(**vars(read.assist)) if read.assist is not None else None,
     )
 
 

@@ -15,8 +15,18 @@ from pathlib import Path
 
 import numpy as np
 
-from backend.workers.protocol import MachineInfo, Mode, Pacing, ParamSnapshot, StatusRead
+from backend.workers.protocol import (
+    AssistRunning,
+    AssistStart,
+    MachineInfo,
+    Mode,
+    Pacing,
+    ParamSnapshot,
+    StatusRead,
+)
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
+from nc_sim.assist.experiments import PROCEDURES
+from nc_sim.assist.procedure import LiveRun
 from nc_sim.commands import JogStop
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
@@ -64,6 +74,8 @@ class MachineHost:
         self.watched = False
         self.status_due = 0.0  # monotonic time of the next status push while watched
         self.pushed_events = self.machine.events.cursor  # events up to here went out
+        self.live: LiveRun | None = None  # a live assistant run, until it is answered
+        self.live_of: AssistStart | None = None
 
     def info(self) -> MachineInfo:
         path = self.ring.path
@@ -99,8 +111,13 @@ class MachineHost:
             part = min(n, self.ring.cycles - start, MAX_WRITE)
             if self.jog_leases:
                 part = min(part, max(1, min(self.jog_leases.values()) - self.sim.cycle))
+            live = self.live if self.live is not None and not self.live.done else None
+            if live is not None:  # it sees each cycle it asked for before the next one runs
+                part = min(part, live.want())
             self.sim.run(part, rows[start : start + part])
             self.ring.publish(self.sim.cycle)
+            if live is not None:
+                live.feed(rows[start : start + part])
             if self.scope.active:
                 self.scope.feed(rows[start : start + part], start_cycle, self.machine.events)
                 if self.scope.completed:
@@ -116,6 +133,29 @@ class MachineHost:
             params[("axis", a.name)] = dict(a.values)
         self.captures += [(rec, params) for rec in self.scope.completed]
         self.scope.completed.clear()
+
+    def start_assist(self, r: AssistStart) -> LiveRun:
+        """Start a live assistant run (one at a time); ValueError for an unknown name. A run
+        refused at once (its motion refused) comes back done, with its error."""
+        start = PROCEDURES.get(r.name)
+        if start is None:
+            raise ValueError(f"no live assistant '{r.name}' ({', '.join(PROCEDURES)})")
+        self.live = LiveRun(self.machine, lambda m: start(m, **r.args), self.cycle_s)
+        self.live_of = r
+        return self.live
+
+    def end_assist(self) -> None:
+        """The run's answer went out: the machine is free for the next."""
+        self.live = self.live_of = None
+
+    def assist_running(self) -> AssistRunning | None:
+        live, of = self.live, self.live_of
+        if live is None or of is None or live.done:
+            return None
+        phase, elapsed_s, planned_s = live.progress()
+        return AssistRunning(
+            of.name, str(of.args.get("axis", "")), phase, elapsed_s, planned_s, of.by
+        )
 
     def history(self, cycles: int) -> np.ndarray:
         """Kernel records of the newest `cycles` cycles the ring holds, oldest first."""
@@ -210,7 +250,7 @@ class MachineHost:
 
     def status_read(self) -> StatusRead:
         """The machine's snapshot and pacing now."""
-        return StatusRead(self.machine.snapshot(), self.pacing_now())
+        return StatusRead(self.machine.snapshot(), self.pacing_now(), self.assist_running())
 
     def close(self) -> None:
         """Remove the machine's ring file (the gateway unmaps its side)."""

@@ -114,6 +114,25 @@ class ScopeRoll:
     max_points: int
 
 
+@dataclass(frozen=True)
+class AssistStart:
+    """Run assistant `name` live on the machine (nc_sim/assist/experiments.PROCEDURES) with
+    `args`; answered when it ends: its result as JSON values, or a Failure."""
+
+    mid: str
+    name: str
+    args: dict[str, object]
+    by: str  # who started it, shown to everyone watching the machine
+
+
+@dataclass(frozen=True)
+class AssistCancel:
+    """End the machine's live assistant run now; its motion is stopped."""
+
+    mid: str
+    why: str
+
+
 Request = (
     AddMachine
     | RemoveMachine
@@ -126,6 +145,8 @@ Request = (
     | ScopeArm
     | ScopeAct
     | ScopeRoll
+    | AssistStart
+    | AssistCancel
 )
 
 
@@ -170,11 +191,24 @@ class Submitted:
 
 
 @dataclass(frozen=True)
+class AssistRunning:
+    """A live assistant run in progress: which, the phase, simulated seconds."""
+
+    name: str
+    axis: str
+    phase: str
+    elapsed_s: float
+    planned_s: float
+    by: str  # who started it (the gateway's actor name)
+
+
+@dataclass(frozen=True)
 class StatusRead:
-    """A machine's snapshot and pacing, read in the same cycle."""
+    """A machine's snapshot and pacing, read in the same cycle, and its live assistant run."""
 
     snapshot: MachineSnapshot
     pacing: Pacing
+    assist: AssistRunning | None = None
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,8 @@ from backend.workers.host import MachineHost
 from backend.workers.protocol import (
     AddMachine,
     ApplyValues,
+    AssistCancel,
+    AssistStart,
     Envelope,
     Failure,
     LoopFigures,
@@ -108,6 +110,7 @@ class Worker:
         self.node = node
         self.hosts: dict[str, MachineHost] = {}
         self.steps: list[tuple[int, str]] = []  # (request, machine) answered when its step ends
+        self.assists: list[tuple[int, MachineHost]] = []  # live runs, answered when they end
         self.backlog: deque[Envelope] = deque()  # taken from the channel, not yet carried out
         self.stopped = False
         self.news_due = False  # pacing changed: report at the end of this tick
@@ -141,6 +144,7 @@ class Worker:
                         self.serve()
                 self._push_news(host, wake)
             self._finish_steps()
+            self._finish_assists()
             self.channel.flush()  # the tick's pushes in one write
             done = time.monotonic()
             self._account(deadline, wake, done, deadline + period)
@@ -214,6 +218,23 @@ class Worker:
             else:
                 waiting.append((req, mid))
         self.steps = waiting
+
+    def _finish_assists(self) -> None:
+        waiting = []
+        for req, host in self.assists:
+            run = host.live
+            if self.hosts.get(host.id) is not host or run is None:
+                why = f"machine '{host.id}' was rebuilt or removed during the run"
+                self.channel.send(Reply(req, Failure("conflict", why)))
+            elif run.done:
+                value: object = run.result.as_json() if run.result is not None else None
+                if run.error is not None:
+                    value = Failure("invalid" if run.fed_cycles == 0 else "conflict", run.error)
+                self.channel.send(Reply(req, value))
+                host.end_assist()
+            else:
+                waiting.append((req, host))
+        self.assists = waiting
 
     def news(self) -> WorkerNews:
         now, cpu = time.monotonic(), time.process_time()
@@ -329,6 +350,22 @@ class Worker:
                 return _scope_state(host)
             case ScopeRoll():
                 return _roll(self._host(r.mid), r.max_points)
+            case AssistStart():
+                host = self._host(r.mid)
+                if host.live_of is not None:
+                    return Failure("conflict", f"{host.live_of.name} runs: one run at a time")
+                run = host.start_assist(r)
+                if run.error is not None:  # refused before a cycle: nothing moved
+                    host.end_assist()
+                    return Failure("invalid", run.error)
+                self.assists.append((req, host))
+                return _DEFERRED
+            case AssistCancel():
+                host = self._host(r.mid)
+                if host.live is None or host.live.done:
+                    return Failure("conflict", "no assistant runs on this machine")
+                host.live.cancel(r.why)
+                return None
         raise NcUsageError(f"unknown request {r!r}")
 
     def _submit(self, host: MachineHost, r: Submit, sent_mono: float) -> Submitted:
@@ -341,6 +378,8 @@ class Worker:
                 host.hold_jog(r.cmd.axis, None if r.jog_release else r.jog_hold_s)
             if isinstance(r.cmd, EmergencyStop):
                 host.pacing.step_to = None  # stop means stop: a long single step ends here too
+                if host.live is not None:
+                    host.live.cancel("emergency stop: the assistant's run ended")
             if r.then_apply:
                 _apply(host, r.then_apply)
         state = {ax.name: ax.state.name for ax in host.machine.axes}

@@ -79,7 +79,7 @@ function Hmi() {
       <div class="head" ref={head}>
         <TopBar />
         <ControlStrip />
-        <Banner />
+        <Banner liveRun={tab !== "Commissioning"} />
         <TrialBar />
       </div>
       <div class="body">

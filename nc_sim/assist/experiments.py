@@ -17,17 +17,18 @@ a preview on a copy) and answers with a `Result`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
 
 import numpy as np
 
+from nc_sim.assist.procedure import ExperimentError, Procedure, Wait, on_copy
 from nc_sim.assist.result import Change, Figure, Result, Series
-from nc_sim.commands import Accepted, HliWrite, Move, Refused, SpindleRun
+from nc_sim.axis.state import Axis
+from nc_sim.commands import Accepted, HliWrite, Move, Refused, Reset, SpindleRun
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
-from nc_sim.scenario import power_on
-from nc_sim.sim import Simulation
+from nc_sim.snapshot import AxisState
 from nc_sim.units import MM_MIN_PER_MM_S, RPM_TO_DEG_S, AxisKind
 
 MAX_PLOT_POINTS = 2000
@@ -35,36 +36,19 @@ MIN_WINDOW_S = 0.2  # the averaging window at constant speed must be at least th
 SPINDLE_UP_S = 60.0  # a spindle not at speed by then has a fault of its own
 
 
-class ExperimentError(ValueError):
-    """The experiment cannot run as asked (unknown axis, no speed, not powered)."""
-
-
-@dataclass
-class _Run:
-    sim: Simulation
-    m: Machine
-    name: str
-
-    @property
-    def slot(self) -> int:
-        return self.m.axis(self.name).slot
-
-
-def _start(cfg: MachineConfig, name: str) -> _Run:
-    sim = Simulation(cfg.cycle_s)
-    m = sim.add(cfg)
+def _check_axis(m: Machine, axis: str) -> Axis:
     try:
-        m.axis(name)
-        power_on(sim, m)
-    except ValueError as e:  # (an unknown axis, a machine that never gets ready)
+        return m.axis(axis)
+    except ValueError as e:  # (an unknown axis)
         raise ExperimentError(str(e)) from None
-    return _Run(sim, m, m.axis(name).name)
 
 
-def _record(run: _Run, seconds: float) -> np.ndarray:
-    rec = run.sim.new_record(max(1, round(seconds / run.sim.kernel.cycle_s)))
-    run.sim.run(rec.shape[0], rec)
-    return rec
+def _stop(m: Machine, ax: Axis) -> None:
+    """The run was cancelled: stop what it started (M5 for a spindle, a CNC reset's braking
+    for an axis); after an emergency stop nothing is left to stop."""
+    if m.estop:
+        return
+    m.submit(SpindleRun(ax.name, 5) if ax.kind is AxisKind.SPINDLE else Reset())
 
 
 def _thin(t: np.ndarray, y: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -93,11 +77,24 @@ def multi_gain_experiment(
     window_s: float = 1.0,
     direction: int = 1,
 ) -> Result:
+    """`multi_gain` on a fresh copy of the machine `cfg` describes (the preview)."""
+    return on_copy(cfg, lambda m: multi_gain(m, axis, feed_mm_min, speed_rpm, window_s, direction))
+
+
+def multi_gain(
+    m: Machine,
+    axis: str,
+    feed_mm_min: float | None = None,
+    speed_rpm: float | None = None,
+    window_s: float = 1.0,
+    direction: int = 1,
+) -> Procedure:
     """004 §3.6.2 on `axis`: a linear or rotary axis moves at `feed_mm_min` (mm/min or
     °/min), a spindle turns position-controlled at `speed_rpm`; the lag is averaged over
     `window_s` at constant speed once the loop has settled."""
-    run = _start(cfg, axis)
-    m, ax = run.m, run.m.axis(axis)
+    ax = _check_axis(m, axis)
+    cycle_s = m.k.cycle_s
+    direction = -1 if direction < 0 else 1
     spindle = ax.kind is AxisKind.SPINDLE
     if spindle:
         if not speed_rpm or speed_rpm <= 0:
@@ -116,38 +113,49 @@ def multi_gain_experiment(
     if spindle:
         out = m.submit(SpindleRun(ax.name, 3 if direction > 0 else 4, speed_rpm))
     else:
-        p0 = float(m.k.st[run.slot, L.S_P_CMD])
+        p0 = float(m.k.st[ax.slot, L.S_P_CMD])
         target = p0 + direction * abs(v) * (total_s + 2.0)
         out = m.submit(Move(ax.name, target, rapid=False, feed_mm_min=feed_mm_min))
     if not isinstance(out, Accepted):
         raise _refusal(out)
-    if spindle:  # up to speed first (a gear change, the acceleration curve): not measured
-        limit = run.sim.cycle + round(SPINDLE_UP_S / cfg.cycle_s)
-        while not m.k.ist[run.slot, L.I_SPEED_REACHED] and run.sim.cycle < limit:
-            run.sim.run(10)
-        settle_s = 5.0 * 3.0 / (int(ax.cfg.raw("getriebe.kv", ax.gear)) / 100.0)
-        total_s = settle_s + max(window_s, MIN_WINDOW_S) + 0.5  # in the gear it chose
-        if m.motion.loop_mode(ax) != L.LOOP_CLOSED:
-            raise ExperimentError(
-                f"{ax.name} is not position-controlled at {speed_rpm:g} rpm (speed control "
-                "above P-AXIS-00767 or the control limit): a lower speed"
-            )
-    rec = _record(run, total_s + 1.0)
-    if spindle:
-        m.submit(SpindleRun(ax.name, 5))
+    try:
+        if spindle:  # up to speed first (a gear change, the acceleration curve): not measured
+            waited = 0
+            while not m.k.ist[ax.slot, L.I_SPEED_REACHED] and waited * cycle_s < SPINDLE_UP_S:
+                yield Wait(10, f"{ax.name} runs up to {speed_rpm:g} rpm", total_s + 1.0)
+                waited += 10
+            settle_s = 5.0 * 3.0 / (int(ax.cfg.raw("getriebe.kv", ax.gear)) / 100.0)
+            total_s = settle_s + max(window_s, MIN_WINDOW_S) + 0.5  # in the gear it chose
+            if m.motion.loop_mode(ax) != L.LOOP_CLOSED:
+                m.submit(SpindleRun(ax.name, 5))
+                raise ExperimentError(
+                    f"{ax.name} is not position-controlled at {speed_rpm:g} rpm (speed control "
+                    "above P-AXIS-00767 or the control limit): a lower speed"
+                )
+        recorded_s = total_s + 1.0
+        whole_s = recorded_s if spindle else total_s + 2.0  # an axis goes on to its target
+        phase = f"{ax.name} at {v_shown:g} {v_unit}: the lag is recorded"
+        rec = yield Wait(round(recorded_s / cycle_s), phase, whole_s)
+        if spindle:
+            m.submit(SpindleRun(ax.name, 5))
+        while ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):  # (live: at rest)
+            yield Wait(10, f"{ax.name} comes to rest", whole_s)
+    except GeneratorExit:
+        _stop(m, ax)
+        raise
     g = ax.gear
     kv_raw = int(ax.cfg.raw("getriebe.kv", g))
     kv = kv_raw / 100.0
     mg_z = int(ax.cfg.raw("getriebe.multi_gain_z", g))
     mg_n = int(ax.cfg.raw("getriebe.multi_gain_n", g))
-    t = np.arange(rec.shape[0]) * cfg.cycle_s
-    v_cmd = rec[:, run.slot, L.R_V_CMD]
-    lag = rec[:, run.slot, L.R_LAG]
+    t = np.arange(rec.shape[0]) * cycle_s
+    v_cmd = rec[:, ax.slot, L.R_V_CMD]
+    lag = rec[:, ax.slot, L.R_LAG]
     steady = np.flatnonzero(np.abs(v_cmd - v) <= 1e-9 * max(1.0, abs(v)))
     notes: list[str] = []
     figures = [Figure("v", v_shown, v_unit, "the speed of the experiment")]
     series = [Series("lag", *_thin(t, lag), "s", unit)]
-    error = m.axis(axis).error_event
+    error = ax.error_event
     if error is not None:
         notes.append(f"the run ended in a job error: {error.message}")
     elif len(steady) == 0 or (t[steady[-1]] - t[steady[0]]) < settle_s + MIN_WINDOW_S:
@@ -195,19 +203,29 @@ def multi_gain_experiment(
     )
 
 
-def sign_check(
+def sign_check_experiment(
     cfg: MachineConfig,
     axis: str,
     distance: float = 1.0,
     feed_mm_min: float = 100.0,
     observed: int | None = None,
 ) -> Result:
+    """`sign_check` on a fresh copy of the machine `cfg` describes (the preview)."""
+    return on_copy(cfg, lambda m: sign_check(m, axis, distance, feed_mm_min, observed))
+
+
+def sign_check(
+    m: Machine,
+    axis: str,
+    distance: float = 1.0,
+    feed_mm_min: float = 100.0,
+    observed: int | None = None,
+) -> Procedure:
     """004 §3.5 on `axis`: a move of `distance` (mm or °) at `feed_mm_min`. `observed` is the
     way the machine moved as the engineer saw it (+1 / -1); None takes the simulated
     machine's plant (its true load position)."""
-    run = _start(cfg, axis)
-    m, ax = run.m, run.m.axis(axis)
-    s = run.slot
+    ax = _check_axis(m, axis)
+    s = ax.slot
     p0, x0 = float(m.k.st[s, L.S_P_ACT]), float(m.k.st[s, L.S_X_MOTOR])
     lag_max = ax.cfg.eng("getriebe.lag_max", ax.gear)
     out = m.submit(Move(ax.name, float(m.k.st[s, L.S_P_CMD]) + distance, False, feed_mm_min))
@@ -216,26 +234,34 @@ def sign_check(
     inc = max(float(m.k.pr[s, L.P_ENC_INC]), 1e-6)
     runaway_at = 10.0 * inc  # the actual running the wrong way by this much: positive feedback
     t_move = abs(distance) / (feed_mm_min / MM_MIN_PER_MM_S)
-    limit = round((t_move + 2.0) / cfg.cycle_s)
+    planned_s = t_move + 2.0
+    limit = round(planned_s / m.k.cycle_s)
     trace_t: list[float] = []
     trace_lag: list[float] = []
     runaway = False
-    for i in range(limit):
-        run.sim.run(1)
-        lag = float(m.k.st[s, L.S_LAG])
-        trace_t.append(i * cfg.cycle_s)
-        trace_lag.append(lag)
-        moved_nc = float(m.k.st[s, L.S_P_ACT]) - p0
-        if moved_nc * math.copysign(1.0, distance) < -runaway_at:
-            runaway = True
-            m.submit(HliWrite("TorquePermission", 0, ax.name))  # servo off at once
-            break
-        if m.axis(axis).error_event is not None:
-            break
+    phase = f"{ax.name} moves {distance:g} {ax.pos_unit} at {feed_mm_min:g} {ax.pos_unit}/min"
+    try:
+        for i in range(limit):  # cycle by cycle: the servo goes off in the cycle it runs away
+            yield Wait(1, phase, planned_s)
+            lag = float(m.k.st[s, L.S_LAG])
+            trace_t.append(i * m.k.cycle_s)
+            trace_lag.append(lag)
+            moved_nc = float(m.k.st[s, L.S_P_ACT]) - p0
+            if moved_nc * math.copysign(1.0, distance) < -runaway_at:
+                runaway = True
+                m.submit(HliWrite("TorquePermission", 0, ax.name))  # servo off at once
+                break
+            if ax.error_event is not None:
+                break
+            if i * m.k.cycle_s > t_move and ax.state is AxisState.STANDSTILL:
+                break  # (live: done once at rest; the copy's trace ends the same way)
+    except GeneratorExit:
+        _stop(m, ax)
+        raise
     max_lag = max((abs(v) for v in trace_lag), default=0.0)
     moved_load = float(m.k.st[s, L.S_X_MOTOR]) - x0
     seen = observed if observed is not None else (1 if moved_load * distance > 0 else -1)
-    tripped = m.axis(axis).error_event is not None and not runaway
+    tripped = ax.error_event is not None and not runaway
     figures = [
         Figure("max_lag", max_lag, ax.pos_unit, "largest lag during the check"),
         Figure("lag_max", lag_max, ax.pos_unit, "lag monitoring's limit (getriebe[i].lag_max)"),
@@ -271,3 +297,11 @@ def sign_check(
         not tripped,
         {"axis": ax.name, "distance": distance, "feed_mm_min": feed_mm_min},
     )
+
+
+PROCEDURES: dict[str, Callable[..., Procedure]] = {
+    "multi-gain": multi_gain,
+    "sign-check": sign_check,
+}
+"""The experiments that can also run live, by name: each takes the machine, then its
+arguments as keywords."""

@@ -24,18 +24,22 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Sequence
+from collections.abc import Generator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from nc_sim.assist.experiments import ExperimentError, _refusal, _Run, _start
+from nc_sim.assist.experiments import _refusal  # the NC's refusal in its words, as there
+from nc_sim.assist.procedure import ExperimentError, Wait, on_copy
 from nc_sim.assist.result import Change, Figure, Result, Series
 from nc_sim.commands import Accepted, Move
+from nc_sim.errors import NcUsageError
 from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig, apply_overrides
+from nc_sim.machine.machine import Machine
 from nc_sim.measure import measure
 from nc_sim.params import Scope
+from nc_sim.sim import Simulation
 from nc_sim.units import MM_MIN_PER_MM_S, AxisKind
 
 NAME = "loop-gain"
@@ -59,6 +63,7 @@ class StepResponse:
     settling_s: float | None  # end of command -> inside the window for good; None: never
     t: np.ndarray
     y: np.ndarray  # actual position from the start, mm | °
+    error: str | None = None  # a job error during the run
 
 
 @dataclass(frozen=True)
@@ -70,6 +75,7 @@ class RampResponse:
     lag_settling_s: float | None  # constant speed reached -> lag inside ±window for good
     t: np.ndarray
     y: np.ndarray  # lag, mm | °
+    error: str | None = None  # a job error during the run
 
 
 @dataclass(frozen=True)
@@ -79,7 +85,11 @@ class KvResponse:
     kv: float  # 1/s
     step: StepResponse
     ramp: RampResponse
-    error: str | None  # a job error during either run
+
+    @property
+    def error(self) -> str | None:
+        """A job error during either run."""
+        return self.step.error or self.ramp.error
 
     def meets(self, overshoot_pct: float, settling_s: float) -> bool:
         """Within the target: overshoot and settling of the step, no job error."""
@@ -91,99 +101,90 @@ class KvResponse:
         )
 
 
-def _with_kv(cfg: MachineConfig, axis: str, gear: int, kv: float) -> _Run:
-    """A fresh machine from `cfg` with getriebe[gear-1].kv = kv (1/s)."""
+def _with_kv(cfg: MachineConfig, axis: str, gear: int, kv: float) -> MachineConfig:
+    """A copy of `cfg` with getriebe[gear-1].kv = kv (1/s)."""
     c = copy.deepcopy(cfg)
     apply_overrides(c, Scope.AXIS, axis, {f"getriebe[{gear - 1}].kv": round(kv * 100.0)})
-    return _start(c, axis)
+    return c
 
 
-def _until_done(run: _Run, target: float, chunks: list[np.ndarray]) -> None:
-    """Record until the interpolator holds `target` (the command has ended)."""
-    s = run.slot
-    limit = round(MOVE_LIMIT_S / run.sim.kernel.cycle_s)
-    n = 0
-    while n < limit:
-        rec = run.sim.new_record(10)
-        run.sim.run(10, rec)
-        chunks.append(rec)
-        n += 10
-        st = run.m.k.st[s]
-        if st[L.S_V_CMD] == 0.0 and abs(st[L.S_P_CMD] - target) < 1e-9:
-            return
-        if run.m.axis(run.name).error_event is not None:
-            return
-    raise ExperimentError(f"the move did not end within {MOVE_LIMIT_S:g} s")
-
-
-def _record_s(run: _Run, seconds: float, chunks: list[np.ndarray]) -> None:
-    rec = run.sim.new_record(max(1, round(seconds / run.sim.kernel.cycle_s)))
-    run.sim.run(rec.shape[0], rec)
-    chunks.append(rec)
-
-
-def _error(run: _Run) -> str | None:
-    e = run.m.axis(run.name).error_event
+def _error(m: Machine, axis: str) -> str | None:
+    e = m.axis(axis).error_event
     return None if e is None else e.message
 
 
-def _step(run: _Run, distance: float, after_s: float, window: float) -> StepResponse:
-    """A G00 move of `distance`, then `after_s` more: overshoot and settling of the actual."""
-    s = run.slot
-    p0 = float(run.m.k.st[s, L.S_P_CMD])
+def _step(
+    m: Machine, axis: str, distance: float, after_s: float, window: float
+) -> Generator[Wait, np.ndarray, StepResponse]:
+    """A G00 move of `distance`, recorded until the command ends and `after_s` more:
+    overshoot and settling of the actual position."""
+    ax = m.axis(axis)
+    s, dt = ax.slot, m.k.cycle_s
+    p0 = float(m.k.st[s, L.S_P_CMD])
     target = p0 + distance
-    out = run.m.submit(Move(run.name, target, rapid=True))
+    out = m.submit(Move(ax.name, target, rapid=True))
     if not isinstance(out, Accepted):
         raise _refusal(out)
+    phase = f"{ax.name} steps {distance:+g} {ax.pos_unit}"
     chunks: list[np.ndarray] = []
-    _until_done(run, target, chunks)
-    # the command ended within the last chunk: the cycle it reached the target
+    while True:  # until the interpolator holds the target
+        chunks.append((yield Wait(10, phase, after_s)))
+        st = m.k.st[s]
+        if (st[L.S_V_CMD] == 0.0 and abs(st[L.S_P_CMD] - target) < 1e-9) or _error(m, axis):
+            break
+        if len(chunks) * 10 * dt > MOVE_LIMIT_S:
+            raise ExperimentError(f"the step did not end within {MOVE_LIMIT_S:g} s")
     rec = np.concatenate(chunks)
     moving = np.flatnonzero(
         (rec[:, s, L.R_V_CMD] != 0.0) | (np.abs(rec[:, s, L.R_P_CMD] - target) > 1e-9)
     )
-    dt = run.sim.kernel.cycle_s
     t_end = (int(moving[-1]) + 1) * dt if moving.size else 0.0
-    _record_s(run, after_s, chunks)
+    chunks.append((yield Wait(max(1, round(after_s / dt)), f"{ax.name} settles", after_s)))
     rec = np.concatenate(chunks)
     t = np.arange(rec.shape[0]) * dt
     p = rec[:, s, L.R_P_ACT]
-    m = measure(t, p, band_abs=window, t_ref_s=t_end, final=target)
+    mes = measure(t, p, band_abs=window, t_ref_s=t_end, final=target)
     past = float(np.max((p - target) * math.copysign(1.0, distance)))
-    return StepResponse(m.overshoot_pct or 0.0, max(0.0, past), m.settling_time_s, t, p - p0)
+    return StepResponse(
+        mes.overshoot_pct or 0.0, max(0.0, past), mes.settling_time_s, t, p - p0, _error(m, axis)
+    )
 
 
-def _ramp(run: _Run, v: float, feed: float, after_s: float, window: float) -> RampResponse:
-    """A G01 move at `feed` (v in unit/s, signed): the steady lag and its transient."""
-    s = run.slot
-    p0 = float(run.m.k.st[s, L.S_P_CMD])
+def _ramp(
+    m: Machine, axis: str, feed: float, v: float, after_s: float, window: float
+) -> Generator[Wait, np.ndarray, RampResponse]:
+    """A G01 move at `feed` (v in unit/s, signed), recorded up to constant speed and
+    `after_s` plus the averaging window more: the steady lag and its transient."""
+    ax = m.axis(axis)
+    s, dt = ax.slot, m.k.cycle_s
+    p0 = float(m.k.st[s, L.S_P_CMD])
     # as far as the recording needs, and no further (the soft limits stay out of it)
     target = p0 + v * (after_s + RAMP_WINDOW_S + RAMP_MARGIN_S)
-    out = run.m.submit(Move(run.name, target, rapid=False, feed_mm_min=feed))
+    out = m.submit(Move(ax.name, target, rapid=False, feed_mm_min=feed))
     if not isinstance(out, Accepted):
         raise _refusal(out)
-    dt = run.sim.kernel.cycle_s
+    phase = f"{ax.name} moves at {feed:g} {ax.pos_unit}/min"
+    planned = after_s + RAMP_WINDOW_S
     chunks: list[np.ndarray] = []
     for _ in range(round(RAMP_MARGIN_S / dt / 10)):  # up to speed first
-        rec = run.sim.new_record(10)
-        run.sim.run(10, rec)
-        chunks.append(rec)
-        if abs(run.m.k.st[s, L.S_V_CMD] - v) <= 1e-9 * abs(v) or _error(run):
+        chunks.append((yield Wait(10, phase, planned)))
+        if abs(m.k.st[s, L.S_V_CMD] - v) <= 1e-9 * abs(v) or _error(m, axis):
             break
-    _record_s(run, after_s + RAMP_WINDOW_S, chunks)
+    chunks.append((yield Wait(max(1, round(planned / dt)), phase, planned)))
     rec = np.concatenate(chunks)
     t = np.arange(rec.shape[0]) * dt
     lag = rec[:, s, L.R_LAG]
-    steady = np.flatnonzero(np.abs(rec[:, s, L.R_V_CMD] - v) <= 1e-9 * abs(v))
-    if steady.size == 0:
-        raise ExperimentError("the ramp never reached constant speed: a lower feed")
-    t_const = float(t[steady[0]])
+    constant = np.abs(rec[:, s, L.R_V_CMD] - v) <= 1e-9 * abs(v)
     last = t >= t[-1] - RAMP_WINDOW_S
-    if np.any(np.abs(rec[last, s, L.R_V_CMD] - v) > 1e-9 * abs(v)):
+    error = _error(m, axis)
+    if error is None and not constant.any():
+        raise ExperimentError("the ramp never reached constant speed: a lower feed")
+    if error is None and not constant[last].all():
         raise ExperimentError("the ramp did not hold constant speed to the end: a lower feed")
+    t_const = float(t[np.flatnonzero(constant)[0]]) if constant.any() else float(t[0])
     lag_steady = float(np.mean(lag[last]))
-    m = measure(t, lag, band_abs=window, t_ref_s=t_const, final=lag_steady)
-    return RampResponse(lag_steady, m.overshoot_pct or 0.0, m.settling_time_s, t, lag)
+    mes = measure(t, lag, band_abs=window, t_ref_s=t_const, final=lag_steady)
+    return RampResponse(lag_steady, mes.overshoot_pct or 0.0, mes.settling_time_s, t, lag, error)
 
 
 def _thin(t: np.ndarray, y: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -216,17 +217,18 @@ def loop_gain(
     (default 5 % of the rapid speed), in `direction`. Proposes the highest kv whose step
     overshoots at most `overshoot_pct` % and settles into the exact-stop window within
     `settle_ms` after the command ends."""
-    probe = _start(cfg, axis)
-    ax = probe.m.axis(axis)
+    try:  # the machine as built (its gear), not powered: what the sweep starts from
+        ax = Simulation(cfg.cycle_s).add(copy.deepcopy(cfg)).axis(axis)
+    except (NcUsageError, ValueError) as e:
+        raise ExperimentError(str(e)) from None
     if ax.kind is AxisKind.SPINDLE:
         raise ExperimentError(f"{ax.name} is a spindle: the loop gain assistant tunes axes")
     if direction not in (1, -1):
         raise ExperimentError("direction must be 1 or -1")
     if overshoot_pct < 0 or settle_ms <= 0:
         raise ExperimentError("targets: overshoot_pct ≥ 0 %, settle_ms > 0 ms")
-    g, unit = ax.gear, ax.pos_unit
+    g, unit, name = ax.gear, ax.pos_unit, ax.name
     kv_raw = int(ax.cfg.raw("getriebe.kv", g))
-    kv_now = kv_raw / 100.0
     window = ax.cfg.eng("kenngr.exact_stop_window")
     distance = (step if step else STEP_WINDOWS * window) * direction
     if distance == 0:
@@ -236,17 +238,16 @@ def loop_gain(
         raise ExperimentError("the ramp needs a feed: feed_mm_min > 0")
     v = feed / MM_MIN_PER_MM_S * direction
     ff = ax.cfg.eng("lr_param.ff_weight")
-    kv_list = sweep(kv_now, kvs)
+    kv_list = sweep(kv_raw / 100.0, kvs)
     after_s = SETTLE_TAUS / kv_list[0]  # the same length for every kv: one time axis
     responses: list[KvResponse] = []
     for kv in kv_list:
-        step_run = _with_kv(cfg, ax.name, g, kv)
-        st = _step(step_run, distance, after_s, window)
-        ramp_run = _with_kv(cfg, ax.name, g, kv)
-        rp = _ramp(ramp_run, v, feed, after_s, window)
-        responses.append(KvResponse(kv, st, rp, _error(step_run) or _error(ramp_run)))
+        c = _with_kv(cfg, name, g, kv)
+        st = on_copy(c, lambda m: _step(m, name, distance, after_s, window))
+        rp = on_copy(c, lambda m: _ramp(m, name, feed, v, after_s, window))
+        responses.append(KvResponse(kv, st, rp))
     target = Target(overshoot_pct, settle_ms / 1000.0)
-    setup = Setup(ax.name, g, unit, kv_raw, distance, feed, v, ff, window)
+    setup = Setup(name, g, unit, kv_raw, distance, feed, v, ff, window)
     return _answer(setup, target, responses)
 
 

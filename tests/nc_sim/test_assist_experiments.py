@@ -12,7 +12,8 @@ from typing import Any
 
 import pytest
 
-from nc_sim.assist.experiments import ExperimentError, multi_gain_experiment, sign_check
+from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
+from nc_sim.assist.procedure import ExperimentError
 from nc_sim.assist.result import Result
 from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.params import Scope
@@ -117,10 +118,10 @@ def test_the_sign_check_finds_each_wrong_sign_before_lag_monitoring(
     of the actual going the wrong way, far below lag_max (5 mm), and the servo goes off. Both
     wrong leave the loop stable but mirrored: only the way the machine moved shows it. After
     the proposed flips the check is clean."""
-    r = sign_check(lathe(X=plant), "X")
+    r = sign_check_experiment(lathe(X=plant), "X")
     assert r.ok
     assert {c.parameter for c in r.changes} == flips
     assert r.figure("max_lag") < 0.1 * r.figure("lag_max")
     assert r.figure("runaway") == float(len(flips) == 1)
-    fixed = sign_check(applied(lathe(X=plant), r), "X")
+    fixed = sign_check_experiment(applied(lathe(X=plant), r), "X")
     assert fixed.changes == () and fixed.figure("runaway") == 0.0

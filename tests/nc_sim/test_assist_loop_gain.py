@@ -18,8 +18,8 @@ from typing import Any
 
 import pytest
 
-from nc_sim.assist.experiments import ExperimentError
 from nc_sim.assist.loop_gain import loop_gain
+from nc_sim.assist.procedure import ExperimentError
 from nc_sim.assist.result import Result
 from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.params import Scope

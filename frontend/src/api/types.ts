@@ -85,3 +85,4 @@ export type LoopGainRequest = S["LoopGainRequest"];
 export type AssistResult = S["AssistResult"];
 export type AssistChange = S["AssistChange"];
 export type AssistSeries = S["AssistSeries"];
+export type AssistProgress = S["AssistProgress"];

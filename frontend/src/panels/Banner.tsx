@@ -1,10 +1,12 @@
-// Connection loss, notices (a machine rebuilt after its worker died) and the newest job error
-// still active, until acknowledged or reset.
+// Connection loss, notices (a machine rebuilt after its worker died), an assistant running
+// live on the machine (outside the Commissioning workspace, which shows it itself) and the
+// newest job error still active, until acknowledged or reset.
 import { acknowledgeBanner, bannerErrors } from "../state/events";
 import { connection, notice } from "../state/session";
 import { qty } from "../ui/format";
+import { LiveProgress } from "./LiveProgress";
 
-export function Banner() {
+export function Banner({ liveRun }: { liveRun: boolean }) {
   const [err, ...more] = bannerErrors.value;
   const n = notice.value;
   return (
@@ -22,6 +24,7 @@ export function Banner() {
           <button onClick={() => (notice.value = null)}>Dismiss</button>
         </div>
       ) : null}
+      {liveRun ? <LiveProgress compact /> : null}
       {err ? (
         <div class="banner error" role="alert" data-testid="banner-error">
           <span>

@@ -1,18 +1,20 @@
 // The commissioning assistants as a guided procedure: choose the assistant and the axis (the
-// panel says what will happen, in the manual's words), run it on a copy of the machine,
+// panel says what will happen, in the manual's words), preview it on a copy of the machine
+// or run it on the machine itself (after confirming the motion; everyone sees its progress),
 // read the figures, the lag and the proposal, Apply on trial (Keep / Revert in the trial
 // bar), and run again to check.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { AssistResult, AxisStatus, Refusal } from "../api/types";
-import { type AssistantName, applyProposal, runAssistant } from "../state/assist";
-import { configureBlocked, may } from "../state/control";
+import { type AssistantName, type Where, applyProposal, liveRun, restartMachine, runAssistant } from "../state/assist";
+import { commandBlocked, configureBlocked, may } from "../state/control";
 import { numbers, paramsVersion, trial } from "../state/params";
 import { me } from "../state/auth";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { AssistResultView, settled } from "./AssistResultView";
+import { LiveProgress } from "./LiveProgress";
 import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
 
 const ASSISTANTS: { name: AssistantName; label: string; section: string }[] = [
@@ -65,6 +67,9 @@ export function Commissioning() {
   const [busySince, setBusySince] = useState<number | null>(null);
   const [elapsed, setElapsed] = useState(0);
   const [applied, setApplied] = useState(false);
+  const [confirming, setConfirming] = useState(false); // the live run's motion, to confirm
+  const [where, setWhere] = useState<Where>("copy"); // of the run going on or shown
+  const [restarted, setRestarted] = useState(false); // since the proposal was applied
   const [kv, setKv] = useState<number | null>(null); // 1/s, for the run's expected duration
 
   const choices = axes.filter((a) => name === "multi-gain" || a.kind !== "spindle");
@@ -88,6 +93,7 @@ export function Commissioning() {
     setResult(null);
     setRefusal(null);
     setApplied(false);
+    setConfirming(false);
   }, [machineId.value, name, ax?.name]);
   useEffect(() => {
     if (!ax || !machineId.value) return;
@@ -102,15 +108,17 @@ export function Commissioning() {
     return () => clearInterval(id);
   }, [busySince]);
 
-  async function run() {
+  async function run(at: Where) {
     if (!ax || errors.length) return;
+    setConfirming(false);
+    setWhere(at);
     setBusySince(performance.now());
     setElapsed(0);
     setRefusal(null);
     try {
       const r =
         name === "loop-gain"
-          ? await runAssistant("loop-gain", loopGainRequest(ax.name, lgValues))
+          ? await runAssistant("loop-gain", loopGainRequest(ax.name, lgValues), "copy")
           : name === "multi-gain"
           ? await runAssistant("multi-gain", {
               axis: ax.name,
@@ -118,13 +126,13 @@ export function Commissioning() {
               speed_rpm: spindle ? (values.speed as number) : null,
               window_s: values.window as number,
               direction: inp.direction,
-            })
+            }, at)
           : await runAssistant("sign-check", {
               axis: ax.name,
               distance: values.distance as number,
               feed_mm_min: values.signFeed as number,
               observed: inp.observed === "" ? null : (Number(inp.observed) as 1 | -1),
-            });
+            }, at);
       setResult(r);
     } catch (e) {
       setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
@@ -139,8 +147,19 @@ export function Commissioning() {
     try {
       await applyProposal(result.assistant, result.changes);
       setApplied(true);
+      setRestarted(false);
     } catch (e) {
       setRefusal(e instanceof ApiError ? e.refusal : { message: e instanceof Error ? e.message : String(e), problems: [] });
+    }
+  }
+
+  async function restart() {
+    setRefusal(null);
+    try {
+      await restartMachine();
+      setRestarted(true);
+    } catch (e) {
+      setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
     }
   }
 
@@ -164,12 +183,14 @@ export function Commissioning() {
     );
   };
 
-  const step = !result ? (busy ? 2 : 1) : applied ? 4 : 3;
+  const step = !result ? (busy || confirming ? 2 : 1) : applied ? 4 : 3;
   const onTrial = !!trial.value;
+  const live = liveRun.value;
+  const liveBlocked = commandBlocked.value || (live ? `${live.name} runs on the machine (${live.by})` : "");
   return (
     <Panel title="Commissioning assistants" id="assist">
       <ol class="assist-steps" aria-label="steps">
-        {["Choose", "Run on a copy", "Read the result", "Apply on trial, run again"].map((s, i) => (
+        {["Choose", "Preview on a copy or run on the machine", "Read the result", "Apply on trial, run again"].map((s, i) => (
           <li key={s} class={i + 1 === step ? "active" : i + 1 < step ? "done" : ""}>
             {s}
           </li>
@@ -235,23 +256,53 @@ export function Commissioning() {
               </label>
             </>
           )}
-          {ax ? <p class="assist-what" data-testid="assist-what">{name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name, ax, inp, values, kv)}</p> : null}
+          {ax ? <p class="assist-what" data-testid="assist-what">{name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
-              title={mayAssist ? "" : `a user in the role ${me.value?.role ?? ""} may not run assistants`} onClick={() => void run()}>
-              {busy ? "Running…" : applied && name === "multi-gain" ? "Run again to check" : result ? "Run again" : "Run"}
+              title={mayAssist ? "a copy of the machine, in simulated time: nothing moves" : `a user in the role ${me.value?.role ?? ""} may not run assistants`}
+              onClick={() => void run("copy")}>
+              {busy && where === "copy" ? "Running…" : applied && name === "multi-gain" ? "Preview again to check" : result ? "Preview again" : "Preview on a copy"}
             </button>
-            {busy ? (
+            <button type="button" class="secondary" data-testid="assist-run-live"
+              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming || name === "loop-gain"}
+              title={name === "loop-gain" ? "the kv sweep runs on copies only: each kv on a copy of its own" : liveBlocked || "the machine itself moves: you confirm the motion first"} onClick={() => setConfirming(true)}>
+              Run on the machine…
+            </button>
+            {busy && where === "copy" ? (
               <span class="assist-busy" role="status" data-testid="assist-busy">
                 <span class="spinner" aria-hidden="true" /> running on a copy of the machine… {elapsed.toFixed(1)} s
               </span>
             ) : null}
           </div>
+          {liveBlocked && !busy && !live ? (
+            <span class="hint" data-testid="assist-live-blocked">
+              On the machine: {liveBlocked}
+            </span>
+          ) : null}
+          {confirming && ax ? (
+            <div class="assist-confirm" role="alertdialog" aria-labelledby="assist-confirm-title" data-testid="assist-confirm">
+              <b id="assist-confirm-title">The machine will move</b>
+              <p>{describe(name, ax, inp, values, kv, "machine")}</p>
+              <p class="hint">Keep clear of the machine. The E-stop and Cancel end the run at once.</p>
+              <div class="row">
+                <button type="button" data-testid="assist-confirm-live" onClick={() => void run("machine")} disabled={!!liveBlocked}>
+                  Move {ax.name} now
+                </button>
+                <button type="button" class="secondary" data-testid="assist-confirm-back" onClick={() => setConfirming(false)}>
+                  Back
+                </button>
+              </div>
+            </div>
+          ) : null}
+          <LiveProgress />
           <RefusalLine refusal={refusal} id="assist-refusal" />
         </div>
         <div class="assist-out">
           {result ? (
             <>
+              <p class="hint" data-testid="assist-where">
+                {where === "machine" ? "Measured on the machine itself." : "Measured on a copy of the machine (simulated time); the machine did not move."}
+              </p>
               <AssistResultView result={result} spindle={spindle} />
               <div class="row apply-bar">
                 <button type="button" data-testid="assist-apply" class={settled(result) ? "secondary" : ""}
@@ -262,9 +313,22 @@ export function Commissioning() {
                 {applied ? (
                   <span class="hint" data-testid="assist-applied">
                     Applied: Keep or Revert in the trial bar above.
-                    {name === "loop-gain" ? " Run again to see the sweep around the new kv." : name === "multi-gain" ? " Run again to check: k must now equal kv (f ≈ 1)." : " The signs take effect at the machine's next restart (the copy too): run again after it to check."}
+                    {name === "loop-gain"
+                      ? " Run again to see the sweep around the new kv."
+                      : name === "multi-gain"
+                      ? " Run again to check: k must now equal kv (f ≈ 1)."
+                      : restarted
+                        ? " Restarted: the new signs are in force. Run again to check."
+                        : " The signs take effect at the machine's restart (the copy's too): restart, then run again to check."}
                   </span>
-                ) : blocked ? (
+                ) : null}
+                {applied && name === "sign-check" && !restarted ? (
+                  <button type="button" data-testid="assist-restart" disabled={!online.value || !!commandBlocked.value || busy}
+                    title={commandBlocked.value || "power off and on: every stored value in force, the axes at rest, not homed"}
+                    onClick={() => void restart()}>
+                    Restart the machine
+                  </button>
+                ) : !applied && blocked ? (
                   <span class="hint" data-testid="assist-apply-blocked">
                     {blocked}
                   </span>
@@ -287,9 +351,13 @@ function describe(
   inp: Inputs,
   values: ReturnType<typeof checked>,
   kv: number | null,
+  where: Where,
 ): string {
   const unit = ax.unit;
-  const copy = "on a copy of the machine, in simulated time; the live machine does not move.";
+  const copy =
+    where === "copy"
+      ? "on a copy of the machine, in simulated time; the live machine does not move."
+      : "on the machine itself, in its time (paused, it waits; fast, it runs fast).";
   if (name === "sign-check") {
     const d = typeof values.distance === "number" ? values.distance : null;
     const f = typeof values.signFeed === "number" ? values.signFeed : null;
@@ -309,12 +377,16 @@ function describe(
   const formula =
     `The lag s is averaged at constant speed once the loop has settled (at least ${n1(w)} s); ` +
     "k = v/s, f = (kv/100)/k, and multi_gain · f with kv / f are proposed (004 §3.6.2).";
-  const about = runS !== null ? ` for about ${n1(runS)} s` : "";
+  // the move goes on a second past the recording (its target is v · (recording + 1 s))
+  const moveS = runS !== null ? runS + 1 : null;
+  const about = moveS !== null ? ` for about ${n1(moveS)} s` : "";
   if (ax.kind === "spindle") {
     const sp = typeof values.speed === "number" ? `${n1(values.speed)} rpm` : "the speed";
-    return `${ax.name} runs up to ${sp} (${dir}), then turns position-controlled at constant speed${about} ${copy} ${formula}`;
+    // at speed: settling, the window and 1.5 s more recorded, then M5
+    const turn = settle !== null ? ` for about ${n1(settle + Math.max(w, 0.2) + 1.5)} s` : "";
+    return `${ax.name} runs up to ${sp} (${dir}), then turns position-controlled at constant speed${turn} and stops (M5) ${copy} ${formula}`;
   }
   const feed = typeof values.feed === "number" ? values.feed : null;
-  const travel = feed !== null && runS !== null ? ` (about ${dir}${n1((feed / 60) * runS)} ${unit})` : "";
+  const travel = feed !== null && moveS !== null ? ` (about ${dir}${n1((feed / 60) * moveS)} ${unit})` : "";
   return `${ax.name} moves at ${feed !== null ? `${n1(feed)} ${unit}/min` : "the feed"} (${dir}) at constant speed${about}${travel} ${copy} ${formula}`;
 }

@@ -1,8 +1,10 @@
 // The commissioning assistants (api/assist.py): run one on a copy of the machine, and apply
 // its proposal through the parameter write the editor uses, on trial (Keep / Revert).
+import { computed } from "@preact/signals";
 import { http } from "../api/http";
 import type {
   AssistChange,
+  AssistProgress,
   AssistResult,
   LoopGainRequest,
   MultiGainRequest,
@@ -11,16 +13,32 @@ import type {
   SignCheckRequest,
 } from "../api/types";
 import { type Change, loadList, trial, trialMessage, writeChanges } from "./params";
-import { machineId, machineUrl } from "./session";
+import { machineId, machineUrl, status } from "./session";
 
 export type AssistantName = "multi-gain" | "sign-check" | "loop-gain";
 
-/** Run an assistant; rejects with the service's refusal (ApiError: 422 says which input). */
-export function runAssistant(name: "multi-gain", body: MultiGainRequest): Promise<AssistResult>;
-export function runAssistant(name: "sign-check", body: SignCheckRequest): Promise<AssistResult>;
-export function runAssistant(name: "loop-gain", body: LoopGainRequest): Promise<AssistResult>;
-export function runAssistant(name: AssistantName, body: MultiGainRequest | SignCheckRequest | LoopGainRequest): Promise<AssistResult> {
-  return http.post<AssistResult>(machineUrl(`/assist/${name}`), body);
+/** Where a run happens: on a copy of the machine in simulated time, or on the machine. */
+export type Where = "copy" | "machine";
+
+/** Run an assistant; rejects with the service's refusal (ApiError: 422 says which input,
+ * 409 a live run cancelled or another running). */
+export function runAssistant(name: "multi-gain", body: MultiGainRequest, where: Where): Promise<AssistResult>;
+export function runAssistant(name: "sign-check", body: SignCheckRequest, where: Where): Promise<AssistResult>;
+export function runAssistant(name: "loop-gain", body: LoopGainRequest, where: "copy"): Promise<AssistResult>;
+export function runAssistant(
+  name: AssistantName,
+  body: MultiGainRequest | SignCheckRequest | LoopGainRequest,
+  where: Where,
+): Promise<AssistResult> {
+  return http.post<AssistResult>(machineUrl(where === "machine" ? `/assist/live/${name}` : `/assist/${name}`), body);
+}
+
+/** The assistant running live on the machine now (anyone's), from the pushed status. */
+export const liveRun = computed<AssistProgress | null>(() => status.value?.assist ?? null);
+
+/** End the live run now (any operator, like the E-stop). */
+export function cancelLive(): Promise<void> {
+  return http.post<void>(machineUrl("/assist/live/cancel"), { why: "cancelled in the HMI" });
 }
 
 /** The value of figure `name`, or null. */
@@ -50,4 +68,10 @@ export async function applyProposal(assistant: string, changes: AssistChange[]):
   trial.value = r.changes.length ? { machine: machineId.value, scope, target, applied: r.changes } : null;
   trialMessage.value = "";
   return r;
+}
+
+/** Power the machine off and on: values that take effect at restart (the signs of 004 §3.5)
+ * come into force. Needs control, like a command. */
+export function restartMachine(): Promise<unknown> {
+  return http.post<unknown>(machineUrl("/restart"), {});
 }

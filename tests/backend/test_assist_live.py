@@ -1,0 +1,116 @@
+"""Assistants live, over real HTTP: the experiment runs on the machine itself in its worker,
+paced in real time; everyone watching sees its progress in the status; it can be cancelled,
+an E-stop ends it; each run is audited.
+
+Physics for the numbers: X's drive gives 22857 digits per 1 m/min where the NC assumes 10000,
+so f = 2.2857 [004 §3.6.2]; the axis moves at 200 mm/min for the run's planned time.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+
+from tests.backend.server import Server
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    s = Server(tmp_path_factory.mktemp("live") / "live.sqlite").start()
+    yield s
+    s.close()
+
+
+def _live(srv: Server, mid: str, name: str, body: dict[str, Any]) -> httpx.Response:
+    return srv.http.post(f"/api/machines/{mid}/assist/live/{name}", json=body, timeout=120)
+
+
+class _Background:
+    """A live run whose answer comes later (the test looks at the machine meanwhile)."""
+
+    def __init__(self, srv: Server, mid: str, name: str, body: dict[str, Any]) -> None:
+        self.answer: httpx.Response | None = None
+        self.thread = threading.Thread(target=self._run, args=(srv, mid, name, body))
+        self.thread.start()
+
+    def _run(self, srv: Server, mid: str, name: str, body: dict[str, Any]) -> None:
+        self.answer = _live(srv, mid, name, body)
+
+    def result(self) -> httpx.Response:
+        self.thread.join(60)
+        assert self.answer is not None
+        return self.answer
+
+
+def _progress(srv: Server, mid: str) -> dict[str, Any]:
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        running = srv.status(mid)["assist"]
+        if running is not None:
+            return dict(running)
+        time.sleep(0.05)
+    raise AssertionError("the status never showed the run")
+
+
+def test_live_multi_gain_moves_the_machine_and_proposes_the_correction(
+    srv: Server, lathe: str
+) -> None:
+    body = {"changes": [{"scope": "axis", "target": "X", "name": "sim.drive_gain", "value": 22857}]}
+    assert srv.http.patch(f"/api/machines/{lathe}/parameters", json=body).status_code == 200
+    x0 = srv.axis("X", lathe)["pos_cmd"]
+    run = _Background(srv, lathe, "multi-gain", {"axis": "X", "feed_mm_min": 200})
+    seen = _progress(srv, lathe)
+    assert seen["name"] == "multi-gain" and seen["axis"] == "X" and seen["by"]
+    # the plan: 2 s ramp allowance + 5·3/kv (kv 20/s) + 1 s window, and the move goes on
+    # 2 s more to its target
+    planned_s = 2 + 15 / 20 + 1 + 2
+    assert seen["planned_s"] == pytest.approx(planned_s)
+    r = run.result()
+    assert r.status_code == 200, r.text
+    fig = {f["name"]: f["value"] for f in r.json()["figures"]}
+    assert fig["f"] == pytest.approx(2.2857, rel=0.01)
+    # the machine itself moved: 200 mm/min for the planned time, to its target
+    assert srv.axis("X", lathe)["pos_cmd"] - x0 == pytest.approx(200 / 60 * planned_s, 1e-6)
+    assert srv.status(lathe)["assist"] is None
+    audit = srv.http.get(f"/api/machines/{lathe}/audit").json()["rows"]
+    live = [a for a in audit if a["action"] == "assist live multi-gain"]
+    assert live and live[0]["outcome"] == "ok"
+    assert live[0]["detail"]["figures"]["f"] == pytest.approx(2.2857, rel=0.01)
+
+
+def test_cancel_ends_the_run_and_the_axis_stops(srv: Server, lathe: str) -> None:
+    run = _Background(srv, lathe, "multi-gain", {"axis": "X", "feed_mm_min": 300})
+    _progress(srv, lathe)
+    # one run at a time
+    again = _live(srv, lathe, "multi-gain", {"axis": "Z", "feed_mm_min": 100})
+    assert again.status_code == 409 and "multi-gain runs" in again.text
+    r = srv.http.post(f"/api/machines/{lathe}/assist/live/cancel", json={})
+    assert r.status_code == 204, r.text
+    answer = run.result()
+    assert answer.status_code == 409 and "cancelled" in answer.text
+    deadline = time.monotonic() + 5
+    while srv.axis("X", lathe)["state"] != "STANDSTILL" and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert srv.axis("X", lathe)["state"] == "STANDSTILL"
+    r = srv.http.post(f"/api/machines/{lathe}/assist/live/cancel", json={})
+    assert r.status_code == 409  # nothing runs now
+
+
+def test_an_emergency_stop_ends_the_run(srv: Server, lathe: str) -> None:
+    run = _Background(srv, lathe, "multi-gain", {"axis": "Z", "feed_mm_min": 300})
+    _progress(srv, lathe)
+    assert srv.emergency_stop(lathe).status_code == 200
+    answer = run.result()
+    assert answer.status_code == 409 and "emergency stop" in answer.text
+
+
+def test_a_refused_motion_is_a_422_in_the_ncs_words(srv: Server, lathe: str) -> None:
+    s0 = srv.axis("S1", lathe)
+    r = _live(srv, lathe, "multi-gain", {"axis": "S1", "speed_rpm": 50000})
+    assert r.status_code == 422 and "refused" in r.text
+    assert srv.axis("S1", lathe)["state"] == s0["state"]
