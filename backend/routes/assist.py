@@ -1,15 +1,30 @@
-"""Commissioning assistants on a copy of a machine: multi_gain by experiment, sign check,
-position loop gain."""
+"""Commissioning assistants: multi_gain by experiment and the sign check (on a copy or live),
+the curve run-up and the position loop gain sweep (on copies), the calculators and the
+gear-range preview."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter
 
-from api.assist import AssistResult, LiveCancel, LoopGainRequest, MultiGainRequest, SignCheckRequest
+from api.assist import (
+    AssistResult,
+    CurveFitRequest,
+    CurveRunUpRequest,
+    GearSelectionRequest,
+    GearSelectionResult,
+    LiveCancel,
+    LoopGainRequest,
+    MultiGainCalcRequest,
+    MultiGainRequest,
+    ResolutionRequest,
+    SignCheckRequest,
+    SpeedScalingRequest,
+)
 from api.auth import Action
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import responses
 from backend.services.assist import cancel_live, run_live
+from backend.services.calculators import calculate, gear_selection
 
 router = APIRouter(prefix="/api/machines/{mid}/assist", tags=["assistants"])
 _WHY = {
@@ -59,6 +74,82 @@ async def loop_gain(
     exact-stop window) and a G01 ramp (steady lag v/kv); the highest kv meeting the target
     is proposed as getriebe[g].kv. The live machine does not move."""
     return await services.assistants.run(machine.cfg, "loop-gain", body)
+
+
+@router.post(
+    "/curve-run-up",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_WHY),
+)
+async def curve_run_up(
+    body: CurveRunUpRequest, machine: MachineDep, services: ServicesDep
+) -> AssistResult:
+    """000 §2.8.4 on a copy of the machine: the spindle runs up with M3 in the gear to its
+    top speed (the gear's vb_max, or `speed_rpm`) at the acceleration its parameters allow;
+    a(n) from the recorded actual speed, the curve of type `typ` fitted by least squares and
+    proposed as the gear's beschl_kennlinie."""
+    return await services.assistants.run(machine.cfg, "curve-run-up", body)
+
+
+# The calculators: pure arithmetic, answered in the request (a thread of the pool, not the
+# assistants' process: no kernel, no simulation). The machine supplies the values "before".
+_CALC_WHY = {422: "the inputs do not fit together (which one, and why) or the axis is unknown"}
+
+
+@router.post(
+    "/resolution",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_CALC_WHY),
+)
+def resolution(body: ResolutionRequest, machine: MachineDep) -> AssistResult:
+    """004 §3.4: wegaufz/wegaufn = encoder increments per motor revolution over the distance
+    one motor revolution moves the axis (pitch / i in 0.1 µm, or 360° / i in 0.0001°)."""
+    return calculate(machine.cfg, "resolution", body)
+
+
+@router.post(
+    "/multi-gain-calc",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_CALC_WHY),
+)
+def multi_gain_calc(body: MultiGainCalcRequest, machine: MachineDep) -> AssistResult:
+    """004 §3.6.1: multi_gain = f · n, the command value per motor rpm f (from the drive's
+    scaling) times the motor speed n for 1 m/min (1000 °/min rotary) with the gear i."""
+    return calculate(machine.cfg, "multi-gain-calc", body)
+
+
+@router.post(
+    "/speed-scaling",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_CALC_WHY),
+)
+def speed_scaling(body: SpeedScalingRequest, machine: MachineDep) -> AssistResult:
+    """000 §2.2.4: v_reso_num/v_reso_denom = increments over the distance (0.001°) the
+    spindle covers at that speed in the time base (P-AXIS-00207)."""
+    return calculate(machine.cfg, "speed-scaling", body)
+
+
+@router.post(
+    "/curve-fit",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_CALC_WHY),
+)
+def curve_fit(body: CurveFitRequest, machine: MachineDep) -> AssistResult:
+    """000 §2.8.4: the coefficients of the spindle gear's acceleration curve (types 1, 2, 3)
+    through 3-4 interpolation points, or by least squares through more."""
+    return calculate(machine.cfg, "curve-fit", body)
+
+
+@router.post(
+    "/gear-ranges",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_CALC_WHY),
+)
+def gear_ranges(body: GearSelectionRequest, machine: MachineDep) -> GearSelectionResult:
+    """000 §2.8.2: the main spindle's six speed ranges (as edited, else the machine's), the
+    stage the NC's automatic selection picks for each S in turn, and the edited ranges as
+    parameter changes (spindel[i].range_table[j].min_speed / max_speed)."""
+    return gear_selection(machine.cfg, body)
 
 
 _LIVE_WHY = {

@@ -34,15 +34,18 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     from nc_sim.assist.loop_gain import loop_gain
     from nc_sim.assist.procedure import ExperimentError
     from nc_sim.assist.result import Result
+    from nc_sim.assist.run_up import curve_run_up
+    from nc_sim.errors import NcUsageError
 
     experiments: dict[str, Callable[..., Result]] = {
         "multi-gain": multi_gain_experiment,
         "sign-check": sign_check_experiment,
         "loop-gain": loop_gain,
+        "curve-run-up": lambda cfg, axis, **kw: curve_run_up(cfg, axis, **kw),
     }
     try:
         return experiments[name](cfg, **args).as_json()
-    except ExperimentError as e:
+    except (ExperimentError, NcUsageError) as e:
         return {"error": str(e)}
 
 

@@ -4,6 +4,7 @@ import { useEffect, useRef, useState } from "preact/hooks";
 import { http } from "./api/http";
 import { AuditPanel } from "./panels/AuditPanel";
 import { Banner } from "./panels/Banner";
+import { Calculators } from "./panels/Calculators";
 import { Commissioning } from "./panels/Commissioning";
 import { ControlStrip } from "./panels/ControlStrip";
 import { EstopHint } from "./panels/EstopHint";
@@ -109,7 +110,12 @@ function Hmi() {
             {tab === "Plots" ? <Plots /> : null}
             {tab === "Scope" ? <Scope /> : null}
             {tab === "Parameters" ? <Parameters /> : null}
-            {tab === "Commissioning" ? <Commissioning /> : null}
+            {tab === "Commissioning" ? (
+              <>
+                <Commissioning />
+                <Calculators />
+              </>
+            ) : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}
             {tab === "Audit" ? <AuditPanel /> : null}

@@ -62,7 +62,7 @@ def _polynomial(n: np.ndarray, a: np.ndarray, n_limit: float, a_min: float) -> C
 
 
 def _hyperbola(n: np.ndarray, a: np.ndarray, n_limit: float, a_min: float) -> CurveParams:
-    below, above = n <= n_limit, n >= n_limit
+    above = n >= n_limit
     if np.count_nonzero(above) < 3:
         raise NcUsageError("the hyperbola needs three points at or above the limit speed")
     nu2 = (n[above] / n_limit) ** 2
@@ -72,7 +72,9 @@ def _hyperbola(n: np.ndarray, a: np.ndarray, n_limit: float, a_min: float) -> Cu
     b1 = 1.0 / float(c0)
     b2 = float(c1) * b1
     b3 = float(c2 / c1) if c1 != 0.0 else 0.0
-    a_konst = float(np.mean(a[below])) if np.any(below) else b1 / (1.0 + b2 * (1.0 + b3))
+    # a_konst is the curve's value at n_limit: a constant that is not would put a step into
+    # the curve there, which a searched limit speed then hides between two points
+    a_konst = b1 / (1.0 + b2 * (1.0 + b3))
     return replace(
         _blank(CURVE_HYPERBOLA, a_min), n_limit=n_limit, a_konst=a_konst, b1=b1, b2=b2, b3=b3
     )

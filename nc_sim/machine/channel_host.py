@@ -21,7 +21,7 @@ from nc_sim.plc import Waiter
 from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
 from nc_sim.snapshot import AxisState
 from nc_sim.spindle.coupled import start_tap, start_thread
-from nc_sim.spindle.gear_change import spindle_index
+from nc_sim.spindle.gears import spindle_index
 from nc_sim.spindle.program import program_end, spindle_call, tool_dynamics
 from nc_sim.units import AxisKind
 

@@ -10,22 +10,20 @@ from nc_sim.axis.params import push_params, speed_controlled
 from nc_sim.axis.state import Axis
 from nc_sim.errors import Code
 from nc_sim.events import Event
-from nc_sim.machine.config import MachineConfig
 from nc_sim.snapshot import AxisState
-from nc_sim.spindle.gears import GearChoice, GearRange, m_of, select_gear
+from nc_sim.spindle.gears import (
+    GearChoice,
+    GearRange,
+    m_of,
+    range_table,
+    select_gear,
+    spindle_index,
+)
 from nc_sim.spindle.task import SpindleTask, TaskPhase
 from nc_sim.units import RPM_TO_DEG_S
 
 if TYPE_CHECKING:
     from nc_sim.spindle.control import SpindleControl
-
-
-def spindle_index(cfg: MachineConfig, name: str) -> int | None:
-    """Index i of spindel[i] in the channel list for this spindle."""
-    for i in range(6):
-        if cfg.channel.get(f"spindel[{i}].bezeichnung") == name:
-            return i
-    return None
 
 
 class GearStages:
@@ -42,15 +40,7 @@ class GearStages:
         i = spindle_index(self.sp.cfg, ax.name)
         if i is None:
             return None
-        pre = f"spindel[{i}].range_table"
-        table = [
-            GearRange(
-                float(cfg.channel_raw(f"{pre}[{g}].min_speed")),
-                float(cfg.channel_raw(f"{pre}[{g}].max_speed")),
-            )
-            for g in range(6)
-        ]
-        return i, table
+        return i, range_table(cfg, i)
 
     def choose(self, ax: Axis, rpm: float, programmed: int | None) -> GearChoice:
         gt = self.table(ax)

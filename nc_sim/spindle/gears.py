@@ -1,7 +1,8 @@
 """Gear stage selection for the main spindle [000 §2.8.2, DOMAIN §4.2].
 
 Gear stage g (1..6) is M(39+g), range_table[g-1] and gear record getriebe[g-1].
-Pure functions: the machine turns the result into a change sequence or a job error.
+Pure functions (no kernel: the gateway previews the rule with them); the machine turns the
+result into a change sequence or a job error.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from nc_sim.errors import Code
+from nc_sim.machine.config import MachineConfig
 
 
 @dataclass(frozen=True)
@@ -31,6 +33,26 @@ class GearChoice:
     gear: int | None
     error: Code | None = None
     detail: str = ""
+
+
+def spindle_index(cfg: MachineConfig, name: str) -> int | None:
+    """Index i of spindel[i] in the channel list for this spindle."""
+    for i in range(6):
+        if cfg.channel.get(f"spindel[{i}].bezeichnung") == name:
+            return i
+    return None
+
+
+def range_table(cfg: MachineConfig, i: int) -> list[GearRange]:
+    """The six speed ranges of spindel[i] (P-CHAN-00058 min_speed, P-CHAN-00055 max_speed)."""
+    pre = f"spindel[{i}].range_table"
+    return [
+        GearRange(
+            float(cfg.channel_raw(f"{pre}[{g}].min_speed")),
+            float(cfg.channel_raw(f"{pre}[{g}].max_speed")),
+        )
+        for g in range(6)
+    ]
 
 
 def m_of(gear: int) -> int:

@@ -80,6 +80,13 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/machines/{mid}/assist/multi-gain"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/sign-check"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/loop-gain"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/curve-run-up"): ("operator", FREE),
+    # the calculators and the gear-range preview: pure arithmetic, proposals to apply
+    ("POST", "/api/machines/{mid}/assist/resolution"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/multi-gain-calc"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/speed-scaling"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/curve-fit"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/gear-ranges"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/live/multi-gain"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/assist/live/sign-check"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/assist/live/cancel"): ("operator", FREE),

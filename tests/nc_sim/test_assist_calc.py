@@ -195,3 +195,15 @@ def test_run_up_recovers_the_plants_curve_within_2_percent() -> None:
     assert changes["getriebe[5].beschl_kennlinie.n_grenz"].after == pytest.approx(
         12000000, rel=0.03
     )
+
+
+def test_a_fitted_hyperbola_has_no_step_at_its_limit_speed() -> None:
+    """Least squares through the manual's four points: below n_limit the curve is a_konst,
+    above it the hyperbola; the two meet (a step there would sit between the points unseen)."""
+    r = curve_fit(1, MANUAL_POINTS)
+    f = {x.name: x.value for x in r.figures}
+    law = (1, f["n_limit"], f["a_konst"], f["b1"], f["b2"], f["b3"], 0, 0, 0, 0)
+    below = curve_accel(law[0], f["n_limit"] * 0.999, *law[1:])
+    above = curve_accel(law[0], f["n_limit"] * 1.001, *law[1:])
+    assert below == pytest.approx(above, rel=0.01)
+    assert r.figure("max_error") < 0.05  # and it still passes near the points

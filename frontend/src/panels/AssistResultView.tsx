@@ -8,7 +8,7 @@ import { AssistChart, type Level } from "./AssistChart";
 import { LoopGainView } from "./LoopGainResult";
 
 /** Names the manual gives the figures, and the decimals they read with. */
-const FIGURES: Record<string, { label: string; decimals: number }> = {
+const FIGURES: Record<string, { label: string; decimals: number; sig?: number }> = {
   v: { label: "v", decimals: 1 },
   s: { label: "s", decimals: 5 },
   k: { label: "k", decimals: 3 },
@@ -20,15 +20,49 @@ const FIGURES: Record<string, { label: string; decimals: number }> = {
   window_s: { label: "averaged over", decimals: 3 },
   max_lag: { label: "max lag", decimals: 4 },
   lag_max: { label: "lag_max", decimals: 4 },
+  // the calculators (004 §3.4, §3.6.1, 000 §2.2.4) and the acceleration curve (000 §2.8.4)
+  resolution: { label: "wegaufz / wegaufn", decimals: 0, sig: 9 },
+  distance_per_motor_rev: { label: "distance per motor revolution", decimals: 1 },
+  n_motor_rpm: { label: "n (motor)", decimals: 4 },
+  v_reso: { label: "v_reso_num / v_reso_denom", decimals: 0, sig: 9 },
+  distance_per_time_base: { label: "distance per time base", decimals: 1 },
+  n_limit: { label: "n_limit", decimals: 1 },
+  a_konst: { label: "a_konst", decimals: 1 },
+  b1: { label: "b1", decimals: 0, sig: 9 },
+  b2: { label: "b2", decimals: 0, sig: 9 },
+  b3: { label: "b3", decimals: 0, sig: 9 },
+  a_max: { label: "a_max", decimals: 1 },
+  n1: { label: "N1", decimals: 1 },
+  n2: { label: "N2", decimals: 1 },
+  max_error: { label: "max error", decimals: 0, sig: 3 },
+  run_up_s: { label: "run-up time", decimals: 2 },
+  "multi-gain-calc.f": { label: "f", decimals: 4 },
+  "multi-gain-calc.multi_gain": { label: "multi_gain", decimals: 4 },
 };
 const HIDDEN = new Set(["runaway", "observed"]); // the sign check's verdict says them in words
+
+/** A figure with its decimals, or in significant digits where those decimals would lose it
+ * (the curve's b3 is of order 1e-10). */
+export function figureText(v: number, decimals: number, sig?: number): string {
+  if (v === 0 || !Number.isFinite(v) || (!sig && Math.abs(v) >= 10 ** (2 - decimals))) return fmt(v, decimals);
+  const digits = sig ?? 9;
+  const text = Math.abs(v) < 1e-3 || Math.abs(v) >= 1e7 ? v.toExponential(digits - 1) : v.toPrecision(digits);
+  return text.replace(/-/g, "−");
+}
 
 /** |f − 1| within this: k equals kv (004 §3.6.2 equation 1), nothing left to correct. */
 export const F_TOLERANCE = 0.01;
 
+/** f of the multi_gain experiment (k against kv); the calculator's f is another figure. */
+const checkFactor = (r: AssistResult): number | null => (r.assistant === "multi-gain" ? figure(r, "f") : null);
+
+/** A figure's name and decimals: the assistant's own first (the calculator's f and multi_gain
+ * are not the experiment's). */
+const figureSpec = (r: AssistResult, name: string) => FIGURES[`${r.assistant}.${name}`] ?? FIGURES[name];
+
 /** The multi_gain run found k = kv already: its proposal is residue, not a correction. */
 export const settled = (r: AssistResult): boolean => {
-  const f = figure(r, "f");
+  const f = checkFactor(r);
   return f !== null && Math.abs(f - 1) <= F_TOLERANCE;
 };
 
@@ -56,7 +90,7 @@ function levels(r: AssistResult, spindle: boolean): Level[] {
 
 export function AssistResultView(props: { result: AssistResult; spindle: boolean }) {
   const r = props.result;
-  const f = figure(r, "f");
+  const f = checkFactor(r);
   const lag = r.series.find((s) => s.name === "lag");
   const shown = r.figures.filter((x) => !HIDDEN.has(x.name));
   return (
@@ -87,9 +121,9 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
           <tbody>
             {shown.map((x) => (
               <tr key={x.name} data-testid={`assist-fig-row-${x.name}`}>
-                <td class="mono">{FIGURES[x.name]?.label ?? x.name}</td>
+                <td class="mono">{figureSpec(r, x.name)?.label ?? x.name}</td>
                 <td class="num" data-testid={`assist-fig-${x.name}`}>
-                  {fmt(x.value, FIGURES[x.name]?.decimals ?? 4)}
+                  {figureText(x.value, figureSpec(r, x.name)?.decimals ?? 4, figureSpec(r, x.name)?.sig)}
                 </td>
                 <td>{x.unit}</td>
                 <td class="hint">{x.text}</td>
