@@ -86,6 +86,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     # on a copy of the machine: changes nothing, but runs a process for seconds
     ("POST", "/api/machines/{mid}/assist/multi-gain"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/sign-check"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/loop-gain"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/curve-run-up"): ("operator", FREE),
     # the calculators and the gear-range preview: pure arithmetic, proposals to apply
     ("POST", "/api/machines/{mid}/assist/resolution"): ("operator", FREE),
