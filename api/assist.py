@@ -1,4 +1,4 @@
-"""Commissioning assistants [004 §3.5, §3.6.2]: what to run, and what they answer."""
+"""Commissioning assistants [004 §3.5, §3.6]: what to run, and what they answer."""
 
 from __future__ import annotations
 
@@ -30,6 +30,29 @@ class SignCheckRequest(BaseModel):
     distance: float = Field(1.0, ge=-100, le=100, description="mm (° for rotary)")
     feed_mm_min: float = Field(100.0, gt=0, le=1e5, description="mm/min (°/min)")
     observed: Literal[1, -1] | None = None
+
+
+KvPerS = Annotated[float, Field(gt=0, le=10000, description="kv, 1/s")]
+
+
+class LoopGainRequest(BaseModel):
+    """The position loop gain sweep (004 §3.6): at each kv a G00 step and a G01 ramp on a
+    copy; the highest kv whose step overshoots at most `overshoot_pct` and settles into the
+    exact-stop window within `settle_ms` is proposed."""
+
+    axis: AxisName
+    kvs: list[KvPerS] | None = Field(
+        None, min_length=1, max_length=12, description="kv values to try, 1/s (null: 0.5×-3×)"
+    )
+    overshoot_pct: float = Field(5.0, ge=0, le=100, description="target: step overshoot, %")
+    settle_ms: float = Field(200.0, gt=0, le=10000, description="target: step settling, ms")
+    step: float | None = Field(
+        None, gt=0, le=100, description="G00 step, mm (° for rotary); null: 20 exact-stop windows"
+    )
+    feed_mm_min: float | None = Field(
+        None, gt=0, le=1e5, description="G01 ramp feed, mm/min (°/min); null: 5 % of rapid"
+    )
+    direction: Literal[1, -1] = 1
 
 
 class LiveCancel(BaseModel):

@@ -17,6 +17,7 @@ from pathlib import Path
 from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
 from nc_sim.assist.curve_fit import curve_fit
 from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
+from nc_sim.assist.loop_gain import loop_gain
 from nc_sim.assist.result import Result
 from nc_sim.assist.run_up import curve_run_up
 from nc_sim.errors import NcUsageError
@@ -236,9 +237,48 @@ def _run_sign_check(args: argparse.Namespace, machine: Callable[[], MachineConfi
     return sign_check_experiment(machine(), args.axis, args.distance, args.feed, args.observed)
 
 
+def _kvs(text: str) -> list[float]:
+    try:
+        return [float(k) for k in text.split(",") if k.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"kv values must be numbers (1/s) separated by commas, not {text!r}"
+        ) from None
+
+
+def _setup_loop_gain(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--axis", required=True, help="axis name (X)")
+    p.add_argument(
+        "--kv", type=_kvs, help="kv values to try, 1/s: 10,20,40 (default 0.5x to 3x the axis' kv)"
+    )
+    p.add_argument(
+        "--overshoot-pct", type=float, default=5.0, help="target: step overshoot, %% (default 5)"
+    )
+    p.add_argument(
+        "--settle-ms", type=float, default=200.0, help="target: step settling, ms (default 200)"
+    )
+    p.add_argument("--step", type=float, help="G00 step, mm or ° (default 20 exact-stop windows)")
+    p.add_argument("--feed", type=float, help="G01 ramp feed, mm/min (default 5 %% of rapid)")
+    p.add_argument("--direction", type=int, default=1, choices=(1, -1))
+
+
+def _run_loop_gain(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
+    return loop_gain(
+        machine(),
+        args.axis,
+        args.kv,
+        args.overshoot_pct,
+        args.settle_ms,
+        step=args.step,
+        feed_mm_min=args.feed,
+        direction=args.direction,
+    )
+
+
 ASSISTANTS: dict[str, tuple[Setup, Run]] = {
     "multi-gain": (_setup_multi_gain, _run_multi_gain),
     "sign-check": (_setup_sign_check, _run_sign_check),
+    "loop-gain": (_setup_loop_gain, _run_loop_gain),
     "resolution": (_setup_resolution, _run_resolution),
     "multi-gain-calc": (_setup_multi_gain_calc, _run_multi_gain_calc),
     "speed-scaling": (_setup_speed_scaling, _run_speed_scaling),

@@ -75,14 +75,18 @@ def measure(
     band_pct: float = 2.0,
     band_abs: float | None = None,
     t_ref_s: float | None = None,
+    final: float | None = None,
 ) -> Measurements:
     """Measurements of y(t). The settling band is `band_abs` when given, else `band_pct` % of
     the step (of the largest excursion from the final value when there is no step); settling
-    is timed from `t_ref_s` (default: the window start, e.g. pass the trigger time)."""
+    is timed from `t_ref_s` (default: the window start, e.g. pass the trigger time). `final`
+    is the value y settles to when it is known (a commanded target), else the window's end
+    tells it."""
     if t.size == 0 or t.size != y.size:
         raise ValueError("measure: t and y need the same non-zero length")
     n_final = max(1, round(y.size * FINAL_SHARE))
-    initial, final = float(y[0]), float(np.mean(y[-n_final:]))
+    initial = float(y[0])
+    final = float(np.mean(y[-n_final:])) if final is None else final
     step = final - initial
     end = y[-n_final:]
     white = noise_std(y)

@@ -21,7 +21,10 @@ ASSISTANTS = {
     "multi-gain": ("multi_gain by experiment", "004 §3.6.2"),
     "sign-check": ("Direction and sign check", "004 §3.5"),
     "curve-run-up": ("Acceleration curve from a run-up", "000 §2.8.4"),
+    "loop-gain": ("Position loop gain", "004 §3.6"),
 }
+MAX_LINES = 4  # series in one plot before they are split by name
+MAX_LEVELS = 3  # reference levels drawn on one plot
 AXIS_KINDS = {"linear": "linear axis", "rotary": "rotary axis", "spindle": "spindle"}
 
 
@@ -178,26 +181,32 @@ def _cover(d: ReportData) -> str:
 
 def _run_plot(run: AssistRun) -> str:
     """One plot per pair of units: series over the same quantities share it (measured
-    points and their fit)."""
-    groups: dict[tuple[str, str], list[AssistSeries]] = {}
+    points and their fit); a crowd of them is split by name (step@10 … and ramp_lag@10 …)."""
+    groups: dict[tuple[str, str, str], list[AssistSeries]] = {}
+    by_units: dict[tuple[str, str], list[AssistSeries]] = {}
     for s in run.result.series:
-        groups.setdefault((s.x_unit, s.y_unit), []).append(s)
+        by_units.setdefault((s.x_unit, s.y_unit), []).append(s)
+    for (x_unit, y_unit), series in by_units.items():
+        for s in series:
+            kind = s.name.split("@")[0] if len(series) > MAX_LINES else ""
+            groups.setdefault((x_unit, y_unit, kind), []).append(s)
     out = []
-    for (x_unit, y_unit), series in groups.items():
-        # figures in the series' own unit are levels worth seeing on it (the mean lag, the
-        # lag monitoring limit)
+    for (x_unit, y_unit, _), series in groups.items():
+        # a few figures in the series' own unit are levels worth seeing on it (the mean lag,
+        # the lag monitoring limit); many would hide the data
         refs = [
             (f"{f.name} = {number(f.value)} {f.unit}", f.value)
             for f in run.result.figures
             if y_unit and f.unit == y_unit
         ]
+        refs = refs if len(refs) <= MAX_LEVELS else []
         x_title = "time" if x_unit == "s" else ""  # else the unit says (a speed: °/s)
         y_title = series[0].name if len(series) == 1 else ""
         lines = [svg.Line(s.name, s.x, s.y) for s in series]
         plot = svg.Plot(lines, x_title, x_unit, y_title, y_unit, refs)
         names = ", ".join(s.name for s in series)
         over = f" over {x_title}" if x_title else ""
-        stored = ", ".join(str(len(s.x)) for s in series)
+        stored = sum(len(s.x) for s in series)
         out.append(
             f'<figure class="plot">{svg.render(plot)}<figcaption>{e(names)}{over}'
             f" (run #{run.id}, {stored} stored points)</figcaption></figure>"

@@ -15,7 +15,9 @@ from html import escape
 
 MAX_POINTS = 2000  # per polyline; longer series are thinned to min/max per column
 Y_PAD = 0.05  # of the data's span, above and below
-COLOURS = ("#1f5fa8", "#c2410c", "#15803d", "#7e22ce")
+COLOURS = ("#1f5fa8", "#c2410c", "#15803d", "#7e22ce", "#b45309", "#0e7490", "#be185d", "#4d7c0f")
+LEGEND_PER_ROW = 5  # legend entries under the plot, per row
+LEGEND_ROW_PX = 16
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,10 @@ def _range(values: list[float]) -> tuple[float, float]:
     return lo, hi
 
 
+def _legend_rows(plot: Plot) -> int:
+    return 0 if len(plot.lines) < 2 else -(-len(plot.lines) // LEGEND_PER_ROW)
+
+
 def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | None:
     """The plot area and the range it shows: x tight to the data, y taking in the data and the
     reference levels near it, with a margin; None without a single finite point."""
@@ -130,7 +136,7 @@ def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | Non
     y0, y1 = min([y0, *near]), max([y1, *near])
     pad = (y1 - y0) * Y_PAD  # the line clear of the frame
     y0, y1 = y0 - pad, y1 + pad
-    left, right, top, bottom = 64.0, 16.0, 12.0, 44.0
+    left, right, top, bottom = 64.0, 16.0, 12.0, 44.0 + _legend_rows(plot) * LEGEND_ROW_PX
     return Frame(left, top, plot.width - left - right, plot.height - top - bottom, x0, x1, y0, y1)
 
 
@@ -169,7 +175,7 @@ def render(plot: Plot) -> str:
     x_title = f"{plot.x_title} [{plot.x_unit}]".strip() if plot.x_unit else plot.x_title
     y_title = f"{plot.y_title} [{plot.y_unit}]".strip() if plot.y_unit else plot.y_title
     out.append(
-        f'<text x="{f.left + f.width / 2}" y="{h - 6}" text-anchor="middle">'
+        f'<text x="{f.left + f.width / 2}" y="{bottom + 32}" text-anchor="middle">'
         f"{escape(x_title)}</text>"
         f'<text transform="translate(14 {f.top + f.height / 2}) rotate(-90)" '
         f'text-anchor="middle">{escape(y_title)}</text>'
@@ -201,12 +207,16 @@ def render(plot: Plot) -> str:
             f'<polyline data-series="{escape(line.label)}" fill="none" stroke="{colour}" '
             f'stroke-width="1.5" points="{coords}"/>'
         )
-    if len(plot.lines) > 1:
+    if len(plot.lines) > 1:  # the legend in rows under the x axis' title
+        column = f.width / LEGEND_PER_ROW
         for i, line in enumerate(plot.lines):
             colour = COLOURS[i % len(COLOURS)]
+            x = f.left + (i % LEGEND_PER_ROW) * column
+            y = bottom + 50 + (i // LEGEND_PER_ROW) * LEGEND_ROW_PX
             out.append(
-                f'<text x="{f.left + 8}" y="{f.top + 16 + 14 * i}" fill="{colour}">'
-                f"{escape(line.label)}</text>"
+                f'<line x1="{x:.1f}" y1="{y - 4}" x2="{x + 16:.1f}" y2="{y - 4}" '
+                f'stroke="{colour}" stroke-width="2"/>'
+                f'<text x="{x + 20:.1f}" y="{y}">{escape(line.label)}</text>'
             )
     out.append("</svg>")
     return "".join(out)

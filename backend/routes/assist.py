@@ -1,5 +1,6 @@
 """Commissioning assistants: multi_gain by experiment and the sign check (on a copy or live),
-the curve run-up (on a copy), the calculators and the gear-range preview."""
+the curve run-up and the position loop gain sweep (on copies), the calculators and the
+gear-range preview."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from api.assist import (
     GearSelectionRequest,
     GearSelectionResult,
     LiveCancel,
+    LoopGainRequest,
     MultiGainCalcRequest,
     MultiGainRequest,
     ResolutionRequest,
@@ -60,6 +62,22 @@ async def sign_check(
     variable (vz_stellgr) or of the actual value (vz_istw) is found before lag monitoring
     trips, from the way the machine moved (`observed`, else the simulated plant's). Stored."""
     result = await services.assistants.run(machine.cfg, "sign-check", body)
+    await services.assist_runs.record(machine.id, actor.name, result, live=False)
+    return result
+
+
+@router.post(
+    "/loop-gain",
+    dependencies=[permit(Action.ASSIST)],
+    responses=responses(404, 422, why=_WHY),
+)
+async def loop_gain(
+    body: LoopGainRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> AssistResult:
+    """004 §3.6 on copies of the machine, one per kv: a G00 step (overshoot, settling into the
+    exact-stop window) and a G01 ramp (steady lag v/kv); the highest kv meeting the target
+    is proposed as getriebe[g].kv. The live machine does not move. Stored."""
+    result = await services.assistants.run(machine.cfg, "loop-gain", body)
     await services.assist_runs.record(machine.id, actor.name, result, live=False)
     return result
 

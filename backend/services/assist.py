@@ -31,6 +31,7 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     """In the assistants' process: run one experiment; its answer or {"error": why}. The
     kernel is imported here, in that process: the gateway itself never loads it."""
     from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
+    from nc_sim.assist.loop_gain import loop_gain
     from nc_sim.assist.procedure import ExperimentError
     from nc_sim.assist.result import Result
     from nc_sim.assist.run_up import curve_run_up
@@ -39,6 +40,7 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     experiments: dict[str, Callable[..., Result]] = {
         "multi-gain": multi_gain_experiment,
         "sign-check": sign_check_experiment,
+        "loop-gain": loop_gain,
         "curve-run-up": lambda cfg, axis, **kw: curve_run_up(cfg, axis, **kw),
     }
     try:

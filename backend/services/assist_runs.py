@@ -21,6 +21,7 @@ _SUMMARY = {
     "multi-gain": ("k", "f", "kv_new"),
     "sign-check": ("max_lag", "lag_max", "runaway"),
     "curve-run-up": ("max_error", "run_up_s"),
+    "loop-gain": ("kv", "kv_new"),
 }
 _INFO = "id, machine, assistant, user, time, live, ok, axis, summary"
 

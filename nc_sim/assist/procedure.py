@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Generator
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
@@ -43,9 +44,10 @@ class Wait:
 
 Procedure = Generator[Wait, np.ndarray, Result]
 Start = Callable[[Machine], Procedure]
+T = TypeVar("T")  # what a procedure answers: a Result, or a part of one (a loop gain's step)
 
 
-def on_copy(cfg: MachineConfig, start: Start) -> Result:
+def on_copy(cfg: MachineConfig, start: Callable[[Machine], Generator[Wait, np.ndarray, T]]) -> T:
     """Run the procedure `start` makes on a fresh machine built from `cfg` and powered on as
     a scenario is; the machine the configuration came from does not move."""
     sim = Simulation(cfg.cycle_s)
@@ -62,7 +64,7 @@ def on_copy(cfg: MachineConfig, start: Start) -> Result:
             sim.run(rec.shape[0], rec)
             wait = proc.send(rec)
     except StopIteration as done:
-        result: Result = done.value
+        result: T = done.value
         return result
 
 

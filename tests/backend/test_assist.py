@@ -68,3 +68,31 @@ def test_bad_requests_are_422_and_say_why(srv: Server, lathe: str) -> None:
     r = _assist(srv, lathe, "multi-gain", {"axis": "X", "feed_mm_min": -5})
     assert r.status_code == 422 and "feed_mm_min" in r.text
     assert _assist(srv, "nope", "sign-check", {"axis": "X"}).status_code == 404
+
+
+def test_the_loop_gain_sweep_proposes_kv_and_the_machine_stays(srv: Server, lathe: str) -> None:
+    """X on a 20 ms drive: the second-order loop's step overshoots 0.09 % at kv 15/s and
+    7.0 % at 30/s (ζ = 1/(2√(kv·T))); with 5 % allowed 15 is proposed; the ramp's lag at
+    600 mm/min (10 mm/s) is v/kv."""
+    body = {"changes": [{"scope": "axis", "target": "X", "name": "sim.drive_t", "value": 20000}]}
+    assert srv.http.patch(f"/api/machines/{lathe}/parameters", json=body).status_code == 200
+    x0 = srv.axis("X", lathe)["pos_cmd"]
+    req = {"axis": "X", "kvs": [10, 15, 30], "settle_ms": 300, "feed_mm_min": 600}
+    r = _assist(srv, lathe, "loop-gain", req)
+    assert r.status_code == 200, r.text
+    res = r.json()
+    fig = {f["name"]: f["value"] for f in res["figures"]}
+    assert res["ok"] and fig["kv_new"] == 15.0
+    assert fig["lag@15"] == pytest.approx(10.0 / 15.0, abs=1e-4)
+    assert fig["overshoot_pct@30"] > 5.0 >= fig["overshoot_pct@15"]
+    assert [(c["parameter"], c["after"]) for c in res["changes"]] == [("getriebe[0].kv", 1500)]
+    assert srv.axis("X", lathe)["pos_cmd"] == x0  # the live machine did not move
+
+
+def test_bad_loop_gain_requests_are_422_and_say_why(srv: Server, lathe: str) -> None:
+    r = _assist(srv, lathe, "loop-gain", {"axis": "X", "kvs": [10, -5]})
+    assert r.status_code == 422 and "kvs" in r.text
+    r = _assist(srv, lathe, "loop-gain", {"axis": "X", "kvs": list(range(1, 20))})
+    assert r.status_code == 422 and "kvs" in r.text
+    r = _assist(srv, lathe, "loop-gain", {"axis": "S1"})
+    assert r.status_code == 422 and "spindle" in r.text

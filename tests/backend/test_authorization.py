@@ -93,6 +93,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/machines/{mid}/report/sign-offs"): ("observer", FREE),
     # a statement about the machine, not a change to it: no control needed
     ("POST", "/api/machines/{mid}/report/sign-off"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/loop-gain"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/curve-run-up"): ("operator", FREE),
     # the calculators and the gear-range preview: pure arithmetic, proposals to apply
     ("POST", "/api/machines/{mid}/assist/resolution"): ("operator", FREE),

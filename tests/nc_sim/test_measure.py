@@ -126,3 +126,18 @@ def test_a_quantised_step_of_many_increments_is_measured() -> None:
     assert m.step_found
     assert m.rise_time_s == pytest.approx(TAU * math.log(9), abs=2e-3)
     assert m.overshoot_pct == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_known_final_value_is_the_one_overshoot_and_settling_refer_to() -> None:
+    """A window cut before the response has settled: its end is not the final value, the
+    commanded target is. A first-order step to 1 cut at 2τ: without `final` the end (≈ 0.85)
+    would be taken as final and the response would "overshoot" it; with final = 1 there is no
+    overshoot and it never settles into ±2 % inside the window (it needs τ·ln 50 ≈ 3.9τ)."""
+    t = np.arange(0, 2 * TAU, 1e-4)
+    y = 1 - np.exp(-t / TAU)
+    guessed = measure(t, y)
+    assert guessed.overshoot_pct is not None and guessed.overshoot_pct > 0
+    m = measure(t, y, final=1.0)
+    assert m.final == 1.0
+    assert m.overshoot_pct == pytest.approx(0.0, abs=1e-9)
+    assert m.settling_time_s is None

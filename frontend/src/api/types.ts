@@ -84,6 +84,7 @@ export type UserCreate = S["UserCreate"];
 export type UserChange = S["UserChange"];
 export type MultiGainRequest = S["MultiGainRequest"];
 export type SignCheckRequest = S["SignCheckRequest"];
+export type LoopGainRequest = S["LoopGainRequest"];
 export type AssistResult = S["AssistResult"];
 export type AssistChange = S["AssistChange"];
 export type AssistSeries = S["AssistSeries"];

@@ -5,6 +5,7 @@ import type { AssistResult } from "../api/types";
 import { figure } from "../state/assist";
 import { fmt } from "../ui/format";
 import { AssistChart, type Level } from "./AssistChart";
+import { LoopGainView } from "./LoopGainResult";
 
 /** Names the manual gives the figures, and the decimals they read with. */
 const FIGURES: Record<string, { label: string; decimals: number; sig?: number }> = {
@@ -106,6 +107,7 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
           </p>
         )
       ) : null}
+      {r.assistant === "loop-gain" ? <LoopGainView result={r} /> : (
       <div class="assist-figures">
         <table class="meas-table" data-testid="assist-figures">
           <thead>
@@ -135,10 +137,11 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
           </div>
         ) : null}
       </div>
+      )}
       {r.notes.length ? (
         <ul class="assist-notes" data-testid="assist-notes">
           {r.notes.map((n) => (
-            <li key={n} class={/^f = .*> 1|tripped|job error|ran away/.test(n) ? "warn" : ""}>
+            <li key={n} class={/^f = .*> 1|tripped|job error|ran away|^no kv/.test(n) ? "warn" : ""}>
               {n}
             </li>
           ))}

@@ -15,10 +15,12 @@ import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { AssistResultView, settled } from "./AssistResultView";
 import { LiveProgress } from "./LiveProgress";
+import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
 
 const ASSISTANTS: { name: AssistantName; label: string; section: string }[] = [
   { name: "multi-gain", label: "multi_gain by experiment", section: "004 §3.6.2" },
   { name: "sign-check", label: "Direction and sign check", section: "004 §3.5" },
+  { name: "loop-gain", label: "Position loop gain (kv sweep)", section: "004 §3.6" },
 ];
 
 /** The limits of api/assist.py, checked as the engineer types (the service checks again). */
@@ -77,7 +79,11 @@ export function Commissioning() {
   const values = checked(inp, unit);
   const used =
     name === "multi-gain" ? [spindle ? values.speed : values.feed, values.window] : [values.distance, values.signFeed];
-  const errors = used.filter((v): v is string => typeof v === "string");
+  // loop gain (LoopGainSetup.tsx): its own inputs, checked as typed
+  const [lg, setLg] = useState(LOOP_GAIN_START);
+  const lgValues = checkLoopGain(lg);
+  const axNow = useAxisNow(ax);
+  const errors = name === "loop-gain" ? loopGainErrors(lgValues) : used.filter((v): v is string => typeof v === "string");
   const mayAssist = may("assist");
   const busy = busySince !== null;
   const blocked = configureBlocked.value;
@@ -111,7 +117,9 @@ export function Commissioning() {
     setRefusal(null);
     try {
       const r =
-        name === "multi-gain"
+        name === "loop-gain"
+          ? await runAssistant("loop-gain", loopGainRequest(ax.name, lgValues), "copy")
+          : name === "multi-gain"
           ? await runAssistant("multi-gain", {
               axis: ax.name,
               feed_mm_min: spindle ? null : (values.feed as number),
@@ -231,6 +239,8 @@ export function Commissioning() {
                 </select>
               </label>
             </>
+          ) : name === "loop-gain" ? (
+            <LoopGainFields inp={lg} set={setLg} values={lgValues} busy={busy} />
           ) : (
             <>
               {field("distance", "Distance", unit, "assist-distance")}
@@ -246,7 +256,7 @@ export function Commissioning() {
               </label>
             </>
           )}
-          {ax ? <p class="assist-what" data-testid="assist-what">{describe(name, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
+          {ax ? <p class="assist-what" data-testid="assist-what">{name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
               title={mayAssist ? "a copy of the machine, in simulated time: nothing moves" : `a user in the role ${me.value?.role ?? ""} may not run assistants`}
@@ -254,8 +264,8 @@ export function Commissioning() {
               {busy && where === "copy" ? "Running…" : applied && name === "multi-gain" ? "Preview again to check" : result ? "Preview again" : "Preview on a copy"}
             </button>
             <button type="button" class="secondary" data-testid="assist-run-live"
-              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming}
-              title={liveBlocked || "the machine itself moves: you confirm the motion first"} onClick={() => setConfirming(true)}>
+              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming || name === "loop-gain"}
+              title={name === "loop-gain" ? "the kv sweep runs on copies only: each kv on a copy of its own" : liveBlocked || "the machine itself moves: you confirm the motion first"} onClick={() => setConfirming(true)}>
               Run on the machine…
             </button>
             {busy && where === "copy" ? (
@@ -303,7 +313,9 @@ export function Commissioning() {
                 {applied ? (
                   <span class="hint" data-testid="assist-applied">
                     Applied: Keep or Revert in the trial bar above.
-                    {name === "multi-gain"
+                    {name === "loop-gain"
+                      ? " Run again to see the sweep around the new kv."
+                      : name === "multi-gain"
                       ? " Run again to check: k must now equal kv (f ≈ 1)."
                       : restarted
                         ? " Restarted: the new signs are in force. Run again to check."

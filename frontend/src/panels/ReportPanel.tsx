@@ -18,6 +18,7 @@ const LABELS: Record<string, string> = {
   "multi-gain": "multi_gain by experiment",
   "sign-check": "Direction and sign check",
   "curve-run-up": "Acceleration curve from a run-up",
+  "loop-gain": "Position loop gain",
 };
 
 function refusalOf(e: unknown): Refusal {

@@ -2,11 +2,20 @@
 // its proposal through the parameter write the editor uses, on trial (Keep / Revert).
 import { computed } from "@preact/signals";
 import { http } from "../api/http";
-import type { AssistChange, AssistProgress, AssistResult, MultiGainRequest, ParameterWriteResult, Scope, SignCheckRequest } from "../api/types";
+import type {
+  AssistChange,
+  AssistProgress,
+  AssistResult,
+  LoopGainRequest,
+  MultiGainRequest,
+  ParameterWriteResult,
+  Scope,
+  SignCheckRequest,
+} from "../api/types";
 import { type Change, loadList, trial, trialMessage, writeChanges } from "./params";
 import { machineId, machineUrl, status } from "./session";
 
-export type AssistantName = "multi-gain" | "sign-check";
+export type AssistantName = "multi-gain" | "sign-check" | "loop-gain";
 
 /** Where a run happens: on a copy of the machine in simulated time, or on the machine. */
 export type Where = "copy" | "machine";
@@ -15,7 +24,12 @@ export type Where = "copy" | "machine";
  * 409 a live run cancelled or another running). */
 export function runAssistant(name: "multi-gain", body: MultiGainRequest, where: Where): Promise<AssistResult>;
 export function runAssistant(name: "sign-check", body: SignCheckRequest, where: Where): Promise<AssistResult>;
-export function runAssistant(name: AssistantName, body: MultiGainRequest | SignCheckRequest, where: Where): Promise<AssistResult> {
+export function runAssistant(name: "loop-gain", body: LoopGainRequest, where: "copy"): Promise<AssistResult>;
+export function runAssistant(
+  name: AssistantName,
+  body: MultiGainRequest | SignCheckRequest | LoopGainRequest,
+  where: Where,
+): Promise<AssistResult> {
   return http.post<AssistResult>(machineUrl(where === "machine" ? `/assist/live/${name}` : `/assist/${name}`), body);
 }
 
