@@ -178,7 +178,9 @@ async def multi_gain_live(
     """004 §3.6.2 on the machine itself, as paced (real time, fast or stepped): the axis
     moves (the spindle turns) for the run's planned time, which the machine's status shows
     as `assist` with its phase while it runs. Needs control of the machine."""
-    return await run_live(machine, "multi-gain", body, actor, services.audit)
+    result = await run_live(machine, "multi-gain", body, actor, services.audit)
+    await services.assist_runs.record(machine.id, actor.name, result, live=True)
+    return result
 
 
 @router.post(
@@ -191,7 +193,9 @@ async def sign_check_live(
 ) -> AssistResult:
     """004 §3.5 on the machine itself: the short move, watched cycle by cycle; a runaway
     switches the servo off (TorquePermission 0) in the cycle it is seen. Needs control."""
-    return await run_live(machine, "sign-check", body, actor, services.audit)
+    result = await run_live(machine, "sign-check", body, actor, services.audit)
+    await services.assist_runs.record(machine.id, actor.name, result, live=True)
+    return result
 
 
 @router.post(

@@ -81,6 +81,9 @@ def test_live_multi_gain_moves_the_machine_and_proposes_the_correction(
     live = [a for a in audit if a["action"] == "assist live multi-gain"]
     assert live and live[0]["outcome"] == "ok"
     assert live[0]["detail"]["figures"]["f"] == pytest.approx(2.2857, rel=0.01)
+    # stored for the commissioning report, as measured on the machine itself
+    runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    assert runs[0]["assistant"] == "multi-gain" and runs[0]["live"] is True
 
 
 def test_cancel_ends_the_run_and_the_axis_stops(srv: Server, lathe: str) -> None:
