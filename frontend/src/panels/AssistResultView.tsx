@@ -88,7 +88,7 @@ function levels(r: AssistResult, spindle: boolean): Level[] {
   ];
 }
 
-export function AssistResultView(props: { result: AssistResult; spindle: boolean }) {
+export function AssistResultView(props: { result: AssistResult; spindle: boolean; live?: boolean }) {
   const r = props.result;
   const f = checkFactor(r);
   const lag = r.series.find((s) => s.name === "lag");
@@ -133,7 +133,8 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
         </table>
         {lag ? (
           <div class="assist-plot">
-            <AssistChart series={lag} levels={levels(r, props.spindle)} testid="assist-chart" />
+            <AssistChart series={lag} levels={levels(r, props.spindle)} testid="assist-chart"
+              xLabel={`time on ${props.live ? "the machine" : "the copy"} [${lag.x_unit || "s"}]`} />
           </div>
         ) : null}
       </div>

@@ -303,7 +303,7 @@ export function Commissioning() {
               <p class="hint" data-testid="assist-where">
                 {where === "machine" ? "Measured on the machine itself." : "Measured on a copy of the machine (simulated time); the machine did not move."}
               </p>
-              <AssistResultView result={result} spindle={spindle} />
+              <AssistResultView result={result} spindle={spindle} live={where === "machine"} />
               <div class="row apply-bar">
                 <button type="button" data-testid="assist-apply" class={settled(result) ? "secondary" : ""}
                   disabled={!online.value || !result.changes.length || onTrial || !!blocked || busy}
