@@ -5,6 +5,7 @@ gear-range preview."""
 from __future__ import annotations
 
 from fastapi import APIRouter
+from pydantic import BaseModel
 
 from api.assist import (
     AssistResult,
@@ -21,16 +22,36 @@ from api.assist import (
     SpeedScalingRequest,
 )
 from api.auth import Action
-from backend.deps import ActorDep, MachineDep, ServicesDep, permit
+from backend.deps import ActorDep, MachineDep, Services, ServicesDep, permit
 from backend.errors import responses
 from backend.services.assist import cancel_live, run_live
+from backend.services.auth import Actor
 from backend.services.calculators import calculate, gear_selection
+from backend.services.machines import MachineProxy
 
 router = APIRouter(prefix="/api/machines/{mid}/assist", tags=["assistants"])
 _WHY = {
     422: "the experiment cannot run as asked (no feed, unknown axis, refused motion)",
     504: "the experiment did not end in time",
 }
+
+
+async def _on_copy(
+    name: str, body: BaseModel, machine: MachineProxy, services: Services, actor: Actor
+) -> AssistResult:
+    """Experiment `name` on a copy of the machine, stored for the report."""
+    result = await services.assistants.run(machine.cfg, name, body)
+    await services.assist_runs.record(machine.id, actor.name, result, live=False)
+    return result
+
+
+async def _live(
+    name: str, body: BaseModel, machine: MachineProxy, services: Services, actor: Actor
+) -> AssistResult:
+    """Experiment `name` on the machine itself, stored for the report."""
+    result = await run_live(machine, name, body, actor, services.audit)
+    await services.assist_runs.record(machine.id, actor.name, result, live=True)
+    return result
 
 
 @router.post(
@@ -45,9 +66,7 @@ async def multi_gain(
     axis at constant feed (a spindle at constant speed, position-controlled), the averaged
     lag, k = v/s, f = (kv/100)/k and the proposed multi_gain · f and kv / f. The live machine
     does not move; Apply is a parameter write. Stored (GET .../assist/runs)."""
-    result = await services.assistants.run(machine.cfg, "multi-gain", body)
-    await services.assist_runs.record(machine.id, actor.name, result, live=False)
-    return result
+    return await _on_copy("multi-gain", body, machine, services, actor)
 
 
 @router.post(
@@ -61,9 +80,7 @@ async def sign_check(
     """004 §3.5 on a copy of the machine: a short slow move; a wrong sign of the manipulated
     variable (vz_stellgr) or of the actual value (vz_istw) is found before lag monitoring
     trips, from the way the machine moved (`observed`, else the simulated plant's). Stored."""
-    result = await services.assistants.run(machine.cfg, "sign-check", body)
-    await services.assist_runs.record(machine.id, actor.name, result, live=False)
-    return result
+    return await _on_copy("sign-check", body, machine, services, actor)
 
 
 @router.post(
@@ -77,9 +94,7 @@ async def loop_gain(
     """004 §3.6 on copies of the machine, one per kv: a G00 step (overshoot, settling into the
     exact-stop window) and a G01 ramp (steady lag v/kv); the highest kv meeting the target
     is proposed as getriebe[g].kv. The live machine does not move. Stored."""
-    result = await services.assistants.run(machine.cfg, "loop-gain", body)
-    await services.assist_runs.record(machine.id, actor.name, result, live=False)
-    return result
+    return await _on_copy("loop-gain", body, machine, services, actor)
 
 
 @router.post(
@@ -94,9 +109,7 @@ async def curve_run_up(
     top speed (the gear's vb_max, or `speed_rpm`) at the acceleration its parameters allow;
     a(n) from the recorded actual speed, the curve of type `typ` fitted by least squares and
     proposed as the gear's beschl_kennlinie. Stored."""
-    result = await services.assistants.run(machine.cfg, "curve-run-up", body)
-    await services.assist_runs.record(machine.id, actor.name, result, live=False)
-    return result
+    return await _on_copy("curve-run-up", body, machine, services, actor)
 
 
 # The calculators: pure arithmetic, answered in the request (a thread of the pool, not the
@@ -178,9 +191,7 @@ async def multi_gain_live(
     """004 §3.6.2 on the machine itself, as paced (real time, fast or stepped): the axis
     moves (the spindle turns) for the run's planned time, which the machine's status shows
     as `assist` with its phase while it runs. Needs control of the machine."""
-    result = await run_live(machine, "multi-gain", body, actor, services.audit)
-    await services.assist_runs.record(machine.id, actor.name, result, live=True)
-    return result
+    return await _live("multi-gain", body, machine, services, actor)
 
 
 @router.post(
@@ -193,9 +204,7 @@ async def sign_check_live(
 ) -> AssistResult:
     """004 §3.5 on the machine itself: the short move, watched cycle by cycle; a runaway
     switches the servo off (TorquePermission 0) in the cycle it is seen. Needs control."""
-    result = await run_live(machine, "sign-check", body, actor, services.audit)
-    await services.assist_runs.record(machine.id, actor.name, result, live=True)
-    return result
+    return await _live("sign-check", body, machine, services, actor)
 
 
 @router.post(
