@@ -13,6 +13,7 @@ import { me } from "../state/auth";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
+import { AssistField } from "./AssistField";
 import { AssistResultView, settled } from "./AssistResultView";
 import { LiveProgress } from "./LiveProgress";
 import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
@@ -167,19 +168,8 @@ export function Commissioning() {
   const field = (key: keyof Inputs, label: string, u: string, testid: string) => {
     const err = (values as Record<string, number | string>)[key];
     return (
-      <label class="assist-field">
-        <span>{label}</span>
-        <span class="row">
-          <input data-testid={testid} size={8} value={inp[key] as string} aria-invalid={typeof err === "string"}
-            disabled={busy} onInput={(e) => set({ [key]: (e.target as HTMLInputElement).value })} />
-          <span>{u}</span>
-        </span>
-        {typeof err === "string" ? (
-          <span class="inline-error" data-testid={`${testid}-error`} role="alert">
-            {err}
-          </span>
-        ) : null}
-      </label>
+      <AssistField label={label} unit={u} testid={testid} value={inp[key] as string} disabled={busy}
+        error={typeof err === "string" ? err : null} onInput={(v) => set({ [key]: v })} />
     );
   };
 

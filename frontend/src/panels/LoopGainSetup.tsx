@@ -4,6 +4,7 @@ import { useEffect, useState } from "preact/hooks";
 import type { AxisStatus, LoopGainRequest } from "../api/types";
 import { numbers, paramsVersion } from "../state/params";
 import { machineId } from "../state/session";
+import { AssistField } from "./AssistField";
 
 // as nc_sim/assist/loop_gain.py: the default sweep, step, ramp feed and recording lengths
 const SWEEP_FACTORS = [0.5, 0.75, 1, 1.5, 2, 2.5, 3];
@@ -118,20 +119,8 @@ export function LoopGainFields(props: {
   const one = (key: keyof LoopGainInputs, label: string, unit: string, testid: string, placeholder = "") => {
     const err = values[key];
     return (
-      <label class="assist-field">
-        <span>{label}</span>
-        <span class="row">
-          <input data-testid={testid} size={key === "kvs" ? 18 : 8} value={inp[key]} placeholder={placeholder}
-            aria-invalid={typeof err === "string"} disabled={props.busy}
-            onInput={(e) => props.set({ ...inp, [key]: (e.target as HTMLInputElement).value })} />
-          <span>{unit}</span>
-        </span>
-        {typeof err === "string" ? (
-          <span class="inline-error" data-testid={`${testid}-error`} role="alert">
-            {err}
-          </span>
-        ) : null}
-      </label>
+      <AssistField label={label} unit={unit} testid={testid} value={inp[key]} placeholder={placeholder} size={key === "kvs" ? 18 : 8}
+        disabled={props.busy} error={typeof err === "string" ? err : null} onInput={(v) => props.set({ ...inp, [key]: v })} />
     );
   };
   return (
