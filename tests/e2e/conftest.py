@@ -9,6 +9,7 @@ from playwright.sync_api import Browser, Page
 
 from tests.backend.server import Server
 from tests.e2e.browser import DIST, chromium, open_hmi
+from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
 @pytest.fixture(scope="module")
@@ -32,3 +33,15 @@ def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
     p = open_hmi(browser, srv.base, mid)
     yield p
     p.close()
+
+
+@pytest.fixture
+def wrong_drive(srv: Server, mid: str) -> str:
+    """The test's machine with the X drive's gain 2.2857 times what the NC assumes (the demo's
+    X list: multi_gain 10000, kv 20/s) [004 §3.6.2]."""
+    set_up(srv, mid, "X", {"sim.drive_gain": DRIVE_GAIN})
+    rows = srv.http.get(f"/api/machines/{mid}/parameters?scope=axis&target=X").json()
+    x = {p["name"]: p["value"] for p in rows}
+    assert x["getriebe[0].multi_gain_z"] / x["getriebe[0].multi_gain_n"] == MULTI_GAIN
+    assert x["getriebe[0].kv"] == KV_RAW
+    return mid

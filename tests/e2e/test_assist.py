@@ -14,10 +14,8 @@ from playwright.sync_api import Browser, Locator, Page, expect
 from api.auth import Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import open_hmi, panel, shot
+from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
-DRIVE_GAIN = 22857  # digits for 1 m/min, the drive as it really is
-MULTI_GAIN = 10000  # getriebe[0].multi_gain_z / _n of the demo's X: what the NC assumes
-KV_RAW = 2000  # getriebe[0].kv of the demo's X, 0.01/s
 RUN_TIMEOUT_MS = 90_000  # a run is seconds of machine time in a process; generous on 2 cores
 OLE = "ole"  # an observer
 
@@ -30,23 +28,6 @@ def read(scope: Locator, test_id: str) -> float:
 def x_list(srv: Server, mid: str) -> dict[str, float]:
     rows = srv.http.get(f"/api/machines/{mid}/parameters?scope=axis&target=X").json()
     return {p["name"]: p["value"] for p in rows}
-
-
-@pytest.fixture
-def wrong_drive(srv: Server, mid: str) -> str:
-    """The test's machine with the X drive's gain 2.2857 times what the NC assumes."""
-    body = {
-        "changes": [{"scope": "axis", "target": "X", "name": "sim.drive_gain", "value": DRIVE_GAIN}]
-    }
-    r = srv.http.patch(f"/api/machines/{mid}/parameters", json=body)
-    assert r.status_code == 200, r.text
-    # the write took control for the test's API session: free it for the browser's user
-    r = srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"})
-    assert r.status_code == 200, r.text
-    before = x_list(srv, mid)
-    assert before["getriebe[0].multi_gain_z"] / before["getriebe[0].multi_gain_n"] == MULTI_GAIN
-    assert before["getriebe[0].kv"] == KV_RAW
-    return mid
 
 
 def test_multi_gain_by_experiment_end_to_end(page: Page, srv: Server, wrong_drive: str) -> None:
@@ -128,14 +109,8 @@ def test_the_sign_check_says_the_signs_are_right_on_the_demo(page: Page) -> None
 def test_the_sign_check_finds_an_inverted_encoder_and_applies_the_flip(
     browser: Browser, srv: Server, mid: str
 ) -> None:
-    body = {
-        "changes": [{"scope": "axis", "target": "X", "name": "sim.encoder_inverted", "value": 1}]
-    }
-    assert srv.http.patch(f"/api/machines/{mid}/parameters", json=body).status_code == 200
     # the plant's wiring takes effect with the restart (effect "restart"), on the copy as well
-    assert srv.http.post(f"/api/machines/{mid}/restart").status_code == 200
-    srv.wait_powered(mid)
-    assert srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"}).is_success
+    set_up(srv, mid, "X", {"sim.encoder_inverted": 1}, restart=True)
     p = open_hmi(browser, srv.base, mid)
     try:
         p.get_by_test_id("tab-Commissioning").click()

@@ -13,8 +13,8 @@ from playwright.sync_api import Browser, Page, expect
 from api.auth import Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import open_hmi, panel, shot
-from tests.e2e.test_assist import DRIVE_GAIN, KV_RAW, MULTI_GAIN, RUN_TIMEOUT_MS, read
-from tests.e2e.test_assist import wrong_drive as wrong_drive  # the fixture
+from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
+from tests.e2e.test_assist import RUN_TIMEOUT_MS, read
 
 FEED = 200.0  # mm/min
 # the run as nc_sim/assist/experiments.py plans it on X (kv 20/s): 2 s for the ramp, five time
@@ -89,13 +89,7 @@ def test_the_sign_check_on_the_machine_flip_restart_and_check_again(
     """004 §3.5 on the machine itself: an inverted encoder runs away and the servo goes off
     before lag monitoring trips; the proposed vz_istw flip, a restart from the panel, and the
     check on the machine is clean."""
-    body = {
-        "changes": [{"scope": "axis", "target": "X", "name": "sim.encoder_inverted", "value": 1}]
-    }
-    assert srv.http.patch(f"/api/machines/{mid}/parameters", json=body).status_code == 200
-    assert srv.http.post(f"/api/machines/{mid}/restart").status_code == 200
-    srv.wait_powered(mid)
-    assert srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"}).is_success
+    set_up(srv, mid, "X", {"sim.encoder_inverted": 1}, restart=True)
     page.get_by_test_id("tab-Commissioning").click()
     box = panel(page, "assist")
     box.get_by_test_id("assist-pick-sign-check").check()

@@ -13,6 +13,7 @@ from playwright.sync_api import Page, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import panel, shot
+from tests.e2e.plant import set_up
 
 RUN_TIMEOUT_MS = 90_000  # seconds of machine time per kv in a process; generous on 2 cores
 KV_RAW = 2000  # getriebe[0].kv of the demo's X, 0.01/s
@@ -20,10 +21,7 @@ KV_RAW = 2000  # getriebe[0].kv of the demo's X, 0.01/s
 
 @pytest.fixture
 def slow_drive(srv: Server, mid: str) -> str:
-    body = {"changes": [{"scope": "axis", "target": "X", "name": "sim.drive_t", "value": 20000}]}
-    assert srv.http.patch(f"/api/machines/{mid}/parameters", json=body).status_code == 200
-    # the write took control for the test's API session: free it for the browser's user
-    assert srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"}).is_success
+    set_up(srv, mid, "X", {"sim.drive_t": 20000})
     return mid
 
 

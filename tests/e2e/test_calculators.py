@@ -11,6 +11,7 @@ from playwright.sync_api import Browser, Locator, Page, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import open_hmi, panel, shot
+from tests.e2e.plant import set_up
 
 
 def read(scope: Locator, test_id: str) -> float:
@@ -151,12 +152,7 @@ def test_curve_from_a_run_up_on_a_copy(page: Page, srv: Server, mid: str) -> Non
     """S1's gear 6 carries the manual's polynomial; run up on a copy, the fit finds it."""
     poly: dict[str, float] = {"typ": 2, "n_grenz": 12000000, "a_konst": 16000, "a_min": 2000}
     poly |= {"b1": -0.88888888, "b2": 2.08333333e-5, "b3": -1.92901234e-10}
-    changes = [
-        {"scope": "axis", "target": "S1", "name": f"getriebe[5].beschl_kennlinie.{k}", "value": v}
-        for k, v in poly.items()
-    ]
-    assert srv.http.patch(f"/api/machines/{mid}/parameters", json={"changes": changes}).is_success
-    srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"})
+    set_up(srv, mid, "S1", {f"getriebe[5].beschl_kennlinie.{k}": v for k, v in poly.items()})
     page.get_by_test_id("tab-Commissioning").click()
     box = panel(page, "calc")
     box.get_by_test_id("calc-pick-curve-fit").click()

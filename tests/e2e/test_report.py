@@ -22,15 +22,6 @@ F_PHYSICS = 22857 / 10000
 RUN_TIMEOUT_MS = 90_000  # a run is seconds of machine time in a process; generous on 2 cores
 
 
-@pytest.fixture
-def wrong_drive(srv: Server, mid: str) -> str:
-    body = {"changes": [{"scope": "axis", "target": "X", "name": "sim.drive_gain", "value": 22857}]}
-    assert srv.http.patch(f"/api/machines/{mid}/parameters", json=body).status_code == 200
-    # the write took control for the test's API session: free it for the browser's user
-    assert srv.http.post(f"/api/machines/{mid}/control", json={"action": "release"}).is_success
-    return mid
-
-
 def test_run_sign_off_open_the_report_and_download_its_pdf(
     page: Page, srv: Server, wrong_drive: str
 ) -> None:

@@ -14,8 +14,8 @@ from playwright.sync_api import Locator, Page, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import SHOTS, panel
-from tests.e2e.test_assist import DRIVE_GAIN, MULTI_GAIN, RUN_TIMEOUT_MS, read
-from tests.e2e.test_assist import wrong_drive as wrong_drive  # the fixture
+from tests.e2e.plant import DRIVE_GAIN, MULTI_GAIN
+from tests.e2e.test_assist import RUN_TIMEOUT_MS, read
 
 
 def _shot(part: Locator, name: str) -> None:
