@@ -11,6 +11,7 @@ AuditKind = Literal[
     "login_failed",
     "logout",
     "command",
+    "assist",
     "parameter",
     "version",
     "control",

@@ -91,7 +91,7 @@ async def run_live(
     or stepped alike); answered when it ends. Audited as the commands it gives."""
     args = req.model_dump()
     detail = {"assistant": name, **args}
-    entry = Entry(actor.name, actor.session, "command", f"assist live {name}", machine.id, detail)
+    entry = Entry(actor.name, actor.session, "assist", f"assist live {name}", machine.id, detail)
     start = AssistStart(machine.id, name, args, actor.name)
     with audit.refusals(entry):
         try:
@@ -109,7 +109,7 @@ async def run_live(
 
 async def cancel_live(machine: MachineProxy, why: str, actor: Actor, audit: Audit) -> None:
     """End the machine's live run now (409 when none runs)."""
-    entry = Entry(actor.name, actor.session, "command", "assist live cancel", machine.id)
+    entry = Entry(actor.name, actor.session, "assist", "assist live cancel", machine.id)
     with audit.refusals(entry):
         await machine.acall(AssistCancel(machine.id, f"{why} ({actor.name})"))
     audit.record(entry)

@@ -175,11 +175,16 @@ def multi_gain(
         Figure("s", s, unit, "mean lag at constant speed"),
         Figure("k", k, "1/s", "effective loop gain k = v/s"),
         Figure("kv", kv, "1/s", f"getriebe[{gi}].kv (P-AXIS-00099)"),
-        Figure("f", f, "", "f = (kv/100)/k"),
+        Figure("f", f, "", "f = kv/k (004: (kv/100)/k with kv in 0.01/s)"),
         Figure("multi_gain", mg, "", "multi_gain_z/multi_gain_n now"),
         Figure("multi_gain_new", new_z / new_n, "", "multi_gain · f"),
         Figure("kv_new", kv_new / 100.0, "1/s", "kv / f: the same loop gain"),
-        Figure("window_s", float(t[window[-1]] - t[window[0]]), "s", "averaged over"),
+        Figure(
+            "averaged_s",
+            float(t[window[-1]] - t[window[0]]),
+            "s",
+            "the lag averaged over (constant speed, settled)",
+        ),
     ]
     changes = [
         Change(ax.name, f"getriebe[{gi}].multi_gain_z", mg_z, new_z, "multi_gain · f"),

@@ -79,7 +79,7 @@ def test_live_multi_gain_moves_the_machine_and_proposes_the_correction(
     assert srv.status(lathe)["assist"] is None
     audit = srv.http.get(f"/api/machines/{lathe}/audit").json()["rows"]
     live = [a for a in audit if a["action"] == "assist live multi-gain"]
-    assert live and live[0]["outcome"] == "ok"
+    assert live and live[0]["outcome"] == "ok" and live[0]["kind"] == "assist"
     assert live[0]["detail"]["figures"]["f"] == pytest.approx(2.2857, rel=0.01)
     # stored for the commissioning report, as measured on the machine itself
     runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()

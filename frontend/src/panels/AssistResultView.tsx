@@ -17,7 +17,7 @@ const FIGURES: Record<string, { label: string; decimals: number; sig?: number }>
   multi_gain: { label: "multi_gain now", decimals: 4 },
   multi_gain_new: { label: "multi_gain new", decimals: 4 },
   kv_new: { label: "kv new", decimals: 2 },
-  window_s: { label: "averaged over", decimals: 3 },
+  averaged_s: { label: "averaged over", decimals: 3 },
   max_lag: { label: "max lag", decimals: 4 },
   lag_max: { label: "lag_max", decimals: 4 },
   // the calculators (004 §3.4, §3.6.1, 000 §2.2.4) and the acceleration curve (000 §2.8.4)

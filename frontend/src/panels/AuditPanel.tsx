@@ -12,7 +12,9 @@ const PAGE = 100;
 const TYPING_MS = 300; // the user and text filters apply once typing pauses this long
 const KINDS: AuditKind[] = [
   "command",
+  "assist",
   "parameter",
+  "version",
   "control",
   "simulation",
   "machine",

@@ -258,7 +258,7 @@ function FormCalculator(props: { tool: FormTool }) {
         <RefusalLine refusal={refusal} id="calc-refusal" />
       </div>
       <div class="assist-out">
-        {result ? (
+        {result && errors.length === 0 ? (
           <>
             <AssistResultView result={result} spindle={ax?.kind === "spindle"} />
             <ApplyBar assistant={tool} changes={result.changes} testid="calc" />

@@ -113,6 +113,8 @@ export function Commissioning() {
     if (!ax || errors.length) return;
     setConfirming(false);
     setWhere(at);
+    setResult(null); // the old result is not this run's
+    setApplied(false);
     setBusySince(performance.now());
     setElapsed(0);
     setRefusal(null);
@@ -176,7 +178,10 @@ export function Commissioning() {
   const step = !result ? (busy || confirming ? 2 : 1) : applied ? 4 : 3;
   const onTrial = !!trial.value;
   const live = liveRun.value;
-  const liveBlocked = commandBlocked.value || (live ? `${live.name} runs on the machine (${live.by})` : "");
+  const liveBlocked =
+    commandBlocked.value ||
+    (status.value?.emergency_stop ? "emergency stop: release it and reset first" : "") ||
+    (live ? `${live.name} runs on the machine (${live.by})` : "");
   return (
     <Panel title="Commissioning assistants" id="assist">
       <ol class="assist-steps" aria-label="steps">
@@ -366,7 +371,7 @@ function describe(
   const dir = inp.direction > 0 ? "+" : "−";
   const formula =
     `The lag s is averaged at constant speed once the loop has settled (at least ${n1(w)} s); ` +
-    "k = v/s, f = (kv/100)/k, and multi_gain · f with kv / f are proposed (004 §3.6.2).";
+    "k = v/s, f = kv/k (the manual's (kv/100)/k with kv in 0.01/s), and multi_gain · f with kv / f are proposed (004 §3.6.2).";
   // the move goes on a second past the recording (its target is v · (recording + 1 s))
   const moveS = runS !== null ? runS + 1 : null;
   const about = moveS !== null ? ` for about ${n1(moveS)} s` : "";
