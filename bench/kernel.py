@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import time
 
+from nc_sim.assist.experiments import multi_gain, sign_check
+from nc_sim.assist.procedure import LiveRun
 from nc_sim.channel.canon import ListSink
 from nc_sim.channel.interpreter import interpret
 from nc_sim.commands import CycleStart, Mdi, ProgramLoad
@@ -89,8 +91,30 @@ def path_figures() -> None:
     )
 
 
+def live_assistant_figures() -> None:
+    """A live run as a worker steps it: the sign check wants every cycle before the next
+    (cycle-by-cycle kernel calls), multi_gain long stretches; simulated cycles per second."""
+    for name, start in (
+        ("sign check (cycle by cycle)", lambda m: sign_check(m, "X", 50.0, 1000.0)),
+        ("multi_gain (in stretches)", lambda m: multi_gain(m, "X", feed_mm_min=200.0)),
+    ):
+        sim = Simulation(CYCLE_S)
+        m = sim.add(demo_machine())
+        power_on(sim, m)
+        run = LiveRun(m, start, CYCLE_S)
+        t0 = time.perf_counter()
+        while not run.done:
+            n = min(run.want(), 1000)
+            rec = sim.new_record(n)
+            sim.run(n, rec)
+            run.feed(rec)
+        rate = run.fed_cycles / (time.perf_counter() - t0)
+        print(f"live assistant run, {name}: {rate:,.0f} cycles/s = {rate * CYCLE_S:,.0f}x")
+
+
 def main() -> None:
     path_figures()
+    live_assistant_figures()
     one = cycles_per_second(1)
     print(f"one demo machine: {one:,.0f} cycles/s = {one * CYCLE_S:,.0f}x real time (bar: >= 200x)")
     rec = cycles_per_second(1, recording=True)
