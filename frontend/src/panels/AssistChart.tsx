@@ -6,6 +6,7 @@ import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { AssistSeries } from "../api/types";
 import { fmt, tickLabels } from "../ui/format";
+import { followWidth } from "../ui/plot";
 import { COLOURS } from "./LivePlot";
 
 /** A horizontal line across the chart: a level to compare the series with. */
@@ -63,12 +64,7 @@ export function AssistChart(props: {
     const aligned = more.map((m) => series.x.map((_x, i) => m.y[i] ?? null));
     const data = [series.x, series.y, ...aligned, ...levels.map((l) => series.x.map(() => l.value))] as uPlot.AlignedData;
     const plot = new uPlot(opts, data, el);
-    const ro = new ResizeObserver(() => plot.setSize({ width: Math.max(300, el.clientWidth), height: HEIGHT }));
-    ro.observe(el);
-    return () => {
-      ro.disconnect();
-      plot.destroy();
-    };
+    return followWidth(plot, el, HEIGHT);
   }, [series, more.length, levels.map((l) => `${l.label}=${l.value}`).join(",")]);
   return <div class="assist-chart" ref={box} data-testid={props.testid} />;
 }

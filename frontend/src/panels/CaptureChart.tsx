@@ -5,6 +5,7 @@ import { useEffect, useRef } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { fmt, tickLabels } from "../ui/format";
+import { followWidth } from "../ui/plot";
 import { COLOURS } from "./LivePlot";
 
 export interface Series {
@@ -179,11 +180,9 @@ export function CaptureChart(props: {
     u.over.addEventListener("mousedown", down);
     u.over.addEventListener("click", click);
     u.over.addEventListener("wheel", wheel, { passive: false });
-    const ro = new ResizeObserver(() => u.setSize({ width: Math.max(300, el.clientWidth), height: CHART_HEIGHT }));
-    ro.observe(el);
+    const stop = followWidth(u, el, CHART_HEIGHT);
     return () => {
-      ro.disconnect();
-      u.destroy();
+      stop();
       plot.current = null;
     };
   }, [structure, props.overlay]);

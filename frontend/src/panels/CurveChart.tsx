@@ -5,6 +5,7 @@ import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { AssistSeries } from "../api/types";
 import { fmt, tickLabels } from "../ui/format";
+import { followWidth } from "../ui/plot";
 import { COLOURS } from "./LivePlot";
 
 const HEIGHT = 280;
@@ -49,12 +50,7 @@ export function CurveChart(props: { points: AssistSeries; curves: AssistSeries[]
     };
     const data = [xs, ...all.map(column)] as uPlot.AlignedData;
     const plot = new uPlot(opts, data, el);
-    const ro = new ResizeObserver(() => plot.setSize({ width: Math.max(300, el.clientWidth), height: HEIGHT }));
-    ro.observe(el);
-    return () => {
-      ro.disconnect();
-      plot.destroy();
-    };
+    return followWidth(plot, el, HEIGHT);
   }, [points, curves]);
   return <div class="assist-chart" ref={box} data-testid={props.testid} />;
 }
