@@ -56,7 +56,8 @@ def student(srv: Server, link: str) -> httpx.Client:
 def new_class(t: httpx.Client, cid: str, seats: int, exercise: str) -> dict[str, Any]:
     r = t.post("/api/classes", json={"id": cid, "exercise": exercise, "seats": seats})
     assert r.status_code == 201, r.text
-    return r.json()
+    created: dict[str, Any] = r.json()
+    return created
 
 
 def wait_for(probe: Any, timeout_s: float = 20.0) -> Any:
