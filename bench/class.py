@@ -50,7 +50,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from api.auth import Role
 from backend.services.console import GRID_S
-from bench.classroom import GridFrames, GridWatch, Jogging, Login, student_login, ws_ticket
+from bench.classroom import GridFrames, GridWatch, Jogging, Login, student_login
 from bench.service import Meter, Run, Viewers, cpu_s, latencies_ms, pct
 from tests.backend.server import Server, add_users, bearer
 
@@ -255,16 +255,6 @@ async def seats_busy(base: str, logins: dict[str, Login]) -> None:
     await asyncio.gather(*(one(mid, login) for mid, login in logins.items()))
 
 
-async def telemetry_urls(ws_base: str, base: str, logins: dict[str, Login]) -> list[str]:
-    """Each seat's telemetry websocket with a fresh ticket of its student's session."""
-
-    async def one(mid: str, login: Login) -> str:
-        async with login.client(base) as http:
-            return f"{ws_base}/api/machines/{mid}/telemetry?ticket={await ws_ticket(http)}"
-
-    return list(await asyncio.gather(*(one(mid, login) for mid, login in logins.items())))
-
-
 def class_run(
     seats: int,
     exercise: str,
@@ -301,8 +291,8 @@ def class_run(
             jogging = Jogging(srv.base, logins, jog_s, feed, PAUSE_S)
             jogging.thread.start()
             grid = GridWatch(f"{srv.ws_base}/api/classes/{CLASS_ID}/grid", instructor).start()
-            urls = asyncio.run(telemetry_urls(srv.ws_base, srv.base, logins))
-            viewers = Viewers(urls, SIGNALS, settle_s=settle_s).start()
+            urls = [f"{srv.ws_base}/api/machines/{mid}/telemetry" for mid in logins]
+            viewers = Viewers(urls, SIGNALS, settle_s, sessions=list(logins.values())).start()
             meter = Meter(srv.http, srv.proc.pid)
             meter.start()
             grid.count()

@@ -20,6 +20,7 @@ import numpy as np
 from websockets.asyncio.client import connect
 
 from api.telemetry import MAGIC
+from bench.classroom import Login, ws_ticket
 
 REPORT_WAIT_S = 3.0  # workers report loop figures once a second; give up on one after this
 STOP_POLL_S = 0.2  # how soon a viewer notices it should stop
@@ -281,27 +282,57 @@ def _viewers_main(
     ready: Any,
     out: Any,
     headers: dict[str, str] | None,
+    sessions: list[Login] | None,
 ) -> None:
-    """Child process: one viewer per URL until `stop` is set; counts subscriptions in
-    `ready`, puts the results to `out`."""
+    """Child process: one viewer per URL until `stop` is set; counts subscriptions (and
+    viewers that failed before one) in `ready`, puts the results to `out`."""
 
-    def subscribed() -> None:
+    def done() -> None:
         with ready.get_lock():
             ready.value += 1
+
+    async def one(url: str, session: Login | None, start: float, until: float) -> Viewer:
+        counted = False
+
+        def subscribed() -> None:
+            nonlocal counted
+            counted = True
+            done()
+
+        if session is not None:  # as a page does: a ticket of its session just before
+            try:
+                async with session.client(http_base(url)) as http:
+                    url = f"{url}?ticket={await ws_ticket(http)}"
+            except httpx.HTTPError as e:
+                done()
+                return Viewer(error=f"no ticket: {type(e).__name__}: {e}")
+        v = await view(url, signals, until, start, stop.is_set, subscribed, headers)
+        if not counted:
+            done()
+        return v
 
     async def main() -> list[Viewer]:
         start = time.monotonic() + settle_s
         until = time.monotonic() + 24 * 3600
+        each: list[Login | None] = [*sessions] if sessions else [None] * len(urls)
         return await asyncio.gather(
-            *(view(u, signals, until, start, stop.is_set, subscribed, headers) for u in urls)
+            *(one(u, s, start, until) for u, s in zip(urls, each, strict=True))
         )
 
     out.put(asyncio.run(main()))
 
 
+def http_base(ws_url: str) -> str:
+    """`http://host:port` of a `ws://host:port/...` URL."""
+    scheme, rest = ws_url.split("://", 1)
+    return f"{'https' if scheme == 'wss' else 'http'}://{rest.split('/', 1)[0]}"
+
+
 class Viewers:
     """Telemetry viewers in a separate client process (so they do not compete with the
-    bench's own timing for this interpreter): one per URL, from `start()` until `stop()`."""
+    bench's own timing for this interpreter): one per URL, from `start()` until `stop()`.
+    Credentials: `headers` (an API token) for all, or a login `sessions` each (a ticket of
+    that session is fetched just before its socket opens, as the HMI does)."""
 
     def __init__(
         self,
@@ -309,6 +340,7 @@ class Viewers:
         signals: list[str],
         settle_s: float = 0.5,
         headers: dict[str, str] | None = None,
+        sessions: list[Login] | None = None,
     ) -> None:
         ctx = mp.get_context("spawn")
         self.stopping = ctx.Event()
@@ -316,13 +348,14 @@ class Viewers:
         self.out: Any = ctx.Queue()
         self.proc = ctx.Process(
             target=_viewers_main,
-            args=(urls, signals, settle_s, self.stopping, self.ready, self.out, headers),
+            args=(urls, signals, settle_s, self.stopping, self.ready, self.out, headers, sessions),
         )
         self.n = len(urls)
         self.settle_s = settle_s
 
     def start(self, timeout_s: float = 60.0) -> Viewers:
-        """Start the viewers; return once all have subscribed and their first burst passed."""
+        """Start the viewers; return once all have subscribed (or failed: a figure of
+        `stop()`) and their first burst passed."""
         self.proc.start()
         deadline = time.monotonic() + timeout_s
         while self.ready.value < self.n:
