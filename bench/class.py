@@ -164,6 +164,7 @@ CLASS_ID = "bench"
 GRID_P99_BAR_MS = 500.0
 GRID_FRAMES_SHARE = 0.9  # of the nominal 1 / GRID_S frames per second
 PAUSE_S = 1.0  # a student between a jog's stop and the next jog the other way
+VIEWERS_START_S = 300.0  # a loaded service may take minutes to let 50 students in
 
 
 @dataclass
@@ -292,7 +293,10 @@ def class_run(
             jogging.thread.start()
             grid = GridWatch(f"{srv.ws_base}/api/classes/{CLASS_ID}/grid", instructor).start()
             urls = [f"{srv.ws_base}/api/machines/{mid}/telemetry" for mid in logins]
-            viewers = Viewers(urls, SIGNALS, settle_s, sessions=list(logins.values())).start()
+            t_view = time.monotonic()
+            viewers = Viewers(urls, SIGNALS, settle_s, sessions=list(logins.values()))
+            viewers.start(VIEWERS_START_S)
+            print(f"viewers subscribed in {time.monotonic() - t_view - settle_s:.1f} s")
             meter = Meter(srv.http, srv.proc.pid)
             meter.start()
             grid.count()
