@@ -23,6 +23,7 @@ AuditKind = Literal[
     "user",
     "token",
     "report",
+    "training",  # classes, seats, faults, hints, broadcasts, freezing, snapshots
 ]
 
 

@@ -13,8 +13,10 @@ class Role(StrEnum):
 
     OBSERVER = "observer"  # watches; captures, saves and exports traces; reads programs
     OPERATOR = "operator"  # commands, jogs and writes parameters while holding control;
-    # writes programs, runs assistants, signs commissioning reports off
-    INSTRUCTOR = "instructor"  # also takes control from others and paces the simulation
+    # writes programs, runs assistants, signs commissioning reports off; a class's student
+    # is an operator who sees only the machine of their seat
+    INSTRUCTOR = "instructor"  # also takes control from others, paces the simulation and
+    # runs classes (faults, snapshots, the console)
     ADMIN = "admin"  # everything, and users, machines and the service
 
 
@@ -33,8 +35,10 @@ class Action(StrEnum):
     VERSIONS = "versions"  # take, delete parameter versions of a machine, set its baseline
     ASSIST = "assist"  # commissioning assistants on a copy of a machine (a process for seconds)
     SIGN_OFF = "sign_off"  # sign a machine's commissioning report off
+    EXERCISE = "exercise"  # read the exercise of one's seat, take its hints
     TAKE_CONTROL = "take_control"  # from another holder without asking
-    SIMULATE = "simulate"  # run, pause, step, fast
+    SIMULATE = "simulate"  # run, pause, step, fast; snapshot a machine and restore it
+    TEACH = "teach"  # classes and exercises, faults, broadcasts, the instructor's console
     MACHINES = "machines"  # create and delete machines
     USERS = "users"  # users, everyone's tokens, the service-wide audit
 
@@ -51,8 +55,9 @@ _OPERATOR = _OBSERVER | {
     Action.VERSIONS,
     Action.ASSIST,
     Action.SIGN_OFF,
+    Action.EXERCISE,
 }
-_INSTRUCTOR = _OPERATOR | {Action.TAKE_CONTROL, Action.SIMULATE}
+_INSTRUCTOR = _OPERATOR | {Action.TAKE_CONTROL, Action.SIMULATE, Action.TEACH}
 
 ALLOWED: dict[Role, frozenset[Action]] = {
     Role.OBSERVER: _OBSERVER,

@@ -90,7 +90,10 @@ class NoticeMessage(BaseModel):
 
     type: Literal["notice"] = "notice"
     seq: int = Field(description="numbered per machine; a reconnecting client sees it again")
-    kind: Literal["rebuilt"]
+    kind: Literal["rebuilt", "restored", "message", "frozen", "resumed"] = Field(
+        description="rebuilt after its worker died; restored from a snapshot; a message from "
+        "the instructor; frozen or resumed by the instructor"
+    )
     message: str
     time_unix: float
 

@@ -79,9 +79,11 @@ class Authentication:
             await self.app(scope, receive, send)
             return
         conn = HTTPConnection(scope)
-        found = identify(scope["app"].state.services.accounts, conn)
+        services = scope["app"].state.services
+        found = identify(services.accounts, conn)
         if isinstance(found, Actor):
-            scope.setdefault("state", {})["actor"] = found
+            seat = services.classes.seat_of(found.name)  # a student sees their seat only
+            scope.setdefault("state", {})["actor"] = replace(found, seat=seat) if seat else found
             await self.app(scope, receive, send)
             return
         status, why = found

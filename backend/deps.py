@@ -20,7 +20,10 @@ from backend.services.assist import Assistants
 from backend.services.assist_runs import AssistRuns
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor, authorize
+from backend.services.classes import Classes
+from backend.services.console import ConsoleHub
 from backend.services.control import Control
+from backend.services.exercises import Exercises
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.report import Reports
@@ -28,6 +31,7 @@ from backend.services.sessions import SessionWatch
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
+from backend.services.training import Snapshots
 from backend.services.versions import Versions
 from backend.services.viewer import RerunViewer
 from backend.settings import Settings
@@ -57,6 +61,10 @@ class Services:
     started: float
     assist_runs: AssistRuns
     reports: Reports
+    exercises: Exercises
+    classes: Classes
+    console: ConsoleHub
+    snapshots: Snapshots
 
     @classmethod
     async def start(cls, settings: Settings) -> Services:
@@ -71,6 +79,8 @@ class Services:
         machines = MachineService(store, pool)
         audit = Audit(store)
         control = Control(machines, audit, settings.control_grace_s)
+        exercises = Exercises(store)
+        classes = Classes(store, accounts, machines, exercises)  # before the machines load
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
@@ -87,6 +97,8 @@ class Services:
         sessions.start()
         assist_runs = AssistRuns(store)
         versions = Versions(store, machines)
+        console = ConsoleHub(classes)
+        console.start()
         services = cls(
             settings,
             store,
@@ -105,6 +117,10 @@ class Services:
             time.time(),
             assist_runs,
             Reports(store, audit, assist_runs, traces, versions),
+            exercises,
+            classes,
+            console,
+            Snapshots(store, machines),
         )
         services.print_login_link()
         return services
@@ -122,6 +138,7 @@ class Services:
         print(f"Log in as {admin} (once, within an hour): {link}", flush=True)
 
     async def stop(self) -> None:
+        await self.console.stop()
         await self.sessions.stop()
         await self.control.stop()
         await self.hub.stop()
@@ -161,8 +178,10 @@ _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is r
     Action.VERSIONS: "version",
     Action.ASSIST: "parameter",  # assistants propose parameters
     Action.SIGN_OFF: "report",
+    Action.EXERCISE: "training",
+    Action.TEACH: "training",
     Action.TAKE_CONTROL: "control",
-    Action.SIMULATE: "simulation",
+    Action.SIMULATE: "simulation",  # (snapshots too)
     Action.MACHINES: "machine",
     Action.USERS: "user",
 }

@@ -26,6 +26,7 @@ from backend.services.machines import MachineProxy
 from backend.services.recorder import Recorders
 from backend.services.store import StoredMachine
 from backend.workers.host import MachineHost
+from backend.workers.protocol import AddMachine
 from nc_sim.commands import Move, SpindleRun
 from nc_sim.machine.config import demo_machine
 
@@ -46,7 +47,7 @@ def programme(host: MachineHost, cycle: int) -> None:
 
 def demo(out: Path) -> tuple[MachineHost, MachineProxy]:
     """The demo lathe as a worker holds it, and the gateway's proxy reading its ring."""
-    host = MachineHost("demo", "Demo lathe", demo_machine(), out / "demo.ring", 1)
+    host = MachineHost(AddMachine("demo", "Demo lathe", demo_machine(), 1), out / "demo.ring")
     proxy = MachineProxy(StoredMachine("demo", "Demo lathe", "demo"), demo_machine())
     proxy.attach(None, host.info())
     host.advance(20)  # the PLC switches the drives on

@@ -23,8 +23,9 @@ router = APIRouter(prefix="/api/machines", tags=["machines"])
 
 
 @router.get("", dependencies=[permit(Action.OBSERVE)])
-def list_machines(services: ServicesDep) -> list[MachineSummary]:
-    return [machine_summary(m) for m in services.machines.proxies()]
+def list_machines(services: ServicesDep, actor: ActorDep) -> list[MachineSummary]:
+    """The machines this user may see (a class's student: their seat's only)."""
+    return [machine_summary(m) for m in services.machines.proxies() if actor.sees(m.id)]
 
 
 @router.post(

@@ -4,28 +4,41 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Query, Request, Response
+from fastapi import APIRouter, Depends, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
+from fastapi.requests import HTTPConnection
 from fastapi.responses import FileResponse, RedirectResponse
 
 from api.auth import Action
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
 from backend.bodies import read_text, text_answer, text_body
-from backend.deps import ActorDep, ServicesDep, permit
-from backend.errors import ApiError, responses
+from backend.deps import ActorDep, ServicesDep, get_actor, permit
+from backend.errors import ApiError, not_found, responses
 from backend.routes.scope import BINARY
 from backend.services.audit import Entry
 from backend.services.trace_csv import from_csv, to_csv
 from backend.services.viewer import viewer_url
 
-router = APIRouter(prefix="/api/traces", tags=["traces"])
+
+async def seat_scope(conn: HTTPConnection, services: ServicesDep) -> None:
+    """A class's student reaches the traces of their seat's machine only (others: 404)."""
+    actor = await get_actor(conn)
+    if actor.seat is None:
+        return
+    tids = [conn.path_params.get("tid")] + [conn.query_params.get(k) for k in ("a", "b")]
+    for tid in tids:
+        if tid is not None and services.store.trace_machine(tid) not in (actor.seat, None):
+            raise not_found(f"trace {tid}")
+
+
+router = APIRouter(prefix="/api/traces", tags=["traces"], dependencies=[Depends(seat_scope)])
 MAX_CSV_BYTES = 64 * 1024 * 1024
 
 
 @router.get("", dependencies=[permit(Action.OBSERVE)])
-def library(services: ServicesDep, machine: str | None = None) -> list[TraceInfo]:
-    """Stored traces, newest first (of one machine when given)."""
-    return services.traces.library(machine)
+def library(services: ServicesDep, actor: ActorDep, machine: str | None = None) -> list[TraceInfo]:
+    """Stored traces, newest first (of one machine when given; a student: their seat's)."""
+    return services.traces.library(actor.seat or machine)
 
 
 @router.get("/compare", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422))

@@ -10,18 +10,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from api.auth import ALLOWED, Action, Me, Role
-from backend.errors import ApiError
+from backend.errors import ApiError, not_found
 
 
 @dataclass(frozen=True)
 class Actor:
     """A user acting through one login session or API token (`session`, a public id), from
-    one client (a browser tab's id, '' for scripts)."""
+    one client (a browser tab's id, '' for scripts). `seat` is the one machine a class's
+    student may see (None: every machine)."""
 
     name: str
     role: Role
     session: str
     client: str = ""
+    seat: str | None = None
+
+    def sees(self, machine: str) -> bool:
+        """Whether this actor may know the machine exists (a student: only their seat's)."""
+        return self.seat is None or machine == self.seat
 
     @property
     def me(self) -> Me:
@@ -34,7 +40,10 @@ class Actor:
 
 
 def authorize(actor: Actor, action: Action, machine: str | None = None) -> None:
-    """Raise 403 unless the actor's role permits the action (on the machine)."""
+    """Raise 403 unless the actor's role permits the action (on the machine); 404 for a
+    machine a student may not see (as if it did not exist)."""
+    if machine is not None and not actor.sees(machine):
+        raise not_found(f"machine '{machine}'")
     if action not in ALLOWED[actor.role]:
         where = f" on {machine}" if machine else ""
         raise ApiError(

@@ -31,18 +31,21 @@ from backend.workers.protocol import (
     MachineInfo,
     MachineNews,
     MachineSamples,
+    Mode,
     Pacing,
     ParamSnapshot,
     Push,
     RemoveMachine,
     Request,
     StatusRead,
+    Values,
     Watch,
     WorkerNews,
 )
 from backend.workers.ring import SampleRing
 from nc_sim.errors import NcUsageError
 from nc_sim.events import Event, EventLog
+from nc_sim.faults import NOW, Fault, FaultState, Trigger
 from nc_sim.machine.config import MachineConfig, demo_machine, machine_from_lists
 from nc_sim.params import ParamListError, Scope, Value
 from nc_sim.scope import Record
@@ -113,6 +116,10 @@ class MachineProxy:
         # pushes of a newer build that came before its AddMachine reply was taken in
         self._early: deque[MachineNews | MachineSamples] = deque(maxlen=EARLY_PUSHES)
         self._serials = itertools.count(1)  # commands to this machine, numbered
+        # training: the faults injected (by id, as its worker last told), the exercise whose
+        # checks its worker evaluates; both go with every rebuild
+        self.faults: dict[int, FaultState] = {}
+        self.exercise: object | None = None
 
     def next_serial(self) -> int:
         """The number of the next command to this machine."""
@@ -218,6 +225,7 @@ class MachineProxy:
             if n.status is not None:
                 self.status = n.status
                 self.status_seq += 1
+                self.faults = {f.id: f for f in n.status.faults}
         for rec, params in n.captures:
             self.captures.append(Capture(uuid.uuid4().hex[:12], rec, params, time.time()))
 
@@ -250,6 +258,8 @@ class MachineService:
         self._placing = threading.Lock()
         self._lock = threading.Lock()
         self.rebuilt = 0  # machines rebuilt after their worker died
+        # class seats' exercises and starting faults, by machine: `load` builds them so
+        self.seats: dict[str, tuple[object, list[tuple[Fault, Trigger]]]] = {}
 
     def proxies(self) -> list[MachineProxy]:
         with self._lock:
@@ -277,14 +287,40 @@ class MachineService:
         apply_stored(cfg, self.store.values(sm.id))
         return cfg
 
-    def _place(self, proxy: MachineProxy, worker: WorkerClient | None = None) -> None:
-        """Build the machine on a worker (the least loaded live one unless given)."""
+    def _place(
+        self,
+        proxy: MachineProxy,
+        worker: WorkerClient | None = None,
+        state: bytes | None = None,
+        faults: list[tuple[Fault, Trigger]] | None = None,
+        mode: Mode = "run",
+    ) -> None:
+        """Build the machine on a worker (the least loaded live one unless given): powered on
+        with its training faults as they stand (an armed one armed again, an active one at
+        once), or restored from a snapshot's `state` (faults and all)."""
         with self._placing:
             worker = worker or self.pool.choose(self._load)
             self._building[proxy.id] = (proxy, worker)
         epoch = proxy.epoch + 1
+        if faults is None:
+            faults = [
+                (f.fault, f.trigger if f.active_since is None else NOW)
+                for f in proxy.faults.values()
+            ]
+        if state is not None:
+            faults = []
+        build = AddMachine(
+            proxy.id,
+            proxy.name,
+            proxy.cfg,
+            epoch,
+            state=state,
+            faults=faults,
+            exercise=proxy.exercise,
+            mode=mode,
+        )
         try:
-            info = worker.call(AddMachine(proxy.id, proxy.name, proxy.cfg, epoch))
+            info = worker.call(build)
         except BaseException:
             self._built(proxy.id)
             raise
@@ -308,11 +344,20 @@ class MachineService:
             stored = [sm]
         for sm in stored:
             proxy = MachineProxy(sm, self._config(sm))
-            self._place(proxy)
+            proxy.exercise, faults = self.seats.get(sm.id, (None, None))
+            self._place(proxy, faults=faults)
             self._proxies[sm.id] = proxy
             self._built(sm.id)
 
-    def create(self, req: MachineCreate) -> MachineProxy:
+    def create(
+        self,
+        req: MachineCreate,
+        values: Values | None = None,
+        faults: list[tuple[Fault, Trigger]] | None = None,
+        exercise: object | None = None,
+    ) -> MachineProxy:
+        """A new machine placed on a worker; a class's seat gets its exercise's starting
+        `values` (written into its lists: the caller stores them), `faults` and checks."""
         if req.id in self._proxies:
             raise ApiError(409, {"message": f"machine '{req.id}' exists"})
         sm = StoredMachine(
@@ -337,9 +382,14 @@ class MachineService:
             ) from None
         except NcUsageError as e:
             raise ApiError(422, {"message": str(e)}) from None
-        proxy = MachineProxy(sm, cfg)
         try:
-            self._place(proxy)
+            apply_values(cfg, values or [])
+        except NcUsageError as e:
+            raise ApiError(422, {"message": str(e)}) from None
+        proxy = MachineProxy(sm, cfg)
+        proxy.exercise = exercise
+        try:
+            self._place(proxy, faults=faults)
         except (WorkerGone, WorkerRefused) as e:
             raise ApiError(503, {"message": f"no worker could build the machine: {e}"}) from None
         self.store.add_machine(sm)
@@ -358,6 +408,25 @@ class MachineService:
             worker = proxy.worker if proxy.worker is not None and proxy.worker.alive else None
             try:
                 self._place(proxy, worker)
+            except (WorkerGone, WorkerRefused) as e:
+                raise ApiError(503, {"message": f"machine '{mid}': {e}"}) from None
+        return proxy
+
+    def restore(self, mid: str, state: bytes, params: ParamSnapshot) -> MachineProxy:
+        """Rebuild the machine from a snapshot (a new epoch continuing at the snapshot's
+        cycle); `params` are its lists then, which the gateway's copy takes over."""
+        proxy = self.get(mid)
+        with proxy.lock:
+            for (scope, target), values in params.items():
+                lists = proxy.cfg.list_values(Scope(scope), target)
+                lists.clear()
+                lists.update(values)
+            proxy.pending.clear()
+            proxy.faults.clear()  # the snapshot's own come with the next status
+            worker = proxy.worker if proxy.worker is not None and proxy.worker.alive else None
+            mode = proxy.pacing.mode if proxy.pacing is not None else "run"
+            try:
+                self._place(proxy, worker, state, mode=mode)
             except (WorkerGone, WorkerRefused) as e:
                 raise ApiError(503, {"message": f"machine '{mid}': {e}"}) from None
         return proxy
@@ -418,6 +487,12 @@ class MachineService:
                 "starts as after power-on: simulated time from 0, axes at their start "
                 "positions, spindle stopped, earlier events and pending values gone",
             )
+
+
+def apply_values(cfg: MachineConfig, values: Values) -> None:
+    """Write values into a machine's lists (NcUsageError for a target it does not have)."""
+    for scope, target, name, value in values:
+        cfg.list_values(Scope(scope), target)[name] = value
 
 
 def apply_stored(cfg: MachineConfig, stored: list[tuple[str, str, str, Value]]) -> None:

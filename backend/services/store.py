@@ -337,6 +337,11 @@ class Store:
             ).fetchone()
         return (r[0], r[1], r[2], r[3]) if r else None
 
+    def trace_machine(self, tid: str) -> str | None:
+        """The machine a stored trace was captured on, None for no such trace."""
+        rows = self.query("SELECT machine FROM traces WHERE id = ?", (tid,))
+        return str(rows[0][0]) if rows else None
+
     def update_trace(self, tid: str, name: str, notes: str) -> None:
         with self._lock:
             self._db.execute(

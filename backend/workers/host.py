@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from backend.workers.protocol import (
+    AddMachine,
     AssistRunning,
     AssistStart,
     MachineInfo,
@@ -29,15 +30,17 @@ from nc_sim.assist.experiments import PROCEDURES
 from nc_sim.assist.procedure import LiveRun
 from nc_sim.commands import JogStop
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.scope import Record, Scope
 from nc_sim.signals import Signal, machine_signals
-from nc_sim.sim import Simulation
+from nc_sim.sim import Simulation, restore
+from nc_sim.training.checks import ExerciseMonitor
+from nc_sim.training.exercise import Exercise
 
 assert R_COLS == L.R_COLS, "the ring's record width must follow the kernel layout"
 
 FAST_CHUNK = MAX_WRITE  # cycles per kernel call in fast mode
+CHECK_CYCLES = 100  # an exercise's checks see the records in stretches of about this many
 MAX_CATCH_UP_S = 1.0  # behind by more than this: re-anchor instead of racing to catch up
 
 
@@ -54,14 +57,24 @@ class PacingState:
 class MachineHost:
     """A machine owned by a worker."""
 
-    def __init__(
-        self, mid: str, name: str, cfg: MachineConfig, ring_path: Path | None, epoch: int
-    ) -> None:
-        self.id = mid
-        self.name = name
-        self.epoch = epoch
-        self.sim = Simulation(cfg.cycle_s)
-        self.machine: Machine = self.sim.add(cfg)
+    def __init__(self, r: AddMachine, ring_path: Path | None) -> None:
+        """The machine of an AddMachine: powered on at cycle 0, or restored from its state;
+        then its training faults injected and its exercise's checks set up."""
+        self.id = r.mid
+        self.name = r.name
+        self.epoch = r.epoch
+        if r.state is not None:
+            self.sim = restore(r.state)
+            self.machine: Machine = self.sim.machines[0]
+        else:
+            self.sim = Simulation(r.cfg.cycle_s)
+            self.machine = self.sim.add(r.cfg)
+        for fault, trigger in r.faults:
+            self.machine.inject(fault, trigger)
+        self.monitor = None
+        if isinstance(r.exercise, Exercise):  # its checks count from this build on
+            self.monitor = ExerciseMonitor(r.exercise.checks, self.machine)
+        self.monitor_fed = self.sim.cycle  # records up to here went to the monitor
         self.signals: list[Signal] = machine_signals(
             self.machine.axes, self.machine.channel_slot, self.machine.rotary_spindle
         )
@@ -118,6 +131,8 @@ class MachineHost:
             self.ring.publish(self.sim.cycle)
             if live is not None:
                 live.feed(rows[start : start + part])
+            if self.monitor is not None and self.sim.cycle - self.monitor_fed >= CHECK_CYCLES:
+                self.feed_monitor()
             if self.scope.active:
                 self.scope.feed(rows[start : start + part], start_cycle, self.machine.events)
                 if self.scope.completed:
@@ -125,12 +140,17 @@ class MachineHost:
             n -= part
         self._expire_jogs()
 
-    def _take_captures(self) -> None:
-        """Keep completed records with the parameter lists as written now (cheap copies)."""
+    def params_now(self) -> ParamSnapshot:
+        """The parameter lists as written now (cheap copies)."""
         cfg = self.machine.cfg
         params: ParamSnapshot = {("channel", ""): dict(cfg.channel), ("tool", ""): dict(cfg.tools)}
         for a in cfg.axes:
             params[("axis", a.name)] = dict(a.values)
+        return params
+
+    def _take_captures(self) -> None:
+        """Keep completed records with the parameter lists as written now."""
+        params = self.params_now()
         self.captures += [(rec, params) for rec in self.scope.completed]
         self.scope.completed.clear()
 
@@ -156,6 +176,15 @@ class MachineHost:
         return AssistRunning(
             of.name, str(of.args.get("axis", "")), phase, elapsed_s, planned_s, of.by
         )
+
+    def feed_monitor(self) -> None:
+        """Hand the exercise's checks the records since they last saw them (in stretches:
+        a call per cycle would cost 50 seats more than their kernel)."""
+        if self.monitor is None or self.sim.cycle == self.monitor_fed:
+            return
+        n = self.sim.cycle - self.monitor_fed
+        self.monitor.feed(self.machine, self.history(n), self.sim.cycle - n + 1)
+        self.monitor_fed = self.sim.cycle
 
     def history(self, cycles: int) -> np.ndarray:
         """Kernel records of the newest `cycles` cycles the ring holds, oldest first."""
@@ -250,7 +279,17 @@ class MachineHost:
 
     def status_read(self) -> StatusRead:
         """The machine's snapshot and pacing now."""
-        return StatusRead(self.machine.snapshot(), self.pacing_now(), self.assist_running())
+        checks: list[object] = []
+        if self.monitor is not None:
+            self.feed_monitor()
+            checks = list(self.monitor.results())
+        return StatusRead(
+            self.machine.snapshot(),
+            self.pacing_now(),
+            self.assist_running(),
+            self.machine.faults(),
+            checks,
+        )
 
     def close(self) -> None:
         """Remove the machine's ring file (the gateway unmaps its side)."""

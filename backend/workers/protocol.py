@@ -14,6 +14,7 @@ from typing import Literal
 from nc_sim import commands as nc
 from nc_sim.commands import Outcome
 from nc_sim.events import Event
+from nc_sim.faults import Fault, FaultState, Trigger
 from nc_sim.machine.config import MachineConfig
 from nc_sim.params import Value
 from nc_sim.scope import Record, ScopeSetup
@@ -36,6 +37,9 @@ class AddMachine:
     cfg: MachineConfig
     epoch: int  # the gateway counts builds: telemetry readers restart when it changes
     mode: Mode = "run"
+    state: bytes | None = None  # a snapshot to restore instead of powering on (TakeSnapshot)
+    faults: list[tuple[Fault, Trigger]] = field(default_factory=list)  # injected when built
+    exercise: object | None = None  # nc_sim.training Exercise whose checks the worker evaluates
 
 
 @dataclass(frozen=True)
@@ -133,6 +137,28 @@ class AssistCancel:
     why: str
 
 
+@dataclass(frozen=True)
+class InjectFault:
+    """A training fault into a machine's plant or PLC (answered with its FaultState)."""
+
+    mid: str
+    fault: Fault
+    trigger: Trigger
+
+
+@dataclass(frozen=True)
+class RemoveFault:
+    mid: str
+    fid: int
+
+
+@dataclass(frozen=True)
+class TakeSnapshot:
+    """The machine's whole state, to restore with AddMachine(state=...)."""
+
+    mid: str
+
+
 Request = (
     AddMachine
     | RemoveMachine
@@ -147,6 +173,9 @@ Request = (
     | ScopeRoll
     | AssistStart
     | AssistCancel
+    | InjectFault
+    | RemoveFault
+    | TakeSnapshot
 )
 
 
@@ -209,6 +238,18 @@ class StatusRead:
     snapshot: MachineSnapshot
     pacing: Pacing
     assist: AssistRunning | None = None
+    faults: list[FaultState] = field(default_factory=list)  # for instructors only
+    checks: list[object] = field(default_factory=list)  # nc_sim.training CheckResult of a seat
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """A machine's saved state: pickled by nc_sim, restored only from our own snapshots."""
+
+    cycle: int
+    t_s: float
+    data: bytes
+    params: ParamSnapshot  # its lists as written then
 
 
 @dataclass(frozen=True)

@@ -32,11 +32,13 @@ from backend.workers.protocol import (
     AssistStart,
     Envelope,
     Failure,
+    InjectFault,
     LoopFigures,
     MachineNews,
     Pace,
     Push,
     ReadStatus,
+    RemoveFault,
     RemoveMachine,
     Reply,
     Request,
@@ -48,10 +50,12 @@ from backend.workers.protocol import (
     Step,
     Submit,
     Submitted,
+    TakeSnapshot,
     Values,
     Watch,
     WorkerNews,
 )
+from backend.workers.training import training_request
 from nc_sim.commands import Accepted, EmergencyStop, JogStart, JogStop
 from nc_sim.errors import NcUsageError
 from nc_sim.params import Scope
@@ -305,7 +309,7 @@ class Worker:
                 if old is not None:
                     old.close()
                 path = None if self.ring_dir is None else self.ring_dir / f"{r.mid}.{r.epoch}.ring"
-                host = MachineHost(r.mid, r.name, r.cfg, path, r.epoch)
+                host = MachineHost(r, path)
                 host.set_mode(r.mode)
                 self.hosts[r.mid] = host
                 self.news_due = True
@@ -366,6 +370,8 @@ class Worker:
                     return Failure("conflict", "no assistant runs on this machine")
                 host.live.cancel(r.why)
                 return None
+            case InjectFault() | RemoveFault() | TakeSnapshot():
+                return training_request(self._host(r.mid), r)
         raise NcUsageError(f"unknown request {r!r}")
 
     def _submit(self, host: MachineHost, r: Submit, sent_mono: float) -> Submitted:

@@ -1,0 +1,229 @@
+"""Training: exercises, classes of seats (one simulated machine per student), the
+instructor's console frames, snapshots of a machine."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from api.faults import FaultInfo, FaultInject
+
+CLASS_ID = r"^[a-z0-9][a-z0-9-]{0,23}$"
+MAX_SEATS = 60
+
+
+class CheckInfo(BaseModel):
+    """An objective check of an exercise, as the student reads it."""
+
+    id: str
+    text: str
+    points: float
+
+
+class HintInfo(BaseModel):
+    """A hint: its cost; its text once taken."""
+
+    n: int = Field(description="number from 1")
+    cost: float = Field(description="points it costs")
+    text: str | None = Field(None, description="null until the hint is taken")
+
+
+class ExerciseInfo(BaseModel):
+    """An exercise as listed (faults are the instructor's: `faults` counts them)."""
+
+    id: str
+    title: str
+    summary: str
+    task: str
+    par_time_s: float = Field(description="time a good student needs (simulated s)")
+    checks: list[CheckInfo]
+    hints: list[HintInfo]
+    faults: int = Field(description="faults it injects (shown to instructors only)")
+    source: str = Field(description="shipped file or 'uploaded by <user>'")
+
+
+class ExerciseUpload(BaseModel):
+    """An exercise file (TOML) to add to the service's exercises."""
+
+    text: str = Field(min_length=1, max_length=100_000)
+
+
+class ClassCreate(BaseModel):
+    """A class: every seat gets its own machine from the exercise's template."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    id: str = Field(pattern=CLASS_ID, description="URL name; seat machines are <id>-s01 …")
+    title: str = Field("", max_length=80)
+    exercise: str = Field(min_length=1, max_length=64, description="exercise id")
+    seats: int = Field(ge=1, le=MAX_SEATS)
+    students: list[str] = Field(
+        default_factory=list,
+        max_length=MAX_SEATS,
+        description="students' names, seat by seat (optional; shown in the console)",
+    )
+
+
+class CheckState(BaseModel):
+    """A check of one seat, evaluated on its live machine."""
+
+    id: str
+    text: str
+    points: float
+    passed: bool = Field(description="holds now")
+    first_passed_s: float | None = Field(description="seat time it first held, s")
+    detail: str = Field(description="the measured figure, e.g. 'k = 19.96 1/s (−0.2 %)'")
+
+
+class SeatInfo(BaseModel):
+    """One seat of a class."""
+
+    n: int = Field(description="seat number from 1")
+    student: str = Field(description="the student's name (or 'Seat n')")
+    user: str = Field(description="the seat's login (its one-time links log in as it)")
+    machine: str
+    frozen: bool
+    control: str | None = Field(description="who holds control of the seat's machine")
+    progress: float = Field(description="share of the checks that hold or held, 0..1")
+    score: float
+    hints_taken: int
+    seat_time_s: float = Field(description="simulated time the seat has run, s")
+
+
+class ClassInfo(BaseModel):
+    id: str
+    title: str
+    exercise: str
+    instructor: str
+    created_unix: float
+    ended_unix: float | None
+    seats: list[SeatInfo]
+
+
+class SeatLink(BaseModel):
+    """A one-time login link of a seat (good once, within an hour)."""
+
+    n: int
+    url: str
+
+
+class ClassCreated(BaseModel):
+    """The new class and its seats' login links (shown this once)."""
+
+    info: ClassInfo
+    links: list[SeatLink]
+
+
+class SeatSelection(BaseModel):
+    """Some seats of a class (all when empty)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    seats: list[int] = Field(default_factory=list, max_length=MAX_SEATS)
+
+
+class Freeze(SeatSelection):
+    """Freeze (pause) or resume seats' machines."""
+
+    frozen: bool
+
+
+class Broadcast(SeatSelection):
+    """A message every selected seat sees as a banner."""
+
+    text: str = Field(min_length=1, max_length=500)
+
+
+class ClassFault(SeatSelection):
+    """A fault injected into the selected seats."""
+
+    inject: FaultInject
+
+
+class SeatFaults(BaseModel):
+    n: int
+    faults: list[FaultInfo]
+
+
+class SeatDetail(BaseModel):
+    """A seat for the instructor and the debrief: checks, hints, faults."""
+
+    info: SeatInfo
+    checks: list[CheckState]
+    hints: list[HintInfo]
+    faults: list[FaultInfo]
+
+
+class Exercise(BaseModel):
+    """The exercise of the student's own seat: task, checks as they stand, hints, score."""
+
+    class_id: str
+    exercise: ExerciseInfo
+    checks: list[CheckState]
+    hints: list[HintInfo]
+    score: float
+    progress: float
+    seat_time_s: float
+
+
+class HintTake(BaseModel):
+    n: int = Field(ge=1, le=32)
+
+
+# --- the instructor console's grid (websocket /api/classes/{cid}/grid) ------------------------
+class AxisLine(BaseModel):
+    """One axis of a seat in the grid: where it is, how fast, its lag."""
+
+    name: str
+    state: str
+    lag: float = Field(description="mm | °")
+    speed: float = Field(description="mm/min | rpm (spindles)")
+
+
+class SeatFrame(BaseModel):
+    """One seat as the grid shows it now."""
+
+    n: int
+    machine: str
+    student: str
+    channel: str = Field(description="channel state (IDLE, RUNNING, ERROR, ...)")
+    mode: Literal["run", "pause", "fast", "gone"]
+    frozen: bool
+    axes: list[AxisLine]
+    error: str | None = Field(description="the newest job error in words, null for none")
+    error_code: int | None
+    control: str | None
+    progress: float
+    score: float
+    faults: int = Field(description="injected faults (active or armed)")
+    seat_time_s: float
+    status_unix: float | None = Field(
+        description="wall time the status shown was pushed by its worker (grid latency)"
+    )
+
+
+class GridFrame(BaseModel):
+    """Every seat of a class, pushed a few times a second."""
+
+    class_id: str
+    ended: bool
+    t_unix: float
+    seats: list[SeatFrame]
+
+
+class SnapshotCreate(BaseModel):
+    label: str = Field("", max_length=80)
+
+
+class SnapshotInfo(BaseModel):
+    """A machine's saved state (simulated time, every axis, the channel, PLC, faults)."""
+
+    id: int
+    machine: str
+    label: str
+    cycle: int
+    t_s: float
+    created_unix: float
+    by: str
+    size_bytes: int

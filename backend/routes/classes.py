@@ -1,0 +1,244 @@
+"""Training: exercises, classes and their seats, the instructor's console (grid websocket)."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Request, WebSocket, WebSocketDisconnect
+from fastapi.concurrency import run_in_threadpool
+
+from api.auth import Action
+from api.classes import (
+    CLASS_ID,
+    Broadcast,
+    ClassCreate,
+    ClassCreated,
+    ClassFault,
+    ClassInfo,
+    ExerciseInfo,
+    ExerciseUpload,
+    Freeze,
+    SeatDetail,
+    SeatFaults,
+    SeatLink,
+)
+from backend.deps import ActorDep, ServicesDep, permit
+from backend.errors import WORKER_GONE, ApiError, responses
+from backend.services import training
+from backend.services.classes import Class, Classes
+from backend.services.exercises import hint_infos
+from backend.workers.protocol import Pace
+
+router = APIRouter(prefix="/api", tags=["training"])
+
+ClassId = Annotated[str, Path(pattern=CLASS_ID, description="a class's id")]
+SeatNo = Annotated[int, Path(ge=1, le=60, description="seat number from 1")]
+_RUNNING = {409: "the class has ended"}
+
+
+def _running(classes: Classes, cid: str) -> Class:
+    c = classes.get(cid)
+    if c.ended_unix is not None:
+        raise ApiError(409, {"message": f"class '{cid}' has ended"})
+    return c
+
+
+@router.get("/exercises", dependencies=[permit(Action.TEACH)], responses=responses(403))
+def list_exercises(services: ServicesDep) -> list[ExerciseInfo]:
+    """Shipped and uploaded exercises, with every hint's text (instructors)."""
+    return services.exercises.list()
+
+
+@router.post(
+    "/exercises",
+    status_code=201,
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 409, 422),
+)
+def upload_exercise(req: ExerciseUpload, services: ServicesDep, actor: ActorDep) -> ExerciseInfo:
+    """Add an exercise file (TOML, the format of `exercises/`); a wrong file is refused with
+    the key, value or line and column that is wrong."""
+    info = services.exercises.upload(req.text, actor.name)
+    services.audit.record(Classes.entry(actor, f"uploaded exercise '{info.id}'"))
+    return info
+
+
+@router.get("/classes", dependencies=[permit(Action.TEACH)], responses=responses(403))
+def list_classes(services: ServicesDep) -> list[ClassInfo]:
+    """Every class, running and ended, newest first."""
+    return [services.classes.info(c) for c in services.classes.all()]
+
+
+@router.post(
+    "/classes",
+    status_code=201,
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404, 409, 422, why=WORKER_GONE),
+)
+def create_class(
+    req: ClassCreate, request: Request, services: ServicesDep, actor: ActorDep
+) -> ClassCreated:
+    """A class of seats: a login and a machine each (the exercise's template, starting
+    values and faults; its checks running). The answer has each seat's one-time login link
+    (shown this once; a new one: POST .../seats/{n}/link)."""
+    created = services.classes.create(actor, req, str(request.base_url))
+    services.audit.record(
+        Classes.entry(
+            actor,
+            f"created class '{req.id}' ({req.seats} seats, exercise '{req.exercise}')",
+            seats=req.seats,
+            exercise=req.exercise,
+        )
+    )
+    return created
+
+
+@router.get("/classes/{cid}", dependencies=[permit(Action.TEACH)], responses=responses(403, 404))
+def get_class(cid: ClassId, services: ServicesDep) -> ClassInfo:
+    return services.classes.info(services.classes.get(cid))
+
+
+@router.post(
+    "/classes/{cid}/end",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404, why=_RUNNING),
+)
+def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo:
+    """End the class: its machines and logins go; its record, results, traces and audit
+    stay for the debrief."""
+    c = services.classes.get(cid)
+    services.classes.end(c)
+    services.console.unwatch(c)
+    for seat in c.seats:
+        services.snapshots.forget(seat.machine)
+    services.audit.record(Classes.entry(actor, f"ended class '{cid}'"))
+    return services.classes.info(c)
+
+
+@router.post(
+    "/classes/{cid}/freeze",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404, why=_RUNNING | WORKER_GONE),
+)
+def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) -> ClassInfo:
+    """Freeze (pause) or resume seats' machines; a student cannot resume a frozen seat."""
+    c = _running(services.classes, cid)
+    seats = services.classes.select(c, req.seats)
+    for seat in seats:
+        m = services.machines.get(seat.machine)
+        m.call(Pace(m.id, "pause" if req.frozen else "run"))
+        seat.frozen = req.frozen
+        services.classes.save(seat)
+        word = "froze" if req.frozen else "resumed"
+        m.notice("frozen" if req.frozen else "resumed", f"{actor.name} {word} the machine")
+    what = "froze" if req.frozen else "resumed"
+    services.audit.record(
+        Classes.entry(actor, f"{what} seats {[s.n for s in seats]} of class '{cid}'")
+    )
+    return services.classes.info(c)
+
+
+@router.post(
+    "/classes/{cid}/broadcast",
+    status_code=204,
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404, why=_RUNNING),
+)
+def broadcast(cid: ClassId, req: Broadcast, services: ServicesDep, actor: ActorDep) -> None:
+    """A message every selected seat's HMI shows as a banner."""
+    c = _running(services.classes, cid)
+    for seat in services.classes.select(c, req.seats):
+        services.machines.get(seat.machine).notice("message", f"{actor.name}: {req.text}")
+    services.audit.record(Classes.entry(actor, f"message to class '{cid}': {req.text}"))
+
+
+@router.post(
+    "/classes/{cid}/faults",
+    status_code=201,
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404, 422, why=_RUNNING | WORKER_GONE),
+)
+def inject_class(
+    cid: ClassId, req: ClassFault, services: ServicesDep, actor: ActorDep
+) -> list[SeatFaults]:
+    """Inject a fault into the selected seats (all when none are named)."""
+    c = _running(services.classes, cid)
+    seats = services.classes.select(c, req.seats)
+    out = []
+    what = training.describe(training.to_fault(req.inject.fault))
+    for seat in seats:
+        m = services.machines.get(seat.machine)
+        training.inject(m, req.inject)
+        services.audit.record(
+            Classes.entry(actor, f"inject fault: {what}", m.id, **req.inject.model_dump())
+        )
+        out.append(SeatFaults(n=seat.n, faults=training.faults_of(m)))
+    return out
+
+
+@router.get(
+    "/classes/{cid}/seats/{n}", dependencies=[permit(Action.TEACH)], responses=responses(403, 404)
+)
+def seat_detail(cid: ClassId, n: SeatNo, services: ServicesDep) -> SeatDetail:
+    """A seat's checks, hints and faults (for the console and the debrief)."""
+    c = services.classes.get(cid)
+    seat = services.classes.seat(cid, n)
+    m = services.classes.proxy(seat) if c.ended_unix is None else None
+    return SeatDetail(
+        info=services.classes.seat_info(c, seat),
+        checks=services.classes.checks(c, seat),
+        hints=hint_infos(c.exercise, seat.hints),
+        faults=training.faults_of(m) if m is not None else [],
+    )
+
+
+@router.post(
+    "/classes/{cid}/seats/{n}/link",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404, why=_RUNNING),
+)
+def seat_link(
+    cid: ClassId, n: SeatNo, request: Request, services: ServicesDep, actor: ActorDep
+) -> SeatLink:
+    """A new one-time login link of a seat (good once, within an hour)."""
+    _running(services.classes, cid)
+    seat = services.classes.seat(cid, n)
+    url = services.classes.link(seat, str(request.base_url))
+    services.audit.record(Classes.entry(actor, f"login link for seat {n} of class '{cid}'"))
+    return SeatLink(n=n, url=url)
+
+
+@router.websocket("/classes/{cid}/grid", dependencies=[permit(Action.TEACH)])
+async def grid(ws: WebSocket, cid: ClassId, services: ServicesDep) -> None:
+    """The console's grid: a `GridFrame` (JSON) a few times a second while the class runs.
+    Nothing is read from the client."""
+    try:
+        await run_in_threadpool(services.classes.get, cid)
+    except ApiError as e:
+        await ws.close(code=4404, reason=str(e)[:120])
+        return
+    await ws.accept()
+    console = services.console.open(cid)
+    reader = asyncio.get_running_loop().create_task(_drain(ws))
+    try:
+        while not reader.done():
+            getter = asyncio.ensure_future(console.mailbox.get())
+            await asyncio.wait({getter, reader}, return_when=asyncio.FIRST_COMPLETED)
+            if not getter.done():
+                getter.cancel()
+                break
+            await ws.send_text(getter.result().model_dump_json())
+    except (WebSocketDisconnect, RuntimeError):
+        pass
+    finally:
+        reader.cancel()
+        services.console.close(console)
+
+
+async def _drain(ws: WebSocket) -> None:
+    """Read (and drop) what the client sends until it goes."""
+    while True:
+        msg = await ws.receive()
+        if msg["type"] == "websocket.disconnect":
+            return

@@ -1,0 +1,45 @@
+"""The exercise of a class's seat, as its student works on it: task, checks, hints, score."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from api.auth import Action
+from api.classes import Exercise, HintInfo, HintTake
+from backend.deps import ActorDep, MachineDep, ServicesDep, permit
+from backend.errors import responses
+from backend.services.classes import Classes
+from backend.services.exercises import exercise_info, hint_infos
+
+router = APIRouter(prefix="/api/machines/{mid}/exercise", tags=["training"])
+
+
+@router.get("", dependencies=[permit(Action.EXERCISE)], responses=responses(403, 404))
+def my_exercise(machine: MachineDep, services: ServicesDep) -> Exercise:
+    """The exercise of the seat this machine is (404 when it is none): the task, every
+    check as it stands on the live machine, the hints (their text once taken), the score."""
+    c, seat = services.classes.seat_by_machine(machine.id)
+    progress, score = services.classes.score(c, seat)
+    info = exercise_info(c.exercise, "class", seat.hints)
+    return Exercise(
+        class_id=c.id,
+        exercise=info.model_copy(update={"faults": 0}),  # the student's to find
+        checks=services.classes.checks(c, seat),
+        hints=hint_infos(c.exercise, seat.hints),
+        score=score,
+        progress=progress,
+        seat_time_s=seat.seat_time_s,
+    )
+
+
+@router.post("/hints", dependencies=[permit(Action.EXERCISE)], responses=responses(403, 404))
+def take_hint(
+    req: HintTake, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> HintInfo:
+    """Take a hint: its text, and its cost comes off the score (once)."""
+    c, seat = services.classes.seat_by_machine(machine.id)
+    text = services.classes.take_hint(seat, c, req.n)
+    services.audit.record(
+        Classes.entry(actor, f"took hint {req.n} of exercise '{c.exercise.id}'", machine.id)
+    )
+    return HintInfo(n=req.n, cost=c.exercise.hints[req.n - 1].cost, text=text)

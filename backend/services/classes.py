@@ -1,0 +1,412 @@
+"""Classes: an instructor's class of seats, each a student's login and a machine of its own
+built from the exercise (its starting values, its faults, its checks evaluated by the
+machine's worker).
+
+The seats' progress lives here: a check counts from the seat time it first held (the time
+weighting of the score), hints taken cost points. Seat time is the simulated time the seat's
+machine ran, summed over its builds (a restart starts the machine's clock again, not the
+seat's). A class that ends takes its machines and logins away; its record, the seats'
+results, their traces and the audit stay for the debrief.
+"""
+
+from __future__ import annotations
+
+import json
+import secrets
+import threading
+import time
+from dataclasses import dataclass, field
+
+from api.auth import Role
+from api.classes import (
+    CheckState,
+    ClassCreate,
+    ClassCreated,
+    ClassInfo,
+    SeatInfo,
+    SeatLink,
+)
+from api.machines import MachineCreate
+from backend.errors import ApiError, not_found
+from backend.services.accounts import Accounts
+from backend.services.audit import Entry
+from backend.services.auth import Actor
+from backend.services.exercises import Exercises
+from backend.services.machines import MachineProxy, MachineService
+from backend.services.store import Store, StoredChange, parameter_entry
+from nc_sim.training.checks import CheckResult
+from nc_sim.training.exercise import Exercise, parse_exercise
+from nc_sim.training.score import score as exercise_score
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS classes (  -- backend/services/classes.py
+    id TEXT PRIMARY KEY,
+    title TEXT NOT NULL,
+    exercise TEXT NOT NULL,
+    exercise_text TEXT NOT NULL,   -- the exercise file as the class ran it
+    instructor TEXT NOT NULL,
+    created REAL NOT NULL,
+    ended REAL
+);
+CREATE TABLE IF NOT EXISTS seats (
+    class TEXT NOT NULL,
+    n INTEGER NOT NULL,
+    student TEXT NOT NULL,
+    user TEXT NOT NULL,
+    machine TEXT NOT NULL,
+    progress TEXT NOT NULL,        -- JSON: hints taken, checks' first pass and detail, time
+    PRIMARY KEY (class, n)
+);
+"""
+
+
+@dataclass
+class Seat:
+    """One seat's progress (the gateway's: it survives rebuilds of the seat's machine)."""
+
+    class_id: str
+    n: int
+    student: str
+    user: str
+    machine: str
+    hints: set[int] = field(default_factory=set)
+    first_passed_s: dict[str, float] = field(default_factory=dict)  # check id -> seat time
+    passed: dict[str, bool] = field(default_factory=dict)  # holds now
+    detail: dict[str, str] = field(default_factory=dict)
+    time_base_s: float = 0.0  # seat time of the machine's earlier builds
+    epoch: int = 0
+    epoch_start_s: float | None = None  # machine time the current build was first seen at
+    last_t_s: float = 0.0
+    frozen: bool = False
+
+    @property
+    def seat_time_s(self) -> float:
+        return self.time_base_s + self.last_t_s - (self.epoch_start_s or 0.0)
+
+    def progress_json(self) -> str:
+        return json.dumps(
+            {
+                "hints": sorted(self.hints),
+                "first_passed_s": self.first_passed_s,
+                "passed": self.passed,
+                "detail": self.detail,
+                "seat_time_s": self.seat_time_s,
+                "frozen": self.frozen,
+            }
+        )
+
+    def load_progress(self, text: str) -> None:
+        p = json.loads(text)
+        self.hints = set(p.get("hints", []))
+        self.first_passed_s = dict(p.get("first_passed_s", {}))
+        self.passed = dict(p.get("passed", {}))
+        self.detail = dict(p.get("detail", {}))
+        self.time_base_s = float(p.get("seat_time_s", 0.0))
+        self.frozen = bool(p.get("frozen", False))
+
+
+@dataclass
+class Class:
+    id: str
+    title: str
+    exercise: Exercise
+    exercise_text: str
+    instructor: str
+    created_unix: float
+    ended_unix: float | None
+    seats: list[Seat]
+
+
+def seat_name(class_id: str, n: int) -> str:
+    """A seat's login and machine id: `<class>-s01`."""
+    return f"{class_id}-s{n:02d}"
+
+
+class Classes:
+    """Every class of the service; the running ones with their machines."""
+
+    def __init__(
+        self, store: Store, accounts: Accounts, machines: MachineService, exercises: Exercises
+    ) -> None:
+        self.store = store
+        self.accounts = accounts
+        self.machines = machines
+        self.exercises = exercises
+        store.script(SCHEMA)
+        self._lock = threading.RLock()
+        self._classes: dict[str, Class] = {}
+        self._seat_of: dict[str, Seat] = {}  # login -> seat of a running class
+        self._by_machine: dict[str, Seat] = {}
+        self._load()
+
+    # --- reading ------------------------------------------------------------------------------
+    def _load(self) -> None:
+        rows = self.store.query(
+            "SELECT id, title, exercise, exercise_text, instructor, created, ended FROM classes"
+        )
+        for cid, title, _eid, text, instructor, created, ended in rows:
+            seats = []
+            for n, student, user, machine, progress in self.store.query(
+                "SELECT n, student, user, machine, progress FROM seats WHERE class = ? ORDER BY n",
+                (cid,),
+            ):
+                seat = Seat(cid, n, student, user, machine)
+                seat.load_progress(progress)
+                seats.append(seat)
+            ex = parse_exercise(text, f"class {cid}")
+            c = Class(cid, title, ex, text, instructor, created, ended, seats)
+            self._classes[cid] = c
+            if ended is None:
+                self._index(c)
+                # the machines are built after this (MachineService.load): with the checks
+                # and the exercise's faults (an instructor's own are gone with the service)
+                faults = [(f.fault, f.trigger) for f in ex.faults]
+                for seat in seats:
+                    self.machines.seats[seat.machine] = (ex, faults)
+
+    def _index(self, c: Class) -> None:
+        for seat in c.seats:
+            self._seat_of[seat.user] = seat
+            self._by_machine[seat.machine] = seat
+
+    def seat_of(self, user: str) -> str | None:
+        """The machine a login may see when it is a running class's student, else None."""
+        seat = self._seat_of.get(user)
+        return seat.machine if seat is not None else None
+
+    def seat_by_machine(self, mid: str) -> tuple[Class, Seat]:
+        """The running class and seat of a machine; 404 when it is no seat."""
+        with self._lock:
+            seat = self._by_machine.get(mid)
+            if seat is None:
+                raise not_found(f"class seat of machine '{mid}'")
+            return self._classes[seat.class_id], seat
+
+    def get(self, cid: str) -> Class:
+        c = self._classes.get(cid)
+        if c is None:
+            raise not_found(f"class '{cid}'")
+        return c
+
+    def all(self) -> list[Class]:
+        with self._lock:
+            return sorted(self._classes.values(), key=lambda c: -c.created_unix)
+
+    def seat(self, cid: str, n: int) -> Seat:
+        c = self.get(cid)
+        if not 1 <= n <= len(c.seats):
+            raise not_found(f"seat {n} of class '{cid}' (seats 1..{len(c.seats)})")
+        return c.seats[n - 1]
+
+    def select(self, c: Class, seats: list[int]) -> list[Seat]:
+        """The seats numbered (all for an empty list); 404 naming a seat that is none."""
+        if not seats:
+            return list(c.seats)
+        bad = [n for n in seats if not 1 <= n <= len(c.seats)]
+        if bad:
+            raise not_found(f"seat {bad[0]} of class '{c.id}' (seats 1..{len(c.seats)})")
+        return [c.seats[n - 1] for n in sorted(set(seats))]
+
+    def proxy(self, seat: Seat) -> MachineProxy | None:
+        try:
+            return self.machines.get(seat.machine)
+        except ApiError:
+            return None
+
+    # --- progress -----------------------------------------------------------------------------
+    def checks(self, c: Class, seat: Seat) -> list[CheckState]:
+        return [
+            CheckState(
+                id=k.id,
+                text=k.text,
+                points=k.points,
+                passed=seat.passed.get(k.id, False),
+                first_passed_s=seat.first_passed_s.get(k.id),
+                detail=seat.detail.get(k.id, "not evaluated yet"),
+            )
+            for k in c.exercise.checks
+        ]
+
+    def score(self, c: Class, seat: Seat) -> tuple[float, float]:
+        """(progress 0..1, score) of a seat, by nc_sim.training.score's rule over the seat
+        times of the checks' first passes (in milliseconds: the rule counts cycles)."""
+        first = seat.first_passed_s
+        results = [
+            CheckResult(
+                k.id, k.id in first, round(first[k.id] * 1000) if k.id in first else None, ""
+            )
+            for k in c.exercise.checks
+        ]
+        s = exercise_score(c.exercise, results, 0, 0.001, [n - 1 for n in seat.hints])
+        return s.passed / max(1, s.total), s.points
+
+    def update(self, seat: Seat, proxy: MachineProxy) -> bool:
+        """Take the seat machine's newest pushed status in (its seat time and check
+        results); True when a check passed for the first time."""
+        st = proxy.status
+        if st is None:
+            return False
+        t_s = st.pacing.cycle * st.pacing.cycle_s
+        if proxy.epoch != seat.epoch:  # a new build: the seat's clock goes on from here
+            if seat.epoch_start_s is not None:
+                seat.time_base_s = seat.seat_time_s
+            seat.epoch, seat.epoch_start_s = proxy.epoch, t_s
+        seat.last_t_s = t_s
+        news = False
+        for r in st.checks:
+            assert isinstance(r, CheckResult)
+            cid, passed = r.id, r.passed
+            seat.passed[cid], seat.detail[cid] = passed, r.detail
+            if passed and cid not in seat.first_passed_s:
+                seat.first_passed_s[cid] = seat.seat_time_s
+                news = True
+        return news
+
+    def save(self, seat: Seat) -> None:
+        self.store.run(
+            "UPDATE seats SET progress = ? WHERE class = ? AND n = ?",
+            (seat.progress_json(), seat.class_id, seat.n),
+        )
+
+    def info(self, c: Class) -> ClassInfo:
+        return ClassInfo(
+            id=c.id,
+            title=c.title,
+            exercise=c.exercise.id,
+            instructor=c.instructor,
+            created_unix=c.created_unix,
+            ended_unix=c.ended_unix,
+            seats=[self.seat_info(c, s) for s in c.seats],
+        )
+
+    def seat_info(self, c: Class, seat: Seat) -> SeatInfo:
+        proxy = self.proxy(seat) if c.ended_unix is None else None
+        holder = proxy.control.holder if proxy is not None else None
+        progress, score = self.score(c, seat)
+        return SeatInfo(
+            n=seat.n,
+            student=seat.student,
+            user=seat.user,
+            machine=seat.machine,
+            frozen=seat.frozen,
+            control=holder.user if holder is not None else None,
+            progress=progress,
+            score=score,
+            hints_taken=len(seat.hints),
+            seat_time_s=seat.seat_time_s,
+        )
+
+    # --- changing -----------------------------------------------------------------------------
+    def create(self, actor: Actor, req: ClassCreate, base_url: str) -> ClassCreated:
+        """Seats with their logins and machines (the exercise's starting values written as
+        the instructor's, its faults injected, its checks running); a link per seat."""
+        ex, text = self.exercises.get(req.exercise)
+        with self._lock:
+            if req.id in self._classes:
+                raise ApiError(409, {"message": f"class '{req.id}' exists (ended or not)"})
+            taken = {u.name for u in self.accounts.users()}
+            names = [seat_name(req.id, n) for n in range(1, req.seats + 1)]
+            clash = [n for n in names if n in taken or self._exists(n)]
+            if clash:
+                raise ApiError(409, {"message": f"'{clash[0]}' is taken (a user or machine)"})
+            now = time.time()
+            c = Class(req.id, req.title or ex.title, ex, text, actor.name, now, None, [])
+            self._classes[c.id] = c  # reserved while the seats are built
+        try:
+            for n, name in enumerate(names, start=1):
+                student = req.students[n - 1] if n <= len(req.students) else f"Seat {n}"
+                c.seats.append(self._build_seat(actor, c, n, name, student[:80]))
+        except BaseException:
+            self._discard(c)
+            raise
+        self.store.run(
+            "INSERT INTO classes VALUES (?, ?, ?, ?, ?, ?, NULL)",
+            (c.id, c.title, ex.id, text, c.instructor, c.created_unix),
+        )
+        for seat in c.seats:
+            self.store.run(
+                "INSERT INTO seats VALUES (?, ?, ?, ?, ?, ?)",
+                (c.id, seat.n, seat.student, seat.user, seat.machine, seat.progress_json()),
+            )
+        with self._lock:
+            self._index(c)
+        links = [SeatLink(n=s.n, url=self.link(s, base_url)) for s in c.seats]
+        return ClassCreated(info=self.info(c), links=links)
+
+    def _exists(self, mid: str) -> bool:
+        try:
+            self.machines.get(mid)
+        except ApiError:
+            return False
+        return True
+
+    def _build_seat(self, actor: Actor, c: Class, n: int, name: str, student: str) -> Seat:
+        self.accounts.add_user(name, Role.OPERATOR, secrets.token_urlsafe(24))
+        title = f"{c.title} · seat {n}"
+        proxy = self.machines.create(
+            MachineCreate(id=name, name=title[:80], demo=True),
+            values=[(v.scope.value, v.target, v.name, v.value) for v in c.exercise.start],
+            faults=[(f.fault, f.trigger) for f in c.exercise.faults],
+            exercise=c.exercise,
+        )
+        changes = [
+            StoredChange(v.scope.value, v.target, v.name, None, v.value, "immediately")
+            for v in c.exercise.start
+        ]
+        if changes:
+            why = f"exercise '{c.exercise.id}' starts so"
+            self.store.write(
+                proxy.id,
+                changes,
+                [parameter_entry(proxy.id, actor.name, actor.session, ch, why) for ch in changes],
+            )
+        return Seat(c.id, n, student, name, proxy.id)
+
+    def _discard(self, c: Class) -> None:
+        """Undo a class whose seats could not all be built."""
+        for seat in c.seats:
+            self._remove_seat(seat)
+        with self._lock:
+            self._classes.pop(c.id, None)
+
+    def _remove_seat(self, seat: Seat) -> None:
+        if self._exists(seat.machine):
+            self.machines.delete(seat.machine)
+        if any(u.name == seat.user for u in self.accounts.users()):
+            self.accounts.remove_user(seat.user)
+
+    def link(self, seat: Seat, base_url: str) -> str:
+        """A one-time login link of the seat's login (good once, within an hour)."""
+        token = self.accounts.new_token(seat.user, f"class {seat.class_id} seat {seat.n}", True)
+        return f"{base_url.rstrip('/')}/auth/once?token={token}"
+
+    def end(self, c: Class) -> None:
+        """The class ends: its machines and logins go, its record stays."""
+        with self._lock:
+            if c.ended_unix is not None:
+                raise ApiError(409, {"message": f"class '{c.id}' has ended"})
+            for seat in c.seats:
+                proxy = self.proxy(seat)
+                if proxy is not None:
+                    self.update(seat, proxy)
+                self._seat_of.pop(seat.user, None)
+                self._by_machine.pop(seat.machine, None)
+            c.ended_unix = time.time()
+        for seat in c.seats:
+            self.save(seat)
+            self._remove_seat(seat)
+        self.store.run("UPDATE classes SET ended = ? WHERE id = ?", (c.ended_unix, c.id))
+
+    def take_hint(self, seat: Seat, c: Class, n: int) -> str:
+        """A hint's text; taken once, it costs its points."""
+        if not 1 <= n <= len(c.exercise.hints):
+            raise not_found(f"hint {n} (hints 1..{len(c.exercise.hints)})")
+        with self._lock:
+            seat.hints.add(n)
+        self.save(seat)
+        return c.exercise.hints[n - 1].text
+
+    @staticmethod
+    def entry(actor: Actor, action: str, machine: str = "", **detail: object) -> Entry:
+        """An audit row of kind 'training'."""
+        return Entry(actor.name, actor.session, "training", action, machine, dict(detail))

@@ -1,0 +1,220 @@
+"""Classes over real HTTP: seats with their own machines and logins, what a student may see,
+faults in the plant (not in the parameters), freezing, hints, the live checks, the end."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+
+from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
+from tests.backend.server import Server, add_users, bearer
+
+PLANT_F = 2.2857  # multi-gain exercise: the drive runs 1/2.2857 as fast per digit (DOMAIN §7)
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    db = tmp_path_factory.mktemp("classes") / "classes.sqlite"
+    s = Server(db)
+    s.tokens = add_users(db, {"trainer": Role.INSTRUCTOR, "olaf": Role.OPERATOR})  # type: ignore[attr-defined]
+    s.start()
+    yield s
+    s.close()
+
+
+OPEN: list[httpx.Client] = []
+
+
+@pytest.fixture(autouse=True)
+def _close_clients() -> Iterator[None]:
+    yield
+    while OPEN:
+        OPEN.pop().close()
+
+
+def trainer(srv: Server) -> httpx.Client:
+    tokens: dict[str, str] = srv.tokens  # type: ignore[attr-defined]
+    c = httpx.Client(base_url=srv.base, headers=bearer(tokens["trainer"]), timeout=30)
+    OPEN.append(c)
+    return c
+
+
+def student(srv: Server, link: str) -> httpx.Client:
+    """A browser-like client logged in by the seat's one-time link (session cookie + CSRF)."""
+    c = httpx.Client(base_url=srv.base, timeout=30)
+    OPEN.append(c)
+    r = c.get(link.replace(srv.base, ""), follow_redirects=False)
+    assert r.status_code == 303, r.text
+    c.headers[CSRF_HEADER] = c.cookies[CSRF_COOKIE]
+    return c
+
+
+def new_class(t: httpx.Client, cid: str, seats: int, exercise: str) -> dict[str, Any]:
+    r = t.post("/api/classes", json={"id": cid, "exercise": exercise, "seats": seats})
+    assert r.status_code == 201, r.text
+    created: dict[str, Any] = r.json()
+    return created
+
+
+def wait_for(probe: Any, timeout_s: float = 20.0) -> Any:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        found = probe()
+        if found:
+            return found
+        time.sleep(0.1)
+    raise AssertionError("timed out")
+
+
+def test_ten_seats_each_student_sees_only_their_seat(srv: Server) -> None:
+    t = trainer(srv)
+    created = new_class(t, "ten", 10, "sign-error")
+    seats = created["info"]["seats"]
+    assert [s["machine"] for s in seats] == [f"ten-s{n:02d}" for n in range(1, 11)]
+    assert len(created["links"]) == 10
+    listed = {m["id"] for m in t.get("/api/machines").json()}
+    assert {s["machine"] for s in seats} <= listed  # the instructor sees every seat
+
+    s3 = student(srv, created["links"][2]["url"])
+    assert [m["id"] for m in s3.get("/api/machines").json()] == ["ten-s03"]
+    assert s3.get("/api/machines/ten-s03/status").status_code == 200
+    # another seat, the demo, another seat's command: as if they did not exist
+    assert s3.get("/api/machines/ten-s04/status").status_code == 404
+    assert s3.get("/api/machines/demo/parameters?scope=axis&target=X").status_code == 404
+    r = s3.post("/api/machines/ten-s04/commands", json={"type": "emergency_stop"})
+    assert r.status_code == 404
+    assert set(s3.get("/api/service/status").json()["machines"]) == {"ten-s03"}
+    # the instructor's side is not the student's
+    assert s3.get("/api/machines/ten-s03/faults").status_code == 403
+    assert s3.get("/api/classes").status_code == 403
+    assert s3.post("/api/machines/ten-s03/simulation", json={"mode": "fast"}).status_code == 403
+    # their own exercise, without its faults
+    ex = s3.get("/api/machines/ten-s03/exercise").json()
+    assert ex["exercise"]["id"] == "sign-error" and ex["exercise"]["faults"] == 0
+    assert all(h["text"] is None for h in ex["hints"])
+    # the links were good once
+    again = t.get(created["links"][2]["url"].replace(srv.base, ""), follow_redirects=False)
+    assert again.status_code == 401
+
+
+def test_a_fault_changes_the_plant_and_not_the_parameters(srv: Server) -> None:
+    """The sign-error exercise's motor is wired inverted: the parameter lists are the demo's
+    own, and yet X runs away and trips lag monitoring (90002) as soon as it moves."""
+    t = trainer(srv)
+    created = new_class(t, "sign", 1, "sign-error")
+    mid = created["info"]["seats"][0]["machine"]
+    seat = student(srv, created["links"][0]["url"])
+    mine = seat.get(f"/api/machines/{mid}/parameters?scope=axis&target=X").json()
+    demo = t.get("/api/machines/demo/parameters?scope=axis&target=X").json()
+    assert {p["name"]: p["value"] for p in mine} == {p["name"]: p["value"] for p in demo}
+    faults = t.get(f"/api/machines/{mid}/faults").json()
+    assert [(f["fault"]["kind"], f["fault"]["axis"], f["active"]) for f in faults] == [
+        ("motor_inverted", "X", True)
+    ]
+    wait_for(lambda: seat.get(f"/api/machines/{mid}/status").json()["plc"]["drives_powered"])
+    r = seat.post(
+        f"/api/machines/{mid}/commands", json={"type": "move", "axis": "X", "target": 60.0}
+    )
+    assert r.status_code == 200, r.text
+
+    def tripped() -> bool:
+        errs = seat.get(f"/api/machines/{mid}/status").json()["job_errors"]
+        return any(e["code"] == 90002 and e["axis"] == "X" for e in errs)
+
+    wait_for(tripped)
+    # a fault the instructor adds comes out again; one for an axis the machine lacks is a 422
+    r = t.post(
+        f"/api/machines/{mid}/faults",
+        json={"fault": {"kind": "backlash", "axis": "Q", "width": 0.02}},
+    )
+    assert r.status_code == 422, r.text
+    r = t.post(
+        f"/api/machines/{mid}/faults",
+        json={"fault": {"kind": "plc_slow_ack", "delay_s": 8}, "trigger": {"after_s": 30}},
+    )
+    assert r.status_code == 201, r.text
+    assert r.json()["active"] is False  # armed: 30 s of simulated time from now
+    assert t.delete(f"/api/machines/{mid}/faults/{r.json()['id']}").status_code == 204
+    assert len(t.get(f"/api/machines/{mid}/faults").json()) == 1
+
+
+def test_the_gain_check_passes_only_on_the_seat_that_fixed_multi_gain(srv: Server) -> None:
+    """Two seats of the multi-gain exercise (the drive runs 1/2.2857 as fast per digit).
+    Both move X at constant speed; only the one that set multi_gain_z to 10000 · 2.2857
+    passes the check 'measured gain within 1 % of kv' (DOMAIN §7)."""
+    t = trainer(srv)
+    created = new_class(t, "gain", 2, "multi-gain")
+    clients = [student(srv, link["url"]) for link in created["links"]]
+    mids = [s["machine"] for s in created["info"]["seats"]]
+    fixed, unfixed = clients
+    change = {
+        "scope": "axis",
+        "target": "X",
+        "name": "getriebe[0].multi_gain_z",
+        "value": round(10000 * PLANT_F),
+    }
+    r = fixed.patch(f"/api/machines/{mids[0]}/parameters", json={"changes": [change]})
+    assert r.status_code == 200, r.text
+    for c, mid in zip(clients, mids, strict=True):
+        wait_for(
+            lambda c=c, mid=mid: c.get(f"/api/machines/{mid}/status").json()["plc"][
+                "drives_powered"
+            ]
+        )
+        if r.json()["changes"][0]["effect"] != "immediately" and c is fixed:
+            assert c.post(f"/api/machines/{mid}/restart").status_code == 200
+            wait_for(
+                lambda c=c, mid=mid: c.get(f"/api/machines/{mid}/status").json()["plc"][
+                    "drives_powered"
+                ]
+            )
+        move = {"type": "move", "axis": "X", "target": 130.0, "rapid": False, "feed_mm_min": 1000}
+        assert c.post(f"/api/machines/{mid}/commands", json=move).status_code == 200
+
+    def gain(c: httpx.Client, mid: str) -> dict[str, Any] | None:
+        checks = c.get(f"/api/machines/{mid}/exercise").json()["checks"]
+        check = next(k for k in checks if k["id"] == "gain")
+        return check if check["detail"].startswith("k =") else None
+
+    done = wait_for(lambda: gain(fixed, mids[0]), 30)
+    assert done["passed"] and done["first_passed_s"] is not None, done
+    other = wait_for(lambda: gain(unfixed, mids[1]), 30)
+    assert not other["passed"], other
+    mine = fixed.get(f"/api/machines/{mids[0]}/exercise").json()
+    assert mine["progress"] == 1.0 and mine["score"] > 0
+    assert unfixed.get(f"/api/machines/{mids[1]}/exercise").json()["progress"] == 0.0
+
+
+def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
+    t = trainer(srv)
+    created = new_class(t, "end", 2, "gear-change-plc")
+    mid = created["info"]["seats"][0]["machine"]
+    seat = student(srv, created["links"][0]["url"])
+    r = t.post("/api/classes/end/freeze", json={"seats": [1], "frozen": True})
+    assert r.status_code == 200, r.text
+    assert [s["frozen"] for s in r.json()["seats"]] == [True, False]
+    sim = seat.get(f"/api/machines/{mid}/status").json()["simulation"]
+    assert sim["mode"] == "pause"
+    assert seat.post(f"/api/machines/{mid}/simulation", json={"mode": "run"}).status_code == 403
+    assert t.post("/api/classes/end/freeze", json={"frozen": False}).status_code == 200
+    assert seat.get(f"/api/machines/{mid}/status").json()["simulation"]["mode"] == "run"
+
+    ex = seat.get(f"/api/machines/{mid}/exercise").json()
+    cost = ex["hints"][0]["cost"]
+    hint = seat.post(f"/api/machines/{mid}/exercise/hints", json={"n": 1})
+    assert hint.status_code == 200 and hint.json()["text"]
+    detail = t.get("/api/classes/end/seats/1").json()
+    assert detail["info"]["hints_taken"] == 1 and detail["hints"][0]["cost"] == cost
+    assert seat.post(f"/api/machines/{mid}/exercise/hints", json={"n": 99}).status_code == 422
+
+    info = t.post("/api/classes/end/end").json()
+    assert info["ended_unix"] is not None
+    assert t.get(f"/api/machines/{mid}/status").status_code == 404  # the machine went
+    assert seat.get("/api/machines").status_code == 401  # and the login with it
+    after = t.get("/api/classes/end/seats/1").json()  # the record stays for the debrief
+    assert after["info"]["hints_taken"] == 1 and len(after["checks"]) >= 1
+    assert t.post("/api/classes/end/end").status_code == 409
