@@ -55,8 +55,19 @@ class SimPlc:
         self.delay_cycles = delay_cycles
         self.power_on_cycle = power_on_cycle
         self.pending: list[PendingM] = []
+        # a fault of the PLC program (training, nc_sim/faults.py), hidden behind the mode the
+        # HLI shows: in auto mode it never acknowledges, or only after its own delay
+        self.no_ack = False
+        self.slow_ack_cycles: int | None = None
         # the mode acknowledgements the PLC holds: at power-on it reports spindle mode
         self.signals: dict[str, bool] = {"ROTMOD_Q": False, "SPMOD_Q": True}
+
+    def _due(self, since: int) -> int | None:
+        """When the PLC program acknowledges a request of cycle `since` on its own."""
+        if self.mode is not PlcMode.AUTO or self.no_ack:
+            return None
+        delay = self.delay_cycles if self.slow_ack_cycles is None else self.slow_ack_cycles
+        return since + delay
 
     def set_mode(self, mode: PlcMode, now: int, delay_cycles: int | None = None) -> None:
         """Switch mode; pending functions get a due cycle in auto mode."""
@@ -64,13 +75,20 @@ class SimPlc:
         if delay_cycles is not None:
             self.delay_cycles = delay_cycles
         for p in self.pending:
-            p.due_cycle = now + self.delay_cycles if mode is PlcMode.AUTO else None
+            p.due_cycle = self._due(now)
+
+    def set_program_fault(self, no_ack: bool, slow_ack_cycles: int | None, now: int) -> None:
+        """The PLC program's fault (training): never acknowledge, or acknowledge
+        `slow_ack_cycles` after the request; pending requests follow it (never before now)."""
+        self.no_ack, self.slow_ack_cycles = no_ack, slow_ack_cycles
+        for p in self.pending:
+            due = self._due(p.out_cycle)
+            p.due_cycle = None if due is None else max(due, now)
 
     def output(self, m: int | None, axis: str, now: int, signal: str | None = None) -> PendingM:
         """The NC outputs an M function (or sets a mode request `signal`); returns its
         pending entry."""
-        due = now + self.delay_cycles if self.mode is PlcMode.AUTO else None
-        p = PendingM(m, axis, now, due, signal)
+        p = PendingM(m, axis, now, self._due(now), signal)
         self.pending.append(p)
         return p
 

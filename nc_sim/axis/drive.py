@@ -41,6 +41,7 @@ class DriveStatus:
     power_up_cycles: int
     drive_on_since: int | None = None  # cycle DriveOn was seen set, None while it is off
     cycle: int = 0
+    failed: bool = False  # a drive fault (injected for training): no ready signal at all
 
     def update(self, cycle: int, drive_on: bool) -> None:
         """Advance to `cycle` with the DriveOn enable as the PLC has it now."""
@@ -52,7 +53,7 @@ class DriveStatus:
 
     @property
     def ready_for_power_on(self) -> bool:
-        return self.cycle >= self.boot_cycles
+        return not self.failed and self.cycle >= self.boot_cycles
 
     @property
     def ready_for_control_loop_on(self) -> bool:

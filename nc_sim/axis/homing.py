@@ -11,6 +11,7 @@ from enum import IntEnum
 
 from nc_sim.axis.dynamics import Motion
 from nc_sim.axis.motion import AxisMotion
+from nc_sim.axis.plant import encoder_reading
 from nc_sim.axis.state import Axis
 from nc_sim.axis.watchdog import search_s
 from nc_sim.errors import Code
@@ -70,10 +71,10 @@ class Homing:
     def _edge(self) -> None:
         """Cam edge with zero pulse: the position here becomes ref_pos, then to it."""
         ax = self.ax
-        pr = self.motion.k.pr[ax.slot]
+        k = self.motion.k
         # the zero pulse latches the position at the edge itself, not one cycle later
-        latched = pr[L.P_ENC_SIGN] * pr[L.P_SIGN_FB] * pr[L.P_CAM_POS] + pr[L.P_ENC_OFFSET]
-        self.motion.set_reference(ax, float(latched))
+        latched = encoder_reading(k, ax.slot, float(k.pr[ax.slot, L.P_CAM_POS]))
+        self.motion.set_reference(ax, latched)
         self.phase = HomingPhase.TO_REF
         ax.target = ax.cfg.eng("kenngr.ref_pos")
         ax.feed = ax.cfg.eng("getriebe.vb_reflow", ax.gear)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from nc_sim.axis.plant import push_plant
 from nc_sim.axis.state import Axis
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
@@ -49,7 +50,8 @@ def changeover_speeds(cfg: AxisConfig) -> tuple[float, float]:
 
 
 def push_params(k: Kernel, ax: Axis) -> None:
-    """Write the axis' active gear record and loop parameters into the kernel row."""
+    """Write the axis' active gear record and loop parameters into the kernel row, then its
+    plant (nc_sim/axis/plant.py: the `sim.*` parameters and the faults in force)."""
     c, g, s = ax.cfg, ax.gear, ax.slot
     pr = k.pr
     ax.required_enables = ENABLES_BY_DRIVE.get(int(c.raw("kenngr.antr_typ")), ("TorquePermission",))
@@ -57,16 +59,9 @@ def push_params(k: Kernel, ax: Axis) -> None:
     pr[s, L.P_KV] = c.eng("getriebe.kv", g)
     pr[s, L.P_FF] = ax.ff_weight if spindle else c.eng("lr_param.ff_weight")
     pr[s, L.P_MG] = c.eng("getriebe.multi_gain_z", g) / c.eng("getriebe.multi_gain_n", g)
-    # the plant's true gain follows the mechanical gear stage
-    pr[s, L.P_DRV_GAIN] = c.eng("sim.getriebe[i].drive_gain", g) or c.eng("sim.drive_gain")
     pr[s, L.P_DA_MAX] = c.eng("lr_hw.da_max")
     pr[s, L.P_SIGN_CMD] = -1.0 if c.flag("lr_hw.vz_stellgr") else 1.0
     pr[s, L.P_SIGN_FB] = -1.0 if c.flag("lr_hw.vz_istw") else 1.0
-    pr[s, L.P_MOTOR_SIGN] = -1.0 if c.flag("sim.motor_inverted") else 1.0
-    pr[s, L.P_ENC_SIGN] = -1.0 if c.flag("sim.encoder_inverted") else 1.0
-    t_drive = c.eng("sim.drive_t")
-    pr[s, L.P_DRV_ALPHA] = 1.0 - math.exp(-k.cycle_s / t_drive) if t_drive > 0 else 1.0
-    pr[s, L.P_DRV_A_MAX] = c.eng("sim.drive_a_max")
     # one increment = wegaufn/wegaufz in 0.1 µm or 0.0001°
     pr[s, L.P_ENC_INC] = c.eng("getriebe.wegaufn", g) / c.eng("getriebe.wegaufz", g)
     pr[s, L.P_LAG_MAX] = c.eng("getriebe.lag_max", g)
@@ -75,7 +70,6 @@ def push_params(k: Kernel, ax: Axis) -> None:
     else:
         pr[s, L.P_SWE_NEG] = c.eng("kenngr.swe_neg")
         pr[s, L.P_SWE_POS] = c.eng("kenngr.swe_pos")
-    pr[s, L.P_CAM_POS] = c.eng("sim.ref_cam_pos")
     pr[s, L.P_SPEED_BAND] = c.eng("kenngr.vb_prozent") if spindle else 0.1
     pr[s, L.P_V_ZERO] = c.eng("getriebe.vb_min_null", g)
     pr[s, L.P_INPOS_WIN] = c.eng("kenngr.exact_stop_window")
@@ -115,6 +109,7 @@ def push_params(k: Kernel, ax: Axis) -> None:
         a_cap = min(a_cap, ax.tool.a_max)
     pr[s, L.P_A_CAP] = a_cap
     k.ist[s, L.I_GEAR] = g
+    push_plant(k, ax)  # the plant of this gear stage, with the faults in force
 
 
 def power_on(k: Kernel, ax: Axis) -> None:
@@ -123,7 +118,8 @@ def power_on(k: Kernel, ax: Axis) -> None:
     x = ax.cfg.eng("sim.start_pos")
     k.st[s, L.S_X_MOTOR] = x  # the encoder sits on the load: physical = measured
     inc = k.pr[s, L.P_ENC_INC]
-    counts = round(k.st[s, L.S_X_MOTOR] / inc) * inc if inc > 0 else k.st[s, L.S_X_MOTOR]
+    x_enc = k.pr[s, L.P_ENC_FACTOR] * x
+    counts = round(x_enc / inc) * inc if inc > 0 else x_enc
     p = k.pr[s, L.P_ENC_SIGN] * k.pr[s, L.P_SIGN_FB] * counts
     k.st[s, L.S_P_ACT] = k.st[s, L.S_P_CMD] = p
     x, cam, mod = k.st[s, L.S_X_MOTOR], k.pr[s, L.P_CAM_POS], k.pr[s, L.P_MODULO]

@@ -8,6 +8,7 @@ from typing import Protocol
 
 from nc_sim.axis.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.axis.dynamics import Motion
+from nc_sim.axis.plant import PlantFaults
 from nc_sim.events import Event
 from nc_sim.hli import axis_units
 from nc_sim.kernel import layout as L
@@ -74,6 +75,7 @@ class Axis:
     deadline_what: str = ""  # ... and what it is (for the job error 90023)
     drive: DriveStatus = field(default_factory=lambda: DriveStatus((), 0, 0))
     units: dict[str, int] = field(default_factory=axis_units)  # its HLI control units
+    plant: PlantFaults = field(default_factory=PlantFaults)  # injected faults (training)
 
     # the enables the drive type needs [004 §4.1], read from the list by push_params (the
     # cycle boundary and every status ask them)

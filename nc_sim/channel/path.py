@@ -42,6 +42,13 @@ class Path:
         # slots the path leaves alone: a spindle that is not in rotary (C axis) mode
         self.inactive: set[int] = set()
 
+    def set_on_path(self, slot: int, on: bool) -> None:
+        """The path drives `slot` (a spindle in rotary axis mode) or leaves it alone."""
+        if on:
+            self.inactive.discard(slot)
+        else:
+            self.inactive.add(slot)
+
     def _on_path(self) -> list[int]:
         return [s for s in self.axis_slots if s not in self.inactive]
 

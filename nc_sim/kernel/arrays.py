@@ -57,6 +57,7 @@ class Kernel:
             for col in (L.P_V_CTRL_LIMIT, L.P_V_SPEED_CTRL, L.P_A_CAP):
                 self.pr[s, col] = math.inf
             self.pr[s, L.P_DRV_ALPHA] = 1.0  # an ideal drive
+            self.pr[s, L.P_ENC_FACTOR] = 1.0  # an encoder as its parameters say
         return range(first, self.n)
 
     def claim_path(self, channel_slot: int, axis_slots: list[int]) -> int:

@@ -27,7 +27,8 @@ S_V_GOAL = 15  # speed the spindle is commanded to reach (for speed reached), un
 S_V_TARGET = 16  # end speed of a curve-controlled speed change (I_CURVE), unit/s
 S_OVERRIDE = 17  # override in force as a fraction (written by the Python layer, recorded)
 S_V_MODEL = 18  # drive speed of the ideal loop the lag monitoring compares with
-S_COLS = 19
+S_PLAY = 19  # backlash: how far the motor is ahead of the load (S_X_MOTOR), within ±width/2
+S_COLS = 20
 
 # --- pr: float parameters (engineering units) -----------------------------------------------
 P_KV = 0  # 1/s
@@ -66,7 +67,12 @@ P_N1 = 32
 P_N2 = 33
 P_A_CAP = 34  # hard cap on curve acceleration (a_max, tool a_max)
 P_V_RESO = 35  # speed-controlled spindle: drive digits per unit/s (v_reso), 0 = position loop
-P_COLS = 36
+# the plant's faults (nc_sim/axis/plant.py): 1, 0, 0, 0 for a sound plant
+P_ENC_FACTOR = 36  # the encoder counts this factor times the load's true position
+P_ENC_NOISE = 37  # white noise on the encoder's reading, rms (mm | °)
+P_FRICTION = 38  # Coulomb friction: speed the drive loses against the motion (unit/s)
+P_BACKLASH = 39  # play between motor and load (mm | °)
+P_COLS = 40
 
 # --- ist: integer state -----------------------------------------------------------------
 I_PLAN_N = 0  # segments in the active plan (0 = none: hold velocity)
@@ -91,7 +97,8 @@ I_MARK_ARMED = 18  # spindle: report the zero mark (homing waits for it)
 I_ROLE = 19  # ROLE_*: what drives this slot's setpoint
 I_LINE = 20  # program line of the block the slot's motion belongs to (0 none)
 I_ROTARY_MODE = 21  # 1: a main spindle is the rotary axis C (written by the Python layer)
-I_COLS = 22
+I_NOISE_STATE = 22  # xorshift32 state of the encoder noise (seeded when the noise starts)
+I_COLS = 23
 
 # I_ROLE values
 ROLE_AXIS = 0  # its own plan (jog, single-axis move, spindle)

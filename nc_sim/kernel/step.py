@@ -5,12 +5,15 @@ cycle in which any slot raised an event, so the Python layer reacts within the s
 One axis, one cycle [DOMAIN §2]:
 
     setpoint plan -> p_cmd, v_cmd, a_cmd
-    encoder: x (where the last cycle left the load) quantised to one increment,
-             sign(vz_istw) -> p_act;  lag = p_cmd - p_act (the one lag, recorded as is)
+    encoder: x (where the last cycle left the load) × factor + seeded noise, quantised to
+             one increment, sign(vz_istw) -> p_act;  lag = p_cmd - p_act (the one lag)
     u  = kv·lag + ff·v_cmd                          (P controller + velocity feedforward)
     da = u · 0.06 · multi_gain · sign(vz_stellgr)   (digits for 1 m/min or 1000 °/min), clipped
-    drive: v_motor -> da / (0.06 · true gain) as a first-order lag with acceleration limit,
-           moving the load x over the cycle
+    drive: v_motor -> da / (0.06 · true gain), less Coulomb friction, as a first-order lag
+           with acceleration limit, moving the load x over the cycle (through any backlash)
+
+The encoder factor, noise, friction and backlash are the plant's training faults
+(nc_sim/axis/plant.py); a sound plant has 1, 0, 0, 0 and runs exactly as without them.
 """
 
 from __future__ import annotations
@@ -65,6 +68,7 @@ from nc_sim.kernel.layout import (
     I_MARK_ARMED,
     I_MON_ACTIVE,
     I_MON_INVALID,
+    I_NOISE_STATE,
     I_OPEN_LOOP,
     I_PLAN_K,
     I_PLAN_N,
@@ -83,6 +87,7 @@ from nc_sim.kernel.layout import (
     P_B1,
     P_B2,
     P_B3,
+    P_BACKLASH,
     P_CAM_POS,
     P_CURVE_A_MAX,
     P_CURVE_TYPE,
@@ -90,10 +95,13 @@ from nc_sim.kernel.layout import (
     P_DRV_A_MAX,
     P_DRV_ALPHA,
     P_DRV_GAIN,
+    P_ENC_FACTOR,
     P_ENC_INC,
+    P_ENC_NOISE,
     P_ENC_OFFSET,
     P_ENC_SIGN,
     P_FF,
+    P_FRICTION,
     P_INPOS_WIN,
     P_KV,
     P_LAG_MAX,
@@ -151,6 +159,7 @@ from nc_sim.kernel.layout import (
     S_OVERRIDE,
     S_P_ACT,
     S_P_CMD,
+    S_PLAY,
     S_SEG_P0,
     S_SEG_TAU,
     S_SEG_V0,
@@ -388,6 +397,28 @@ def _advance_path(
 
 
 @njit(cache=True)
+def _xorshift(ist: np.ndarray, s: int) -> float:
+    """The slot's next uniform number in (0, 1) from its xorshift32 state (Marsaglia 13/17/5,
+    kept in 32 bits of the int64 column): deterministic, a state of its own per slot."""
+    x = int(ist[s, I_NOISE_STATE])
+    if x == 0:  # the generator's one fixed point: a zero state would never move
+        x = 1
+    x ^= (x << 13) & 0xFFFFFFFF
+    x ^= x >> 17
+    x ^= (x << 5) & 0xFFFFFFFF
+    ist[s, I_NOISE_STATE] = x
+    return (x + 0.5) / 4294967296.0
+
+
+@njit(cache=True)
+def _gauss(ist: np.ndarray, s: int) -> float:
+    """A standard normal number from two uniform ones (Box-Muller)."""
+    u1 = _xorshift(ist, s)
+    u2 = _xorshift(ist, s)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@njit(cache=True)
 def _measure(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
     """Read the encoder at the start of the cycle and form this cycle's lag.
 
@@ -395,7 +426,9 @@ def _measure(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float)
     controller acts on `lag = p_cmd - p_act` of this very sample, and the same pair is what
     the HLI, the traces and the scope show (one definition of the lag everywhere).
     """
-    x = st[s, S_X_MOTOR]
+    x = pr[s, P_ENC_FACTOR] * st[s, S_X_MOTOR]
+    if pr[s, P_ENC_NOISE] > 0.0:
+        x += pr[s, P_ENC_NOISE] * _gauss(ist, s)
     inc = pr[s, P_ENC_INC]
     counts = x if inc <= 0.0 else math.floor(x / inc + 0.5) * inc
     p_prev = st[s, S_P_ACT]
@@ -454,6 +487,14 @@ def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, 
         lim = pr[s, P_DA_MAX]
         da = min(max(da, -lim), lim)
         v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
+        friction = pr[s, P_FRICTION]
+        if friction > 0.0:  # Coulomb friction: a speed loss against the motion, or stuck
+            if v_target > friction:
+                v_target -= friction
+            elif v_target < -friction:
+                v_target += friction
+            else:
+                v_target = 0.0
         dv = (v_target - v_m) * pr[s, P_DRV_ALPHA]
         a_lim = pr[s, P_DRV_A_MAX]
         if a_lim > 0.0:
@@ -465,7 +506,19 @@ def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, 
         st[s, S_U] = 0.0
         st[s, S_DA] = 0.0
     v_new = v_m + dv
-    st[s, S_X_MOTOR] += 0.5 * (v_m + v_new) * dt
+    dx = 0.5 * (v_m + v_new) * dt
+    half_play = 0.5 * pr[s, P_BACKLASH]
+    if half_play > 0.0:  # backlash: the motor moves the load only at either end of the play
+        play = st[s, S_PLAY] + dx
+        if play > half_play:
+            st[s, S_X_MOTOR] += play - half_play
+            play = half_play
+        elif play < -half_play:
+            st[s, S_X_MOTOR] += play + half_play
+            play = -half_play
+        st[s, S_PLAY] = play
+    else:
+        st[s, S_X_MOTOR] += dx
     st[s, S_V_MOTOR] = v_new
 
 

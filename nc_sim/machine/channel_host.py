@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -189,25 +190,27 @@ class MachineChannelHost:
         mode, then the function (its job error stops the block)."""
         cax = self.m.cax
         assert cax is not None
+        return cax.request(False, action_id, partial(self._start_or_fail, call, action_id))
 
-        def then() -> Event | None:
-            err = self.start_action(call, action_id)
-            if err is not None:
-                self.channel_error(err)
-            return err
-
-        return cax.request(False, action_id, then)
+    def _start_or_fail(self, call: canon.Call, action_id: int) -> Event | None:
+        """Start the action; its job error stops the block."""
+        err = self.start_action(call, action_id)
+        if err is not None:
+            self.channel_error(err)
+        return err
 
     def output(self, mfunc: int, axis: str, action_id: int) -> None:
         """An M function to the PLC, waited for by `action_id`."""
-
-        def timed_out(ev: Event) -> None:
-            if action_id in self.m_pending:
-                self.channel_error(ev)
-
-        waiter = Waiter(lambda: self.acknowledged(action_id), timed_out)
+        waiter = Waiter(
+            partial(self.acknowledged, action_id), partial(self._m_timed_out, action_id)
+        )
         self.m.handshake.output(mfunc, axis, waiter)
         self.m_pending[action_id] = self.m_pending.get(action_id, 0) + 1
+
+    def _m_timed_out(self, action_id: int, ev: Event) -> None:
+        """No acknowledgement in time: the block that waits for it stops in error."""
+        if action_id in self.m_pending:
+            self.channel_error(ev)
 
     def acknowledged(self, action_id: int | None) -> None:
         """The PLC acknowledged an M function of this action."""

@@ -12,6 +12,7 @@ phase bounded by the watchdog (nc_sim/axis/watchdog.py). Nothing here reads a cl
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import assert_never
 
 from nc_sim import hli
@@ -53,11 +54,13 @@ from nc_sim.commands import (
 )
 from nc_sim.errors import MESSAGES, Code, NcUsageError, is_error
 from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
+from nc_sim.faults import NOW, Fault, FaultState, Trigger
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.channel_host import MachineChannelHost
 from nc_sim.machine.channel_ops import PROGRAM_ACTIVE, ChannelOps
 from nc_sim.machine.config import MachineConfig
+from nc_sim.machine.fault_injection import FaultInjection
 from nc_sim.machine.panel import Panel
 from nc_sim.machine.readout import machine_snapshot
 from nc_sim.plc import Handshake, PlcMode, SimPlc
@@ -94,11 +97,11 @@ class Machine:
             self._cycles(cfg.channel_eng("plc.m_ack_timeout")),
             kernel.cycle_s,
             self.log,
-            lambda: self.cycle,
+            self.now,
         )
         self.outcomes: EventLog[Outcome] = EventLog(OUTCOME_LOG_LEN)  # answers to submit
         self._powered = False  # power-on done: the PLC has switched every drive on
-        self.motion = AxisMotion(kernel, self.ctx, self.log, lambda: self.cycle, self._axis_failed)
+        self.motion = AxisMotion(kernel, self.ctx, self.log, self.now, self._axis_failed)
         self.sp = SpindleControl(self.motion, cfg, self.handshake)
         self.moves = Moves(self.motion, self.sp, cfg)
         path_axes = [a for a in self.axes if a.kind is not AxisKind.SPINDLE]
@@ -127,6 +130,7 @@ class Machine:
             ax.gear = int(ax.cfg.raw("kenngr.getriebe_stufe")) if ax.cfg.is_spindle else 1
             push_params(kernel, ax)
             power_on(kernel, ax)
+        self.injection = FaultInjection(self)  # training faults (nc_sim/faults.py)
         self.cax: CAxis | None = None
         if c_spindle is not None and c_spindle in path_axes:
             slot = c_spindle.slot
@@ -135,7 +139,7 @@ class Machine:
                 c_spindle,
                 c_name,
                 self.handshake,
-                lambda on: path.inactive.discard(slot) if on else path.inactive.add(slot),
+                partial(path.set_on_path, slot),
                 self._axis_failed,
             )
 
@@ -178,6 +182,7 @@ class Machine:
         # what a block waited for may be done now (a manual acknowledgement): it goes on from
         # this cycle boundary, not from the next wake-up
         self.channel.pump()
+        self.injection.tick()  # a motion it started starts a fault's count
         self.outcomes.append(outcome)
         return outcome
 
@@ -200,19 +205,23 @@ class Machine:
                 answer = self._as(
                     cmd.spindle,
                     False,
-                    lambda: self.panel.spindle_run(cmd.spindle, cmd.m, cmd.speed_rpm),
+                    partial(self.panel.spindle_run, cmd.spindle, cmd.m, cmd.speed_rpm),
                 )
             case SpindlePosition():
                 answer = self._as(
                     cmd.spindle,
                     False,
-                    lambda: self.panel.spindle_position(
-                        cmd.spindle, cmd.position_deg, cmd.direction, cmd.speed_rpm
+                    partial(
+                        self.panel.spindle_position,
+                        cmd.spindle,
+                        cmd.position_deg,
+                        cmd.direction,
+                        cmd.speed_rpm,
                     ),
                 )
             case GearChange():
                 answer = self._as(
-                    cmd.spindle, False, lambda: self.panel.spindle_gear(cmd.spindle, cmd.m)
+                    cmd.spindle, False, partial(self.panel.spindle_gear, cmd.spindle, cmd.m)
                 )
             case Home():
                 answer = self.moves.home(self.axis(cmd.axis))
@@ -221,7 +230,7 @@ class Machine:
                 answer = self._as(
                     cmd.axis,
                     True,
-                    lambda: self.moves.jog_start(ax, cmd.direction, cmd.feed_mm_min),
+                    partial(self.moves.jog_start, ax, cmd.direction, cmd.feed_mm_min),
                 )
             case JogStop():
                 ax = self.axis(cmd.axis)
@@ -231,14 +240,14 @@ class Machine:
             case JogStep():
                 ax = self.axis(cmd.axis)
                 answer = self._as(
-                    cmd.axis, True, lambda: self.moves.jog_step(ax, cmd.distance, cmd.feed_mm_min)
+                    cmd.axis, True, partial(self.moves.jog_step, ax, cmd.distance, cmd.feed_mm_min)
                 )
             case Move():
                 ax = self.axis(cmd.axis)
                 answer = self._as(
                     cmd.axis,
                     True,
-                    lambda: self.moves.move(ax, cmd.target, cmd.rapid, cmd.feed_mm_min),
+                    partial(self.moves.move, ax, cmd.target, cmd.rapid, cmd.feed_mm_min),
                 )
             case HliWrite():
                 self.panel.hli_write(cmd.unit, cmd.value, cmd.axis)
@@ -282,6 +291,10 @@ class Machine:
     def _cycles(self, seconds: float) -> int:
         return max(0, round(seconds / self.k.cycle_s))
 
+    def now(self) -> int:
+        """The machine's current cycle (a bound method: the parts keep it, and it copies)."""
+        return self.cycle
+
     @property
     def t_s(self) -> float:
         return self.cycle * self.k.cycle_s
@@ -290,9 +303,9 @@ class Machine:
         """The next cycle at which the machine must act without a kernel event."""
         times = [self.plc.power_on_cycle] if self.cycle < self.plc.power_on_cycle else []
         times += [c for ax in self.axes if (c := ax.drive.next_change()) is not None]
-        due = self.handshake.next_wakeup()
-        if due is not None:
-            times.append(due)
+        for due in (self.handshake.next_wakeup(), self.injection.next_wakeup()):
+            if due is not None:
+                times.append(due)
         times += [ax.deadline for ax in self.axes if ax.deadline is not None]
         for wake in (self.channel.next_wakeup(), self.ch_host.next_wakeup()):
             if wake is not None:
@@ -324,6 +337,19 @@ class Machine:
     def queued_blocks(self) -> int:
         """MDI blocks waiting or running."""
         return len(self.channel.mdi.blocks)
+
+    # --- training faults (nc_sim/machine/fault_injection.py) ------------------------------
+    def inject(self, fault: Fault, trigger: Trigger = NOW) -> int:
+        """Inject a training fault to take effect on `trigger`; returns its id."""
+        return self.injection.inject(fault, trigger)
+
+    def remove_fault(self, fid: int) -> None:
+        """Remove injected fault `fid` (NcUsageError for an unknown id)."""
+        self.injection.remove(fid)
+
+    def faults(self) -> list[FaultState]:
+        """The injected faults and whether each is in force."""
+        return self.injection.states()
 
     # --- events -------------------------------------------------------------------------
     def log(
@@ -443,6 +469,7 @@ class Machine:
             self.channel.on_path_events()
         else:
             self.channel.pump()
+        self.injection.tick()
         self.k.ist[self.channel_slot, L.I_STATE] = int(self.channel.state)
 
     def _drive_status(self) -> None:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from enum import StrEnum
+from functools import partial
 
 from nc_sim.axis.params import push_params, speed_controlled
 from nc_sim.axis.state import Axis
@@ -216,7 +217,7 @@ class CAxis:
         c.phase = "external"
         sp.motion.unwatch(ax)  # the PLC's acknowledgement timeout bounds the next phase
         self._outputs(c.rotary)
-        waiter = Waiter(lambda: self.external_done(c), lambda ev: self._timed_out(c, ev), ax.name)
+        waiter = Waiter(partial(self.external_done, c), partial(self._timed_out, c), ax.name)
         self.handshake.request(c.request, ax.name, waiter)
 
     def external_done(self, c: Changeover) -> None:

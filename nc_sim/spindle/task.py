@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import math
 from enum import IntEnum
+from functools import partial
 from typing import TYPE_CHECKING
 
 from nc_sim.axis.params import changeover_speeds
+from nc_sim.axis.plant import encoder_reading
 from nc_sim.axis.state import Axis
 from nc_sim.errors import Code
 from nc_sim.kernel import layout as L
@@ -150,8 +152,7 @@ class SpindleTask:
         pr = k.pr[ax.slot]
         cam = pr[L.P_CAM_POS]
         x_edge = cam + round((k.st[ax.slot, L.S_X_MOTOR] - cam) / 360.0) * 360.0
-        latched = pr[L.P_ENC_SIGN] * pr[L.P_SIGN_FB] * x_edge + pr[L.P_ENC_OFFSET]
-        motion.set_reference(ax, float(latched))
+        motion.set_reference(ax, encoder_reading(k, ax.slot, float(x_edge)))
         ax.reference_lost = False
         motion.log(Code.EV_HOMED, ax.name, f"{ax.name} reference at the zero mark")
 
@@ -164,9 +165,7 @@ class SpindleTask:
                 m_of(self.gear),
                 ax.name,
                 Waiter(
-                    lambda: sp.gears.acknowledged(ax),
-                    lambda ev: sp.gears.timed_out(ax, ev),
-                    ax.name,
+                    partial(sp.gears.acknowledged, ax), partial(sp.gears.timed_out, ax), ax.name
                 ),
                 self.gear,
             )
