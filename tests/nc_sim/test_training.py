@@ -19,6 +19,7 @@ from nc_sim.commands import (
     HliWrite,
     Invalid,
     Mdi,
+    PlcAck,
     PlcSignal,
     Refused,
     Reset,
@@ -301,6 +302,19 @@ def test_gear_change_completes_once_the_plc_gets_its_time() -> None:
     seat.param(Scope.CHANNEL, "", {"plc.m_ack_timeout": 10_000_000})
     seat.do(GearChange("S", 41))
     seat.run(12.0)
+    assert seat.passed("gear-2"), seat.result("gear-2")
+    seat.do(SpindlePosition("S", 90.0))
+    seat.run(12.0)
+    assert seat.passed("m19-90"), seat.result("m19-90")
+
+
+def test_gear_change_acknowledged_by_hand() -> None:
+    """The other way: acknowledge the pending M41 by hand before the 5 s run out."""
+    seat = Seat("gear-change-plc")
+    seat.do(GearChange("S", 41))
+    seat.run(2.0)
+    seat.do(PlcAck())
+    seat.run(4.0)
     assert seat.passed("gear-2"), seat.result("gear-2")
     seat.do(SpindlePosition("S", 90.0))
     seat.run(12.0)
