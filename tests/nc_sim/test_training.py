@@ -397,3 +397,13 @@ def test_c_axis_without_the_handshake_fails_both_checks() -> None:
     seat.do(SpindlePosition("S", 90.0))
     seat.run(8.0)
     assert not seat.passed("rotary-mode") and not seat.passed("c-90")
+
+
+def test_a_check_naming_an_axis_the_machine_lacks_is_refused_at_the_start() -> None:
+    """Axis names are checked for their form at parse time, against the machine when the
+    seat's monitor starts."""
+    ex = parse_exercise(GOOD.replace('axis = "X"\nwithin_pct', 'axis = "Y"\nwithin_pct'), "t")
+    sim = Simulation()
+    m = start_seat(sim, ex)
+    with pytest.raises(ValueError, match=r"checks\[0\] \(a\): .*'Y'"):
+        ExerciseMonitor(ex.checks, m)
