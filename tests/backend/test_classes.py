@@ -275,3 +275,36 @@ def test_the_grid_pushes_every_seat_to_instructors_only(srv: Server) -> None:
     assert {a["name"] for a in frame["seats"][0]["axes"]} >= {"X", "Z"}
     with pytest.raises(InvalidStatus):
         asyncio.run(first_frame(tokens["olaf"]))  # an operator is no instructor
+
+
+def test_an_uploaded_exercise_is_checked_against_its_machine(srv: Server) -> None:
+    t = trainer(srv)
+    good = "\n".join(
+        [
+            'id = "own"',
+            'title = "Z for a minute"',
+            'summary = "Z moves without a trip."',
+            "par_time_s = 120",
+            'machine = "demo"',
+            'task = "Move Z."',
+            "[[checks]]",
+            'id = "z"',
+            'text = "Z moves a minute without lag monitoring"',
+            "points = 10",
+            'kind = "no_event"',
+            'codes = ["LAG_MONITORING"]',
+            'axis = "Z"',
+            "window_s = 60",
+        ]
+    )
+    r = t.post("/api/exercises", json={"text": good})
+    assert r.status_code == 201, r.text
+    assert r.json()["checks"][0]["id"] == "z"
+    # the demo lathe has no Y: refused with the axis named, nothing kept
+    r = t.post("/api/exercises", json={"text": good.replace('"Z"', '"Y"').replace("own", "own2")})
+    assert r.status_code == 422 and "Y" in r.json()["detail"]["message"], r.text
+    assert "own2" not in {e["id"] for e in t.get("/api/exercises").json()}
+    r = t.post("/api/exercises", json={"text": good + "\n[[checks]\n"})
+    assert r.status_code == 422 and "line 15, column 9" in r.json()["detail"]["message"], r.text
+    r = t.post("/api/exercises", json={"text": good.replace('"own"', '"sign-error"')})
+    assert r.status_code == 409, r.text
