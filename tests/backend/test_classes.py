@@ -193,6 +193,7 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     t = trainer(srv)
     created = new_class(t, "end", 2, "gear-change-plc")
     mid = created["info"]["seats"][0]["machine"]
+    seat_user = created["info"]["seats"][0]["user"]
     seat = student(srv, created["links"][0]["url"])
     r = t.post("/api/classes/end/freeze", json={"seats": [1], "frozen": True})
     assert r.status_code == 200, r.text
@@ -217,4 +218,9 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert seat.get("/api/machines").status_code == 401  # and the login with it
     after = t.get("/api/classes/end/seats/1").json()  # the record stays for the debrief
     assert after["info"]["hints_taken"] == 1 and len(after["checks"]) >= 1
+    # and so does what was done on the seat (the student's hint here)
+    rows = t.get("/api/classes/end/seats/1/audit").json()["rows"]
+    assert [r["machine"] for r in rows] == [mid] * len(rows)
+    assert any(r["actor"] == seat_user and "took hint 1" in r["action"] for r in rows), rows
+    assert t.get("/api/classes/end/seats/3/audit").status_code == 404
     assert t.post("/api/classes/end/end").status_code == 409
