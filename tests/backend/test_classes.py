@@ -3,15 +3,19 @@ faults in the plant (not in the parameters), freezing, hints, the live checks, t
 
 from __future__ import annotations
 
+import asyncio
+import json
 import time
 from collections.abc import Iterator
 from typing import Any
 
 import httpx
 import pytest
+import websockets
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
-from tests.backend.server import Server, add_users, bearer
+from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
+from tests.backend.test_accounts import browser_like, login
 
 PLANT_F = 2.2857  # multi-gain exercise: the drive runs 1/2.2857 as fast per digit (DOMAIN §7)
 
@@ -224,3 +228,28 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert any(r["actor"] == seat_user and "took hint 1" in r["action"] for r in rows), rows
     assert t.get("/api/classes/end/seats/3/audit").status_code == 404
     assert t.post("/api/classes/end/end").status_code == 409
+
+
+def test_the_console_grid_opens_with_the_pages_ticket(srv: Server) -> None:
+    """The console page opens the grid as its telemetry: a one-time ticket of its session
+    (the cookie alone opens no socket). A frame has every seat, its axes with their kind."""
+    t = trainer(srv)
+    new_class(t, "grid", 2, "accel-curve")
+    page = browser_like(srv)
+    OPEN.append(page)
+    assert login(page, "trainer", OTHERS_PASSWORD).status_code == 200
+    page.headers[CSRF_HEADER] = page.cookies[CSRF_COOKIE]
+    ticket = page.post("/api/auth/ws-ticket").json()["ticket"]
+
+    async def first_frame() -> dict[str, Any]:
+        url = f"{srv.ws_base}/api/classes/grid/grid?ticket={ticket}"
+        async with websockets.connect(url) as ws:
+            while True:  # until both seats' workers have pushed a status
+                frame: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                if all(s["axes"] for s in frame["seats"]):
+                    return frame
+
+    frame = asyncio.run(first_frame())
+    assert frame["class_id"] == "grid" and [s["n"] for s in frame["seats"]] == [1, 2]
+    kinds = {a["name"]: a["kind"] for a in frame["seats"][0]["axes"]}
+    assert kinds["X"] == "linear" and kinds["S1"] == "spindle", kinds
