@@ -55,7 +55,7 @@ export function Grid(props: { c: ClassInfo }) {
       <RefusalLine refusal={actionRefusal.value} id="console-refusal" />
       <div class="seat-grid">
         {seats.value.map((s) => (
-          <SeatTile key={s.n} seat={s} cid={c.id} />
+          <SeatTile key={s.n} seat={s} cid={c.id} user={c.seats.find((k) => k.n === s.n)?.user ?? ""} />
         ))}
         {!seats.value.length ? <p class="hint">waiting for the seats' status…</p> : null}
       </div>

@@ -36,8 +36,9 @@ function AxisRow(props: { a: AxisLine; seat: SeatLive; now: number }) {
   );
 }
 
-export function SeatTile(props: { seat: SeatLive; cid: string }) {
-  const { seat, cid } = props;
+/** `user`: the seat's login, so its control reads as the student's name. */
+export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
+  const { seat, cid, user } = props;
   const f = seat.frame.value;
   const now = gridTime.value;
   const mode = f.frozen ? "frozen" : f.mode;
@@ -53,8 +54,8 @@ export function SeatTile(props: { seat: SeatLive; cid: string }) {
       </header>
       <div class="seat-line">
         <span data-testid="seat-channel" title="channel state">{f.channel}</span>
-        <span class="seat-control" data-testid="seat-control" title="who holds control of the machine">
-          {f.control ? `◉ ${f.control}` : "○ free"}
+        <span class="seat-control" data-testid="seat-control" title={f.control ? `${f.control} holds control of the machine` : "nobody holds control"}>
+          {f.control ? `◉ ${f.control === user ? f.student : f.control}` : "○ free"}
         </span>
       </div>
       <div class="seat-error" data-testid="seat-error" title={f.error ?? ""}>
