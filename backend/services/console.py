@@ -26,7 +26,7 @@ GRID_S = 0.25  # a frame every quarter second: the grid's sparklines move smooth
 SAVE_S = 10.0  # seat time saved this often (first passes at once)
 
 
-@dataclass(eq=False)  # each open console is itself (the hub keeps a set of them)
+@dataclass(eq=False)  # each open console is itself (kept in a set)
 class Console:
     """One open console of a class."""
 

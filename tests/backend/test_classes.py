@@ -11,7 +11,8 @@ from typing import Any
 
 import httpx
 import pytest
-import websockets
+from websockets.asyncio.client import connect
+from websockets.exceptions import InvalidStatus
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
@@ -230,11 +231,64 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert t.post("/api/classes/end/end").status_code == 409
 
 
+def test_a_restored_snapshot_runs_on_exactly_as_the_machine_did(srv: Server) -> None:
+    """Snapshot a paused machine, run commands for 700 cycles; restore and run the same:
+    every axis' state, the channel, the PLC and the events after it are the same to the
+    last bit (the state is the machine's whole state, and the kernel is deterministic)."""
+    t = trainer(srv)
+    mid = "snapme"
+    assert srv.http.post("/api/machines", json={"id": mid, "demo": True}).status_code == 201
+    srv.wait_powered(mid)
+    assert t.post(f"/api/machines/{mid}/simulation", json={"mode": "pause"}).status_code == 200
+    snap = t.post(f"/api/machines/{mid}/snapshots", json={"label": "before"}).json()
+
+    def run() -> dict[str, Any]:
+        for block in ("M3 S700", "G01 X75 Z-20 F3000"):
+            r = t.post(f"/api/machines/{mid}/commands", json={"type": "mdi", "block": block})
+            assert r.status_code == 200, r.text
+        t.post(f"/api/machines/{mid}/simulation/step", json={"cycles": 700}).raise_for_status()
+        st: dict[str, Any] = t.get(f"/api/machines/{mid}/status").json()
+        return {k: st[k] for k in ("axes", "channel", "plc", "job_errors", "recent_events")} | {
+            "cycle": st["simulation"]["cycle"]
+        }
+
+    first = run()
+    assert first["cycle"] == snap["cycle"] + 700
+    x = next(a for a in first["axes"] if a["name"] == "X")
+    assert x["state"] != "STANDSTILL" or x["pos_act"] != 0  # something happened
+    r = t.post(f"/api/machines/{mid}/snapshots/{snap['id']}/restore")
+    assert r.status_code == 200, r.text
+    st = t.get(f"/api/machines/{mid}/status").json()
+    assert st["simulation"]["cycle"] == snap["cycle"] and st["simulation"]["mode"] == "pause"
+    assert run() == first
+    assert t.post(f"/api/machines/{mid}/snapshots/99/restore").status_code == 404
+
+
+def test_the_grid_pushes_every_seat_to_instructors_only(srv: Server) -> None:
+    t = trainer(srv)
+    new_class(t, "grid", 3, "c-axis")
+    tokens: dict[str, str] = srv.tokens  # type: ignore[attr-defined]
+
+    async def first_frame(token: str) -> dict[str, Any]:
+        url = f"{srv.ws_base}/api/classes/grid/grid"
+        async with connect(url, additional_headers=bearer(token)) as ws:
+            while True:
+                frame: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                if all(s["axes"] for s in frame["seats"]):
+                    return frame
+
+    frame = asyncio.run(first_frame(tokens["trainer"]))
+    assert [s["machine"] for s in frame["seats"]] == ["grid-s01", "grid-s02", "grid-s03"]
+    assert {a["name"] for a in frame["seats"][0]["axes"]} >= {"X", "Z"}
+    with pytest.raises(InvalidStatus):
+        asyncio.run(first_frame(tokens["olaf"]))  # an operator is no instructor
+
+
 def test_the_console_grid_opens_with_the_pages_ticket(srv: Server) -> None:
     """The console page opens the grid as its telemetry: a one-time ticket of its session
     (the cookie alone opens no socket). A frame has every seat, its axes with their kind."""
     t = trainer(srv)
-    new_class(t, "grid", 2, "accel-curve")
+    new_class(t, "ticket", 2, "accel-curve")
     page = browser_like(srv)
     OPEN.append(page)
     assert login(page, "trainer", OTHERS_PASSWORD).status_code == 200
@@ -242,14 +296,14 @@ def test_the_console_grid_opens_with_the_pages_ticket(srv: Server) -> None:
     ticket = page.post("/api/auth/ws-ticket").json()["ticket"]
 
     async def first_frame() -> dict[str, Any]:
-        url = f"{srv.ws_base}/api/classes/grid/grid?ticket={ticket}"
-        async with websockets.connect(url) as ws:
+        url = f"{srv.ws_base}/api/classes/ticket/grid?ticket={ticket}"
+        async with connect(url) as ws:
             while True:  # until both seats' workers have pushed a status
                 frame: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), 10))
                 if all(s["axes"] for s in frame["seats"]):
                     return frame
 
     frame = asyncio.run(first_frame())
-    assert frame["class_id"] == "grid" and [s["n"] for s in frame["seats"]] == [1, 2]
+    assert frame["class_id"] == "ticket" and [s["n"] for s in frame["seats"]] == [1, 2]
     kinds = {a["name"]: a["kind"] for a in frame["seats"][0]["axes"]}
     assert kinds["X"] == "linear" and kinds["S1"] == "spindle", kinds
