@@ -15,7 +15,8 @@ from websockets.asyncio.client import connect
 from websockets.exceptions import InvalidStatus
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
-from tests.backend.server import Server, add_users, bearer
+from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
+from tests.backend.test_accounts import browser_like, login
 
 PLANT_F = 2.2857  # multi-gain exercise: the drive runs 1/2.2857 as fast per digit (DOMAIN §7)
 
@@ -197,6 +198,7 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     t = trainer(srv)
     created = new_class(t, "end", 2, "gear-change-plc")
     mid = created["info"]["seats"][0]["machine"]
+    seat_user = created["info"]["seats"][0]["user"]
     seat = student(srv, created["links"][0]["url"])
     r = t.post("/api/classes/end/freeze", json={"seats": [1], "frozen": True})
     assert r.status_code == 200, r.text
@@ -221,6 +223,11 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert seat.get("/api/machines").status_code == 401  # and the login with it
     after = t.get("/api/classes/end/seats/1").json()  # the record stays for the debrief
     assert after["info"]["hints_taken"] == 1 and len(after["checks"]) >= 1
+    # and so does what was done on the seat (the student's hint here)
+    rows = t.get("/api/classes/end/seats/1/audit").json()["rows"]
+    assert [r["machine"] for r in rows] == [mid] * len(rows)
+    assert any(r["actor"] == seat_user and "took hint 1" in r["action"] for r in rows), rows
+    assert t.get("/api/classes/end/seats/3/audit").status_code == 404
     assert t.post("/api/classes/end/end").status_code == 409
 
 
@@ -308,3 +315,28 @@ def test_an_uploaded_exercise_is_checked_against_its_machine(srv: Server) -> Non
     assert r.status_code == 422 and "line 15, column 9" in r.json()["detail"]["message"], r.text
     r = t.post("/api/exercises", json={"text": good.replace('"own"', '"sign-error"')})
     assert r.status_code == 409, r.text
+
+
+def test_the_console_grid_opens_with_the_pages_ticket(srv: Server) -> None:
+    """The console page opens the grid as its telemetry: a one-time ticket of its session
+    (the cookie alone opens no socket). A frame has every seat, its axes with their kind."""
+    t = trainer(srv)
+    new_class(t, "ticket", 2, "accel-curve")
+    page = browser_like(srv)
+    OPEN.append(page)
+    assert login(page, "trainer", OTHERS_PASSWORD).status_code == 200
+    page.headers[CSRF_HEADER] = page.cookies[CSRF_COOKIE]
+    ticket = page.post("/api/auth/ws-ticket").json()["ticket"]
+
+    async def first_frame() -> dict[str, Any]:
+        url = f"{srv.ws_base}/api/classes/ticket/grid?ticket={ticket}"
+        async with connect(url) as ws:
+            while True:  # until both seats' workers have pushed a status
+                frame: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                if all(s["axes"] for s in frame["seats"]):
+                    return frame
+
+    frame = asyncio.run(first_frame())
+    assert frame["class_id"] == "ticket" and [s["n"] for s in frame["seats"]] == [1, 2]
+    kinds = {a["name"]: a["kind"] for a in frame["seats"][0]["axes"]}
+    assert kinds["X"] == "linear" and kinds["S1"] == "spindle", kinds
