@@ -176,6 +176,9 @@ class AxisLine(BaseModel):
     """One axis of a seat in the grid: where it is, how fast, its lag."""
 
     name: str
+    kind: Literal["linear", "rotary", "spindle"] = Field(
+        description="spindles' lines show speed, axes' lag"
+    )
     state: str
     lag: float = Field(description="mm | °")
     speed: float = Field(description="mm/min | rpm (spindles)")

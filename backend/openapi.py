@@ -10,6 +10,7 @@ from fastapi.openapi.utils import get_openapi
 from pydantic import BaseModel
 from pydantic.json_schema import models_json_schema
 
+from api.classes import GridFrame
 from api.common import ErrorBody
 from api.telemetry import (
     ErrorMessage,
@@ -34,6 +35,7 @@ WEBSOCKET_MODELS: tuple[type[BaseModel], ...] = (
     ErrorMessage,
     FrameHeader,
     SignalInfo,
+    GridFrame,  # the instructor console's grid
 )
 
 

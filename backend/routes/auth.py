@@ -89,8 +89,9 @@ async def me(actor: ActorDep) -> Me:
 
 @router.post("/api/auth/ws-ticket", dependencies=[permit(Action.OBSERVE)], responses=responses(401))
 async def ws_ticket(actor: ActorDep, services: ServicesDep) -> WsTicket:
-    """A ticket that opens one telemetry websocket as this session (and browser tab) within
-    `expires_in_s`, once: `/api/machines/{mid}/telemetry?ticket=...`. Browsers cannot send
+    """A ticket that opens one websocket as this session (and browser tab) within
+    `expires_in_s`, once: `/api/machines/{mid}/telemetry?ticket=...` or (instructors) the
+    console's `/api/classes/{cid}/grid?ticket=...`. Browsers cannot send
     headers on a websocket, and the session cookie alone is refused there."""
     lifetime_s = services.settings.ws_ticket_s
     ticket = services.accounts.issue_ws_ticket(actor, lifetime_s)

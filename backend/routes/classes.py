@@ -5,9 +5,10 @@ from __future__ import annotations
 import asyncio
 from typing import Annotated
 
-from fastapi import APIRouter, Path, Request, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, Path, Query, Request, WebSocket, WebSocketDisconnect
 from fastapi.concurrency import run_in_threadpool
 
+from api.audit import AuditPage
 from api.auth import Action
 from api.classes import (
     CLASS_ID,
@@ -26,6 +27,7 @@ from api.classes import (
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, ApiError, responses
 from backend.services import training
+from backend.services.audit import MAX_PAGE, AuditFilter
 from backend.services.classes import Class, Classes
 from backend.services.exercises import hint_infos
 from backend.workers.protocol import Pace
@@ -191,6 +193,24 @@ def seat_detail(cid: ClassId, n: SeatNo, services: ServicesDep) -> SeatDetail:
         hints=hint_infos(c.exercise, seat.hints),
         faults=training.faults_of(m) if m is not None else [],
     )
+
+
+@router.get(
+    "/classes/{cid}/seats/{n}/audit",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(403, 404),
+)
+def seat_audit(
+    cid: ClassId,
+    n: SeatNo,
+    services: ServicesDep,
+    limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 200,
+    before_seq: Annotated[int | None, Query(ge=1)] = None,
+) -> AuditPage:
+    """What was done on the seat's machine (commands, parameters, faults, hints), newest
+    first: for the debrief, also once the class has ended and its machine is gone."""
+    seat = services.classes.seat(cid, n)
+    return services.audit.page(AuditFilter(machine=seat.machine), limit, before_seq)
 
 
 @router.post(

@@ -24,8 +24,10 @@ from backend.services.store import Store
 
 SESSION_S = 12 * 3600.0  # a shift; then log in again
 TICKET_S = 300.0  # a ticket for one URL (a viewer that cannot send the session) lives this long
-WS_TICKET_S = 30.0  # a telemetry websocket's ticket: fetched just before the connect
-TELEMETRY_PATH = re.compile(r"/api/machines/[^/]+/telemetry")  # what a websocket ticket opens
+WS_TICKET_S = 30.0  # a websocket's ticket: fetched just before the connect
+# what a websocket ticket opens: a machine's telemetry, a class's console grid (the route
+# itself still checks the role)
+WEBSOCKET_PATH = re.compile(r"/api/machines/[^/]+/telemetry|/api/classes/[^/]+/grid")
 LAST_USED_S = 60.0  # a token's last use is written at most this often (not once per request)
 ONCE_S = 3600.0  # a one-time login link is good for an hour
 LOGIN_FAILURES = 5  # failed logins per address within LOGIN_WINDOW_S before 429
@@ -262,9 +264,10 @@ class Accounts:
         return self._issue(actor, "http", re.compile(re.escape(path)), TICKET_S)
 
     def issue_ws_ticket(self, actor: Actor, lifetime_s: float = WS_TICKET_S) -> str:
-        """A ticket that opens one telemetry websocket as `actor` within `lifetime_s`
-        (browsers cannot send headers on a websocket, and the cookie alone is refused)."""
-        return self._issue(actor, "websocket", TELEMETRY_PATH, lifetime_s)
+        """A ticket that opens one websocket (telemetry, a class's grid) as `actor` within
+        `lifetime_s` (browsers cannot send headers on a websocket, and the cookie alone is
+        refused)."""
+        return self._issue(actor, "websocket", WEBSOCKET_PATH, lifetime_s)
 
     def _issue(
         self, actor: Actor, scope_type: str, path: re.Pattern[str], lifetime_s: float

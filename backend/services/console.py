@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from api.classes import AxisLine, GridFrame, SeatFrame
 from backend.services.classes import Class, Classes, Seat
 from backend.services.machines import MachineProxy
+from backend.services.status import AXIS_KIND
 from backend.workers.protocol import Watch
 
 log = logging.getLogger(__name__)
@@ -50,7 +51,13 @@ def seat_frame(c: Class, seat: Seat, m: MachineProxy | None, classes: Classes) -
     if st is not None:
         snap = st.snapshot
         axes = [
-            AxisLine(name=a.display_name or a.name, state=a.state, lag=a.lag, speed=a.vel_act)
+            AxisLine(
+                name=a.display_name or a.name,
+                kind=AXIS_KIND[a.kind],
+                state=a.state,
+                lag=a.lag,
+                speed=a.vel_act,
+            )
             for a in snap.axes
         ]
         channel = snap.channel.state.name

@@ -40,7 +40,7 @@ from nc_sim.units import AxisKind
 
 RECENT_EVENTS = 50  # events a machine's status carries
 
-_KIND: dict[AxisKind, Literal["linear", "rotary", "spindle"]] = {
+AXIS_KIND: dict[AxisKind, Literal["linear", "rotary", "spindle"]] = {
     AxisKind.LINEAR: "linear",
     AxisKind.ROTARY: "rotary",
     AxisKind.SPINDLE: "spindle",
@@ -101,7 +101,7 @@ def _axis_status(a: AxisSnapshot) -> AxisStatus:
     sp = a.spindle
     return AxisStatus(
         name=a.name,
-        kind=_KIND[a.kind],
+        kind=AXIS_KIND[a.kind],
         state=a.state,
         unit=a.pos_unit,
         pos_cmd=a.pos_cmd,

@@ -22,6 +22,8 @@ import { Scope } from "./panels/Scope";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
 import { TrialBar } from "./panels/TrialBar";
+import { Console } from "./console/Console";
+import { view } from "./state/classes";
 import { me } from "./state/auth";
 import { commandBlocked, may } from "./state/control";
 import { connection, machineUrl, online, status } from "./state/session";
@@ -59,7 +61,21 @@ function MachineControls() {
 
 export function App() {
   if (me.value === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
-  return me.value ? <Hmi /> : <Login />;
+  if (!me.value) return <Login />;
+  if (view.value === "classes" && may("teach")) return <ConsoleScreen />;
+  return <Hmi />;
+}
+
+/** The instructor console under the top bar (state/classes.ts `view`). */
+function ConsoleScreen() {
+  return (
+    <div class="app">
+      <div class="head">
+        <TopBar />
+      </div>
+      <Console />
+    </div>
+  );
 }
 
 function Hmi() {

@@ -4,6 +4,7 @@ import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { logout, me } from "../state/auth";
 import { may } from "../state/control";
+import { openConsole, openHmi, view } from "../state/classes";
 import { connection, emergencyStop, machineId, machines, online, selectMachine, status } from "../state/session";
 import { AccountDialog, accountOpen } from "./Account";
 import { Lamp } from "../ui/Lamp";
@@ -18,6 +19,7 @@ export function TopBar() {
   return (
     <header class="topbar">
       <span class="brand">Inbetrieb</span>
+      {may("teach") ? <ViewSwitch /> : null}
       <label class="machine-select">
         Machine{" "}
         <select value={machineId.value} onChange={(e) => selectMachine((e.target as HTMLSelectElement).value)}>
@@ -62,6 +64,15 @@ export function TopBar() {
         </button>
       </span>
     </header>
+  );
+}
+
+/** Instructors switch between the machine HMI and the class console (state/classes.ts). */
+function ViewSwitch() {
+  return view.value === "classes" ? (
+    <button type="button" class="secondary" data-testid="back-to-hmi" onClick={() => void openHmi()}>◂ Machine HMI</button>
+  ) : (
+    <button type="button" class="secondary" data-testid="open-classes" onClick={openConsole}>Classes</button>
   );
 }
 

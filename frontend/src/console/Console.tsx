@@ -1,0 +1,74 @@
+// The instructor console: classes on the left (a new one, running and ended ones); the open
+// class's live grid (or, ended, its seats for the debrief) with one seat's detail below; the
+// fault form over it. It replaces the machine HMI under the same top bar.
+import { useEffect, useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { ClassCreated, ClassInfo, Refusal } from "../api/types";
+import { classes, loadClasses, loadExercises, openClass } from "../state/classes";
+import { fmt } from "../ui/format";
+import { Panel } from "../ui/Panel";
+import { RefusalLine } from "../ui/useCommand";
+import { ClassList } from "./ClassList";
+import { CreateClass, SeatLinks } from "./CreateClass";
+import { FaultForm } from "./FaultForm";
+import { Grid } from "./Grid";
+import { SeatDetail } from "./SeatDetail";
+import { clock } from "./SeatTile";
+import { detailSeat, faultFor } from "./uiState";
+import "./console.css";
+
+/** An ended class's seats: results as they stood at the end, each seat's debrief. */
+function EndedSeats(props: { c: ClassInfo }) {
+  return (
+    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercise} (ended)`}>
+      <table class="dense">
+        <thead><tr><th class="num">seat</th><th>student</th><th class="num">progress</th><th class="num">score</th><th class="num">hints</th><th class="num">seat time</th><th /></tr></thead>
+        <tbody>
+          {props.c.seats.map((s) => (
+            <tr key={s.n} data-testid={`ended-seat-${s.n}`}>
+              <td class="num">{s.n}</td>
+              <td>{s.student}</td>
+              <td class="num">{Math.round(s.progress * 100)} %</td>
+              <td class="num">{fmt(s.score, 1)}</td>
+              <td class="num">{s.hints_taken}</td>
+              <td class="num">{clock(s.seat_time_s)}</td>
+              <td><button type="button" class="secondary" data-testid="seat-detail" onClick={() => (detailSeat.value = s.n)}>Debrief</button></td>
+            </tr>
+          ))}
+        </tbody>
+      </table>
+    </Panel>
+  );
+}
+
+export function Console() {
+  const [creating, setCreating] = useState(false);
+  const [created, setCreated] = useState<ClassCreated | null>(null);
+  const [refusal, setRefusal] = useState<Refusal | null>(null);
+  useEffect(() => {
+    Promise.all([loadClasses(), loadExercises()]).catch((e: unknown) =>
+      setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
+    );
+  }, []);
+  const c = classes.value.find((k) => k.id === openClass.value);
+  useEffect(() => void (detailSeat.value = null), [c?.id]);
+  const n = detailSeat.value;
+  return (
+    <div class="console" data-testid="console">
+      <aside class="console-side">
+        <ClassList onNew={() => setCreating(true)} />
+        <RefusalLine refusal={refusal} />
+      </aside>
+      <main class="console-main">
+        {creating ? (
+          <CreateClass onCancel={() => setCreating(false)} onCreated={(k) => { setCreating(false); setCreated(k); }} />
+        ) : null}
+        {created ? <SeatLinks created={created} onDone={() => setCreated(null)} /> : null}
+        {c ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
+        {!c && !creating && !created ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
+        {c && n !== null ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}
+        {c && faultFor.value !== null ? <FaultForm c={c} target={faultFor.value} /> : null}
+      </main>
+    </div>
+  );
+}

@@ -1,0 +1,155 @@
+// One seat for the instructor and the debrief: the exercise's checks (measured figure, first
+// pass), hints taken, injected faults (remove one), snapshots (take, restore), the seat's
+// traces and what was done on its machine (audit). An ended class keeps all but the machine.
+import { useEffect, useState } from "preact/hooks";
+import { ApiError, http } from "../api/http";
+import type { AuditPage, ClassInfo, Refusal, SeatDetail as Detail, SeatLink, SnapshotInfo, TraceInfo } from "../api/types";
+import { newLink } from "../state/classes";
+import { fmt } from "../ui/format";
+import { Panel } from "../ui/Panel";
+import { RefusalLine } from "../ui/useCommand";
+import { clock } from "./SeatTile";
+import { detailSeat } from "./uiState";
+
+const REFRESH_MS = 3000; // a running seat's checks and faults change as the student works
+const AUDIT_ROWS = 100;
+const time = (unix: number) => new Date(unix * 1000).toLocaleTimeString();
+
+interface Loaded {
+  detail: Detail;
+  snapshots: SnapshotInfo[];
+  traces: TraceInfo[];
+  audit: AuditPage;
+}
+
+export function SeatDetail(props: { c: ClassInfo; n: number }) {
+  const { c, n } = props;
+  const running = c.ended_unix === null;
+  const seat = c.seats.find((s) => s.n === n);
+  const mid = seat?.machine ?? "";
+  const [data, setData] = useState<Loaded | null>(null);
+  const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const [link, setLink] = useState<SeatLink | null>(null);
+  const [tick, setTick] = useState(0);
+  const fail = (e: unknown) => setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
+  useEffect(() => {
+    let live = true;
+    const load = async () => {
+      const [detail, traces, audit, snapshots] = await Promise.all([
+        http.get<Detail>(`/api/classes/${c.id}/seats/${n}`),
+        http.get<TraceInfo[]>(`/api/traces?machine=${encodeURIComponent(mid)}`),
+        http.get<AuditPage>(`/api/classes/${c.id}/seats/${n}/audit?limit=${AUDIT_ROWS}`),
+        running ? http.get<SnapshotInfo[]>(`/api/machines/${mid}/snapshots`) : Promise.resolve([]),
+      ]);
+      if (live) setData({ detail, traces, audit, snapshots });
+    };
+    load().catch(fail);
+    const timer = running ? setInterval(() => void load().catch(fail), REFRESH_MS) : undefined;
+    return () => {
+      live = false;
+      clearInterval(timer);
+    };
+  }, [c.id, n, running, mid, tick]);
+  const then = (p: Promise<unknown>) => void p.then(() => setTick((t) => t + 1), fail);
+  const d = data?.detail;
+  return (
+    <Panel id="seat-detail" title={`Seat ${n}: ${seat?.student ?? ""}${running ? "" : " (debrief)"}`}
+      actions={<button type="button" class="secondary" data-testid="detail-close" onClick={() => (detailSeat.value = null)}>Close</button>}>
+      <RefusalLine refusal={refusal} id="detail-refusal" />
+      {d ? (
+        <p class="hint">
+          {mid} · login {d.info.user} · seat time {clock(d.info.seat_time_s)} · progress {Math.round(d.info.progress * 100)} % · score{" "}
+          <b>{fmt(d.info.score, 1)}</b> · hints taken {d.info.hints_taken}
+          {running ? (
+            <>
+              {" "}·{" "}
+              <button type="button" class="link" onClick={() => void newLink(c.id, n).then(setLink, fail)}>new login link</button>
+            </>
+          ) : null}
+        </p>
+      ) : <p class="hint">loading…</p>}
+      {link ? <p class="once-note">Shown this once: <input readOnly class="mono link-url" value={link.url} /></p> : null}
+      <div class="detail-cols">
+        <section>
+          <h3>Checks</h3>
+          <table class="dense" data-testid="detail-checks">
+            <thead><tr><th>check</th><th>holds</th><th>first passed</th><th>measured</th><th class="num">points</th></tr></thead>
+            <tbody>
+              {d?.checks.map((k) => (
+                <tr key={k.id}>
+                  <td>{k.text}</td>
+                  <td class={k.passed ? "ok" : "bad"}>{k.passed ? "yes" : "no"}</td>
+                  <td class="num">{k.first_passed_s === null ? "—" : clock(k.first_passed_s)}</td>
+                  <td>{k.detail}</td>
+                  <td class="num">{fmt(k.points, 0)}</td>
+                </tr>
+              ))}
+            </tbody>
+          </table>
+          <h3>Hints</h3>
+          <ul class="plain">
+            {d?.hints.map((h) => (
+              <li key={h.n}>{h.n}. {h.text ? <>taken (−{fmt(h.cost, 0)} pt): {h.text}</> : <span class="hint">not taken ({fmt(h.cost, 0)} pt)</span>}</li>
+            ))}
+          </ul>
+          <h3>Faults</h3>
+          <ul class="plain" data-testid="detail-faults">
+            {d?.faults.map((f) => (
+              <li key={f.id}>
+                <b>{f.text}</b> <span class="hint">{f.active ? `active since ${fmt(f.active_since_s, 1)} s` : "armed"}</span>{" "}
+                {running ? (
+                  <button type="button" class="link" data-testid={`fault-remove-${f.id}`} onClick={() => then(http.del(`/api/machines/${mid}/faults/${f.id}`))}>remove</button>
+                ) : null}
+              </li>
+            ))}
+            {d && !d.faults.length ? <li class="hint">{running ? "none" : "the machine has gone"}</li> : null}
+          </ul>
+          {running ? (
+            <>
+              <h3>Snapshots</h3>
+              <ul class="plain" data-testid="detail-snapshots">
+                {data?.snapshots.map((s) => (
+                  <li key={s.id}>
+                    {s.id}: {fmt(s.t_s, 1)} s {s.label ? `"${s.label}"` : ""} <span class="hint">by {s.by} at {time(s.created_unix)}</span>{" "}
+                    <button type="button" class="link" data-testid={`snapshot-restore-${s.id}`}
+                      onClick={() => confirm(`Restore seat ${n}'s machine to ${fmt(s.t_s, 1)} s? What the student did since is lost.`) && then(http.post(`/api/machines/${mid}/snapshots/${s.id}/restore`, {}))}>
+                      restore
+                    </button>
+                  </li>
+                ))}
+                {data && !data.snapshots.length ? <li class="hint">none</li> : null}
+              </ul>
+              <button type="button" class="secondary" data-testid="snapshot-take" onClick={() => then(http.post(`/api/machines/${mid}/snapshots`, { label: "" }))}>
+                Take snapshot
+              </button>
+            </>
+          ) : null}
+        </section>
+        <section>
+          <h3>Traces</h3>
+          <ul class="plain" data-testid="detail-traces">
+            {data?.traces.map((t) => (
+              <li key={t.id}>
+                <a href={`/api/traces/${t.id}/csv`}>{t.name || t.id}</a> <span class="hint">{time(t.created_unix)} · {t.trigger}</span>
+              </li>
+            ))}
+            {data && !data.traces.length ? <li class="hint">none</li> : null}
+          </ul>
+          <h3>Commands and changes ({data?.audit.total ?? 0})</h3>
+          <table class="dense" data-testid="detail-audit">
+            <tbody>
+              {data?.audit.rows.map((r) => (
+                <tr key={r.seq}>
+                  <td class="num">{time(r.time_unix)}</td>
+                  <td>{r.actor}</td>
+                  <td>{r.action}</td>
+                  <td class={r.outcome === "ok" ? "" : "bad"}>{r.outcome}</td>
+                </tr>
+              ))}
+            </tbody>
+          </table>
+        </section>
+      </div>
+    </Panel>
+  );
+}

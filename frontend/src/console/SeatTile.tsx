@@ -1,0 +1,102 @@
+// One seat in the grid: who, the machine's state, its newest job error, who holds control,
+// lag and speed over the last minute, progress and score, faults, seat time, and what the
+// instructor can do with it. Fixed size and fixed rows: numbers change, the layout does not.
+import type { AxisLine } from "../api/types";
+import { freeze, gridTime, openHmi, selected, toggleSeat, type SeatLive } from "../state/classes";
+import { fmt } from "../ui/format";
+import { Sparkline } from "./Sparkline";
+import { act, detailSeat, faultFor } from "./uiState";
+
+const UNIT = { linear: "mm", rotary: "°", spindle: "rpm" } as const;
+const FLOOR = { linear: 0.01, rotary: 0.01, spindle: 10 } as const; // scale floors: lag mm | °, speed rpm
+const MAX_LINES = 3; // sparklines per tile (the lathe: X, Z, S1)
+
+/** Seat time as m:ss (h:mm:ss past an hour). */
+export function clock(s: number): string {
+  const t = Math.max(0, Math.floor(s));
+  const hh = Math.floor(t / 3600);
+  const mm = Math.floor((t % 3600) / 60);
+  const ss = String(t % 60).padStart(2, "0");
+  return hh ? `${hh}:${String(mm).padStart(2, "0")}:${ss}` : `${mm}:${ss}`;
+}
+
+function AxisRow(props: { a: AxisLine; seat: SeatLive; now: number }) {
+  const { a, seat, now } = props;
+  const spindle = a.kind === "spindle";
+  const value = spindle ? a.speed : a.lag;
+  return (
+    <div class="seat-axis" data-testid={`seat-axis-${a.name}`}>
+      <span class="seat-axis-name">{a.name}</span>
+      <span class="hint">{spindle ? "speed" : "lag"}</span>
+      <Sparkline series={seat.history.get(a.name)} now={now} symmetric={!spindle} floor={FLOOR[a.kind]} bad={a.state === "ERROR"} />
+      <span class="num seat-axis-value">
+        {fmt(value, spindle ? 0 : 3)}&nbsp;{UNIT[a.kind]}
+      </span>
+    </div>
+  );
+}
+
+/** `user`: the seat's login, so its control reads as the student's name. */
+export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
+  const { seat, cid, user } = props;
+  const f = seat.frame.value;
+  const now = gridTime.value;
+  const mode = f.frozen ? "frozen" : f.mode;
+  const picked = selected.value.has(f.n);
+  const cls = ["seat-tile", f.error_code ? "in-error" : "", f.frozen ? "frozen" : "", picked ? "picked" : ""].join(" ");
+  return (
+    <article class={cls} data-testid={`seat-${f.n}`} aria-label={`seat ${f.n}: ${f.student}`}>
+      <header class="seat-head">
+        <input type="checkbox" checked={picked} onChange={() => toggleSeat(f.n)} data-testid="seat-select" aria-label={`select seat ${f.n}`} />
+        <b class="seat-n">{String(f.n).padStart(2, "0")}</b>
+        <span class="seat-student" title={`${f.student} · ${f.machine}`} data-testid="seat-student">{f.student}</span>
+        <span class={`seat-mode mode-${mode}`} data-testid="seat-mode">{mode}</span>
+      </header>
+      <div class="seat-line">
+        <span data-testid="seat-channel" title="channel state">{f.channel}</span>
+        <span class="seat-control" data-testid="seat-control" title={f.control ? `${f.control} holds control of the machine` : "nobody holds control"}>
+          {f.control ? `◉ ${f.control === user ? f.student : f.control}` : "○ free"}
+        </span>
+      </div>
+      <div class="seat-error" data-testid="seat-error" title={f.error ?? ""}>
+        {f.error_code ? (
+          <>
+            <b>{f.error_code}</b> {f.error}
+          </>
+        ) : (
+          <span class="hint">no job error</span>
+        )}
+      </div>
+      <div class="seat-axes">
+        {f.axes.slice(0, MAX_LINES).map((a) => (
+          <AxisRow key={a.name} a={a} seat={seat} now={now} />
+        ))}
+      </div>
+      <div class="seat-line">
+        <span class="seat-progress" title={`checks that hold or held: ${Math.round(f.progress * 100)} %`}>
+          <span class="bar" style={{ width: `${Math.round(f.progress * 100)}%` }} />
+        </span>
+        <span class="num" data-testid="seat-score" title="score">{fmt(f.score, 0)}&nbsp;pt</span>
+        <span class={f.faults ? "seat-faults has" : "seat-faults"} data-testid="seat-faults" title="injected faults (active or armed)">
+          ⚡{f.faults}
+        </span>
+        <span class="num" data-testid="seat-time" title="seat time (simulated)">{clock(f.seat_time_s)}</span>
+      </div>
+      <footer class="seat-actions">
+        <button type="button" class="secondary" data-testid="seat-live" onClick={() => void act(() => openHmi(f.machine))}
+          title="the seat's machine in the HMI: watch it live, take control">
+          Live
+        </button>
+        <button type="button" class="secondary" data-testid="seat-detail" onClick={() => (detailSeat.value = f.n)} title="checks, hints, faults, snapshots, traces, commands">
+          Detail
+        </button>
+        <button type="button" class="secondary" data-testid="seat-fault" onClick={() => (faultFor.value = [f.n])} title="inject a fault into this seat">
+          Fault…
+        </button>
+        <button type="button" class="secondary" data-testid="seat-freeze" onClick={() => void act(() => freeze(cid, [f.n], !f.frozen))}>
+          {f.frozen ? "Resume" : "Freeze"}
+        </button>
+      </footer>
+    </article>
+  );
+}

@@ -1,0 +1,207 @@
+// The instructor's side of classes: which screen shows (the machine HMI or the console, kept
+// in the URL as `#classes`), the classes and exercises, and the open class's grid: pushed
+// frames over the grid websocket (a one-time ticket first, as the telemetry socket), each
+// seat's newest frame in a signal of its own and its lag/speed history for the sparklines.
+// Only a seat's own tile re-renders when its frame changes; the tiles themselves stay.
+import { batch, computed, effect, signal, type Signal } from "@preact/signals";
+import { http } from "../api/http";
+import type {
+  ClassCreate,
+  ClassCreated,
+  ClassInfo,
+  ExerciseInfo,
+  FaultInfo,
+  FaultInject,
+  GridFrame,
+  SeatFaults,
+  SeatFrame,
+  SeatLink,
+  WsTicket,
+} from "../api/types";
+import { loggedIn } from "./auth";
+import { may } from "./control";
+import { machines, selectMachine } from "./session";
+import type { MachineSummary } from "../api/types";
+
+export type View = "hmi" | "classes";
+const CONSOLE_HASH = "#classes";
+
+/** The console (instructors: `may("teach")`) or the machine HMI. */
+export const view = signal<View>(location.hash.startsWith(CONSOLE_HASH) ? "classes" : "hmi");
+
+/** Show the console; the URL keeps it (a reload opens it again). */
+export function openConsole(): void {
+  view.value = "classes";
+  history.replaceState(null, "", CONSOLE_HASH + (openClass.value ? `/${openClass.value}` : ""));
+}
+
+/** Back to the machine HMI, on `machine` when given (a seat's live view). The machine list
+ * is read again: a class made since has new machines. */
+export async function openHmi(machine?: string): Promise<void> {
+  if (machine) {
+    machines.value = await http.get<MachineSummary[]>("/api/machines");
+    selectMachine(machine);
+  } else {
+    history.replaceState(null, "", location.pathname);
+  }
+  view.value = "hmi";
+}
+
+// --- classes and exercises --------------------------------------------------------------
+export const classes = signal<ClassInfo[]>([]);
+export const exercises = signal<ExerciseInfo[]>([]);
+/** The class whose grid (or, ended, whose debrief) shows. */
+export const openClass = signal<string>(location.hash.match(/^#classes\/([a-z0-9-]+)/)?.[1] ?? "");
+
+export async function loadClasses(): Promise<void> {
+  classes.value = await http.get<ClassInfo[]>("/api/classes");
+}
+
+export async function loadExercises(): Promise<void> {
+  exercises.value = await http.get<ExerciseInfo[]>("/api/exercises");
+}
+
+export function chooseClass(cid: string): void {
+  openClass.value = cid;
+  selected.value = new Set();
+  history.replaceState(null, "", CONSOLE_HASH + (cid ? `/${cid}` : ""));
+}
+
+/** A new class; its seats' login links come with the answer, this once. */
+export async function createClass(req: ClassCreate): Promise<ClassCreated> {
+  const created = await http.post<ClassCreated>("/api/classes", req);
+  await loadClasses();
+  return created;
+}
+
+export async function endClass(cid: string): Promise<void> {
+  await http.post<ClassInfo>(`/api/classes/${cid}/end`, {});
+  await loadClasses();
+}
+
+/** A new one-time login link of a seat (the old one stops working once used, or in an hour). */
+export const newLink = (cid: string, n: number) => http.post<SeatLink>(`/api/classes/${cid}/seats/${n}/link`, {});
+
+// --- actions on seats (an empty list: the whole class) -------------------------------------
+/** The seats ticked in the grid. */
+export const selected = signal<Set<number>>(new Set());
+
+export function toggleSeat(n: number): void {
+  const s = new Set(selected.value);
+  if (s.has(n)) s.delete(n);
+  else s.add(n);
+  selected.value = s;
+}
+
+export const freeze = (cid: string, seats: number[], frozen: boolean) =>
+  http.post<ClassInfo>(`/api/classes/${cid}/freeze`, { seats, frozen });
+export const broadcast = (cid: string, seats: number[], text: string) =>
+  http.post<null>(`/api/classes/${cid}/broadcast`, { seats, text });
+export const injectSeat = (mid: string, inject: FaultInject) => http.post<FaultInfo>(`/api/machines/${mid}/faults`, inject);
+export const injectClass = (cid: string, seats: number[], inject: FaultInject) =>
+  http.post<SeatFaults[]>(`/api/classes/${cid}/faults`, { seats, inject });
+
+// --- the grid -----------------------------------------------------------------------------
+export const HISTORY_S = 60; // the sparklines' window
+const CAPACITY = 512; // frames kept: 60 s at 4 Hz and room to spare
+
+/** One sparkline's samples: the grid's wall time and a value (lag or speed), a ring. */
+export class Series {
+  readonly t = new Float64Array(CAPACITY);
+  readonly v = new Float64Array(CAPACITY);
+  head = 0; // next slot
+  size = 0;
+  push(t: number, v: number): void {
+    this.t[this.head] = t;
+    this.v[this.head] = v;
+    this.head = (this.head + 1) % CAPACITY;
+    this.size = Math.min(this.size + 1, CAPACITY);
+  }
+  /** Oldest first, k = 0 .. size-1. */
+  at(k: number): number {
+    return (this.head - this.size + k + CAPACITY) % CAPACITY;
+  }
+}
+
+/** A seat in the open grid: its newest frame and, per axis line, its history. */
+export interface SeatLive {
+  n: number;
+  frame: Signal<SeatFrame>;
+  history: Map<string, Series>;
+}
+
+export type GridLink = "closed" | "connecting" | "online" | "lost";
+export const gridLink = signal<GridLink>("closed");
+/** Seats of the open class, in seat order; the array is replaced only when the seats do. */
+export const seats = signal<SeatLive[]>([]);
+/** Wall time of the newest frame (the sparklines' right edge). */
+export const gridTime = signal(0);
+
+function take(frame: GridFrame): void {
+  batch(() => {
+    let live = seats.value;
+    if (live.length !== frame.seats.length || live.some((s, i) => s.n !== frame.seats[i].n)) {
+      live = frame.seats.map((f) => ({ n: f.n, frame: signal(f), history: new Map<string, Series>() }));
+      seats.value = live;
+    }
+    frame.seats.forEach((f, i) => {
+      const s = live[i];
+      for (const a of f.axes) {
+        let series = s.history.get(a.name);
+        if (!series) s.history.set(a.name, (series = new Series()));
+        series.push(frame.t_unix, a.kind === "spindle" ? a.speed : a.lag);
+      }
+      s.frame.value = f;
+    });
+    gridTime.value = frame.t_unix;
+  });
+}
+
+const RECONNECT_MS = 1000;
+const NOT_FOUND = 4404;
+let ws: WebSocket | null = null;
+let attempt = 0;
+
+async function connect(cid: string): Promise<void> {
+  const mine = ++attempt;
+  gridLink.value = "connecting";
+  let ticket: WsTicket;
+  try {
+    ticket = await http.post<WsTicket>("/api/auth/ws-ticket", {});
+  } catch {
+    if (mine === attempt) setTimeout(() => mine === attempt && void connect(cid), RECONNECT_MS);
+    return;
+  }
+  if (mine !== attempt) return;
+  const proto = location.protocol === "https:" ? "wss" : "ws";
+  const sock = new WebSocket(`${proto}://${location.host}/api/classes/${cid}/grid?ticket=${encodeURIComponent(ticket.ticket)}`);
+  ws = sock;
+  sock.onmessage = (ev) => {
+    gridLink.value = "online";
+    take(JSON.parse(ev.data as string) as GridFrame);
+  };
+  sock.onclose = (ev) => {
+    if (ws !== sock) return; // replaced on purpose
+    ws = null;
+    gridLink.value = "lost";
+    if (ev.code !== NOT_FOUND) setTimeout(() => mine === attempt && void connect(cid), RECONNECT_MS);
+  };
+}
+
+/** The class whose grid socket is open: the console shows it and it runs. */
+const gridClass = computed(() => {
+  const cid = openClass.value;
+  const running = classes.value.some((c) => c.id === cid && c.ended_unix === null);
+  return loggedIn.value && view.value === "classes" && may("teach") && running ? cid : "";
+});
+
+effect(() => {
+  const wanted = gridClass.value;
+  const old = ws;
+  ws = null;
+  old?.close();
+  attempt++;
+  seats.value = [];
+  gridLink.value = "closed";
+  if (wanted) void connect(wanted);
+});

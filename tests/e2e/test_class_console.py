@@ -1,0 +1,150 @@
+"""The instructor console in the browser: a class made in the console, two students logged in
+by their seats' one-time links, a sign fault injected into one seat from the fault form. The
+student's X runs away and trips lag monitoring (90002), the grid shows it on that seat's tile
+only, and the instructor opens the seat's live view."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+
+import pytest
+from playwright.sync_api import Browser, Locator, Page, expect
+
+from api.auth import Role
+from tests.backend.server import OTHERS_PASSWORD, Server, add_users
+from tests.e2e.browser import SIZES, panel, shot, signed_in_page
+
+TRAINER = "trainer"
+CLASS = "drill"
+# accel-curve injects no fault at start and its task is the spindle: X is as the demo's
+EXERCISE = "accel-curve"
+LAG_MONITORING = 90002  # job error: following error above its limit [002]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def instructor(srv: Server) -> None:
+    add_users(srv.db, {TRAINER: Role.INSTRUCTOR})
+
+
+@pytest.fixture
+def console(browser: Browser, srv: Server) -> Iterator[Page]:
+    """The instructor's console (Classes in the top bar)."""
+    p = signed_in_page(browser, srv.base, user=TRAINER, password=OTHERS_PASSWORD)
+    p.goto(f"{srv.base}/")
+    expect(p.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    p.get_by_test_id("open-classes").click()
+    expect(p.get_by_test_id("console")).to_be_visible()
+    yield p
+    p.close()
+
+
+def student(browser: Browser, url: str) -> Page:
+    """A student's own browser, logged in by their seat's one-time link."""
+    w, h = SIZES["desktop"]
+    p = browser.new_page(viewport={"width": w, "height": h})
+    p.set_default_timeout(15_000)
+    p.goto(url)
+    expect(p.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    return p
+
+
+def has_class(name: str) -> re.Pattern[str]:
+    """A class attribute with `name` among its classes."""
+    return re.compile(rf"(^|\s){re.escape(name)}(\s|$)")
+
+
+def resize(p: Page, size: str) -> None:
+    w, h = SIZES[size]
+    p.set_viewport_size({"width": w, "height": h})
+
+
+def tile(p: Page, n: int) -> Locator:
+    return panel(p, "grid").get_by_test_id(f"seat-{n}")
+
+
+def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
+    console: Page, browser: Browser, srv: Server
+) -> None:
+    c = console
+    c.get_by_test_id("class-new").click()
+    form = panel(c, "class-create")
+    form.get_by_test_id("class-exercise").select_option(EXERCISE)
+    expect(form.get_by_test_id("exercise-info")).to_contain_text("0 faults at start")
+    form.get_by_test_id("class-id").fill(CLASS)
+    form.get_by_test_id("class-seats").fill("2")
+    form.get_by_test_id("class-students").fill("Anna\nBert")
+    form.get_by_test_id("class-create").click()
+
+    links = panel(c, "seat-links")
+    expect(links).to_contain_text("Shown this once", timeout=60_000)  # two machines start
+    urls = [
+        links.get_by_test_id(f"seat-link-{n}").get_by_test_id("link-url").input_value()
+        for n in (1, 2)
+    ]
+    assert all("/auth/once?token=" in u for u in urls), urls
+    links.get_by_test_id("links-done").click()
+    expect(links).to_be_hidden()  # shown once: gone for good
+
+    anna, bert = (student(browser, u) for u in urls)
+    try:
+        expect(tile(c, 1).get_by_test_id("seat-student")).to_have_text("Anna")
+        expect(tile(c, 2).get_by_test_id("seat-student")).to_have_text("Bert")
+        expect(panel(c, "grid").get_by_test_id("grid-link")).to_have_text("live")
+        for n in (1, 2):
+            expect(tile(c, n).get_by_test_id("seat-error")).to_have_text("no job error")
+            expect(tile(c, n).get_by_test_id("seat-faults")).to_have_text("⚡0")
+        for size in ("desktop", "tablet"):
+            resize(c, size)
+            shot(c, f"class-console-grid-{size}")
+
+        tile(c, 1).get_by_test_id("seat-fault").click()
+        fault = panel(c, "fault-form")
+        expect(fault).to_contain_text("seat 1 (Anna)")
+        fault.get_by_test_id("fault-kind").select_option("motor_inverted")
+        expect(fault.get_by_test_id("fault-description")).to_contain_text("wired inverted")
+        fault.get_by_test_id("fault-field-axis").select_option("X")
+        for size in ("tablet", "desktop"):
+            resize(c, size)
+            shot(c, f"class-console-fault-{size}")
+        fault.get_by_test_id("fault-inject").click()
+        expect(fault).to_be_hidden()
+        expect(tile(c, 1).get_by_test_id("seat-faults")).to_have_text("⚡1")
+        expect(tile(c, 2).get_by_test_id("seat-faults")).to_have_text("⚡0")
+
+        # Anna moves X by a 1 mm jog step: with the motor inverted the loop pushes X away
+        # from its command until lag monitoring stops it
+        jog = panel(anna, "jog")
+        jog.get_by_test_id("jog-axis-X").check()
+        jog.get_by_test_id("jog-step-plus").click()
+        expect(tile(c, 1).get_by_test_id("seat-error")).to_contain_text(
+            str(LAG_MONITORING), timeout=20_000
+        )
+        expect(tile(c, 1)).to_have_class(has_class("in-error"))
+        expect(tile(c, 1).get_by_test_id("seat-control")).to_have_text("◉ Anna")  # her jog took it
+        expect(tile(c, 2).get_by_test_id("seat-error")).to_have_text("no job error")
+        expect(tile(c, 2)).not_to_have_class(has_class("in-error"))
+        expect(anna.get_by_test_id("banner-error")).to_contain_text(str(LAG_MONITORING))
+        # the console shows what was injected; the student's screen does not
+        expect(anna.get_by_text("motor_inverted")).to_have_count(0)
+        expect(anna.get_by_text("inverted")).to_have_count(0)
+        shot(c, "class-console-seat-error")
+        # the seat's detail: what was injected, and Anna's jog in its commands
+        tile(c, 1).get_by_test_id("seat-detail").click()
+        detail = panel(c, "seat-detail")
+        expect(detail.get_by_test_id("detail-faults")).to_contain_text("X: motor wired inverted")
+        expect(detail.get_by_test_id("detail-audit")).to_contain_text("inject fault")
+        shot(c, "class-console-seat-detail")
+
+        mid = f"{CLASS}-s01"
+        tile(c, 1).get_by_test_id("seat-live").click()
+        expect(c.get_by_test_id("console")).to_be_hidden()
+        expect(c.locator(".machine-select select")).to_have_value(mid)
+        expect(c.get_by_test_id("banner-error")).to_contain_text(str(LAG_MONITORING))
+        expect(c.get_by_test_id("control-strip")).to_be_visible()  # the instructor can take over
+        shot(c, "class-console-live-view")
+        c.get_by_test_id("open-classes").click()
+        expect(tile(c, 1).get_by_test_id("seat-error")).to_contain_text(str(LAG_MONITORING))
+    finally:
+        anna.close()
+        bert.close()
