@@ -100,3 +100,6 @@ export type GearSelectionRequest = S["GearSelectionRequest"];
 export type GearSelectionResult = S["GearSelectionResult"];
 export type GearRangeValues = S["GearRangeValues"];
 export type AssistProgress = S["AssistProgress"];
+export type Exercise = S["Exercise"];
+export type CheckState = S["CheckState"];
+export type HintInfo = S["HintInfo"];
