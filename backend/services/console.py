@@ -25,7 +25,7 @@ GRID_S = 0.25  # a frame every quarter second: the grid's sparklines move smooth
 SAVE_S = 10.0  # seat time saved this often (first passes at once)
 
 
-@dataclass
+@dataclass(eq=False)  # each open console is itself (kept in a set)
 class Console:
     """One open console of a class."""
 

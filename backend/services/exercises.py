@@ -10,7 +10,12 @@ from pathlib import Path
 from api.classes import CheckInfo, ExerciseInfo, HintInfo
 from backend.errors import ApiError, not_found
 from backend.services.store import Store
+from nc_sim.errors import NcUsageError
+from nc_sim.params import ParamListError
+from nc_sim.sim import Simulation
+from nc_sim.training.checks import ExerciseMonitor
 from nc_sim.training.exercise import Exercise, ExerciseError, parse_exercise
+from nc_sim.training.seat import start_seat
 
 SHIPPED = Path(__file__).resolve().parents[2] / "exercises"
 MAX_UPLOADED = 200
@@ -94,7 +99,9 @@ class Exercises:
         409 for a shipped id."""
         try:
             ex = parse_exercise(text, "upload")
-        except ExerciseError as e:
+            tried = start_seat(Simulation(), ex)  # its axes, values and faults fit the template
+            ExerciseMonitor(ex.checks, tried)
+        except (ExerciseError, ParamListError, NcUsageError, ValueError) as e:
             raise ApiError(422, {"message": str(e)}) from None
         with self._lock:
             if ex.id in self._shipped:

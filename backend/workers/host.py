@@ -86,7 +86,9 @@ class MachineHost:
         self.pacing = PacingState(anchor_mono=time.monotonic())
         self.watched = False
         self.status_due = 0.0  # monotonic time of the next status push while watched
-        self.pushed_events = self.machine.events.cursor  # events up to here went out
+        # events up to here went out: none yet, the gateway's copy (new for each build) is
+        # the machine's own log, a restored one's included
+        self.pushed_events = self.machine.events.first_seq
         self.live: LiveRun | None = None  # a live assistant run, until it is answered
         self.live_of: AssistStart | None = None
 

@@ -338,7 +338,8 @@ class AxisMotion:
             self.monitor_speed(ax, False)
             self._abort(ax)
             ax.sequence = None
-            self.fail(ax, Code.ENABLES_LOST, f"{ax.name}: {', '.join(ax.missing_enables())} off")
+            lost = ax.missing_enables() + ax.drive.missing()  # enables, or the drive's status
+            self.fail(ax, Code.ENABLES_LOST, f"{ax.name}: {', '.join(lost)} off")
             self.set_state(ax, AxisState.ERROR)
 
     def halt(self, ax: Axis) -> None:

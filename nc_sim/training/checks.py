@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from typing import ClassVar, Protocol
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.machine.machine import Machine
 from nc_sim.units import RPM_TO_DEG_S
+
+if TYPE_CHECKING:  # the gateway imports the checks without the kernel
+    from nc_sim.machine.machine import Machine
 
 # a constant-speed stretch is measured once the lag has settled: SETTLE_TAU time constants
 # (1/kv) after the speed became constant, then averaged over at least AVERAGE_TAU more

@@ -113,6 +113,27 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/auth/tokens"): ("observer", FREE),  # everyone's (?all=true): admins
     ("POST", "/api/auth/tokens"): ("observer", FREE),
     ("DELETE", "/api/auth/tokens/{tid}"): ("observer", FREE),  # another's: admins
+    # training: instructors run classes, inject faults (a student must not read them), take
+    # and restore snapshots (pacing); a seat's student reads their exercise and takes hints
+    ("GET", "/api/exercises"): ("instructor", FREE),
+    ("POST", "/api/exercises"): ("instructor", FREE),
+    ("GET", "/api/classes"): ("instructor", FREE),
+    ("POST", "/api/classes"): ("instructor", FREE),
+    ("GET", "/api/classes/{cid}"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/end"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/freeze"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/broadcast"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/faults"): ("instructor", FREE),
+    ("GET", "/api/classes/{cid}/seats/{n}"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/seats/{n}/link"): ("instructor", FREE),
+    ("GET", "/api/machines/{mid}/faults"): ("instructor", FREE),
+    ("POST", "/api/machines/{mid}/faults"): ("instructor", FREE),
+    ("DELETE", "/api/machines/{mid}/faults/{fid}"): ("instructor", FREE),
+    ("GET", "/api/machines/{mid}/snapshots"): ("instructor", FREE),
+    ("POST", "/api/machines/{mid}/snapshots"): ("instructor", FREE),
+    ("POST", "/api/machines/{mid}/snapshots/{sid}/restore"): ("instructor", FREE),
+    ("GET", "/api/machines/{mid}/exercise"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/exercise/hints"): ("operator", FREE),
     ("GET", "/api/users"): ("admin", FREE),
     ("POST", "/api/users"): ("admin", FREE),
     ("PATCH", "/api/users/{name}"): ("admin", FREE),
@@ -162,6 +183,10 @@ def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Respo
         .replace("{run_id}", "1")
         .replace("{vid}", "nope")
         .replace("{name}", "nobody")
+        .replace("{cid}", "nope")
+        .replace("{n}", "1")
+        .replace("{fid}", "1")
+        .replace("{sid}", "1")
     )
     kw: dict[str, Any] = {"headers": {"Authorization": f"Bearer {token}"}}
     if method in ("POST", "PUT", "PATCH"):
@@ -239,7 +264,11 @@ def test_a_stranger_gets_401_on_every_route(srv: tuple[Server, dict[str, str]]) 
                 .replace("{id}", "x")
                 .replace("{run_id}", "1")
                 .replace("{vid}", "x")
-                .replace("{name}", "x"),
+                .replace("{name}", "x")
+                .replace("{cid}", "x")
+                .replace("{n}", "1")
+                .replace("{fid}", "1")
+                .replace("{sid}", "1"),
             )
             assert r.status_code == 401, (method, path, r.status_code)
         assert c.get("/rerun/").status_code == 401

@@ -3,12 +3,16 @@ faults in the plant (not in the parameters), freezing, hints, the live checks, t
 
 from __future__ import annotations
 
+import asyncio
+import json
 import time
 from collections.abc import Iterator
 from typing import Any
 
 import httpx
 import pytest
+from websockets.asyncio.client import connect
+from websockets.exceptions import InvalidStatus
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
 from tests.backend.server import Server, add_users, bearer
@@ -220,3 +224,89 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     after = t.get("/api/classes/end/seats/1").json()  # the record stays for the debrief
     assert after["info"]["hints_taken"] == 1 and len(after["checks"]) >= 1
     assert t.post("/api/classes/end/end").status_code == 409
+
+
+def test_a_restored_snapshot_runs_on_exactly_as_the_machine_did(srv: Server) -> None:
+    """Snapshot a paused machine, run commands for 700 cycles; restore and run the same:
+    every axis' state, the channel, the PLC and the events after it are the same to the
+    last bit (the state is the machine's whole state, and the kernel is deterministic)."""
+    t = trainer(srv)
+    mid = "snapme"
+    assert srv.http.post("/api/machines", json={"id": mid, "demo": True}).status_code == 201
+    srv.wait_powered(mid)
+    assert t.post(f"/api/machines/{mid}/simulation", json={"mode": "pause"}).status_code == 200
+    snap = t.post(f"/api/machines/{mid}/snapshots", json={"label": "before"}).json()
+
+    def run() -> dict[str, Any]:
+        for block in ("M3 S700", "G01 X75 Z-20 F3000"):
+            r = t.post(f"/api/machines/{mid}/commands", json={"type": "mdi", "block": block})
+            assert r.status_code == 200, r.text
+        t.post(f"/api/machines/{mid}/simulation/step", json={"cycles": 700}).raise_for_status()
+        st: dict[str, Any] = t.get(f"/api/machines/{mid}/status").json()
+        return {k: st[k] for k in ("axes", "channel", "plc", "job_errors", "recent_events")} | {
+            "cycle": st["simulation"]["cycle"]
+        }
+
+    first = run()
+    assert first["cycle"] == snap["cycle"] + 700
+    x = next(a for a in first["axes"] if a["name"] == "X")
+    assert x["state"] != "STANDSTILL" or x["pos_act"] != 0  # something happened
+    r = t.post(f"/api/machines/{mid}/snapshots/{snap['id']}/restore")
+    assert r.status_code == 200, r.text
+    st = t.get(f"/api/machines/{mid}/status").json()
+    assert st["simulation"]["cycle"] == snap["cycle"] and st["simulation"]["mode"] == "pause"
+    assert run() == first
+    assert t.post(f"/api/machines/{mid}/snapshots/99/restore").status_code == 404
+
+
+def test_the_grid_pushes_every_seat_to_instructors_only(srv: Server) -> None:
+    t = trainer(srv)
+    new_class(t, "grid", 3, "c-axis")
+    tokens: dict[str, str] = srv.tokens  # type: ignore[attr-defined]
+
+    async def first_frame(token: str) -> dict[str, Any]:
+        url = f"{srv.ws_base}/api/classes/grid/grid"
+        async with connect(url, additional_headers=bearer(token)) as ws:
+            while True:
+                frame: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                if all(s["axes"] for s in frame["seats"]):
+                    return frame
+
+    frame = asyncio.run(first_frame(tokens["trainer"]))
+    assert [s["machine"] for s in frame["seats"]] == ["grid-s01", "grid-s02", "grid-s03"]
+    assert {a["name"] for a in frame["seats"][0]["axes"]} >= {"X", "Z"}
+    with pytest.raises(InvalidStatus):
+        asyncio.run(first_frame(tokens["olaf"]))  # an operator is no instructor
+
+
+def test_an_uploaded_exercise_is_checked_against_its_machine(srv: Server) -> None:
+    t = trainer(srv)
+    good = "\n".join(
+        [
+            'id = "own"',
+            'title = "Z for a minute"',
+            'summary = "Z moves without a trip."',
+            "par_time_s = 120",
+            'machine = "demo"',
+            'task = "Move Z."',
+            "[[checks]]",
+            'id = "z"',
+            'text = "Z moves a minute without lag monitoring"',
+            "points = 10",
+            'kind = "no_event"',
+            'codes = ["LAG_MONITORING"]',
+            'axis = "Z"',
+            "window_s = 60",
+        ]
+    )
+    r = t.post("/api/exercises", json={"text": good})
+    assert r.status_code == 201, r.text
+    assert r.json()["checks"][0]["id"] == "z"
+    # the demo lathe has no Y: refused with the axis named, nothing kept
+    r = t.post("/api/exercises", json={"text": good.replace('"Z"', '"Y"').replace("own", "own2")})
+    assert r.status_code == 422 and "Y" in r.json()["detail"]["message"], r.text
+    assert "own2" not in {e["id"] for e in t.get("/api/exercises").json()}
+    r = t.post("/api/exercises", json={"text": good + "\n[[checks]\n"})
+    assert r.status_code == 422 and "line 15, column 9" in r.json()["detail"]["message"], r.text
+    r = t.post("/api/exercises", json={"text": good.replace('"own"', '"sign-error"')})
+    assert r.status_code == 409, r.text

@@ -15,7 +15,9 @@ from nc_sim.faults import (
     Backlash,
     DriveGainWrong,
     DriveNotReady,
+    EnableDrop,
     EncoderNoise,
+    EncoderResolutionWrong,
     Friction,
     GearRatioWrong,
     MotorInverted,
@@ -183,3 +185,137 @@ def test_a_trigger_after_s_takes_effect_in_its_exact_cycle() -> None:
     assert ready[:300].all() and not ready[300:].any()  # rows are cycles t0+1 ...
     assert m.faults()[0].active_since == t0 + 300
     assert Code.ENABLES_LOST in _errors(m) and x.state.name == "ERROR"
+
+
+def _move_x(sim: Simulation, m: Machine, target: float, seconds: float = 3.0) -> None:
+    mdi(m, f"G01 X{target:.4f} F1200")
+    record(sim, seconds)
+    assert m.axis("X").state.name == "STANDSTILL", _errors(m)
+
+
+@pytest.mark.parametrize("factor", [0.5, 1.25, 2.0])
+def test_encoder_resolution_wrong_moves_the_load_distance_over_factor(factor: float) -> None:
+    """The NC reads factor × the true position: a 10 mm move moves the load 10/factor."""
+    sim, m, _ = make({"X": NO_LAG_MONITOR})
+    x = m.axis("X")
+    m.inject(EncoderResolutionWrong("X", factor))
+    p0, x0 = float(m.k.st[x.slot, L.S_P_ACT]), float(m.k.st[x.slot, L.S_X_MOTOR])
+    _move_x(sim, m, p0 + 10.0)
+    assert float(m.k.st[x.slot, L.S_P_ACT]) - p0 == pytest.approx(10.0, abs=1e-3)
+    assert float(m.k.st[x.slot, L.S_X_MOTOR]) - x0 == pytest.approx(10.0 / factor, abs=1e-3)
+
+
+def _noise_run(seed: int) -> np.ndarray:
+    sim, m, _ = make()
+    m.inject(EncoderNoise("X", 0.01, seed))
+    return record(sim, 4.0)[1000:, m.axis("X").slot, L.R_P_ACT]
+
+
+def test_encoder_noise_has_its_rms_at_standstill_and_the_same_seed_repeats_it() -> None:
+    a = _noise_run(7)
+    assert float(np.std(a)) == pytest.approx(0.01, rel=0.1)
+    assert np.array_equal(a, _noise_run(7))
+    assert not np.array_equal(a, _noise_run(8))
+
+
+def _steady_lag_deg(sim: Simulation, m: Machine, block: str) -> float:
+    mdi(m, block)
+    rec = record(sim, 6.0)[-1000:, m.axis("S1").slot]
+    assert not _errors(m)
+    return float(rec[:, L.R_LAG].mean())
+
+
+def test_gear_ratio_wrong_in_gear_2_scales_the_lag_in_gear_2_only() -> None:
+    """Demo S1, kv 10/s in every gear: 600 rpm = 3600 °/s gives a lag of 360°. With the
+    mechanics of gear 2 (M41) 1.5 times its record's ratio, the drive turns the spindle
+    1.5 times slower per digit there: the lag is 1.5 · v/kv in gear 2, v/kv in gear 3."""
+    big = {f"getriebe[{i}].lag_max": 100_000_000 for i in range(3)}
+    sim, m, cfg = make({"S1": big})
+    lists = pickle.dumps(cfg)
+    m.inject(GearRatioWrong("S1", 2, 1.5))
+    assert m.axis("S1").gear == 3
+    assert _steady_lag_deg(sim, m, "M3 S1000") == pytest.approx(6000.0 / 10.0, rel=0.01)
+    assert _steady_lag_deg(sim, m, "M3 S600") == pytest.approx(1.5 * 3600.0 / 10.0, rel=0.01)
+    assert m.axis("S1").gear == 2
+    assert _steady_lag_deg(sim, m, "M3 S1000") == pytest.approx(6000.0 / 10.0, rel=0.01)
+    assert pickle.dumps(m.cfg) == lists
+
+
+def test_friction_adds_v_loss_over_kv_to_the_steady_lag() -> None:
+    """The drive loses v_loss against the motion: the loop needs kv·lag = v + v_loss."""
+    sound_lag, _ = _cruise(*make({"X": NO_LAG_MONITOR})[:2], 1200.0, 3.0)
+    sim, m, _ = make({"X": NO_LAG_MONITOR})
+    m.inject(Friction("X", 4.0))
+    lag, v = _cruise(sim, m, 1200.0, 3.0)
+    assert v == pytest.approx(20.0, rel=1e-3)
+    assert lag - sound_lag == pytest.approx(4.0 / KV_X, rel=0.01)
+
+
+def test_friction_sticks_a_command_below_it() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.inject(Friction("X", 2.0))
+    x0 = float(m.k.st[x.slot, L.S_X_MOTOR])
+    mdi(m, f"G01 X{float(m.k.st[x.slot, L.S_P_CMD]) + 0.01:.4f} F6")  # 0.1 mm/s, lag 5 µm
+    record(sim, 0.5)
+    assert float(m.k.st[x.slot, L.S_X_MOTOR]) == x0  # kv·lag never beats 2 mm/s
+
+
+def test_backlash_leaves_the_motor_its_width_apart_after_a_reversal() -> None:
+    """The encoder reads the load: reaching one NC position from below and from above, the
+    load stands at the same place and the motor is the play's width apart."""
+    b = 0.2
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.inject(Backlash("X", b))
+    p0 = float(m.k.st[x.slot, L.S_P_ACT])
+    motor: list[float] = []
+    load: list[float] = []
+    for approach in (-5.0, +5.0):
+        _move_x(sim, m, p0 + approach)
+        _move_x(sim, m, p0)
+        motor.append(float(m.k.st[x.slot, L.S_X_MOTOR] + m.k.st[x.slot, L.S_PLAY]))
+        load.append(float(m.k.st[x.slot, L.S_X_MOTOR]))
+    assert load[0] == pytest.approx(load[1], abs=2e-3)
+    assert motor[0] - motor[1] == pytest.approx(b, abs=2e-3)
+
+
+def test_enable_drop_stops_the_moving_axis_after_s_into_its_motion() -> None:
+    sim, m, _ = make({"X": NO_LAG_MONITOR})
+    x = m.axis("X")
+    m.inject(EnableDrop("X"), Trigger(after_s=0.2, on_motion=True))
+    sim.run(100)
+    assert x.units["TorquePermission"] == 1 and m.faults()[0].active_since is None
+    mdi(m, "G01 X100 F600")
+    start = m.cycle
+    rec = record(sim, 0.5)[:, x.slot]
+    assert not rec[200:, L.R_READY].any() and rec[:200, L.R_READY].all()
+    assert m.faults()[0].active_since == start + 200
+    assert _errors(m) == [Code.ENABLES_LOST] and x.state.name == "ERROR"
+    assert x.units["TorquePermission"] == 0
+    m.remove_fault(1)  # the PLC program gives the enable back
+    assert x.units["TorquePermission"] == 1
+
+
+def test_enable_drop_now_drops_at_the_next_motion() -> None:
+    sim, m, _ = make()
+    x = m.axis("X")
+    m.inject(EnableDrop("X"))
+    sim.run(300)
+    assert x.units["TorquePermission"] == 1
+    mdi(m, "G01 X100 F600")
+    assert x.units["TorquePermission"] == 0 and _errors(m) == [Code.ENABLES_LOST]
+
+
+def test_drive_not_ready_stops_the_moving_axis_and_refuses_motion_with_90007() -> None:
+    sim, m, _ = make({"X": NO_LAG_MONITOR})
+    x = m.axis("X")
+    mdi(m, "G01 X100 F600")
+    record(sim, 0.2)
+    fid = m.inject(DriveNotReady("X"))
+    record(sim, 0.2)
+    assert _errors(m) == [Code.ENABLES_LOST] and x.state.name == "ERROR"
+    assert "X: ready_for_power_on, ready_for_control_loop_on off" in m.events[-1].message
+    assert x.drive.missing() == ["ready_for_power_on", "ready_for_control_loop_on"]
+    m.remove_fault(fid)
+    assert x.drive.missing() == []
