@@ -165,6 +165,7 @@ class Exercise(BaseModel):
     score: float
     progress: float
     seat_time_s: float
+    frozen: bool = Field(description="paused by the instructor (the student cannot resume)")
 
 
 class HintTake(BaseModel):

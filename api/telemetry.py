@@ -84,13 +84,16 @@ class StatusMessage(BaseModel):
     status: MachineStatus
 
 
+NoticeKind = Literal["rebuilt", "restored", "message", "frozen", "resumed"]
+
+
 class NoticeMessage(BaseModel):
     """Server → client: something every viewer must see, e.g. the machine was rebuilt on
     another worker after its worker died (simulated time restarts at 0)."""
 
     type: Literal["notice"] = "notice"
     seq: int = Field(description="numbered per machine; a reconnecting client sees it again")
-    kind: Literal["rebuilt", "restored", "message", "frozen", "resumed"] = Field(
+    kind: NoticeKind = Field(
         description="rebuilt after its worker died; restored from a snapshot; a message from "
         "the instructor; frozen or resumed by the instructor"
     )

@@ -29,6 +29,7 @@ def my_exercise(machine: MachineDep, services: ServicesDep) -> Exercise:
         score=score,
         progress=progress,
         seat_time_s=seat.seat_time_s,
+        frozen=seat.frozen,
     )
 
 

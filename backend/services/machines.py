@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from api.machines import MachineCreate
+from api.telemetry import NoticeKind
 from backend.errors import ApiError, not_found
 from backend.services.control import MachineControl
 from backend.services.store import Store, StoredMachine
@@ -80,7 +81,7 @@ class Notice:
     """Something every viewer of a machine must see (a banner), numbered per machine."""
 
     seq: int
-    kind: str
+    kind: NoticeKind
     message: str
     time_unix: float
 
@@ -240,7 +241,7 @@ class MachineProxy:
             read = self.events.since(cursor)
         return read.entries, read.first_seq, read.cursor, read.dropped
 
-    def notice(self, kind: str, message: str) -> None:
+    def notice(self, kind: NoticeKind, message: str) -> None:
         seq = self.notices[-1].seq + 1 if self.notices else 1
         self.notices.append(Notice(seq, kind, message, time.time()))
 

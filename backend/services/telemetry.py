@@ -255,7 +255,7 @@ class TelemetryHub:
             sub.epoch, sub.cursor, sub.event_cursor = m.epoch, 1, 0
         out += [
             NoticeMessage(
-                seq=n.seq, kind="rebuilt", message=n.message, time_unix=n.time_unix
+                seq=n.seq, kind=n.kind, message=n.message, time_unix=n.time_unix
             ).model_dump_json()
             for n in list(m.notices)
             if n.seq > sub.notice_seq

@@ -9,6 +9,7 @@ import { Commissioning } from "./panels/Commissioning";
 import { ControlStrip } from "./panels/ControlStrip";
 import { EstopHint } from "./panels/EstopHint";
 import { EventsPanel } from "./panels/EventsPanel";
+import { ExercisePanel } from "./panels/ExercisePanel";
 import { HliPanel } from "./panels/HliPanel";
 import { JogPanel } from "./panels/JogPanel";
 import { Login } from "./panels/Login";
@@ -26,10 +27,12 @@ import { Console } from "./console/Console";
 import { view } from "./state/classes";
 import { me } from "./state/auth";
 import { commandBlocked, may } from "./state/control";
-import { connection, machineUrl, online, status } from "./state/session";
+import { exercise } from "./state/exercise";
+import { connection, frozen, machineUrl, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
-const TABS = ["Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "HLI / PLC", "Events", "Audit"] as const;
+// "Exercise" only on a class seat (the first tab there, and the one it opens on)
+const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
 function MachineControls() {
@@ -37,7 +40,11 @@ function MachineControls() {
   const mode = status.value?.simulation.mode;
   const blocked = commandBlocked.value; // another holder, or a role that may not command
   // pacing is the instructor's (api/auth.py SIMULATE), holding control or not
-  const pace = may("simulate") ? "" : `a user in the role ${me.value?.role ?? ""} may not pace the simulation`;
+  const pace = may("simulate")
+    ? ""
+    : frozen.value !== null
+      ? "frozen by the instructor: only the instructor can resume the simulation"
+      : `a user in the role ${me.value?.role ?? ""} may not pace the simulation`;
   return (
     <div class="controls-apart" aria-label="reset and simulation">
       <button type="button" class="secondary" data-testid="reset" disabled={!online.value || !!blocked}
@@ -54,6 +61,7 @@ function MachineControls() {
         onClick={() => void http.post(machineUrl("/simulation"), { mode: "pause" })}>
         ❚❚ pause
       </button>
+      {pace && frozen.value !== null ? <span class="pace-reason" data-testid="pace-reason">Frozen by the instructor</span> : null}
       <RefusalLine refusal={cmd.refusal} />
     </div>
   );
@@ -80,6 +88,8 @@ function ConsoleScreen() {
 
 function Hmi() {
   const [tab, setTab] = useState<Tab>("Operate");
+  const seat = !!exercise.value;
+  useEffect(() => setTab((t) => (seat ? "Exercise" : t === "Exercise" ? "Operate" : t)), [seat]);
   const head = useRef<HTMLDivElement>(null);
   useEffect(() => {
     // focus and scrollIntoView keep controls clear of the sticky head (its height varies:
@@ -107,7 +117,7 @@ function Hmi() {
         </aside>
         <main class="main">
           <nav class="tabs" role="tablist">
-            {TABS.map((t) => (
+            {TABS.filter((t) => seat || t !== "Exercise").map((t) => (
               <button key={t} type="button" role="tab" aria-selected={t === tab} data-testid={`tab-${t}`}
                 class={t === tab ? "active" : ""} onClick={() => setTab(t)}>
                 {t}
@@ -115,6 +125,7 @@ function Hmi() {
             ))}
           </nav>
           <div class="workspace" role="tabpanel" aria-label={tab}>
+            {tab === "Exercise" ? <ExercisePanel /> : null}
             {tab === "Operate" ? (
               <div class="operate">
                 <SpindlePanel />

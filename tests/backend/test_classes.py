@@ -206,10 +206,12 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     sim = seat.get(f"/api/machines/{mid}/status").json()["simulation"]
     assert sim["mode"] == "pause"
     assert seat.post(f"/api/machines/{mid}/simulation", json={"mode": "run"}).status_code == 403
+    assert seat.get(f"/api/machines/{mid}/exercise").json()["frozen"]  # a reload shows it
     assert t.post("/api/classes/end/freeze", json={"frozen": False}).status_code == 200
     assert seat.get(f"/api/machines/{mid}/status").json()["simulation"]["mode"] == "run"
 
     ex = seat.get(f"/api/machines/{mid}/exercise").json()
+    assert not ex["frozen"]
     cost = ex["hints"][0]["cost"]
     hint = seat.post(f"/api/machines/{mid}/exercise/hints", json={"n": 1})
     assert hint.status_code == 200 and hint.json()["text"]

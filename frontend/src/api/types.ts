@@ -115,3 +115,5 @@ export type FaultInject = S["FaultInject"];
 export type FaultInfo = S["FaultInfo"];
 export type SeatFaults = S["SeatFaults"];
 export type SnapshotInfo = S["SnapshotInfo"];
+export type Exercise = S["Exercise"];
+export type HintInfo = S["HintInfo"];

@@ -1,14 +1,15 @@
-// Connection loss, notices (a machine rebuilt after its worker died), an assistant running
+// Connection loss, a class seat frozen by the instructor (while it is), notices (a machine
+// rebuilt after its worker died or restored, the instructor's messages), an assistant running
 // live on the machine (outside the Commissioning workspace, which shows it itself) and the
 // newest job error still active, until acknowledged or reset.
+import type { NoticeMessage } from "../api/types";
 import { acknowledgeBanner, bannerErrors } from "../state/events";
-import { connection, notice } from "../state/session";
+import { connection, dismissNotice, frozen, notices } from "../state/session";
 import { qty } from "../ui/format";
 import { LiveProgress } from "./LiveProgress";
 
 export function Banner({ liveRun }: { liveRun: boolean }) {
   const [err, ...more] = bannerErrors.value;
-  const n = notice.value;
   return (
     <div class="banners">
       {connection.value === "lost" ? (
@@ -16,14 +17,20 @@ export function Banner({ liveRun }: { liveRun: boolean }) {
           ⚠ Connection to the service lost: controls are locked and jog keys released. Reconnecting…
         </div>
       ) : null}
-      {n ? (
-        <div class="banner notice" role="alert" data-testid="banner-notice">
+      {frozen.value !== null ? (
+        <div class="banner frozen" role="alert" data-testid="banner-frozen">
           <span>
-            ⚠ {new Date(n.time_unix * 1000).toLocaleTimeString()}: {n.message}
+            ❚❚ Frozen by the instructor — the machine is paused. Only the instructor can resume it.
+            {frozen.value ? <span class="banner-detail"> ({frozen.value})</span> : null}
           </span>
-          <button onClick={() => (notice.value = null)}>Dismiss</button>
         </div>
       ) : null}
+      {notices.value.map((n) => (
+        <div key={n.seq} class={`banner notice ${n.kind}`} role="alert" data-testid="banner-notice" data-kind={n.kind}>
+          <span>{noticeText(n)}</span>
+          <button onClick={() => dismissNotice(n.seq)}>Dismiss</button>
+        </div>
+      ))}
       {liveRun ? <LiveProgress compact /> : null}
       {err ? (
         <div class="banner error" role="alert" data-testid="banner-error">
@@ -36,4 +43,16 @@ export function Banner({ liveRun }: { liveRun: boolean }) {
       ) : null}
     </div>
   );
+}
+
+function noticeText(n: NoticeMessage): string {
+  const at = new Date(n.time_unix * 1000).toLocaleTimeString();
+  switch (n.kind) {
+    case "message":
+      return `✉ ${at}: Message from ${n.message}`; // the service writes "<name>: <text>"
+    case "resumed":
+      return `▶ ${at}: ${n.message}`;
+    default:
+      return `⚠ ${at}: ${n.message}`;
+  }
 }

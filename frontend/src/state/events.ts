@@ -12,8 +12,8 @@ export const acknowledged = signal<ReadonlySet<string>>(new Set());
 
 export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 
-/** The machine was rebuilt (its worker died): its time and log start again, so the log
- * starts again too, with the notice as its first entry. */
+/** The machine was rebuilt (its worker died) or restored from a snapshot: its time starts
+ * again or goes back, so the log starts again too, with the notice as its first entry. */
 export function restartLog(message: string): void {
   events.value = [];
   seen.clear();

@@ -10,8 +10,15 @@ export type Connection = "connecting" | "online" | "lost";
 export const machines = signal<MachineSummary[]>([]);
 export const machineId = signal<string>("");
 export const status = signal<MachineStatus | null>(null);
-/** The newest notice about the machine (e.g. rebuilt after its worker died), until dismissed. */
-export const notice = signal<NoticeMessage | null>(null);
+/** Notices to read, oldest first, each until dismissed: the machine rebuilt after its worker
+ * died or restored from a snapshot, a message from the instructor, resumed by the instructor. */
+export const notices = signal<NoticeMessage[]>([]);
+/** The instructor froze this machine (a class seat): what the notice said ("" when known from
+ * the exercise only); null while it is not frozen. */
+export const frozen = signal<string | null>(null);
+const MAX_NOTICES = 4;
+let lastNoticeSeq = 0; // the socket sends the newest notice again when it reconnects
+let freezeNotices = 0; // frozen/resumed notices so far: an exercise answer asked for before one is stale
 /** The telemetry socket: it brings status, events and samples. */
 export const socket = signal<Connection>("connecting");
 /** Requests reach the service (false after one failed on the network, until one gets through). */
@@ -55,6 +62,41 @@ setInterval(() => {
 }, STALE_MS / 4);
 export const online = computed(() => connection.value === "online");
 
+/** A notice pushed for the current machine; false when it was seen already (a reconnect). */
+export function noticeArrived(msg: NoticeMessage): boolean {
+  if (msg.seq === lastNoticeSeq) return false;
+  lastNoticeSeq = msg.seq;
+  if (msg.kind === "frozen" || msg.kind === "resumed") freezeNotices++;
+  if (msg.kind === "frozen") {
+    frozen.value = `${msg.message} at ${new Date(msg.time_unix * 1000).toLocaleTimeString()}`;
+    return true;
+  }
+  if (msg.kind === "resumed") frozen.value = null;
+  notices.value = [...notices.value, msg].slice(-MAX_NOTICES);
+  return true;
+}
+
+export function dismissNotice(seq: number): void {
+  notices.value = notices.value.filter((n) => n.seq !== seq);
+}
+
+/** Freeze notices so far (ask before requesting the exercise, pass to `seatFrozen`). */
+export const freezeNoticeCount = (): number => freezeNotices;
+
+/** The exercise says whether the seat is frozen (a page opened while it was): believed unless
+ * a freeze notice came while it was on its way. */
+export function seatFrozen(isFrozen: boolean, askedAt: number): void {
+  if (askedAt !== freezeNotices) return;
+  if (!isFrozen) frozen.value = null;
+  else if (frozen.value === null) frozen.value = "";
+}
+
+function forgetNotices(): void {
+  notices.value = [];
+  frozen.value = null;
+  lastNoticeSeq = 0;
+}
+
 export const axis = (name: string) => status.value?.axes.find((a) => a.name === name) ?? null;
 
 /** A machine's route; throws while no machine is chosen (never `/api/machines//…`). */
@@ -90,7 +132,7 @@ export function endSession(): void {
   machineId.value = "";
   machines.value = [];
   status.value = null;
-  notice.value = null;
+  forgetNotices();
   lastStatusMs = 0;
   socket.value = "connecting";
 }
@@ -98,7 +140,7 @@ export function endSession(): void {
 export function selectMachine(id: string): void {
   machineId.value = id;
   status.value = null;
-  notice.value = null;
+  forgetNotices();
   lastStatusMs = 0;
   location.hash = id;
 }

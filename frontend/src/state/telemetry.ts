@@ -21,7 +21,7 @@ import { clientId, http } from "../api/http";
 import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { Rings } from "./rings";
-import { machineId, notice, socket, statusArrived } from "./session";
+import { machineId, noticeArrived, socket, statusArrived } from "./session";
 
 const MAGIC = 0x54424e49; // "INBT" little-endian
 export const RING_SECONDS = 30;
@@ -111,8 +111,8 @@ function onMessage(text: string): void {
       statusArrived(msg.status);
       break;
     case "notice":
-      if (notice.value?.seq !== msg.seq) restartLog(msg.message); // once per rebuild
-      notice.value = msg;
+      // the machine's time starts again (rebuilt) or goes back (restored): so does the log
+      if (noticeArrived(msg) && (msg.kind === "rebuilt" || msg.kind === "restored")) restartLog(msg.message);
       break;
     case "error":
       console.warn("telemetry:", msg.message);

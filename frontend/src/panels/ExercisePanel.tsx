@@ -1,0 +1,174 @@
+// The student's exercise on a class seat: the task, the checks as they stand on the live
+// machine, progress and the time-weighted score, the hints (each costs points; asked first).
+// Refreshed every 2 s while it shows. Faults are the instructor's: the service never sends them.
+import { useEffect, useState } from "preact/hooks";
+import { ApiError } from "../api/http";
+import type { CheckState, Exercise, HintInfo } from "../api/types";
+import { exercise, refreshExercise, takeHint } from "../state/exercise";
+import { Panel } from "../ui/Panel";
+import { fmt } from "../ui/format";
+
+const REFRESH_MS = 2000;
+// as nc_sim/training/score.py LATE_FACTOR and FLOOR_WEIGHT (the explanation only; the service scores)
+const LATE_FACTOR = 3;
+const FLOOR_PCT = 50;
+
+/** Seat time as m:ss (h:mm:ss from an hour). */
+function clock(s: number): string {
+  const t = Math.max(0, Math.floor(s));
+  const [h, m, sec] = [Math.floor(t / 3600), Math.floor((t % 3600) / 60), t % 60];
+  const pad = (n: number) => String(n).padStart(2, "0");
+  return h ? `${h}:${pad(m)}:${pad(sec)}` : `${m}:${pad(sec)}`;
+}
+
+/** The task as paragraphs: blank lines part them; a file's hard line breaks inside one are
+ * joined so the text flows at any width, except before list items. */
+function paragraphs(task: string): string[] {
+  return task
+    .trim()
+    .split(/\n\s*\n/)
+    .map((p) => p.replace(/\n(?!\s*(?:[-*•]|\d+[.)])\s)/g, " "));
+}
+
+export function ExercisePanel() {
+  useEffect(() => {
+    void refreshExercise();
+    const timer = setInterval(() => void refreshExercise(), REFRESH_MS);
+    return () => clearInterval(timer);
+  }, []);
+  const ex = exercise.value;
+  if (!ex) return <p class="hint">This machine is no class seat.</p>;
+  const info = ex.exercise;
+  return (
+    <div class="exercise">
+      <Panel title={`Exercise: ${info.title}`} id="exercise">
+        <p class="exercise-summary" data-testid="exercise-summary">{info.summary}</p>
+        <div class="exercise-task" data-testid="exercise-task">
+          {paragraphs(info.task).map((p, i) => (
+            <p key={i}>{p}</p>
+          ))}
+        </div>
+      </Panel>
+      <div class="exercise-side">
+        <Panel title="Progress and score" id="exercise-score">
+          <Standing ex={ex} />
+        </Panel>
+        <Panel title="Checks" id="exercise-checks">
+          <ul class="checklist" data-testid="check-list">
+            {ex.checks.map((c) => (
+              <CheckRow key={c.id} check={c} />
+            ))}
+          </ul>
+        </Panel>
+        <Panel title="Hints" id="exercise-hints">
+          {ex.hints.length ? (
+            ex.hints.map((h) => <HintRow key={h.n} hint={h} />)
+          ) : (
+            <p class="hint">This exercise has no hints.</p>
+          )}
+        </Panel>
+      </div>
+    </div>
+  );
+}
+
+function Standing({ ex }: { ex: Exercise }) {
+  const max = ex.checks.reduce((sum, c) => sum + c.points, 0);
+  const counted = ex.checks.filter((c) => c.first_passed_s !== null).length;
+  const hintCost = ex.hints.reduce((sum, h) => sum + (h.text !== null ? h.cost : 0), 0);
+  const par = ex.exercise.par_time_s;
+  return (
+    <>
+      <div class="exercise-stats">
+        <Stat label="Score" id="exercise-score" value={fmt(ex.score, 0)} unit={`of ${fmt(max, 0)} points`} />
+        <Stat label="Progress" id="exercise-progress" value={String(counted)} unit={`of ${ex.checks.length} checks`} />
+        <Stat label="Seat time" id="exercise-time" value={clock(ex.seat_time_s)} unit={`par ${clock(par)}`} />
+        <Stat label="Hints" id="exercise-hint-cost" value={hintCost ? `−${fmt(hintCost, 0)}` : "0"} unit="points" />
+      </div>
+      <progress class="exercise-bar" max={1} value={ex.progress} aria-label="progress" />
+      <p class="hint">
+        A check earns its full points when it first passes within the par time ({clock(par)} of seat time), then less
+        and less, down to {FLOOR_PCT} % of its points at {LATE_FACTOR}× par ({clock(LATE_FACTOR * par)}). A check that
+        passed once stays counted. Each hint you take costs its points (the score never goes below 0).
+      </p>
+    </>
+  );
+}
+
+function Stat(props: { label: string; id: string; value: string; unit: string }) {
+  return (
+    <div class="stat">
+      <span class="stat-label">{props.label}</span>
+      <span>
+        <b data-testid={props.id}>{props.value}</b> {props.unit}
+      </span>
+    </div>
+  );
+}
+
+function CheckRow({ check: c }: { check: CheckState }) {
+  const state = c.passed ? "passed" : c.first_passed_s !== null ? "held" : "open";
+  const label = { passed: "✓ passes now", held: "◐ held once", open: "○ not yet" }[state];
+  return (
+    <li class={`check ${state}`} data-testid={`check-${c.id}`} data-state={state}>
+      <span class="check-state">{label}</span>
+      <span class="check-text">{c.text}</span>
+      <span class="check-points num">{fmt(c.points, 0)} points</span>
+      <span class="check-detail mono" data-testid="check-detail">{c.detail}</span>
+      <span class="check-when">
+        {c.first_passed_s !== null ? `first passed at ${clock(c.first_passed_s)} seat time` : ""}
+      </span>
+    </li>
+  );
+}
+
+function HintRow({ hint: h }: { hint: HintInfo }) {
+  const [asking, setAsking] = useState(false);
+  const [busy, setBusy] = useState(false);
+  const [error, setError] = useState("");
+  const cost = fmt(h.cost, 0);
+  async function take(): Promise<void> {
+    setBusy(true);
+    try {
+      await takeHint(h.n);
+      setAsking(false);
+      setError("");
+    } catch (e) {
+      setError(e instanceof ApiError ? e.message : String(e));
+    } finally {
+      setBusy(false);
+    }
+  }
+  return (
+    <div class="hint-row" data-testid={`hint-${h.n}`}>
+      <div class="row">
+        <b>Hint {h.n}</b>
+        {h.text !== null ? (
+          <span class="hint">taken: −{cost} points</span>
+        ) : asking ? (
+          <span class="confirm" role="group" aria-label={`confirm hint ${h.n}`}>
+            <span>
+              Hint {h.n} takes {cost} points off your score. Show it?
+            </span>
+            <button type="button" data-testid="hint-confirm" disabled={busy} onClick={() => void take()}>
+              Yes, show hint {h.n}
+            </button>
+            <button type="button" class="secondary" data-testid="hint-cancel" onClick={() => setAsking(false)}>
+              Cancel
+            </button>
+          </span>
+        ) : (
+          <button type="button" class="secondary" data-testid="hint-show" onClick={() => setAsking(true)}>
+            Show hint (costs {cost} points)
+          </button>
+        )}
+      </div>
+      {h.text !== null ? (
+        <p class="hint-text" data-testid="hint-text">
+          {h.text}
+        </p>
+      ) : null}
+      {error ? <p class="inline-error" role="alert">{error}</p> : null}
+    </div>
+  );
+}

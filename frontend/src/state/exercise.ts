@@ -1,0 +1,41 @@
+// The exercise of the chosen machine when it is a class seat: asked for when the machine
+// changes (404: no seat, so no Exercise tab), refreshed while the Exercise tab shows it;
+// hints are taken from here. The service hides the exercise's faults from the student.
+import { effect, signal, untracked } from "@preact/signals";
+import { ApiError, http } from "../api/http";
+import type { Exercise, HintInfo } from "../api/types";
+import { freezeNoticeCount, machineId, machineUrl, seatFrozen } from "./session";
+
+/** The seat's exercise as it stands; null while the machine is no class seat (or unknown). */
+export const exercise = signal<Exercise | null>(null);
+
+/** Ask the service for the seat's exercise again (checks, score, hints, frozen). */
+export async function refreshExercise(): Promise<void> {
+  const mid = machineId.value;
+  if (!mid) return;
+  const asked = freezeNoticeCount();
+  try {
+    const ex = await http.get<Exercise>(machineUrl("/exercise"));
+    if (machineId.value !== mid) return; // an answer about the machine before
+    exercise.value = ex;
+    seatFrozen(ex.frozen, asked);
+  } catch (e) {
+    // no seat (404), or a role that reads no exercise: no tab; a lost connection keeps it
+    if (machineId.value === mid && e instanceof ApiError && e.status !== 0) exercise.value = null;
+  }
+}
+
+/** Take hint n: its text (its cost comes off the score once). */
+export async function takeHint(n: number): Promise<HintInfo> {
+  const hint = await http.post<HintInfo>(machineUrl("/exercise/hints"), { n });
+  await refreshExercise();
+  return hint;
+}
+
+effect(() => {
+  void machineId.value; // another machine: another seat, or none
+  untracked(() => {
+    exercise.value = null;
+    void refreshExercise();
+  });
+});
