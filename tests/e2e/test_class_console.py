@@ -113,7 +113,8 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         expect(tile(c, 2).get_by_test_id("seat-faults")).to_have_text("⚡0")
 
         # Anna moves X by a 1 mm jog step: with the motor inverted the loop pushes X away
-        # from its command until lag monitoring stops it
+        # from its command until lag monitoring stops it (a seat opens on its Exercise tab)
+        anna.get_by_test_id("tab-Operate").click()
         jog = panel(anna, "jog")
         jog.get_by_test_id("jog-axis-X").check()
         jog.get_by_test_id("jog-step-plus").click()
