@@ -19,7 +19,14 @@ from backend.services import parameters as params
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.store import Store
-from backend.workers.protocol import InjectFault, RemoveFault, Snapshot, TakeSnapshot
+from backend.workers.protocol import (
+    InjectFault,
+    ReadStatus,
+    RemoveFault,
+    Snapshot,
+    StatusRead,
+    TakeSnapshot,
+)
 from nc_sim.faults import CATALOGUE, Fault, FaultState, Trigger
 from nc_sim.params import Scope
 
@@ -86,7 +93,11 @@ def fault_info(state: FaultState, cycle_s: float) -> FaultInfo:
 
 
 def faults_of(m: MachineProxy) -> list[FaultInfo]:
-    """The machine's injected faults as its worker last told."""
+    """The machine's injected faults, as its worker has them now (the pushed status may not
+    have come yet for a machine just built)."""
+    read = m.call(ReadStatus(m.id))
+    assert isinstance(read, StatusRead)
+    m.faults = {f.id: f for f in read.faults}
     return [fault_info(f, m.cycle_s) for f in sorted(m.faults.values(), key=lambda f: f.id)]
 
 
