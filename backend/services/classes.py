@@ -350,7 +350,7 @@ class Classes:
             exercise=c.exercise,
         )
         changes = [
-            StoredChange(v.scope.value, v.target, v.name, None, v.value, "immediately")
+            StoredChange(v.scope.value, v.target, v.name, None, v.value, "now")
             for v in c.exercise.start
         ]
         if changes:

@@ -36,6 +36,7 @@ from backend.workers.protocol import (
     Pacing,
     ParamSnapshot,
     Push,
+    ReadStatus,
     RemoveMachine,
     Request,
     StatusRead,
@@ -327,6 +328,11 @@ class MachineService:
             raise
         assert isinstance(info, MachineInfo)
         proxy.attach(worker, info)
+        if faults or state is not None:  # their ids, before a first status is pushed: the
+            # next rebuild (a restart right away) must inject them again
+            read = worker.call(ReadStatus(proxy.id))
+            assert isinstance(read, StatusRead)
+            proxy.faults = {f.id: f for f in read.faults}
         if proxy.id in self._proxies:  # a new machine counts as building until it is listed
             self._built(proxy.id)
         if proxy.watchers:

@@ -170,7 +170,7 @@ def test_the_gain_check_passes_only_on_the_seat_that_fixed_multi_gain(srv: Serve
                 "drives_powered"
             ]
         )
-        if r.json()["changes"][0]["effect"] != "immediately" and c is fixed:
+        if c is fixed:  # a power cycle at once: the plant's fault stays (it is no parameter)
             assert c.post(f"/api/machines/{mid}/restart").status_code == 200
             wait_for(
                 lambda c=c, mid=mid: c.get(f"/api/machines/{mid}/status").json()["plc"][
