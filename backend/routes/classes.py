@@ -28,22 +28,14 @@ from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, ApiError, responses
 from backend.services import training
 from backend.services.audit import MAX_PAGE, AuditFilter
-from backend.services.classes import Class, Classes
+from backend.services.classes import Classes
 from backend.services.exercises import hint_infos
-from backend.workers.protocol import Pace
 
 router = APIRouter(prefix="/api", tags=["training"])
 
 ClassId = Annotated[str, Path(pattern=CLASS_ID, description="a class's id")]
 SeatNo = Annotated[int, Path(ge=1, le=60, description="seat number from 1")]
 _RUNNING = {409: "the class has ended"}
-
-
-def _running(classes: Classes, cid: str) -> Class:
-    c = classes.get(cid)
-    if c.ended_unix is not None:
-        raise ApiError(409, {"message": f"class '{cid}' has ended"})
-    return c
 
 
 @router.get("/exercises", dependencies=[permit(Action.TEACH)], responses=responses(403))
@@ -125,15 +117,9 @@ def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo
 )
 def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) -> ClassInfo:
     """Freeze (pause) or resume seats' machines; a student cannot resume a frozen seat."""
-    c = _running(services.classes, cid)
+    c = services.classes.running(cid)
     seats = services.classes.select(c, req.seats)
-    for seat in seats:
-        m = services.machines.get(seat.machine)
-        m.call(Pace(m.id, "pause" if req.frozen else "run"))
-        seat.frozen = req.frozen
-        services.classes.save(seat)
-        word = "froze" if req.frozen else "resumed"
-        m.notice("frozen" if req.frozen else "resumed", f"{actor.name} {word} the machine")
+    services.classes.freeze(seats, req.frozen, actor.name)
     what = "froze" if req.frozen else "resumed"
     services.audit.record(
         Classes.entry(actor, f"{what} seats {[s.n for s in seats]} of class '{cid}'")
@@ -149,9 +135,8 @@ def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) ->
 )
 def broadcast(cid: ClassId, req: Broadcast, services: ServicesDep, actor: ActorDep) -> None:
     """A message every selected seat's HMI shows as a banner."""
-    c = _running(services.classes, cid)
-    for seat in services.classes.select(c, req.seats):
-        services.machines.get(seat.machine).notice("message", f"{actor.name}: {req.text}")
+    c = services.classes.running(cid)
+    services.classes.broadcast(services.classes.select(c, req.seats), req.text, actor.name)
     services.audit.record(Classes.entry(actor, f"message to class '{cid}': {req.text}"))
 
 
@@ -165,7 +150,7 @@ def inject_class(
     cid: ClassId, req: ClassFault, services: ServicesDep, actor: ActorDep
 ) -> list[SeatFaults]:
     """Inject a fault into the selected seats (all when none are named)."""
-    c = _running(services.classes, cid)
+    c = services.classes.running(cid)
     seats = services.classes.select(c, req.seats)
     out = []
     what = training.describe(training.to_fault(req.inject.fault))
@@ -222,7 +207,7 @@ def seat_link(
     cid: ClassId, n: SeatNo, request: Request, services: ServicesDep, actor: ActorDep
 ) -> SeatLink:
     """A new one-time login link of a seat (good once, within an hour)."""
-    _running(services.classes, cid)
+    services.classes.running(cid)
     seat = services.classes.seat(cid, n)
     url = services.classes.link(seat, str(request.base_url))
     services.audit.record(Classes.entry(actor, f"login link for seat {n} of class '{cid}'"))

@@ -34,6 +34,7 @@ from backend.services.auth import Actor
 from backend.services.exercises import Exercises
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.store import Store, StoredChange, parameter_entry
+from backend.workers.protocol import Pace
 from nc_sim.training.checks import CheckResult
 from nc_sim.training.exercise import Exercise, parse_exercise
 from nc_sim.training.score import score as exercise_score
@@ -191,6 +192,13 @@ class Classes:
     def all(self) -> list[Class]:
         with self._lock:
             return sorted(self._classes.values(), key=lambda c: -c.created_unix)
+
+    def running(self, cid: str) -> Class:
+        """A class that has not ended; 404 for none, 409 for one that has ended."""
+        c = self.get(cid)
+        if c.ended_unix is not None:
+            raise ApiError(409, {"message": f"class '{cid}' has ended"})
+        return c
 
     def seat(self, cid: str, n: int) -> Seat:
         c = self.get(cid)
@@ -396,6 +404,21 @@ class Classes:
             self.save(seat)
             self._remove_seat(seat)
         self.store.run("UPDATE classes SET ended = ? WHERE id = ?", (c.ended_unix, c.id))
+
+    def freeze(self, seats: list[Seat], frozen: bool, by: str) -> None:
+        """Pause (or run again) the seats' machines, each with a banner on its HMI."""
+        for seat in seats:
+            m = self.machines.get(seat.machine)
+            m.call(Pace(m.id, "pause" if frozen else "run"))
+            seat.frozen = frozen
+            self.save(seat)
+            word = "froze" if frozen else "resumed"
+            m.notice("frozen" if frozen else "resumed", f"{by} {word} the machine")
+
+    def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
+        """A message as a banner on every one of the seats' HMIs."""
+        for seat in seats:
+            self.machines.get(seat.machine).notice("message", f"{by}: {text}")
 
     def take_hint(self, seat: Seat, c: Class, n: int) -> str:
         """A hint's text; taken once, it costs its points."""

@@ -26,6 +26,19 @@ function stateOptions(vs: VersionInfo[]) {
   ];
 }
 
+/** One end of a comparison: a version, the live lists, the baseline or the defaults. */
+function StateSelect(p: { testid: string; value: string; options: { value: string; label: string }[]; onPick: (v: string) => void }) {
+  return (
+    <select data-testid={p.testid} value={p.value} onChange={(e) => p.onPick((e.target as HTMLSelectElement).value)}>
+      {p.options.map((o) => (
+        <option key={o.value} value={o.value}>
+          {o.label}
+        </option>
+      ))}
+    </select>
+  );
+}
+
 /** Until the machine has a baseline: a line that says why it matters, and sets one. */
 export function BaselineNudge() {
   const vs = versions.value;
@@ -249,23 +262,11 @@ export function Versions() {
       <div class="row">
         <label>
           From{" "}
-          <select data-testid="diff-from" value={a} onChange={(e) => setFrom((e.target as HTMLSelectElement).value)}>
-            {options.map((o) => (
-              <option key={o.value} value={o.value}>
-                {o.label}
-              </option>
-            ))}
-          </select>
+          <StateSelect testid="diff-from" value={a} options={options} onPick={setFrom} />
         </label>
         <label>
           to{" "}
-          <select data-testid="diff-to" value={b} onChange={(e) => setTo((e.target as HTMLSelectElement).value)}>
-            {options.map((o) => (
-              <option key={o.value} value={o.value}>
-                {o.label}
-              </option>
-            ))}
-          </select>
+          <StateSelect testid="diff-to" value={b} options={options} onPick={setTo} />
         </label>
         {diff ? (
           <span class="hint" data-testid="diff-summary">
