@@ -89,6 +89,18 @@ def _no_loop(m: Machine, ax: Axis) -> str | None:
     return None
 
 
+def _window_cycles(kv_per_s: float, cycle_s: float) -> int:
+    """Cycles of constant speed k needs: settling over 8/kv, then averaging over 0.1 s."""
+    settle = math.ceil(SETTLE_TIME_CONSTANTS / kv_per_s / cycle_s)
+    return settle + max(1, math.ceil(AVERAGE_S / cycle_s))
+
+
+def history_cycles(m: Machine) -> int:
+    """Records the service view of every axis of `m` looks back on."""
+    kvs = [float(m.k.pr[ax.slot, L.P_KV]) for ax in m.axes]
+    return max((_window_cycles(kv, m.k.cycle_s) for kv in kvs if kv > 0), default=1)
+
+
 def measured_gain(
     rec: np.ndarray, slot: int, cycle_s: float, kv_per_s: float, enc_inc: float
 ) -> GainReading:
@@ -98,9 +110,8 @@ def measured_gain(
     too small or too scattered to give k within 1 %."""
     if kv_per_s <= 0:
         return GainReading(None, "kv is 0: no position loop gain")
-    settle = math.ceil(SETTLE_TIME_CONSTANTS / kv_per_s / cycle_s)
     avg = max(1, math.ceil(AVERAGE_S / cycle_s))
-    need = settle + avg
+    need = _window_cycles(kv_per_s, cycle_s)
     if rec.shape[0] < need:
         return GainReading(None, f"needs {need * cycle_s:.2f} s of records")
     r = rec[-need:, slot]
