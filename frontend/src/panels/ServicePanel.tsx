@@ -7,9 +7,13 @@ import { useEffect, useState } from "preact/hooks";
 import { http } from "../api/http";
 import type { AxisService, AxisStatus, LimitInForce, ServiceAxes } from "../api/types";
 import { machineId, machineUrl, online, status } from "../state/session";
-import { fmt, qty, velUnit } from "../ui/format";
+import { fmt, qty as withUnit, velUnit } from "../ui/format";
 import { Lamp } from "../ui/Lamp";
 import { Panel } from "../ui/Panel";
+
+/** A value with its unit, or "—" alone where there is none (no unit beside a dash). */
+const qty = (v: number | null | undefined, decimals: number, unit: string) =>
+  v === null || v === undefined || !Number.isFinite(v) ? "—" : withUnit(v, decimals, unit);
 
 const READ_MS = 250; // four reads a second: the view follows the machine, the worker hardly notices
 
