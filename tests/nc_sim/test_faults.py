@@ -8,7 +8,7 @@ import pickle
 import numpy as np
 import pytest
 
-from nc_sim.commands import Mdi, PlcMode
+from nc_sim.commands import Mdi, PlcMode, Reset
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.faults import (
     NOW,
@@ -61,6 +61,26 @@ def test_motor_inverted_runs_away_into_lag_monitoring_and_changes_no_parameter()
     assert pickle.dumps(m.cfg) == lists
     assert not cfg.axis("X").flag("sim.motor_inverted")
     assert [(f.id, f.active_since) for f in m.faults()] == [(1, 20)]
+
+
+def test_after_a_lag_trip_the_reset_gives_the_servo_back() -> None:
+    """The error reaction takes X's TorquePermission; the CNC reset that clears the error
+    gives it back (the PLC program's part), and X then reaches its target without a trip."""
+    sim, m, _ = make()
+    x = m.axis("X")
+    fid = m.inject(MotorInverted("X"))
+    mdi(m, "G01 X60 F1000")
+    record(sim, 2.0)
+    assert _errors(m) == [Code.LAG_MONITORING] and x.units["TorquePermission"] == 0
+    m.remove_fault(fid)
+    m.submit(Reset())
+    record(sim, 0.1)
+    assert x.units["TorquePermission"] == 1 and x.job_error == 0
+    start = float(m.k.st[x.slot, L.S_P_CMD])
+    mdi(m, f"G01 X{start + 5:.3f} F600")  # 5 mm at 10 mm/s
+    rec = record(sim, 1.5)
+    assert _errors(m) == [Code.LAG_MONITORING]  # no second trip
+    assert rec[-1, x.slot, L.R_P_ACT] == pytest.approx(start + 5, abs=0.01)
 
 
 def test_drive_gain_wrong_gives_the_factor_times_kv_as_the_measured_gain() -> None:

@@ -16,7 +16,6 @@ import pytest
 from nc_sim.commands import (
     Command,
     GearChange,
-    HliWrite,
     Invalid,
     Mdi,
     PlcAck,
@@ -81,10 +80,8 @@ class Seat:
         return r.passed and r.first_passed_cycle is not None
 
     def recover(self, axis: str) -> None:
-        """After a trip: CNC reset, and the servo back on (the error reaction took its
-        TorquePermission)."""
+        """After a trip: the CNC reset (which gives the servo back)."""
         self.do(Reset())
-        self.do(HliWrite("TorquePermission", 1, axis))
         self.run(0.5)
 
     def x_back_and_forth(self, seconds: float) -> None:
