@@ -13,6 +13,7 @@ from nc_sim.errors import Code, NcUsageError
 from nc_sim.faults import (
     NOW,
     Backlash,
+    DriveAccelLimit,
     DriveGainWrong,
     DriveNotReady,
     EnableDrop,
@@ -243,6 +244,25 @@ def _steady_lag_deg(sim: Simulation, m: Machine, block: str) -> float:
     rec = record(sim, 6.0)[-1000:, m.axis("S1").slot]
     assert not _errors(m)
     return float(rec[:, L.R_LAG].mean())
+
+
+@pytest.mark.parametrize(("limit", "slope"), [(None, 3000.0), (2000.0, 2000.0)])
+def test_drive_accel_limit_caps_the_run_up_and_changes_no_parameter(
+    limit: float | None, slope: float
+) -> None:
+    """Demo S1, gear 3: M3 S3500 ramps at getriebe[2].slope_profil.a_beschl 3000 °/s². A
+    drive limited to 2000 °/s² falls behind: the actual speed rises at 2000 °/s² (the
+    slope over 1..3 s of the run-up), the parameters unchanged."""
+    big = {f"getriebe[{i}].lag_max": 100_000_000 for i in range(3)}
+    sim, m, cfg = make({"S1": big})
+    lists = pickle.dumps(cfg)
+    if limit is not None:
+        m.inject(DriveAccelLimit("S1", limit))
+    s1 = m.axis("S1")
+    mdi(m, "M3 S3500")
+    v = record(sim, 3.0)[:, s1.slot, L.R_V_ACT]
+    assert (v[2999] - v[999]) / 2.0 == pytest.approx(slope, rel=0.01)
+    assert pickle.dumps(m.cfg) == lists
 
 
 def test_gear_ratio_wrong_in_gear_2_scales_the_lag_in_gear_2_only() -> None:
