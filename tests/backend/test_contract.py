@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import get_args
+from typing import Any, get_args
 
 from api.commands import HliUnit
 from nc_sim.hli import AXIS_UNITS, CHANNEL_UNITS
@@ -19,7 +19,7 @@ def test_every_fault_of_the_catalogue_has_its_model_and_round_trips() -> None:
     from backend.services.training import to_fault, to_model
     from nc_sim.faults import CATALOGUE
 
-    samples = {"axis": "X", "factor": 1.5, "rms": 0.01, "gear": 2, "v_loss": 0.5}
+    samples: dict[str, Any] = {"axis": "X", "factor": 1.5, "rms": 0.01, "gear": 2, "v_loss": 0.5}
     samples |= {"width": 0.02, "delay_s": 3.0, "a_max": 2000.0, "seed": 7}
     for cls in CATALOGUE:
         fields = {f.name: samples[f.name] for f in dataclasses.fields(cls)}
