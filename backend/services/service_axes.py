@@ -7,7 +7,7 @@ from dataclasses import asdict
 from api.service_axes import AxisService, LimitInForce, ServiceAxes
 from backend.services.machines import MachineProxy
 from backend.workers.protocol import ReadServiceAxes, ServiceAxesRead
-from nc_sim.machine.service import AxisServiceSnapshot
+from nc_sim.snapshot import AxisServiceSnapshot
 
 
 def _axis(a: AxisServiceSnapshot) -> AxisService:

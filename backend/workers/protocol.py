@@ -16,11 +16,10 @@ from nc_sim.commands import Outcome
 from nc_sim.events import Event
 from nc_sim.faults import Fault, FaultState, Trigger
 from nc_sim.machine.config import MachineConfig
-from nc_sim.machine.service import AxisServiceSnapshot
 from nc_sim.params import Value
 from nc_sim.scope import Record, ScopeSetup
 from nc_sim.signals import Signal
-from nc_sim.snapshot import MachineSnapshot
+from nc_sim.snapshot import AxisServiceSnapshot, MachineSnapshot
 
 Mode = Literal["run", "pause", "fast"]
 # (scope, target, name) -> value: parameter values a worker writes into a machine's lists

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Literal
 
 import numpy as np
 
 from nc_sim.machine.config import AxisConfig
 from nc_sim.profiles.plan import SHAPE_LINEAR, SHAPE_SIN2, make_limits
+from nc_sim.snapshot import LimitKind
 
 
 class Motion(StrEnum):
@@ -22,9 +22,6 @@ class Motion(StrEnum):
     RAPID = "G00"
     MANUAL = "G200"
     HOMING = "G74"
-
-
-LimitKind = Literal["parameter", "programmed", "reduced_speed", "reduced_acceleration", "tool"]
 
 
 @dataclass(frozen=True)

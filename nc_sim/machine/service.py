@@ -12,14 +12,14 @@ constant long enough for the lag to settle and with a lag well above the encoder
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from nc_sim.axis.dynamics import Dynamics, LimitKind, Motion, Sourced
+from nc_sim.axis.dynamics import Dynamics, Motion, Sourced
 from nc_sim.axis.state import Axis
 from nc_sim.kernel import layout as L
+from nc_sim.snapshot import AxisServiceSnapshot, GainReading, LimitInForce
 from nc_sim.units import AxisKind, display_velocity
 
 if TYPE_CHECKING:
@@ -31,49 +31,6 @@ SPEED_STEADY = 1e-3  # the command speed varies by less than this fraction meanw
 LAG_FLOOR_INCREMENTS = 100.0  # |lag| at least this many encoder increments (< 1 % quantised)
 LAG_FLOOR = 1e-6  # ... and at least this (mm | °) with an ideal encoder
 LAG_SCATTER = 2e-3  # the mean lag's standard error below this fraction of it
-
-
-@dataclass(frozen=True)
-class LimitInForce:
-    """A dynamic limit in force (velocity in the axis' display unit, acceleration unit/s²,
-    jerk unit/s³) and where it comes from."""
-
-    value: float
-    unit: str
-    source: str  # list name (`getriebe[0].dynamik.vb_max`), `F`, `S`, `jog feed`, ...
-    param_id: str | None
-    kind: LimitKind
-    override_pct: float | None = None  # the override that scales it, None when none does
-
-
-@dataclass(frozen=True)
-class GainReading:
-    """k = v / lag from the newest records, or why it is not shown."""
-
-    k_per_s: float | None
-    why_not: str | None
-
-
-@dataclass(frozen=True)
-class AxisServiceSnapshot:
-    """One axis or spindle in the service-axis view."""
-
-    name: str
-    gear: int  # the active gear record (1..)
-    kv_per_s: float  # getriebe[gear-1].kv of the active record, 1/s
-    ff_weight: float  # feedforward weight 0..1 in force
-    multi_gain: float  # multi_gain_z / multi_gain_n: digits for 1 m/min or 1000 °/min
-    lag_max: float  # getriebe.lag_max (mm | °)
-    v_cmd: float  # commanded speed, unit/s (mm/s | °/s)
-    lag_expected: float | None  # (1 − ff)·v / kv (mm | °), None without a closed loop
-    lag_expected_why_not: str | None
-    gain: GainReading
-    da_digits: float  # manipulated variable at the D/A
-    da_max_digits: float  # lr_hw.da_max
-    velocity: LimitInForce
-    acceleration: LimitInForce
-    jerk: LimitInForce | None  # None: step-shaped, jerk not limited
-    jerk_why_none: str | None
 
 
 def _no_loop(m: Machine, ax: Axis) -> str | None:

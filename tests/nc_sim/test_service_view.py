@@ -12,8 +12,9 @@ import pytest
 
 from nc_sim.commands import Accepted, HliWrite, JogStart
 from nc_sim.machine.machine import Machine
-from nc_sim.machine.service import AxisServiceSnapshot, axis_service
+from nc_sim.machine.service import axis_service
 from nc_sim.sim import Simulation
+from nc_sim.snapshot import AxisServiceSnapshot
 from tests.nc_sim.sim_helpers import make, mdi, record
 
 KV_X = 20.0  # getriebe[0].kv 2000 in 0.01/s
