@@ -41,7 +41,7 @@ class Homing:
         self.motion = motion
         self.phase = phase
         self.speed = 0.0  # the phase's speed, unit/s (vb_refmax or vb_reflow)
-        self.start = self._pos()  # where G74 began
+        self.start_pos = self._pos()  # where G74 began
         self.shift = 0.0  # by which the reference moved every position
 
     def _pos(self) -> float:
@@ -56,7 +56,7 @@ class Homing:
         to_go = (
             self.ax.cfg.eng("kenngr.ref_pos") - pos if self.phase is HomingPhase.TO_REF else None
         )
-        return PHASE_NAMES[self.phase], pos - self.shift - self.start, to_go, self.speed
+        return PHASE_NAMES[self.phase], pos - self.shift - self.start_pos, to_go, self.speed
 
     @classmethod
     def start(cls, ax: Axis, motion: AxisMotion, block_id: int | None) -> Event | None:

@@ -153,7 +153,7 @@ def test_homing_reports_its_phases_distance_and_speed() -> None:
             assert h.to_go is None and h.moved == pytest.approx(x.pos_act - start, abs=1e-9)
         if h.phase == "to the reference position":
             assert h.to_go == pytest.approx(x_cfg.eng("kenngr.ref_pos") - x.pos_act, abs=1e-9)
-            moved_and_to_go = h.moved + h.to_go
+            moved_and_to_go = h.moved + (h.to_go or 0.0)
     assert list(seen) == ["search for the cam", "leaving the cam", "to the reference position"]
     assert seen["search for the cam"] == pytest.approx(5000.0, rel=1e-4)
     assert seen["leaving the cam"] == pytest.approx(1000.0, rel=1e-4)
