@@ -43,10 +43,10 @@ function HomingLine({ a }: { a: AxisStatus }) {
   return (
     <p class="homing-line" role="status" data-testid={`homing-${a.name}`}>
       <b>G74 {a.display_name}</b>: <span data-testid={`homing-phase-${a.name}`}>{h.phase}</span> ·{" "}
-      <span data-testid={`homing-moved-${a.name}`}>{qty(Math.abs(h.moved), 1, unit)}</span> from the start
+      <span data-testid={`homing-moved-${a.name}`}>{fmt(Math.abs(h.moved), 1)}</span>&nbsp;{unit} from the start
       {h.to_go !== null && h.to_go !== undefined ? (
         <>
-          {" "}· <span data-testid={`homing-to-go-${a.name}`}>{qty(Math.abs(h.to_go), 1, unit)}</span> to ref_pos
+          {" "}· <span data-testid={`homing-to-go-${a.name}`}>{fmt(Math.abs(h.to_go), 1)}</span>&nbsp;{unit} to ref_pos
         </>
       ) : null}{" "}
       · at <span data-testid={`homing-speed-${a.name}`}>{qty(h.speed, 0, velUnit(unit, a.kind, a.spindle_mode))}</span>

@@ -5,7 +5,7 @@
 import { commandBlocked } from "../state/control";
 import { answerOf, pendingHandshakes, secondsLeft, waitedFor } from "../state/handshakes";
 import { online, status } from "../state/session";
-import { qty } from "../ui/format";
+import { fmt } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
 export function PendingStrip() {
@@ -30,7 +30,7 @@ export function PendingStrip() {
             </span>
             {left !== null ? (
               <span class="pending-left" title="then job error 90004 (P-CHAN plc.m_ack_timeout)">
-                <span data-testid="pending-left">{qty(left, 1, "s")}</span> left
+                <span data-testid="pending-left">{fmt(left, 1)}</span>&nbsp;s left
                 {total ? <meter min={0} max={total} value={left} low={total * 0.3} optimum={total} aria-hidden="true" /> : null}
               </span>
             ) : null}
