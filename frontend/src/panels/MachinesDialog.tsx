@@ -91,7 +91,7 @@ function ThisMachine() {
         <span class="hint">Simulation</span>
         {paceButton("run", "▶ run", "in real time")}
         {paceButton("pause", "❚❚ pause", "hold the simulated time")}
-        {paceButton("fast", "⏩ fast", "as fast as the worker can (no real-time pacing)")}
+        {paceButton("fast", "» fast", "as fast as the worker can (no real-time pacing)")}
         <label>
           step <input size={8} inputMode="numeric" value={cycles} data-testid="step-cycles" aria-invalid={!stepOk}
             onInput={(e) => setCycles((e.target as HTMLInputElement).value)} /> cycles
@@ -99,7 +99,7 @@ function ThisMachine() {
         <button type="button" class="secondary" data-testid="pace-step" disabled={dis || !stepOk || !!paceWhy}
           title={paceWhy || (stepOk ? "pause, then advance this many cycles" : "a whole number of cycles, 1 … 1 000 000")}
           onClick={() => void req.run(() => stepCycles(n))}>
-          ⏭ step
+          ▸| step
         </button>
         {paceWhy && frozen.value !== null ? <span class="pace-reason" data-testid="pace-reason">Frozen by the instructor</span> : null}
       </div>

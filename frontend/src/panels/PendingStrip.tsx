@@ -26,7 +26,7 @@ export function PendingStrip() {
         return (
           <div class="pending-item" key={`${tid}-${p.out_cycle}`} data-testid={`pending-strip-${tid}`}>
             <span>
-              ⏳ The NC waits: <b data-testid="pending-what">{waitedFor(p)}</b>
+              The NC waits: <b data-testid="pending-what">{waitedFor(p)}</b>
             </span>
             {left !== null ? (
               <span class="pending-left" title="then job error 90004 (P-CHAN plc.m_ack_timeout)">
