@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 
-from playwright.sync_api import Browser, Page, expect
+from playwright.sync_api import Browser, FilePayload, Page, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import SIZES, number, open_hmi, panel, poll, shot
@@ -181,24 +181,21 @@ def test_machines_are_created_restarted_and_deleted_from_the_hmi(
         page.close()
 
 
+def lis(name: str, text: str) -> FilePayload:
+    """A list file as the file picker hands it over."""
+    return {"name": name, "mimeType": "text/plain", "buffer": text.encode()}
+
+
 def test_lists_refused_on_create_show_their_problems_line_by_line(page: Page) -> None:
     page.get_by_test_id("open-machines").click()
     form = panel(page, "machines").get_by_test_id("new-machine")
     form.get_by_test_id("new-machine-id").fill("broken-lists")
     form.get_by_test_id("new-machine-lists").check()
     form.get_by_test_id("new-machine-channel").set_input_files(
-        files=[
-            {"name": "channel.lis", "mimeType": "text/plain", "buffer": b"no_such.parameter 1\n"}
-        ]
+        files=[lis("channel.lis", "no_such.parameter 1\n")]
     )
     form.get_by_test_id("new-machine-axes").set_input_files(
-        files=[
-            {
-                "name": "axis_1.lis",
-                "mimeType": "text/plain",
-                "buffer": b"kopf.achs_nr 1\nkenngr.swe_pos banana\n",
-            }
-        ]
+        files=[lis("axis_1.lis", "kopf.achs_nr 1\nkenngr.swe_pos banana\n")]
     )
     form.get_by_test_id("new-machine-create").click()
     problems = form.get_by_test_id("new-machine-problems").locator("li")
