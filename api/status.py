@@ -15,6 +15,7 @@ SimMode = Literal["run", "pause", "fast"]
 
 SpindleModeName = Literal["spindle", "rotary", "none"]
 ChangeoverPhase = Literal["internal", "external", "interrupted"]
+HomingPhaseName = Literal["search for the cam", "leaving the cam", "to the reference position"]
 
 
 class AxisSignals(BaseModel):
@@ -35,6 +36,24 @@ class AxisSignals(BaseModel):
         description="rotary axis mode (true) or spindle mode (false) of a main spindle with "
         "rotary-axis capability; null for other axes",
     )
+
+
+class HomingProgress(BaseModel):
+    """A G74 of an axis in progress [002 §2.7]."""
+
+    phase: HomingPhaseName = Field(
+        description="to the cam at vb_refmax, off it at vb_reflow (the zero pulse at its edge "
+        "sets ref_pos), then to ref_pos at vb_reflow"
+    )
+    moved: float = Field(
+        description="from where G74 began, signed, mm or ° (the reference set on the way "
+        "does not count as motion)"
+    )
+    to_go: float | None = Field(
+        description="distance left to ref_pos in the last phase, mm or °; null while searching "
+        "(the NC does not know where the cam is)"
+    )
+    speed: float = Field(description="the phase's speed before override, mm/min or °/min")
 
 
 class AxisStatus(BaseModel):
@@ -96,6 +115,7 @@ class AxisStatus(BaseModel):
         "immediate stop: reset or a jog/spindle key ends it); null without one",
     )
     signals: AxisSignals
+    homing: HomingProgress | None = Field(None, description="G74 in progress; null without")
 
 
 class PendingM(BaseModel):
@@ -106,6 +126,11 @@ class PendingM(BaseModel):
     out_cycle: int
     signal: str | None = Field(
         None, description="the mode request ROTMOD or SPMOD (answered by <signal>_Q)"
+    )
+    timeout_cycle: int | None = Field(
+        None,
+        description="the NC gives up waiting at this cycle (P-CHAN plc.m_ack_timeout after the "
+        "output): job error 90004",
     )
 
 

@@ -74,6 +74,17 @@ class InterfaceSignals:
 
 
 @dataclass(frozen=True)
+class HomingSnapshot:
+    """A G74 in progress [002 §2.7]: its phase, how far the axis moved since it began, and the
+    distance left where the NC knows it (to ref_pos; a search does not know where the cam is)."""
+
+    phase: str  # "search for the cam", "leaving the cam", "to the reference position"
+    moved: float  # from where G74 began, signed, pos_unit (the reference's shift not counted)
+    to_go: float | None  # to ref_pos in its last phase, pos_unit; None while searching
+    speed: float  # the phase's commanded speed, vel_unit (before override)
+
+
+@dataclass(frozen=True)
 class AxisSnapshot:
     """One axis or spindle: state, actual values, its HLI objects and drive status."""
 
@@ -103,6 +114,7 @@ class AxisSnapshot:
     spindle: SpindleSnapshot | None  # None for axes
     display_name: str = ""  # the name that follows the mode: C as the rotary axis, else name
     signals: InterfaceSignals | None = None
+    homing: HomingSnapshot | None = None  # G74 of an axis in progress
 
 
 @dataclass(frozen=True)
@@ -114,6 +126,7 @@ class PendingMSnapshot:
     axis: str
     out_cycle: int
     signal: str | None = None
+    timeout_cycle: int | None = None  # the NC gives up (90004) at this cycle
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,8 @@ from api.status import (
     AxisStatus,
     ChangeoverPhase,
     ChannelStatus,
+    HomingPhaseName,
+    HomingProgress,
     LoopStatus,
     MachineStatus,
     MachineSummary,
@@ -131,6 +133,14 @@ def _axis_status(a: AxisSnapshot) -> AxisStatus:
         spindle_mode=cast(SpindleModeName, sp.mode) if sp and sp.mode else None,
         changeover=cast(ChangeoverPhase, sp.changeover) if sp and sp.changeover else None,
         signals=_signals(a),
+        homing=HomingProgress(
+            phase=cast(HomingPhaseName, a.homing.phase),
+            moved=a.homing.moved,
+            to_go=a.homing.to_go,
+            speed=a.homing.speed,
+        )
+        if a.homing
+        else None,
     )
 
 
@@ -177,7 +187,13 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
             ack_delay_s=snap.plc.ack_delay_s,
             drives_powered=snap.plc.drives_powered,
             pending=[
-                PendingM(m=p.m, axis=p.axis, out_cycle=p.out_cycle, signal=p.signal)
+                PendingM(
+                    m=p.m,
+                    axis=p.axis,
+                    out_cycle=p.out_cycle,
+                    signal=p.signal,
+                    timeout_cycle=p.timeout_cycle,
+                )
                 for p in snap.plc.pending
             ],
             signals=dict(snap.plc.signals),

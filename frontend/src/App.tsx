@@ -1,7 +1,6 @@
 // Layout: the login screen while nobody is logged in; then the top bar (machine, health,
 // connection, user, emergency stop) and banners always, the machine view beside the workspaces (tabs).
 import { useEffect, useRef, useState } from "preact/hooks";
-import { http } from "./api/http";
 import { AuditPanel } from "./panels/AuditPanel";
 import { Banner } from "./panels/Banner";
 import { Calculators } from "./panels/Calculators";
@@ -14,7 +13,9 @@ import { HliPanel } from "./panels/HliPanel";
 import { JogPanel } from "./panels/JogPanel";
 import { Login } from "./panels/Login";
 import { MachineView } from "./panels/MachineView";
+import { MachinesDialog } from "./panels/MachinesDialog";
 import { MdiPanel } from "./panels/MdiPanel";
+import { PendingStrip } from "./panels/PendingStrip";
 import { Parameters } from "./panels/Parameters";
 import { Plots } from "./panels/Plots";
 import { ProgramPanel } from "./panels/ProgramPanel";
@@ -29,23 +30,19 @@ import { view } from "./state/classes";
 import { me } from "./state/auth";
 import { commandBlocked, may } from "./state/control";
 import { exercise } from "./state/exercise";
-import { connection, frozen, machineUrl, online, status } from "./state/session";
+import { machinesOpen } from "./state/machines";
+import { connection, frozen, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
 // "Exercise" only on a class seat (the first tab there, and the one it opens on)
 const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Service", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
+/** The CNC reset and, on a frozen seat, why the simulation stands (pacing, restart and the
+ * machines themselves: the Machines dialog). */
 function MachineControls() {
   const cmd = useCommand();
-  const mode = status.value?.simulation.mode;
   const blocked = commandBlocked.value; // another holder, or a role that may not command
-  // pacing is the instructor's (api/auth.py SIMULATE), holding control or not
-  const pace = may("simulate")
-    ? ""
-    : frozen.value !== null
-      ? "frozen by the instructor: only the instructor can resume the simulation"
-      : `a user in the role ${me.value?.role ?? ""} may not pace the simulation`;
   return (
     <div class="controls-apart" aria-label="reset and simulation">
       <button type="button" class="secondary" data-testid="reset" disabled={!online.value || !!blocked}
@@ -53,16 +50,11 @@ function MachineControls() {
         ⟲ Reset
       </button>
       <EstopHint />
-      <span class="hint">Simulation</span>
-      <button type="button" class="secondary" aria-pressed={mode === "run"} disabled={!online.value || mode === "run" || !!pace} title={pace}
-        onClick={() => void http.post(machineUrl("/simulation"), { mode: "run" })}>
-        ▶ run
+      <button type="button" class="secondary" data-testid="open-machines-side" onClick={() => (machinesOpen.value = true)}
+        title="run, pause, step, fast; restart; machines">
+        Simulation: {status.value?.simulation.mode ?? "—"} …
       </button>
-      <button type="button" class="secondary" aria-pressed={mode === "pause"} disabled={!online.value || mode === "pause" || !!pace} title={pace}
-        onClick={() => void http.post(machineUrl("/simulation"), { mode: "pause" })}>
-        ❚❚ pause
-      </button>
-      {pace && frozen.value !== null ? <span class="pace-reason" data-testid="pace-reason">Frozen by the instructor</span> : null}
+      {frozen.value !== null ? <span class="pace-reason" data-testid="pace-reason">Frozen by the instructor</span> : null}
       <RefusalLine refusal={cmd.refusal} />
     </div>
   );
@@ -82,6 +74,7 @@ function ConsoleScreen() {
       <div class="head">
         <TopBar />
       </div>
+      <MachinesDialog />
       <Console />
     </div>
   );
@@ -108,9 +101,11 @@ function Hmi() {
       <div class="head" ref={head}>
         <TopBar />
         <ControlStrip />
+        <PendingStrip />
         <Banner liveRun={tab !== "Commissioning"} />
         <TrialBar />
       </div>
+      <MachinesDialog />
       <div class="body">
         <aside class="side">
           <MachineView />

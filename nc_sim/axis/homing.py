@@ -26,6 +26,13 @@ class HomingPhase(IntEnum):
     TO_REF = 3
 
 
+PHASE_NAMES = {
+    HomingPhase.TO_CAM: "search for the cam",
+    HomingPhase.OFF_CAM: "leaving the cam",
+    HomingPhase.TO_REF: "to the reference position",
+}
+
+
 class Homing:
     """The homing sequence of one axis."""
 
@@ -33,6 +40,23 @@ class Homing:
         self.ax = ax
         self.motion = motion
         self.phase = phase
+        self.speed = 0.0  # the phase's speed, unit/s (vb_refmax or vb_reflow)
+        self.start_pos = self._pos()  # where G74 began
+        self.shift = 0.0  # by which the reference moved every position
+
+    def _pos(self) -> float:
+        return float(self.motion.k.st[self.ax.slot, L.S_P_ACT])
+
+    def progress(self) -> tuple[str, float, float | None, float]:
+        """The phase's name, the distance from where G74 began (signed, unit: the reference
+        latched on the way does not count), the distance left to ref_pos in the last phase
+        (None while searching: the NC does not know where the cam is) and the phase's speed
+        (unit/s)."""
+        pos = self._pos()
+        to_go = (
+            self.ax.cfg.eng("kenngr.ref_pos") - pos if self.phase is HomingPhase.TO_REF else None
+        )
+        return PHASE_NAMES[self.phase], pos - self.shift - self.start_pos, to_go, self.speed
 
     @classmethod
     def start(cls, ax: Axis, motion: AxisMotion, block_id: int | None) -> Event | None:
@@ -62,6 +86,7 @@ class Homing:
             v, what = d * ax.cfg.eng("getriebe.vb_refmax", ax.gear), "search for the cam"
         else:
             v, what = -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), "leaving the cam"
+        self.speed = abs(v)
         self.motion.plan_velocity(ax, v, self.motion.limits(ax, Motion.HOMING))
         # the cam lies within the travel: a search over the whole of it finds it
         pr = self.motion.k.pr
@@ -74,10 +99,12 @@ class Homing:
         k = self.motion.k
         # the zero pulse latches the position at the edge itself, not one cycle later
         latched = encoder_reading(k, ax.slot, float(k.pr[ax.slot, L.P_CAM_POS]))
+        before = self._pos()
         self.motion.set_reference(ax, latched)
+        self.shift += self._pos() - before
         self.phase = HomingPhase.TO_REF
         ax.target = ax.cfg.eng("kenngr.ref_pos")
-        ax.feed = ax.cfg.eng("getriebe.vb_reflow", ax.gear)
+        ax.feed = self.speed = ax.cfg.eng("getriebe.vb_reflow", ax.gear)
         self.motion.plan_move(ax, self.motion.limits(ax, Motion.HOMING), ax.feed)
 
     def on_event(self, ev: int) -> bool:

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from nc_sim.axis.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
+from nc_sim.axis.homing import Homing
 from nc_sim.axis.state import Axis, target_and_distance
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.step import moving_direction
@@ -13,6 +14,7 @@ from nc_sim.machine.channel_ops import PROGRAM_ACTIVE
 from nc_sim.snapshot import (
     AxisSnapshot,
     ChannelSnapshot,
+    HomingSnapshot,
     InterfaceSignals,
     LoopMode,
     MachineSnapshot,
@@ -87,7 +89,17 @@ def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
         spindle=spindle,
         display_name=cax.display_name if cax else ax.name,
         signals=_signals(m, ax, spindle is not None, cax),
+        homing=_homing(ax),
     )
+
+
+def _homing(ax: Axis) -> HomingSnapshot | None:
+    """The G74 of an axis in progress, in display units."""
+    seq = ax.sequence
+    if not isinstance(seq, Homing):
+        return None
+    phase, moved, to_go, speed = seq.progress()
+    return HomingSnapshot(phase, moved, to_go, display_velocity(speed, ax.kind)[0])
 
 
 def _signals(m: Machine, ax: Axis, spindle: bool, cax: CAxis | None) -> InterfaceSignals:
@@ -164,7 +176,10 @@ def machine_snapshot(m: Machine) -> MachineSnapshot:
             ack_delay_s=m.plc.delay_cycles * m.k.cycle_s,
             drives_powered=m.powered,
             pending=tuple(
-                PendingMSnapshot(p.m, p.axis, p.out_cycle, p.signal) for p in m.plc.pending
+                PendingMSnapshot(
+                    p.m, p.axis, p.out_cycle, p.signal, p.out_cycle + m.handshake.timeout_cycles
+                )
+                for p in m.plc.pending
             ),
             signals=tuple(sorted({**m.cax.requests, **m.plc.signals}.items())) if m.cax else (),
         ),

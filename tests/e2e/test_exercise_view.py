@@ -125,7 +125,8 @@ def test_a_broadcast_and_a_freeze_reach_the_student(
     message = p.locator("[data-testid=banner-notice][data-kind=message]")
     expect(message).to_contain_text(f"Message from {TRAINER}: {text}")
 
-    controls = p.get_by_label("reset and simulation")
+    p.get_by_test_id("open-machines").click()  # pacing is in the Machines dialog
+    controls = p.get_by_test_id("panel-machines").get_by_test_id("machine-pacing")
     run = controls.get_by_role("button", name="▶ run")
     pause = controls.get_by_role("button", name="❚❚ pause")
     expect(run).to_have_attribute("aria-pressed", "true")
@@ -139,6 +140,8 @@ def test_a_broadcast_and_a_freeze_reach_the_student(
     expect(controls.get_by_test_id("pace-reason")).to_have_text("Frozen by the instructor")
     assert srv.status(mid)["simulation"]["mode"] == "pause"
     shot(p, "exercise-frozen")
+    p.get_by_test_id("machines-close").click()
+    expect(p.get_by_label("reset and simulation").get_by_test_id("pace-reason")).to_be_visible()
     expect(message).to_be_visible()  # the message stays until dismissed
 
     # a message after the freeze, then a reload: the socket repeats only the newest notice,
@@ -154,6 +157,8 @@ def test_a_broadcast_and_a_freeze_reach_the_student(
     expect(p.locator("[data-testid=banner-notice][data-kind=resumed]")).to_contain_text(
         f"{TRAINER} resumed the machine"
     )
+    expect(p.get_by_label("reset and simulation").get_by_test_id("pace-reason")).to_have_count(0)
+    p.get_by_test_id("open-machines").click()
     expect(run).to_have_attribute("aria-pressed", "true")
     expect(controls.get_by_test_id("pace-reason")).to_have_count(0)
 

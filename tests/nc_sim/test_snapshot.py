@@ -10,6 +10,7 @@ import pytest
 from nc_sim.commands import (
     EmergencyStop,
     HliWrite,
+    Home,
     JogStep,
     PlcMode,
     Refused,
@@ -112,3 +113,51 @@ def test_the_plc_snapshot_shows_a_pending_m_function_in_manual_mode() -> None:
     assert snap.plc.mode.value == "manual" and snap.plc.drives_powered
     assert [(p.m, p.axis) for p in snap.plc.pending] == [(8, "")]
     assert snap.queued_blocks == 1  # the block waits for the acknowledgement
+
+
+def test_a_pending_m_function_says_when_the_nc_gives_up_on_it() -> None:
+    """P-CHAN plc.m_ack_timeout 2 s (µs) after the output: the snapshot's timeout cycle is the
+    one the NC raises 90004 in, not a cycle before."""
+    sim, m, cfg = make(channel={"plc.m_ack_timeout": 2_000_000})
+    m.submit(PlcMode("manual"))
+    mdi(m, "M8")
+    (p,) = m.snapshot().plc.pending
+    assert p.timeout_cycle is not None
+    assert (p.timeout_cycle - p.out_cycle) * cfg.cycle_s == pytest.approx(2.0)
+    sim.run(p.timeout_cycle - m.cycle - 1)
+    assert Code.PLC_ACK_TIMEOUT not in [e.code for e in m.events]
+    sim.run(2)
+    timeout = next(e for e in m.events if e.code == Code.PLC_ACK_TIMEOUT)
+    assert timeout.cycle == p.timeout_cycle and m.snapshot().plc.pending == ()
+
+
+def test_homing_reports_its_phases_distance_and_speed() -> None:
+    """Demo X homes towards + from 50 mm: to the cam (at 280 mm) at vb_refmax 5 m/min, off it
+    at vb_reflow 1 m/min, then to ref_pos 280 mm, the cam's edge [002 §2.7]: it ends 230 mm
+    from where it began; the last phase knows what is left to ref_pos."""
+    sim, m, cfg = make()
+    x_cfg = cfg.axis("X")
+    start = _axis(m.snapshot(), "X").pos_act
+    assert start == pytest.approx(50.0) and _axis(m.snapshot(), "X").homing is None
+    m.submit(Home("X"))
+    seen: dict[str, float] = {}
+    moved_and_to_go = 0.0
+    while True:
+        record(sim, 0.05)
+        x = _axis(m.snapshot(), "X")
+        if x.homing is None:
+            break
+        h = x.homing
+        seen.setdefault(h.phase, h.speed)
+        if h.phase == "search for the cam":
+            assert h.to_go is None and h.moved == pytest.approx(x.pos_act - start, abs=1e-9)
+        if h.phase == "to the reference position":
+            assert h.to_go == pytest.approx(x_cfg.eng("kenngr.ref_pos") - x.pos_act, abs=1e-9)
+            moved_and_to_go = h.moved + (h.to_go or 0.0)
+    assert list(seen) == ["search for the cam", "leaving the cam", "to the reference position"]
+    assert seen["search for the cam"] == pytest.approx(5000.0, rel=1e-4)
+    assert seen["leaving the cam"] == pytest.approx(1000.0, rel=1e-4)
+    assert seen["to the reference position"] == pytest.approx(1000.0, rel=1e-4)
+    assert m.axis("X").homed
+    # where it will end (the cam's edge) is 230 mm from where it began
+    assert moved_and_to_go == pytest.approx(280.0 - 50.0, abs=1e-3)

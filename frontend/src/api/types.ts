@@ -4,6 +4,7 @@ import type { components } from "./schema";
 type S = components["schemas"];
 export type MachineStatus = S["MachineStatus"];
 export type MachineSummary = S["MachineSummary"];
+export type SimulationStatus = S["SimulationStatus"];
 export type AxisStatus = S["AxisStatus"];
 export type AxisSignals = S["AxisSignals"];
 export type PendingM = S["PendingM"];

@@ -4,6 +4,7 @@
 import { useState } from "preact/hooks";
 import type { HliUnit, MachineStatus, PendingM } from "../api/types";
 import { commandBlocked } from "../state/control";
+import { answerOf, secondsLeft, waitedFor } from "../state/handshakes";
 import { online, status } from "../state/session";
 import { AxisSignalLamps } from "../ui/AxisSignalLamps";
 import { Lamp } from "../ui/Lamp";
@@ -70,24 +71,22 @@ function Handshake(props: { s: MachineStatus; run: Run; disabled: boolean; title
   );
 }
 
-/** A pending M function or mode request with its acknowledge key. */
+/** A pending M function or mode request, the time left before the NC gives up (90004), and
+ * its acknowledge key (state/handshakes.ts: the strip under the top bar shows the same). */
 function PendingRow(props: { p: PendingM; run: Run; disabled: boolean; title: string }) {
   const { p } = props;
-  const what = p.signal ?? `M${p.m}`;
   const tid = p.signal ?? `m${p.m}`;
+  const answer = answerOf(p);
   return (
     <tr data-testid={`pending-${tid}`}>
-      <td>{p.signal ? `${p.signal} (mode request)` : what}</td>
+      <td>{waitedFor(p)}</td>
       <td>{p.axis}</td>
       <td>{p.out_cycle}</td>
+      <td class="num">{qty(secondsLeft(p), 1, "s")}</td>
       <td>
         <button type="button" data-testid={`ack-${tid}`} disabled={props.disabled} title={props.title}
-          onClick={() =>
-            void props.run(
-              p.signal ? { type: "plc_signal", signal: p.signal === "SPMOD" ? "SPMOD_Q" : "ROTMOD_Q", on: true } : { type: "plc_ack", m: p.m },
-            )
-          }>
-          {p.signal ? `Set ${p.signal}_Q` : "Acknowledge"}
+          onClick={() => void props.run(answer.cmd)}>
+          {answer.label}
         </button>
       </td>
     </tr>
@@ -176,6 +175,7 @@ export function HliPanel() {
                 <th>Pending</th>
                 <th>Axis</th>
                 <th>since cycle</th>
+                <th>left</th>
                 <th />
               </tr>
             </thead>
@@ -186,7 +186,7 @@ export function HliPanel() {
               ))}
               {!plc.pending.length ? (
                 <tr>
-                  <td colSpan={4} class="hint">
+                  <td colSpan={5} class="hint">
                     none
                   </td>
                 </tr>

@@ -2,7 +2,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
-import { heldKey, holdJog, keyName, releaseJog } from "../state/jog";
+import { heldKey, holdJog, jogSettings, keyName, releaseJog } from "../state/jog";
 import { loadRotaryAxisName, rotaryAxisName } from "../state/caxis";
 import { commandBlocked } from "../state/control";
 import { loadList, numbers, paramsVersion } from "../state/params";
@@ -64,10 +64,8 @@ function JogKey(props: {
 
 export function JogPanel() {
   const axes = status.value?.axes ?? [];
-  const [name, setName] = useState("X");
+  const { axis: name, feed, step } = jogSettings.value;
   const ax = axes.find((a) => a.name === name) ?? axes[0];
-  const [feed, setFeed] = useState("");
-  const [step, setStep] = useState(1);
   const [jogRefusal, setJogRefusal] = useState<Refusal | null>(null);
   const cmd = useCommand();
   const [overrideMax, setOverrideMax] = useState(100);
@@ -78,17 +76,27 @@ export function JogPanel() {
   }, [machineId.value, paramsVersion.value]);
   // the axis' G200 maximum (P-AXIS-00213) bounds the jog feed [002 §2.6.1]; the NC refuses a
   // feed above it as well (90025), this shows it before a key is pressed
+  // and with the gear's getriebe.dynamik.vb_max the default feed a jog without one takes
   const [feedMax, setFeedMax] = useState<number | null>(null);
+  const [feedDefault, setFeedDefault] = useState<number | null>(null);
   const axName = ax?.name;
+  const gear = ax?.gear ?? 1;
   useEffect(() => {
     setFeedMax(null);
+    setFeedDefault(null);
     if (!machineId.value || !axName) return;
     void loadList("axis", axName).then((list) => {
-      const p = list.find((q) => q.name === "handbetrieb.hb.vb_max");
       // list unit (µm/s, 0.001°/s) × eng_factor = mm/s | °/s, × 60 = per minute
-      setFeedMax(p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor * 60 : null);
+      const perMin = (n: string) => {
+        const p = list.find((q) => q.name === n);
+        return p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor * 60 : null;
+      };
+      const hb = perMin("handbetrieb.hb.vb_max");
+      const dyn = perMin(`getriebe[${Math.max(0, gear - 1)}].dynamik.vb_max`);
+      setFeedMax(hb);
+      setFeedDefault(hb !== null && dyn !== null ? Math.min(hb, dyn) : hb);
     }, () => undefined);
-  }, [machineId.value, paramsVersion.value, axName]);
+  }, [machineId.value, paramsVersion.value, axName, gear]);
   useEffect(() => void loadRotaryAxisName(), [machineId.value, paramsVersion.value]);
   if (!ax) return <Panel title="Jog" id="jog">Waiting for the service…</Panel>;
   // the main spindle with rotary-axis capability jogs as the rotary axis C: a jog changes it
@@ -96,7 +104,7 @@ export function JogPanel() {
   const cName = ax.spindle_mode != null ? (rotaryAxisName.value ?? (ax.spindle_mode === "rotary" ? ax.display_name : null)) : null;
   const jogName = cName ?? ax.name;
   const unit = ax.unit === "deg" ? "°" : "mm";
-  const feedNum = feed.trim() === "" ? null : Number(feed);
+  const feedNum = feed === null || feed.trim() === "" ? null : Number(feed);
   const feedPositive = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
   const feedInLimit = feedNum === null || feedMax === null || feedNum <= feedMax * (1 + 1e-12);
   const feedOk = feedPositive && feedInLimit;
@@ -118,7 +126,7 @@ export function JogPanel() {
         {axes.map((a) => (
           <label key={a.name} class={`axis-choice ${a.name === ax.name ? "active" : ""}`}>
             <input type="radio" name="jog-axis" value={a.name} checked={a.name === ax.name}
-              onChange={() => setName(a.name)} data-testid={`jog-axis-${a.name}`} />
+              onChange={() => jogSettings.patch({ axis: a.name })} data-testid={`jog-axis-${a.name}`} />
             {a.display_name}
           </label>
         ))}
@@ -132,10 +140,23 @@ export function JogPanel() {
             title={why || "Hold to jog; release stops"} />
         ))}
         <label>
-          Jog feed <input data-testid="jog-feed" inputMode="decimal" placeholder="G200 default" size={9} value={feed}
-            aria-invalid={!feedOk} onInput={(e) => setFeed((e.target as HTMLInputElement).value)} />{" "}
+          Jog feed{" "}
+          <input data-testid="jog-feed" inputMode="decimal" size={9} class={feed === null ? "is-default" : ""}
+            value={feed ?? (feedDefault === null ? "" : fmt(feedDefault, 1))} aria-invalid={!feedOk}
+            aria-describedby="jog-feed-default"
+            onInput={(e) => jogSettings.patch({ feed: (e.target as HTMLInputElement).value })} />{" "}
           {unit}/min
         </label>
+        {feed === null ? (
+          <span class="tag default-tag" id="jog-feed-default" data-testid="jog-feed-default"
+            title="the jog feed without one given: hb.vb_max (P-AXIS-00213), at most the gear's vb_max">
+            G200 default
+          </span>
+        ) : (
+          <button type="button" class="link" data-testid="jog-feed-reset" onClick={() => jogSettings.patch({ feed: null })}>
+            ↺ default
+          </button>
+        )}
       </div>
       {cName && ax.spindle_mode !== "rotary" ? (
         <p class="hint" data-testid="jog-changeover-hint">
@@ -152,7 +173,7 @@ export function JogPanel() {
       <div class="row">
         <label>
           Increment{" "}
-          <select data-testid="jog-step-size" value={String(step)} onChange={(e) => setStep(Number((e.target as HTMLSelectElement).value))}>
+          <select data-testid="jog-step-size" value={String(step)} onChange={(e) => jogSettings.patch({ step: Number((e.target as HTMLSelectElement).value) })}>
             {STEPS.map((s) => (
               <option key={s} value={String(s)}>
                 {s} {unit}

@@ -1,22 +1,17 @@
-// One live plot: chosen signals over a 1–30 s window, drawn with uPlot at most once per
-// animation frame and only when new samples arrived; pause, drag-zoom (pauses), autoscale,
-// cursor readout in the legend, and the newest value of every trace under the chart.
+// One live plot: chosen signals (subscribed by state/plots.ts, on screen or not) over a 1–30 s
+// window, drawn with uPlot at most once per animation frame and only when new samples arrived;
+// pause, drag-zoom (pauses), autoscale, cursor readout in the legend, and the newest value of
+// every trace under the chart.
 import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
-import { catalogue, rings, unwant, want } from "../state/telemetry";
+import type { PlotConfig } from "../state/plots";
+import { catalogue, rings } from "../state/telemetry";
 import { fmt, tickLabels } from "../ui/format";
 import { SignalPicker } from "../ui/SignalPicker";
 
 export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
 export const fps = { frames: 0, draws: 0 }; // read by bench/ui.py through window.inbetrieb
-let instances = 0;
-
-export interface PlotConfig {
-  id: string;
-  signals: string[];
-  windowS: number;
-}
 
 function unitOf(name: string): string {
   return catalogue.value.find((s) => s.name === name)?.unit ?? "";
@@ -31,12 +26,6 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
   const [latest, setLatest] = useState<number[]>([]);
   const pausedRef = useRef(paused);
   pausedRef.current = paused;
-
-  const owner = useRef(`plot${++instances}`).current; // one subscription share per mounted plot
-  useEffect(() => {
-    want(owner, config.signals);
-    return () => unwant(owner);
-  }, [config.signals.join(",")]);
 
   // (re)build the chart when its traces change
   useEffect(() => {

@@ -3,7 +3,7 @@ import type { AxisStatus } from "../api/types";
 import { status } from "../state/session";
 import { Lamp } from "../ui/Lamp";
 import { Panel } from "../ui/Panel";
-import { fmt, velUnit } from "../ui/format";
+import { fmt, qty, velUnit } from "../ui/format";
 
 function AxisRow({ a }: { a: AxisStatus }) {
   const spindle = a.kind === "spindle";
@@ -31,6 +31,26 @@ function AxisRow({ a }: { a: AxisStatus }) {
       <td data-testid={`gear-${a.name}`}>{a.gear ? `M${39 + a.gear}` : "—"}</td>
       <td title={a.homed ? "homed" : "not homed"}>{a.homed ? "✓" : "✗"}</td>
     </tr>
+  );
+}
+
+/** A G74 on its way [002 §2.7]: its phase, how far it went and what is left where the NC
+ * knows it (a search does not know where the cam is), and the phase's speed. */
+function HomingLine({ a }: { a: AxisStatus }) {
+  const h = a.homing;
+  if (!h) return null;
+  const unit = a.unit === "deg" ? "°" : a.unit;
+  return (
+    <p class="homing-line" role="status" data-testid={`homing-${a.name}`}>
+      <b>G74 {a.display_name}</b>: <span data-testid={`homing-phase-${a.name}`}>{h.phase}</span> ·{" "}
+      <span data-testid={`homing-moved-${a.name}`}>{fmt(Math.abs(h.moved), 1)}</span>&nbsp;{unit} from the start
+      {h.to_go !== null && h.to_go !== undefined ? (
+        <>
+          {" "}· <span data-testid={`homing-to-go-${a.name}`}>{fmt(Math.abs(h.to_go), 1)}</span>&nbsp;{unit} to ref_pos
+        </>
+      ) : null}{" "}
+      · at <span data-testid={`homing-speed-${a.name}`}>{qty(h.speed, 0, velUnit(unit, a.kind, a.spindle_mode))}</span>
+    </p>
   );
 }
 
@@ -69,6 +89,9 @@ export function MachineView() {
           ))}
         </tbody>
       </table>
+      {s.axes.map((a) => (
+        <HomingLine a={a} key={a.name} />
+      ))}
       <div class="lamps" aria-label="HLI state">
         {spindles.map((a) => (
           <div class="lamp-row" key={a.name}>

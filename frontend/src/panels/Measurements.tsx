@@ -3,17 +3,19 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { Measurements as M, TraceDetail } from "../api/types";
+import { measure } from "../state/scope";
 import { fmt } from "../ui/format";
 import type { Cursors } from "./CaptureChart";
 
 export function Measurements(props: { detail: TraceDetail; cursors: Cursors; range: [number, number] | null }) {
   const { detail, cursors, range } = props;
-  const [channel, setChannel] = useState(detail.channels.find((c) => c.kind === "float")?.name ?? detail.channels[0].name);
-  const [band, setBand] = useState(2);
+  const { channel, band } = measure.value;
+  const setChannel = (c: string) => measure.patch({ channel: c });
+  const setBand = (b: number) => measure.patch({ band: b });
   const [m, setM] = useState<M | null>(null);
   const [error, setError] = useState("");
   const names = detail.channels.map((c) => c.name);
-  const ch = names.includes(channel) ? channel : names[0];
+  const ch = names.includes(channel) ? channel : (detail.channels.find((c) => c.kind === "float")?.name ?? names[0]);
   const [a, b] = cursors;
   const win: [number, number] | null = a !== null && b !== null ? [Math.min(a, b), Math.max(a, b)] : range;
   const source = a !== null && b !== null ? "between the cursors" : "visible range";

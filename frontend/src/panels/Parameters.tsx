@@ -11,6 +11,7 @@ import {
   listUrl,
   loadList,
   loadRegistry,
+  paramListView,
   paramsVersion,
   trial,
   trialMessage,
@@ -92,12 +93,10 @@ function ParameterList() {
     { scope: "channel", target: null, label: "Channel" },
     { scope: "tool", target: null, label: "Tools" },
   ];
-  const [which, setWhich] = useState("Axis X");
+  const { list: which, query, group } = paramListView.value;
   const t = targets.find((x) => x.label === which) ?? targets[0];
   const spindle = axes.find((a) => a.name === t?.target)?.kind === "spindle";
   const [rows, setRows] = useState<ParameterValue[]>([]);
-  const [query, setQuery] = useState("");
-  const [group, setGroup] = useState("");
   const [edits, setEdits] = useState<Record<string, string>>({});
   const [problems, setProblems] = useState<ParameterProblem[]>([]);
   const [message, setMessage] = useState("");
@@ -207,7 +206,7 @@ function ParameterList() {
       <div class="row param-tools">
         <label>
           List{" "}
-          <select data-testid="param-target" value={t?.label} onChange={(e) => setWhich((e.target as HTMLSelectElement).value)}>
+          <select data-testid="param-target" value={t?.label} onChange={(e) => paramListView.patch({ list: (e.target as HTMLSelectElement).value, group: "" })}>
             {targets.map((x) => (
               <option key={x.label}>{x.label}</option>
             ))}
@@ -215,7 +214,7 @@ function ParameterList() {
         </label>
         <label>
           Group{" "}
-          <select data-testid="param-group" value={group} onChange={(e) => setGroup((e.target as HTMLSelectElement).value)}>
+          <select data-testid="param-group" value={group} onChange={(e) => paramListView.patch({ group: (e.target as HTMLSelectElement).value })}>
             <option value="">all</option>
             {groups.map((g) => (
               <option key={g}>{g}</option>
@@ -223,7 +222,7 @@ function ParameterList() {
           </select>
         </label>
         <input type="search" data-testid="param-search" size={32} placeholder="Search ID, name or description" value={query}
-          onInput={(e) => setQuery((e.target as HTMLInputElement).value)} aria-label="search parameters" />
+          onInput={(e) => paramListView.patch({ query: (e.target as HTMLInputElement).value })} aria-label="search parameters" />
         <a class="button secondary" href={t && machineId.value ? listUrl("/export", t.scope, t.target) : "#"}
           download={`${machineId.value}-${t?.target ?? t?.scope}.lis`}>
           Export list

@@ -1,44 +1,13 @@
-// Several live plots side by side; their choice of signals survives a reload (localStorage).
-import { useEffect, useState } from "preact/hooks";
-import type { SignalInfo } from "../api/types";
-import { machineId } from "../state/session";
+// Several live plots side by side (their configuration and subscription: state/plots.ts).
+import { defaultPlots, plots as plotsSignal, setPlots } from "../state/plots";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
-import { LivePlot, type PlotConfig } from "./LivePlot";
-
-/** Spindle speed command vs actual, and the lag of the linear axes. */
-export function defaultPlots(signals: SignalInfo[]): PlotConfig[] {
-  const names = signals.map((s) => s.name);
-  const speed = names.filter((n) => /\.speed_(cmd|act)_rpm$/.test(n)).slice(0, 2);
-  const lag = names.filter((n) => /\.lag_mm$/.test(n));
-  return [
-    { id: "p1", signals: speed, windowS: 10 },
-    { id: "p2", signals: lag, windowS: 10 },
-  ].filter((p) => p.signals.length);
-}
-
-const storageKey = () => `inbetrieb.plots.${machineId.value}`;
+import { LivePlot } from "./LivePlot";
 
 export function Plots(props: { single?: boolean }) {
-  const [plots, setPlots] = useState<PlotConfig[]>([]);
+  const plots = plotsSignal.value;
   const cat = catalogue.value;
-  useEffect(() => {
-    if (!cat.length) return;
-    const known = new Set(cat.map((s) => s.name));
-    let saved: PlotConfig[] | null = null;
-    try {
-      saved = JSON.parse(localStorage.getItem(storageKey()) ?? "null") as PlotConfig[] | null;
-    } catch {
-      saved = null;
-    }
-    const valid = saved?.map((p) => ({ ...p, signals: p.signals.filter((s) => known.has(s)) }));
-    setPlots(valid?.length ? valid : defaultPlots(cat));
-  }, [cat, machineId.value]);
-
-  function update(next: PlotConfig[]) {
-    setPlots(next);
-    localStorage.setItem(storageKey(), JSON.stringify(next));
-  }
+  const update = setPlots;
 
   const shown = props.single ? plots.slice(0, 1) : plots;
   return (

@@ -3,7 +3,7 @@
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { EventTrigger, LevelTrigger, RecordingInfo, ScopeSetup as Setup } from "../api/types";
-import { arm, force, loadDraft, MAX_CHANNELS, saveDraft, scopeStatus, startRecording, stop, stopRecording } from "../state/scope";
+import { arm, force, MAX_CHANNELS, saveDraft, scopeDraft, scopeStatus, startRecording, stop, stopRecording } from "../state/scope";
 import { online, status } from "../state/session";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
@@ -30,15 +30,12 @@ function kib(n: number): string {
 }
 
 export function ScopeSetup() {
-  const [draft, setDraftState] = useState<Setup>(loadDraft);
+  const draft = scopeDraft.value;
   const [error, setError] = useState("");
   const [recording, setRecording] = useState<RecordingInfo | null>(null);
   const st = scopeStatus.value;
   const rec = st?.recording ?? recording;
-  const setDraft = (d: Setup) => {
-    setDraftState(d);
-    saveDraft(d);
-  };
+  const setDraft = saveDraft;
   const trig = draft.trigger ?? null;
   const level: LevelTrigger =
     trig?.type === "level" ? trig : { type: "level", signal: draft.channels[0] ?? "", level: 0, edge: "rising", hysteresis: 0 };

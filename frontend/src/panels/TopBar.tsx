@@ -6,6 +6,7 @@ import { logout, me } from "../state/auth";
 import { may } from "../state/control";
 import { openConsole, openHmi, view } from "../state/classes";
 import { connection, emergencyStop, machineId, machines, online, selectMachine, status } from "../state/session";
+import { machinesOpen } from "../state/machines";
 import { AccountDialog, accountOpen } from "./Account";
 import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
@@ -30,6 +31,10 @@ export function TopBar() {
           ))}
         </select>
       </label>
+      <button type="button" class="secondary" data-testid="open-machines" title="pacing, restart, new and deleted machines"
+        onClick={() => (machinesOpen.value = true)}>
+        Machines…
+      </button>
       <span class="health" data-testid="health">
         <span title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
         <span title="simulated seconds per wall second">

@@ -1,8 +1,18 @@
-// Press-and-hold jog with a dead-man: while a key is held the start command is renewed every
+// The jog panel's settings (kept per machine across workspaces) and press-and-hold jog with a
+// dead-man: while a key is held the start command is renewed every
 // RENEW_MS with a lease of HOLD_S (simulated seconds); the service stops the jog when renewals
 // stop. Releasing, leaving the window, hiding the tab and losing the connection all release.
 import { effect, signal } from "@preact/signals";
 import { online, send } from "./session";
+import { kept } from "./workspace";
+
+/** The jog panel's choices: the axis, the jog feed as typed (null: the G200 default) and the
+ * increment of a step. */
+export const jogSettings = kept<{ axis: string; feed: string | null; step: number }>("jog", {
+  axis: "X",
+  feed: null,
+  step: 1,
+});
 
 export const HOLD_S = 0.5;
 const RENEW_MS = 150;

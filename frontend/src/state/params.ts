@@ -8,6 +8,7 @@ import type { ParameterChange, ParameterDef, ParameterValue, ParameterWriteResul
 import { loggedIn } from "./auth";
 import { holderKey } from "./control";
 import { machineId, machineUrl } from "./session";
+import { kept } from "./workspace";
 
 /** One edit: the value, and the version it was read at (refused when someone wrote since;
  * null: no check). */
@@ -18,6 +19,10 @@ export interface Change {
 }
 
 export const paramsVersion = signal(0);
+
+/** The parameter editor's choices, kept per machine across workspaces: the list shown (its
+ * label, "Axis X", "Channel", "Tools"), the search text and the group. */
+export const paramListView = kept("params", { list: "Axis X", query: "", group: "" });
 
 export function listUrl(path: string, scope: Scope, target: string | null): string {
   const q = new URLSearchParams({ scope });

@@ -18,6 +18,20 @@ export class Rings {
     this.y = names.map(() => new Float64Array(2 * capacity));
   }
 
+  /** A ring for `names` with the history `old` holds of them (NaN where it had none): a new
+   * subscription keeps what was recorded of the signals that stay. */
+  static carry(old: Rings, names: string[], capacity: number): Rings {
+    const r = new Rings(names, capacity);
+    const n = Math.min(old.size, capacity);
+    if (!n) return r;
+    const [t, ...cols] = old.window(Infinity, names);
+    const from = t.length - n;
+    const data = new Float64Array(names.length * n);
+    cols.forEach((c, s) => data.set(c.subarray(from), s * n));
+    r.append(t.subarray(from), data, n);
+    return r;
+  }
+
   get size(): number {
     return Math.min(this.count, this.capacity);
   }

@@ -1,10 +1,12 @@
 // The scope: its status (polled while the Scope workspace is open), the setup being edited
-// (kept per machine), the trace on screen and the one overlaid, and the trace library.
-import { signal } from "@preact/signals";
+// (kept per machine), the trace on screen and the one overlaid, the measurement's channel and
+// band, and the trace library.
+import { computed, signal } from "@preact/signals";
 import { http } from "../api/http";
 import type { RecordingInfo, ScopeSetup, ScopeStatus, TraceDetail, TraceInfo } from "../api/types";
 import { machineId, machineUrl } from "./session";
 import { decodeFrame } from "./telemetry";
+import { kept } from "./workspace";
 
 export const SCOPE_PERIOD_MS = 250;
 export const MAX_CHANNELS = 16;
@@ -32,7 +34,11 @@ const DEFAULT_SETUP: ScopeSetup = {
 
 const key = () => `inbetrieb.scope.${machineId.value}`;
 
-export function loadDraft(): ScopeSetup {
+/** The measurements' channel ("" until chosen: the trace's first float channel) and the
+ * settling band, % — kept across workspaces. */
+export const measure = kept("measure", { channel: "", band: 2 });
+
+function loadDraft(): ScopeSetup {
   try {
     const raw = localStorage.getItem(key());
     if (raw) return { ...DEFAULT_SETUP, ...(JSON.parse(raw) as ScopeSetup) };
@@ -42,7 +48,13 @@ export function loadDraft(): ScopeSetup {
   return DEFAULT_SETUP;
 }
 
+const drafts = signal<Record<string, ScopeSetup>>({});
+/** The setup being edited for the machine on screen (the one last armed or edited). */
+export const scopeDraft = computed(() => drafts.value[machineId.value] ?? loadDraft());
+
+/** Edit the setup (kept, and stored for the next session). */
 export function saveDraft(s: ScopeSetup): void {
+  drafts.value = { ...drafts.value, [machineId.value]: s };
   localStorage.setItem(key(), JSON.stringify(s));
 }
 

@@ -64,7 +64,8 @@ function resubscribe(): void {
   if (!ws || ws.readyState !== WebSocket.OPEN || key === subscribedKey || !names.length) return;
   subscribedKey = key;
   ws.send(JSON.stringify({ type: "subscribe", signals: names }));
-  rings.value = new Rings(names, Math.round(RING_SECONDS / cycleS));
+  // the signals that stay keep their history (a plot's, while another panel adds its own)
+  rings.value = Rings.carry(rings.value, names, Math.round(RING_SECONDS / cycleS));
 }
 
 export function decodeFrame(buf: ArrayBuffer): { header: FrameHeader; data: Float64Array } | null {
@@ -158,6 +159,7 @@ effect(() => {
   ws = null;
   old?.close();
   subscribedKey = "";
+  rings.value = new Rings([], 1); // another machine's history is not this one's
   attempt++; // a ticket still on its way is for the machine before
   if (mid) void connect(mid);
 });
