@@ -85,8 +85,9 @@ export function JogPanel() {
     if (!machineId.value || !axName) return;
     void loadList("axis", axName).then((list) => {
       const p = list.find((q) => q.name === "handbetrieb.hb.vb_max");
-      // list unit (µm/s, 0.001°/s) × eng_factor = mm/s | °/s, × 60 = per minute
-      setFeedMax(p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor * 60 : null);
+      // list unit × eng_factor = mm/min | °/min (rpm for a spindle, which jogs as C in °/min)
+      const perMin = p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor : null;
+      setFeedMax(perMin !== null && p?.eng_unit === "rpm" ? perMin * 360 : perMin);
     }, () => undefined);
   }, [machineId.value, paramsVersion.value, axName]);
   useEffect(() => void loadRotaryAxisName(), [machineId.value, paramsVersion.value]);

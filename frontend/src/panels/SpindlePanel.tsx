@@ -9,7 +9,7 @@ import { loadRotaryAxisName, rotaryAxisName } from "../state/caxis";
 import { machineId, motionLocked, online, status } from "../state/session";
 import { AxisSignalLamps } from "../ui/AxisSignalLamps";
 import { Panel } from "../ui/Panel";
-import { fmt, qty } from "../ui/format";
+import { fmt, gearName, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 import { GearBars, type GearRange } from "./GearBars";
 import { SpindleKeys } from "./SpindleKeys";
@@ -174,14 +174,20 @@ export function SpindlePanel() {
           </span>
           {params?.ranges.map((_, i) => (
             <button key={i} type="button" data-testid={`gear-m${40 + i}`} class={sp.gear === i + 1 ? "active" : ""}
-              disabled={locked} title={lockedWhy} aria-pressed={sp.gear === i + 1}
+              disabled={locked} title={lockedWhy || gearName(i + 1)} aria-pressed={sp.gear === i + 1}
               onClick={() => void cmd.run({ type: "gear", spindle: sp.name, m: 40 + i })}>
               M{40 + i}
             </button>
           ))}
         </div>
         {params?.ranges.length ? (
-          <GearBars ranges={params.ranges} active={sp.gear ?? null} speed={sp.speed_prog_rpm ?? null} />
+          <>
+            <GearBars ranges={params.ranges} active={sp.gear ?? null} speed={sp.speed_prog_rpm ?? null} />
+            <p class="hint" data-testid="gear-mapping">
+              M40…M45 = gear 1…6 = gear records getriebe[0]…[5] (range_table[0]…[5])
+              {sp.gear ? <> · now <b>{gearName(sp.gear)}</b></> : null}
+            </p>
+          </>
         ) : (
           <p class="hint">No gear change on this spindle.</p>
         )}
