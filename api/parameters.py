@@ -45,9 +45,12 @@ class ParameterValue(BaseModel):
     min: float | None = Field(None, description="lower bound in list units, as the list stands")
     max: float | None = Field(None, description="upper bound in list units, as the list stands")
     eng_factor: float | None = Field(
-        None, description="list value × eng_factor = engineering value (numeric entries)"
+        None,
+        description="list value × eng_factor = the value in the HMI's unit `eng_unit` "
+        "(numeric entries; nc_sim.units.display_unit: velocities mm/min, °/min or rpm, "
+        "weights %, kv 1/s)",
     )
-    eng_unit: str = Field("", description="engineering unit, e.g. 1/s for a kv in 0.01/s")
+    eng_unit: str = Field("", description="the HMI's unit, e.g. 1/s for a kv in 0.01/s")
     version: int = Field(
         0,
         description="changes with every write (0: never written here); send it back as "

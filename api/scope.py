@@ -137,6 +137,9 @@ class MeasurementsModel(BaseModel):
 
 
 class ParamCompare(BaseModel):
+    """A parameter as it was at each trace's capture (its default where the capture's
+    snapshot did not list it); null only for an import, which has no snapshot."""
+
     scope: str
     target: str
     name: str

@@ -63,7 +63,9 @@ class ParamDiff(BaseModel):
     unit: str = Field(description="unit of the list value")
     before_eng: float | None = Field(None, description="`before` in `eng_unit` (numbers)")
     after_eng: float | None = Field(None, description="`after` in `eng_unit` (numbers)")
-    eng_unit: str = Field("", description="engineering unit, e.g. 1/s for a kv in 0.01/s")
+    eng_unit: str = Field(
+        "", description="the HMI's unit (as the parameter list's), e.g. 1/s for a kv in 0.01/s"
+    )
     effect: str = Field(description="when a new value takes effect: now, reset or restart")
 
 

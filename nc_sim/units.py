@@ -129,6 +129,22 @@ def display_velocity(v_eng: float, kind: AxisKind) -> tuple[float, str]:
     return v_eng * MM_MIN_PER_MM_S, "mm/min" if kind is AxisKind.LINEAR else "°/min"
 
 
+def display_unit(q: Quantity, kind: AxisKind) -> tuple[float, str]:
+    """The HMI's one convention for a parameter's value, as (factor from the raw list value,
+    unit): velocities as the NC's F word reads them (mm/min, °/min; rpm for a spindle),
+    weights in %, kv in 1/s, times in s; the rest in the kernel's engineering unit."""
+    if q is Quantity.VELOCITY:
+        per_min = _TO_ENG[q] * MM_MIN_PER_MM_S
+        if kind is AxisKind.SPINDLE:
+            return _TO_ENG[q] / RPM_TO_DEG_S, "rpm"
+        return per_min, "mm/min" if kind is AxisKind.LINEAR else "°/min"
+    if q is Quantity.PERMILLE:
+        return 0.1, "%"
+    if q is Quantity.PERCENT:
+        return 1.0, "%"
+    return _TO_ENG[q], eng_unit(q, kind)
+
+
 # exact integer scales the commissioning calculators build list fractions from [004 §3.4-3.6]
 POSITION_UNITS_PER_MM = 10000  # wegaufn: 0.1 µm
 POSITION_UNITS_PER_DEG = 10000  # wegaufn: 0.0001°

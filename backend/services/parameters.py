@@ -39,7 +39,7 @@ from nc_sim.params import (
     validate_values,
 )
 from nc_sim.params.listfile import axis_kind_of, parse_value, value_range
-from nc_sim.units import AxisKind, to_eng
+from nc_sim.units import AxisKind
 
 Key = tuple[str, str, str]  # scope, target ('' for channel and tool), name
 _GEAR = "getriebe[i]."
@@ -303,8 +303,8 @@ def read(
                     title=d.title,
                     min=lo,
                     max=hi,
-                    eng_factor=to_eng(d.quantity, 1.0) if d.is_numeric else None,
-                    eng_unit=d.eng_unit(kind) if d.is_numeric else "",
+                    eng_factor=d.display_unit(kind)[0] if d.is_numeric else None,
+                    eng_unit=d.display_unit(kind)[1] if d.is_numeric else "",
                     version=versions.get((scope.value, tgt, name), 0),
                 )
             )

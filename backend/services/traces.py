@@ -228,9 +228,13 @@ class TraceService:
         ta, tb = self.get(a).detail, self.get(b).detail
         pa = {(p.scope, p.target, p.name): p.value for p in ta.params}
         pb = {(p.scope, p.target, p.name): p.value for p in tb.params}
+        # a capture lists only the parameters off their default: one missing there had its
+        # default then (an import has no snapshot at all: its values stay unknown, None)
+        defaults = {(p.scope, p.target, p.name): p.default for p in [*ta.params, *tb.params]}
         rows = []
         for key in sorted(set(pa) | set(pb)):
-            va, vb = pa.get(key), pb.get(key)
+            va = pa.get(key, defaults[key] if ta.source == "capture" else None)
+            vb = pb.get(key, defaults[key] if tb.source == "capture" else None)
             if va != vb:
                 s, t, n = key
                 rows.append(ParamCompare(scope=s, target=t, name=n, a=va, b=vb))

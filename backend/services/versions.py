@@ -27,7 +27,7 @@ from backend.services.machines import MachineProxy, MachineService
 from backend.services.store import Store
 from nc_sim.params import ParamDef, ParamError, Scope, Value, resolve
 from nc_sim.params.listfile import axis_kind_of
-from nc_sim.units import AxisKind, to_eng
+from nc_sim.units import AxisKind
 
 MAX_VERSIONS = 1000  # per machine: a script taking one per minute is told, not the disk filled
 LIVE, DEFAULTS, BASELINE = "live", "defaults", "baseline"
@@ -106,10 +106,10 @@ def _value(d: ParamDef, values: dict[str, Value], name: str) -> Value:
     return d.symbols.get(v, v) if isinstance(v, str) and d.symbols else v
 
 
-def _eng(d: ParamDef, v: Value | None) -> float | None:
+def _eng(d: ParamDef, v: Value | None, kind: AxisKind) -> float | None:
     if not d.is_numeric or d.symbols or isinstance(v, str) or v is None:
         return None
-    return to_eng(d.quantity, float(v))
+    return float(v) * d.display_unit(kind)[0]
 
 
 def diff(m: MachineProxy, a: Lists, b: Lists) -> list[ParamDiff]:
@@ -122,7 +122,7 @@ def diff(m: MachineProxy, a: Lists, b: Lists) -> list[ParamDiff]:
         if before == after:
             continue
         kind = kinds.get(target, AxisKind.LINEAR)
-        eng_unit = d.eng_unit(kind) if d.is_numeric else ""
+        eng_unit = d.display_unit(kind)[1] if d.is_numeric else ""
         out.append(
             ParamDiff(
                 scope=scope,
@@ -133,8 +133,8 @@ def diff(m: MachineProxy, a: Lists, b: Lists) -> list[ParamDiff]:
                 before=before,
                 after=after,
                 unit=d.raw_unit(kind),
-                before_eng=_eng(d, before),
-                after_eng=_eng(d, after),
+                before_eng=_eng(d, before, kind),
+                after_eng=_eng(d, after, kind),
                 eng_unit=eng_unit,
                 effect=d.effect.value,
             )

@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from enum import StrEnum
 
-from nc_sim.units import AxisKind, Quantity, eng_unit, raw_unit
+from nc_sim.units import AxisKind, Quantity, display_unit, eng_unit, raw_unit
 
 
 class Scope(StrEnum):
@@ -98,6 +98,10 @@ class ParamDef:
     def eng_unit(self, kind: AxisKind) -> str:
         """Unit of the value as the kernel uses it."""
         return eng_unit(self.quantity, kind)
+
+    def display_unit(self, kind: AxisKind) -> tuple[float, str]:
+        """(factor from the list value, unit) as the HMI shows the value (units.display_unit)."""
+        return display_unit(self.quantity, kind)
 
 
 _INDEX_RE = re.compile(r"\[(\d+|i|j)\]")

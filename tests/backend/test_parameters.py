@@ -81,6 +81,16 @@ def test_registry_and_values_per_gear_record(srv: Server, mid: str) -> None:
     # engineering value: kv 2000 × 0.01/s = 20 1/s; the manual's range 1 … 2^32-1
     assert (x["eng_factor"] * x["value"], x["eng_unit"]) == (pytest.approx(20.0), "1/s")
     assert (x["min"], x["max"]) == (1, 2**32 - 1)
+    # one unit per quantity, as the machine view shows it: a velocity in µm/s reads in mm/min
+    # (the F word's unit; 333333 µm/s = 20 m/min), a spindle's in rpm (3360000 0.001°/s =
+    # 3360 °/s = 560 rpm), a weight in 0.1 % in % (r_trans_weight 1000 = 100 %)
+    for target, name, shown in (
+        ("X", "getriebe[0].vb_eilgang", (19999.98, "mm/min")),
+        ("S1", "getriebe[0].vb_eilgang", (560.0, "rpm")),
+        ("X", "getriebe[0].dynamik.r_trans_weight", (100.0, "%")),
+    ):
+        p = values(srv, mid, target)[name]
+        assert (p["value"] * p["eng_factor"], p["eng_unit"]) == (pytest.approx(shown[0]), shown[1])
     # a bound that names another entry is resolved from the list: a_emergency ≤ 2·a_max
     a_max = values(srv, mid)["getriebe[0].dynamik.a_max"]["value"]
     assert values(srv, mid)["getriebe[0].dynamik.a_emergency"]["max"] == 2 * a_max

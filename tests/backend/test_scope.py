@@ -189,7 +189,8 @@ def test_library_keeps_parameters_renames_compares_deletes(
     at_capture = {(p["scope"], p["target"], p["name"]): p["value"] for p in detail["params"]}
     assert at_capture[("axis", "S1", kv)] == 1500
     cmp = srv.http.get("/api/traces/compare", params={"a": first["id"], "b": second["id"]}).json()
-    assert [(p["name"], p["b"]) for p in cmp["params"]] == [(kv, 1500)]
+    # the first capture ran with kv at its default, 1000 (10/s): the value then, not "default"
+    assert [(p["name"], p["a"], p["b"]) for p in cmp["params"]] == [(kv, 1000, 1500)]
     assert cmp["common_channels"] == CH
 
     r = srv.http.patch(f"/api/traces/{first['id']}", json={"name": "before", "notes": "kv 20"})

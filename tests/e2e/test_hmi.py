@@ -94,7 +94,7 @@ def test_kv_apply_changes_the_lag_and_revert_restores_it(page: Page) -> None:
     page.get_by_test_id("param-search").fill("P-AXIS-00099")
     field = page.get_by_test_id("param-input-getriebe[0].kv")
     field.fill("1000")
-    expect(page.get_by_test_id("param-eng-getriebe[0].kv")).to_have_text("10.0000 1/s")
+    expect(page.get_by_test_id("param-eng-getriebe[0].kv")).to_have_text("10\u00a01/s")
     page.get_by_test_id("param-apply").click()
     expect(page.get_by_test_id("param-trial")).to_be_visible()
     lag_settles_at(v / (1000 * 0.01))  # 1.0 mm: lag = v / (kv · 0.01)

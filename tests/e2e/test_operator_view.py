@@ -143,10 +143,10 @@ def test_units_sit_with_their_numbers(browser: Browser, srv: Server, mid: str) -
         " - parseFloat(getComputedStyle(e).paddingRight); }"
     )
     assert fits
-    search.fill("P-AXIS-00109")  # kenngr.max_vb_override in 0.1 %: a plain fraction
+    search.fill("P-AXIS-00109")  # kenngr.max_vb_override in 0.1 %: read in %
     raw = float(params.get_by_test_id("param-input-kenngr.max_vb_override").input_value())
     eng = params.get_by_test_id("param-eng-kenngr.max_vb_override")
-    expect(eng).to_have_text(f"{raw / 1000:.4f}")  # no unit "1" after it
+    expect(eng).to_have_text(f"{raw / 10:g}\u00a0%")  # a weight in %, not "0.0000 1"
     shot(page, "parameters-tablet")
     page.close()
 

@@ -10,7 +10,7 @@ from pathlib import Path
 from playwright.sync_api import Browser, Page, Request, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import number, open_hmi, shot, signed_in_page
+from tests.e2e.browser import commands_sent, number, open_hmi, panel, shot, signed_in_page
 
 LENGTH_S = 4.0
 PRE_PCT = 25.0
@@ -116,6 +116,13 @@ def test_save_import_csv_and_overlay(
     expect(compare).to_contain_text("same parameters")
     legend = page.get_by_test_id("capture-chart").locator(".u-legend")
     expect(legend).to_contain_text("m19-before: S1.pos_act_deg")
+    # the overlay measured alike, side by side: the same capture, so the same figures
+    meas = page.get_by_test_id("measurements")
+    expect(meas.get_by_test_id("meas-head-overlay")).to_contain_text("m19-before")
+    expect(meas.get_by_test_id("meas-overlay-final")).not_to_have_text("—")
+    expect(meas.get_by_test_id("meas-overlay-final")).to_have_text(
+        meas.get_by_test_id("meas-final").inner_text()
+    )
     shot(page, "scope-overlay-desktop")
     page.close()
 
@@ -173,4 +180,55 @@ def test_roll_mode_runs_free_and_a_capture_fits_a_tablet(
     overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
     assert overflow <= 0
     shot(page, "scope-capture-tablet")
+    page.close()
+
+
+def test_one_y_axis_per_unit_booleans_as_lanes_and_commands_from_the_scope(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    """rpm, degrees and a boolean in one capture: two y axes (rpm, deg) and a digital lane; the
+    signal picker opens below Arm, and M3 from the scope's own command strip triggers it."""
+    page = open_hmi(browser, srv.base, mid)
+    page.get_by_test_id("tab-Scope").click()
+    setup = panel(page, "scope-setup")
+    picker = setup.get_by_test_id("scope-channels")
+    picker.locator("summary").click()
+    for name in ("S1.speed_cmd_rpm", "S1.lag_deg"):  # the default set keeps two rpm, two deg
+        picker.locator(f'input[data-signal="{name}"]').uncheck()
+    picker.locator('input[data-signal="S1.speed_reached"]').check()
+    body = picker.locator(".picker-body").bounding_box()
+    arm_box = setup.get_by_test_id("scope-arm").bounding_box()
+    assert body is not None and arm_box is not None
+    assert arm_box["y"] + arm_box["height"] <= body["y"], "the open picker covers Arm"
+    picker.locator("summary").click()
+    setup.get_by_test_id("scope-length").fill("1.5")
+    setup.get_by_test_id("trigger-event").check()
+    setup.get_by_test_id("trigger-kind").select_option("m_start")
+    setup.get_by_test_id("trigger-axis").select_option("S1")
+    setup.get_by_test_id("trigger-m").select_option("3")
+    setup.get_by_test_id("scope-arm").click()
+    expect(setup.get_by_test_id("scope-state")).to_contain_text("history 100 %", timeout=10_000)
+
+    strip = panel(page, "scope-commands")
+    sent = commands_sent(page)
+    strip.get_by_test_id("s-input").fill("1000")
+    strip.get_by_test_id("m3").click()
+    chart = panel(page, "capture").get_by_test_id("capture-chart")
+    expect(chart).to_be_visible(timeout=15_000)
+    assert any('"m":3' in s for s in sent)
+    # channels in their picker order: rpm first (left), deg (right), the boolean as a lane
+    expect(chart).to_have_attribute("data-y-units", "rpm|deg")
+    expect(chart).to_have_attribute("data-lanes", "S1.speed_reached")
+    # uPlot's axes: time, rpm, deg and the lanes' labels
+    expect(chart.locator(".u-axis")).to_have_count(4)
+    # the lane reads 0/1 at the cursor, never the drawn level
+    legend = chart.locator(".u-legend")
+    expect(legend).to_contain_text("S1.speed_reached")
+    shot(page, "scope-axes-desktop")
+    page.set_viewport_size({"width": 1024, "height": 768})
+    expect(chart.locator(".u-axis")).to_have_count(4)
+    chart.scroll_into_view_if_needed()
+    overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
+    assert overflow <= 0
+    shot(page, "scope-axes-tablet")
     page.close()

@@ -1,16 +1,16 @@
 // A captured record in uPlot: time from the trigger, a trigger marker at t = 0, two cursors
 // (click sets A, shift-click sets B, drag a line to move it), drag or wheel to zoom, buttons
-// to pan, double-click for the whole record, and an overlay trace drawn dashed behind.
+// to pan, double-click for the whole record, and an overlay trace drawn dashed behind. One y
+// axis per unit, booleans as digital lanes below the analog area (ui/scopeAxes.ts).
 import { useEffect, useRef } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { fmt, tickLabels } from "../ui/format";
 import { followWidth } from "../ui/plot";
+import { analogRange, type ChannelShape, DIGITAL, digitalRange, LANE_HIGH, laneBit, laneValue, scopeLayout } from "../ui/scopeAxes";
 import { COLOURS } from "./LivePlot";
 
-export interface Series {
-  name: string;
-  unit: string;
+export interface Series extends ChannelShape {
   data: Float64Array;
 }
 
@@ -53,15 +53,22 @@ export function CaptureChart(props: {
   cb.current = props;
 
   const overlaid = props.overlay ? props.series.filter((s) => props.overlay?.channels.has(s.name)) : [];
+  const layout = scopeLayout(props.series);
+  // a boolean sample becomes its lane's level; analog samples stay as they are
+  const drawn = (i: number, y: ArrayLike<number | null>): (number | null)[] | number[] => {
+    const lane = layout.laneOf[i];
+    if (lane === null) return y as unknown as number[];
+    return Array.from(y, (v) => laneValue(v, lane, layout.lanes));
+  };
   const aligned = (): uPlot.AlignedData => {
     const { t, series, overlay } = props;
     return [
       t as unknown as number[],
-      ...series.map((s) => s.data as unknown as number[]),
-      ...overlaid.map((s) => onGrid(t, overlay!.t, overlay!.channels.get(s.name)!)),
+      ...series.map((s, i) => drawn(i, s.data)),
+      ...overlaid.map((s) => drawn(series.indexOf(s), onGrid(t, overlay!.t, overlay!.channels.get(s.name)!))),
     ];
   };
-  const structure = `${props.series.map((s) => s.name).join(",")}|${overlaid.length}`;
+  const structure = `${props.series.map((s) => `${s.name}:${s.unit}:${s.kind}`).join(",")}|${overlaid.length}`;
 
   // (re)build the chart when its series change; new samples of the same series only replace
   // the data (a rolling scope, the next capture of a normal-mode scope)
@@ -96,36 +103,72 @@ export function CaptureChart(props: {
       put(cbx, cursorsRef.current[1]);
     };
 
+    const { scales, scaleOf, laneOf, lanes, digitalShare } = layout;
+    const stepped = uPlot.paths.stepped!({ align: 1 });
+    const valueOf = (i: number) => (_u: uPlot, v: number | null) => (laneOf[i] === null ? fmt(v, 4) : String(laneBit(v) ?? "—"));
+    const uScales: uPlot.Scales = { x: { time: false } };
+    for (const sc of scales) uScales[sc.key] = { range: (_u, min, max) => analogRange(min, max, digitalShare).slice(0, 2) as [number, number] };
+    if (lanes) uScales[DIGITAL] = { auto: false, range: () => digitalRange(lanes, digitalShare) };
+    const bools = series.filter((_s, i) => laneOf[i] !== null);
     const opts: uPlot.Options = {
       width: Math.max(300, el.clientWidth),
       height: CHART_HEIGHT, // the legend (cursor values) goes below, outside this height
       series: [
         { label: "t [s]", value: (_u, v) => fmt(v, 4) },
         ...series.map((s, i) => ({
-          label: `${s.name} [${s.unit}]`,
+          label: s.unit ? `${s.name} [${s.unit}]` : s.name,
           stroke: COLOURS[i % COLOURS.length],
           width: 1.25,
-          value: (_u: uPlot, v: number | null) => fmt(v, 4),
+          scale: scaleOf[i],
+          ...(laneOf[i] !== null ? { paths: stepped } : {}),
+          value: valueOf(i),
         })),
-        ...overlaid.map((s) => ({
-          label: `${overlay!.label}: ${s.name}`,
-          stroke: COLOURS[series.indexOf(s) % COLOURS.length] + "99",
-          width: 1.25,
-          dash: [6, 4],
-          value: (_u: uPlot, v: number | null) => fmt(v, 4),
-        })),
+        ...overlaid.map((s) => {
+          const i = series.indexOf(s);
+          return {
+            label: `${overlay!.label}: ${s.name}`,
+            stroke: COLOURS[i % COLOURS.length] + "99",
+            width: 1.25,
+            dash: [6, 4],
+            scale: scaleOf[i],
+            ...(laneOf[i] !== null ? { paths: stepped } : {}),
+            value: valueOf(i),
+          };
+        }),
       ],
-      scales: { x: { time: false } },
+      scales: uScales,
       axes: [
         { label: "time from trigger [s]", values: (_u, splits) => tickLabels(splits) },
-        {
-          size: 64,
-          values: (u, splits) => {
+        ...scales.map((sc, k) => ({
+          scale: sc.key,
+          side: sc.side,
+          label: sc.unit,
+          labelSize: 18,
+          size: 56,
+          grid: { show: k === 0 },
+          // ticks only where the analog data is, not down in the digital lanes
+          filter: (u: uPlot, splits: number[]) => {
+            const { min, max } = u.scales[sc.key];
+            const floor = min == null || max == null ? -Infinity : min + (max - min) * digitalShare;
+            return splits.map((v) => (v >= floor - 1e-9 * Math.abs(max ?? 1) ? v : null));
+          },
+          values: (u: uPlot, splits: number[]) => {
             const labels = tickLabels(splits);
-            u.root.dataset.yTicks = labels.join(" | "); // what the axis reads, for tests
+            if (k === 0) u.root.dataset.yTicks = labels.join(" | "); // what the axis reads, for tests
             return labels;
           },
-        },
+        })),
+        ...(lanes
+          ? [{
+              scale: DIGITAL,
+              side: 3 as const,
+              size: Math.min(170, 16 + 6.5 * Math.max(...bools.map((b) => b.name.length))),
+              grid: { show: false },
+              ticks: { show: false },
+              splits: () => bools.map((_b, j) => lanes - 1 - j + LANE_HIGH / 2),
+              values: () => bools.map((b) => b.name),
+            }]
+          : []),
       ],
       cursor: { drag: { x: true, y: false } },
       legend: { live: true },
@@ -205,7 +248,8 @@ export function CaptureChart(props: {
   const whole = () => span(() => [props.t[0], props.t[props.t.length - 1]]);
 
   return (
-    <div class="capture-chart" data-testid={props.testid}>
+    <div class="capture-chart" data-testid={props.testid} data-y-units={layout.scales.map((sc) => sc.unit).join("|")}
+      data-lanes={props.series.filter((_s, i) => layout.laneOf[i] !== null).map((s) => s.name).join("|")}>
       <div class="plot-tools">
         <button type="button" title="pan left" onClick={() => span((a, b) => [a - (b - a) / 2, b - (b - a) / 2])}>◀</button>
         <button type="button" title="pan right" onClick={() => span((a, b) => [a + (b - a) / 2, b + (b - a) / 2])}>▶</button>

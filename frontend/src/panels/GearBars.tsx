@@ -1,23 +1,29 @@
-// The gear range table as bars on one speed scale, the active stage highlighted and the
-// programmed speed marked.
+// The gear range table as bars on one rpm scale (ticks with numbers), the active stage
+// highlighted and the programmed speed marked; each bar names its M function, gear number and
+// gear record (M40 · gear 1 · getriebe[0]).
+import { gearName, niceTicks } from "../ui/format";
+
 export interface GearRange {
   min: number;
   max: number;
 }
 
 export function GearBars(props: { ranges: GearRange[]; active: number | null; speed: number | null }) {
-  const top = Math.max(1, ...props.ranges.map((r) => r.max)) * 1.05;
+  const ticks = niceTicks(Math.max(1, ...props.ranges.map((r) => r.max)));
+  const top = ticks[ticks.length - 1];
   const W = 360;
   const ROW = 18;
-  const x = (v: number) => 40 + (v / top) * (W - 50);
-  const H = props.ranges.length * ROW + 18;
+  const LEFT = 40;
+  const x = (v: number) => LEFT + (v / top) * (W - LEFT - 14);
+  const bars = props.ranges.length * ROW;
+  const H = bars + 34; // the scale, then the programmed speed's label
   const s = props.speed;
   return (
     <svg
       class="gearbars"
       viewBox={`0 0 ${W} ${H}`}
       role="img"
-      aria-label={`gear ranges, programmed speed ${s ?? "none"} rpm`}
+      aria-label={`gear ranges on an rpm scale, programmed speed ${s ?? "none"} rpm`}
       data-testid="gear-bars"
     >
       {props.ranges.map((r, i) => {
@@ -36,14 +42,26 @@ export function GearBars(props: { ranges: GearRange[]; active: number | null; sp
               height={ROW - 6}
               class={on ? "bar active" : "bar"}
             >
-              <title>{`M${39 + g}: ${r.min}–${r.max} rpm`}</title>
+              <title>{`${gearName(g)}: ${r.min}–${r.max} rpm`}</title>
             </rect>
           </g>
         );
       })}
+      <g class="gear-axis" data-testid="gear-bars-scale" data-ticks={ticks.join(" ")}>
+        <line x1={x(0)} x2={x(top)} y1={bars + 2} y2={bars + 2} class="axis" />
+        {ticks.map((v, k) => (
+          <g key={v}>
+            <line x1={x(v)} x2={x(v)} y1={bars + 2} y2={bars + 6} class="axis" />
+            <text x={x(v) + (k === ticks.length - 1 ? 12 : 0)} y={bars + 16} class="tick-label"
+              text-anchor={k === 0 ? "start" : k === ticks.length - 1 ? "end" : "middle"}>
+              {k === ticks.length - 1 ? `${v} rpm` : v}
+            </text>
+          </g>
+        ))}
+      </g>
       {s !== null ? (
         <g data-testid="gear-mark" data-rpm={s}>
-          <line x1={x(s)} x2={x(s)} y1="0" y2={H - 14} class="mark" />
+          <line x1={x(s)} x2={x(s)} y1="0" y2={bars + 6} class="mark" />
           <text x={x(s)} y={H - 3} class="mark-label" text-anchor="middle">
             S{Math.round(s)}
           </text>

@@ -10,6 +10,7 @@ import { previewGears } from "../state/calculators";
 import { paramsVersion } from "../state/params";
 import { machineId, status } from "../state/session";
 import { RefusalLine } from "../ui/useCommand";
+import { gearName } from "../ui/format";
 import { ApplyBar, checkNumber, refusalOf } from "./CalcParts";
 
 const GEARS = [1, 2, 3, 4, 5, 6];
@@ -175,7 +176,7 @@ export function GearRanges() {
           return (
             <g key={g} data-testid={`gear-row-${g}`} data-chosen={g === chosen ? "1" : "0"}>
               <text x={4} y={y + 17} class={g === chosen ? "row-label chosen" : "row-label"}>
-                M{39 + g} · gear {g} · getriebe[{g - 1}]
+                {gearName(g)}
               </text>
               {used ? (
                 <>

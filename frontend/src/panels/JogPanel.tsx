@@ -86,10 +86,12 @@ export function JogPanel() {
     setFeedDefault(null);
     if (!machineId.value || !axName) return;
     void loadList("axis", axName).then((list) => {
-      // list unit (µm/s, 0.001°/s) × eng_factor = mm/s | °/s, × 60 = per minute
+      // list unit × eng_factor = mm/min | °/min (rpm for a spindle, which jogs as C in °/min)
       const perMin = (n: string) => {
         const p = list.find((q) => q.name === n);
-        return p && typeof p.value === "number" && p.eng_factor != null ? p.value * p.eng_factor * 60 : null;
+        if (!p || typeof p.value !== "number" || p.eng_factor == null) return null;
+        const v = p.value * p.eng_factor;
+        return p.eng_unit === "rpm" ? v * 360 : v;
       };
       const hb = perMin("handbetrieb.hb.vb_max");
       const dyn = perMin(`getriebe[${Math.max(0, gear - 1)}].dynamik.vb_max`);

@@ -5,9 +5,10 @@ import { motionLocked, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
-export function MdiPanel() {
-  const [line, setLine] = useState("");
-  const [history, setHistory] = useState<string[]>([]);
+/** The MDI input with Execute, a refused block's caret and the refusal: the MDI panel's and
+ * the scope's command strip's. `line` is the parent's (its history fills it). */
+export function MdiLine(props: { line: string; setLine: (l: string) => void; history: string[]; onSent: (block: string) => void }) {
+  const { line, setLine, history } = props;
   const [pos, setPos] = useState(-1); // index into history while browsing, -1: editing
   const [sent, setSent] = useState("");
   const cmd = useCommand();
@@ -16,7 +17,7 @@ export function MdiPanel() {
     const block = line.trim();
     if (!block) return;
     setSent(block);
-    setHistory((h) => [block, ...h.filter((b) => b !== block)].slice(0, 50));
+    props.onSent(block);
     setPos(-1);
     const ok = await cmd.run({ type: "mdi", block });
     if (ok) setLine("");
@@ -31,9 +32,9 @@ export function MdiPanel() {
   const column = cmd.refusal?.column ?? null;
   const blocked = commandBlocked.value; // another holder, or a role that may not command
   return (
-    <Panel title="MDI" id="mdi">
+    <>
       <form
-        class="row"
+        class="row mdi-form"
         onSubmit={(e) => {
           e.preventDefault();
           void submit();
@@ -68,6 +69,19 @@ export function MdiPanel() {
         </pre>
       ) : null}
       <RefusalLine refusal={cmd.refusal} id="mdi-refusal" />
+    </>
+  );
+}
+
+/** A block history, newest first, without repeats. */
+export const withBlock = (h: string[], block: string) => [block, ...h.filter((b) => b !== block)].slice(0, 50);
+
+export function MdiPanel() {
+  const [line, setLine] = useState("");
+  const [history, setHistory] = useState<string[]>([]);
+  return (
+    <Panel title="MDI" id="mdi">
+      <MdiLine line={line} setLine={setLine} history={history} onSent={(b) => setHistory((h) => withBlock(h, b))} />
       <MdiState />
       {history.length ? (
         <ol class="history" aria-label="MDI history">
@@ -85,7 +99,7 @@ export function MdiPanel() {
 }
 
 /** What MDI runs and which modal words the next block starts from (they carry over). */
-function MdiState() {
+export function MdiState() {
   const s = status.value;
   const ch = s?.channel;
   if (!s || !ch) return null;

@@ -1,5 +1,7 @@
 // Measurements of one channel over the window between the cursors (or the visible range),
-// computed by the service: max |value| (max lag), overshoot, rise time, settling, steady mean.
+// computed by the service: max |value| (max lag), overshoot, rise time, settling, steady mean;
+// with an overlaid trace, its figures for the same channel and window side by side.
+import { Fragment } from "preact";
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { Measurements as M, TraceDetail } from "../api/types";
@@ -7,28 +9,21 @@ import { measure } from "../state/scope";
 import { fmt } from "../ui/format";
 import type { Cursors } from "./CaptureChart";
 
-export function Measurements(props: { detail: TraceDetail; cursors: Cursors; range: [number, number] | null }) {
-  const { detail, cursors, range } = props;
-  const { channel, band } = measure.value;
-  const setChannel = (c: string) => measure.patch({ channel: c });
-  const setBand = (b: number) => measure.patch({ band: b });
+/** The service's figures for `channel` of trace `id` over the window, refetched as they change
+ * (debounced while cursors move); null while none or when `id` is "". */
+function useMeasure(id: string, channel: string, band: number, win: [number, number] | null) {
   const [m, setM] = useState<M | null>(null);
   const [error, setError] = useState("");
-  const names = detail.channels.map((c) => c.name);
-  const ch = names.includes(channel) ? channel : (detail.channels.find((c) => c.kind === "float")?.name ?? names[0]);
-  const [a, b] = cursors;
-  const win: [number, number] | null = a !== null && b !== null ? [Math.min(a, b), Math.max(a, b)] : range;
-  const source = a !== null && b !== null ? "between the cursors" : "visible range";
-
   useEffect(() => {
-    const q = new URLSearchParams({ channel: ch, band_pct: String(band) });
+    if (!id) return setM(null);
+    const q = new URLSearchParams({ channel, band_pct: String(band) });
     if (win) {
       q.set("t0_s", String(win[0]));
       q.set("t1_s", String(win[1]));
     }
     const timer = setTimeout(() => {
       http
-        .get<M>(`/api/traces/${detail.id}/measure?${q}`)
+        .get<M>(`/api/traces/${id}/measure?${q}`)
         .then((r) => {
           setM(r);
           setError("");
@@ -39,13 +34,48 @@ export function Measurements(props: { detail: TraceDetail; cursors: Cursors; ran
         });
     }, 120);
     return () => clearTimeout(timer);
-  }, [detail.id, ch, band, win?.[0], win?.[1]]);
+  }, [id, channel, band, win?.[0], win?.[1]]);
+  return { m, error };
+}
 
-  const u = m?.unit ?? "";
-  const row = (label: string, id: string, value: string, title = "") => (
-    <tr title={title}>
-      <th>{label}</th>
-      <td data-testid={`meas-${id}`}>{value}</td>
+type Row = [label: string, id: string, value: (m: M) => string, title?: string];
+
+export function Measurements(props: {
+  detail: TraceDetail;
+  cursors: Cursors;
+  range: [number, number] | null;
+  /** an overlaid trace: measured alike, in a second column */
+  compare?: TraceDetail | null;
+}) {
+  const { detail, cursors, range } = props;
+  // the channel and band stay for the session (state/scope.ts), across tabs
+  const { channel, band } = measure.value;
+  const setChannel = (c: string) => measure.patch({ channel: c });
+  const setBand = (b: number) => measure.patch({ band: b });
+  const names = detail.channels.map((c) => c.name);
+  const ch = names.includes(channel) ? channel : (detail.channels.find((c) => c.kind === "float")?.name ?? names[0]);
+  const [a, b] = cursors;
+  const win: [number, number] | null = a !== null && b !== null ? [Math.min(a, b), Math.max(a, b)] : range;
+  const source = a !== null && b !== null ? "between the cursors" : "visible range";
+
+  const { m, error } = useMeasure(detail.id, ch, band, win);
+  const other = props.compare && props.compare.channels.some((c) => c.name === ch) ? props.compare : null;
+  const { m: mo } = useMeasure(other?.id ?? "", ch, band, win);
+  const rows: Row[] = [
+    ["window", "window", (r) => `${fmt(r.t0_s, 3)} … ${fmt(r.t1_s, 3)} s (${r.samples} samples)`],
+    ["max |value|", "max-abs", (r) => `${fmt(r.max_abs, 4)} ${r.unit} at ${fmt(r.t_max_abs_s, 3)} s`, "e.g. the maximum lag"],
+    ["overshoot", "overshoot", (r) => (r.overshoot_pct === null ? "—" : `${fmt(r.overshoot_pct, 2)} %`), "beyond the final value, in % of the step"],
+    ["rise time 10–90 %", "rise", (r) => (r.rise_time_s === null ? "—" : `${fmt(r.rise_time_s * 1000, 1)} ms`)],
+    ["noise σ", "noise", (r) => `${fmt(r.noise, 6)} ${r.unit}`, "from neighbouring samples; a step must exceed 10 σ"],
+    [`settling (±${fmt(m?.band, 4)} ${m?.unit ?? ""})`, "settling", (r) => (r.settling_time_s === null ? "not settled" : `${fmt(r.settling_time_s * 1000, 1)} ms`), "from the trigger until it stays in the band"],
+    ["steady mean", "final", (r) => `${fmt(r.final, 4)} ${r.unit}`, "mean of the last 10 % of the window"],
+    ["min / max", "minmax", (r) => `${fmt(r.minimum, 4)} / ${fmt(r.maximum, 4)} ${r.unit}`],
+  ];
+  const noStep = (
+    <tr>
+      <td colSpan={other ? 3 : 2} class="hint" data-testid="meas-no-step">
+        no step stands out of the noise here (or it comes back): no overshoot or rise time
+      </td>
     </tr>
   );
   return (
@@ -68,22 +98,26 @@ export function Measurements(props: { detail: TraceDetail; cursors: Cursors; ran
       {error ? <p class="refusal">{error}</p> : null}
       {m ? (
         <table class="meas-table">
-          <tbody>
-            {row("window", "window", `${fmt(m.t0_s, 3)} … ${fmt(m.t1_s, 3)} s (${m.samples} samples)`)}
-            {row("max |value|", "max-abs", `${fmt(m.max_abs, 4)} ${u} at ${fmt(m.t_max_abs_s, 3)} s`, "e.g. the maximum lag")}
-            {m.step_found ? null : (
+          {other ? (
+            <thead>
               <tr>
-                <td colSpan={2} class="hint" data-testid="meas-no-step">
-                  no step stands out of the noise here (or it comes back): no overshoot or rise time
-                </td>
+                <th />
+                <th data-testid="meas-head-shown">{detail.name || detail.trigger || "shown"}</th>
+                <th data-testid="meas-head-overlay">{other.name || other.trigger || "overlay"} (dashed)</th>
               </tr>
-            )}
-            {row("overshoot", "overshoot", m.overshoot_pct === null ? "—" : `${fmt(m.overshoot_pct, 2)} %`, "beyond the final value, in % of the step")}
-            {row("rise time 10–90 %", "rise", m.rise_time_s === null ? "—" : `${fmt(m.rise_time_s * 1000, 1)} ms`)}
-            {row("noise σ", "noise", `${fmt(m.noise, 6)} ${u}`, "from neighbouring samples; a step must exceed 10 σ")}
-            {row(`settling (±${fmt(m.band, 4)} ${u})`, "settling", m.settling_time_s === null ? "not settled" : `${fmt(m.settling_time_s * 1000, 1)} ms`, "from the trigger until it stays in the band")}
-            {row("steady mean", "final", `${fmt(m.final, 4)} ${u}`, "mean of the last 10 % of the window")}
-            {row("min / max", "minmax", `${fmt(m.minimum, 4)} / ${fmt(m.maximum, 4)} ${u}`)}
+            </thead>
+          ) : null}
+          <tbody>
+            {rows.map(([label, id, value, title]) => (
+              <Fragment key={id}>
+                <tr title={title}>
+                  <th>{label}</th>
+                  <td data-testid={`meas-${id}`}>{value(m)}</td>
+                  {other ? <td data-testid={`meas-overlay-${id}`}>{mo ? value(mo) : "—"}</td> : null}
+                </tr>
+                {id === "max-abs" && !m.step_found ? noStep : null}
+              </Fragment>
+            ))}
           </tbody>
         </table>
       ) : null}

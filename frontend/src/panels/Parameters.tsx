@@ -19,7 +19,7 @@ import {
 } from "../state/params";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
-import { qty } from "../ui/format";
+import { engQty, multiGainText } from "../ui/format";
 import { paramView } from "../state/versions";
 import { groupOf } from "./paramGroups";
 import { BaselineNudge, Versions } from "./Versions";
@@ -200,6 +200,18 @@ function ParameterList() {
     }
   }
 
+  /** multi_gain_z and _n read as their ratio (the gear record's other half as it stands or
+   * is being edited) [004 §3.6.2]. */
+  const multiGain = (p: ParameterValue, v: ParameterValue["value"]): string | null => {
+    const m = /^(getriebe\[\d+\]\.multi_gain_)([zn])$/.exec(p.name);
+    if (!m || typeof v !== "number") return null;
+    const other = byName.get(`${m[1]}${m[2] === "z" ? "n" : "z"}`);
+    const edited = other ? edits[other.name] : undefined;
+    const ov = edited !== undefined && other && !check(other, edited) ? Number(edited) : other?.value;
+    if (typeof ov !== "number") return null;
+    const [z, n] = m[2] === "z" ? [v, ov] : [ov, v];
+    return multiGainText(z, n, axes.find((a) => a.name === t?.target)?.kind === "linear");
+  };
   const problemOf = (name: string) => problems.find((p) => p.parameter === name);
   return (
     <Panel title="Parameters" id="parameters">
@@ -315,7 +327,9 @@ function ParameterList() {
                   </td>
                   <td>{p.unit}</td>
                   <td class="num" data-testid={`param-eng-${p.name}`}>
-                    {typeof v === "number" && p.eng_factor != null && p.eng_unit !== p.unit ? qty(v * p.eng_factor, 4, p.eng_unit) : ""}
+                    {multiGain(p, v) ?? (typeof v === "number" && p.eng_factor != null && (p.eng_unit !== p.unit || p.eng_factor !== 1)
+                      ? engQty(v * p.eng_factor, p.eng_unit)
+                      : "")}
                   </td>
                   <td class="hint">{p.min != null ? `${num(p.min)} … ${num(p.max ?? Infinity)}` : ""}</td>
                   <td class="num">{String(p.default)}</td>

@@ -19,6 +19,7 @@ import {
 import { catalogue } from "../state/telemetry";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
+import { CommandStrip } from "./CommandStrip";
 import { CaptureChart, type Cursors, type Overlay, type Series } from "./CaptureChart";
 import { Measurements } from "./Measurements";
 import { ScopeSetup } from "./ScopeSetup";
@@ -67,7 +68,7 @@ function CursorTable(props: { trace: LoadedTrace; cursors: Cursors }) {
           const yb = ib === null ? null : y[ib];
           return (
             <tr key={c.name}>
-              <th>{c.name} [{c.unit}]</th>
+              <th>{c.name}{c.unit ? ` [${c.unit}]` : ""}</th>
               <td>{fmt(ya, 4)}</td>
               <td>{fmt(yb, 4)}</td>
               <td data-testid={`cursor-dy-${c.name}`}>{ya !== null && yb !== null ? fmt(yb - ya, 4) : "—"}</td>
@@ -174,7 +175,7 @@ function CaptureView() {
   }, [trace?.detail.id, overlay?.detail.id]);
 
   const series: Series[] = trace
-    ? trace.detail.channels.map((c) => ({ name: c.name, unit: c.unit, data: trace.channels.get(c.name)! }))
+    ? trace.detail.channels.map((c) => ({ name: c.name, unit: c.unit, kind: c.kind, data: trace.channels.get(c.name)! }))
     : [];
   // one object per overlay: the chart rebuilds when it changes identity
   const ov = useMemo<Overlay | null>(
@@ -217,7 +218,7 @@ function CaptureView() {
             onCursors={setCursors} onRange={setRange} testid="capture-chart" />
           <div class="capture-below">
             <CursorTable trace={trace} cursors={cursors} />
-            <Measurements detail={d} cursors={cursors} range={range} />
+            <Measurements detail={d} cursors={cursors} range={range} compare={overlay?.detail ?? null} />
           </div>
           <RecordFacts detail={d} />
           {overlay ? (
@@ -234,8 +235,9 @@ function CaptureView() {
                       {compare.params.map((p) => (
                         <tr key={`${p.scope}${p.target}${p.name}`}>
                           <td>{p.target ? `${p.target} ` : ""}{p.name}</td>
-                          <td>{p.a ?? "default"}</td>
-                          <td>{p.b ?? "default"}</td>
+                          {/* null only for an import: it has no parameter snapshot */}
+                          <td>{p.a ?? "not recorded"}</td>
+                          <td>{p.b ?? "not recorded"}</td>
                         </tr>
                       ))}
                     </tbody>
@@ -268,8 +270,13 @@ function RollView() {
     };
   }, []);
   if (!data) return null;
-  const unit = (n: string) => catalogue.value.find((s) => s.name === n)?.unit ?? "";
-  const series = [...data.channels].map(([name, y]) => ({ name, unit: unit(name), data: y }));
+  const info = (n: string) => catalogue.value.find((s) => s.name === n);
+  const series: Series[] = [...data.channels].map(([name, y]) => ({
+    name,
+    unit: info(name)?.unit ?? "",
+    kind: info(name)?.kind ?? "float",
+    data: y,
+  }));
   return (
     <Panel title="Roll" id="roll">
       <p class="hint" data-testid="roll-info" data-last-cycle={data.lastCycle} data-span-s={data.t.length ? -data.t[0] : 0}>
@@ -294,6 +301,7 @@ export function Scope() {
         <ScopeSetup />
       </div>
       <div class="scope-main">
+        <CommandStrip />
         {scopeStatus.value?.state === "roll" ? <RollView /> : <CaptureView />}
         <TraceLibrary />
       </div>

@@ -58,6 +58,31 @@ export function ScopeSetup() {
   return (
     <Panel title="Scope" id="scope-setup">
       <div class="scope-form">
+        {/* the keys first: the signal picker opens downward over what follows it */}
+        <div class="scope-buttons">
+          <button type="button" class="primary" data-testid="scope-arm" disabled={!online.value || !draft.channels.length}
+            onClick={() => void run(() => arm(draft.mode === "roll" ? { ...draft, trigger: null } : draft))}>
+            {draft.mode === "roll" ? "▶ Roll" : "◉ Arm"}
+          </button>
+          <button type="button" data-testid="scope-force" disabled={state !== "armed"} onClick={() => void run(force)}>
+            ⚡ Force
+          </button>
+          <button type="button" data-testid="scope-stop" disabled={state === "idle" || state === "done"} onClick={() => void run(stop)}>
+            ■ Stop
+          </button>
+        </div>
+        <div class="scope-state" data-testid="scope-state" data-state={state}>
+          <b>{STATE_TEXT[state]}</b>
+          {st?.setup && state !== "idle" ? (
+            <span>
+              {" "}· {st.length_cycles} cycles, {st.pre_cycles} before the trigger
+              {state === "armed" || state === "roll" ? ` · history ${Math.round(fill * 100)} %` : ""}
+            </span>
+          ) : null}
+        </div>
+        {error ? (
+          <p class="refusal" role="alert" data-testid="scope-error">{error}</p>
+        ) : null}
         <SignalPicker chosen={draft.channels} max={MAX_CHANNELS} testid="scope-channels"
           onChange={(channels) => setDraft({ ...draft, channels })} />
         <label>
@@ -141,30 +166,6 @@ export function ScopeSetup() {
             </div>
           )}
         </fieldset>
-        <div class="scope-buttons">
-          <button type="button" class="primary" data-testid="scope-arm" disabled={!online.value || !draft.channels.length}
-            onClick={() => void run(() => arm(draft.mode === "roll" ? { ...draft, trigger: null } : draft))}>
-            {draft.mode === "roll" ? "▶ Roll" : "◉ Arm"}
-          </button>
-          <button type="button" data-testid="scope-force" disabled={state !== "armed"} onClick={() => void run(force)}>
-            ⚡ Force
-          </button>
-          <button type="button" data-testid="scope-stop" disabled={state === "idle" || state === "done"} onClick={() => void run(stop)}>
-            ■ Stop
-          </button>
-        </div>
-        <div class="scope-state" data-testid="scope-state" data-state={state}>
-          <b>{STATE_TEXT[state]}</b>
-          {st?.setup && state !== "idle" ? (
-            <span>
-              {" "}· {st.length_cycles} cycles, {st.pre_cycles} before the trigger
-              {state === "armed" || state === "roll" ? ` · history ${Math.round(fill * 100)} %` : ""}
-            </span>
-          ) : null}
-        </div>
-        {error ? (
-          <p class="refusal" role="alert" data-testid="scope-error">{error}</p>
-        ) : null}
         <fieldset class="recording">
           <legend>Continuous recording (.rrd)</legend>
           {rec?.active ? (

@@ -9,9 +9,10 @@ import { loadRotaryAxisName, rotaryAxisName } from "../state/caxis";
 import { machineId, motionLocked, online, status } from "../state/session";
 import { AxisSignalLamps } from "../ui/AxisSignalLamps";
 import { Panel } from "../ui/Panel";
-import { fmt, qty } from "../ui/format";
+import { fmt, gearName, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 import { GearBars, type GearRange } from "./GearBars";
+import { SpindleKeys } from "./SpindleKeys";
 
 interface SpindleParams {
   ranges: GearRange[];
@@ -105,9 +106,6 @@ export function SpindlePanel() {
   const [name, setName] = useState("");
   const sp = spindles.find((a) => a.name === name) ?? spindles[0];
   const [params, setParams] = useState<SpindleParams | null>(null);
-  const [speed, setSpeed] = useState("1000");
-  const [angle, setAngle] = useState("90");
-  const [dir, setDir] = useState<"0" | "1" | "-1">("0");
   const cmd = useCommand();
   const ovrTimer = useRef<number | null>(null);
   const [ovr, setOvr] = useState<number | null>(null);
@@ -123,10 +121,6 @@ export function SpindlePanel() {
   // offline, emergency stop or someone else's machine: nothing may start moving
   const locked = motionLocked.value || !!blocked;
   const lockedWhy = blocked || (status.value?.emergency_stop ? "emergency stop: reset first" : "");
-  const rpm = Number(speed);
-  const validS = speed.trim() !== "" && Number.isFinite(rpm) && rpm >= 0;
-  const deg = Number(angle);
-  const validAngle = angle.trim() !== "" && Number.isFinite(deg); // "" would be 0°
 
   function sendOverride(pct: number) {
     setOvr(pct);
@@ -172,63 +166,7 @@ export function SpindlePanel() {
         <ModeRow sp={sp} plc={status.value.plc} locked={locked} lockedWhy={lockedWhy} run={cmd.run} />
       ) : null}
       <AxisSignalLamps a={sp} />
-      <form
-        class="row"
-        onSubmit={(e) => {
-          e.preventDefault();
-          if (validS && !locked) void cmd.run({ type: "spindle", spindle: sp.name, m: 3, speed_rpm: rpm });
-        }}
-      >
-        <label>
-          S <input data-testid="s-input" inputMode="decimal" value={speed} size={7} aria-invalid={!validS}
-            onInput={(e) => setSpeed((e.target as HTMLInputElement).value)} /> rpm
-        </label>
-        <button type="submit" data-testid="m3" disabled={locked || !validS} title={lockedWhy || "M3: clockwise"}>
-          M3 ⟳
-        </button>
-        <button type="button" data-testid="m4" disabled={locked || !validS} title={lockedWhy || "M4: counter-clockwise"}
-          onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 4, speed_rpm: rpm })}>
-          M4 ⟲
-        </button>
-        <button type="button" data-testid="m5" class="stop" disabled={dis} title={blocked}
-          onClick={() => void cmd.run({ type: "spindle", spindle: sp.name, m: 5 })}>
-          M5 stop
-        </button>
-      </form>
-      <form
-        class="row"
-        onSubmit={(e) => {
-          e.preventDefault();
-          if (!validAngle || locked) return;
-          void cmd.run({
-            type: "spindle_position",
-            spindle: sp.name,
-            position_deg: deg,
-            direction: dir === "0" ? null : (Number(dir) as 1 | -1),
-          });
-        }}
-      >
-        <label>
-          M19 to <input data-testid="m19-angle" inputMode="decimal" value={angle} size={6} aria-invalid={!validAngle}
-            onInput={(e) => setAngle((e.target as HTMLInputElement).value)} />°
-        </label>
-        <select aria-label="M19 direction" value={dir} onChange={(e) => setDir((e.target as HTMLSelectElement).value as "0")}>
-          <option value="0">shortest way</option>
-          <option value="1">M3 direction (+)</option>
-          <option value="-1">M4 direction (−)</option>
-        </select>
-        <button type="submit" data-testid="m19" disabled={locked || !validAngle} title={lockedWhy}>
-          M19 orient
-        </button>
-      </form>
-      {/* its own line, reserved: the message appears without moving the buttons */}
-      <div class="field-note">
-        {!validAngle ? (
-          <span class="inline-error" role="alert" data-testid="m19-angle-error">
-            an angle in degrees is needed
-          </span>
-        ) : null}
-      </div>
+      <SpindleKeys sp={sp} run={cmd.run} />
       <div class="gears">
         <div class="row">
           <span>
@@ -236,14 +174,20 @@ export function SpindlePanel() {
           </span>
           {params?.ranges.map((_, i) => (
             <button key={i} type="button" data-testid={`gear-m${40 + i}`} class={sp.gear === i + 1 ? "active" : ""}
-              disabled={locked} title={lockedWhy} aria-pressed={sp.gear === i + 1}
+              disabled={locked} title={lockedWhy || gearName(i + 1)} aria-pressed={sp.gear === i + 1}
               onClick={() => void cmd.run({ type: "gear", spindle: sp.name, m: 40 + i })}>
               M{40 + i}
             </button>
           ))}
         </div>
         {params?.ranges.length ? (
-          <GearBars ranges={params.ranges} active={sp.gear ?? null} speed={sp.speed_prog_rpm ?? null} />
+          <>
+            <GearBars ranges={params.ranges} active={sp.gear ?? null} speed={sp.speed_prog_rpm ?? null} />
+            <p class="hint" data-testid="gear-mapping">
+              M40…M45 = gear 1…6 = gear records getriebe[0]…[5] (range_table[0]…[5])
+              {sp.gear ? <> · now <b>{gearName(sp.gear)}</b></> : null}
+            </p>
+          </>
         ) : (
           <p class="hint">No gear change on this spindle.</p>
         )}

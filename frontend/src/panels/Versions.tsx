@@ -10,7 +10,7 @@ import { paramsVersion, trial } from "../state/params";
 import { machineId, online } from "../state/session";
 import { baselineOf, compare, deleteVersion, makeBaseline, rollback, takeVersion, versions } from "../state/versions";
 import { Panel } from "../ui/Panel";
-import { qty } from "../ui/format";
+import { engQty } from "../ui/format";
 
 const when = (t: number) => new Date(t * 1000).toLocaleString([], { dateStyle: "short", timeStyle: "short" });
 const text = (v: ParamDiff["before"]) => (v === null || v === undefined ? "—" : String(v));
@@ -97,7 +97,7 @@ export function DiffTable({ diff }: { diff: ParamDiff[] }) {
               <td class="num" data-testid="diff-after">{text(d.after)}</td>
               <td>{d.unit}</td>
               <td class="num" data-testid="diff-eng">
-                {d.eng_unit && d.eng_unit !== d.unit ? `${qty(d.before_eng, 4, d.eng_unit)} → ${qty(d.after_eng, 4, d.eng_unit)}` : ""}
+                {d.eng_unit && d.eng_unit !== d.unit ? `${engQty(d.before_eng, d.eng_unit)} → ${engQty(d.after_eng, d.eng_unit)}` : ""}
               </td>
               <td>{d.effect}</td>
             </tr>

@@ -15,9 +15,9 @@ const TOPICS: Record<string, string> = {
   wz: "Tools (wz)",
 };
 
-/** The group a concrete list name belongs to, e.g. "Gear record 3 (M42)". */
+/** The group a concrete list name belongs to, e.g. "Gear record getriebe[2] (M42 · gear 3)". */
 export function groupOf(name: string, gear: number | null | undefined, spindle: boolean): string {
-  if (gear) return spindle ? `Gear record ${gear} (M${39 + gear})` : `Gear record ${gear}`;
+  if (gear) return `Gear record getriebe[${gear - 1}] (${spindle ? `M${39 + gear} · ` : ""}gear ${gear})`;
   const head = name.split(/[.[]/)[0];
   return TOPICS[head] ?? "General";
 }

@@ -34,3 +34,37 @@ export function tickLabels(splits: number[]): string[] {
   const decimals = Math.max(0, -mag + extra);
   return splits.map((v) => (zero(v) ? "0" : fmt(v, decimals)));
 }
+
+/** A parameter's value in the HMI's unit (the list value × the API's eng_factor, in its
+ * eng_unit: mm/min, rpm, %, 1/s …): six significant digits, no trailing zeros, so 20 1/s,
+ * 100 % and 19999.98 mm/min read as they are. */
+export function engQty(v: number | null | undefined, unit: string): string {
+  if (v === null || v === undefined || !Number.isFinite(v)) return "—";
+  const s = String(+v.toPrecision(6));
+  return qty(Number(s), Math.max(0, (s.split(".")[1] ?? "").length), unit);
+}
+
+/** multi_gain as the manual defines it [004 §3.6.2]: multi_gain_z / multi_gain_n, the D/A
+ * digits at 1 m/min (linear) or 1000 °/min (rotary axes and spindles). */
+export function multiGainText(z: number, n: number, linear: boolean): string {
+  return `multi_gain ${engQty(z / n, "")} digits per ${linear ? "1 m/min" : "1000 °/min"}`;
+}
+
+/** A gear stage by its three names [000 §2.8.2]: the M function that selects it, its number
+ * (1…6) and its axis gear record, "M42 · gear 3 · getriebe[2]". `m` false: an axis without
+ * gear change (no M function). */
+export function gearName(gear: number, m = true): string {
+  return `${m ? `M${39 + gear} · ` : ""}gear ${gear} · getriebe[${gear - 1}]`;
+}
+
+/** Round tick values from 0 to at least `top` (1, 2 or 5 × 10^k apart, about `count`). */
+export function niceTicks(top: number, count = 5): number[] {
+  if (!(top > 0)) return [0];
+  const raw = top / count;
+  const mag = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 5, 10].map((f) => f * mag).find((s) => s >= raw) ?? 10 * mag;
+  const out: number[] = [];
+  const n = Math.ceil(top / step - 1e-9); // the last tick at or above the top
+  for (let k = 0; k <= n; k++) out.push(k * step);
+  return out;
+}
