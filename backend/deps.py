@@ -80,7 +80,7 @@ class Services:
         audit = Audit(store)
         control = Control(machines, audit, settings.control_grace_s)
         exercises = Exercises(store)
-        classes = Classes(store, accounts, machines, exercises)  # before the machines load
+        classes = Classes(store, accounts, machines, exercises, audit)  # before the machines load
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
