@@ -469,10 +469,21 @@ class Classes:
         for seat in seats:
             m = self.machines.get(seat.machine)
             m.call(Pace(m.id, "pause" if frozen else "run"))
+            m.control.frozen_by = by if frozen else None  # its student cannot take control
             seat.frozen = frozen
             self.save(seat)
             word = "froze" if frozen else "resumed"
             m.notice("frozen" if frozen else "resumed", f"{by} {word} the machine")
+
+    def refreeze(self) -> None:
+        """After the machines are built at start-up: the seats frozen before pause again."""
+        for c in self.all():
+            if c.ended_unix is None:
+                frozen = [s for s in c.seats if s.frozen and self.proxy(s) is not None]
+                for seat in frozen:
+                    m = self.machines.get(seat.machine)
+                    m.call(Pace(m.id, "pause"))
+                    m.control.frozen_by = c.instructor
 
     def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
         """A message as a banner on every one of the seats' HMIs."""

@@ -210,8 +210,16 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert sim["mode"] == "pause"
     assert seat.post(f"/api/machines/{mid}/simulation", json={"mode": "run"}).status_code == 403
     assert seat.get(f"/api/machines/{mid}/exercise").json()["frozen"]  # a reload shows it
+    # frozen: the student takes no control (nor by a command on the free machine), says why
+    r = seat.post(f"/api/machines/{mid}/control", json={"action": "take"})
+    assert r.status_code == 409 and "froze" in r.json()["detail"]["message"], r.text
+    r = seat.post(f"/api/machines/{mid}/commands", json={"type": "reset"})
+    assert r.status_code == 409 and "froze" in r.json()["detail"]["message"], r.text
+    assert seat.get(f"/api/machines/{mid}/control").json()["holder"] is None
     assert t.post("/api/classes/end/freeze", json={"frozen": False}).status_code == 200
     assert seat.get(f"/api/machines/{mid}/status").json()["simulation"]["mode"] == "run"
+    r = seat.post(f"/api/machines/{mid}/control", json={"action": "take"})
+    assert r.status_code == 200 and r.json()["holder"]["user"] == seat_user, r.text
 
     ex = seat.get(f"/api/machines/{mid}/exercise").json()
     assert not ex["frozen"]

@@ -67,6 +67,10 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
     console: Page, browser: Browser, srv: Server
 ) -> None:
     c = console
+    # the console shows no machine: no machine select, health or emergency stop in its bar
+    expect(c.locator(".topbar")).to_be_visible()
+    expect(c.get_by_test_id("estop")).to_have_count(0)
+    expect(c.locator(".machine-select")).to_have_count(0)
     c.get_by_test_id("class-new").click()
     form = panel(c, "class-create")
     form.get_by_test_id("class-exercise").select_option(EXERCISE)
@@ -102,6 +106,10 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         fault = panel(c, "fault-form")
         expect(fault).to_contain_text("seat 1 (Anna)")
         fault.get_by_test_id("fault-kind").select_option("motor_inverted")
+        # the kinds in the instructor's words (the schema's titles), not identifiers
+        expect(fault.get_by_test_id("fault-kind").locator("option:checked")).to_have_text(
+            "Motor wired inverted"
+        )
         expect(fault.get_by_test_id("fault-description")).to_contain_text("wired inverted")
         fault.get_by_test_id("fault-field-axis").select_option("X")
         for size in ("tablet", "desktop"):
@@ -144,8 +152,17 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         expect(c.get_by_test_id("banner-error")).to_contain_text(str(LAG_MONITORING))
         expect(c.get_by_test_id("control-strip")).to_be_visible()  # the instructor can take over
         shot(c, "class-console-live-view")
+        expect(c.get_by_test_id("estop")).to_be_visible()  # a machine is shown: its E-stop
         c.get_by_test_id("open-classes").click()
         expect(tile(c, 1).get_by_test_id("seat-error")).to_contain_text(str(LAG_MONITORING))
+
+        # Bert's seat frozen: his control strip offers no control and says why
+        r = srv.http.post(f"/api/classes/{CLASS}/freeze", json={"seats": [2], "frozen": True})
+        assert r.status_code == 200, r.text
+        strip = bert.get_by_test_id("control-strip")
+        expect(strip.get_by_test_id("control-frozen")).to_contain_text("frozen by the instructor")
+        expect(strip.get_by_test_id("control-take")).to_have_count(0)
+        shot(bert, "class-seat-frozen-control")
     finally:
         anna.close()
         bert.close()
