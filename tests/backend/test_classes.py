@@ -367,7 +367,7 @@ def lists_with(axis_x: str | None = None, channel: str | None = None) -> dict[st
 def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
     """Every seat is built from the class's lists: X's kv is the uploaded 33.00 1/s
     (getriebe[0].kv 3300, in 0.01/s), not the demo's 20 1/s; a restart of the service
-    builds the seat from the same lists again."""
+    builds the seat from the same lists again (a frozen seat frozen)."""
     db = tmp_path / "lists.sqlite"
     s = Server(db)
     s.tokens = add_users(db, {"trainer": Role.INSTRUCTOR})  # type: ignore[attr-defined]
@@ -389,9 +389,17 @@ def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
                 params={"scope": "axis", "target": "X"},
             ).json()
             assert {p["name"]: p["value"] for p in kv}["getriebe[0].kv"] == 3300
+        r = t.post("/api/classes/lis/freeze", json={"seats": [2], "frozen": True})
+        assert r.status_code == 200, r.text
         s.stop()
         s.start()
         t = trainer(s)
+        # a frozen seat stays frozen: paused, and its student still takes no control
+        assert t.get("/api/machines/lis-s02/status").json()["simulation"]["mode"] == "pause"
+        assert t.get("/api/machines/lis-s01/status").json()["simulation"]["mode"] == "run"
+        link = t.post("/api/classes/lis/seats/2/link").json()["url"]
+        r = student(s, link).post("/api/machines/lis-s02/control", json={"action": "take"})
+        assert r.status_code == 409, r.text
         kv = t.get("/api/machines/lis-s01/parameters", params={"scope": "axis", "target": "X"})
         assert {p["name"]: p["value"] for p in kv.json()}["getriebe[0].kv"] == 3300
         assert t.get("/api/classes/lis").json()["template"] == "lists"
