@@ -29,9 +29,7 @@ class MotorInvertedModel(_Fault):
 class EncoderInvertedModel(_Fault):
     """The encoder counts inverted."""
 
-    model_config = ConfigDict(
-        title="Encoder counts inverted"
-    )
+    model_config = ConfigDict(title="Encoder counts inverted")
     kind: Literal["encoder_inverted"] = "encoder_inverted"
     axis: str = AXIS
 
@@ -48,9 +46,7 @@ class DriveGainWrongModel(_Fault):
 class EncoderResolutionWrongModel(_Fault):
     """The encoder delivers `factor` times the increments the NC's wegaufz/wegaufn assume."""
 
-    model_config = ConfigDict(
-        title="Encoder resolution wrong"
-    )
+    model_config = ConfigDict(title="Encoder resolution wrong")
     kind: Literal["encoder_resolution_wrong"] = "encoder_resolution_wrong"
     axis: str = AXIS
     factor: float = FACTOR
@@ -94,12 +90,20 @@ class BacklashModel(_Fault):
     width: float = Field(gt=0, le=10.0, description="mm | °")
 
 
+class DriveAccelLimitModel(_Fault):
+    """The drive is torque-limited: it accelerates no faster than `a_max`."""
+
+    model_config = ConfigDict(title="Drive torque-limited")
+
+    kind: Literal["drive_accel_limit"] = "drive_accel_limit"
+    axis: str = AXIS
+    a_max: float = Field(gt=0, le=1e6, description="mm/s² | °/s²")
+
+
 class PlcNoAckModel(_Fault):
     """The PLC program never acknowledges M functions or mode requests."""
 
-    model_config = ConfigDict(
-        title="PLC never acknowledges"
-    )
+    model_config = ConfigDict(title="PLC never acknowledges")
     kind: Literal["plc_no_ack"] = "plc_no_ack"
 
 
@@ -122,9 +126,7 @@ class DriveNotReadyModel(_Fault):
 class EnableDropModel(_Fault):
     """The PLC drops the axis' enable while it moves."""
 
-    model_config = ConfigDict(
-        title="Enable drops during motion"
-    )
+    model_config = ConfigDict(title="Enable drops during motion")
     kind: Literal["enable_drop"] = "enable_drop"
     axis: str = AXIS
 
@@ -138,6 +140,7 @@ FaultModel = Annotated[
     | GearRatioWrongModel
     | FrictionModel
     | BacklashModel
+    | DriveAccelLimitModel
     | PlcNoAckModel
     | PlcSlowAckModel
     | DriveNotReadyModel
