@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import IntEnum, StrEnum
+from typing import Literal
 
 from nc_sim.events import Event
 from nc_sim.plc import PlcMode
@@ -180,3 +181,50 @@ class MachineSnapshot:
     plc: PlcSnapshot
     job_errors: tuple[Event, ...]  # the event behind each active job error, once each
     event_cursor: int  # sequence number the next event will get
+
+
+# --- the service-axis view (nc_sim/machine/service.py) ------------------------------------
+LimitKind = Literal["parameter", "programmed", "reduced_speed", "reduced_acceleration", "tool"]
+
+
+@dataclass(frozen=True)
+class LimitInForce:
+    """A dynamic limit in force (velocity in the axis' display unit, acceleration unit/s²,
+    jerk unit/s³) and where it comes from."""
+
+    value: float
+    unit: str
+    source: str  # list name (`getriebe[0].dynamik.vb_max`), `F`, `S`, `jog feed`, ...
+    param_id: str | None
+    kind: LimitKind
+    override_pct: float | None = None  # the override that scales it, None when none does
+
+
+@dataclass(frozen=True)
+class GainReading:
+    """k = v / lag from the newest records, or why it is not shown."""
+
+    k_per_s: float | None
+    why_not: str | None
+
+
+@dataclass(frozen=True)
+class AxisServiceSnapshot:
+    """One axis or spindle in the service-axis view."""
+
+    name: str
+    gear: int  # the active gear record (1..)
+    kv_per_s: float  # getriebe[gear-1].kv of the active record, 1/s
+    ff_weight: float  # feedforward weight 0..1 in force
+    multi_gain: float  # multi_gain_z / multi_gain_n: digits for 1 m/min or 1000 °/min
+    lag_max: float  # getriebe.lag_max (mm | °)
+    v_cmd: float  # commanded speed, unit/s (mm/s | °/s)
+    lag_expected: float | None  # (1 − ff)·v / kv (mm | °), None without a closed loop
+    lag_expected_why_not: str | None
+    gain: GainReading
+    da_digits: float  # manipulated variable at the D/A
+    da_max_digits: float  # lr_hw.da_max
+    velocity: LimitInForce
+    acceleration: LimitInForce
+    jerk: LimitInForce | None  # None: step-shaped, jerk not limited
+    jerk_why_none: str | None

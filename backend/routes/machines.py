@@ -6,11 +6,13 @@ from fastapi import APIRouter, Response
 
 from api.auth import Action
 from api.machines import MachineCreate, SimulationControl, StepRequest
+from api.service_axes import ServiceAxes
 from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services.audit import Entry
+from backend.services.service_axes import service_axes
 from backend.services.status import (
     machine_status,
     machine_summary,
@@ -48,6 +50,17 @@ def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -
         )
     )
     return machine_summary(machine)
+
+
+@router.get(
+    "/{mid}/service-axes",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(404, why=WORKER_GONE),
+)
+async def service_axes_view(machine: MachineDep) -> ServiceAxes:
+    """The service-axis view: per axis and spindle kv, expected lag (1 − ff)·v/kv, measured
+    gain k = v/lag, D/A output and limit, limits in force with their sources."""
+    return await service_axes(machine)
 
 
 @router.get(

@@ -23,6 +23,7 @@ from backend.workers.protocol import (
     Mode,
     Pacing,
     ParamSnapshot,
+    ServiceAxesRead,
     StatusRead,
 )
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
@@ -31,6 +32,7 @@ from nc_sim.assist.procedure import LiveRun
 from nc_sim.commands import JogStop
 from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
+from nc_sim.machine.service import history_cycles, service_view
 from nc_sim.scope import Record, Scope
 from nc_sim.signals import Signal, machine_signals
 from nc_sim.sim import Simulation, restore
@@ -292,6 +294,12 @@ class MachineHost:
             self.machine.faults(),
             checks,
         )
+
+    def service_axes_read(self) -> ServiceAxesRead:
+        """The service-axis view of every axis, with the measured gain from the ring's newest
+        records (enough for its settling and averaging window)."""
+        rec = self.history(history_cycles(self.machine))
+        return ServiceAxesRead(self.sim.cycle, service_view(self.machine, rec))
 
     def close(self) -> None:
         """Remove the machine's ring file (the gateway unmaps its side)."""

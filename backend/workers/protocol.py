@@ -19,7 +19,7 @@ from nc_sim.machine.config import MachineConfig
 from nc_sim.params import Value
 from nc_sim.scope import Record, ScopeSetup
 from nc_sim.signals import Signal
-from nc_sim.snapshot import MachineSnapshot
+from nc_sim.snapshot import AxisServiceSnapshot, MachineSnapshot
 
 Mode = Literal["run", "pause", "fast"]
 # (scope, target, name) -> value: parameter values a worker writes into a machine's lists
@@ -86,6 +86,14 @@ class ApplyValues:
 @dataclass(frozen=True)
 class ReadStatus:
     """A fresh status of the machine, consistent to one cycle."""
+
+    mid: str
+
+
+@dataclass(frozen=True)
+class ReadServiceAxes:
+    """The service-axis view of every axis and spindle (nc_sim/machine/service.py), from the
+    machine and its newest records; answered with a ServiceAxesRead."""
 
     mid: str
 
@@ -167,6 +175,7 @@ Request = (
     | Step
     | ApplyValues
     | ReadStatus
+    | ReadServiceAxes
     | Watch
     | ScopeArm
     | ScopeAct
@@ -240,6 +249,14 @@ class StatusRead:
     assist: AssistRunning | None = None
     faults: list[FaultState] = field(default_factory=list)  # for instructors only
     checks: list[object] = field(default_factory=list)  # nc_sim.training CheckResult of a seat
+
+
+@dataclass(frozen=True)
+class ServiceAxesRead:
+    """The service-axis view of a machine's axes, read at `cycle`."""
+
+    cycle: int
+    axes: tuple[AxisServiceSnapshot, ...]
 
 
 @dataclass(frozen=True)

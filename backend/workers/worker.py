@@ -37,6 +37,7 @@ from backend.workers.protocol import (
     MachineNews,
     Pace,
     Push,
+    ReadServiceAxes,
     ReadStatus,
     RemoveFault,
     RemoveMachine,
@@ -336,6 +337,8 @@ class Worker:
                 return None
             case ReadStatus():
                 return self._host(r.mid).status_read()
+            case ReadServiceAxes():
+                return self._host(r.mid).service_axes_read()
             case Watch():
                 host = self._host(r.mid)
                 host.watched, host.status_due = r.on, time.monotonic()  # the first one now

@@ -20,6 +20,7 @@ import { Plots } from "./panels/Plots";
 import { ProgramPanel } from "./panels/ProgramPanel";
 import { ReportPanel } from "./panels/ReportPanel";
 import { Scope } from "./panels/Scope";
+import { ServicePanel } from "./panels/ServicePanel";
 import { SpindlePanel } from "./panels/SpindlePanel";
 import { TopBar } from "./panels/TopBar";
 import { TrialBar } from "./panels/TrialBar";
@@ -32,7 +33,7 @@ import { connection, frozen, machineUrl, online, status } from "./state/session"
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
 // "Exercise" only on a class seat (the first tab there, and the one it opens on)
-const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "HLI / PLC", "Events", "Audit"] as const;
+const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Service", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
 function MachineControls() {
@@ -146,6 +147,7 @@ function Hmi() {
                 <ReportPanel />
               </>
             ) : null}
+            {tab === "Service" ? <ServicePanel /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}
             {tab === "Audit" ? <AuditPanel /> : null}

@@ -7,12 +7,14 @@ manual mode G200 (jog), homing, feedhold and emergency stop, for the slope type 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
 
 from nc_sim.machine.config import AxisConfig
 from nc_sim.profiles.plan import SHAPE_LINEAR, SHAPE_SIN2, make_limits
+from nc_sim.snapshot import LimitKind
 
 
 class Motion(StrEnum):
@@ -22,61 +24,137 @@ class Motion(StrEnum):
     HOMING = "G74"
 
 
-def _cap(a: float, cfg: AxisConfig, gear: int) -> float:
-    a_max = cfg.eng("getriebe.dynamik.a_max", gear)
-    return min(a, a_max) if a > 0 else a_max
+@dataclass(frozen=True)
+class Sourced:
+    """A dynamic limit (engineering unit) and where it comes from: a parameter of the list
+    (`source` its name with the gear record's index, `param_id` its ID), the programmed F or
+    S, the reduced speed or acceleration the PLC asks for (a parameter too), a tool's limit."""
+
+    value: float
+    source: str
+    param_id: str | None = None
+    kind: LimitKind = "parameter"
+
+
+def param(cfg: AxisConfig, name: str, gear: int = 1, kind: LimitKind = "parameter") -> Sourced:
+    """A parameter's value in engineering units with its list name and ID."""
+    concrete, pid = cfg.ref(name, gear)
+    return Sourced(cfg.eng(name, gear), concrete, pid, kind)
+
+
+def _or(a: Sourced, b: Sourced) -> Sourced:
+    """`a`, or `b` where the list leaves `a` at 0 (0 = take the other)."""
+    return a if a.value else b
+
+
+def lowest(*xs: Sourced) -> Sourced:
+    """The lowest limit (the first of equal ones)."""
+    return min(xs, key=lambda x: x.value)
+
+
+def _highest(*xs: Sourced) -> Sourced:
+    return max(xs, key=lambda x: x.value)
+
+
+def _cap(a: Sourced, cfg: AxisConfig, gear: int) -> Sourced:
+    a_max = param(cfg, "getriebe.dynamik.a_max", gear)
+    return lowest(a, a_max) if a.value > 0 else a_max
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """Accelerations and ramp times of one kind of motion, each with its source."""
+
+    a_acc: Sourced
+    a_dec: Sourced
+    tr: tuple[Sourced, Sourced, Sourced, Sourced]  # acc up, acc down, dec up, dec down
+    shape: float = SHAPE_LINEAR
+    a_acc2: Sourced | None = None  # step-shaped: the second stage above v12
+    a_dec2: Sourced | None = None
+    v12: float = 0.0
+
+    def limits(self) -> np.ndarray:
+        """The planner's limit row (`nc_sim.profiles.plan.make_limits`)."""
+        a2 = self.a_acc2.value if self.a_acc2 is not None else 0.0
+        d2 = self.a_dec2.value if self.a_dec2 is not None else 0.0
+        t = [x.value for x in self.tr]
+        return make_limits(
+            self.a_acc.value, self.a_dec.value, t[0], t[1], t[2], t[3], self.shape, a2, d2, self.v12
+        )
+
+    def jerk(self) -> Sourced | None:
+        """Jerk while acceleration builds up (a / tr); None when step-shaped (not limited)."""
+        tr = self.tr[0]
+        if tr.value <= 0.0:
+            return None
+        a = self.a_acc
+        return Sourced(a.value / tr.value, f"{a.source} / {tr.source}", tr.param_id, tr.kind)
+
+
+def motion_dynamics(
+    cfg: AxisConfig, gear: int, motion: Motion, slope: int, reduced: bool = False
+) -> Dynamics:
+    """Accelerations and ramp times of a kind of motion with the given slope type, each with
+    the parameter it comes from."""
+
+    def p(name: str) -> Sourced:
+        return param(cfg, name, gear)
+
+    if motion is Motion.MANUAL:
+        a = p("handbetrieb.hb.a_max")
+        if reduced:
+            a = param(cfg, "handbetrieb.hb.a_max_red", gear, "reduced_acceleration")
+        a = _cap(a, cfg, gear)
+        d = _cap(_or(p("handbetrieb.hb.d_max"), a), cfg, gear)
+        tr = p("handbetrieb.hb.tr")  # 0 = step-shaped
+        return Dynamics(a, d, (tr, tr, tr, tr))
+    if motion is Motion.HOMING:
+        a = _or(
+            p("getriebe.a_ref"),
+            lowest(
+                p("getriebe.lslope_profil.a_grenz_stufe_1"),
+                p("getriebe.lslope_profil.a_grenz_stufe_2"),
+            ),
+        )
+        a = _cap(a, cfg, gear)
+        tr = Sourced(0.0, "getriebe.slope_type")
+        if int(cfg.raw("getriebe.slope_type", gear)) != 0:
+            tr = _or(p("getriebe.tr_ref"), p("getriebe.dynamik.tr_min"))
+        return Dynamics(a, a, (tr, tr, tr, tr))
+    rapid = motion is Motion.RAPID
+    if slope == 0:
+        pre = "getriebe.lslope_profil."
+        if rapid:
+            a1, a2 = p(pre + "a_grenz_stufe_1"), p(pre + "a_grenz_stufe_2")
+            v12 = cfg.eng(pre + "vb_grenz_stufe_1_2", gear)
+        else:
+            a1, a2 = p(pre + "a_stufe_1"), p(pre + "a_stufe_2")
+            v12 = cfg.eng(pre + "vb_stufe_1_2", gear)
+        a1, a2 = _cap(a1, cfg, gear), _cap(a2, cfg, gear)
+        step = Sourced(0.0, "P-CHAN-00071 slope_type 0")
+        return Dynamics(a1, a1, (step, step, step, step), a_acc2=a2, a_dec2=a2, v12=v12)
+    pre = "getriebe.slope_profil."
+    tr_min = p("getriebe.dynamik.tr_min")
+    if rapid:
+        a_acc = a_dec = _cap(p(pre + "a_grenz"), cfg, gear)
+        tr = _highest(p(pre + "tr_grenz"), tr_min)
+        trs = [tr, tr, tr, tr]
+    else:
+        a_acc = _cap(p(pre + "a_beschl"), cfg, gear)
+        a_dec = _cap(p(pre + "a_brems"), cfg, gear)
+        names = ("tr_beschl_zu", "tr_beschl_ab", "tr_brems_zu", "tr_brems_ab")
+        trs = [_highest(p(pre + n), tr_min) for n in names]
+    if slope == 3:  # HSC: one ramp time, the longest of the four
+        trs = [_highest(*trs)] * 4
+    shape = SHAPE_SIN2 if slope == 2 else SHAPE_LINEAR
+    return Dynamics(a_acc, a_dec, (trs[0], trs[1], trs[2], trs[3]), shape)
 
 
 def motion_limits(
     cfg: AxisConfig, gear: int, motion: Motion, slope: int, reduced: bool = False
 ) -> np.ndarray:
     """Planner limits for one kind of motion with the given slope type."""
-    e = cfg.eng
-    if motion is Motion.MANUAL:
-        a = e("handbetrieb.hb.a_max")
-        if reduced:
-            a = e("handbetrieb.hb.a_max_red")
-        a = _cap(a, cfg, gear)
-        d = _cap(e("handbetrieb.hb.d_max") or a, cfg, gear)
-        tr = e("handbetrieb.hb.tr")  # 0 = step-shaped
-        return make_limits(a, d, tr, tr, tr, tr)
-    if motion is Motion.HOMING:
-        a = e("getriebe.a_ref", gear) or min(
-            e("getriebe.lslope_profil.a_grenz_stufe_1", gear),
-            e("getriebe.lslope_profil.a_grenz_stufe_2", gear),
-        )
-        a = _cap(a, cfg, gear)
-        tr = 0.0
-        if int(cfg.raw("getriebe.slope_type", gear)) != 0:
-            tr = e("getriebe.tr_ref", gear) or e("getriebe.dynamik.tr_min", gear)
-        return make_limits(a, a, tr, tr, tr, tr)
-    rapid = motion is Motion.RAPID
-    if slope == 0:
-        pre = "getriebe.lslope_profil."
-        if rapid:
-            a1, a2 = e(pre + "a_grenz_stufe_1", gear), e(pre + "a_grenz_stufe_2", gear)
-            v12 = e(pre + "vb_grenz_stufe_1_2", gear)
-        else:
-            a1, a2 = e(pre + "a_stufe_1", gear), e(pre + "a_stufe_2", gear)
-            v12 = e(pre + "vb_stufe_1_2", gear)
-        a1, a2 = _cap(a1, cfg, gear), _cap(a2, cfg, gear)
-        return make_limits(a1, a1, a_acc2=a2, a_dec2=a2, v12=v12)
-    pre = "getriebe.slope_profil."
-    tr_min = e("getriebe.dynamik.tr_min", gear)
-    if rapid:
-        a = _cap(e(pre + "a_grenz", gear), cfg, gear)
-        tr = max(e(pre + "tr_grenz", gear), tr_min)
-        trs = [tr, tr, tr, tr]
-        a_acc = a_dec = a
-    else:
-        a_acc = _cap(e(pre + "a_beschl", gear), cfg, gear)
-        a_dec = _cap(e(pre + "a_brems", gear), cfg, gear)
-        names = ("tr_beschl_zu", "tr_beschl_ab", "tr_brems_zu", "tr_brems_ab")
-        trs = [max(e(pre + n, gear), tr_min) for n in names]
-    if slope == 3:  # HSC: one ramp time, the longest of the four
-        trs = [max(trs)] * 4
-    shape = SHAPE_SIN2 if slope == 2 else SHAPE_LINEAR
-    return make_limits(a_acc, a_dec, trs[0], trs[1], trs[2], trs[3], shape)
+    return motion_dynamics(cfg, gear, motion, slope, reduced).limits()
 
 
 def feedhold_limits(
@@ -88,7 +166,7 @@ def feedhold_limits(
         return normal
     e = cfg.eng
     if motion is Motion.MANUAL:
-        a = _cap(e("handbetrieb.hb.a_feedh") or e("handbetrieb.hb.a_max"), cfg, gear)
+        a = _cap_value(e("handbetrieb.hb.a_feedh") or e("handbetrieb.hb.a_max"), cfg, gear)
         tr = e("handbetrieb.hb.tr_feedh")
         return make_limits(a, a, tr, tr, tr, tr)
     if slope == 0:
@@ -96,9 +174,9 @@ def feedhold_limits(
             e("getriebe.lslope_profil.a_grenz_stufe_1", gear),
             e("getriebe.lslope_profil.a_grenz_stufe_2", gear),
         )
-        a = _cap(a, cfg, gear)
+        a = _cap_value(a, cfg, gear)
         return make_limits(a, a)
-    a = _cap(
+    a = _cap_value(
         e("getriebe.slope_profil.a_feedh", gear) or e("getriebe.slope_profil.a_grenz", gear),
         cfg,
         gear,
@@ -108,23 +186,33 @@ def feedhold_limits(
     return make_limits(a, a, tr, tr, tr, tr, shape)
 
 
+def _cap_value(a: float, cfg: AxisConfig, gear: int) -> float:
+    return _cap(Sourced(a, ""), cfg, gear).value
+
+
 def emergency_limits(cfg: AxisConfig, gear: int) -> np.ndarray:
     """Step-shaped braking at a_emergency (0 = a_max) [002 §2.4]."""
     a = cfg.eng("getriebe.dynamik.a_emergency", gear) or cfg.eng("getriebe.dynamik.a_max", gear)
     return make_limits(a, a)
 
 
-def velocity_limit(cfg: AxisConfig, gear: int, motion: Motion, feed: float | None) -> float:
-    """Top speed (unit/s) before override: F for G01, vb_eilgang for G00, hb.vb_max for jog."""
-    vb_max = cfg.eng("getriebe.dynamik.vb_max", gear)
+def velocity_in_force(cfg: AxisConfig, gear: int, motion: Motion, feed: float | None) -> Sourced:
+    """Top speed (unit/s) before override and its source: F for G01, vb_eilgang for G00,
+    hb.vb_max (or a lower jog feed) for jog, vb_refmax for homing; capped by vb_max."""
+    vb_max = param(cfg, "getriebe.dynamik.vb_max", gear)
     if motion is Motion.RAPID:
-        v = cfg.eng("getriebe.vb_eilgang", gear)
+        v = param(cfg, "getriebe.vb_eilgang", gear)
     elif motion is Motion.MANUAL:
-        v = cfg.eng("handbetrieb.hb.vb_max")
+        v = param(cfg, "handbetrieb.hb.vb_max")
         if feed:
-            v = min(v, feed)
+            v = lowest(v, Sourced(feed, "jog feed", None, "programmed"))
     elif motion is Motion.HOMING:
-        v = cfg.eng("getriebe.vb_refmax", gear)
+        v = param(cfg, "getriebe.vb_refmax", gear)
     else:
-        v = feed or 0.0
-    return min(v, vb_max)
+        v = Sourced(feed or 0.0, "F", None, "programmed")
+    return lowest(v, vb_max)
+
+
+def velocity_limit(cfg: AxisConfig, gear: int, motion: Motion, feed: float | None) -> float:
+    """Top speed (unit/s) before override (`velocity_in_force` without its source)."""
+    return velocity_in_force(cfg, gear, motion, feed).value

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nc_sim.axis.dynamics import Motion, emergency_limits, motion_limits
+from nc_sim.axis.dynamics import Dynamics, Motion, emergency_limits, motion_dynamics
 from nc_sim.axis.state import Axis
 from nc_sim.axis.watchdog import bound_s, plan_s
 from nc_sim.errors import Code
@@ -127,10 +127,15 @@ class AxisMotion:
             )
         return None
 
+    def dynamics(self, ax: Axis, motion: Motion) -> Dynamics:
+        """Accelerations and ramp times (with their sources) of a kind of motion with the
+        axis' slope and the channel's reduced acceleration."""
+        reduced = bool(self.ctx.units["reduced_acceleration"])
+        return motion_dynamics(ax.cfg, ax.gear, motion, ax.slope, reduced)
+
     def limits(self, ax: Axis, motion: Motion) -> np.ndarray:
         """Planner limits of a kind of motion with the channel's slope and acceleration."""
-        reduced = bool(self.ctx.units["reduced_acceleration"])
-        return motion_limits(ax.cfg, ax.gear, motion, ax.slope, reduced)
+        return self.dynamics(ax, motion).limits()
 
     # --- plans --------------------------------------------------------------------------
     def plan_move(self, ax: Axis, limits: np.ndarray, v_max: float, what: str = "") -> None:

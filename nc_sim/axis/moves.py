@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from nc_sim.axis.dynamics import Motion, feedhold_limits, velocity_limit
+from nc_sim.axis.dynamics import Motion, Sourced, feedhold_limits, param, velocity_in_force
 from nc_sim.axis.homing import Homing
 from nc_sim.axis.motion import AxisMotion
 from nc_sim.axis.state import Axis
@@ -61,16 +61,23 @@ class Moves:
         cap = self.cfg.channel_eng("max_vb_override")
         return min(self.motion.ctx.units["override"] * 1e-3, cap)
 
-    def _vmax(self, ax: Axis, motion: Motion) -> float:
-        v = velocity_limit(ax.cfg, ax.gear, motion, ax.feed) * self.override(ax)
+    def speed_in_force(self, ax: Axis, motion: Motion) -> tuple[Sourced, float]:
+        """The top speed (unit/s) of a kind of motion now with its source, and the override
+        fraction that scales it (1.0 when the reduced speed the PLC asks for caps it)."""
+        base = velocity_in_force(ax.cfg, ax.gear, motion, ax.feed)
+        ovr = self.override(ax)
+        v = Sourced(base.value * ovr, base.source, base.param_id, base.kind)
         if ax.units["reduced_speed"]:
-            red = ax.cfg.eng(
-                "getriebe.rapid_speed_red" if motion is Motion.RAPID else "getriebe.vb_max_red",
-                ax.gear,
-            ) or ax.cfg.eng("getriebe.vb_max_red", ax.gear)
-            if red > 0:
-                v = min(v, red)
-        return v
+            name = "getriebe.rapid_speed_red" if motion is Motion.RAPID else "getriebe.vb_max_red"
+            red = param(ax.cfg, name, ax.gear, "reduced_speed")
+            if not red.value:
+                red = param(ax.cfg, "getriebe.vb_max_red", ax.gear, "reduced_speed")
+            if 0 < red.value < v.value:
+                return red, 1.0
+        return v, ovr
+
+    def _vmax(self, ax: Axis, motion: Motion) -> float:
+        return self.speed_in_force(ax, motion)[0].value
 
     def replan(self, ax: Axis) -> None:
         """Re-plan the active motion from the current state (override, feedhold release);

@@ -46,6 +46,11 @@ class AxisConfig:
     def flag(self, name: str, gear: int = 1) -> bool:
         return bool(self.eng(name, gear))
 
+    def ref(self, name: str, gear: int = 1) -> tuple[str, str]:
+        """The concrete list name (`getriebe[0].kv` for gear 1) and the ID of a parameter."""
+        concrete = concrete_name(_gear_template(name), f"[{gear - 1}]")
+        return concrete, resolve(Scope.AXIS, concrete).id
+
 
 def _gear_template(name: str) -> str:
     """Accept `getriebe.kv` or `getriebe[i].kv` as shorthand for the active gear record."""

@@ -8,11 +8,12 @@ spindle's part of a block is program.py. Every kernel write goes through `AxisMo
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from nc_sim.accel_curve import CurveParams
-from nc_sim.axis.dynamics import Motion
+from nc_sim.axis.dynamics import Dynamics, Motion, Sourced, lowest, motion_dynamics, param
 from nc_sim.axis.motion import AxisMotion
 from nc_sim.axis.params import changeover_speeds, push_params, speed_controlled
 from nc_sim.axis.state import Axis
@@ -23,10 +24,6 @@ from nc_sim.kernel import layout as L
 from nc_sim.machine.config import MachineConfig
 from nc_sim.plc import Handshake
 from nc_sim.profiles.plan import (
-    LIM_A_ACC,
-    LIM_A_ACC2,
-    LIM_A_DEC,
-    LIM_A_DEC2,
     new_plan,
     plan_distance,
     velocity_change,
@@ -78,8 +75,14 @@ class SpindleControl:
         return not mode & ACHSMODE_KEINE_AUTO_RPF and drive not in DIGITAL_DRIVES
 
     def v_max(self, ax: Axis) -> float:
-        v = ax.cfg.eng("getriebe.dynamik.vb_max", ax.gear)
-        return min(v, ax.tool.vb_max) if ax.tool.vb_max is not None else v
+        return self.vb_max_in_force(ax).value
+
+    def vb_max_in_force(self, ax: Axis) -> Sourced:
+        """The spindle's top speed (°/s): the gear record's vb_max, or a lower tool limit."""
+        v = param(ax.cfg, "getriebe.dynamik.vb_max", ax.gear)
+        if ax.tool.vb_max is not None:
+            v = lowest(v, Sourced(ax.tool.vb_max, "wz[i].vb_max", "P-TOOL-00014", "tool"))
+        return v
 
     def override(self, ax: Axis) -> float:
         if ax.override_suppressed or not ax.units["override_valid"]:
@@ -95,13 +98,28 @@ class SpindleControl:
             v = max(v, ax.tool.vb_min)
         return math.copysign(v, ax.speed_prog)
 
+    def dynamics(self, ax: Axis) -> Dynamics:
+        """The spindle's accelerations (G01 set of its gear record) within the tool's a_max."""
+        reduced = bool(self.motion.ctx.units["reduced_acceleration"])
+        d = motion_dynamics(ax.cfg, ax.gear, Motion.FEED, ax.slope, reduced)
+        if ax.tool.a_max is None:
+            return d
+        tool = Sourced(ax.tool.a_max, "wz[i].a_max", "P-TOOL-00015", "tool")
+
+        def cap(a: Sourced) -> Sourced:
+            return lowest(a, tool) if a.value > 0 else a
+
+        a2, d2 = d.a_acc2, d.a_dec2
+        return replace(
+            d,
+            a_acc=cap(d.a_acc),
+            a_dec=cap(d.a_dec),
+            a_acc2=cap(a2) if a2 is not None else None,
+            a_dec2=cap(d2) if d2 is not None else None,
+        )
+
     def limits(self, ax: Axis) -> np.ndarray:
-        lim = self.motion.limits(ax, Motion.FEED)
-        if ax.tool.a_max is not None:
-            for col in (LIM_A_ACC, LIM_A_DEC, LIM_A_ACC2, LIM_A_DEC2):
-                if lim[col] > 0:
-                    lim[col] = min(lim[col], ax.tool.a_max)
-        return lim
+        return self.dynamics(ax).limits()
 
     # --- primitives ---------------------------------------------------------------------
     def velocity(self, ax: Axis, v: float) -> None:

@@ -35,6 +35,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/machines"): ("observer", FREE),
     ("POST", "/api/machines"): ("admin", FREE),
     ("GET", "/api/machines/{mid}/status"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/service-axes"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/signals"): ("observer", FREE),
     ("POST", "/api/machines/{mid}/restart"): ("operator", HELD),
     ("DELETE", "/api/machines/{mid}"): ("admin", FREE),

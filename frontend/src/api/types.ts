@@ -118,3 +118,6 @@ export type SeatFaults = S["SeatFaults"];
 export type SnapshotInfo = S["SnapshotInfo"];
 export type Exercise = S["Exercise"];
 export type HintInfo = S["HintInfo"];
+export type ServiceAxes = S["ServiceAxes"];
+export type AxisService = S["AxisService"];
+export type LimitInForce = S["LimitInForce"];
