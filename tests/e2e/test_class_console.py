@@ -9,7 +9,7 @@ import re
 from collections.abc import Iterator
 
 import pytest
-from playwright.sync_api import Browser, Locator, Page, expect
+from playwright.sync_api import Browser, FilePayload, Locator, Page, expect
 
 from api.auth import Role
 from nc_sim.machine.config import demo_lists
@@ -169,6 +169,11 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         bert.close()
 
 
+def lis(name: str, text: str) -> FilePayload:
+    """A parameter list file as the browser's file input takes it."""
+    return {"name": name, "mimeType": "text/plain", "buffer": text.encode()}
+
+
 def test_a_class_from_uploaded_parameter_lists(console: Page, srv: Server) -> None:
     """New class with "Upload parameter lists": the demo's own .lis files with X's kv 33 1/s
     (getriebe[0].kv 3300); each axis list's number is read from its kopf.achs_nr. The seat's
@@ -176,19 +181,14 @@ def test_a_class_from_uploaded_parameter_lists(console: Page, srv: Server) -> No
     channel, axes = demo_lists()
     kv = "getriebe[0].kv                     "
     axes[1] = axes[1].replace(kv + "2000", kv + "3300")
-    files = [
-        {"name": f"slide{nr}.lis", "mimeType": "text/plain", "buffer": text.encode()}
-        for nr, text in sorted(axes.items())
-    ]
+    files = [lis(f"slide{nr}.lis", text) for nr, text in sorted(axes.items())]
     c = console
     c.get_by_test_id("class-new").click()
     form = panel(c, "class-create")
     form.get_by_test_id("class-exercise").select_option("sign-error")
     form.get_by_test_id("template-lists").check()
     no_x = channel.replace("achse[0].bezeichnung       X", "achse[0].bezeichnung       Y")
-    form.get_by_test_id("lists-channel").set_input_files(
-        {"name": "channel.lis", "mimeType": "text/plain", "buffer": no_x.encode()}
-    )
+    form.get_by_test_id("lists-channel").set_input_files(lis("channel.lis", no_x))
     form.get_by_test_id("lists-axes").set_input_files(files)
     numbers = form.get_by_test_id("lists-axis-numbers")
     for i, nr in enumerate(sorted(axes)):
@@ -199,9 +199,7 @@ def test_a_class_from_uploaded_parameter_lists(console: Page, srv: Server) -> No
     expect(form.get_by_test_id("class-create-refusal")).to_contain_text("faults[0].axis = 'X'")
     shot(c, "class-create-lists-refused")
 
-    form.get_by_test_id("lists-channel").set_input_files(
-        {"name": "channel.lis", "mimeType": "text/plain", "buffer": channel.encode()}
-    )
+    form.get_by_test_id("lists-channel").set_input_files(lis("channel.lis", channel))
     form.get_by_test_id("class-create").click()
     expect(panel(c, "seat-links")).to_contain_text("Shown this once", timeout=60_000)
     r = srv.http.get("/api/machines/lists-s01/parameters", params={"scope": "axis", "target": "X"})
