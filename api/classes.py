@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from api.faults import FaultInfo, FaultInject
+from api.machines import MachineLists
 
 CLASS_ID = r"^[a-z0-9][a-z0-9-]{0,23}$"
 MAX_SEATS = 60
@@ -50,7 +51,9 @@ class ExerciseUpload(BaseModel):
 
 
 class ClassCreate(BaseModel):
-    """A class: every seat gets its own machine from the exercise's template."""
+    """A class: every seat gets its own machine, the demo lathe or one built from uploaded
+    parameter lists (as POST /api/machines takes them), the exercise's starting values and
+    faults in it."""
 
     model_config = ConfigDict(extra="forbid")
 
@@ -62,6 +65,11 @@ class ClassCreate(BaseModel):
         default_factory=list,
         max_length=MAX_SEATS,
         description="students' names, seat by seat (optional; shown in the console)",
+    )
+    lists: MachineLists | None = Field(
+        None,
+        description="the seats' machine template: these parameter lists; null for the demo "
+        "lathe. The exercise's axes, spindles and gear stages must be in them (else 422)",
     )
 
 
@@ -95,6 +103,9 @@ class ClassInfo(BaseModel):
     id: str
     title: str
     exercise: str
+    template: Literal["demo", "lists"] = Field(
+        description="the seats' machines: the demo lathe or the class's uploaded lists"
+    )
     instructor: str
     created_unix: float
     ended_unix: float | None

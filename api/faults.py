@@ -12,12 +12,16 @@ FACTOR = Field(gt=0.01, le=100.0, description="factor against the correct value 
 
 
 class _Fault(BaseModel):
+    """A fault kind: its `title` is its name in the instructor's words (the console's fault
+    form reads it from the OpenAPI schema)."""
+
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class MotorInvertedModel(_Fault):
     """The motor is wired inverted: with the NC's signs unchanged the axis runs away."""
 
+    model_config = ConfigDict(title="Motor wired inverted")
     kind: Literal["motor_inverted"] = "motor_inverted"
     axis: str = AXIS
 
@@ -25,6 +29,7 @@ class MotorInvertedModel(_Fault):
 class EncoderInvertedModel(_Fault):
     """The encoder counts inverted."""
 
+    model_config = ConfigDict(title="Encoder counts inverted")
     kind: Literal["encoder_inverted"] = "encoder_inverted"
     axis: str = AXIS
 
@@ -32,6 +37,7 @@ class EncoderInvertedModel(_Fault):
 class DriveGainWrongModel(_Fault):
     """The drive's speed per D/A digit is `factor` times what multi_gain assumes."""
 
+    model_config = ConfigDict(title="Drive gain wrong")
     kind: Literal["drive_gain_wrong"] = "drive_gain_wrong"
     axis: str = AXIS
     factor: float = FACTOR
@@ -40,6 +46,7 @@ class DriveGainWrongModel(_Fault):
 class EncoderResolutionWrongModel(_Fault):
     """The encoder delivers `factor` times the increments the NC's wegaufz/wegaufn assume."""
 
+    model_config = ConfigDict(title="Encoder resolution wrong")
     kind: Literal["encoder_resolution_wrong"] = "encoder_resolution_wrong"
     axis: str = AXIS
     factor: float = FACTOR
@@ -48,6 +55,7 @@ class EncoderResolutionWrongModel(_Fault):
 class EncoderNoiseModel(_Fault):
     """White noise on the encoder's reading (seeded: reproducible)."""
 
+    model_config = ConfigDict(title="Encoder noise")
     kind: Literal["encoder_noise"] = "encoder_noise"
     axis: str = AXIS
     rms: float = Field(gt=0, le=10.0, description="root mean square, mm | °")
@@ -57,6 +65,7 @@ class EncoderNoiseModel(_Fault):
 class GearRatioWrongModel(_Fault):
     """One gear stage's mechanical ratio is `factor` times its gear record's."""
 
+    model_config = ConfigDict(title="Gear ratio wrong")
     kind: Literal["gear_ratio_wrong"] = "gear_ratio_wrong"
     axis: str = AXIS
     gear: int = Field(ge=1, le=6, description="gear stage 1..6 (M40..M45 → getriebe[0..5])")
@@ -66,6 +75,7 @@ class GearRatioWrongModel(_Fault):
 class FrictionModel(_Fault):
     """Coulomb friction: the drive loses `v_loss` against the motion, sticks below it."""
 
+    model_config = ConfigDict(title="Friction")
     kind: Literal["friction"] = "friction"
     axis: str = AXIS
     v_loss: float = Field(gt=0, le=1000.0, description="speed lost, mm/s | °/s")
@@ -74,6 +84,7 @@ class FrictionModel(_Fault):
 class BacklashModel(_Fault):
     """Play between motor and load; the encoder reads the load."""
 
+    model_config = ConfigDict(title="Backlash")
     kind: Literal["backlash"] = "backlash"
     axis: str = AXIS
     width: float = Field(gt=0, le=10.0, description="mm | °")
@@ -81,6 +92,8 @@ class BacklashModel(_Fault):
 
 class DriveAccelLimitModel(_Fault):
     """The drive is torque-limited: it accelerates no faster than `a_max`."""
+
+    model_config = ConfigDict(title="Drive torque-limited")
 
     kind: Literal["drive_accel_limit"] = "drive_accel_limit"
     axis: str = AXIS
@@ -90,12 +103,14 @@ class DriveAccelLimitModel(_Fault):
 class PlcNoAckModel(_Fault):
     """The PLC program never acknowledges M functions or mode requests."""
 
+    model_config = ConfigDict(title="PLC never acknowledges")
     kind: Literal["plc_no_ack"] = "plc_no_ack"
 
 
 class PlcSlowAckModel(_Fault):
     """The PLC program acknowledges only after `delay_s`."""
 
+    model_config = ConfigDict(title="PLC acknowledges late")
     kind: Literal["plc_slow_ack"] = "plc_slow_ack"
     delay_s: float = Field(gt=0, le=600.0, description="simulated seconds")
 
@@ -103,6 +118,7 @@ class PlcSlowAckModel(_Fault):
 class DriveNotReadyModel(_Fault):
     """The drive drops its ready signals."""
 
+    model_config = ConfigDict(title="Drive not ready")
     kind: Literal["drive_not_ready"] = "drive_not_ready"
     axis: str = AXIS
 
@@ -110,6 +126,7 @@ class DriveNotReadyModel(_Fault):
 class EnableDropModel(_Fault):
     """The PLC drops the axis' enable while it moves."""
 
+    model_config = ConfigDict(title="Enable drops during motion")
     kind: Literal["enable_drop"] = "enable_drop"
     axis: str = AXIS
 

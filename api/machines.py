@@ -7,17 +7,22 @@ from typing import Literal
 from pydantic import BaseModel, Field
 
 
-class MachineCreate(BaseModel):
-    """A new machine: the demo lathe, or from native parameter lists."""
+class MachineLists(BaseModel):
+    """A machine's native parameter lists (the text of .lis files)."""
 
-    id: str = Field(pattern=r"^[a-z0-9][a-z0-9_-]{0,31}$", description="URL name")
-    name: str = Field("", max_length=80)
-    demo: bool = Field(False, description="the shipped demo lathe (lists ignored)")
     channel_list: str = Field("", max_length=1_000_000)
     axis_lists: dict[int, str] = Field(
         default_factory=dict, description="axis lists by logical axis number (log_achs_nr)"
     )
     tool_list: str = Field("", max_length=1_000_000)
+
+
+class MachineCreate(MachineLists):
+    """A new machine: the demo lathe, or from native parameter lists."""
+
+    id: str = Field(pattern=r"^[a-z0-9][a-z0-9_-]{0,31}$", description="URL name")
+    name: str = Field("", max_length=80)
+    demo: bool = Field(False, description="the shipped demo lathe (lists ignored)")
 
 
 class SimulationControl(BaseModel):

@@ -80,10 +80,11 @@ class Services:
         audit = Audit(store)
         control = Control(machines, audit, settings.control_grace_s)
         exercises = Exercises(store)
-        classes = Classes(store, accounts, machines, exercises)  # before the machines load
+        classes = Classes(store, accounts, machines, exercises, audit)  # before the machines load
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
+        await asyncio.to_thread(classes.refreeze)
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
         tdir = settings.traces_path
         traces = TraceService(store, tdir, machines)

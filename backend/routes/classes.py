@@ -151,17 +151,7 @@ def inject_class(
 ) -> list[SeatFaults]:
     """Inject a fault into the selected seats (all when none are named)."""
     c = services.classes.running(cid)
-    seats = services.classes.select(c, req.seats)
-    out = []
-    what = training.describe(training.to_fault(req.inject.fault))
-    for seat in seats:
-        m = services.machines.get(seat.machine)
-        training.inject(m, req.inject)
-        services.audit.record(
-            Classes.entry(actor, f"inject fault: {what}", m.id, **req.inject.model_dump())
-        )
-        out.append(SeatFaults(n=seat.n, faults=training.faults_of(m)))
-    return out
+    return services.classes.inject(services.classes.select(c, req.seats), req.inject, actor)
 
 
 @router.get(

@@ -25,7 +25,8 @@ def control_state(machine: MachineDep) -> ControlState:
         403,
         404,
         why={
-            409: "nothing to request (the machine is free, or yours)",
+            409: "nothing to request (the machine is free, or yours); a student's seat is "
+            "frozen by the instructor",
         },
     ),
 )

@@ -121,9 +121,10 @@ def recording_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) 
     dependencies=[permit(Action.OBSERVE)],
     responses=BINARY | responses(404),
 )
-def recording_rrd(rid: str, services: ServicesDep) -> FileResponse:
-    """The recording as a Rerun .rrd file (so far, while it runs)."""
-    path = services.recorders.path(rid)
+def recording_rrd(rid: str, services: ServicesDep, actor: ActorDep) -> FileResponse:
+    """The recording as a Rerun .rrd file (so far, while it runs); a class's student gets
+    their seat's only (others: 404)."""
+    path = services.recorders.path(rid, actor.seat)
     return FileResponse(path, media_type="application/octet-stream", filename=f"{rid}.rrd")
 
 
@@ -139,7 +140,7 @@ def recording_viewer(
 ) -> RedirectResponse:
     """Open the recording in the bundled Rerun web viewer. Its loader fetches the .rrd
     without the session cookie, so the URL carries a ticket for that one request."""
-    services.recorders.path(rid)
+    services.recorders.path(rid, actor.seat)
     path = f"/api/recordings/{rid}/recording.rrd"
     ticket = services.accounts.issue_ticket(actor, path)
     return RedirectResponse(viewer_url(request, f"{path}?ticket={ticket}"))

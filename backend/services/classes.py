@@ -23,21 +23,28 @@ from api.classes import (
     ClassCreate,
     ClassCreated,
     ClassInfo,
+    SeatFaults,
     SeatInfo,
     SeatLink,
 )
-from api.machines import MachineCreate
+from api.faults import FaultInject
+from api.machines import MachineCreate, MachineLists
 from backend.errors import ApiError, not_found
+from backend.services import training
 from backend.services.accounts import Accounts
-from backend.services.audit import Entry
+from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor
 from backend.services.exercises import Exercises
-from backend.services.machines import MachineProxy, MachineService
+from backend.services.machines import MachineProxy, MachineService, lists_rejected
 from backend.services.store import Store, StoredChange, parameter_entry
 from backend.workers.protocol import Pace
+from nc_sim.errors import NcUsageError
+from nc_sim.machine.config import machine_from_lists
+from nc_sim.params import ParamListError
 from nc_sim.training.checks import CheckResult
-from nc_sim.training.exercise import Exercise, parse_exercise
+from nc_sim.training.exercise import Exercise, ExerciseError, parse_exercise
 from nc_sim.training.score import score as exercise_score
+from nc_sim.training.template import check_fits
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS classes (  -- backend/services/classes.py
@@ -57,6 +64,12 @@ CREATE TABLE IF NOT EXISTS seats (
     machine TEXT NOT NULL,
     progress TEXT NOT NULL,        -- JSON: hints taken, checks' first pass and detail, time
     PRIMARY KEY (class, n)
+);
+CREATE TABLE IF NOT EXISTS class_lists (  -- a class's uploaded machine template (none: demo)
+    class TEXT PRIMARY KEY,
+    channel_list TEXT NOT NULL,
+    axis_lists TEXT NOT NULL,      -- JSON {log_achs_nr: text}
+    tool_list TEXT NOT NULL
 );
 """
 
@@ -116,6 +129,7 @@ class Class:
     created_unix: float
     ended_unix: float | None
     seats: list[Seat]
+    lists: MachineLists | None = None  # the seats' machine template; None: the demo lathe
 
 
 def seat_name(class_id: str, n: int) -> str:
@@ -127,9 +141,15 @@ class Classes:
     """Every class of the service; the running ones with their machines."""
 
     def __init__(
-        self, store: Store, accounts: Accounts, machines: MachineService, exercises: Exercises
+        self,
+        store: Store,
+        accounts: Accounts,
+        machines: MachineService,
+        exercises: Exercises,
+        audit: Audit,
     ) -> None:
         self.store = store
+        self.audit = audit
         self.accounts = accounts
         self.machines = machines
         self.exercises = exercises
@@ -145,6 +165,16 @@ class Classes:
         rows = self.store.query(
             "SELECT id, title, exercise, exercise_text, instructor, created, ended FROM classes"
         )
+        templates = {
+            cid: MachineLists(
+                channel_list=channel,
+                axis_lists={int(k): v for k, v in json.loads(axes).items()},
+                tool_list=tools,
+            )
+            for cid, channel, axes, tools in self.store.query(
+                "SELECT class, channel_list, axis_lists, tool_list FROM class_lists"
+            )
+        }
         for cid, title, _eid, text, instructor, created, ended in rows:
             seats = []
             for n, student, user, machine, progress in self.store.query(
@@ -155,7 +185,7 @@ class Classes:
                 seat.load_progress(progress)
                 seats.append(seat)
             ex = parse_exercise(text, f"class {cid}")
-            c = Class(cid, title, ex, text, instructor, created, ended, seats)
+            c = Class(cid, title, ex, text, instructor, created, ended, seats, templates.get(cid))
             self._classes[cid] = c
             if ended is None:
                 self._index(c)
@@ -235,17 +265,11 @@ class Classes:
             for k in c.exercise.checks
         ]
 
-    def score(self, c: Class, seat: Seat) -> tuple[float, float]:
+    @staticmethod
+    def score(c: Class, seat: Seat) -> tuple[float, float]:
         """(progress 0..1, score) of a seat, by nc_sim.training.score's rule over the seat
-        times of the checks' first passes (in milliseconds: the rule counts cycles)."""
-        first = seat.first_passed_s
-        results = [
-            CheckResult(
-                k.id, k.id in first, round(first[k.id] * 1000) if k.id in first else None, ""
-            )
-            for k in c.exercise.checks
-        ]
-        s = exercise_score(c.exercise, results, 0, 0.001, [n - 1 for n in seat.hints])
+        times (s) of the checks' first passes."""
+        s = exercise_score(c.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
         return s.passed / max(1, s.total), s.points
 
     def update(self, seat: Seat, proxy: MachineProxy) -> bool:
@@ -281,6 +305,7 @@ class Classes:
             id=c.id,
             title=c.title,
             exercise=c.exercise.id,
+            template="demo" if c.lists is None else "lists",
             instructor=c.instructor,
             created_unix=c.created_unix,
             ended_unix=c.ended_unix,
@@ -309,6 +334,7 @@ class Classes:
         """Seats with their logins and machines (the exercise's starting values written as
         the instructor's, its faults injected, its checks running); a link per seat."""
         ex, text = self.exercises.get(req.exercise)
+        self._check_template(ex, req.lists)
         with self._lock:
             if req.id in self._classes:
                 raise ApiError(409, {"message": f"class '{req.id}' exists (ended or not)"})
@@ -318,7 +344,7 @@ class Classes:
             if clash:
                 raise ApiError(409, {"message": f"'{clash[0]}' is taken (a user or machine)"})
             now = time.time()
-            c = Class(req.id, req.title or ex.title, ex, text, actor.name, now, None, [])
+            c = Class(req.id, req.title or ex.title, ex, text, actor.name, now, None, [], req.lists)
             self._classes[c.id] = c  # reserved while the seats are built
         try:
             for n, name in enumerate(names, start=1):
@@ -331,6 +357,16 @@ class Classes:
             "INSERT INTO classes VALUES (?, ?, ?, ?, ?, ?, NULL)",
             (c.id, c.title, ex.id, text, c.instructor, c.created_unix),
         )
+        if c.lists is not None:
+            self.store.run(
+                "INSERT INTO class_lists VALUES (?, ?, ?, ?)",
+                (
+                    c.id,
+                    c.lists.channel_list,
+                    json.dumps({str(k): v for k, v in c.lists.axis_lists.items()}),
+                    c.lists.tool_list,
+                ),
+            )
         for seat in c.seats:
             self.store.run(
                 "INSERT INTO seats VALUES (?, ?, ?, ?, ?, ?)",
@@ -340,6 +376,24 @@ class Classes:
             self._index(c)
         links = [SeatLink(n=s.n, url=self.link(s, base_url)) for s in c.seats]
         return ClassCreated(info=self.info(c), links=links)
+
+    @staticmethod
+    def _check_template(ex: Exercise, lists: MachineLists | None) -> None:
+        """422 for lists no machine can be built from (the list's line named, as machine
+        creation does) or that lack an axis, spindle or gear stage the exercise needs."""
+        template = None
+        if lists is not None:
+            try:
+                template = machine_from_lists(
+                    "template", lists.channel_list, lists.axis_lists, lists.tool_list
+                )
+            except (ParamListError, NcUsageError) as e:
+                raise lists_rejected(e) from None
+        try:
+            check_fits(ex, f"exercise '{ex.id}'", template)
+        except (ExerciseError, ParamListError, NcUsageError) as e:
+            machine = "the demo lathe" if lists is None else "the uploaded lists"
+            raise ApiError(422, {"message": f"{e} (the machine: {machine})"}) from None
 
     def _exists(self, mid: str) -> bool:
         try:
@@ -352,7 +406,12 @@ class Classes:
         self.accounts.add_user(name, Role.OPERATOR, secrets.token_urlsafe(24))
         title = f"{c.title} · seat {n}"
         proxy = self.machines.create(
-            MachineCreate(id=name, name=title[:80], demo=True),
+            MachineCreate(
+                id=name,
+                name=title[:80],
+                demo=c.lists is None,
+                **(c.lists.model_dump() if c.lists is not None else {}),
+            ),
             values=[(v.scope.value, v.target, v.name, v.value) for v in c.exercise.start],
             faults=[(f.fault, f.trigger) for f in c.exercise.faults],
             exercise=c.exercise,
@@ -410,15 +469,38 @@ class Classes:
         for seat in seats:
             m = self.machines.get(seat.machine)
             m.call(Pace(m.id, "pause" if frozen else "run"))
+            m.control.frozen_by = by if frozen else None  # its student cannot take control
             seat.frozen = frozen
             self.save(seat)
             word = "froze" if frozen else "resumed"
             m.notice("frozen" if frozen else "resumed", f"{by} {word} the machine")
 
+    def refreeze(self) -> None:
+        """After the machines are built at start-up: the seats frozen before pause again."""
+        for c in self.all():
+            if c.ended_unix is None:
+                frozen = [s for s in c.seats if s.frozen and self.proxy(s) is not None]
+                for seat in frozen:
+                    m = self.machines.get(seat.machine)
+                    m.call(Pace(m.id, "pause"))
+                    m.control.frozen_by = c.instructor
+
     def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
         """A message as a banner on every one of the seats' HMIs."""
         for seat in seats:
             self.machines.get(seat.machine).notice("message", f"{by}: {text}")
+
+    def inject(self, seats: list[Seat], req: FaultInject, actor: Actor) -> list[SeatFaults]:
+        """A fault into each of the seats' machines (each audited on its machine); every
+        seat's faults as they stand after."""
+        what = training.describe(training.to_fault(req.fault))
+        out = []
+        for seat in seats:
+            m = self.machines.get(seat.machine)
+            training.inject(m, req)
+            self.audit.record(self.entry(actor, f"inject fault: {what}", m.id, **req.model_dump()))
+            out.append(SeatFaults(n=seat.n, faults=training.faults_of(m)))
+        return out
 
     def take_hint(self, seat: Seat, c: Class, n: int) -> str:
         """A hint's text; taken once, it costs its points."""

@@ -40,6 +40,7 @@ class MachineControl:
     connections: Counter[Key] = field(default_factory=Counter)  # live websockets per client
     release_at: float | None = None  # wall time: the holder has no connection since
     seq: int = 0  # changes, for the pushed status
+    frozen_by: str | None = None  # a class seat frozen by this instructor: students wait
 
     def state(self) -> ControlState:
         lost = self.holder is not None and self.release_at is not None
@@ -79,11 +80,22 @@ class Control:
         self._lock = threading.Lock()
         self._task: asyncio.Task[None] | None = None
 
+    @staticmethod
+    def _not_frozen(actor: Actor, m: MachineProxy) -> None:
+        """409 for a class's student on their seat while the instructor has it frozen."""
+        by = m.control.frozen_by
+        if by is not None and actor.seat is not None:
+            raise ApiError(
+                409,
+                {"message": f"{by} froze {m.id}: you act on it again once they resume it"},
+            )
+
     # --- asked by every action only a holder may do ----------------------------------------
     def hold(self, actor: Actor, m: MachineProxy) -> None:
         """Pass if the actor holds the machine (taking it when free); 403 naming the holder
-        otherwise."""
+        otherwise, 409 for a student while their seat is frozen."""
         with self._lock:
+            self._not_frozen(actor, m)
             c = m.control
             if c.holder is None:
                 self._change(m, _party(actor), actor, "took control of a free machine")
@@ -118,6 +130,8 @@ class Control:
     def _act(self, actor: Actor, m: MachineProxy, req: ControlAction) -> None:
         c = m.control
         mine = c.holder is not None and _key(c.holder) == _key(actor)
+        if req.action in ("take", "request"):
+            self._not_frozen(actor, m)
         match req.action:
             case "take":
                 if mine:

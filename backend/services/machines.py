@@ -377,18 +377,8 @@ class MachineService:
         )
         try:
             cfg = self._config(sm)
-        except ParamListError as e:
-            raise ApiError(
-                422,
-                {
-                    "message": f"parameter list rejected: {e}",
-                    "problems": [
-                        {"parameter": p.name, "line": p.line, "message": p.detail} for p in e.errors
-                    ],
-                },
-            ) from None
-        except NcUsageError as e:
-            raise ApiError(422, {"message": str(e)}) from None
+        except (ParamListError, NcUsageError) as e:
+            raise lists_rejected(e) from None
         try:
             apply_values(cfg, values or [])
         except NcUsageError as e:
@@ -494,6 +484,22 @@ class MachineService:
                 "starts as after power-on: simulated time from 0, axes at their start "
                 "positions, spindle stopped, earlier events and pending values gone",
             )
+
+
+def lists_rejected(e: ParamListError | NcUsageError) -> ApiError:
+    """The 422 of parameter lists a machine cannot be built from: each problem with its
+    parameter and line."""
+    if isinstance(e, NcUsageError):
+        return ApiError(422, {"message": str(e)})
+    return ApiError(
+        422,
+        {
+            "message": f"parameter list rejected: {e}",
+            "problems": [
+                {"parameter": p.name, "line": p.line, "message": p.detail} for p in e.errors
+            ],
+        },
+    )
 
 
 def apply_values(cfg: MachineConfig, values: Values) -> None:

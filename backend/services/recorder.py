@@ -201,9 +201,11 @@ class Recorders:
         rec.stop("stopped on request")
         return rec.info()
 
-    def path(self, rid: str) -> Path:
+    def path(self, rid: str, seat: str | None = None) -> Path:
+        """The recording's .rrd file (written up to now); 404 for none, and for a class's
+        student (`seat`: their seat's machine) one of another machine."""
         rec = self.all.get(rid)
-        if rec is None:
+        if rec is None or (seat is not None and rec.machine.id != seat):
             raise not_found(f"recording {rid}")
         if rec.active:
             rec.pump()

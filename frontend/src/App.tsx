@@ -67,12 +67,13 @@ export function App() {
   return <Hmi />;
 }
 
-/** The instructor console under the top bar (state/classes.ts `view`). */
+/** The instructor console under the top bar (state/classes.ts `view`): no machine is shown,
+ * so the bar has no machine select, health or emergency stop. */
 function ConsoleScreen() {
   return (
     <div class="app">
       <div class="head">
-        <TopBar />
+        <TopBar machine={false} />
       </div>
       <MachinesDialog />
       <Console />

@@ -8,16 +8,17 @@ check earns its points × the time weight of its first pass, t seconds after the
     w(t) = 1 − 0.5 · (t − par) / (2 · par)      for par < t < 3 · par   (1 → 0.5)
     w(t) = 0.5                                  for t ≥ 3 · par
 
-The score is the sum of these, minus the cost of every hint taken, never below 0.
+Times are seconds of the seat (simulated time), as the gateway keeps them across the
+seat machine's rebuilds. The score is the sum of these, minus the cost of every hint taken,
+never below 0.
 Progress is the number of counted checks against all of them.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 
-from nc_sim.training.checks import CheckResult
 from nc_sim.training.exercise import Exercise
 
 LATE_FACTOR = 3.0  # at this multiple of the par time the weight reaches its floor
@@ -55,24 +56,22 @@ class Score:
 
 def score(
     exercise: Exercise,
-    results: Sequence[CheckResult],
-    start_cycle: int,
-    cycle_s: float,
+    first_passed_s: Mapping[str, float],
     hints_taken: Collection[int] = (),
 ) -> Score:
-    """Progress and score from the monitor's results (the exercise started at
-    `start_cycle`); `hints_taken` are indices into exercise.hints (each counted once).
-    Raises ValueError for results of other checks or an unknown hint index."""
-    by_id = {r.id: r for r in results}
-    if set(by_id) != {c.id for c in exercise.checks}:
-        raise ValueError(f"results of checks {sorted(by_id)} are not the exercise's checks")
+    """Progress and score from the checks' first passes: check id -> seconds after the start
+    (checks not named have not passed); `hints_taken` are indices into exercise.hints (each
+    counted once). Raises ValueError for a check the exercise lacks or an unknown hint index."""
+    known = {c.id for c in exercise.checks}
+    unknown = sorted(set(first_passed_s) - known)
+    if unknown:
+        raise ValueError(f"checks {unknown} are not the exercise's checks")
     rows: list[CheckScore] = []
     for c in exercise.checks:
-        first = by_id[c.id].first_passed_cycle
-        if first is None:
+        if c.id not in first_passed_s:
             rows.append(CheckScore(c.id, c.points, 0.0, None, None))
             continue
-        t_s = max(0, first - start_cycle) * cycle_s
+        t_s = max(0.0, first_passed_s[c.id])
         w = time_weight(t_s, exercise.par_time_s)
         rows.append(CheckScore(c.id, c.points, c.points * w, w, t_s))
     for i in hints_taken:

@@ -1,20 +1,24 @@
-"""An exercise's machine as configured, without the kernel (the gateway checks an uploaded
-exercise against it): the template with the starting values, and whether every axis the
-faults and checks name is there."""
+"""An exercise's machine as configured, without the kernel (the gateway checks an exercise
+against it): the template with the starting values, and whether every axis, spindle and gear
+stage the faults and checks name is there."""
 
 from __future__ import annotations
 
 from collections import defaultdict
 
+from nc_sim.faults import GearRatioWrong
 from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.params import Scope, Value
+from nc_sim.spindle.gears import range_table, spindle_index
+from nc_sim.training.checks import SpeedReachedCheck
 from nc_sim.training.exercise import Exercise, ExerciseError
 
 
-def seat_config(exercise: Exercise) -> MachineConfig:
-    """The exercise's machine template with its starting values written into the lists.
-    Raises ParamListError for a value out of range, NcUsageError for an unknown axis."""
-    cfg = demo_machine()  # the one template (exercise.MACHINES)
+def seat_config(exercise: Exercise, template: MachineConfig | None = None) -> MachineConfig:
+    """The exercise's machine with its starting values written into the lists: `template`
+    (changed in place: pass a fresh one) or the demo lathe (exercise.MACHINES). Raises
+    ParamListError for a value out of range, NcUsageError for an unknown axis."""
+    cfg = template if template is not None else demo_machine()
     lists: dict[tuple[Scope, str], dict[str, Value]] = defaultdict(dict)
     for v in exercise.start:
         lists[(v.scope, v.target)][v.name] = v.value
@@ -23,23 +27,68 @@ def seat_config(exercise: Exercise) -> MachineConfig:
     return cfg
 
 
-def check_fits(exercise: Exercise, source: str) -> None:
-    """Raise ExerciseError naming the first fault or check whose axis the exercise's machine
-    lacks (a main spindle's rotary-axis name, e.g. C, counts), ParamListError for a starting
-    value out of range."""
-    cfg = seat_config(exercise)
+def check_fits(exercise: Exercise, source: str, template: MachineConfig | None = None) -> None:
+    """Raise ExerciseError naming the first fault or check whose axis, spindle or gear stage
+    the exercise's machine (`template`, changed in place, or the demo lathe) lacks (a main
+    spindle's rotary-axis name, e.g. C, counts as the spindle); ParamListError for a starting
+    value out of range, NcUsageError for a starting value of an axis the machine lacks."""
+    cfg = seat_config(exercise, template)
+    spindles = {a.name for a in cfg.axes if a.is_spindle}
     names = {a.name for a in cfg.axes}
     rotary = str(cfg.channel_raw("default_ax_name_of_spindle") or "").strip().upper()
-    if rotary:
+    main = cfg.main_spindle
+    if rotary and main is not None:
         names.add(rotary)
-    named = [
-        (f"faults[{i}].axis", getattr(f.fault, "axis", None)) for i, f in enumerate(exercise.faults)
+    # (key, axis, needs a spindle, gear stage)
+    named: list[tuple[str, str | None, bool, int | None]] = [
+        (
+            f"faults[{i}]",
+            getattr(f.fault, "axis", None),
+            isinstance(f.fault, GearRatioWrong),
+            getattr(f.fault, "gear", None),
+        )
+        for i, f in enumerate(exercise.faults)
     ]
     named += [
-        (f"checks[{i}].axis", getattr(c.rule, "axis", None)) for i, c in enumerate(exercise.checks)
+        (
+            f"checks[{i}]",
+            getattr(c.rule, "axis", None),
+            isinstance(c.rule, SpeedReachedCheck),
+            getattr(c.rule, "gear", None),
+        )
+        for i, c in enumerate(exercise.checks)
     ]
-    for key, axis in named:
+    for key, axis, spindle, gear in named:
         if axis is not None and axis not in names:
             raise ExerciseError(
-                source, key, axis, f"an axis of the machine: {', '.join(sorted(names))}"
+                source, f"{key}.axis", axis, f"an axis of the machine: {', '.join(sorted(names))}"
             )
+        name = main if axis is not None and axis == rotary else axis
+        if spindle and name not in spindles:
+            raise ExerciseError(
+                source,
+                f"{key}.axis",
+                axis,
+                f"a spindle of the machine: {', '.join(sorted(spindles)) or 'none'}",
+            )
+        if gear is not None and gear not in gear_stages(cfg, name if name is not None else main):
+            stages = ", ".join(str(g) for g in sorted(gear_stages(cfg, name or main)))
+            raise ExerciseError(
+                source,
+                f"{key}.gear",
+                gear,
+                f"a gear stage of {name or main or 'the spindle'}: {stages}",
+            )
+
+
+def gear_stages(cfg: MachineConfig, axis: str | None) -> set[int]:
+    """The gear stages an axis can run in: 1, and for the main spindle with gear change
+    (main_spindle_gear_change) every stage whose range_table[g-1] has a max_speed
+    [000 §2.8.2]."""
+    stages = {1}
+    if axis is None or axis != cfg.main_spindle or not cfg.channel_raw("main_spindle_gear_change"):
+        return stages
+    i = spindle_index(cfg, axis)
+    if i is None:
+        return stages
+    return stages | {g for g, r in enumerate(range_table(cfg, i), start=1) if r.used}

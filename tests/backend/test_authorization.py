@@ -315,3 +315,35 @@ def test_an_observer_cannot_take_request_or_grant_control(
             headers={"Authorization": f"Bearer {tokens['olga']}"},
         )
         assert r.status_code == 403
+
+
+def test_a_student_reaches_their_seats_recordings_only(
+    srv: tuple[Server, dict[str, str]],
+) -> None:
+    """A class's student (an operator of their seat) gets their seat machine's recording;
+    another seat's is a 404, as if it did not exist (the .rrd and the viewer alike)."""
+    s, tokens = srv
+    ida = {"Authorization": f"Bearer {tokens['ida']}"}
+    r = s.http.post(
+        "/api/classes", json={"id": "rec", "exercise": "sign-error", "seats": 2}, headers=ida
+    )
+    assert r.status_code == 201, r.text
+    link = r.json()["links"][0]["url"].replace(s.base, "")
+    rids = []
+    for mid in ("rec-s01", "rec-s02"):
+        sigs = [g["name"] for g in s.http.get(f"/api/machines/{mid}/signals").json()][:4]
+        started = s.http.post(f"/api/machines/{mid}/recording", json={"signals": sigs})
+        assert started.status_code == 201, started.text
+        rids.append(started.json()["id"])
+    with httpx.Client(base_url=s.base, timeout=30) as student:
+        assert student.get(link, follow_redirects=False).status_code == 303
+        assert student.get(f"/api/recordings/{rids[0]}/recording.rrd").status_code == 200
+        other = student.get(f"/api/recordings/{rids[1]}/recording.rrd")
+        assert other.status_code == 404, other.text
+        viewer = student.get(f"/api/recordings/{rids[1]}/viewer", follow_redirects=False)
+        assert viewer.status_code == 404, viewer.text
+        mine = student.get(f"/api/recordings/{rids[0]}/viewer", follow_redirects=False)
+        assert mine.status_code == 307, mine.text
+    # the instructor reaches both
+    assert s.http.get(f"/api/recordings/{rids[1]}/recording.rrd", headers=ida).status_code == 200
+    assert s.http.post("/api/classes/rec/end", headers=ida).status_code == 200

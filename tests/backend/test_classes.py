@@ -15,6 +15,9 @@ from websockets.asyncio.client import connect
 from websockets.exceptions import InvalidStatus
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
+from backend.services.classes import Class, Classes, Seat
+from nc_sim.machine.config import demo_lists
+from nc_sim.training.exercise import parse_exercise
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
 from tests.backend.test_accounts import browser_like, login
 
@@ -222,8 +225,16 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert sim["mode"] == "pause"
     assert seat.post(f"/api/machines/{mid}/simulation", json={"mode": "run"}).status_code == 403
     assert seat.get(f"/api/machines/{mid}/exercise").json()["frozen"]  # a reload shows it
+    # frozen: the student takes no control (nor by a command on the free machine), says why
+    r = seat.post(f"/api/machines/{mid}/control", json={"action": "take"})
+    assert r.status_code == 409 and "froze" in r.json()["detail"]["message"], r.text
+    r = seat.post(f"/api/machines/{mid}/commands", json={"type": "reset"})
+    assert r.status_code == 409 and "froze" in r.json()["detail"]["message"], r.text
+    assert seat.get(f"/api/machines/{mid}/control").json()["holder"] is None
     assert t.post("/api/classes/end/freeze", json={"frozen": False}).status_code == 200
     assert seat.get(f"/api/machines/{mid}/status").json()["simulation"]["mode"] == "run"
+    r = seat.post(f"/api/machines/{mid}/control", json={"action": "take"})
+    assert r.status_code == 200 and r.json()["holder"]["user"] == seat_user, r.text
 
     ex = seat.get(f"/api/machines/{mid}/exercise").json()
     assert not ex["frozen"]
@@ -357,3 +368,124 @@ def test_the_console_grid_opens_with_the_pages_ticket(srv: Server) -> None:
     assert frame["class_id"] == "ticket" and [s["n"] for s in frame["seats"]] == [1, 2]
     kinds = {a["name"]: a["kind"] for a in frame["seats"][0]["axes"]}
     assert kinds["X"] == "linear" and kinds["S1"] == "spindle", kinds
+
+
+def lists_with(axis_x: str | None = None, channel: str | None = None) -> dict[str, Any]:
+    """The demo lathe's own .lis files as ClassCreate.lists, X's axis list or the channel
+    list replaced."""
+    chan, axes = demo_lists()
+    if axis_x is not None:
+        axes[1] = axis_x
+    return {"channel_list": channel or chan, "axis_lists": {str(k): v for k, v in axes.items()}}
+
+
+def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
+    """Every seat is built from the class's lists: X's kv is the uploaded 33.00 1/s
+    (getriebe[0].kv 3300, in 0.01/s), not the demo's 20 1/s; a restart of the service
+    builds the seat from the same lists again (a frozen seat frozen)."""
+    db = tmp_path / "lists.sqlite"
+    s = Server(db)
+    s.tokens = add_users(db, {"trainer": Role.INSTRUCTOR})  # type: ignore[attr-defined]
+    s.start()
+    try:
+        _chan, axes = demo_lists()
+        assert "getriebe[0].kv                     2000" in axes[1]  # the demo's 20 1/s
+        kv33 = axes[1].replace(
+            "getriebe[0].kv                     2000", "getriebe[0].kv                     3300"
+        )
+        t = trainer(s)
+        body = {"id": "lis", "exercise": "sign-error", "seats": 2, "lists": lists_with(kv33)}
+        r = t.post("/api/classes", json=body)
+        assert r.status_code == 201, r.text
+        assert r.json()["info"]["template"] == "lists"
+        for seat in r.json()["info"]["seats"]:
+            kv = t.get(
+                f"/api/machines/{seat['machine']}/parameters",
+                params={"scope": "axis", "target": "X"},
+            ).json()
+            assert {p["name"]: p["value"] for p in kv}["getriebe[0].kv"] == 3300
+        r = t.post("/api/classes/lis/freeze", json={"seats": [2], "frozen": True})
+        assert r.status_code == 200, r.text
+        s.stop()
+        s.start()
+        t = trainer(s)
+        # a frozen seat stays frozen: paused, and its student still takes no control
+        assert t.get("/api/machines/lis-s02/status").json()["simulation"]["mode"] == "pause"
+        assert t.get("/api/machines/lis-s01/status").json()["simulation"]["mode"] == "run"
+        link = t.post("/api/classes/lis/seats/2/link").json()["url"]
+        r = student(s, link).post("/api/machines/lis-s02/control", json={"action": "take"})
+        assert r.status_code == 409, r.text
+        kv = t.get("/api/machines/lis-s01/parameters", params={"scope": "axis", "target": "X"})
+        assert {p["name"]: p["value"] for p in kv.json()}["getriebe[0].kv"] == 3300
+        assert t.get("/api/classes/lis").json()["template"] == "lists"
+        # the exercise's fault is in the rebuilt seat as well
+        faults = t.get("/api/machines/lis-s01/faults").json()
+        assert [(f["fault"]["kind"], f["fault"]["axis"]) for f in faults] == [
+            ("motor_inverted", "X")
+        ]
+    finally:
+        s.close()
+
+
+def test_lists_that_lack_what_the_exercise_needs_are_422(srv: Server) -> None:
+    """The sign-error exercise inverts X's motor: lists whose cross slide is named Y lack X;
+    gear-change-plc checks gear stage 2 (M41): lists without gear change lack it; a broken
+    list is refused with its line, as machine creation refuses it. Nothing is kept."""
+    t = trainer(srv)
+    chan, _axes = demo_lists()
+    no_x = chan.replace("achse[0].bezeichnung       X", "achse[0].bezeichnung       Y")
+    assert no_x != chan
+    body = {"id": "nox", "exercise": "sign-error", "seats": 1, "lists": lists_with(channel=no_x)}
+    r = t.post("/api/classes", json=body)
+    assert r.status_code == 422, r.text
+    msg = r.json()["detail"]["message"]
+    assert "faults[0].axis = 'X'" in msg and "uploaded lists" in msg, msg
+    no_gears = chan.replace("main_spindle_gear_change   1", "main_spindle_gear_change   0")
+    assert no_gears != chan
+    body = {
+        "id": "nogear",
+        "exercise": "gear-change-plc",
+        "seats": 1,
+        "lists": lists_with(channel=no_gears),
+    }
+    r = t.post("/api/classes", json=body)
+    assert r.status_code == 422, r.text
+    assert ".gear = 2" in r.json()["detail"]["message"], r.text
+    broken = chan.replace("cycle_time                 1000", "cycle_time                 fast")
+    body = {
+        "id": "broken",
+        "exercise": "sign-error",
+        "seats": 1,
+        "lists": lists_with(channel=broken),
+    }
+    r = t.post("/api/classes", json=body)
+    assert r.status_code == 422, r.text
+    line = 1 + chan.splitlines().index(
+        next(x for x in chan.splitlines() if x.startswith("cycle_time"))
+    )
+    assert any(
+        p["parameter"] == "cycle_time" and p["line"] == line for p in r.json()["detail"]["problems"]
+    ), r.text
+    ids = {c["id"] for c in t.get("/api/classes").json()}
+    assert not ids & {"nox", "nogear", "broken"}
+    assert t.get("/api/machines/nox-s01/status").status_code == 404
+
+
+def test_a_seat_is_scored_on_its_seat_time_in_seconds() -> None:
+    """Par 2 s; check a (40 points) first passed 2.0004 s into the seat, b (60) at 4 s:
+    a earns 40 × (1 − 0.5 · 0.0004 / 4) = 39.998 (not rounded to a whole millisecond, which
+    would be par and 40), b 60 × 0.75 = 45 (half-way from par to 3 par)."""
+    text = (
+        'id = "t"\ntitle = "T"\nsummary = "S"\ntask = "Do it."\npar_time_s = 2\n'
+        'machine = "demo"\n'
+        '[[checks]]\nid = "a"\ntext = "A"\npoints = 40\nkind = "gain"\naxis = "X"\n'
+        "within_pct = 1.0\n"
+        '[[checks]]\nid = "b"\ntext = "B"\npoints = 60\nkind = "gain"\naxis = "Z"\n'
+        "within_pct = 1.0\n"
+    )
+    ex = parse_exercise(text, "t.toml")
+    seat = Seat("c", 1, "Ann", "c-s01", "c-s01", first_passed_s={"a": 2.0004, "b": 4.0})
+    c = Class("c", "C", ex, text, "trainer", 0.0, None, [seat])
+    progress, points = Classes.score(c, seat)
+    assert progress == 1.0
+    assert points == pytest.approx(40 * (1 - 0.5 * 0.0004 / 4) + 45, abs=1e-9)

@@ -25,3 +25,20 @@ def test_every_fault_of_the_catalogue_has_its_model_and_round_trips() -> None:
         fields = {f.name: samples[f.name] for f in dataclasses.fields(cls)}
         fault = cls(**fields)
         assert to_fault(to_model(fault)) == fault
+
+
+def test_every_fault_kind_has_the_instructors_words_in_the_schema() -> None:
+    """The console's fault form names each kind by its schema title ("Motor wired inverted"),
+    not by a class or kind identifier."""
+    from api.faults import FaultInject
+
+    defs = FaultInject.model_json_schema()["$defs"]
+    kinds = [d for d in defs.values() if "kind" in d.get("properties", {})]
+    assert len(kinds) >= 12
+    for d in kinds:
+        kind = d["properties"]["kind"]["const"]
+        title = d["title"]
+        assert not title.endswith("Model") and "_" not in title, (kind, title)
+        assert title[0].isupper(), title
+    titles = [d["title"] for d in kinds]
+    assert len(set(titles)) == len(titles)  # told apart in the form

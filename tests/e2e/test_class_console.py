@@ -9,15 +9,16 @@ import re
 from collections.abc import Iterator
 
 import pytest
-from playwright.sync_api import Browser, Locator, Page, expect
+from playwright.sync_api import Browser, FilePayload, Locator, Page, expect
 
 from api.auth import Role
+from nc_sim.machine.config import demo_lists
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import SIZES, panel, shot, signed_in_page
 
 TRAINER = "trainer"
 CLASS = "drill"
-# accel-curve injects no fault at start and its task is the spindle: X is as the demo's
+# accel-curve's one fault at start is the spindle's (a torque-limited drive): X is as the demo's
 EXERCISE = "accel-curve"
 LAG_MONITORING = 90002  # job error: following error above its limit [002]
 
@@ -67,10 +68,14 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
     console: Page, browser: Browser, srv: Server
 ) -> None:
     c = console
+    # the console shows no machine: no machine select, health or emergency stop in its bar
+    expect(c.locator(".topbar")).to_be_visible()
+    expect(c.get_by_test_id("estop")).to_have_count(0)
+    expect(c.locator(".machine-select")).to_have_count(0)
     c.get_by_test_id("class-new").click()
     form = panel(c, "class-create")
     form.get_by_test_id("class-exercise").select_option(EXERCISE)
-    expect(form.get_by_test_id("exercise-info")).to_contain_text("0 faults at start")
+    expect(form.get_by_test_id("exercise-info")).to_contain_text("1 fault at start")
     form.get_by_test_id("class-id").fill(CLASS)
     form.get_by_test_id("class-seats").fill("2")
     form.get_by_test_id("class-students").fill("Anna\nBert")
@@ -93,7 +98,7 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         expect(panel(c, "grid").get_by_test_id("grid-link")).to_have_text("live")
         for n in (1, 2):
             expect(tile(c, n).get_by_test_id("seat-error")).to_have_text("no job error")
-            expect(tile(c, n).get_by_test_id("seat-faults")).to_have_text("⚡0")
+            expect(tile(c, n).get_by_test_id("seat-faults")).to_have_text("⚡1")  # S1's
         for size in ("desktop", "tablet"):
             resize(c, size)
             shot(c, f"class-console-grid-{size}")
@@ -102,6 +107,10 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         fault = panel(c, "fault-form")
         expect(fault).to_contain_text("seat 1 (Anna)")
         fault.get_by_test_id("fault-kind").select_option("motor_inverted")
+        # the kinds in the instructor's words (the schema's titles), not identifiers
+        expect(fault.get_by_test_id("fault-kind").locator("option:checked")).to_have_text(
+            "Motor wired inverted"
+        )
         expect(fault.get_by_test_id("fault-description")).to_contain_text("wired inverted")
         fault.get_by_test_id("fault-field-axis").select_option("X")
         for size in ("tablet", "desktop"):
@@ -109,8 +118,8 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
             shot(c, f"class-console-fault-{size}")
         fault.get_by_test_id("fault-inject").click()
         expect(fault).to_be_hidden()
-        expect(tile(c, 1).get_by_test_id("seat-faults")).to_have_text("⚡1")
-        expect(tile(c, 2).get_by_test_id("seat-faults")).to_have_text("⚡0")
+        expect(tile(c, 1).get_by_test_id("seat-faults")).to_have_text("⚡2")
+        expect(tile(c, 2).get_by_test_id("seat-faults")).to_have_text("⚡1")
 
         # Anna moves X by a 1 mm jog step: with the motor inverted the loop pushes X away
         # from its command until lag monitoring stops it (a seat opens on its Exercise tab)
@@ -144,8 +153,54 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         expect(c.get_by_test_id("banner-error")).to_contain_text(str(LAG_MONITORING))
         expect(c.get_by_test_id("control-strip")).to_be_visible()  # the instructor can take over
         shot(c, "class-console-live-view")
+        expect(c.get_by_test_id("estop")).to_be_visible()  # a machine is shown: its E-stop
         c.get_by_test_id("open-classes").click()
         expect(tile(c, 1).get_by_test_id("seat-error")).to_contain_text(str(LAG_MONITORING))
+
+        # Bert's seat frozen: his control strip offers no control and says why
+        r = srv.http.post(f"/api/classes/{CLASS}/freeze", json={"seats": [2], "frozen": True})
+        assert r.status_code == 200, r.text
+        strip = bert.get_by_test_id("control-strip")
+        expect(strip.get_by_test_id("control-frozen")).to_contain_text("frozen by the instructor")
+        expect(strip.get_by_test_id("control-take")).to_have_count(0)
+        shot(bert, "class-seat-frozen-control")
     finally:
         anna.close()
         bert.close()
+
+
+def lis(name: str, text: str) -> FilePayload:
+    """A parameter list file as the browser's file input takes it."""
+    return {"name": name, "mimeType": "text/plain", "buffer": text.encode()}
+
+
+def test_a_class_from_uploaded_parameter_lists(console: Page, srv: Server) -> None:
+    """New class with "Upload parameter lists": the demo's own .lis files with X's kv 33 1/s
+    (getriebe[0].kv 3300); each axis list's number is read from its kopf.achs_nr. The seat's
+    machine has the uploaded kv, and lists without X are refused naming X."""
+    channel, axes = demo_lists()
+    kv = "getriebe[0].kv                     "
+    axes[1] = axes[1].replace(kv + "2000", kv + "3300")
+    files = [lis(f"slide{nr}.lis", text) for nr, text in sorted(axes.items())]
+    c = console
+    c.get_by_test_id("class-new").click()
+    form = panel(c, "class-create")
+    form.get_by_test_id("class-exercise").select_option("sign-error")
+    form.get_by_test_id("template-lists").check()
+    no_x = channel.replace("achse[0].bezeichnung       X", "achse[0].bezeichnung       Y")
+    form.get_by_test_id("lists-channel").set_input_files(lis("channel.lis", no_x))
+    form.get_by_test_id("lists-axes").set_input_files(files)
+    numbers = form.get_by_test_id("lists-axis-numbers")
+    for i, nr in enumerate(sorted(axes)):
+        expect(numbers.get_by_test_id(f"lists-axis-nr-{i}")).to_have_value(str(nr))
+    form.get_by_test_id("class-id").fill("lists")
+    form.get_by_test_id("class-seats").fill("1")
+    form.get_by_test_id("class-create").click()
+    expect(form.get_by_test_id("class-create-refusal")).to_contain_text("faults[0].axis = 'X'")
+    shot(c, "class-create-lists-refused")
+
+    form.get_by_test_id("lists-channel").set_input_files(lis("channel.lis", channel))
+    form.get_by_test_id("class-create").click()
+    expect(panel(c, "seat-links")).to_contain_text("Shown this once", timeout=60_000)
+    r = srv.http.get("/api/machines/lists-s01/parameters", params={"scope": "axis", "target": "X"})
+    assert {p["name"]: p["value"] for p in r.json()}["getriebe[0].kv"] == 3300

@@ -206,26 +206,22 @@ def test_the_score_by_hand() -> None:
     """Check a (40 points) passed after 300 s: 40; b (60) after 1200 s with par 600:
     60 × 0.75 = 45; one hint of 10 taken: 40 + 45 - 10 = 75 of 100."""
     ex = parse_exercise(GOOD + '\n[[hints]]\ntext = "h"\ncost = 10\n', "t.toml")
-    start, cycle_s = 5000, 0.001
-    results = [
-        CheckResult("a", True, start + 300_000, ""),
-        CheckResult("b", True, start + 1_200_000, ""),
-    ]
-    s = score(ex, results, start, cycle_s, hints_taken=[0])
+    s = score(ex, {"a": 300.0, "b": 1200.0}, hints_taken=[0])
     assert (s.passed, s.total, s.max_points) == (2, 2, 100)
     assert s.points == pytest.approx(75.0) and s.hint_cost == 10
-    half = score(ex, [results[0], CheckResult("b", False, None, "")], start, cycle_s)
+    half = score(ex, {"a": 300.0})
     assert half.passed == 1 and half.points == pytest.approx(40.0)
+    with pytest.raises(ValueError, match="not the exercise's checks"):
+        score(ex, {"a": 1.0, "zz": 2.0})
 
 
 def test_the_score_never_goes_below_zero() -> None:
     ex = parse_exercise(
         GOOD + '\n[[hints]]\ntext = "h"\ncost = 25\n[[hints]]\ntext = "i"\ncost = 30\n', "t.toml"
     )
-    none = [CheckResult("a", False, None, ""), CheckResult("b", False, None, "")]
-    assert score(ex, none, 0, 0.001, hints_taken=[0, 1]).points == 0.0
+    assert score(ex, {}, hints_taken=[0, 1]).points == 0.0
     with pytest.raises(ValueError, match="no hint 2"):
-        score(ex, none, 0, 0.001, hints_taken=[2])
+        score(ex, {}, hints_taken=[2])
 
 
 # --- the shipped exercises on a seat -------------------------------------------------------

@@ -105,6 +105,7 @@ export type ExerciseInfo = S["ExerciseInfo"];
 export type ClassInfo = S["ClassInfo"];
 export type ClassCreate = S["ClassCreate"];
 export type ClassCreated = S["ClassCreated"];
+export type MachineLists = S["MachineLists"];
 export type SeatInfo = S["SeatInfo"];
 export type SeatLink = S["SeatLink"];
 export type SeatDetail = S["SeatDetail"];

@@ -1,13 +1,123 @@
 // A new class: the exercise (what it asks, its checks and hints, how many faults it injects),
-// how many seats, the students' names; then each seat's one-time login link, shown this once.
+// the seats' machine (the demo lathe or uploaded parameter lists: a channel list, one axis list
+// per axis with its logical axis number, optionally a tool list), how many seats, the
+// students' names; then each seat's one-time login link, shown this once.
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
-import type { ClassCreated, Refusal, SeatLink } from "../api/types";
+import type { ClassCreated, MachineLists, Refusal, SeatLink } from "../api/types";
 import { chooseClass, createClass, exercises, newLink } from "../state/classes";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 
 const MAX_SEATS = 60; // api/classes.py MAX_SEATS
+
+/** An uploaded axis list and its logical axis number (log_achs_nr), which the channel list's
+ * achse[i].log_achs_nr / spindel[i].log_achs_nr refer to. */
+interface AxisFile {
+  name: string;
+  text: string;
+  nr: string;
+}
+
+/** The axis number an axis list gives itself (kopf.achs_nr), else the digits of its file
+ * name (axis_3.lis), else "". */
+function axisNumber(name: string, text: string): string {
+  const own = /^\s*kopf\.achs_nr\s+(\d+)/m.exec(text);
+  return own?.[1] ?? /(\d+)\D*$/.exec(name)?.[1] ?? "";
+}
+
+const readFiles = (input: HTMLInputElement) =>
+  Promise.all(Array.from(input.files ?? []).map(async (f) => ({ name: f.name, text: await f.text() })));
+
+/** The seats' machine: the demo lathe, or parameter lists from files. */
+function TemplateChoice(props: {
+  upload: boolean;
+  setUpload: (u: boolean) => void;
+  channel: { name: string; text: string } | null;
+  setChannel: (c: { name: string; text: string } | null) => void;
+  axes: AxisFile[];
+  setAxes: (a: AxisFile[]) => void;
+  tools: { name: string; text: string } | null;
+  setTools: (t: { name: string; text: string } | null) => void;
+}) {
+  const { upload, axes } = props;
+  const one = (set: (f: { name: string; text: string } | null) => void) => (e: Event) =>
+    void readFiles(e.target as HTMLInputElement).then((fs) => set(fs[0] ?? null));
+  return (
+    <fieldset class="wide template" data-testid="class-template">
+      <legend>Machine of every seat</legend>
+      <label class="inline">
+        <input type="radio" name="template" checked={!upload} data-testid="template-demo" onChange={() => props.setUpload(false)} /> Demo lathe
+      </label>
+      <label class="inline">
+        <input type="radio" name="template" checked={upload} data-testid="template-lists" onChange={() => props.setUpload(true)} /> Upload
+        parameter lists
+      </label>
+      {upload ? (
+        <div class="template-files">
+          <label>
+            Channel list (.lis)
+            <input type="file" accept=".lis,.txt,text/plain" required data-testid="lists-channel" onChange={one(props.setChannel)} />
+          </label>
+          <label>
+            Axis lists (.lis, one per axis and spindle)
+            <input type="file" accept=".lis,.txt,text/plain" multiple required data-testid="lists-axes"
+              onChange={(e) =>
+                void readFiles(e.target as HTMLInputElement).then((fs) =>
+                  props.setAxes(fs.map((f) => ({ ...f, nr: axisNumber(f.name, f.text) }))),
+                )
+              } />
+          </label>
+          <label>
+            Tool list (.lis, optional)
+            <input type="file" accept=".lis,.txt,text/plain" data-testid="lists-tools" onChange={one(props.setTools)} />
+          </label>
+          {axes.length ? (
+            <table class="axis-files" data-testid="lists-axis-numbers">
+              <thead>
+                <tr><th>axis list</th><th>logical axis number (log_achs_nr)</th></tr>
+              </thead>
+              <tbody>
+                {axes.map((a, i) => (
+                  <tr key={a.name}>
+                    <td class="mono">{a.name}</td>
+                    <td>
+                      <input type="number" min={1} max={255} step={1} required value={a.nr} aria-label={`logical axis number of ${a.name}`}
+                        data-testid={`lists-axis-nr-${i}`}
+                        onInput={(e) => props.setAxes(axes.map((x, j) => (j === i ? { ...x, nr: (e.target as HTMLInputElement).value } : x)))} />
+                    </td>
+                  </tr>
+                ))}
+              </tbody>
+            </table>
+          ) : null}
+          <p class="hint">
+            The channel list names each axis and spindle with its logical axis number; each axis list is taken for the
+            number beside it (read from its kopf.achs_nr, else from the file name). The exercise's axes, spindles and
+            gear stages must be in the lists.
+          </p>
+        </div>
+      ) : null}
+    </fieldset>
+  );
+}
+
+/** The lists as ClassCreate.lists; a sentence for what is missing. */
+function listsOf(
+  channel: { text: string } | null,
+  axes: AxisFile[],
+  tools: { text: string } | null,
+): MachineLists | string {
+  if (!channel) return "choose the channel list";
+  if (!axes.length) return "choose the axis lists";
+  const byNr: Record<string, string> = {};
+  for (const a of axes) {
+    if (!/^\d+$/.test(a.nr)) return `give ${a.name} its logical axis number`;
+    if (a.nr in byNr) return `two axis lists have number ${a.nr}`;
+    byNr[a.nr] = a.text;
+  }
+  return { channel_list: channel.text, axis_lists: byNr, tool_list: tools?.text ?? "" };
+}
 
 export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCancel: () => void }) {
   const [id, setId] = useState("");
@@ -15,15 +125,24 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   const [exercise, setExercise] = useState(exercises.value[0]?.id ?? "");
   const [seats, setSeats] = useState(2);
   const [students, setStudents] = useState("");
+  const [upload, setUpload] = useState(false);
+  const [channel, setChannel] = useState<{ name: string; text: string } | null>(null);
+  const [axes, setAxes] = useState<AxisFile[]>([]);
+  const [tools, setTools] = useState<{ name: string; text: string } | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [busy, setBusy] = useState(false);
   const ex = exercises.value.find((e) => e.id === exercise) ?? exercises.value[0];
   const names = students.split("\n").map((s) => s.trim()).filter(Boolean);
   async function submit(e: Event) {
     e.preventDefault();
+    const lists = upload ? listsOf(channel, axes, tools) : null;
+    if (typeof lists === "string") {
+      setRefusal({ message: lists, problems: [] });
+      return;
+    }
     setBusy(true);
     try {
-      const created = await createClass({ id, title, exercise: ex?.id ?? "", seats, students: names });
+      const created = await createClass({ id, title, exercise: ex?.id ?? "", seats, students: names, lists });
       setRefusal(null);
       chooseClass(created.info.id);
       props.onCreated(created);
@@ -54,6 +173,8 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
             </p>
           </div>
         ) : null}
+        <TemplateChoice upload={upload} setUpload={setUpload} channel={channel} setChannel={setChannel} axes={axes} setAxes={setAxes}
+          tools={tools} setTools={setTools} />
         <label>
           Class id
           <input value={id} required pattern="[a-z0-9][a-z0-9\-]{0,23}" maxLength={24} data-testid="class-id" onInput={str(setId)}

@@ -71,7 +71,7 @@ export function FaultForm(props: { c: ClassInfo; target: number[] }) {
             Fault
             <select value={kind} data-testid="fault-kind" onChange={(e) => { setKind((e.target as HTMLSelectElement).value); setValues({}); }}>
               {kinds.map((k) => (
-                <option key={k.kind} value={k.kind}>{k.kind}</option>
+                <option key={k.kind} value={k.kind}>{k.title}</option>
               ))}
             </select>
           </label>

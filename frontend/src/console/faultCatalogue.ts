@@ -1,5 +1,5 @@
 // The fault catalogue as the service's OpenAPI schema describes it (api/faults.py): every
-// kind with its sentence, its fields with type, range, default and unit (the field's
+// kind with its title (the instructor's words) and sentence, its fields with type, range, default and unit (the field's
 // description). The form is built from it, so a new fault kind needs no frontend change.
 import { http } from "../api/http";
 
@@ -16,11 +16,14 @@ export interface FaultField {
 
 export interface FaultKind {
   kind: string;
+  /** "Motor wired inverted": the model's title in the schema */
+  title: string;
   description: string;
   fields: FaultField[];
 }
 
 interface JsonSchema {
+  title?: string;
   properties?: Record<string, JsonSchema>;
   required?: string[];
   description?: string;
@@ -64,7 +67,8 @@ function parse(schemas: Record<string, JsonSchema>): FaultKind[] {
         default: p.default,
         required: (m.required ?? []).includes(name),
       }));
-    return { kind: props.kind?.const ?? "", description: m.description ?? "", fields };
+    const kind = props.kind?.const ?? "";
+    return { kind, title: m.title ?? kind, description: m.description ?? "", fields };
   });
 }
 

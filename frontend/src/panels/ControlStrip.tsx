@@ -1,13 +1,14 @@
 // Who holds the machine on screen, under the top bar: free, this tab, this session in another
 // tab, or someone else; the way to ask for it, take it, hand it over or give it back; a
 // holder without a live connection (a closed tab, a script) counting down to the release; what
-// happened to this tab's control or request meanwhile (refused, taken, lapsed).
+// happened to this tab's control or request meanwhile (refused, taken, lapsed). A student
+// of a frozen class seat is offered nothing: the strip says why.
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ControlParty, Refusal } from "../api/types";
 import { me } from "../state/auth";
 import { act, control, controlNote, dismissControlNote, may, requested, standing, who } from "../state/control";
-import { online } from "../state/session";
+import { frozen, online } from "../state/session";
 import { RefusalLine } from "../ui/useCommand";
 
 export function ControlStrip() {
@@ -27,6 +28,8 @@ export function ControlStrip() {
       {label}
     </button>
   );
+  // a class seat frozen by the instructor: its student waits (the service refuses them, 409)
+  const waiting = frozen.value !== null && !may("take_control");
   const lapseS = c.release_at_unix != null ? Math.max(0, Math.ceil(c.release_at_unix - Date.now() / 1000)) : null;
   return (
     <div class={`control-strip ${st}`} data-testid="control-strip" role="status" aria-label="control of the machine">
@@ -43,6 +46,10 @@ export function ControlStrip() {
         <span class="hint" data-testid="control-view-only">
           view only ({me.value?.role})
         </span>
+      ) : waiting ? (
+        <span class="hint" data-testid="control-frozen">
+          frozen by the instructor: you can take control once they resume the machine
+        </span>
       ) : !h ? (
         <span class="hint">the first command takes control</span>
       ) : null}
@@ -51,7 +58,7 @@ export function ControlStrip() {
           no live connection: released in {lapseS} s
         </span>
       ) : null}
-      {may("control") ? (
+      {may("control") && !waiting ? (
         <span class="control-actions">
           {!h ? button("control-take", "Take control", "take") : null}
           {st === "mine" ? button("control-release", "Release", "release") : null}

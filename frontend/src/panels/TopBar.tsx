@@ -1,4 +1,6 @@
-// Always visible: machine, time and loop health, connection, who is logged in, and the emergency stop.
+// Always visible: machine, time and loop health, connection, who is logged in, and the emergency
+// stop. The instructor console shows no machine: there the bar has the brand, the view switch
+// and the user only (`machine={false}`).
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
@@ -12,7 +14,7 @@ import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
-export function TopBar() {
+export function TopBar({ machine = true }: { machine?: boolean }) {
   const s = status.value;
   const sim = s?.simulation;
   const c = connection.value;
@@ -21,52 +23,58 @@ export function TopBar() {
     <header class="topbar">
       <span class="brand">Inbetrieb</span>
       {may("teach") ? <ViewSwitch /> : null}
-      <label class="machine-select">
-        Machine{" "}
-        <select value={machineId.value} onChange={(e) => selectMachine((e.target as HTMLSelectElement).value)}>
-          {machines.value.map((m) => (
-            <option value={m.id} key={m.id}>
-              {m.name}
-            </option>
-          ))}
-        </select>
-      </label>
-      <button type="button" class="secondary" data-testid="open-machines" title="pacing, restart, new and deleted machines"
-        onClick={() => (machinesOpen.value = true)}>
-        Machines…
-      </button>
-      <span class="health" data-testid="health">
-        <span title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
-        <span title="simulated seconds per wall second">
-          {sim?.mode ?? "—"} ×{fmt(sim?.rt_factor, 2)}
-        </span>
-        <span
-          title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile`}
-          data-testid="loop-health"
-        >
-          loop {sim?.worker ?? "—"} · overruns {sim?.loop_overruns ?? "—"} · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}
-        </span>
-      </span>
-      <Lamp
-        id="lamp-connection"
-        on={c === "online"}
-        tone="ok"
-        label={c === "online" ? "connected" : c === "lost" ? "connection lost" : "connecting"}
-      />
-      {s?.emergency_stop ? <span class="estop-state">EMERGENCY STOP ACTIVE</span> : null}
-      <RefusalLine refusal={estop.refusal} />
+      {machine ? (
+        <>
+          <label class="machine-select">
+            Machine{" "}
+            <select value={machineId.value} onChange={(e) => selectMachine((e.target as HTMLSelectElement).value)}>
+              {machines.value.map((m) => (
+                <option value={m.id} key={m.id}>
+                  {m.name}
+                </option>
+              ))}
+            </select>
+          </label>
+          <button type="button" class="secondary" data-testid="open-machines" title="pacing, restart, new and deleted machines"
+            onClick={() => (machinesOpen.value = true)}>
+            Machines…
+          </button>
+          <span class="health" data-testid="health">
+            <span title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
+            <span title="simulated seconds per wall second">
+              {sim?.mode ?? "—"} ×{fmt(sim?.rt_factor, 2)}
+            </span>
+            <span
+              title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile`}
+              data-testid="loop-health"
+            >
+              loop {sim?.worker ?? "—"} · overruns {sim?.loop_overruns ?? "—"} · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}
+            </span>
+          </span>
+          <Lamp
+            id="lamp-connection"
+            on={c === "online"}
+            tone="ok"
+            label={c === "online" ? "connected" : c === "lost" ? "connection lost" : "connecting"}
+          />
+          {s?.emergency_stop ? <span class="estop-state">EMERGENCY STOP ACTIVE</span> : null}
+          <RefusalLine refusal={estop.refusal} />
+        </>
+      ) : null}
       {/* one group: when the bar wraps, the emergency stop stays at the right end */}
       <span class="topbar-end">
         <UserBox />
-        <button
-          class="estop"
-          data-testid="estop"
-          disabled={!online.value || !may("stop")}
-          onClick={() => void estop.run(emergencyStop)}
-          title={may("stop") ? "Emergency stop: every axis brakes with a_emergency (no control needed)" : `a user in the role ${me.value?.role ?? ""} may not stop the machine`}
-        >
-          EMERGENCY STOP
-        </button>
+        {machine ? (
+          <button
+            class="estop"
+            data-testid="estop"
+            disabled={!online.value || !may("stop")}
+            onClick={() => void estop.run(emergencyStop)}
+            title={may("stop") ? "Emergency stop: every axis brakes with a_emergency (no control needed)" : `a user in the role ${me.value?.role ?? ""} may not stop the machine`}
+          >
+            EMERGENCY STOP
+          </button>
+        ) : null}
       </span>
     </header>
   );
