@@ -106,6 +106,7 @@ class MachineHost:
             self.signals,
             self.sim.kernel.n,
             str(path) if path is not None else None,
+            self.machine.faults(),
         )
 
     @property
