@@ -79,6 +79,14 @@ class BacklashModel(_Fault):
     width: float = Field(gt=0, le=10.0, description="mm | °")
 
 
+class DriveAccelLimitModel(_Fault):
+    """The drive is torque-limited: it accelerates no faster than `a_max`."""
+
+    kind: Literal["drive_accel_limit"] = "drive_accel_limit"
+    axis: str = AXIS
+    a_max: float = Field(gt=0, le=1e6, description="mm/s² | °/s²")
+
+
 class PlcNoAckModel(_Fault):
     """The PLC program never acknowledges M functions or mode requests."""
 
@@ -115,6 +123,7 @@ FaultModel = Annotated[
     | GearRatioWrongModel
     | FrictionModel
     | BacklashModel
+    | DriveAccelLimitModel
     | PlcNoAckModel
     | PlcSlowAckModel
     | DriveNotReadyModel

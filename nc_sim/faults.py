@@ -94,6 +94,17 @@ class Backlash:
 
 
 @dataclass(frozen=True)
+class DriveAccelLimit:
+    """The drive is torque-limited: it cannot accelerate the axis faster than `a_max`
+    (mm/s² | °/s²), whatever the NC's ramp asks. A ramp steeper than that leaves the drive
+    behind and the lag grows [000 §2.8.4]."""
+
+    kind: ClassVar[str] = "drive_accel_limit"
+    axis: str
+    a_max: float
+
+
+@dataclass(frozen=True)
 class PlcNoAck:
     """The PLC program never acknowledges M functions or mode requests (the NC's handshake
     times out with job error 90004), whatever PLC mode the HLI shows."""
@@ -134,6 +145,7 @@ Fault = (
     | GearRatioWrong
     | Friction
     | Backlash
+    | DriveAccelLimit
     | PlcNoAck
     | PlcSlowAck
     | DriveNotReady
@@ -148,6 +160,7 @@ CATALOGUE: tuple[type[Fault], ...] = (
     GearRatioWrong,
     Friction,
     Backlash,
+    DriveAccelLimit,
     PlcNoAck,
     PlcSlowAck,
     DriveNotReady,

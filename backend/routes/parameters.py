@@ -61,11 +61,16 @@ def definitions() -> list[ParameterDef]:
     responses=responses(404, 422),
 )
 def values(
-    machine: MachineDep, services: ServicesDep, scope: ScopeQ = "axis", target: TargetQ = None
+    machine: MachineDep,
+    services: ServicesDep,
+    actor: ActorDep,
+    scope: ScopeQ = "axis",
+    target: TargetQ = None,
 ) -> list[ParameterValue]:
     """Values of one list (every gear record for getriebe[i]), with pending values and
-    versions."""
-    return params.read(machine, services.store, Scope(scope), target)
+    versions. A class's student does not get the simulated plant's sim.* values."""
+    plant = not params.plant_hidden(actor)
+    return params.read(machine, services.store, Scope(scope), target, plant)
 
 
 @router.patch(
@@ -95,10 +100,12 @@ def write(
     responses=text_answer("text/plain", "the list") | responses(404, 422),
 )
 def export(
-    machine: MachineDep, scope: ScopeQ = "axis", target: TargetQ = None
+    machine: MachineDep, actor: ActorDep, scope: ScopeQ = "axis", target: TargetQ = None
 ) -> PlainTextResponse:
-    """The list in the native format, as a restart would load it."""
-    return PlainTextResponse(params.export_list(machine, Scope(scope), target))
+    """The list in the native format, as a restart would load it (without the simulated
+    plant's sim.* for a class's student)."""
+    plant = not params.plant_hidden(actor)
+    return PlainTextResponse(params.export_list(machine, Scope(scope), target, plant))
 
 
 @router.post(

@@ -103,6 +103,15 @@ def effective(m: MachineProxy, scope: Scope, target: str) -> dict[str, Value]:
     return values
 
 
+PLANT = "sim."  # the simulated plant's parameters (motor, drive, encoder): not the NC's
+
+
+def plant_hidden(actor: Actor) -> bool:
+    """A class's student neither sees nor writes the simulated plant: their exercise is to
+    find its faults from the NC's side, as on a real machine, which has no sim.* lists."""
+    return actor.seat is not None
+
+
 def write(
     actor: Actor,
     m: MachineProxy,
@@ -113,6 +122,12 @@ def write(
 ) -> ParameterWriteResult:
     """Validate all changes together (refused when based on a value someone else has
     written since), then store, audit and apply them."""
+    plant = [c.name for c in changes if c.name.startswith(PLANT)]
+    if plant and plant_hidden(actor):
+        raise ApiError(
+            403,
+            {"message": f"{plant[0]}: the simulated plant is the instructor's on a class seat"},
+        )
     with m.lock:
         problems: list[ParameterProblem] = []
         parsed: list[tuple[Scope, str, ParamDef, str, Value]] = []
@@ -254,9 +269,11 @@ def _concrete_names(scope: Scope, kind: AxisKind, written: Mapping[str, Value]) 
     return names + sorted(n for n in written if n not in set(names))
 
 
-def read(m: MachineProxy, store: Store, scope: Scope, target: str | None) -> list[ParameterValue]:
+def read(
+    m: MachineProxy, store: Store, scope: Scope, target: str | None, plant: bool = True
+) -> list[ParameterValue]:
     """Every parameter of one list with value, default, unit, effect, pending value and
-    version."""
+    version (the plant's sim.* only with `plant`)."""
     versions = store.versions(m.id)
     with m.lock:
         tgt = _target(m, scope, target)
@@ -264,6 +281,8 @@ def read(m: MachineProxy, store: Store, scope: Scope, target: str | None) -> lis
         kind = axis_kind_of(written) if scope is Scope.AXIS else AxisKind.LINEAR
         out = []
         for name in _concrete_names(scope, kind, written):
+            if not plant and name.startswith(PLANT):
+                continue
             d = resolve(scope, name)
             pending = m.pending.get((scope.value, tgt, name))
             gear = int(name[9]) + 1 if name.startswith("getriebe[") else None
@@ -292,11 +311,14 @@ def read(m: MachineProxy, store: Store, scope: Scope, target: str | None) -> lis
         return out
 
 
-def export_list(m: MachineProxy, scope: Scope, target: str | None) -> str:
-    """The list in native format as the next restart would load it (pending included)."""
+def export_list(m: MachineProxy, scope: Scope, target: str | None, plant: bool = True) -> str:
+    """The list in native format as the next restart would load it (pending included; the
+    plant's sim.* only with `plant`)."""
     with m.lock:
         tgt = _target(m, scope, target)
         values = effective(m, scope, tgt)
+    if not plant:
+        values = {n: v for n, v in values.items() if not n.startswith(PLANT)}
     where = f" axis {tgt}" if tgt else ""
     title = f"Inbetrieb export: machine {m.id}, {scope.value} list{where}"
     return format_list(values, scope, [title])

@@ -68,6 +68,8 @@ def describe(fault: Fault) -> str:
             what = f"friction: loses {fault.v_loss:g}/s"  # type: ignore[union-attr]
         case "backlash":
             what = f"backlash {fault.width:g}"  # type: ignore[union-attr]
+        case "drive_accel_limit":
+            what = f"drive accelerates at most {fault.a_max:g}/s²"  # type: ignore[union-attr]
         case "plc_no_ack":
             what = "never acknowledges"
         case "plc_slow_ack":

@@ -346,6 +346,7 @@ class AxisMotion:
         """Error reaction: servo off, axis in error, its block aborted."""
         self.k.ist[ax.slot, L.I_PLAN_N] = 0
         self.k.ist[ax.slot, L.I_ENABLED] = 0
+        ax.servo_taken = ax.servo_taken or bool(ax.units["TorquePermission"])
         ax.units["TorquePermission"] = 0
         self._abort(ax)
         ax.motion, ax.sequence = None, None

@@ -32,6 +32,7 @@ class PlantFaults:
     noise_rms: float = 0.0  # white noise on the encoder's reading (mm | °)
     friction: float = 0.0  # Coulomb friction: speed lost against the motion (unit/s)
     backlash: float = 0.0  # play between motor and load (mm | °)
+    a_max: float = 0.0  # the drive accelerates no faster than this (unit/s²), 0 = its own
 
 
 def push_plant(k: Kernel, ax: Axis) -> None:
@@ -47,7 +48,10 @@ def push_plant(k: Kernel, ax: Axis) -> None:
     pr[s, L.P_ENC_SIGN] = -1.0 if c.flag("sim.encoder_inverted") != f.encoder_inverted else 1.0
     t_drive = c.eng("sim.drive_t")
     pr[s, L.P_DRV_ALPHA] = 1.0 - math.exp(-k.cycle_s / t_drive) if t_drive > 0 else 1.0
-    pr[s, L.P_DRV_A_MAX] = c.eng("sim.drive_a_max")
+    a_max = c.eng("sim.drive_a_max")  # 0: no limit of its own
+    if f.a_max > 0.0:
+        a_max = min(a_max, f.a_max) if a_max > 0.0 else f.a_max
+    pr[s, L.P_DRV_A_MAX] = a_max
     pr[s, L.P_CAM_POS] = c.eng("sim.ref_cam_pos")
     pr[s, L.P_ENC_FACTOR] = f.encoder_factor
     pr[s, L.P_ENC_NOISE] = f.noise_rms

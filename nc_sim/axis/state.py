@@ -75,6 +75,7 @@ class Axis:
     deadline_what: str = ""  # ... and what it is (for the job error 90023)
     drive: DriveStatus = field(default_factory=lambda: DriveStatus((), 0, 0))
     units: dict[str, int] = field(default_factory=axis_units)  # its HLI control units
+    servo_taken: bool = False  # the error reaction took TorquePermission (the reset gives it back)
     plant: PlantFaults = field(default_factory=PlantFaults)  # injected faults (training)
 
     # the enables the drive type needs [004 §4.1], read from the list by push_params (the

@@ -22,6 +22,7 @@ from nc_sim.faults import (
     CATALOGUE,
     NOW,
     Backlash,
+    DriveAccelLimit,
     DriveGainWrong,
     DriveNotReady,
     EnableDrop,
@@ -203,6 +204,7 @@ class FaultInjection:
             ("rms", " mm|°"),
             ("v_loss", " mm|°/s"),
             ("width", " mm|°"),
+            ("a_max", " mm|°/s²"),
             ("delay_s", " s"),
         ):
             value = getattr(fault, field_name, None)
@@ -250,6 +252,8 @@ def _plant(faults: list[Fault]) -> PlantFaults:
                 p.friction += f.v_loss
             case Backlash():
                 p.backlash += f.width
+            case DriveAccelLimit():
+                p.a_max = min(p.a_max, f.a_max) if p.a_max > 0.0 else f.a_max
             case _:
                 pass
     return p

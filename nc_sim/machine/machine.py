@@ -404,7 +404,9 @@ class Machine:
     # --- reset, emergency stop ----------------------------------------------------------
     def _reset(self) -> None:
         """CNC reset: clear errors and the block queue, stop motion (spindles per P-AXIS-00455).
-        After an emergency stop the PLC switches the drives on again (their power-up time)."""
+        After an emergency stop the PLC switches the drives on again (their power-up time);
+        after an error reaction that took an axis' servo (lag monitoring), the PLC program
+        gives its TorquePermission back once the reset has cleared the error."""
         estop, self.ctx.estop = self.ctx.estop, False
         self.channel.reset()
         if self.cax is not None:
@@ -412,6 +414,10 @@ class Machine:
         self.handshake.clear()
         for ax in self.axes:
             self.moves.reset(ax)
+            if ax.servo_taken and not estop:
+                ax.units["TorquePermission"] = 1
+                self.motion.enables_changed(ax)
+            ax.servo_taken = False  # (after an E-stop the start-up below gives every enable)
         if estop:
             self._powered = False  # the PLC runs its start-up again: DriveOn, power-up, ...
             self._drive_status()  # DriveOn now; the power-up is then a wake-up of its own

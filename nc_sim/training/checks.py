@@ -98,9 +98,21 @@ class SpeedReachedCheck:
     gear: int | None = None
 
 
-Rule = GainCheck | EventCheck | NoEventCheck | InPositionCheck | SpeedReachedCheck
+@dataclass(frozen=True)
+class DirectionCheck:
+    """`axis` moves the way the NC commands it, as the slide itself does (a dial gauge's
+    view, not the NC's actual value): at constant commanded speed the load's true velocity
+    has the command's sign. A sign "fixed" on the actual value (lr_hw[i].vz_istw) instead of
+    the command value closes the loop but drives the slide backwards [004 §3.5]."""
+
+    kind: ClassVar[str] = "direction"
+    axis: str
+
+
+Rule = GainCheck | EventCheck | NoEventCheck | InPositionCheck | SpeedReachedCheck | DirectionCheck
 RULES: tuple[type[Rule], ...] = (
     GainCheck,
+    DirectionCheck,
     EventCheck,
     NoEventCheck,
     InPositionCheck,
@@ -231,6 +243,38 @@ class _Gain:
         self.detail = (
             f"k = {k:.2f} 1/s against kv {kv:.2f} 1/s ({dev_pct:+.1f} %)"
             f" at v = {v:.3f} {unit}/s, lag {lag:.4f} {unit}"
+        )
+
+
+class _Direction:
+    """The newest constant-speed moment at a feed decides: the plant's true velocity
+    (S_V_MOTOR, which the rows do not carry) against the commanded one."""
+
+    def __init__(self, rule: DirectionCheck, m: Machine, slot: int) -> None:
+        self.rule = rule
+        self.m = m
+        self.slot = slot
+        self.unit = m.axis(rule.axis).pos_unit
+        self.passed = False
+        self.first_passed_cycle: int | None = None
+        self.detail = f"{rule.axis} not yet seen moving at constant speed"
+
+    def feed(self, rows: np.ndarray, first_cycle: int, events: list[Event], now: int) -> None:
+        if rows.shape[0] == 0:
+            return
+        last = rows[-1]
+        steady = last[L.R_A_CMD] == 0.0 and last[L.R_OPEN_LOOP] == 0 and last[L.R_READY] != 0
+        if not steady or last[L.R_MVPOS] == last[L.R_MVNEG]:
+            return  # at rest or accelerating: the drive's own lag could show either sign
+        v_cmd = float(self.m.k.st[self.slot, L.S_V_CMD])
+        v_true = float(self.m.k.st[self.slot, L.S_V_MOTOR])
+        if v_cmd == 0.0 or v_true == 0.0:
+            return
+        agrees = (v_cmd > 0.0) == (v_true > 0.0)
+        _passed_at(self, agrees, now)
+        u = self.unit
+        self.detail = f"commanded {v_cmd:+.2f} {u}/s, the slide moves {v_true:+.2f} {u}/s" + (
+            "" if agrees else ": the wrong way, although the NC's actual value follows"
         )
 
 
@@ -395,6 +439,9 @@ def _make(rule: Rule, m: Machine, slot: int | None, start_cycle: int) -> _Evalua
         case GainCheck():
             assert slot is not None
             return _Gain(rule, m, slot)
+        case DirectionCheck():
+            assert slot is not None
+            return _Direction(rule, m, slot)
         case EventCheck():
             return _Event(rule, m)
         case NoEventCheck():

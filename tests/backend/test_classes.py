@@ -115,7 +115,22 @@ def test_a_fault_changes_the_plant_and_not_the_parameters(srv: Server) -> None:
     seat = student(srv, created["links"][0]["url"])
     mine = seat.get(f"/api/machines/{mid}/parameters?scope=axis&target=X").json()
     demo = t.get("/api/machines/demo/parameters?scope=axis&target=X").json()
-    assert {p["name"]: p["value"] for p in mine} == {p["name"]: p["value"] for p in demo}
+    # the NC's lists are the demo's; the simulated plant's sim.* the student does not get
+    nc = {p["name"]: p["value"] for p in demo if not p["name"].startswith("sim.")}
+    assert {p["name"]: p["value"] for p in mine} == nc
+    assert "sim.motor_inverted" in {p["name"] for p in demo}
+    export = seat.get(f"/api/machines/{mid}/parameters/export?scope=axis&target=X")
+    assert "kenngr.antr_typ" in export.text and "sim." not in export.text
+    # ... nor writes it: inverting the simulated motor back would hide the fault
+    r = seat.post(f"/api/machines/{mid}/control", json={"action": "take"})
+    assert r.status_code == 200, r.text
+    r = seat.patch(
+        f"/api/machines/{mid}/parameters",
+        json={
+            "changes": [{"scope": "axis", "target": "X", "name": "sim.motor_inverted", "value": 1}]
+        },
+    )
+    assert r.status_code == 403 and "sim.motor_inverted" in r.text, r.text
     faults = t.get(f"/api/machines/{mid}/faults").json()
     assert [(f["fault"]["kind"], f["fault"]["axis"], f["active"]) for f in faults] == [
         ("motor_inverted", "X", True)

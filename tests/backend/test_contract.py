@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import get_args
+import dataclasses
+from typing import Any, get_args
 
 from api.commands import HliUnit
 from nc_sim.hli import AXIS_UNITS, CHANNEL_UNITS
@@ -11,3 +12,16 @@ from nc_sim.hli import AXIS_UNITS, CHANNEL_UNITS
 def test_hli_units_of_the_contract_are_the_machines() -> None:
     # override has its own command in percent; every other unit the machine accepts is listed
     assert set(get_args(HliUnit)) == (set(AXIS_UNITS) | set(CHANNEL_UNITS)) - {"override"}
+
+
+def test_every_fault_of_the_catalogue_has_its_model_and_round_trips() -> None:
+    """An instructor can inject every fault nc_sim knows, and reads back what was injected."""
+    from backend.services.training import to_fault, to_model
+    from nc_sim.faults import CATALOGUE
+
+    samples: dict[str, Any] = {"axis": "X", "factor": 1.5, "rms": 0.01, "gear": 2, "v_loss": 0.5}
+    samples |= {"width": 0.02, "delay_s": 3.0, "a_max": 2000.0, "seed": 7}
+    for cls in CATALOGUE:
+        fields = {f.name: samples[f.name] for f in dataclasses.fields(cls)}
+        fault = cls(**fields)
+        assert to_fault(to_model(fault)) == fault

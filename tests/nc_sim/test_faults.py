@@ -8,11 +8,12 @@ import pickle
 import numpy as np
 import pytest
 
-from nc_sim.commands import Mdi, PlcMode
+from nc_sim.commands import Mdi, PlcMode, Reset
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.faults import (
     NOW,
     Backlash,
+    DriveAccelLimit,
     DriveGainWrong,
     DriveNotReady,
     EnableDrop,
@@ -61,6 +62,26 @@ def test_motor_inverted_runs_away_into_lag_monitoring_and_changes_no_parameter()
     assert pickle.dumps(m.cfg) == lists
     assert not cfg.axis("X").flag("sim.motor_inverted")
     assert [(f.id, f.active_since) for f in m.faults()] == [(1, 20)]
+
+
+def test_after_a_lag_trip_the_reset_gives_the_servo_back() -> None:
+    """The error reaction takes X's TorquePermission; the CNC reset that clears the error
+    gives it back (the PLC program's part), and X then reaches its target without a trip."""
+    sim, m, _ = make()
+    x = m.axis("X")
+    fid = m.inject(MotorInverted("X"))
+    mdi(m, "G01 X60 F1000")
+    record(sim, 2.0)
+    assert _errors(m) == [Code.LAG_MONITORING] and x.units["TorquePermission"] == 0
+    m.remove_fault(fid)
+    m.submit(Reset())
+    record(sim, 0.1)
+    assert x.units["TorquePermission"] == 1 and x.job_error == 0
+    start = float(m.k.st[x.slot, L.S_P_CMD])
+    mdi(m, f"G01 X{start + 5:.3f} F600")  # 5 mm at 10 mm/s
+    rec = record(sim, 1.5)
+    assert _errors(m) == [Code.LAG_MONITORING]  # no second trip
+    assert rec[-1, x.slot, L.R_P_ACT] == pytest.approx(start + 5, abs=0.01)
 
 
 def test_drive_gain_wrong_gives_the_factor_times_kv_as_the_measured_gain() -> None:
@@ -223,6 +244,25 @@ def _steady_lag_deg(sim: Simulation, m: Machine, block: str) -> float:
     rec = record(sim, 6.0)[-1000:, m.axis("S1").slot]
     assert not _errors(m)
     return float(rec[:, L.R_LAG].mean())
+
+
+@pytest.mark.parametrize(("limit", "slope"), [(None, 3000.0), (2000.0, 2000.0)])
+def test_drive_accel_limit_caps_the_run_up_and_changes_no_parameter(
+    limit: float | None, slope: float
+) -> None:
+    """Demo S1, gear 3: M3 S3500 ramps at getriebe[2].slope_profil.a_beschl 3000 °/s². A
+    drive limited to 2000 °/s² falls behind: the actual speed rises at 2000 °/s² (the
+    slope over 1..3 s of the run-up), the parameters unchanged."""
+    big = {f"getriebe[{i}].lag_max": 100_000_000 for i in range(3)}
+    sim, m, cfg = make({"S1": big})
+    lists = pickle.dumps(cfg)
+    if limit is not None:
+        m.inject(DriveAccelLimit("S1", limit))
+    s1 = m.axis("S1")
+    mdi(m, "M3 S3500")
+    v = record(sim, 3.0)[:, s1.slot, L.R_V_ACT]
+    assert (v[2999] - v[999]) / 2.0 == pytest.approx(slope, rel=0.01)
+    assert pickle.dumps(m.cfg) == lists
 
 
 def test_gear_ratio_wrong_in_gear_2_scales_the_lag_in_gear_2_only() -> None:

@@ -16,7 +16,6 @@ import pytest
 from nc_sim.commands import (
     Command,
     GearChange,
-    HliWrite,
     Invalid,
     Mdi,
     PlcAck,
@@ -81,10 +80,8 @@ class Seat:
         return r.passed and r.first_passed_cycle is not None
 
     def recover(self, axis: str) -> None:
-        """After a trip: CNC reset, and the servo back on (the error reaction took its
-        TorquePermission)."""
+        """After a trip: the CNC reset (which gives the servo back)."""
         self.do(Reset())
-        self.do(HliWrite("TorquePermission", 1, axis))
         self.run(0.5)
 
     def x_back_and_forth(self, seconds: float) -> None:
@@ -243,6 +240,21 @@ def test_sign_error_fixed_by_the_command_value_sign() -> None:
     assert seat.passed("gain"), seat.result("gain")
     assert "k = 20.00 1/s against kv 20.00 1/s" in seat.result("gain").detail
     assert seat.passed("no-trip"), seat.result("no-trip")
+    assert seat.passed("direction"), seat.result("direction")
+
+
+def test_sign_error_fixed_on_the_actual_value_drives_the_slide_backwards() -> None:
+    """Inverting the actual value (lr_hw[0].vz_istw) instead of the command value closes the
+    loop too: no trip and k = kv in the NC's view. But the slide moves against the command
+    (motor inverted, its encoder counting true), which the direction check sees."""
+    seat = Seat("sign-error")
+    seat.param(Scope.AXIS, "X", {"lr_hw[0].vz_istw": 1})
+    seat.run(0.1)
+    seat.recover("X")  # the actual value jumped to -x: lag monitoring trips at once
+    seat.x_back_and_forth(68.0)
+    assert seat.passed("gain") and seat.passed("no-trip")
+    assert not seat.passed("direction")
+    assert "the wrong way" in seat.result("direction").detail
 
 
 def test_sign_error_not_fixed_fails_both_checks() -> None:
