@@ -192,8 +192,16 @@ class AxisLine(BaseModel):
         description="spindles' lines show speed, axes' lag"
     )
     state: str
-    lag: float = Field(description="mm | °")
-    speed: float = Field(description="mm/min | rpm (spindles)")
+    lag: float = Field(description="mm | °, as the newest status says")
+    speed: float = Field(description="mm/min | rpm (spindles), as the newest status says")
+    lag_peak: float = Field(
+        description="the lag of the largest magnitude (sign kept) in every cycle since the "
+        "previous frame: a spike between two frames still shows (mm | °)"
+    )
+    speed_peak: float = Field(
+        description="the speed of the largest magnitude since the previous frame, every cycle "
+        "(mm/min | rpm)"
+    )
 
 
 class SeatFrame(BaseModel):

@@ -129,3 +129,14 @@ def signal_columns(signals: list[Signal], rec: np.ndarray) -> np.ndarray:
     for i, s in enumerate(signals):
         np.multiply(rec[:, s.slot, s.column], s.scale, out=out[i])
     return out
+
+
+def signal_rows(signals: list[Signal], rec: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """`signal_columns` of the given rows of a record only (`rows`: row indices), reading
+    just the signals' own slots and columns (a ring read copies a few values per cycle, not
+    every column of every slot)."""
+    slots = np.fromiter((s.slot for s in signals), np.intp, len(signals))
+    cols = np.fromiter((s.column for s in signals), np.intp, len(signals))
+    scale = np.fromiter((s.scale for s in signals), np.float64, len(signals))
+    out: np.ndarray = rec[rows[None, :], slots[:, None], cols[:, None]] * scale[:, None]
+    return out

@@ -223,7 +223,7 @@ async def grid(ws: WebSocket, cid: ClassId, services: ServicesDep) -> None:
             if not getter.done():
                 getter.cancel()
                 break
-            await ws.send_text(getter.result().model_dump_json())
+            await ws.send_text(getter.result())
     except (WebSocketDisconnect, RuntimeError):
         pass
     finally:

@@ -12,9 +12,9 @@ results, their traces and the audit stay for the debrief.
 from __future__ import annotations
 
 import json
-import secrets
 import threading
 import time
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 
 from api.auth import Role
@@ -346,13 +346,7 @@ class Classes:
             now = time.time()
             c = Class(req.id, req.title or ex.title, ex, text, actor.name, now, None, [], req.lists)
             self._classes[c.id] = c  # reserved while the seats are built
-        try:
-            for n, name in enumerate(names, start=1):
-                student = req.students[n - 1] if n <= len(req.students) else f"Seat {n}"
-                c.seats.append(self._build_seat(actor, c, n, name, student[:80]))
-        except BaseException:
-            self._discard(c)
-            raise
+        self._build_seats(actor, c, names, req.students)
         self.store.run(
             "INSERT INTO classes VALUES (?, ?, ?, ?, ?, ?, NULL)",
             (c.id, c.title, ex.id, text, c.instructor, c.created_unix),
@@ -402,32 +396,72 @@ class Classes:
             return False
         return True
 
+    def _build_seats(self, actor: Actor, c: Class, names: list[str], students: list[str]) -> None:
+        """Build every seat, one build in flight per live worker (a worker builds a machine
+        in its loop: more at once would only queue there); when one fails, none more
+        starts, and every seat built is taken away again before the error goes on."""
+        workers = max(1, len(self.machines.pool.alive()))
+        built: list[Seat] = []
+        with ThreadPoolExecutor(workers, thread_name_prefix="seat-build") as pool:
+            futures = [
+                pool.submit(
+                    self._build_seat,
+                    actor,
+                    c,
+                    n,
+                    name,
+                    (students[n - 1] if n <= len(students) else f"Seat {n}")[:80],
+                )
+                for n, name in enumerate(names, start=1)
+            ]
+            wait(futures, return_when=FIRST_EXCEPTION)
+            for f in futures:
+                f.cancel()  # those not started yet (a failure: no more builds)
+        failure: BaseException | None = None
+        for f in futures:
+            if f.cancelled():
+                continue
+            if (e := f.exception()) is not None:
+                failure = failure or e
+            else:
+                built.append(f.result())
+        c.seats.extend(sorted(built, key=lambda seat: seat.n))
+        if failure is not None:
+            self._discard(c)
+            raise failure
+
     def _build_seat(self, actor: Actor, c: Class, n: int, name: str, student: str) -> Seat:
-        self.accounts.add_user(name, Role.OPERATOR, secrets.token_urlsafe(24))
-        title = f"{c.title} · seat {n}"
-        proxy = self.machines.create(
-            MachineCreate(
-                id=name,
-                name=title[:80],
-                demo=c.lists is None,
-                **(c.lists.model_dump() if c.lists is not None else {}),
-            ),
-            values=[(v.scope.value, v.target, v.name, v.value) for v in c.exercise.start],
-            faults=[(f.fault, f.trigger) for f in c.exercise.faults],
-            exercise=c.exercise,
-        )
-        changes = [
-            StoredChange(v.scope.value, v.target, v.name, None, v.value, "now")
-            for v in c.exercise.start
-        ]
-        if changes:
-            why = f"exercise '{c.exercise.id}' starts so"
-            self.store.write(
-                proxy.id,
-                changes,
-                [parameter_entry(proxy.id, actor.name, actor.session, ch, why) for ch in changes],
+        """A seat's login (no password: only its one-time links log in) and machine; what
+        of it was made is taken away again when it fails."""
+        self.accounts.add_user(name, Role.OPERATOR, None)
+        seat = Seat(c.id, n, student, name, name)
+        try:
+            title = f"{c.title} · seat {n}"
+            proxy = self.machines.create(
+                MachineCreate(
+                    id=name,
+                    name=title[:80],
+                    demo=c.lists is None,
+                    **(c.lists.model_dump() if c.lists is not None else {}),
+                ),
+                values=[(v.scope.value, v.target, v.name, v.value) for v in c.exercise.start],
+                faults=[(f.fault, f.trigger) for f in c.exercise.faults],
+                exercise=c.exercise,
             )
-        return Seat(c.id, n, student, name, proxy.id)
+            changes = [
+                StoredChange(v.scope.value, v.target, v.name, None, v.value, "now")
+                for v in c.exercise.start
+            ]
+            if changes:
+                why = f"exercise '{c.exercise.id}' starts so"
+                entries = [
+                    parameter_entry(proxy.id, actor.name, actor.session, ch, why) for ch in changes
+                ]
+                self.store.write(proxy.id, changes, entries)
+        except BaseException:
+            self._remove_seat(seat)
+            raise
+        return seat
 
     def _discard(self, c: Class) -> None:
         """Undo a class whose seats could not all be built."""

@@ -3,8 +3,12 @@ status the seats' workers push (the console watches every seat, so they push), a
 second, to each console's websocket. Building a frame also takes the seats' check results in
 (first passes saved at once, seat time now and then).
 
+Each axis line also carries the peak lag and speed of every cycle since the previous frame,
+read from the sample ring its worker writes (what the status shows is one cycle out of a
+hundred: a runaway that trips between two frames would leave no trace).
+
 A slow console never holds the others up: each has a one-frame mailbox, a newer frame
-replaces one it has not sent yet.
+replaces one it has not sent yet. A frame is encoded once for all consoles of its class.
 """
 
 from __future__ import annotations
@@ -19,11 +23,17 @@ from backend.services.classes import Class, Classes, Seat
 from backend.services.machines import MachineProxy
 from backend.services.status import AXIS_KIND
 from backend.workers.protocol import Watch
+from nc_sim.signals import Signal
 
 log = logging.getLogger(__name__)
 
 GRID_S = 0.25  # a frame every quarter second: the grid's sparklines move smoothly
 SAVE_S = 10.0  # seat time saved this often (first passes at once)
+# an axis' lag and speed signals (nc_sim/signals.py), by the axis' kind
+LAG_SIGNALS = ("lag_mm", "lag_deg")
+SPEED_SIGNALS = ("speed_act_rpm", "vel_act_mm_min", "vel_act_deg_min")
+
+Peaks = dict[str, tuple[float, float]]  # axis -> (lag, speed) of the largest magnitude
 
 
 @dataclass(eq=False)  # each open console is itself (kept in a set)
@@ -31,17 +41,20 @@ class Console:
     """One open console of a class."""
 
     class_id: str
-    mailbox: asyncio.Queue[GridFrame] = field(default_factory=lambda: asyncio.Queue(maxsize=1))
+    mailbox: asyncio.Queue[str] = field(default_factory=lambda: asyncio.Queue(maxsize=1))
 
-    def offer(self, frame: GridFrame) -> None:
+    def offer(self, frame: str) -> None:
         """Leave the newest frame (replacing one not taken yet)."""
         if self.mailbox.full():
             self.mailbox.get_nowait()
         self.mailbox.put_nowait(frame)
 
 
-def seat_frame(c: Class, seat: Seat, m: MachineProxy | None, classes: Classes) -> SeatFrame:
-    """One seat now, from its machine's newest pushed status."""
+def seat_frame(
+    c: Class, seat: Seat, m: MachineProxy | None, classes: Classes, peaks: Peaks
+) -> SeatFrame:
+    """One seat now, from its machine's newest pushed status, with the `peaks` of its axes
+    since the previous frame (an axis without: its status values)."""
     progress, score = classes.score(c, seat)
     st = m.status if m is not None else None
     holder = m.control.holder if m is not None else None
@@ -57,6 +70,8 @@ def seat_frame(c: Class, seat: Seat, m: MachineProxy | None, classes: Classes) -
                 state=a.state,
                 lag=a.lag,
                 speed=a.vel_act,
+                lag_peak=peaks.get(a.name, (a.lag, a.vel_act))[0],
+                speed_peak=peaks.get(a.name, (a.lag, a.vel_act))[1],
             )
             for a in snap.axes
         ]
@@ -97,6 +112,7 @@ class ConsoleHub:
         self.frames = 0
         self.restarts = 0
         self._watched: set[str] = set()
+        self._peaks_from: dict[str, tuple[int, int]] = {}  # machine -> (epoch, next cycle)
 
     def open(self, class_id: str) -> Console:
         console = Console(class_id)
@@ -125,13 +141,49 @@ class ConsoleHub:
             self._watched.discard(seat.machine)
 
     def frame(self, c: Class) -> GridFrame:
-        seats = [seat_frame(c, s, self.classes.proxy(s), self.classes) for s in c.seats]
+        seats = []
+        for s in c.seats:
+            m = self.classes.proxy(s)
+            peaks = self.peaks(m) if m is not None else {}
+            seats.append(seat_frame(c, s, m, self.classes, peaks))
         return GridFrame(
             class_id=c.id, ended=c.ended_unix is not None, t_unix=time.time(), seats=seats
         )
 
-    def tick(self, wanted: set[str]) -> list[GridFrame]:
-        """Take every seat's status in, then build the frames of the classes `wanted`."""
+    def peaks(self, m: MachineProxy) -> Peaks:
+        """Each axis' lag and speed of the largest magnitude in the cycles since the last
+        frame (as far back as the ring holds them: a machine run fast between two frames;
+        a frame period back for the first frame; the newest cycle's while it stands paused),
+        from the machine's sample ring."""
+        ring, epoch = m.ring, m.epoch
+        if ring is None:
+            return {}
+        head = ring.head
+        known, first = self._peaks_from.get(m.id, (-1, 0))
+        if known != epoch:
+            first = head - round(GRID_S / m.cycle_s) + 1
+        first = min(max(first, 1), head)
+        lines = [
+            (a, lag, speed)
+            for a in m.axes
+            if (lag := _signal(m, a, LAG_SIGNALS)) and (speed := _signal(m, a, SPEED_SIGNALS))
+        ]
+        if first < 1 or not lines:
+            return {}
+        try:
+            peak = ring.peaks([s for _a, lag, speed in lines for s in (lag, speed)], first, head)
+        except IndexError:  # the machine was rebuilt meanwhile: its old ring is closed
+            return {}
+        self._peaks_from[m.id] = (epoch, head + 1)
+        if peak is None:
+            return {}
+        return {
+            a: (float(peak[2 * i]), float(peak[2 * i + 1])) for i, (a, _l, _s) in enumerate(lines)
+        }
+
+    def tick(self, wanted: set[str]) -> list[tuple[str, str]]:
+        """Take every seat's status in, then build the frames of the classes `wanted`:
+        (class, the frame as JSON)."""
         self.watch()
         due = time.monotonic() - self._saved >= SAVE_S
         if due:
@@ -145,7 +197,7 @@ class ConsoleHub:
                 if m is not None and (self.classes.update(seat, m) or due):
                     self.classes.save(seat)
             if c.id in wanted:
-                frames.append(self.frame(c))
+                frames.append((c.id, self.frame(c).model_dump_json()))
         return frames
 
     def start(self) -> None:
@@ -162,10 +214,15 @@ class ConsoleHub:
                     await asyncio.sleep(GRID_S)
                     # SQLite writes and 50 seats' frames: off the event loop
                     wanted = {k.class_id for k in self.consoles}
-                    for frame in await asyncio.to_thread(self.tick, wanted):
-                        for console in [k for k in self.consoles if k.class_id == frame.class_id]:
+                    for cid, frame in await asyncio.to_thread(self.tick, wanted):
+                        for console in [k for k in self.consoles if k.class_id == cid]:
                             console.offer(frame)
                         self.frames += 1
             except Exception:
                 self.restarts += 1
                 log.exception("instructor console failed; restarting it")
+
+
+def _signal(m: MachineProxy, axis: str, names: tuple[str, ...]) -> Signal | None:
+    """The axis' first signal of these names that the machine records."""
+    return next((s for n in names if (s := m.signal_by_name.get(f"{axis}.{n}")) is not None), None)

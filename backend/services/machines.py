@@ -36,7 +36,6 @@ from backend.workers.protocol import (
     Pacing,
     ParamSnapshot,
     Push,
-    ReadStatus,
     RemoveMachine,
     Request,
     StatusRead,
@@ -139,6 +138,9 @@ class MachineProxy:
             self.events = EventLog()
             self.signal_by_name: dict[str, Signal] = {s.name: s for s in info.signals}
             self.status, self.pacing = None, None
+            # the build's faults with their ids, as the build answered: known from the
+            # first moment (a first status may come much later, or never while unwatched)
+            self.faults = {f.id: f for f in info.faults}
             early = [p for p in self._early if p.epoch == info.epoch]
             self._early.clear()
         if old is not None:
@@ -328,11 +330,6 @@ class MachineService:
             raise
         assert isinstance(info, MachineInfo)
         proxy.attach(worker, info)
-        if faults or state is not None:  # their ids, before a first status is pushed: the
-            # next rebuild (a restart right away) must inject them again
-            read = worker.call(ReadStatus(proxy.id))
-            assert isinstance(read, StatusRead)
-            proxy.faults = {f.id: f for f in read.faults}
         if proxy.id in self._proxies:  # a new machine counts as building until it is listed
             self._built(proxy.id)
         if proxy.watchers:
@@ -419,7 +416,6 @@ class MachineService:
                 lists.clear()
                 lists.update(values)
             proxy.pending.clear()
-            proxy.faults.clear()  # the snapshot's own come with the next status
             worker = proxy.worker if proxy.worker is not None and proxy.worker.alive else None
             mode = proxy.pacing.mode if proxy.pacing is not None else "run"
             try:

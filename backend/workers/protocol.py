@@ -209,7 +209,8 @@ class Pacing:
 
 @dataclass(frozen=True)
 class MachineInfo:
-    """A machine as built: its signals and where its samples are."""
+    """A machine as built: its signals, where its samples are, and the training faults it
+    was built with, each with the id the machine gave it (a restored one's own)."""
 
     mid: str
     epoch: int
@@ -218,6 +219,7 @@ class MachineInfo:
     signals: list[Signal]
     slots: int  # kernel slots (axes) per sample row
     ring_path: str | None  # the shared sample ring, None when samples are pushed
+    faults: list[FaultState] = field(default_factory=list)
 
 
 @dataclass(frozen=True)

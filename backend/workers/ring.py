@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nc_sim.signals import Signal, signal_columns
+from nc_sim.signals import Signal, signal_rows
 
 RING_CYCLES = 1 << 14  # 16.4 s at 1 kHz
 MAX_WRITE = 2000  # cycles a worker writes at most before publishing them
@@ -110,12 +110,24 @@ class SampleRing:
         ring no longer holds the older cycles)."""
         first = self._skip_to(first, self.oldest(self.head), stride)
         idx = np.arange(first, last + 1, stride)
-        data = signal_columns(signals, self.rows[idx % self.cycles])
+        data = signal_rows(signals, self.rows, idx % self.cycles)
         safe = self._skip_to(first, self.oldest(self.head), stride)  # overwritten meanwhile?
         if safe > first:
             k = (safe - first) // stride
             data, first = data[:, k:], safe
         return data, first
+
+    def peaks(self, signals: list[Signal], first: int, last: int) -> np.ndarray | None:
+        """Per signal, its sample of the largest magnitude (sign kept) among cycles
+        first..last, every cycle (None when the ring holds none of them): what a display
+        that shows a value now and then must not miss in between."""
+        first = max(first, self.oldest(self.head))
+        if first > last:
+            return None
+        data = signal_rows(signals, self.rows, np.arange(first, last + 1) % self.cycles)
+        at = np.abs(data).argmax(axis=1)
+        peak: np.ndarray = data[np.arange(len(signals)), at]
+        return peak
 
     @staticmethod
     def _skip_to(first: int, oldest: int, stride: int) -> int:

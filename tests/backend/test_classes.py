@@ -312,6 +312,41 @@ def test_the_grid_pushes_every_seat_to_instructors_only(srv: Server) -> None:
         asyncio.run(first_frame(tokens["olaf"]))  # an operator is no instructor
 
 
+def test_a_lag_spike_between_two_grid_frames_shows_in_the_peak(srv: Server) -> None:
+    """The sign-error seat, paused, jogs X and is then stepped 3000 cycles at once: X runs
+    away and lag monitoring switches it off (90002) within one step, between two grid
+    frames. The frame after carries X's peak lag of those cycles: beyond lag_max, 5 mm
+    beyond the expected lag (demo axis_1.lis), whatever the lag at the moment it shows."""
+    t = trainer(srv)
+    mid = new_class(t, "spike", 1, "sign-error")["info"]["seats"][0]["machine"]
+    wait_for(lambda: t.get(f"/api/machines/{mid}/status").json()["plc"]["drives_powered"])
+    assert t.post(f"/api/machines/{mid}/simulation", json={"mode": "pause"}).status_code == 200
+    jog = {"type": "jog", "axis": "X", "action": "start", "direction": 1, "feed_mm_min": 100}
+    r = t.post(f"/api/machines/{mid}/commands", json=jog)
+    assert r.status_code == 200, r.text
+    tokens: dict[str, str] = srv.tokens  # type: ignore[attr-defined]
+
+    async def peak_after_the_step() -> float:
+        url = f"{srv.ws_base}/api/classes/spike/grid"
+        async with connect(url, additional_headers=bearer(tokens["trainer"])) as ws:
+            await asyncio.wait_for(ws.recv(), 10)  # a frame before the step
+            step = await asyncio.to_thread(
+                t.post, f"/api/machines/{mid}/simulation/step", json={"cycles": 3000}
+            )
+            assert step.status_code == 200, step.text
+            peak = 0.0
+            while True:  # until the status shows the trip (the peak came with a frame)
+                frame = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                seat = frame["seats"][0]
+                x = next(a for a in seat["axes"] if a["name"] == "X")
+                peak = max(peak, abs(float(x["lag_peak"])))
+                if seat["error_code"] == 90002:
+                    return peak
+
+    expected_mm = 100 / 60 / 20  # v/kv: 100 mm/min at kv 20 1/s
+    assert asyncio.run(peak_after_the_step()) >= 5.0 + expected_mm - 1e-9
+
+
 def test_an_uploaded_exercise_is_checked_against_its_machine(srv: Server) -> None:
     t = trainer(srv)
     good = "\n".join(

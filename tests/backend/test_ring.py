@@ -62,3 +62,22 @@ def test_rings_of_a_gateway_that_is_gone_are_removed(tmp_path: Path) -> None:
         (d / "m.1.ring").write_bytes(b"x")
     remove_stale_rings(tmp_path)
     assert not gone.exists() and (mine / "m.1.ring").exists()
+
+
+LAG = Signal("X.lag_mm", "X", 1, 3, 1.0, "mm", "float")  # slot 1, column 3
+
+
+def test_peaks_find_a_one_cycle_spike_with_its_sign(tmp_path: Path) -> None:
+    """Between two reads of a display, one cycle of -7 among values within ±0.1: the peak
+    of every cycle in between is that cycle's value, sign kept."""
+    ring = SampleRing.create(tmp_path / "m.ring", slots=2, cycles=4096)
+    for c in range(1, 501):
+        ring.rows[c % ring.cycles, 1, 3] = 0.1 * np.sin(c / 7)
+        ring.rows[c % ring.cycles, 0, 0] = float(c)
+    ring.rows[333 % ring.cycles, 1, 3] = -7.0
+    ring.publish(500)
+    peak = ring.peaks([POS, LAG], 251, 500)
+    assert peak is not None
+    np.testing.assert_array_equal(peak, [500.0, -7.0])
+    assert abs(ring.peaks([LAG], 334, 500)[0]) <= 0.1  # type: ignore[index]
+    assert ring.peaks([LAG], 501, 500) is None  # nothing new

@@ -105,7 +105,8 @@ export const injectClass = (cid: string, seats: number[], inject: FaultInject) =
 export const HISTORY_S = 60; // the sparklines' window
 const CAPACITY = 512; // frames kept: 60 s at 4 Hz and room to spare
 
-/** One sparkline's samples: the grid's wall time and a value (lag or speed), a ring. */
+/** One sparkline's samples: the grid's wall time and a value (the peak lag or speed since the
+ * previous frame, so a spike between frames shows), a ring. */
 export class Series {
   readonly t = new Float64Array(CAPACITY);
   readonly v = new Float64Array(CAPACITY);
@@ -149,7 +150,7 @@ function take(frame: GridFrame): void {
       for (const a of f.axes) {
         let series = s.history.get(a.name);
         if (!series) s.history.set(a.name, (series = new Series()));
-        series.push(frame.t_unix, a.kind === "spindle" ? a.speed : a.lag);
+        series.push(frame.t_unix, a.kind === "spindle" ? a.speed_peak : a.lag_peak);
       }
       s.frame.value = f;
     });
