@@ -6,7 +6,7 @@ nothing is wider than the window; numbers that grow do not move what stands besi
 from __future__ import annotations
 
 import pytest
-from playwright.sync_api import Browser, Page, expect
+from playwright.sync_api import Browser, FloatRect, Page, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import SIZES, open_hmi, panel, poll, shot
@@ -29,7 +29,7 @@ def slug(name: str) -> str:
     return name.lower().replace(" / ", "-").replace(" ", "-")
 
 
-def box(page: Page, selector: str) -> dict[str, float]:
+def box(page: Page, selector: str) -> FloatRect:
     b = page.locator(selector).first.bounding_box()
     assert b is not None, selector
     return b
