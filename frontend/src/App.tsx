@@ -60,6 +60,32 @@ function MachineControls() {
   );
 }
 
+const tabId = (t: Tab) => `ws-tab-${t.replace(/\W+/g, "-")}`;
+
+/** The workspaces as WAI-ARIA tabs: one tab stop (the selected tab), arrow keys, Home and End
+ * move between them and select (automatic activation), Enter and Space as for any button. */
+function Tabs({ tabs, tab, setTab }: { tabs: readonly Tab[]; tab: Tab; setTab: (t: Tab) => void }) {
+  const onKey = (e: KeyboardEvent) => {
+    const i = tabs.indexOf(tab);
+    const to = { ArrowRight: i + 1, ArrowLeft: i - 1, Home: 0, End: tabs.length - 1 }[e.key];
+    if (to === undefined) return;
+    e.preventDefault();
+    const next = tabs[(to + tabs.length) % tabs.length];
+    setTab(next);
+    document.getElementById(tabId(next))?.focus();
+  };
+  return (
+    <nav class="tabs" role="tablist" aria-label="workspaces" onKeyDown={onKey}>
+      {tabs.map((t) => (
+        <button key={t} type="button" role="tab" id={tabId(t)} aria-selected={t === tab} aria-controls="workspace"
+          tabIndex={t === tab ? 0 : -1} data-testid={`tab-${t}`} class={t === tab ? "active" : ""} onClick={() => setTab(t)}>
+          {t}
+        </button>
+      ))}
+    </nav>
+  );
+}
+
 export function App() {
   if (me.value === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
   if (!me.value) return <Login />;
@@ -86,13 +112,20 @@ function Hmi() {
   const seat = !!exercise.value;
   useEffect(() => setTab((t) => (seat ? "Exercise" : t === "Exercise" ? "Operate" : t)), [seat]);
   const head = useRef<HTMLDivElement>(null);
+  const side = useRef<HTMLElement>(null);
   useEffect(() => {
     // focus and scrollIntoView keep controls clear of the sticky head (its height varies:
-    // the top bar wraps on narrow screens, banners come and go)
-    const el = head.current;
-    if (!el) return;
-    const ro = new ResizeObserver(() => document.documentElement.style.setProperty("--head-h", `${el.offsetHeight}px`));
-    ro.observe(el);
+    // banners come and go) and, on a small screen, of the machine view stuck under it
+    const h = head.current;
+    const s = side.current;
+    if (!h || !s) return;
+    const root = document.documentElement.style;
+    const ro = new ResizeObserver(() => {
+      root.setProperty("--head-h", `${h.offsetHeight}px`);
+      root.setProperty("--side-h", `${s.offsetHeight}px`);
+    });
+    ro.observe(h);
+    ro.observe(s);
     return () => ro.disconnect();
   }, []);
   return (
@@ -108,20 +141,13 @@ function Hmi() {
       </div>
       <MachinesDialog />
       <div class="body">
-        <aside class="side">
+        <aside class="side" ref={side} aria-label="machine state">
           <MachineView />
           <MachineControls />
         </aside>
         <main class="main">
-          <nav class="tabs" role="tablist">
-            {TABS.filter((t) => seat || t !== "Exercise").map((t) => (
-              <button key={t} type="button" role="tab" aria-selected={t === tab} data-testid={`tab-${t}`}
-                class={t === tab ? "active" : ""} onClick={() => setTab(t)}>
-                {t}
-              </button>
-            ))}
-          </nav>
-          <div class="workspace" role="tabpanel" aria-label={tab}>
+          <Tabs tabs={TABS.filter((t) => seat || t !== "Exercise")} tab={tab} setTab={setTab} />
+          <div class="workspace" role="tabpanel" id="workspace" aria-labelledby={tabId(tab)}>
             {tab === "Exercise" ? <ExercisePanel /> : null}
             {tab === "Operate" ? (
               <div class="operate">

@@ -20,7 +20,7 @@ ARGS = [
     "--disable-sync",
     "--no-first-run",
 ]
-SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768)}
+SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "tour": (1280, 800)}
 SHOTS = Path(__file__).resolve().parent / "screenshots"
 DIST = Path(__file__).resolve().parents[2] / "frontend" / "dist" / "index.html"
 

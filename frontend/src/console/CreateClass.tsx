@@ -240,7 +240,7 @@ export function SeatLinks(props: { created: ClassCreated; onDone: () => void }) 
               <tr key={l.n} data-testid={`seat-link-${l.n}`}>
                 <td class="num">{l.n}</td>
                 <td>{seat?.student}</td>
-                <td><input readOnly value={l.url} class="mono link-url" data-testid="link-url" onFocus={(e) => (e.target as HTMLInputElement).select()} /></td>
+                <td><input readOnly value={l.url} aria-label={`login link of seat ${l.n}`} class="mono link-url" data-testid="link-url" onFocus={(e) => (e.target as HTMLInputElement).select()} /></td>
                 <td>
                   <button type="button" class="secondary" data-testid="link-copy" onClick={() => copy(l)}>{copied === l.n ? "Copied" : "Copy"}</button>{" "}
                   <button type="button" class="link" onClick={() => void renew(l.n)} title="a new link (the old one stays good until used or an hour has passed)">new link</button>

@@ -68,7 +68,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
           ) : null}
         </p>
       ) : <p class="hint">loading…</p>}
-      {link ? <p class="once-note">Shown this once: <input readOnly class="mono link-url" value={link.url} /></p> : null}
+      {link ? <p class="once-note">Shown this once: <input readOnly aria-label="login link" class="mono link-url" value={link.url} /></p> : null}
       <div class="detail-cols">
         <section>
           <h3>Checks</h3>

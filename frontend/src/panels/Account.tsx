@@ -182,7 +182,7 @@ function Users(props: { self: string }) {
             <tr key={u.name} data-testid="user-row" data-user={u.name}>
               <td>{u.name}</td>
               <td>
-                <select data-testid="user-role-select" value={u.role}
+                <select data-testid="user-role-select" value={u.role} aria-label={`role of ${u.name}`}
                   onChange={(e) => change(u.name, { role: (e.target as HTMLSelectElement).value as Role })}>
                   {ROLES.map((r) => (
                     <option key={r} value={r}>
@@ -213,7 +213,7 @@ function Users(props: { self: string }) {
       <form class="account-form" onSubmit={add}>
         <input data-testid="user-new-name" value={name} placeholder="name" required
           onInput={(e) => setName((e.target as HTMLInputElement).value)} />
-        <select data-testid="user-new-role" value={role} onChange={(e) => setRole((e.target as HTMLSelectElement).value as Role)}>
+        <select data-testid="user-new-role" aria-label="role of the new user" value={role} onChange={(e) => setRole((e.target as HTMLSelectElement).value as Role)}>
           {ROLES.map((r) => (
             <option key={r} value={r}>
               {r}

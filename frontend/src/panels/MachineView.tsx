@@ -12,11 +12,11 @@ function AxisRow({ a }: { a: AxisStatus }) {
     <tr data-testid={`axis-${a.name}`} class={a.job_error ? "has-error" : ""}>
       {/* the name follows the mode: C while the main spindle is the rotary axis [003 §2.4] */}
       <th scope="row" data-testid={`name-${a.name}`}>{a.display_name}</th>
-      <td data-testid={`state-${a.name}`}>{a.state}</td>
-      <td class="num" data-testid={`pos-${a.name}`}>
+      <td class="state" data-testid={`state-${a.name}`}>{a.state}</td>
+      <td class="num pos" data-testid={`pos-${a.name}`}>
         {fmt(a.pos_act, posDec)}
       </td>
-      <td class="num">{fmt(a.pos_cmd, posDec)}</td>
+      <td class="num pos">{fmt(a.pos_cmd, posDec)}</td>
       <td class="num" data-testid={`lag-${a.name}`}>
         {fmt(a.lag, 4)}
       </td>
@@ -75,10 +75,10 @@ export function MachineView() {
             <th class="num">Actual</th>
             <th class="num">Command</th>
             <th class="num">Lag</th>
-            <th />
+            <th><span class="sr-only">Unit</span></th>
             <th class="num">v cmd</th>
             <th class="num">v act</th>
-            <th />
+            <th><span class="sr-only">Speed unit</span></th>
             <th>Gear</th>
             <th>Homed</th>
           </tr>

@@ -72,9 +72,10 @@ export function Parameters() {
   const view = paramView.value;
   return (
     <>
-      <div class="row subviews" role="tablist" aria-label="parameter views">
+      {/* two toggle buttons (aria-pressed), not tabs: the nudge beside them is no tab */}
+      <div class="row subviews" role="group" aria-label="parameter views">
         {(["list", "versions"] as const).map((v) => (
-          <button key={v} type="button" role="tab" class="secondary" aria-selected={view === v} aria-pressed={view === v}
+          <button key={v} type="button" class="secondary" aria-pressed={view === v}
             data-testid={`param-view-${v}`} onClick={() => (paramView.value = v)}>
             {v === "list" ? "Lists" : "Versions"}
           </button>

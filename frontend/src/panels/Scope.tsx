@@ -192,7 +192,7 @@ function CaptureView() {
             <input type="checkbox" checked={followNewest.value} onChange={(e) => (followNewest.value = (e.target as HTMLInputElement).checked)} />
             show each new capture
           </label>
-          <select value={recent.some((c) => c.id === shownId.value) ? shownId.value : ""} data-testid="recent-captures"
+          <select value={recent.some((c) => c.id === shownId.value) ? shownId.value : ""} aria-label="recent captures" data-testid="recent-captures"
             onChange={(e) => (shownId.value = (e.target as HTMLSelectElement).value)}>
             <option value="">recent captures ({recent.length})</option>
             {recent.map((c) => (

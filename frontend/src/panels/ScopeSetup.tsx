@@ -138,7 +138,7 @@ export function ScopeSetup() {
             </div>
           ) : (
             <div class="trigger-fields">
-              <select value={event.event} data-testid="trigger-kind"
+              <select value={event.event} aria-label="trigger event" data-testid="trigger-kind"
                 onChange={(e) => setDraft({ ...draft, trigger: { ...event, event: (e.target as HTMLSelectElement).value as EventTrigger["event"] } })}>
                 {EVENTS.map(([v, text]) => (
                   <option key={v} value={v}>{text}</option>

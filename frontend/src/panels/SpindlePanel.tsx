@@ -155,10 +155,10 @@ export function SpindlePanel() {
           {rotary ? "v act" : "n act"} <b data-testid="spindle-speed">{fmt(sp.vel_act, 1)}</b>{" "}
           {rotary ? "°/min" : "rpm"}
         </span>
-        <span>
+        <span class="pos">
           {rotary ? sp.display_name : "position"} <b data-testid="spindle-pos">{fmt(sp.pos_act, rotary ? 3 : 2)}</b>°
         </span>
-        <span>
+        <span class="wordy">
           state <b>{sp.state}</b>
         </span>
       </div>

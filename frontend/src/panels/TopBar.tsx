@@ -21,13 +21,13 @@ export function TopBar({ machine = true }: { machine?: boolean }) {
   const estop = useCommand();
   return (
     <header class="topbar">
-      <span class="brand">Inbetrieb</span>
+      <span class="brand wide-only">Inbetrieb</span>
       {may("teach") ? <ViewSwitch /> : null}
       {machine ? (
         <>
           <label class="machine-select">
-            Machine{" "}
-            <select value={machineId.value} onChange={(e) => selectMachine((e.target as HTMLSelectElement).value)}>
+            <span class="wide-only">Machine </span>
+            <select aria-label="Machine" value={machineId.value} onChange={(e) => selectMachine((e.target as HTMLSelectElement).value)}>
               {machines.value.map((m) => (
                 <option value={m.id} key={m.id}>
                   {m.name}
@@ -40,15 +40,19 @@ export function TopBar({ machine = true }: { machine?: boolean }) {
             Machines…
           </button>
           <span class="health" data-testid="health">
-            <span title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
-            <span title="simulated seconds per wall second">
+            {/* fixed-width cells (styles.css .health): growing numbers do not move the bar;
+                on a small screen the loop's p99 is in the title only */}
+            <span class="h-time" title="simulated time">t = {qty(sim?.t_s, 2, "s")}</span>
+            <span class="h-pace" title="simulated seconds per wall second">
               {sim?.mode ?? "—"} ×{fmt(sim?.rt_factor, 2)}
             </span>
             <span
-              title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile`}
+              class="h-loop"
+              title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile ${qty(sim?.loop_work_p99_ms, 2, "ms")}`}
               data-testid="loop-health"
             >
-              loop {sim?.worker ?? "—"} · overruns {sim?.loop_overruns ?? "—"} · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}
+              <span class="wide-only">loop </span>{sim?.worker ?? "—"} · overruns {sim?.loop_overruns ?? "—"}
+              <span class="wide-only"> · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}</span>
             </span>
           </span>
           <Lamp
@@ -101,9 +105,9 @@ function UserBox() {
   return (
     <span class="user" title="logged in as">
       <RefusalLine refusal={refusal} id="logout-error" />
-      <button type="button" class="secondary account-open" data-testid="account-open" title="your account: API tokens (and users)"
+      <button type="button" class="secondary account-open" data-testid="account-open" title={`your account (${user.role}): API tokens (and users)`}
         onClick={() => (accountOpen.value = true)}>
-        <b data-testid="user-name">{user.name}</b> <span data-testid="user-role">{user.role}</span>
+        <b data-testid="user-name">{user.name}</b> <span data-testid="user-role" class="wide-only">{user.role}</span>
       </button>
       <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
         Log out
