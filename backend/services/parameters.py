@@ -177,11 +177,16 @@ def write(
         if not changed:
             return ParameterWriteResult(changes=[])
         now: Values = []
+        waiting: set[Key] = set()
         for scope, target, d, name, value in changed:
+            key = (scope.value, target, name)
             if d.effect is Effect.NOW:
                 now.append((scope.value, target, name, value))
+            elif m.cfg.list_values(scope, target).get(name, d.default) == value:
+                m.pending.pop(key, None)  # the value in force again: nothing waits (a revert)
             else:
-                m.pending[(scope.value, target, name)] = Pending(value, d.effect.value)
+                m.pending[key] = Pending(value, d.effect.value)
+                waiting.add(key)
         if now:  # the running machine first: a write it cannot take is not stored
             m.call(ApplyValues(m.id, now))
             for scope_name, target, name, value in now:
@@ -200,7 +205,7 @@ def write(
                     old=c.old,
                     new=c.new,
                     effect=c.effect,
-                    pending=c.effect != Effect.NOW.value,
+                    pending=(c.scope, c.target, c.name) in waiting,
                     version=version,
                 )
                 for c, version in zip(stored, versions, strict=True)
