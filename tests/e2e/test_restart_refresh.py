@@ -1,0 +1,101 @@
+"""Issue 20 (new-user trial): a value that waits for a restart, on trial, through the restart.
+
+The demo's lr_hw[0].vz_stellgr (sign of the drive's command value) takes effect at restart
+only: applied, it waits; after a restart (by this tab or by anyone) it is in force everywhere
+without a reload; Revert then writes the old value back, which waits for a restart again."""
+
+from __future__ import annotations
+
+import re
+
+from playwright.sync_api import Browser, Page, expect
+
+from tests.backend.server import Server
+from tests.e2e.browser import SIZES, open_hmi, panel, shot
+
+SIGN = "lr_hw[0].vz_stellgr"  # effect: restart [004]
+
+
+def apply_sign(page: Page, value: str) -> None:
+    page.get_by_test_id("tab-Parameters").click()
+    params = panel(page, "parameters")
+    params.get_by_test_id("param-search").fill("vz_stellgr")
+    params.get_by_test_id(f"param-input-{SIGN}").fill(value)
+    params.get_by_test_id("param-apply").click()
+
+
+def test_a_restart_from_the_trial_bar_puts_the_value_in_force_and_revert_waits_again(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    page = open_hmi(browser, srv.base, mid)
+    apply_sign(page, "1")
+    bar = page.get_by_test_id("trial-bar")
+    params = panel(page, "parameters")
+    expect(bar.get_by_test_id("param-trial")).to_contain_text(f"{SIGN} default → 1 (at restart)")
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_text("pending 1 at restart")
+    # a reload keeps the open trial (the session's, like the rest of the workspace)
+    page.reload()
+    expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    expect(bar.get_by_test_id("param-trial")).to_contain_text(f"{SIGN} default → 1 (at restart)")
+    # a reload is another tab to the control lock: the restart says why until taken over
+    restart = bar.get_by_test_id("machine-restart")
+    expect(restart).to_be_disabled()
+    expect(restart).to_have_attribute("title", re.compile("you have control in another tab"))
+    page.get_by_test_id("control-strip").get_by_test_id("control-take-here").click()
+    # the bar offers the restart, asking first
+    bar.get_by_test_id("machine-restart").click()
+    expect(bar).to_contain_text("Power off and on")
+    shot(page, "trial-restart-confirm-desktop")
+    bar.get_by_test_id("restart-confirm").click()
+    expect(bar.get_by_test_id("restart-done")).to_contain_text(f"Restarted {mid} at")
+    expect(bar.get_by_test_id("param-trial")).to_contain_text(
+        f"{SIGN} default → 1 (in force since the restart)"
+    )
+    page.get_by_test_id("tab-Parameters").click()
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_count(0)
+    expect(params.get_by_test_id(f"param-input-{SIGN}")).to_have_value("1")
+    page.get_by_test_id("open-machines").click()
+    dialog = panel(page, "machines")
+    expect(dialog.get_by_test_id("restart-pending-count")).to_have_text(
+        "no value waits for a restart"
+    )
+    dialog.get_by_test_id("machines-close").click()
+    # the restart took our value in: that is no change by someone else, Revert writes 0 back
+    bar.get_by_test_id("param-revert").click()
+    message = bar.get_by_test_id("trial-message")
+    expect(message).to_contain_text("Reverted 1 value(s).")
+    expect(message).to_contain_text(f"Back in force at the next restart: {SIGN} 0")
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_text("pending 0 at restart")
+    expect(bar.get_by_test_id("machine-restart")).to_be_visible()  # offered again
+    shot(page, "trial-reverted-waits-for-restart-desktop")
+    page.set_viewport_size({"width": SIZES["tablet"][0], "height": SIZES["tablet"][1]})
+    shot(page, "trial-reverted-waits-for-restart-tablet")
+    page.close()
+
+
+def test_a_restart_by_someone_else_shows_without_a_reload(
+    page: Page, srv: Server, mid: str
+) -> None:
+    apply_sign(page, "1")
+    bar = page.get_by_test_id("trial-bar")
+    params = panel(page, "parameters")
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_text("pending 1 at restart")
+    shot(page, "trial-waits-for-restart-desktop")
+    # another client takes the machine and restarts it: nothing tells this tab but its status
+    assert srv.http.post(f"/api/machines/{mid}/control", json={"action": "take"}).is_success
+    assert srv.http.post(f"/api/machines/{mid}/restart").status_code == 200
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_count(0)
+    expect(params.get_by_test_id(f"param-input-{SIGN}")).to_have_value("1")
+    expect(bar.get_by_test_id("param-trial")).to_contain_text("(in force since the restart)")
+    expect(bar.get_by_test_id("machine-restart")).to_have_count(0)
+
+
+def test_reverting_before_the_restart_leaves_nothing_waiting(page: Page) -> None:
+    apply_sign(page, "1")
+    bar = page.get_by_test_id("trial-bar")
+    params = panel(page, "parameters")
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_text("pending 1 at restart")
+    bar.get_by_test_id("param-revert").click()
+    expect(bar.get_by_test_id("trial-message")).to_have_text("Reverted 1 value(s).")
+    expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_count(0)
+    expect(bar.get_by_test_id("machine-restart")).to_have_count(0)
