@@ -238,6 +238,9 @@ class MachineSummary(BaseModel):
     axes: list[str]
     mode: SimMode
     cycle: int
+    seat: bool = Field(
+        description="a class's seat: it has an exercise (GET /api/machines/{id}/exercise)"
+    )
 
 
 class OverrunRecord(BaseModel):

@@ -239,6 +239,7 @@ def machine_summary(m: MachineProxy) -> MachineSummary:
         axes=list(m.info.axes) if m.info else [],
         mode=m.pacing.mode if m.pacing else "run",
         cycle=m.cycle,
+        seat=m.exercise is not None,
     )
 
 

@@ -1,8 +1,10 @@
-"""Issue 20 (new-user trial): a value that waits for a restart, on trial, through the restart.
+"""Issue 20, a new user's trial (commissioning engineer on the demo lathe).
 
-The demo's lr_hw[0].vz_stellgr (sign of the drive's command value) takes effect at restart
-only: applied, it waits; after a restart (by this tab or by anyone) it is in force everywhere
-without a reload; Revert then writes the old value back, which waits for a restart again."""
+A value that waits for a restart, on trial, through the restart: the demo's
+lr_hw[0].vz_stellgr (sign of the drive's command value) takes effect at restart only. Applied,
+it waits; after a restart (by this tab or by anyone) it is in force everywhere without a
+reload; Revert then writes the old value back, which waits for a restart again. And a machine
+that is no class seat is not asked for an exercise."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import re
 from playwright.sync_api import Browser, Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import SIZES, open_hmi, panel, shot
+from tests.e2e.browser import SIZES, open_hmi, panel, shot, signed_in_page
 
 SIGN = "lr_hw[0].vz_stellgr"  # effect: restart [004]
 
@@ -99,3 +101,17 @@ def test_reverting_before_the_restart_leaves_nothing_waiting(page: Page) -> None
     expect(bar.get_by_test_id("trial-message")).to_have_text("Reverted 1 value(s).")
     expect(params.get_by_test_id(f"param-pending-{SIGN}")).to_have_count(0)
     expect(bar.get_by_test_id("machine-restart")).to_have_count(0)
+
+
+def test_a_machine_that_is_no_class_seat_is_not_asked_for_its_exercise(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    page = signed_in_page(browser, srv.base)
+    asked: list[str] = []
+    page.on("request", lambda r: asked.append(r.url) if "/exercise" in r.url else None)
+    page.goto(f"{srv.base}/#{mid}")
+    expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+    expect(page.get_by_test_id("tab-Operate")).to_be_visible()
+    expect(page.get_by_test_id("tab-Exercise")).to_have_count(0)
+    assert asked == []  # before: GET …/exercise, answered 404, logged in the console
+    page.close()
