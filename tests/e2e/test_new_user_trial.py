@@ -115,3 +115,31 @@ def test_a_machine_that_is_no_class_seat_is_not_asked_for_its_exercise(
     expect(page.get_by_test_id("tab-Exercise")).to_have_count(0)
     assert asked == []  # before: GET …/exercise, answered 404, logged in the console
     page.close()
+
+
+def test_another_machine_shows_its_own_capture_not_the_one_before(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    other = f"{mid}-b"
+    r = srv.http.post("/api/machines", json={"id": other, "name": other, "demo": True})
+    assert r.status_code == 201, r.text
+    page = open_hmi(browser, srv.base, mid)
+    try:
+        page.get_by_test_id("tab-Scope").click()
+        scope = panel(page, "scope-setup")
+        scope.get_by_test_id("scope-mode").select_option("single")
+        scope.get_by_test_id("scope-arm").click()
+        scope.get_by_test_id("scope-force").click()
+        capture = panel(page, "capture")
+        expect(capture.get_by_test_id("capture-view")).to_be_visible(timeout=15_000)
+        ours = capture.get_by_test_id("capture-view").get_attribute("data-trace")
+        page.locator(".machine-select select").select_option(other)
+        expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+        page.get_by_test_id("tab-Scope").click()
+        expect(capture.get_by_test_id("capture-view")).to_have_count(0)
+        shot(page, "scope-other-machine-desktop")
+        page.locator(".machine-select select").select_option(mid)  # back: its own again
+        expect(capture.get_by_test_id("capture-view")).to_have_attribute("data-trace", ours or "")
+    finally:
+        page.close()
+        srv.http.delete(f"/api/machines/{other}")
