@@ -87,6 +87,10 @@ class AppliedChange(BaseModel):
     new: Value
     effect: Literal["now", "reset", "restart"]
     pending: bool = Field(description="stored, waits for reset/restart")
+    version: int = Field(
+        description="the value's version after this write (as `ParameterValue.version`): a "
+        "reset or restart taking the value in leaves it, a later write changes it",
+    )
 
 
 class ParameterWriteResult(BaseModel):

@@ -153,6 +153,11 @@ class SimulationStatus(BaseModel):
 
     mode: SimMode
     cycle: int
+    epoch: int = Field(
+        description="the machine's build: grows by one with every power-on (restart), restore "
+        "from a snapshot and rebuild after its worker died; values that waited for a restart "
+        "are in force from a new epoch on",
+    )
     t_s: float = Field(description="simulated time, s")
     cycle_s: float
     rt_factor: float = Field(description="simulated seconds per wall second, last ~1 s")
@@ -233,6 +238,9 @@ class MachineSummary(BaseModel):
     axes: list[str]
     mode: SimMode
     cycle: int
+    seat: bool = Field(
+        description="a class's seat: it has an exercise (GET /api/machines/{id}/exercise)"
+    )
 
 
 class OverrunRecord(BaseModel):

@@ -163,7 +163,6 @@ def write(
                     "stale": [v.model_dump() for v in stale],
                 },
             )
-        applied: list[AppliedChange] = []
         stored: list[StoredChange] = []
         changed: list[tuple[Scope, str, ParamDef, str, Value]] = []
         for scope, target, d, name, value in parsed:
@@ -175,35 +174,43 @@ def write(
                 continue  # the value it already has (a list re-imported): no change, no audit
             changed.append((scope, target, d, name, value))
             stored.append(StoredChange(scope.value, target, name, old, value, d.effect.value))
-            applied.append(
-                AppliedChange(
-                    scope=scope.value,
-                    target=target or None,
-                    name=name,
-                    old=old,
-                    new=value,
-                    effect=d.effect.value,
-                    pending=d.effect is not Effect.NOW,
-                )
-            )
         if not changed:
             return ParameterWriteResult(changes=[])
         now: Values = []
+        waiting: set[Key] = set()
         for scope, target, d, name, value in changed:
+            key = (scope.value, target, name)
             if d.effect is Effect.NOW:
                 now.append((scope.value, target, name, value))
+            elif m.cfg.list_values(scope, target).get(name, d.default) == value:
+                m.pending.pop(key, None)  # the value in force again: nothing waits (a revert)
             else:
-                m.pending[(scope.value, target, name)] = Pending(value, d.effect.value)
+                m.pending[key] = Pending(value, d.effect.value)
+                waiting.add(key)
         if now:  # the running machine first: a write it cannot take is not stored
             m.call(ApplyValues(m.id, now))
             for scope_name, target, name, value in now:
                 m.cfg.list_values(Scope(scope_name), target)[name] = value
-        store.write(
+        versions = store.write(
             m.id,
             stored,
             [parameter_entry(m.id, actor.name, actor.session, c, comment) for c in stored],
         )
-        return ParameterWriteResult(changes=applied)
+        return ParameterWriteResult(
+            changes=[
+                AppliedChange(
+                    scope=c.scope,
+                    target=c.target or None,
+                    name=c.name,
+                    old=c.old,
+                    new=c.new,
+                    effect=c.effect,
+                    pending=(c.scope, c.target, c.name) in waiting,
+                    version=version,
+                )
+                for c, version in zip(stored, versions, strict=True)
+            ]
+        )
 
 
 def _stale(

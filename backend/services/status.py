@@ -55,11 +55,12 @@ _LOOP: dict[LoopMode, Literal["open", "closed", "control_limit", "speed_control"
 }
 
 
-def simulation_status(p: Pacing) -> SimulationStatus:
-    """Pacing and time of a machine as its worker reported it."""
+def simulation_status(p: Pacing, epoch: int) -> SimulationStatus:
+    """Pacing and time of a machine's build `epoch` as its worker reported it."""
     return SimulationStatus(
         mode=p.mode,
         cycle=p.cycle,
+        epoch=epoch,
         t_s=p.cycle * p.cycle_s,
         cycle_s=p.cycle_s,
         rt_factor=p.rt_factor,
@@ -176,7 +177,7 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
     return MachineStatus(
         id=m.id,
         name=m.name,
-        simulation=with_loop_health(simulation_status(read.pacing), m.worker),
+        simulation=with_loop_health(simulation_status(read.pacing, m.epoch), m.worker),
         channel_units=dict(snap.channel_units),
         emergency_stop=snap.emergency_stop,
         queued_blocks=snap.queued_blocks,
@@ -219,7 +220,7 @@ def machine_simulation(m: MachineProxy) -> SimulationStatus:
     p = m.pacing
     if p is None:
         p = Pacing("run", m.cycle, m.cycle_s, 0.0, None, 0.0, 0)
-    sim = simulation_status(p)
+    sim = simulation_status(p, m.epoch)
     sim.cycle = max(sim.cycle, m.cycle)
     sim.t_s = sim.cycle * sim.cycle_s
     return with_loop_health(sim, m.worker)
@@ -238,6 +239,7 @@ def machine_summary(m: MachineProxy) -> MachineSummary:
         axes=list(m.info.axes) if m.info else [],
         mode=m.pacing.mode if m.pacing else "run",
         cycle=m.cycle,
+        seat=m.exercise is not None,
     )
 
 
@@ -284,4 +286,4 @@ def paced(machine: MachineProxy, request: Pace | Step) -> SimulationStatus:
     p = machine.call(request)
     assert isinstance(p, Pacing)
     machine.pacing = p
-    return with_loop_health(simulation_status(p), machine.worker)
+    return with_loop_health(simulation_status(p, machine.epoch), machine.worker)

@@ -278,19 +278,20 @@ class Store:
             ).fetchall()
         return [(r[0], r[1], r[2], json.loads(r[3])) for r in rows]
 
-    def write(self, mid: str, changes: list[StoredChange], entries: list[audit.Entry]) -> None:
+    def write(self, mid: str, changes: list[StoredChange], entries: list[audit.Entry]) -> list[int]:
         """Store accepted changes and their audit rows (one each) in one transaction; each
-        value's version is its audit row's seq."""
+        value's version is its audit row's seq. The versions, in the order of `changes`."""
 
-        def work(db: sqlite3.Connection) -> None:
+        def work(db: sqlite3.Connection) -> list[int]:
             seqs = audit.append(db, entries)
             for c, seq in zip(changes, seqs, strict=True):
                 db.execute(
                     "INSERT OR REPLACE INTO param_values VALUES (?, ?, ?, ?, ?, ?)",
                     (mid, c.scope, c.target, c.name, json.dumps(c.new), seq),
                 )
+            return seqs
 
-        self.transaction(work)
+        return self.transaction(work)
 
     def versions(self, mid: str) -> dict[tuple[str, str, str], int]:
         """(scope, target, name) → version of every written value of a machine."""

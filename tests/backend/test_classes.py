@@ -84,8 +84,11 @@ def test_ten_seats_each_student_sees_only_their_seat(srv: Server) -> None:
     seats = created["info"]["seats"]
     assert [s["machine"] for s in seats] == [f"ten-s{n:02d}" for n in range(1, 11)]
     assert len(created["links"]) == 10
-    listed = {m["id"] for m in t.get("/api/machines").json()}
-    assert {s["machine"] for s in seats} <= listed  # the instructor sees every seat
+    listed = {m["id"]: m["seat"] for m in t.get("/api/machines").json()}
+    assert {s["machine"] for s in seats} <= set(listed)  # the instructor sees every seat
+    # the list says which machines are seats: only those have an exercise to ask for
+    assert all(listed[s["machine"]] for s in seats) and listed["demo"] is False
+    assert t.get("/api/machines/demo/exercise").status_code == 404
 
     s3 = student(srv, created["links"][2]["url"])
     assert [m["id"] for m in s3.get("/api/machines").json()] == ["ten-s03"]

@@ -168,6 +168,35 @@ def test_restart_effect_is_pending_until_restart(srv: Server, mid: str) -> None:
     assert (p["value"], p["pending"]) == (2, None)
 
 
+def test_a_restart_is_a_new_epoch_and_keeps_the_version_of_the_value_it_took_in(
+    srv: Server, mid: str
+) -> None:
+    """The HMI reloads parameters when the build changes (the epoch), and tells its own
+    trial value taken in by the restart (same version) from someone else's write (new one)."""
+    epoch = srv.status(mid)["simulation"]["epoch"]
+    r = write(srv, mid, ("axis", "X", "lr_hw[0].vz_stellgr", 1))
+    (change,) = r.json()["changes"]
+    assert (change["pending"], change["effect"]) == (True, "restart")
+    assert values(srv, mid)["lr_hw[0].vz_stellgr"]["version"] == change["version"]
+    assert srv.http.post(f"/api/machines/{mid}/restart").status_code == 200
+    assert srv.status(mid)["simulation"]["epoch"] == epoch + 1
+    p = values(srv, mid)["lr_hw[0].vz_stellgr"]
+    assert (p["value"], p["pending"], p["version"]) == (1, None, change["version"])
+    (again,) = write(srv, mid, ("axis", "X", "lr_hw[0].vz_stellgr", 0)).json()["changes"]
+    assert again["version"] > change["version"]
+    assert values(srv, mid)["lr_hw[0].vz_stellgr"]["version"] == again["version"]
+
+
+def test_writing_back_the_value_in_force_cancels_the_pending_one(srv: Server, mid: str) -> None:
+    """A revert before the restart: nothing waits for a restart any more."""
+    write(srv, mid, ("axis", "X", "lr_hw[0].vz_stellgr", 1))
+    assert values(srv, mid)["lr_hw[0].vz_stellgr"]["pending"] == 1
+    (back,) = write(srv, mid, ("axis", "X", "lr_hw[0].vz_stellgr", 0)).json()["changes"]
+    assert (back["old"], back["new"], back["pending"]) == (1, 0, False)
+    p = values(srv, mid)["lr_hw[0].vz_stellgr"]
+    assert (p["value"], p["pending"]) == (0, None)
+
+
 def test_import_manual_excerpt_and_reject_bad_line(srv: Server, mid: str) -> None:
     text = (DATA / "axis_excerpt.lis").read_text()
     r = import_list(srv, mid, "S1", text)

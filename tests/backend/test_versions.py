@@ -128,6 +128,7 @@ def test_a_rollback_of_a_restart_value_is_pending_like_any_write(srv: Server, la
         1,
         "restart",
     )
+    assert srv.http.post(f"/api/machines/{lathe}/restart").status_code == 200  # 1 in force
     r = srv.http.post(url(lathe, f"/{v['id']}/rollback"), json={})
     (c,) = r.json()["changes"]
     assert (c["name"], c["old"], c["new"], c["pending"], c["effect"]) == (

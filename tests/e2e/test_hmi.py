@@ -6,6 +6,8 @@ manuals and physics (speeds, gear ranges, lag = v/kv), never against wall-clock 
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from playwright.sync_api import Page, expect
 
@@ -140,7 +142,9 @@ def test_mdi_shows_it_runs_and_the_modal_words_the_next_block_inherits(page: Pag
     expect(state).to_have_attribute("data-mdi", "0", timeout=10_000)
 
 
-def test_job_error_is_shown_as_a_banner_until_acknowledged(page: Page) -> None:
+def test_job_error_is_shown_as_a_banner_until_dismissed_and_stays_until_reset(
+    page: Page, srv: Server, mid: str
+) -> None:
     page.get_by_test_id("tab-HLI / PLC").click()
     drive_on = page.get_by_test_id("hli-X-DriveOn").locator("input")
     drive_on.click()  # the switch shows the HLI as the NC reports it back
@@ -154,8 +158,14 @@ def test_job_error_is_shown_as_a_banner_until_acknowledged(page: Page) -> None:
     banner = page.get_by_test_id("banner-error")
     expect(banner).to_contain_text("90001")
     shot(page, "job-error-banner-desktop")
-    banner.get_by_role("button", name="Acknowledge").click()
+    # the banner's button only hides it (the PLC acknowledge is the pending strip's): so named
+    expect(banner.get_by_role("button", name="Acknowledge")).to_have_count(0)
+    expect(banner).to_contain_text("Reset clears it.")
+    dismiss = banner.get_by_role("button", name="Dismiss")
+    expect(dismiss).to_have_attribute("title", re.compile("stays active until Reset"))
+    dismiss.click()
     expect(banner).to_be_hidden()
+    assert any(e["code"] == 90001 for e in srv.status(mid)["job_errors"])  # still in error
     page.get_by_test_id("tab-HLI / PLC").click()
     drive_on.click()
     expect(drive_on).to_be_checked()

@@ -164,6 +164,9 @@ def test_machines_are_created_restarted_and_deleted_from_the_hmi(
         pacing.get_by_test_id("restart-confirm").click()
         expect(pacing.get_by_test_id("restart-confirm")).to_have_count(0)
         expect(dialog.get_by_test_id("machine-refusal")).to_have_count(0)
+        # it says what happened; "created" is old news once the new machine is on screen
+        expect(pacing.get_by_test_id("restart-done")).to_contain_text(f"Restarted {new} at")
+        expect(form.get_by_test_id("new-machine-created")).to_have_count(0)
         poll(lambda: srv.status(new)["simulation"]["cycle"] < 2000, "cycle 0 again")
         # pacing from the same place: pause, step 250 cycles, run
         pacing.get_by_test_id("pace-pause").click()
@@ -179,6 +182,7 @@ def test_machines_are_created_restarted_and_deleted_from_the_hmi(
         dialog.get_by_test_id(f"machine-delete-{new}").click()
         dialog.get_by_test_id(f"machine-delete-confirm-{new}").click()
         expect(dialog.get_by_test_id(f"machine-row-{new}")).to_have_count(0)
+        expect(dialog.get_by_test_id("machine-deleted")).to_contain_text(f"Deleted {new}")
         expect(select.locator(f"option[value='{new}']")).to_have_count(0)
         assert srv.http.get(f"/api/machines/{new}/status").status_code == 404
     finally:

@@ -1,9 +1,9 @@
 // Connection loss, a class seat frozen by the instructor (while it is), notices (a machine
 // rebuilt after its worker died or restored, the instructor's messages), an assistant running
 // live on the machine (outside the Commissioning workspace, which shows it itself) and the
-// newest job error still active, until acknowledged or reset.
+// newest job error still active, until dismissed (hidden only) or cleared by a reset.
 import type { NoticeMessage } from "../api/types";
-import { acknowledgeBanner, bannerErrors } from "../state/events";
+import { dismissBanner, bannerErrors } from "../state/events";
 import { connection, dismissNotice, frozen, notices } from "../state/session";
 import { qty } from "../ui/format";
 import { LiveProgress } from "./LiveProgress";
@@ -38,7 +38,8 @@ export function Banner({ liveRun }: { liveRun: boolean }) {
             ✖ Job error <b>{err.code}</b> {err.axis ? `[${err.axis}]` : ""} at t = {qty(err.t_s, 3, "s")}: {err.message}
             {more.length ? ` (+${more.length} more active)` : ""}
           </span>
-          <button onClick={acknowledgeBanner}>Acknowledge</button>
+          <span class="banner-detail"> Reset clears it.</span>
+          <button onClick={dismissBanner} title="Hide this banner: the error stays active until Reset">Dismiss</button>
         </div>
       ) : null}
     </div>

@@ -6,14 +6,15 @@ import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { me } from "../state/auth";
-import { commandBlocked, may } from "../state/control";
-import { deleteMachine, machinesOpen, pace, pendingRestart, type PendingRestart, refreshMachines, restartMachine, stepCycles } from "../state/machines";
+import { may } from "../state/control";
+import { deleteMachine, machinesOpen, pace, pendingRestart, type PendingRestart, refreshMachines, stepCycles } from "../state/machines";
 import { paramsVersion } from "../state/params";
 import { frozen, machineId, machines, online, selectMachine, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine } from "../ui/useCommand";
 import { NewMachine } from "./NewMachine";
+import { RestartMachine } from "./RestartMachine";
 
 const refusalOf = (e: unknown): Refusal => (e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
 
@@ -59,12 +60,11 @@ function ThisMachine() {
   const s = status.value;
   const req = useRequest();
   const [cycles, setCycles] = useState("100");
-  const [confirm, setConfirm] = useState(false);
   const [pending, setPending] = useState<PendingRestart[] | null>(null);
   useEffect(() => {
     setPending(null);
     void pendingRestart().then(setPending, () => setPending(null));
-  }, [machineId.value, paramsVersion.value, s?.simulation.cycle === 0]);
+  }, [machineId.value, paramsVersion.value]); // a new build (a restart) bumps paramsVersion
   const mode = s?.simulation.mode;
   // pacing is the instructor's (api/auth.py SIMULATE), holding control or not
   const paceWhy = may("simulate")
@@ -72,7 +72,6 @@ function ThisMachine() {
     : frozen.value !== null
       ? "frozen by the instructor: only the instructor can resume the simulation"
       : `a user in the role ${me.value?.role ?? ""} may not pace the simulation`;
-  const restartWhy = commandBlocked.value; // a power cycle is a command: it needs control
   const n = Number(cycles);
   const stepOk = Number.isInteger(n) && n >= 1 && n <= 1_000_000;
   const dis = !online.value;
@@ -104,21 +103,7 @@ function ThisMachine() {
         {paceWhy && frozen.value !== null ? <span class="pace-reason" data-testid="pace-reason">Frozen by the instructor</span> : null}
       </div>
       <div class="row">
-        {confirm ? (
-          <>
-            <span>Power off and on: the machine starts again at cycle 0 with every stored value in force.</span>
-            <button type="button" class="danger" data-testid="restart-confirm" disabled={dis || !!restartWhy}
-              onClick={() => void req.run(restartMachine).then(() => setConfirm(false))}>
-              Restart now
-            </button>
-            <button type="button" class="secondary" onClick={() => setConfirm(false)}>Cancel</button>
-          </>
-        ) : (
-          <button type="button" class="secondary" data-testid="machine-restart" disabled={dis || !!restartWhy} title={restartWhy}
-            onClick={() => setConfirm(true)}>
-            ⟳ Restart…
-          </button>
-        )}
+        <RestartMachine refusalId="restart-refusal" />
         <span class="hint" data-testid="restart-pending-count">
           {pending === null ? "" : pending.length ? `${pending.length} value(s) wait for the restart:` : "no value waits for a restart"}
         </span>
@@ -141,6 +126,7 @@ function ThisMachine() {
 function MachineList() {
   const req = useRequest();
   const [doomed, setDoomed] = useState("");
+  const [deleted, setDeleted] = useState("");
   const delWhy = may("machines") ? "" : `a user in the role ${me.value?.role ?? ""} may not delete machines`;
   return (
     <section class="account-section" aria-label="all machines">
@@ -171,14 +157,19 @@ function MachineList() {
                 {doomed === m.id ? (
                   <>
                     <button type="button" class="danger" data-testid={`machine-delete-confirm-${m.id}`}
-                      onClick={() => void req.run(() => deleteMachine(m.id)).then(() => setDoomed(""))}>
+                      onClick={() =>
+                        void req.run(() => deleteMachine(m.id)).then((ok) => {
+                          setDoomed("");
+                          if (ok) setDeleted(`Deleted ${m.id} (${m.name}) at ${new Date().toLocaleTimeString()}.`);
+                        })
+                      }>
                       Delete {m.id} for good
                     </button>
                     <button type="button" class="secondary" onClick={() => setDoomed("")}>Cancel</button>
                   </>
                 ) : (
                   <button type="button" class="secondary" data-testid={`machine-delete-${m.id}`} disabled={!!delWhy} title={delWhy}
-                    onClick={() => setDoomed(m.id)}>
+                    onClick={() => (setDeleted(""), setDoomed(m.id))}>
                     Delete…
                   </button>
                 )}
@@ -187,6 +178,7 @@ function MachineList() {
           ))}
         </tbody>
       </table>
+      {deleted ? <p class="hint" role="status" data-testid="machine-deleted">{deleted}</p> : null}
       <RefusalLine refusal={req.refusal} id="machine-list-refusal" />
     </section>
   );

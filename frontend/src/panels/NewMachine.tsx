@@ -2,13 +2,13 @@
 // list, one axis list per axis — numbered by its kopf.achs_nr, which the channel's
 // log_achs_nr refers to — and a tool list if any). A refused list comes back with its problems
 // line by line.
-import { useState } from "preact/hooks";
+import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { Refusal } from "../api/types";
 import { me } from "../state/auth";
 import { may } from "../state/control";
 import { createMachine } from "../state/machines";
-import { selectMachine } from "../state/session";
+import { machineId, selectMachine } from "../state/session";
 import { RefusalLine } from "../ui/useCommand";
 
 const ID_PATTERN = /^[a-z0-9][a-z0-9_-]{0,31}$/; // as api/machines.py MachineCreate.id
@@ -31,6 +31,7 @@ export function NewMachine() {
   const [tools, setTools] = useState<{ file: string; text: string } | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [created, setCreated] = useState("");
+  useEffect(() => setCreated(""), [machineId.value]); // old news once another machine is on screen
   if (!may("machines")) {
     return (
       <section class="account-section" aria-label="new machine">

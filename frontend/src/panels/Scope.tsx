@@ -153,9 +153,11 @@ function CaptureView() {
   const recent = st?.captures ?? [];
 
   useEffect(() => {
-    if (!shownId.value) return setTrace(null);
-    loadTrace(shownId.value)
+    const id = shownId.value;
+    if (!id) return setTrace(null);
+    loadTrace(id)
       .then((t) => {
+        if (shownId.peek() !== id) return; // another was chosen meanwhile (another machine)
         setTrace(t);
         setCursors([null, null]);
         setRange(null);

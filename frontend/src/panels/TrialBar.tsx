@@ -1,15 +1,28 @@
 // Values applied on trial stay on screen in every workspace until Keep or Revert, so the
-// engineer can switch to Operate, test them, and still revert.
-import { configureBlocked } from "../state/control";
-import { keepTrial, revertTrial, shownTrial, trialMessage } from "../state/params";
+// engineer can switch to Operate, test them, and still revert. A value that waits for a
+// restart says so until the machine has restarted (by anyone), and the bar offers the restart.
+import { configureBlocked, may } from "../state/control";
+import { changeKey, keepTrial, revertTrial, revertWaitsForRestart, shownTrial, type Trial, trialMessage, trialNow } from "../state/params";
 import { online } from "../state/session";
+import { RestartMachine } from "./RestartMachine";
 
 const SHOWN = 6; // changes listed; a rollback may bring many
+
+type Applied = Trial["applied"][number];
+
+/** The change still waits for its reset or restart (as the list stands now; as applied while
+ * the list is not loaded yet). */
+function waits(c: Applied): boolean {
+  if (!c.pending) return false;
+  const p = trialNow.value.get(changeKey(c));
+  return p ? p.pending != null && p.version === c.version : true;
+}
 
 export function TrialBar() {
   const t = shownTrial.value;
   const msg = trialMessage.value;
   if (!t && !msg) return null;
+  const restartWaits = t ? t.applied.some((c) => c.effect === "restart" && waits(c)) : revertWaitsForRestart.value;
   return (
     <div class="trial-bar" data-testid="trial-bar">
       {t ? (
@@ -17,7 +30,11 @@ export function TrialBar() {
           Parameters on trial ({t.label ?? t.target ?? t.scope}):{" "}
           {t.applied
             .slice(0, SHOWN)
-            .map((c) => `${t.label && c.target ? `${c.target}: ` : ""}${c.name} ${c.old ?? "default"} → ${c.new}${c.pending ? ` (at ${c.effect})` : ""}`)
+            .map(
+              (c) =>
+                `${t.label && c.target ? `${c.target}: ` : ""}${c.name} ${c.old ?? "default"} → ${c.new}` +
+                (waits(c) ? ` (at ${c.effect})` : c.pending ? ` (in force since the ${c.effect})` : ""),
+            )
             .join(", ")}
           {t.applied.length > SHOWN ? ` … and ${t.applied.length - SHOWN} more` : ""}
           <button type="button" data-testid="param-keep" onClick={keepTrial}>
@@ -31,6 +48,7 @@ export function TrialBar() {
         </span>
       ) : null}
       {msg ? <span class="hint" data-testid="trial-message">{msg}</span> : null}
+      {restartWaits && may("command") ? <RestartMachine label="⟳ Restart now…" refusalId="trial-restart-refusal" /> : null}
     </div>
   );
 }

@@ -7,8 +7,8 @@ import { machineId, status } from "./session";
 const MAX_EVENTS = 500;
 export const events = signal<JobError[]>([]);
 const seen = new Set<string>();
-/** Keys of the active errors the operator acknowledged (the banner hides them). */
-export const acknowledged = signal<ReadonlySet<string>>(new Set());
+/** Keys of the active errors the operator dismissed (the banner hides them). */
+export const dismissed = signal<ReadonlySet<string>>(new Set());
 
 export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 
@@ -17,7 +17,7 @@ export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 export function restartLog(message: string): void {
   events.value = [];
   seen.clear();
-  acknowledged.value = new Set();
+  dismissed.value = new Set();
   addEvents([
     { cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null, line: null, column: null, signal: null },
   ]);
@@ -32,19 +32,21 @@ export function addEvents(list: JobError[]): void {
 }
 
 /** The job errors still active (the pushed status has one per axis, an emergency stop once)
- * and not acknowledged, newest first: the banner shows them. A reset clears them there; the
- * log (Events panel) keeps their history. */
+ * and not dismissed, newest first: the banner shows them. Dismissing only hides them here
+ * (the NC is not told: the axis stays in error); a reset clears them. The log (Events panel)
+ * keeps their history. */
 export const bannerErrors = computed(() =>
-  (status.value?.job_errors ?? []).filter((e) => !acknowledged.value.has(keyOf(e))).sort((a, b) => b.cycle - a.cycle),
+  (status.value?.job_errors ?? []).filter((e) => !dismissed.value.has(keyOf(e))).sort((a, b) => b.cycle - a.cycle),
 );
 
-export function acknowledgeBanner(): void {
-  acknowledged.value = new Set([...acknowledged.value, ...bannerErrors.value.map(keyOf)]);
+/** Hide the banner's errors (they stay active until a reset). */
+export function dismissBanner(): void {
+  dismissed.value = new Set([...dismissed.value, ...bannerErrors.value.map(keyOf)]);
 }
 
 effect(() => {
   void machineId.value; // a new machine: a new log
   events.value = [];
   seen.clear();
-  acknowledged.value = new Set();
+  dismissed.value = new Set();
 });

@@ -1,10 +1,10 @@
-// The exercise of the chosen machine when it is a class seat: asked for when the machine
-// changes (404: no seat, so no Exercise tab), refreshed while the Exercise tab shows it;
+// The exercise of the chosen machine when it is a class seat (the machine list says which
+// are): asked for when the machine changes, refreshed while the Exercise tab shows it;
 // hints are taken from here. The service hides the exercise's faults from the student.
 import { effect, signal, untracked } from "@preact/signals";
 import { ApiError, http } from "../api/http";
 import type { Exercise, HintInfo } from "../api/types";
-import { freezeNoticeCount, machineId, machineUrl, seatFrozen } from "./session";
+import { freezeNoticeCount, machineId, machines, machineUrl, seatFrozen } from "./session";
 
 /** The seat's exercise as it stands; null while the machine is no class seat (or unknown). */
 export const exercise = signal<Exercise | null>(null);
@@ -13,6 +13,7 @@ export const exercise = signal<Exercise | null>(null);
 export async function refreshExercise(): Promise<void> {
   const mid = machineId.value;
   if (!mid) return;
+  if (!machines.peek().find((m) => m.id === mid)?.seat) return void (exercise.value = null); // no seat: nothing to ask
   const asked = freezeNoticeCount();
   try {
     const ex = await http.get<Exercise>(machineUrl("/exercise"));

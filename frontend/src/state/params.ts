@@ -5,10 +5,10 @@
 import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
 import type { ParameterChange, ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
-import { loggedIn } from "./auth";
+import { me } from "./auth";
 import { holderKey } from "./control";
-import { machineId, machineUrl } from "./session";
-import { kept } from "./workspace";
+import { machineId, machineUrl, status } from "./session";
+import { kept, keptSignal } from "./workspace";
 
 /** One edit: the value, and the version it was read at (refused when someone wrote since;
  * null: no check). */
@@ -62,12 +62,39 @@ export interface Trial {
   label?: string;
 }
 
-/** Values applied on trial, waiting for Keep or Revert (one trial at a time). */
-export const trial = signal<Trial | null>(null);
+/** Values applied on trial, waiting for Keep or Revert (one trial at a time; a reload of the
+ * tab keeps it). */
+export const trial = keptSignal<Trial | null>("trial", null);
 /** The trial of the machine on screen (another machine's trial waits for its machine). */
 export const shownTrial = computed(() => (trial.value?.machine === machineId.value ? trial.value : null));
 /** What the last Keep/Revert did (or why Revert failed). */
 export const trialMessage = signal("");
+/** The last Revert left values waiting for a restart (the trial bar offers it). */
+export const revertWaitsForRestart = signal(false);
+
+/** The trial's parameters as they stand now (by scope/target/name), reloaded after every
+ * write and every new build: whether a value still waits for its reset or restart. */
+export const trialNow = signal<Map<string, ParameterValue>>(new Map());
+export const changeKey = (c: { scope: Scope; target?: string | null; name: string }) => `${c.scope}/${c.target ?? ""}/${c.name}`;
+effect(() => {
+  void paramsVersion.value;
+  const t = shownTrial.value;
+  trialNow.value = new Map();
+  if (!t) return;
+  const lists = new Set(t.applied.map((c) => `${c.scope}/${c.target ?? ""}`));
+  void Promise.all(
+    [...lists].map((l) => {
+      const [scope, target] = l.split("/");
+      return loadList(scope as Scope, target || null);
+    }),
+  ).then(
+    (rows) => {
+      if (shownTrial.peek() !== t) return; // another trial meanwhile
+      trialNow.value = new Map(rows.flat().map((p) => [changeKey(p), p]));
+    },
+    () => undefined, // unknown: the bar shows the trial as applied
+  );
+});
 
 export async function writeChanges(
   scope: Scope,
@@ -94,8 +121,9 @@ export function keepTrial(): void {
 }
 
 /** Write the old values back, unless someone wrote over the trial's values meanwhile (their
- * value is not ours to revert); the trial stays when that is refused. Each change goes back to
- * its own list (a rollback's trial spans several). */
+ * value is not ours to revert: its version changed; a reset or restart taking our value in
+ * leaves the version); the trial stays when that is refused. Each change goes back to its
+ * own list (a rollback's trial spans several). */
 export async function revertTrial(): Promise<void> {
   const t = trial.value;
   if (!t) return;
@@ -110,7 +138,7 @@ export async function revertTrial(): Promise<void> {
     const named = (c: Applied) => (lists.size > 1 && c.target ? `${c.target}: ${c.name}` : c.name);
     const changed = t.applied.filter((c) => {
       const p = now(c);
-      return p && (c.pending ? p.pending : p.value) !== c.new;
+      return p && p.version !== c.version;
     });
     if (changed.length) {
       trialMessage.value = `Revert refused: ${changed.map(named).join(", ")} changed by someone else since the trial (reload the list).`;
@@ -120,11 +148,16 @@ export async function revertTrial(): Promise<void> {
     const back: ParameterChange[] = [];
     for (const c of t.applied) {
       const value = c.old ?? now(c)?.default ?? null;
-      if (value !== null) back.push({ scope: c.scope, target: c.target, name: c.name, value, base_version: now(c)?.version ?? null });
+      if (value !== null) back.push({ scope: c.scope, target: c.target, name: c.name, value, base_version: c.version });
     }
-    await writeAll(back, "editor: revert");
+    const r = await writeAll(back, "editor: revert");
     trial.value = null;
-    trialMessage.value = `Reverted ${back.length} value(s).`;
+    // a value the restart had taken in goes back as a pending one: it needs a restart again
+    const waiting = r.changes.filter((c) => c.pending);
+    revertWaitsForRestart.value = waiting.some((c) => c.effect === "restart");
+    trialMessage.value =
+      `Reverted ${back.length} value(s).` +
+      (waiting.length ? ` Back in force at the next ${waiting.map((c) => `${c.effect}: ${c.name} ${c.new}`).join(", ")}.` : "");
   } catch (e) {
     trialMessage.value = `Revert refused: ${e instanceof Error ? e.message : String(e)}`;
   }
@@ -134,11 +167,32 @@ effect(() => {
   void machineId.value; // a message belongs to the machine it was about ...
   void holderKey.value; // ... and to its holder at the time ("Kept." is old news to the next)
   trialMessage.value = "";
+  revertWaitsForRestart.value = false;
 });
 
 effect(() => {
   // a trial belongs to the session that applied it: the next user must not see its Keep/Revert
-  if (loggedIn.value) return;
+  // (null: logged out; undefined while a reload asks who is logged in: the trial stays)
+  if (me.value !== null) return;
   trial.value = null;
   trialMessage.value = "";
+});
+
+/** The build of the machine on screen (status.simulation.epoch): a restart by anyone, a
+ * restore or a rebuild after its worker died brings a new one, with the values that waited
+ * for it in force. */
+const build = computed(() => {
+  const st = status.value;
+  return st ? `${st.id}/${st.simulation.epoch}` : null;
+});
+let lastBuild: string | null = null;
+effect(() => {
+  const b = build.value;
+  if (b === null) return; // between machines, or before the first status
+  const same = lastBuild !== null && b.split("/")[0] === lastBuild.split("/")[0];
+  if (same && b !== lastBuild) {
+    paramsVersion.value = paramsVersion.peek() + 1; // every view reloads
+    revertWaitsForRestart.value = false; // the restart took them in
+  }
+  lastBuild = b;
 });

@@ -1,7 +1,7 @@
 // The scope: its status (polled while the Scope workspace is open), the setup being edited
 // (kept per machine), the trace on screen and the one overlaid, the measurement's channel and
 // band, and the trace library.
-import { computed, signal } from "@preact/signals";
+import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
 import type { RecordingInfo, ScopeSetup, ScopeStatus, TraceDetail, TraceInfo } from "../api/types";
 import { machineId, machineUrl } from "./session";
@@ -144,3 +144,14 @@ export async function loadRoll(maxPoints: number): Promise<RollData | null> {
   h.signals.forEach((name, i) => channels.set(name, data.subarray(i * h.count, (i + 1) * h.count)));
   return { t, channels, lastCycle: last, stride: h.stride };
 }
+
+effect(() => {
+  // another machine: its own scope and captures (another's stay in the trace library, named
+  // by their machine); back on this one, its newest capture shows again
+  void machineId.value;
+  scopeStatus.value = null;
+  shownId.value = "";
+  overlayId.value = "";
+  followNewest.value = true;
+  lastNewest = "";
+});

@@ -8,6 +8,7 @@ import { machineId } from "./session";
 
 const PREFIX = "inbetrieb.ws.";
 const all: Signal<Record<string, unknown>>[] = [];
+const forgets: (() => void)[] = [];
 
 /** A value per machine that outlives the panel showing it. */
 export interface Kept<T> {
@@ -48,9 +49,32 @@ export function kept<T extends object>(name: string, initial: T): Kept<T> {
   };
 }
 
+/** A value of the session (one for all machines, e.g. the one trial of parameters) mirrored
+ * to sessionStorage under `name`: a reload of the tab keeps it, logging out forgets it. */
+export function keptSignal<T>(name: string, initial: T): Signal<T> {
+  let stored: T = initial;
+  try {
+    const raw = sessionStorage.getItem(PREFIX + name);
+    if (raw) stored = JSON.parse(raw) as T;
+  } catch {
+    /* a broken entry: start afresh */
+  }
+  const s = signal<T>(stored);
+  forgets.push(() => void (s.value = initial));
+  effect(() => {
+    try {
+      sessionStorage.setItem(PREFIX + name, JSON.stringify(s.value));
+    } catch {
+      /* storage full or refused: the page keeps it still */
+    }
+  });
+  return s;
+}
+
 effect(() => {
   // the next user of this tab starts from the defaults (null: nobody; undefined: not known yet)
   if (me.value !== null) return;
   for (const s of all) s.value = {};
+  for (const forget of forgets) forget();
   for (const k of Object.keys(sessionStorage)) if (k.startsWith(PREFIX)) sessionStorage.removeItem(k);
 });
