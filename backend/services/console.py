@@ -22,7 +22,6 @@ from api.classes import AxisLine, GridFrame, SeatFrame
 from backend.services.classes import Class, Classes, Seat
 from backend.services.machines import MachineProxy
 from backend.services.status import AXIS_KIND
-from backend.workers.protocol import Watch
 from nc_sim.signals import Signal
 
 log = logging.getLogger(__name__)
@@ -132,9 +131,7 @@ class ConsoleHub:
                 m = self.classes.proxy(seat)
                 if m is not None and seat.machine not in self._watched:
                     self._watched.add(seat.machine)
-                    m.watchers += 1
-                    if m.watchers == 1:
-                        m.post(Watch(m.id, True))
+                    m.watch(True)
 
     def unwatch(self, c: Class) -> None:
         for seat in c.seats:

@@ -102,7 +102,8 @@ class MachineProxy:
         self.ring: SampleRing | None = None
         self.epoch = 0
         self.deleted = False  # telemetry closes its subscribers
-        self.watchers = 0
+        self.watchers = 0  # viewers and consoles that need its status pushed (see `watch`)
+        self._watching = threading.Lock()
         self.control = MachineControl()  # who holds it (backend/services/control.py)
         # jogs whose start is audited: (axis, session, client) -> (direction, feed, when)
         self.jogs_audited: dict[tuple[str, str, str], tuple[int, float | None, float]] = {}
@@ -121,6 +122,14 @@ class MachineProxy:
         # checks its worker evaluates; both go with every rebuild
         self.faults: dict[int, FaultState] = {}
         self.exercise: object | None = None
+
+    def watch(self, on: bool) -> None:
+        """One more (or one fewer) watcher: the worker pushes the status while there is any.
+        Telemetry's event loop and the console's thread both count, hence the lock."""
+        with self._watching:
+            self.watchers += 1 if on else -1
+            if self.watchers == (1 if on else 0):
+                self.post(Watch(self.id, on))
 
     def next_serial(self) -> int:
         """The number of the next command to this machine."""

@@ -46,7 +46,6 @@ from backend.services.commands import job_error_model
 from backend.services.machines import MachineProxy
 from backend.services.status import RECENT_EVENTS, status_of
 from backend.tasks import cancel
-from backend.workers.protocol import Watch
 from nc_sim.signals import Signal
 
 log = logging.getLogger(__name__)
@@ -138,18 +137,14 @@ class TelemetryHub:
         self.on_connect(actor, m)
         sub.notice_seq = m.notices[-1].seq - 1 if m.notices else 0  # the newest notice again
         self.subscribers.add(sub)
-        m.watchers += 1
-        if m.watchers == 1:
-            m.post(Watch(m.id, True))
+        m.watch(True)
         return sub
 
     def remove(self, sub: Subscriber) -> None:
         if sub in self.subscribers:
             m = sub.machine
             self.on_disconnect(sub.actor, m)
-            m.watchers -= 1
-            if m.watchers == 0:
-                m.post(Watch(m.id, False))
+            m.watch(False)
         sub.closed = True
         self.subscribers.discard(sub)
 

@@ -65,8 +65,9 @@ class EventCheck:
 
 @dataclass(frozen=True)
 class NoEventCheck:
-    """None of `codes` (of `axis`) in the last `window_s`, the exercise has run that long and
-    `axis` moved within that window: a student who does nothing does not pass."""
+    """`axis` has been in use for `window_s` without any of `codes` (of it): its first motion
+    since the last such event (or the start) lies `window_s` back, and it moved again within
+    that window. A student who does nothing, or moved once a moment ago, does not pass."""
 
     kind: ClassVar[str] = "no_event"
     codes: tuple[Code, ...]
@@ -304,42 +305,53 @@ class _Event:
 
 
 class _NoEvent:
-    def __init__(self, rule: NoEventCheck, m: Machine, start_cycle: int) -> None:
+    def __init__(self, rule: NoEventCheck, m: Machine) -> None:
         self.rule = rule
         self.axis = m.axis(rule.axis).name
         self.codes = frozenset(int(c) for c in rule.codes)
-        self.start = start_cycle
         self.window = round(rule.window_s / m.k.cycle_s)
         self.cycle_s = m.k.cycle_s
         self.last_event: Event | None = None
+        self.first_moved: int | None = None  # first motion since the last event (or start)
         self.last_moved: int | None = None
         self.passed = False
         self.first_passed_cycle: int | None = None
-        self.detail = ""
+        self.detail = f"{rule.axis} has not moved yet"
 
     def feed(self, rows: np.ndarray, first_cycle: int, events: list[Event], now: int) -> None:
         for e in events:
             if e.code in self.codes and e.axis == self.axis:
                 self.last_event = e
-        moved = np.flatnonzero((rows[:, L.R_MVPOS] != 0) | (rows[:, L.R_MVNEG] != 0))
-        if moved.size:
-            self.last_moved = first_cycle + int(moved[-1])
+        moving = (rows[:, L.R_MVPOS] != 0) | (rows[:, L.R_MVNEG] != 0)
+        cycles = first_cycle + np.flatnonzero(moving)
+        after = self.last_event.cycle if self.last_event is not None else -1
+        if self.first_moved is not None and self.first_moved <= after:
+            self.first_moved = None  # the event ended that stretch of use
+        if cycles.size:
+            self.last_moved = int(cycles[-1])
+            if self.first_moved is None:
+                later = cycles[cycles > after]
+                self.first_moved = int(later[0]) if later.size else None
         since = now - self.window
         names = "/".join(Code(c).name for c in sorted(self.codes))
-        ran = now - self.start >= self.window
         quiet = self.last_event is None or self.last_event.cycle <= since
+        long_enough = self.first_moved is not None and self.first_moved <= since
         moved_now = self.last_moved is not None and self.last_moved > since
-        _passed_at(self, ran and quiet and moved_now, now)
-        if not quiet and self.last_event is not None:
-            ago = (now - self.last_event.cycle) * self.cycle_s
-            self.detail = f"{names} {ago:.0f} s ago: {self.last_event.message}"
-        elif not ran:
-            left = (self.start + self.window - now) * self.cycle_s
-            self.detail = f"no {names} so far; {left:.0f} s to go"
+        _passed_at(self, quiet and long_enough and moved_now, now)
+        ax, w = self.rule.axis, self.rule.window_s
+        if self.first_moved is None:
+            ago = ""
+            if self.last_event is not None:
+                t = (now - self.last_event.cycle) * self.cycle_s
+                ago = f" since {names} {t:.0f} s ago ({self.last_event.message})"
+            self.detail = f"{ax} has not moved{ago}"
+        elif not long_enough:
+            left = (self.first_moved + self.window - now) * self.cycle_s
+            self.detail = f"{ax} in use without {names}: {w - left:.0f} of {w:g} s"
         elif not moved_now:
-            self.detail = f"{self.rule.axis} has not moved in the last {self.rule.window_s:g} s"
+            self.detail = f"{ax} has not moved in the last {w:g} s"
         else:
-            self.detail = f"no {names} in the last {self.rule.window_s:g} s, {self.axis} moving"
+            self.detail = f"{ax} in use for {w:g} s without {names}"
 
 
 class _Standing:
@@ -414,7 +426,7 @@ class ExerciseMonitor:
                 except ValueError as e:
                     raise ValueError(f"checks[{i}] ({c.id}): {e}") from None
             self._slots.append(slot)
-            self._evals.append(_make(rule, machine, slot, self.start_cycle))
+            self._evals.append(_make(rule, machine, slot))
 
     def feed(self, machine: Machine, rows: np.ndarray, first_cycle: int) -> None:
         """The sample rows recorded since the last call (rows[0] is cycle `first_cycle`) and
@@ -434,7 +446,7 @@ class ExerciseMonitor:
         ]
 
 
-def _make(rule: Rule, m: Machine, slot: int | None, start_cycle: int) -> _Evaluator:
+def _make(rule: Rule, m: Machine, slot: int | None) -> _Evaluator:
     match rule:
         case GainCheck():
             assert slot is not None
@@ -445,7 +457,7 @@ def _make(rule: Rule, m: Machine, slot: int | None, start_cycle: int) -> _Evalua
         case EventCheck():
             return _Event(rule, m)
         case NoEventCheck():
-            return _NoEvent(rule, m, start_cycle)
+            return _NoEvent(rule, m)
         case InPositionCheck() | SpeedReachedCheck():
             assert slot is not None
             return _Standing(rule, m, slot)

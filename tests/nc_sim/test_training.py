@@ -276,6 +276,20 @@ def test_sign_error_with_kv_halved_instead_fails_both_checks() -> None:
     assert not seat.passed("gain") and not seat.passed("no-trip")
 
 
+def test_sign_error_fixed_but_x_moved_only_a_moment_ago_is_not_a_minute_of_use() -> None:
+    """ "X moves for a minute": a fixed X that stood still for 70 s and then made one 4 s
+    stroke has not been in use for a minute; a minute of strokes later it has."""
+    seat = Seat("sign-error")
+    seat.param(Scope.AXIS, "X", {"lr_hw[0].vz_stellgr": 1})
+    seat.run(70.0)
+    assert seat.result("no-trip").detail == "X has not moved"
+    seat.x_back_and_forth(4.0)
+    assert not seat.passed("no-trip")
+    assert "X in use without LAG_MONITORING: 4 of 60 s" in seat.result("no-trip").detail
+    seat.x_back_and_forth(60.0)
+    assert seat.passed("no-trip"), seat.result("no-trip")
+
+
 def test_sign_error_doing_nothing_fails_both_checks() -> None:
     seat = Seat("sign-error")
     seat.run(70.0)
