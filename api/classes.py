@@ -163,13 +163,27 @@ class SeatDetail(BaseModel):
     info: SeatInfo
     checks: list[CheckState]
     hints: list[HintInfo]
-    faults: list[FaultInfo]
+    faults: list[FaultInfo] = Field(
+        description="the injected faults (the exercise's and the instructor's): live while "
+        "the class runs, as they stood at its end once it has ended"
+    )
+    ended: bool = Field(
+        description="the class has ended: checks' details and faults are their last state"
+    )
 
 
 class Exercise(BaseModel):
-    """The exercise of the student's own seat: task, checks as they stand, hints, score."""
+    """The exercise of a seat: task, checks as they stand, hints, score (for the seat's
+    student, or an instructor watching it)."""
 
     class_id: str
+    seat: int = Field(description="seat number from 1")
+    student: str = Field(description="the seat's student's name (or 'Seat n')")
+    user: str = Field(description="the seat's login (control held by it is the student's)")
+    takes_hints: bool = Field(
+        description="whether the asker may take hints: only the seat's own student (a hint "
+        "costs the student's points)"
+    )
     exercise: ExerciseInfo
     checks: list[CheckState]
     hints: list[HintInfo]
@@ -177,6 +191,24 @@ class Exercise(BaseModel):
     progress: float
     seat_time_s: float
     frozen: bool = Field(description="paused by the instructor (the student cannot resume)")
+
+
+class SeatResult(BaseModel):
+    """A seat's final result, for its student once the class has ended (their login is gone:
+    the ended session's cookie still names the seat)."""
+
+    class_id: str
+    title: str = Field(description="the class's title")
+    exercise: str = Field(description="the exercise's title")
+    seat: int
+    student: str
+    ended_unix: float
+    score: float
+    max_points: float = Field(description="the sum of the checks' points")
+    checks_passed: int = Field(description="checks that held at some time")
+    checks_total: int
+    hints_taken: int
+    seat_time_s: float
 
 
 class HintTake(BaseModel):

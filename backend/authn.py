@@ -8,8 +8,9 @@ browser shows open one, so a websocket needs an API token or a one-time ticket i
 fetched with the session (`POST /api/auth/ws-ticket`, as Moonraker does); the session cookie
 alone is refused.
 
-Open without either: health, logging in, one-time login links, and the static pages (the
-HMI shows its login screen; the docs describe the API).
+Open without either: health, logging in, one-time login links, an ended class seat's
+result (by the cookie of the session the end took away), and the static pages (the HMI
+shows its login screen; the docs describe the API).
 """
 
 from __future__ import annotations
@@ -27,7 +28,10 @@ from backend.security import SAFE_METHODS
 from backend.services.accounts import Accounts, public_id
 from backend.services.auth import Actor
 
-OPEN_PATHS = frozenset({"/api/health", "/api/auth/login", "/api/auth/logout"})
+# an ended class's seat result: its login has gone, the old session cookie names the seat
+OPEN_PATHS = frozenset(
+    {"/api/health", "/api/auth/login", "/api/auth/logout", "/api/auth/seat-result"}
+)
 GUARDED_PREFIXES = ("/api/", "/rerun")
 
 

@@ -16,8 +16,8 @@ from backend.services.auth import Actor
 router = APIRouter(tags=["auth"])
 
 _LINK_USED = """<!doctype html><meta charset="utf-8"><title>Inbetrieb</title>
-<p>This login link was used already or has expired. <a href="/">Log in</a> with your name
-and password, or restart the service for a new link.</p>"""
+<p>This login link was used already or has expired. A class seat's link: ask your
+instructor for a new one. Otherwise <a href="/">log in</a> with your name and password.</p>"""
 
 
 @router.get("/api/health")
@@ -69,6 +69,8 @@ def logout(request: Request, services: ServicesDep) -> Response:
     """End this session (the cookies go too)."""
     sid = request.cookies.get(SESSION_COOKIE)
     session = services.accounts.session(sid) if sid else None
+    if sid:
+        services.classes.forget_result(sid)  # an ended seat's result shows no more
     if sid and session is not None:
         services.accounts.end_session(sid)
         key = public_id("session", sid)

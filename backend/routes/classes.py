@@ -9,7 +9,7 @@ from fastapi import APIRouter, Path, Query, Request, WebSocket, WebSocketDisconn
 from fastapi.concurrency import run_in_threadpool
 
 from api.audit import AuditPage
-from api.auth import Action
+from api.auth import SESSION_COOKIE, Action
 from api.classes import (
     CLASS_ID,
     Broadcast,
@@ -23,6 +23,7 @@ from api.classes import (
     SeatDetail,
     SeatFaults,
     SeatLink,
+    SeatResult,
 )
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, ApiError, responses
@@ -99,10 +100,12 @@ def get_class(cid: ClassId, services: ServicesDep) -> ClassInfo:
     responses=responses(403, 404, why=_RUNNING),
 )
 def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo:
-    """End the class: its machines and logins go; its record, results, traces and audit
-    stay for the debrief."""
+    """End the class: its machines and logins go; its record, results, injected faults,
+    traces and audit stay for the debrief. Each student's page shows their result
+    (GET /api/auth/seat-result)."""
     c = services.classes.get(cid)
     services.classes.end(c)
+    services.sessions.poke()  # the students' websockets close now
     services.console.unwatch(c)
     for seat in c.seats:
         services.snapshots.forget(seat.machine)
@@ -158,16 +161,31 @@ def inject_class(
     "/classes/{cid}/seats/{n}", dependencies=[permit(Action.TEACH)], responses=responses(403, 404)
 )
 def seat_detail(cid: ClassId, n: SeatNo, services: ServicesDep) -> SeatDetail:
-    """A seat's checks, hints and faults (for the console and the debrief)."""
+    """A seat's checks, hints and faults (for the console and the debrief: an ended
+    class's as they stood at its end)."""
     c = services.classes.get(cid)
     seat = services.classes.seat(cid, n)
-    m = services.classes.proxy(seat) if c.ended_unix is None else None
+    ended = c.ended_unix is not None
+    m = services.classes.proxy(seat) if not ended else None
     return SeatDetail(
         info=services.classes.seat_info(c, seat),
         checks=services.classes.checks(c, seat),
         hints=hint_infos(c.exercise, seat.hints),
-        faults=training.faults_of(m) if m is not None else [],
+        faults=seat.faults if ended else training.faults_of(m) if m is not None else [],
+        ended=ended,
     )
+
+
+@router.get("/auth/seat-result", responses=responses(404))
+def seat_result(request: Request, services: ServicesDep) -> SeatResult:
+    """The final result of the class seat this browser was logged in to, once the class
+    has ended and its login has gone (open: the ended session's cookie names the seat,
+    until the session would have expired or its student logs out); 404 for any other."""
+    sid = request.cookies.get(SESSION_COOKIE, "")
+    result = services.classes.result_of(sid) if sid else None
+    if result is None:
+        raise ApiError(404, {"message": "this browser's session was no seat of an ended class"})
+    return result
 
 
 @router.get(

@@ -15,14 +15,19 @@ router = APIRouter(prefix="/api/machines/{mid}/exercise", tags=["training"])
 
 
 @router.get("", dependencies=[permit(Action.EXERCISE)], responses=responses(403, 404))
-def my_exercise(machine: MachineDep, services: ServicesDep) -> Exercise:
+def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Exercise:
     """The exercise of the seat this machine is (404 when it is none): the task, every
-    check as it stands on the live machine, the hints (their text once taken), the score."""
+    check as it stands on the live machine, the hints (their text once taken), the score;
+    whether the asker may take hints (the seat's student only)."""
     c, seat = services.classes.seat_by_machine(machine.id)
     progress, score = services.classes.score(c, seat)
     info = exercise_info(c.exercise, "class", seat.hints)
     return Exercise(
         class_id=c.id,
+        seat=seat.n,
+        student=seat.student,
+        user=seat.user,
+        takes_hints=actor.name == seat.user,
         exercise=info.model_copy(update={"faults": 0}),  # the student's to find
         checks=services.classes.checks(c, seat),
         hints=hint_infos(c.exercise, seat.hints),
@@ -33,13 +38,18 @@ def my_exercise(machine: MachineDep, services: ServicesDep) -> Exercise:
     )
 
 
-@router.post("/hints", dependencies=[permit(Action.EXERCISE)], responses=responses(403, 404))
+@router.post(
+    "/hints",
+    dependencies=[permit(Action.EXERCISE)],
+    responses=responses(403, 404, why={403: "not the seat's own student"}),
+)
 def take_hint(
     req: HintTake, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> HintInfo:
-    """Take a hint: its text, and its cost comes off the score (once)."""
+    """Take a hint: its text, and its cost comes off the score (once). Only the seat's own
+    student takes its hints (anyone else: 403)."""
     c, seat = services.classes.seat_by_machine(machine.id)
-    text = services.classes.take_hint(seat, c, req.n)
+    text = services.classes.take_hint(actor, seat, c, req.n)
     services.audit.record(
         Classes.entry(actor, f"took hint {req.n} of exercise '{c.exercise.id}'", machine.id)
     )

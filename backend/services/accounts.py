@@ -61,14 +61,15 @@ CREATE TABLE IF NOT EXISTS tokens (
 _DIGEST_CHARS = 16  # of a public id
 
 
-def _digest(secret: str) -> str:
+def digest(secret: str) -> str:
+    """What the store keeps of a session id or token (SHA-256, hex)."""
     return hashlib.sha256(secret.encode()).hexdigest()
 
 
 def public_id(kind: str, secret: str) -> str:
     """A session's or token's id that others may see (who holds control): a prefix of the
     digest the store keeps, which gives nothing away."""
-    return f"{kind}-{_digest(secret)[:_DIGEST_CHARS]}"
+    return f"{kind}-{digest(secret)[:_DIGEST_CHARS]}"
 
 
 def _digest_prefix(public: str, kind: str) -> str | None:
@@ -239,7 +240,7 @@ class Accounts:
         now = time.time()
         self.store.run(
             "INSERT INTO sessions VALUES (?, ?, ?, ?, ?)",
-            (_digest(sid), name, csrf, now, now + SESSION_S),
+            (digest(sid), name, csrf, now, now + SESSION_S),
         )
         return sid, csrf
 
@@ -247,15 +248,23 @@ class Accounts:
         rows = self.store.query(
             "SELECT s.user, u.role, s.csrf FROM sessions s JOIN users u ON u.name = s.user "
             "WHERE s.digest = ? AND s.expires > ?",
-            (_digest(sid), time.time()),
+            (digest(sid), time.time()),
         )
         if not rows:
             return None
         user, role, csrf = rows[0]
         return Session(User(user, Role(role)), csrf)
 
+    def sessions_of(self, name: str) -> list[tuple[str, float]]:
+        """(digest, expiry unix time) of each of the user's live sessions."""
+        rows = self.store.query(
+            "SELECT digest, expires FROM sessions WHERE user = ? AND expires > ?",
+            (name, time.time()),
+        )
+        return [(d, float(e)) for d, e in rows]
+
     def end_session(self, sid: str) -> None:
-        self.store.run("DELETE FROM sessions WHERE digest = ?", (_digest(sid),))
+        self.store.run("DELETE FROM sessions WHERE digest = ?", (digest(sid),))
 
     # --- tickets: one URL, once, soon ------------------------------------------------------
     def issue_ticket(self, actor: Actor, path: str) -> str:
@@ -316,7 +325,7 @@ class Accounts:
         self.store.run(
             "INSERT INTO tokens VALUES (?, ?, ?, ?, ?, ?, NULL)",
             (
-                _digest(token),
+                digest(token),
                 name,
                 "once" if once else "api",
                 label,
@@ -330,14 +339,14 @@ class Accounts:
         """Whose API token this is (its last use noted, at most once a LAST_USED_S)."""
         user = self._token("api", token)
         if user is not None:
-            digest, now = _digest(token), time.monotonic()
+            key, now = digest(token), time.monotonic()
             with self._lock:
-                due = now - self._used.get(digest, -LAST_USED_S) >= LAST_USED_S
+                due = now - self._used.get(key, -LAST_USED_S) >= LAST_USED_S
                 if due:
-                    self._used[digest] = now
+                    self._used[key] = now
             if due:
                 sql = "UPDATE tokens SET last_used = ? WHERE digest = ?"
-                self.store.run(sql, (time.time(), digest))
+                self.store.run(sql, (time.time(), key))
         return user
 
     def tokens(self, user: str | None = None) -> list[TokenEntry]:
@@ -367,13 +376,13 @@ class Accounts:
         """Whose login link this is; the link is used up."""
         me = self._token("once", token)
         if me is not None:
-            self.store.run("DELETE FROM tokens WHERE digest = ?", (_digest(token),))
+            self.store.run("DELETE FROM tokens WHERE digest = ?", (digest(token),))
         return me
 
     def _token(self, kind: str, token: str) -> User | None:
         rows = self.store.query(
             "SELECT t.user, u.role FROM tokens t JOIN users u ON u.name = t.user "
             "WHERE t.digest = ? AND t.kind = ? AND (t.expires IS NULL OR t.expires > ?)",
-            (_digest(token), kind, time.time()),
+            (digest(token), kind, time.time()),
         )
         return User(rows[0][0], Role(rows[0][1])) if rows else None

@@ -6,7 +6,8 @@ The seats' progress lives here: a check counts from the seat time it first held 
 weighting of the score), hints taken cost points. Seat time is the simulated time the seat's
 machine ran, summed over its builds (a restart starts the machine's clock again, not the
 seat's). A class that ends takes its machines and logins away; its record, the seats'
-results, their traces and the audit stay for the debrief.
+results and injected faults, their traces and the audit stay for the debrief. A student's
+session that the end took away still names their seat, so their page can show the result.
 """
 
 from __future__ import annotations
@@ -26,12 +27,13 @@ from api.classes import (
     SeatFaults,
     SeatInfo,
     SeatLink,
+    SeatResult,
 )
-from api.faults import FaultInject
+from api.faults import FaultInfo, FaultInject
 from api.machines import MachineCreate, MachineLists
 from backend.errors import ApiError, not_found
 from backend.services import training
-from backend.services.accounts import Accounts
+from backend.services.accounts import Accounts, digest
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor
 from backend.services.exercises import Exercises
@@ -62,8 +64,15 @@ CREATE TABLE IF NOT EXISTS seats (
     student TEXT NOT NULL,
     user TEXT NOT NULL,
     machine TEXT NOT NULL,
-    progress TEXT NOT NULL,        -- JSON: hints taken, checks' first pass and detail, time
+    progress TEXT NOT NULL,        -- JSON: hints taken, checks' first pass and detail, time,
+                                   -- faults (kept at the end)
     PRIMARY KEY (class, n)
+);
+CREATE TABLE IF NOT EXISTS ended_sessions (  -- a seat's sessions the class's end took away
+    digest TEXT PRIMARY KEY,       -- SHA-256 of the session id (as the sessions table)
+    class TEXT NOT NULL,
+    n INTEGER NOT NULL,
+    expires REAL NOT NULL          -- the session's own expiry: its result shows until then
 );
 CREATE TABLE IF NOT EXISTS class_lists (  -- a class's uploaded machine template (none: demo)
     class TEXT PRIMARY KEY,
@@ -92,6 +101,7 @@ class Seat:
     epoch_start_s: float | None = None  # machine time the current build was first seen at
     last_t_s: float = 0.0
     frozen: bool = False
+    faults: list[FaultInfo] = field(default_factory=list)  # as they stood at the class's end
 
     @property
     def seat_time_s(self) -> float:
@@ -106,6 +116,7 @@ class Seat:
                 "detail": self.detail,
                 "seat_time_s": self.seat_time_s,
                 "frozen": self.frozen,
+                "faults": [f.model_dump(mode="json") for f in self.faults],
             }
         )
 
@@ -117,6 +128,7 @@ class Seat:
         self.detail = dict(p.get("detail", {}))
         self.time_base_s = float(p.get("seat_time_s", 0.0))
         self.frozen = bool(p.get("frozen", False))
+        self.faults = [FaultInfo.model_validate(f) for f in p.get("faults", [])]
 
 
 @dataclass
@@ -482,7 +494,9 @@ class Classes:
         return f"{base_url.rstrip('/')}/auth/once?token={token}"
 
     def end(self, c: Class) -> None:
-        """The class ends: its machines and logins go, its record stays."""
+        """The class ends: its machines and logins go, its record stays with each seat's
+        final progress and injected faults; the students' sessions still name their seats
+        (their pages show the result, `result_of`)."""
         with self._lock:
             if c.ended_unix is not None:
                 raise ApiError(409, {"message": f"class '{c.id}' has ended"})
@@ -490,13 +504,60 @@ class Classes:
                 proxy = self.proxy(seat)
                 if proxy is not None:
                     self.update(seat, proxy)
+                    seat.faults = self._last_faults(proxy)
                 self._seat_of.pop(seat.user, None)
                 self._by_machine.pop(seat.machine, None)
             c.ended_unix = time.time()
         for seat in c.seats:
             self.save(seat)
+            for key, expires in self.accounts.sessions_of(seat.user):
+                self.store.run(
+                    "INSERT OR REPLACE INTO ended_sessions VALUES (?, ?, ?, ?)",
+                    (key, c.id, seat.n, expires),
+                )
             self._remove_seat(seat)
         self.store.run("UPDATE classes SET ended = ? WHERE id = ?", (c.ended_unix, c.id))
+
+    @staticmethod
+    def _last_faults(proxy: MachineProxy) -> list[FaultInfo]:
+        """The machine's faults as its worker has them now; its last pushed ones when the
+        worker does not answer (the class ends all the same)."""
+        try:
+            return training.faults_of(proxy)
+        except ApiError:
+            faults = sorted(proxy.faults.values(), key=lambda f: f.id)
+            return [training.fault_info(f, proxy.cycle_s) for f in faults]
+
+    def result_of(self, sid: str) -> SeatResult | None:
+        """The final result of the seat an ended class's session was logged in to (None for
+        any other session, or one past its expiry)."""
+        rows = self.store.query(
+            "SELECT class, n FROM ended_sessions WHERE digest = ? AND expires > ?",
+            (digest(sid), time.time()),
+        )
+        c = self._classes.get(rows[0][0]) if rows else None
+        if c is None or c.ended_unix is None:
+            return None
+        seat = self.seat(c.id, rows[0][1])
+        s = exercise_score(c.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
+        return SeatResult(
+            class_id=c.id,
+            title=c.title,
+            exercise=c.exercise.title,
+            seat=seat.n,
+            student=seat.student,
+            ended_unix=c.ended_unix,
+            score=s.points,
+            max_points=sum(k.points for k in c.exercise.checks),
+            checks_passed=s.passed,
+            checks_total=s.total,
+            hints_taken=len(seat.hints),
+            seat_time_s=seat.seat_time_s,
+        )
+
+    def forget_result(self, sid: str) -> None:
+        """The student logged out of their ended seat: its session names it no more."""
+        self.store.run("DELETE FROM ended_sessions WHERE digest = ?", (digest(sid),))
 
     def freeze(self, seats: list[Seat], frozen: bool, by: str) -> None:
         """Pause (or run again) the seats' machines, each with a banner on its HMI."""
@@ -536,8 +597,17 @@ class Classes:
             out.append(SeatFaults(n=seat.n, faults=training.faults_of(m)))
         return out
 
-    def take_hint(self, seat: Seat, c: Class, n: int) -> str:
-        """A hint's text; taken once, it costs its points."""
+    def take_hint(self, actor: Actor, seat: Seat, c: Class, n: int) -> str:
+        """A hint's text; taken once, it costs its points. Only the seat's own student takes
+        one (403 for anyone else: an instructor watching would charge the student)."""
+        if actor.name != seat.user:
+            raise ApiError(
+                403,
+                {
+                    "message": f"only seat {seat.n}'s student ({seat.student}, login "
+                    f"{seat.user}) takes its hints: a hint costs the student's points"
+                },
+            )
         if not 1 <= n <= len(c.exercise.hints):
             raise not_found(f"hint {n} (hints 1..{len(c.exercise.hints)})")
         with self._lock:

@@ -141,7 +141,12 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("PATCH", "/api/users/{name}"): ("admin", FREE),
     ("DELETE", "/api/users/{name}"): ("admin", FREE),
 }
-OPEN = {("GET", "/api/health"), ("POST", "/api/auth/login"), ("POST", "/api/auth/logout")}
+OPEN = {
+    ("GET", "/api/health"),
+    ("POST", "/api/auth/login"),
+    ("POST", "/api/auth/logout"),
+    ("GET", "/api/auth/seat-result"),
+}
 MACHINE = "m1"  # the machine whose control matters; other routes name ones that do not exist
 
 

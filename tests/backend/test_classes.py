@@ -262,6 +262,73 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert t.post("/api/classes/end/end").status_code == 409
 
 
+def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:
+    """An instructor watching a seat reads its exercise but takes no hint (it would cost the
+    student's points): 403 saying whose hints they are, and the seat's score stays."""
+    t = trainer(srv)
+    created = new_class(t, "hints", 1, "sign-error")
+    mid = created["info"]["seats"][0]["machine"]
+    seat = student(srv, created["links"][0]["url"])
+    watched = t.get(f"/api/machines/{mid}/exercise").json()
+    assert watched["takes_hints"] is False and watched["seat"] == 1
+    assert watched["user"] == created["info"]["seats"][0]["user"]
+    assert seat.get(f"/api/machines/{mid}/exercise").json()["takes_hints"] is True
+    r = t.post(f"/api/machines/{mid}/exercise/hints", json={"n": 2})
+    assert r.status_code == 403, r.text
+    assert "student" in r.json()["detail"]["message"], r.text
+    info = t.get("/api/classes/hints/seats/1").json()["info"]
+    assert info["hints_taken"] == 0
+    assert all(h["text"] is None for h in seat.get(f"/api/machines/{mid}/exercise").json()["hints"])
+    # the student's own: 25 points off (exercises/sign-error.toml), the instructor sees it taken
+    r = seat.post(f"/api/machines/{mid}/exercise/hints", json={"n": 2})
+    assert r.status_code == 200 and r.json()["cost"] == 25, r.text
+    hints = t.get(f"/api/machines/{mid}/exercise").json()["hints"]
+    assert [h["text"] is not None for h in hints] == [False, True]
+
+
+def test_the_student_sees_their_result_and_the_debrief_keeps_the_faults(srv: Server) -> None:
+    """After the end the student's login is gone, but their browser's old session still
+    shows the seat's result (until they log out); the seat's faults (the exercise's and the
+    instructor's) stay for the debrief as they stood at the end."""
+    t = trainer(srv)
+    created = new_class(t, "fin", 2, "sign-error")
+    mid = created["info"]["seats"][0]["machine"]
+    seat = student(srv, created["links"][0]["url"])
+    other = student(srv, created["links"][1]["url"])
+    assert seat.get("/api/auth/seat-result").status_code == 404  # not ended yet
+    r = t.post(
+        "/api/classes/fin/faults",
+        json={
+            "seats": [1],
+            "inject": {"fault": {"kind": "plc_slow_ack", "delay_s": 8}, "trigger": {"after_s": 30}},
+        },
+    )
+    assert r.status_code == 201, r.text
+    assert seat.post(f"/api/machines/{mid}/exercise/hints", json={"n": 1}).status_code == 200
+    assert t.post("/api/classes/fin/end").status_code == 200
+    assert seat.get("/api/machines").status_code == 401  # the login has gone
+
+    result = seat.get("/api/auth/seat-result")
+    assert result.status_code == 200, result.text
+    res = result.json()
+    assert (res["class_id"], res["seat"], res["hints_taken"]) == ("fin", 1, 1)
+    assert res["max_points"] == 100  # 40 + 20 + 40 (exercises/sign-error.toml)
+    assert res["checks_total"] == 3 and res["checks_passed"] == 0
+    assert res["score"] == 0  # nothing passed; a hint never takes it below 0
+    assert other.get("/api/auth/seat-result").json()["seat"] == 2
+    assert t.get("/api/auth/seat-result").status_code == 404  # no session: no seat
+    assert seat.post("/api/auth/logout").status_code == 204
+    assert seat.get("/api/auth/seat-result").status_code == 404  # logged out: gone
+
+    debrief = t.get("/api/classes/fin/seats/1").json()
+    assert debrief["ended"] is True
+    faults = [(f["fault"]["kind"], f["active"]) for f in debrief["faults"]]
+    assert faults == [("motor_inverted", True), ("plc_slow_ack", False)], faults
+    assert [f["fault"]["kind"] for f in t.get("/api/classes/fin/seats/2").json()["faults"]] == [
+        "motor_inverted"
+    ]
+
+
 def test_a_restored_snapshot_runs_on_exactly_as_the_machine_did(srv: Server) -> None:
     """Snapshot a paused machine, run commands for 700 cycles; restore and run the same:
     every axis' state, the channel, the PLC and the events after it are the same to the

@@ -204,3 +204,110 @@ def test_a_class_from_uploaded_parameter_lists(console: Page, srv: Server) -> No
     expect(panel(c, "seat-links")).to_contain_text("Shown this once", timeout=60_000)
     r = srv.http.get("/api/machines/lists-s01/parameters", params={"scope": "axis", "target": "X"})
     assert {p["name"]: p["value"] for p in r.json()}["getriebe[0].kv"] == 3300
+
+
+WIDER = """() => [...document.querySelectorAll('*')]
+  .filter((e) => e.getBoundingClientRect().right > innerWidth + 1)
+  .slice(0, 8)
+  .map((e) => `${e.tagName}.${e.className} ${Math.round(e.getBoundingClientRect().right)}`)"""
+
+
+def no_sideways_scroll(p: Page) -> None:
+    """The page fits its viewport's width (nothing runs past the right edge)."""
+    width = p.evaluate("document.documentElement.scrollWidth")
+    assert width <= p.viewport_size["width"], (width, p.evaluate(WIDER))  # type: ignore[index]
+
+
+def test_watching_a_seat_then_ending_the_class(
+    console: Page, browser: Browser, srv: Server
+) -> None:
+    """The instructor watches Anna's seat live: her hints read-only (no button: a hint
+    costs her points), her control named as hers. Ended with the page's own confirmation,
+    Anna's page shows her result; the debrief keeps the seat's faults."""
+    c = console
+    r = srv.http.post(
+        "/api/classes",
+        json={"id": "watch", "exercise": "sign-error", "seats": 1, "students": ["Anna"]},
+    )
+    assert r.status_code == 201, r.text
+    anna = student(browser, r.json()["links"][0]["url"])
+    try:
+        c.reload()  # the console lists the class made over the API
+        expect(c.get_by_test_id("console")).to_be_visible()
+        panel(c, "classes").get_by_test_id("class-watch").click()
+        grid = panel(c, "grid")
+        expect(tile(c, 1).get_by_test_id("seat-student")).to_have_text("Anna")
+        # a message says whom it reached
+        grid.get_by_test_id("broadcast-text").fill("Five minutes left")
+        grid.get_by_test_id("broadcast-send").click()
+        expect(grid.get_by_test_id("broadcast-sent")).to_have_text("sent to 1 seat")
+        # the fault form: the catalogue read ahead, descriptions as text (no markdown ticks)
+        tile(c, 1).get_by_test_id("seat-fault").click()
+        fault = panel(c, "fault-form")
+        fault.get_by_test_id("fault-kind").select_option("drive_gain_wrong")
+        expect(fault.get_by_test_id("fault-loading")).to_have_count(0)
+        what = fault.get_by_test_id("fault-description")
+        expect(what).not_to_contain_text("`")
+        expect(what.locator("code")).to_have_text("factor")
+        fault.get_by_test_id("fault-cancel").click()
+
+        anna.get_by_test_id("tab-Operate").click()
+        panel(anna, "jog").get_by_test_id("jog-axis-X").check()
+        panel(anna, "jog").get_by_test_id("jog-step-plus").click()  # takes control
+        expect(tile(c, 1).get_by_test_id("seat-control")).to_have_text("◉ Anna")
+        resize(c, "tablet")
+        no_sideways_scroll(c)
+        resize(c, "desktop")
+        anna.get_by_test_id("tab-Exercise").click()
+        hints = panel(anna, "exercise-hints")
+        hints.get_by_test_id("hint-1").get_by_test_id("hint-show").click()
+        hints.get_by_test_id("hint-1").get_by_test_id("hint-confirm").click()
+        expect(hints.get_by_test_id("hint-1").get_by_test_id("hint-text")).to_be_visible()
+
+        tile(c, 1).get_by_test_id("seat-live").click()
+        expect(c.get_by_test_id("control-holder")).to_have_text("Anna (seat 1) has control")
+        c.get_by_test_id("tab-Exercise").click()
+        watched = panel(c, "exercise-hints")
+        expect(watched.get_by_test_id("hints-read-only")).to_contain_text("only the student")
+        expect(watched.get_by_test_id("hint-show")).to_have_count(0)
+        expect(watched.get_by_test_id("hint-1").get_by_test_id("hint-text")).to_be_visible()
+        expect(watched.get_by_test_id("hint-2").get_by_test_id("hint-not-taken")).to_be_visible()
+        for size in ("desktop", "tablet"):
+            resize(c, size)
+            shot(c, f"class-live-view-hints-{size}")
+        resize(c, "desktop")
+
+        c.get_by_test_id("open-classes").click()
+        tile(c, 1).get_by_test_id("seat-detail").click()
+        detail = panel(c, "seat-detail")
+        expect(detail.get_by_test_id("detail-audit")).to_contain_text("took hint 1")
+        for size in ("desktop", "tablet"):
+            resize(c, size)
+            no_sideways_scroll(c)
+            shot(c, f"class-console-seat-detail-{size}")
+        resize(c, "desktop")
+
+        grid.get_by_test_id("class-end").click()
+        expect(grid.get_by_test_id("class-end-confirm")).to_be_visible()  # asked in the page
+        grid.get_by_test_id("class-end-confirm").click()
+        ended = panel(anna, "class-ended")
+        expect(ended).to_contain_text("The class has ended", timeout=20_000)
+        expect(ended.get_by_test_id("result-checks")).to_have_text("0")
+        expect(ended).to_contain_text("of 3")
+        expect(ended.get_by_test_id("result-hints")).to_have_text("1")
+        for size in ("desktop", "tablet"):
+            resize(anna, size)
+            shot(anna, f"class-ended-student-{size}")
+        ended.get_by_test_id("class-ended-done").click()
+        help_line = panel(anna, "login").get_by_test_id("login-help")
+        expect(help_line).to_contain_text("instructor")
+        expect(help_line).not_to_contain_text("make run")
+
+        debrief = panel(c, "ended-seats")
+        debrief.get_by_test_id("ended-seat-1").get_by_test_id("seat-detail").click()
+        detail = panel(c, "seat-detail")
+        expect(detail.get_by_test_id("detail-faults")).to_contain_text("X: motor wired inverted")
+        expect(detail.get_by_test_id("detail-checks")).to_contain_text("last measured, at the end")
+        shot(c, "class-console-debrief")
+    finally:
+        anna.close()

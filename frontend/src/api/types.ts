@@ -122,3 +122,4 @@ export type HintInfo = S["HintInfo"];
 export type ServiceAxes = S["ServiceAxes"];
 export type AxisService = S["AxisService"];
 export type LimitInForce = S["LimitInForce"];
+export type SeatResult = S["SeatResult"];

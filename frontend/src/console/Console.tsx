@@ -5,6 +5,7 @@ import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ClassCreated, ClassInfo, Refusal } from "../api/types";
 import { classes, loadClasses, loadExercises, openClass } from "../state/classes";
+import { faultCatalogue } from "./faultCatalogue";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
@@ -46,6 +47,7 @@ export function Console() {
   const [created, setCreated] = useState<ClassCreated | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   useEffect(() => {
+    void faultCatalogue().catch(() => undefined); // read ahead: the fault form opens filled (it says a failure)
     Promise.all([loadClasses(), loadExercises()]).catch((e: unknown) =>
       setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
     );

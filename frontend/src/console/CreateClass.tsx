@@ -156,7 +156,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   return (
     <Panel id="class-create" title="New class">
       <form class="class-form" onSubmit={(e) => void submit(e)}>
-        <label>
+        <label class="wide">
           Exercise
           <select value={ex?.id} data-testid="class-exercise" onChange={str(setExercise)}>
             {exercises.value.map((x) => (

@@ -12,6 +12,11 @@ import { faultFor } from "./uiState";
 
 type When = "now" | "after" | "motion";
 
+/** A schema description's `code spans` as code, the rest as text (no other markdown there). */
+function codeSpans(text: string) {
+  return text.split(/`([^`]+)`/).map((part, i) => (i % 2 ? <code key={i}>{part}</code> : part));
+}
+
 export function FaultForm(props: { c: ClassInfo; target: number[] }) {
   const { c, target } = props;
   const [kinds, setKinds] = useState<FaultKind[]>([]);
@@ -75,7 +80,8 @@ export function FaultForm(props: { c: ClassInfo; target: number[] }) {
               ))}
             </select>
           </label>
-          {spec ? <p class="fault-what" data-testid="fault-description">{spec.description}</p> : null}
+          {!kinds.length && !refusal ? <p class="hint" data-testid="fault-loading">loading the fault catalogue…</p> : null}
+          {spec ? <p class="fault-what" data-testid="fault-description">{codeSpans(spec.description)}</p> : null}
           {spec?.fields.map((f) => (
             <label key={f.name}>
               <span class="mono">{f.name}</span>
@@ -90,7 +96,7 @@ export function FaultForm(props: { c: ClassInfo; target: number[] }) {
                   required={f.required} value={value(f.name, f.default?.toString() ?? "")} data-testid={`fault-field-${f.name}`} onInput={set(f.name)} />
               )}
               <span class="hint">
-                {f.type === "axis" ? "the seat's axes and spindles" : f.description}
+                {f.type === "axis" ? "the seat's axes and spindles" : codeSpans(f.description)}
                 {rangeText(f) ? ` · ${rangeText(f)}` : ""}
               </span>
             </label>

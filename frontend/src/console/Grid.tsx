@@ -11,6 +11,8 @@ import { act, actionRefusal, faultFor } from "./uiState";
 function ClassBar(props: { c: ClassInfo }) {
   const { c } = props;
   const [text, setText] = useState("");
+  const [sent, setSent] = useState(""); // "sent to N seats", until the next message is typed
+  const [ending, setEnding] = useState(false); // asking whether to end the class
   const picked = [...selected.value].sort((a, b) => a - b);
   const target = picked.length ? `seats ${picked.join(", ")}` : "the whole class";
   return (
@@ -31,16 +33,31 @@ function ClassBar(props: { c: ClassInfo }) {
       </button>
       <form class="broadcast" onSubmit={(e) => {
         e.preventDefault();
-        void act(() => broadcast(c.id, picked, text)).then((ok) => ok && setText(""));
+        const n = picked.length || c.seats.length;
+        void act(() => broadcast(c.id, picked, text)).then((ok) => {
+          if (!ok) return;
+          setText("");
+          setSent(`sent to ${n} seat${n === 1 ? "" : "s"}`);
+        });
       }}>
         <input value={text} maxLength={500} placeholder="message to the students" aria-label="message" data-testid="broadcast-text"
-          onInput={(e) => setText((e.target as HTMLInputElement).value)} />
+          onInput={(e) => { setText((e.target as HTMLInputElement).value); setSent(""); }} />
         <button type="submit" class="secondary" disabled={!text.trim()} data-testid="broadcast-send">Send</button>
+        {sent ? <span class="hint broadcast-sent" role="status" data-testid="broadcast-sent">{sent}</span> : null}
       </form>
-      <button type="button" class="danger end-class" data-testid="class-end"
-        onClick={() => confirm(`End class '${c.id}'? Its machines and seat logins go; results, traces and audit stay.`) && void act(() => endClass(c.id))}>
-        End class
-      </button>
+      {ending ? (
+        <span class="confirm end-class" role="group" aria-label="confirm the end of the class">
+          <span>End class '{c.id}'? Its machines and seat logins go; results, faults, traces and audit stay.</span>
+          <button type="button" class="danger" data-testid="class-end-confirm" onClick={() => { setEnding(false); void act(() => endClass(c.id)); }}>
+            Yes, end the class
+          </button>
+          <button type="button" class="secondary" data-testid="class-end-cancel" onClick={() => setEnding(false)}>Cancel</button>
+        </span>
+      ) : (
+        <button type="button" class="danger end-class" data-testid="class-end" onClick={() => setEnding(true)}>
+          End class
+        </button>
+      )}
     </div>
   );
 }

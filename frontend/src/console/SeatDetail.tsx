@@ -1,6 +1,7 @@
 // One seat for the instructor and the debrief: the exercise's checks (measured figure, first
 // pass), hints taken, injected faults (remove one), snapshots (take, restore), the seat's
-// traces and what was done on its machine (audit). An ended class keeps all but the machine.
+// traces and what was done on its machine (audit). An ended class keeps all but the machine:
+// its checks' figures and faults as they stood at the end.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { AuditPage, ClassInfo, Refusal, SeatDetail as Detail, SeatLink, SnapshotInfo, TraceInfo } from "../api/types";
@@ -73,7 +74,8 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
         <section>
           <h3>Checks</h3>
           <table class="dense" data-testid="detail-checks">
-            <thead><tr><th>check</th><th>holds</th><th>first passed</th><th>measured</th><th class="num">points</th></tr></thead>
+            <thead><tr><th>check</th><th>{running ? "holds" : "held at the end"}</th><th>first passed</th>
+              <th>{running ? "measured" : "last measured, at the end"}</th><th class="num">points</th></tr></thead>
             <tbody>
               {d?.checks.map((k) => (
                 <tr key={k.id}>
@@ -96,13 +98,17 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
           <ul class="plain" data-testid="detail-faults">
             {d?.faults.map((f) => (
               <li key={f.id}>
-                <b>{f.text}</b> <span class="hint">{f.active ? `active since ${fmt(f.active_since_s, 1)} s` : "armed"}</span>{" "}
+                <b>{f.text}</b>{" "}
+                <span class="hint">
+                  {f.active ? `active since ${fmt(f.active_since_s, 1)} s` : running ? "armed" : "armed, never took effect"}
+                  {f.injected_s > 0 ? ` · injected at ${fmt(f.injected_s, 1)} s` : " · from the start"}
+                </span>{" "}
                 {running ? (
                   <button type="button" class="link" data-testid={`fault-remove-${f.id}`} onClick={() => then(http.del(`/api/machines/${mid}/faults/${f.id}`))}>remove</button>
                 ) : null}
               </li>
             ))}
-            {d && !d.faults.length ? <li class="hint">{running ? "none" : "the machine has gone"}</li> : null}
+            {d && !d.faults.length ? <li class="hint">none</li> : null}
           </ul>
           {running ? (
             <>

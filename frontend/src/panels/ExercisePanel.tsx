@@ -1,6 +1,8 @@
 // The student's exercise on a class seat: the task, the checks as they stand on the live
 // machine, progress and the time-weighted score, the hints (each costs points; asked first).
 // Refreshed every 2 s while it shows. Faults are the instructor's: the service never sends them.
+// Only the seat's own student takes hints; an instructor watching the seat reads which were
+// taken (and their texts), with no button (a hint costs the student's points).
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { CheckState, Exercise, HintInfo } from "../api/types";
@@ -61,8 +63,13 @@ export function ExercisePanel() {
           </ul>
         </Panel>
         <Panel title="Hints" id="exercise-hints">
+          {ex.hints.length && !ex.takes_hints ? (
+            <p class="hint" data-testid="hints-read-only">
+              {ex.student}'s hints (seat {ex.seat}): only the student takes them, each costs their points.
+            </p>
+          ) : null}
           {ex.hints.length ? (
-            ex.hints.map((h) => <HintRow key={h.n} hint={h} />)
+            ex.hints.map((h) => <HintRow key={h.n} hint={h} mine={ex.takes_hints} />)
           ) : (
             <p class="hint">This exercise has no hints.</p>
           )}
@@ -122,7 +129,8 @@ function CheckRow({ check: c }: { check: CheckState }) {
   );
 }
 
-function HintRow({ hint: h }: { hint: HintInfo }) {
+/** `mine`: the seat's own student, who may take it (anyone else reads it, taken or not). */
+function HintRow({ hint: h, mine }: { hint: HintInfo; mine: boolean }) {
   const [asking, setAsking] = useState(false);
   const [busy, setBusy] = useState(false);
   const [error, setError] = useState("");
@@ -145,6 +153,8 @@ function HintRow({ hint: h }: { hint: HintInfo }) {
         <b>Hint {h.n}</b>
         {h.text !== null ? (
           <span class="hint">taken: −{cost} points</span>
+        ) : !mine ? (
+          <span class="hint" data-testid="hint-not-taken">not taken ({cost} points)</span>
         ) : asking ? (
           <span class="confirm" role="group" aria-label={`confirm hint ${h.n}`}>
             <span>

@@ -1,12 +1,81 @@
-// The login screen, shown instead of the HMI while nobody is logged in.
-import { useRef, useState } from "preact/hooks";
-import { ApiError } from "../api/http";
-import type { Refusal } from "../api/types";
+// The login screen, shown instead of the HMI while nobody is logged in; to a class seat's
+// student whose class the instructor ended, their final result first (the service knows the
+// seat by the ended session's cookie) until they are done with it.
+import { useEffect, useRef, useState } from "preact/hooks";
+import { ApiError, http } from "../api/http";
+import type { Refusal, SeatResult } from "../api/types";
 import { login } from "../state/auth";
+import { forgetSeat, wasSeat } from "../state/exercise";
+import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 
+/** Seat time as m:ss (h:mm:ss from an hour). */
+function clock(s: number): string {
+  const t = Math.max(0, Math.floor(s));
+  const [h, m, sec] = [Math.floor(t / 3600), Math.floor((t % 3600) / 60), t % 60];
+  const pad = (n: number) => String(n).padStart(2, "0");
+  return h ? `${h}:${pad(m)}:${pad(sec)}` : `${m}:${pad(sec)}`;
+}
+
 export function Login() {
+  // undefined: still asking whether this browser's session was an ended class's seat
+  const [result, setResult] = useState<SeatResult | null | undefined>(undefined);
+  useEffect(() => {
+    http.get<SeatResult>("/api/auth/seat-result").then(setResult, () => setResult(null));
+  }, []);
+  if (result === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
+  if (result) return <ClassEnded result={result} onDone={() => setResult(null)} />;
+  return <LoginForm />;
+}
+
+/** The end of a class for its student: the seat's final result; "Done" ends the old session
+ * (the service forgets the result) and shows the login. */
+function ClassEnded(props: { result: SeatResult; onDone: () => void }) {
+  const r = props.result;
+  const done = () => void http.post<null>("/api/auth/logout", {}).finally(props.onDone);
+  return (
+    <div class="login-page">
+      <header class="topbar">
+        <span class="brand">Inbetrieb</span>
+      </header>
+      <div class="login">
+        <Panel title="The class has ended" id="class-ended">
+          <p>
+            {r.student}, your instructor ended the class <b>{r.title}</b> at {new Date(r.ended_unix * 1000).toLocaleTimeString()}.
+            Your seat's machine has gone; this is your result{r.exercise !== r.title ? <> in <i>{r.exercise}</i></> : null}:
+          </p>
+          <table class="dense" data-testid="class-result">
+            <tbody>
+              <tr>
+                <th>Score</th>
+                <td><b data-testid="result-score">{fmt(r.score, 0)}</b> of {fmt(r.max_points, 0)} points</td>
+              </tr>
+              <tr>
+                <th>Checks passed</th>
+                <td><b data-testid="result-checks">{r.checks_passed}</b> of {r.checks_total}</td>
+              </tr>
+              <tr>
+                <th>Hints taken</th>
+                <td data-testid="result-hints">{r.hints_taken}</td>
+              </tr>
+              <tr>
+                <th>Seat time</th>
+                <td>{clock(r.seat_time_s)}</td>
+              </tr>
+            </tbody>
+          </table>
+          <p class="hint">Your instructor has your checks, traces and commands for the debrief.</p>
+          <button type="button" data-testid="class-ended-done" onClick={done}>
+            Done
+          </button>
+        </Panel>
+      </div>
+    </div>
+  );
+}
+
+function LoginForm() {
   const [name, setName] = useState("");
   const [password, setPassword] = useState("");
   const [refusal, setRefusal] = useState<Refusal | null>(null);
@@ -18,6 +87,7 @@ export function Login() {
     setBusy(true);
     try {
       await login(name.trim(), password); // on success the HMI replaces this screen
+      forgetSeat();
     } catch (err) {
       setRefusal(err instanceof ApiError ? err.refusal : { message: String(err), problems: [] });
       setPassword(""); // type it again, the name stays
@@ -50,8 +120,10 @@ export function Login() {
               Log in
             </button>
           </form>
-          <p class="hint">
-            On the computer running the service, open the one-time login link <code>make run</code> printed.
+          <p class="hint" data-testid="login-help">
+            {wasSeat()
+              ? "A class seat logs in by the link your instructor gives you (good once): ask them for a new one."
+              : "Students of a class: open the login link your instructor gave you. On the computer running the service, the one-time link it printed at its start logs in too."}
           </p>
         </Panel>
       </div>

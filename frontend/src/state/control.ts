@@ -6,6 +6,7 @@ import { computed, effect, signal } from "@preact/signals";
 import { clientId, http } from "../api/http";
 import type { Action, ControlAction, ControlParty, ControlState } from "../api/types";
 import { me } from "./auth";
+import { exercise } from "./exercise";
 import { machineUrl, status } from "./session";
 
 /** The user's role allows `action` (api/auth.py ALLOWED, as /api/auth/me reports it). */
@@ -13,8 +14,12 @@ export const may = (action: Action): boolean => !!me.value?.actions.includes(act
 
 export const control = computed<ControlState | null>(() => status.value?.control ?? null);
 
-/** "NAME (role)", as the service names a party in its refusals. */
-export const who = (p: ControlParty) => `${p.user} (${p.role})`;
+/** A party in words: "NAME (role)" as the service names one in its refusals; a class seat's
+ * own login by its student's name ("Anna (seat 1)"). */
+export function who(p: ControlParty): string {
+  const seat = exercise.value;
+  return seat && p.user === seat.user ? `${seat.student} (seat ${seat.seat})` : `${p.user} (${p.role})`;
+}
 
 const partyKey = (p: ControlParty | null | undefined) => (p ? `${p.session}/${p.client}` : "");
 const isMe = (p: ControlParty) => p.session === me.value?.session && p.client === clientId;

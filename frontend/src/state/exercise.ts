@@ -6,6 +6,14 @@ import { ApiError, http } from "../api/http";
 import type { Exercise, HintInfo } from "../api/types";
 import { freezeNoticeCount, machineId, machines, machineUrl, seatFrozen } from "./session";
 
+const SEAT_KEY = "inbetrieb.seat"; // this browser was a class seat's student's (the class id)
+
+/** Whether this browser was last logged in as a class seat's student (their login page
+ * tells them to ask their instructor for a link, not about the service's start). */
+export const wasSeat = (): boolean => localStorage.getItem(SEAT_KEY) !== null;
+/** Someone logged in with a password (no seat's student has one): the browser is no seat's. */
+export const forgetSeat = (): void => localStorage.removeItem(SEAT_KEY);
+
 /** The seat's exercise as it stands; null while the machine is no class seat (or unknown). */
 export const exercise = signal<Exercise | null>(null);
 
@@ -19,6 +27,7 @@ export async function refreshExercise(): Promise<void> {
     const ex = await http.get<Exercise>(machineUrl("/exercise"));
     if (machineId.value !== mid) return; // an answer about the machine before
     exercise.value = ex;
+    if (ex.takes_hints) localStorage.setItem(SEAT_KEY, ex.class_id); // the login page's help
     seatFrozen(ex.frozen, asked);
   } catch (e) {
     // no seat (404), or a role that reads no exercise: no tab; a lost connection keeps it
