@@ -21,6 +21,19 @@ ARGS = [
     "--no-first-run",
 ]
 SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "tour": (1280, 800)}
+# the HMI's workspace tabs (App.tsx TABS; "Exercise" only on a class seat)
+WORKSPACES = [
+    "Operate",
+    "Program",
+    "Plots",
+    "Scope",
+    "Parameters",
+    "Commissioning",
+    "Service",
+    "HLI / PLC",
+    "Events",
+    "Audit",
+]
 SHOTS = Path(__file__).resolve().parent / "screenshots"
 DIST = Path(__file__).resolve().parents[2] / "frontend" / "dist" / "index.html"
 

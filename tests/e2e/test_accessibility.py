@@ -15,21 +15,9 @@ from playwright.sync_api import Browser, Page, expect
 
 from api.auth import Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
-from tests.e2e.browser import open_hmi, panel, signed_in_page
+from tests.e2e.browser import WORKSPACES, open_hmi, panel, signed_in_page
 
 AXE = Path(__file__).resolve().parents[2] / "frontend" / "node_modules" / "axe-core" / "axe.min.js"
-WORKSPACES = [
-    "Operate",
-    "Program",
-    "Plots",
-    "Scope",
-    "Parameters",
-    "Commissioning",
-    "Service",
-    "HLI / PLC",
-    "Events",
-    "Audit",
-]
 TRAINER = "trainer"
 
 

@@ -9,20 +9,7 @@ import pytest
 from playwright.sync_api import Browser, FloatRect, Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import SIZES, open_hmi, panel, poll, shot
-
-WORKSPACES = [
-    "Operate",
-    "Program",
-    "Plots",
-    "Scope",
-    "Parameters",
-    "Commissioning",
-    "Service",
-    "HLI / PLC",
-    "Events",
-    "Audit",
-]
+from tests.e2e.browser import SIZES, WORKSPACES, open_hmi, panel, poll, shot
 
 
 def slug(name: str) -> str:
