@@ -129,14 +129,15 @@ def test_the_sign_check_finds_an_inverted_encoder_and_applies_the_flip(
         trial = p.get_by_test_id("param-trial")
         expect(trial).to_contain_text("lr_hw[0].vz_istw default → 1 (at restart)")
         shot(p, "assist-sign-check-flip-desktop")
-        p.get_by_test_id("param-revert").click()  # back to the default it had, still pending
+        # reverted before any restart: the value in force (the default 0) stays, nothing waits
+        p.get_by_test_id("param-revert").click()
         expect(trial).to_be_hidden()
         row = next(
             r
             for r in srv.http.get(f"/api/machines/{mid}/parameters?target=X").json()
             if r["name"] == "lr_hw[0].vz_istw"
         )
-        assert row["pending"] == 0
+        assert row["pending"] is None and row["value"] == 0
     finally:
         p.close()
 

@@ -49,7 +49,7 @@ def test_a_restart_from_the_trial_bar_puts_the_value_in_force_and_revert_waits_a
     expect(bar).to_contain_text("Power off and on")
     shot(page, "trial-restart-confirm-desktop")
     bar.get_by_test_id("restart-confirm").click()
-    expect(bar.get_by_test_id("restart-done")).to_contain_text(f"Restarted {mid} at")
+    expect(bar.get_by_test_id("trial-message")).to_contain_text(f"Restarted {mid} at")
     expect(bar.get_by_test_id("param-trial")).to_contain_text(
         f"{SIGN} default → 1 (in force since the restart)"
     )

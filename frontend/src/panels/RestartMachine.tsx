@@ -9,7 +9,9 @@ import { restartMachine } from "../state/machines";
 import { online } from "../state/session";
 import { RefusalLine } from "../ui/useCommand";
 
-export function RestartMachine({ label = "⟳ Restart…", refusalId }: { label?: string; refusalId: string }) {
+/** `onDone` takes the "restarted" line where it must outlive the button (the trial bar drops
+ * the button once nothing waits for a restart any more); else the button shows it. */
+export function RestartMachine({ label = "⟳ Restart…", refusalId, onDone }: { label?: string; refusalId: string; onDone?: (text: string) => void }) {
   const [confirm, setConfirm] = useState(false);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [done, setDone] = useState("");
@@ -19,7 +21,9 @@ export function RestartMachine({ label = "⟳ Restart…", refusalId }: { label?
     try {
       const m = await restartMachine();
       setRefusal(null);
-      setDone(`Restarted ${m.id} at ${new Date().toLocaleTimeString()}: every stored value is in force.`);
+      const text = `Restarted ${m.id} at ${new Date().toLocaleTimeString()}: every stored value is in force.`;
+      if (onDone) onDone(text);
+      else setDone(text);
     } catch (e) {
       setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
     }

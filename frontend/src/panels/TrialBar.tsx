@@ -48,7 +48,9 @@ export function TrialBar() {
         </span>
       ) : null}
       {msg ? <span class="hint" data-testid="trial-message">{msg}</span> : null}
-      {restartWaits && may("command") ? <RestartMachine label="⟳ Restart now…" refusalId="trial-restart-refusal" /> : null}
+      {restartWaits && may("command") ? (
+        <RestartMachine label="⟳ Restart now…" refusalId="trial-restart-refusal" onDone={(text) => (trialMessage.value = text)} />
+      ) : null}
     </div>
   );
 }
