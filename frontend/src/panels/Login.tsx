@@ -1,6 +1,7 @@
 // The login screen, shown instead of the HMI while nobody is logged in; to a class seat's
 // student whose class the instructor ended, their final result first (the service knows the
 // seat by the ended session's cookie) until they are done with it.
+import type { ComponentChildren } from "preact";
 import { useEffect, useRef, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { Refusal, SeatResult } from "../api/types";
@@ -35,11 +36,7 @@ function ClassEnded(props: { result: SeatResult; onDone: () => void }) {
   const r = props.result;
   const done = () => void http.post<null>("/api/auth/logout", {}).finally(props.onDone);
   return (
-    <div class="login-page">
-      <header class="topbar">
-        <span class="brand">Inbetrieb</span>
-      </header>
-      <div class="login">
+    <LoginFrame>
         <Panel title="The class has ended" id="class-ended">
           <p>
             {r.student}, your instructor ended the class <b>{r.title}</b> at {new Date(r.ended_unix * 1000).toLocaleTimeString()}.
@@ -70,8 +67,7 @@ function ClassEnded(props: { result: SeatResult; onDone: () => void }) {
             Done
           </button>
         </Panel>
-      </div>
-    </div>
+    </LoginFrame>
   );
 }
 
@@ -97,11 +93,7 @@ function LoginForm() {
   }
 
   return (
-    <div class="login-page">
-      <header class="topbar">
-        <span class="brand">Inbetrieb</span>
-      </header>
-      <div class="login">
+    <LoginFrame>
         <Panel title="Log in" id="login">
           <form class="login-form" data-testid="login-form" onSubmit={(e) => void submit(e)}>
             <label>
@@ -126,7 +118,18 @@ function LoginForm() {
               : "Students of a class: open the login link your instructor gave you. On the computer running the service, the one-time link it printed at its start logs in too."}
           </p>
         </Panel>
-      </div>
+    </LoginFrame>
+  );
+}
+
+/** The page around the login and the class-ended panel: the brand and one centred panel. */
+function LoginFrame(props: { children: ComponentChildren }) {
+  return (
+    <div class="login-page">
+      <header class="topbar">
+        <span class="brand">Inbetrieb</span>
+      </header>
+      <div class="login">{props.children}</div>
     </div>
   );
 }
