@@ -2,7 +2,8 @@
 PY_SYS ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
-STAMP  := $(VENV)/.bootstrap-py
+RUN_STAMP := $(VENV)/.bootstrap-run
+DEV_STAMP := $(VENV)/.bootstrap-dev
 NPM_STAMP := frontend/node_modules/.bootstrap-npm
 OPENAPI   := var/openapi.json
 SCHEMA_TS := frontend/src/api/schema.d.ts
@@ -15,14 +16,19 @@ UI_SRC    := $(shell find frontend/src -type f ! -name schema.d.ts) frontend/ind
 
 .PHONY: run test lint bench bootstrap frontend clean
 
-bootstrap: $(STAMP) $(NPM_STAMP)
+bootstrap: $(DEV_STAMP) $(NPM_STAMP)
 
-# Recreate the venv when the pinned dependencies change.
-$(STAMP): pyproject.toml constraints.txt
+# Serving needs only the runtime dependencies; tests, lint and benches add the dev extras
+# (Ray, Playwright, schemathesis, …). Both reinstall when the pinned dependencies change.
+$(RUN_STAMP): pyproject.toml constraints.txt
 	test -x $(PY) || $(PY_SYS) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade "pip>=24"
+	$(PY) -m pip install --quiet -c constraints.txt -e .
+	touch $(RUN_STAMP)
+
+$(DEV_STAMP): $(RUN_STAMP)
 	$(PY) -m pip install --quiet -c constraints.txt -e ".[dev]"
-	touch $(STAMP)
+	touch $(DEV_STAMP)
 
 # Node packages exactly as the lock file pins them.
 $(NPM_STAMP): frontend/package.json frontend/package-lock.json
@@ -30,7 +36,7 @@ $(NPM_STAMP): frontend/package.json frontend/package-lock.json
 	touch $(NPM_STAMP)
 
 # The browser's types come from the service's OpenAPI schema (websocket messages included).
-$(OPENAPI): $(STAMP) $(API_SRC)
+$(OPENAPI): $(RUN_STAMP) $(API_SRC)
 	$(PY) -m backend.cli openapi --out $(OPENAPI)
 
 $(SCHEMA_TS): $(OPENAPI) $(NPM_STAMP)
@@ -46,10 +52,10 @@ $(CHROMIUM):
 	$(SUDO) apt-get update -q
 	$(SUDO) apt-get install -y -q --no-install-recommends chromium
 
-run: $(STAMP) $(DIST)
+run: $(RUN_STAMP) $(DIST)
 	$(PY) -m backend.cli serve --host 127.0.0.1 --port 8000
 
-lint: $(STAMP) $(SCHEMA_TS)
+lint: $(DEV_STAMP) $(SCHEMA_TS)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
 	$(PY) -m mypy
@@ -58,7 +64,7 @@ lint: $(STAMP) $(SCHEMA_TS)
 test: lint $(DIST) $(CHROMIUM)
 	$(PY) -m pytest -q
 
-bench: $(STAMP) $(DIST) $(CHROMIUM)
+bench: $(DEV_STAMP) $(DIST) $(CHROMIUM)
 	$(PY) bench/kernel.py
 	$(PY) bench/api.py
 	$(PY) bench/telemetry.py

@@ -8,12 +8,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from backend import cli_accounts, cli_assist
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 
 
 def main(argv: list[str] | None = None) -> int:
+    # here, not at the top: a local worker process (multiprocessing "spawn") imports this
+    # module again as its main module, and needs none of the accounts' or assistants' code
+    from backend import cli_accounts, cli_assist
+
     parser = argparse.ArgumentParser(prog="inbetrieb", description=__doc__)
     sub = parser.add_subparsers(dest="cmd", required=True)
     p_sim = sub.add_parser("sim", help="run a TOML scenario as fast as possible")

@@ -1,5 +1,11 @@
 """A local multi-node Ray cluster for the Ray transport's tests and the cluster bench: a head
-and worker nodes as separate raylets on this host, light enough for a 2-core machine."""
+and worker nodes as separate raylets on this host, light enough for a 2-core machine.
+
+Everything it makes stays in a temp dir of its own, under the run's TMPDIR: Ray's session
+files, sockets and logs, and the address file that `ray.cluster_utils.Cluster` writes to
+`$RAY_TMPDIR/ray/ray_current_cluster` (`ray._common.utils.get_default_ray_temp_dir`; without
+RAY_TMPDIR it would be `/tmp/ray`, which exists only where Ray ran before). Every node, the
+GCS, the raylets and the Ray Client server listen on 127.0.0.1 only."""
 
 from __future__ import annotations
 
@@ -7,6 +13,10 @@ import os
 
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # before ray loads: no usage reports
 os.environ.setdefault("RAY_DEDUP_LOGS", "0")
+# Ray turns a loopback address given to ray.init into the host's outward address
+# (`ray._private.services.resolve_ip_for_localhost`) unless this says the cluster is
+# single-host (`ray_constants.ENABLE_RAY_CLUSTER`, read once when Ray loads)
+os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
 
 import shutil
 import socket
@@ -16,10 +26,20 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
+from ray._private import ray_constants
 from ray.cluster_utils import Cluster
 
-# one logical CPU each (the actors ask for none), the smallest object store Ray accepts + a bit
-NODE_ARGS: dict[str, Any] = {"num_cpus": 1, "object_store_memory": 80 * 2**20}
+if ray_constants.ENABLE_RAY_CLUSTER:
+    raise RuntimeError("Ray was loaded before tests.backend.raycluster: it would leave loopback")
+
+LOOPBACK = "127.0.0.1"
+# one logical CPU each (the actors ask for none), the smallest object store Ray accepts + a
+# bit; every listening socket on loopback (Ray binds its servers to the node's IP)
+NODE_ARGS: dict[str, Any] = {
+    "num_cpus": 1,
+    "object_store_memory": 80 * 2**20,
+    "node_ip_address": LOOPBACK,
+}
 # a node that stops answering is declared dead after ~1.5 s instead of Ray's default ~14 s
 HEALTH = {
     "health_check_period_ms": 500,
@@ -31,7 +51,7 @@ HEALTH = {
 def free_port() -> int:
     """A TCP port nothing listens on now (the OS picks it)."""
     with socket.socket() as s:
-        s.bind(("", 0))
+        s.bind((LOOPBACK, 0))
         port: int = s.getsockname()[1]
         return port
 
@@ -39,27 +59,36 @@ def free_port() -> int:
 class LocalCluster(Cluster):
     """A `Cluster` whose head also serves Ray Client."""
 
-    client_address: str  # `ray://HOST:PORT`; the server listens on the node's IP only
+    client_address: str  # `ray://127.0.0.1:PORT`
 
 
 @contextmanager
 def local_cluster(worker_nodes: int = 2) -> Iterator[LocalCluster]:
     """A head and `worker_nodes` nodes; shut down (every Ray process ended) afterwards.
     The head also serves Ray Client (`client_address`), as `ray start --head` does."""
-    temp = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Unix socket paths ≤ 107 chars
+    # under TMPDIR, kept short: Ray's Unix socket paths must fit in 107 characters
+    temp = tempfile.mkdtemp(prefix="ray")
+    ray_temp = os.path.join(temp, "ray")  # what Ray derives from RAY_TMPDIR for the address file
+    os.makedirs(ray_temp)
+    previous = os.environ.get("RAY_TMPDIR")
+    os.environ["RAY_TMPDIR"] = temp  # inherited by every node and by the services started
     client_port = free_port()
     head = {
         **NODE_ARGS,
         "include_dashboard": False,
-        "temp_dir": temp,
+        "temp_dir": ray_temp,
         "_system_config": HEALTH,
         "ray_client_server_port": client_port,
     }
-    with warnings.catch_warnings():  # Ray drops its handles on the client server's log files
-        warnings.simplefilter("ignore", ResourceWarning)
-        cluster = LocalCluster(initialize_head=True, head_node_args=head)
-    host = cluster.address.rsplit(":", 1)[0]
-    cluster.client_address = f"ray://{host}:{client_port}"
+    try:
+        with warnings.catch_warnings():  # Ray drops its handles on the client server's logs
+            warnings.simplefilter("ignore", ResourceWarning)
+            cluster = LocalCluster(initialize_head=True, head_node_args=head)
+    except BaseException:
+        _restore(previous)
+        shutil.rmtree(temp, ignore_errors=True)
+        raise
+    cluster.client_address = f"ray://{LOOPBACK}:{client_port}"
     try:
         for _ in range(worker_nodes):
             cluster.add_node(**NODE_ARGS)
@@ -67,7 +96,15 @@ def local_cluster(worker_nodes: int = 2) -> Iterator[LocalCluster]:
         yield cluster
     finally:
         cluster.shutdown()  # type: ignore[no-untyped-call]
+        _restore(previous)
         shutil.rmtree(temp, ignore_errors=True)
+
+
+def _restore(ray_tmpdir: str | None) -> None:
+    if ray_tmpdir is None:
+        os.environ.pop("RAY_TMPDIR", None)
+    else:
+        os.environ["RAY_TMPDIR"] = ray_tmpdir
 
 
 def head_node_id(cluster: Cluster) -> str:

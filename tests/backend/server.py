@@ -109,6 +109,9 @@ class Server:
                     return self
             except httpx.TransportError:
                 time.sleep(0.1)
+        self.proc.kill()  # not left running (nor its Popen unwaited) behind the failed test
+        self.proc.wait()
+        self.proc = None
         raise RuntimeError("service did not come up")
 
     def stop(self) -> None:

@@ -7,9 +7,11 @@ its machines rebuilt on the others."""
 from __future__ import annotations
 
 import asyncio
+import ipaddress
 import itertools
 from collections.abc import Iterator
 
+import psutil
 import pytest
 
 from api.telemetry import FrameHeader
@@ -109,3 +111,30 @@ def test_a_node_that_leaves_has_its_machines_rebuilt_on_the_others(
     finally:
         ray_cluster.add_node(**NODE_ARGS)  # the next tests find the cluster as it was
         ray_cluster.wait_for_nodes()
+
+
+def test_the_cluster_and_the_gateway_listen_on_loopback_only(
+    srv: Server, ray_cluster: LocalCluster
+) -> None:
+    """Every socket that the nodes (GCS, raylets, agents, the Ray Client server), the gateway
+    and its actors listen on is bound to a loopback address: a test reaches no network."""
+    listening: dict[tuple[str, int], str] = {}
+    for proc in psutil.Process().children(recursive=True):
+        try:
+            sockets = proc.net_connections(kind="inet")
+            name = proc.name()
+        except (psutil.NoSuchProcess, psutil.AccessDenied):
+            continue
+        for s in sockets:
+            if s.status == psutil.CONN_LISTEN:
+                listening[(s.laddr.ip, s.laddr.port)] = name
+    ports = {port for _, port in listening}
+    gcs_port = int(ray_cluster.address.rsplit(":", 1)[1])
+    client_port = int(ray_cluster.client_address.rsplit(":", 1)[1])
+    assert {srv.port, gcs_port, client_port} <= ports, listening  # the ones we know are seen
+    outward = {
+        f"{ip}:{port} ({name})"
+        for (ip, port), name in listening.items()
+        if not ipaddress.ip_address(ip.removeprefix("::ffff:")).is_loopback
+    }
+    assert not outward

@@ -51,9 +51,9 @@ def transport(request: pytest.FixtureRequest) -> Iterator[tuple[str, Factory]]:
     if request.param == "local":
         yield "local", LocalWorker
         return
+    address = request.getfixturevalue("ray_cluster").address  # before Ray loads (loopback)
     from backend.workers.ray_transport import RayWorker, connect, disconnect
 
-    address = request.getfixturevalue("ray_cluster").address
     connect(address)
 
     def ray_worker(wid: str, period_s: float, _ring_dir: Path) -> WorkerClient:
