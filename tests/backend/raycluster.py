@@ -56,6 +56,21 @@ def free_port() -> int:
         return port
 
 
+# Ray's longest Unix socket path below the cluster's temp dir (a socket path has at most 107
+# bytes): /rayXXXXXXXX/ray/session_<date>_<time>_<µs>_<pid>/sockets/plasma_store
+_SOCKET_TAIL = len(
+    "/rayXXXXXXXX/ray/session_2026-11-27_20-14-13_123456_4194304/sockets/plasma_store"
+)
+_SOCKET_MAX = 107
+
+
+def _temp_base() -> str:
+    """The run's TMPDIR, or /tmp when TMPDIR's path is too long for Ray's sockets (a fresh
+    folder of our own either way: nothing an earlier run left is used)."""
+    base = tempfile.gettempdir()
+    return base if len(base) + _SOCKET_TAIL <= _SOCKET_MAX else "/tmp"
+
+
 class LocalCluster(Cluster):
     """A `Cluster` whose head also serves Ray Client."""
 
@@ -66,8 +81,7 @@ class LocalCluster(Cluster):
 def local_cluster(worker_nodes: int = 2) -> Iterator[LocalCluster]:
     """A head and `worker_nodes` nodes; shut down (every Ray process ended) afterwards.
     The head also serves Ray Client (`client_address`), as `ray start --head` does."""
-    # under TMPDIR, kept short: Ray's Unix socket paths must fit in 107 characters
-    temp = tempfile.mkdtemp(prefix="ray")
+    temp = tempfile.mkdtemp(prefix="ray", dir=_temp_base())
     ray_temp = os.path.join(temp, "ray")  # what Ray derives from RAY_TMPDIR for the address file
     os.makedirs(ray_temp)
     previous = os.environ.get("RAY_TMPDIR")

@@ -93,7 +93,8 @@ class Server:
         """The token as a raw HTTP header line (CRLF included)."""
         return f"Authorization: Bearer {self.token}\r\n"
 
-    def start(self, stdout: IO[str] | None = None) -> Server:
+    def start(self, stdout: IO[str] | None = None, timeout_s: float = 60.0) -> Server:
+        """Start the service; wait until it answers (`timeout_s`: a safety net, no measure)."""
         if self.seed:
             self.token = seed_user(self.db)
             self.http.headers["Authorization"] = f"Bearer {self.token}"
@@ -102,7 +103,7 @@ class Server:
         self.proc = subprocess.Popen(
             cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env}, stdout=stdout
         )
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             try:
                 if self.http.get("/api/health").status_code == 200:

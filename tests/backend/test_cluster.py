@@ -29,7 +29,9 @@ def srv(
     """A gateway with 3 workers, on the head node (GCS address) or a Ray Client."""
     address = ray_cluster.address if request.param == "gcs" else ray_cluster.client_address
     db = tmp_path_factory.mktemp("cluster") / "c.sqlite"
-    s = Server(db, "--cluster", address, "--workers", "3").start()
+    # a Ray Client gateway ships its code and starts a server per client: on a busy 2-core
+    # machine that takes longer than a local service
+    s = Server(db, "--cluster", address, "--workers", "3").start(timeout_s=180)
     yield s
     s.close()
 
