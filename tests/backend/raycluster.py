@@ -1,7 +1,8 @@
 """A local multi-node Ray cluster for the Ray transport's tests and the cluster bench: a head
 and worker nodes as separate raylets on this host, light enough for a 2-core machine.
 
-Everything it makes stays in a temp dir of its own, under the run's TMPDIR: Ray's session
+Everything it makes stays in a new temp dir of its own, under the run's TMPDIR (under /tmp
+when TMPDIR's path is too long for Ray's Unix sockets): Ray's session
 files, sockets and logs, and the address file that `ray.cluster_utils.Cluster` writes to
 `$RAY_TMPDIR/ray/ray_current_cluster` (`ray._common.utils.get_default_ray_temp_dir`; without
 RAY_TMPDIR it would be `/tmp/ray`, which exists only where Ray ran before). Every node, the
@@ -94,22 +95,19 @@ def local_cluster(worker_nodes: int = 2) -> Iterator[LocalCluster]:
         "_system_config": HEALTH,
         "ray_client_server_port": client_port,
     }
+    cluster: LocalCluster | None = None
     try:
         with warnings.catch_warnings():  # Ray drops its handles on the client server's logs
             warnings.simplefilter("ignore", ResourceWarning)
             cluster = LocalCluster(initialize_head=True, head_node_args=head)
-    except BaseException:
-        _restore(previous)
-        shutil.rmtree(temp, ignore_errors=True)
-        raise
-    cluster.client_address = f"ray://{LOOPBACK}:{client_port}"
-    try:
+        cluster.client_address = f"ray://{LOOPBACK}:{client_port}"
         for _ in range(worker_nodes):
             cluster.add_node(**NODE_ARGS)
         cluster.wait_for_nodes()
         yield cluster
     finally:
-        cluster.shutdown()  # type: ignore[no-untyped-call]
+        if cluster is not None:
+            cluster.shutdown()  # type: ignore[no-untyped-call]
         _restore(previous)
         shutil.rmtree(temp, ignore_errors=True)
 
