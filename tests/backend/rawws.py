@@ -76,3 +76,9 @@ class RawWebSocket:
 
     def close(self) -> None:
         self.sock.close()
+
+    def __enter__(self) -> RawWebSocket:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -201,12 +201,6 @@ def test_slow_client_is_decimated_and_never_delays_others(srv: Server, mid: str)
     """A client that stops reading fills its socket; the hub skips it, then sends it the
     backlog decimated, while a second client keeps receiving every cycle."""
     every = [s["name"] for s in srv.http.get(f"/api/machines/{mid}/signals").json()]
-    slow = RawWebSocket(
-        "127.0.0.1",
-        srv.port,
-        f"/api/machines/{mid}/telemetry?signals=" + ",".join(every),
-        srv.auth_header,
-    )
 
     async def watch() -> tuple[list[tuple[FrameHeader, np.ndarray]], int]:
         url = f"{srv.ws_base}/api/machines/{mid}/telemetry?signals=X.pos_act_mm"
@@ -215,15 +209,18 @@ def test_slow_client_is_decimated_and_never_delays_others(srv: Server, mid: str)
             frames, _ = await _step_watched(srv, mid, fast, 5000)  # slow one reads nothing
         return frames, sub["first_cycle"]
 
-    fast_frames, first = asyncio.run(watch())
-    last = srv.status(mid)["simulation"]["cycle"]
-    slow_frames: list[tuple[FrameHeader, np.ndarray]] = []
-    slow.sock.settimeout(30)
-    while not slow_frames or _end(slow_frames[-1][0]) <= last:
-        op, payload = slow.recv()
-        if op == 2:
-            slow_frames.append(decode_frame(payload))
-    slow.close()
+    query = "?signals=" + ",".join(every)
+    with RawWebSocket(
+        "127.0.0.1", srv.port, f"/api/machines/{mid}/telemetry{query}", srv.auth_header
+    ) as slow:
+        fast_frames, first = asyncio.run(watch())
+        last = srv.status(mid)["simulation"]["cycle"]
+        slow_frames: list[tuple[FrameHeader, np.ndarray]] = []
+        slow.sock.settimeout(30)
+        while not slow_frames or _end(slow_frames[-1][0]) <= last:
+            op, payload = slow.recv()
+            if op == 2:
+                slow_frames.append(decode_frame(payload))
     assert np.array_equal(_cycles(fast_frames), np.arange(first + 1, last + 1))
     late = [h for h, _ in slow_frames if h.decimated]
     assert late and all(h.stride > 1 and h.count <= 1000 for h in late)

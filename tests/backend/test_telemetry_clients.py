@@ -66,9 +66,9 @@ def _still_receives(srv: Server, mid: str, ws: ClientConnection) -> None:
                 return
 
 
-def _raw(srv: Server, mid: str, query: str = "") -> RawWebSocket:
+def _raw(srv: Server, mid: str, query: str = "", rcvbuf: int = 4096) -> RawWebSocket:
     raw = RawWebSocket(
-        "127.0.0.1", srv.port, f"/api/machines/{mid}/telemetry{query}", srv.auth_header
+        "127.0.0.1", srv.port, f"/api/machines/{mid}/telemetry{query}", srv.auth_header, rcvbuf
     )
     raw.sock.settimeout(30)
     return raw
@@ -106,16 +106,18 @@ def test_a_bad_message_closes_that_client_with_its_code(
     srv: Server, mid: str, payload: bytes, opcode: int, code: int
 ) -> None:
     assert (len(payload) > MAX_MESSAGE_BYTES) == (code == 1009)
-    with _watching(srv, mid) as other, ThreadPoolExecutor(1) as pool:
-        raw = _raw(srv, mid)
-        # sent while this thread reads: a server closing with our bytes still unread resets
-        # the connection and drops what it had not sent yet (its close frame too), so its
-        # pushes must not pile up behind a slow send
+    # a server closing with our bytes still unread resets the connection and drops what its
+    # kernel had not sent yet (its close frame too): so the client reads while it sends, and
+    # its receive buffer takes all the server sends at once (this client is not a slow one)
+    with (
+        _watching(srv, mid) as other,
+        ThreadPoolExecutor(1) as pool,
+        _raw(srv, mid, rcvbuf=1 << 20) as raw,
+    ):
         sending = pool.submit(raw.send, payload, opcode)
         assert raw.close_code() == code
         with suppress(OSError):  # the server stopped reading the rest of a huge payload
             sending.result()
-        raw.close()
         _still_receives(srv, mid, other)
 
 
@@ -125,14 +127,13 @@ def test_a_client_that_sends_but_never_reads_is_disconnected(srv: Server, mid: s
     dropped = _telemetry(srv)["clients_dropped"]
     msg = json.dumps({"type": "subscribe", "signals": ["X.nonsense"] * 200}).encode()
     with _watching(srv, mid) as other:
-        raw = _raw(srv, mid)
-        sent = 0
-        with suppress(OSError):  # the server closed the connection while we still sent
-            while sent < 5000:  # 5000 replies of ~2 kB if nobody stopped it
-                raw.send(msg)
-                sent += 1
-        assert sent < 5000 or raw.close_code() == 1008
-        raw.close()
+        with _raw(srv, mid) as raw:
+            sent = 0
+            with suppress(OSError):  # the server closed the connection while we still sent
+                while sent < 5000:  # 5000 replies of ~2 kB if nobody stopped it
+                    raw.send(msg)
+                    sent += 1
+            assert sent < 5000 or raw.close_code() == 1008
         assert _telemetry(srv)["clients_dropped"] == dropped + 1
         _still_receives(srv, mid, other)
 
@@ -146,16 +147,15 @@ def test_a_client_that_stops_reading_is_disconnected_after_the_stall_limit(
     dropped = _telemetry(srv)["clients_dropped"]
     with _watching(srv, mid) as other:
         clients = srv.http.get("/api/service/status").json()["clients"]
-        raw = _raw(srv, mid, "?signals=" + ",".join(every))
-        with ThreadPoolExecutor(1) as pool:  # keep the machine going until the server gives up
-            stepping = pool.submit(_step_until_dropped, srv, mid, dropped)
-            while not stepping.done():
-                _still_receives(srv, mid, other)  # the reader is served all along
-            stepping.result()
-        assert srv.http.get("/api/service/status").json()["clients"] == clients
-        with suppress(TimeoutError, ConnectionError):  # else the close handshake timed out
-            assert raw.close_code() == 1008
-        raw.close()
+        with _raw(srv, mid, "?signals=" + ",".join(every)) as raw:
+            with ThreadPoolExecutor(1) as pool:  # keep the machine going until the server gives up
+                stepping = pool.submit(_step_until_dropped, srv, mid, dropped)
+                while not stepping.done():
+                    _still_receives(srv, mid, other)  # the reader is served all along
+                stepping.result()
+            assert srv.http.get("/api/service/status").json()["clients"] == clients
+            with suppress(TimeoutError, ConnectionError):  # else the close handshake timed out
+                assert raw.close_code() == 1008
 
 
 def _step_until_dropped(srv: Server, mid: str, dropped: int) -> None:
