@@ -52,7 +52,9 @@ $(CHROMIUM):
 	$(SUDO) apt-get update -q
 	$(SUDO) apt-get install -y -q --no-install-recommends chromium
 
-run: $(RUN_STAMP) $(DIST)
+# The Python and the Node installs run side by side (-j2), then the UI build.
+run:
+	$(MAKE) --no-print-directory -j2 $(RUN_STAMP) $(DIST)
 	$(PY) -m backend.cli serve --host 127.0.0.1 --port 8000
 
 lint: $(DEV_STAMP) $(SCHEMA_TS)
@@ -61,7 +63,8 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 	$(PY) -m mypy
 	cd frontend && npx tsc --noEmit
 
-test: lint $(DIST) $(CHROMIUM)
+test:
+	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM)
 	$(PY) -m pytest -q
 
 bench: $(DEV_STAMP) $(DIST) $(CHROMIUM)

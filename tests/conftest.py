@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator
+from contextlib import ExitStack
 from typing import TYPE_CHECKING
 
 import pytest
@@ -30,10 +31,56 @@ def mid(srv: Server) -> Iterator[str]:
     srv.http.delete(f"/api/machines/{name}")
 
 
-@pytest.fixture(scope="session")
-def ray_cluster() -> Iterator[LocalCluster]:
-    """One local Ray cluster (head + 2 nodes) for every Ray test of the run (≈10 s to start)."""
-    from tests.backend.raycluster import local_cluster
+class _RayCluster:
+    """The run's one local Ray cluster: started by the first Ray test, shut down after the
+    last (the Ray tests run one after another, see pytest_collection_modifyitems), so its
+    dozen processes do not idle through the rest of the suite."""
 
-    with local_cluster(2) as cluster:
-        yield cluster
+    def __init__(self) -> None:
+        self.stack: ExitStack | None = None
+        self.cluster: LocalCluster | None = None
+
+    def start(self) -> LocalCluster:
+        if self.cluster is None:
+            from tests.backend.raycluster import local_cluster
+
+            self.stack = ExitStack()
+            self.cluster = self.stack.enter_context(local_cluster(2))
+        return self.cluster
+
+    def stop(self) -> None:
+        if self.stack is not None:
+            self.stack.close()
+        self.stack = self.cluster = None
+
+
+_RAY = _RayCluster()
+
+
+def _uses_ray(item: pytest.Item) -> bool:
+    callspec = getattr(item, "callspec", None)
+    return item.path.name == "test_cluster.py" or (
+        callspec is not None and callspec.params.get("transport") == "ray"
+    )
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The Ray tests together, where the first of them was collected."""
+    ray = [i for i in items if _uses_ray(i)]
+    if ray:
+        first = items.index(ray[0])
+        rest = [i for i in items if not _uses_ray(i)]
+        items[:] = rest[:first] + ray + rest[first:]
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> Iterator[None]:
+    yield  # the item's own fixtures (a service on the cluster among them) end first
+    if _uses_ray(item) and (nextitem is None or not _uses_ray(nextitem)):
+        _RAY.stop()
+
+
+@pytest.fixture(scope="session")
+def ray_cluster() -> LocalCluster:
+    """The local Ray cluster (head + 2 nodes, ≈10 s to start) the Ray tests share."""
+    return _RAY.start()

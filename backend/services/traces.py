@@ -29,7 +29,6 @@ from api.scope import (
 )
 from api.telemetry import FrameHeader, encode_frame
 from backend.errors import ApiError, not_found
-from backend.services import rrd
 from backend.services.commands import job_error_model
 from backend.services.machines import Capture, MachineProxy, MachineService
 from backend.services.store import Store
@@ -299,6 +298,8 @@ class TraceService:
             path.parent.mkdir(exist_ok=True)
             d = trace.detail
             about = _about(d)
+            from backend.services import rrd  # Rerun loads only when a capture is written
+
             rrd.write_capture(
                 path,
                 tid,

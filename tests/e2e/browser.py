@@ -40,7 +40,7 @@ DIST = Path(__file__).resolve().parents[2] / "frontend" / "dist" / "index.html"
 
 @contextmanager
 def chromium() -> Iterator[Browser]:
-    """A headless browser for the duration of a test module."""
+    """A headless browser (for the whole run in the browser tests)."""
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
         try:

@@ -1,4 +1,9 @@
-"""Browser tests: one real service and one headless Chromium per test module."""
+"""Browser tests: one real service and one headless Chromium (each page its own context) for
+the whole run; each test works on a machine of its own.
+
+A module whose tests change what all machines share (users, classes, the trace library, the
+service itself) gets a service of its own: `OWN_SERVICE = True`, or `SERVE_ARGS` for one started
+with other arguments."""
 
 from __future__ import annotations
 
@@ -12,16 +17,33 @@ from tests.e2e.browser import DIST, chromium, open_hmi
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+def _service(tmp_path_factory: pytest.TempPathFactory, *args: str) -> Server:
     if not DIST.is_file():
         pytest.fail("the frontend is not built: run `make test`, which builds it")
-    s = Server(tmp_path_factory.mktemp("e2e") / "e2e.sqlite").start()
+    return Server(tmp_path_factory.mktemp("e2e") / "e2e.sqlite", *args).start()
+
+
+@pytest.fixture(scope="session")
+def shared_srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    s = _service(tmp_path_factory)
     yield s
     s.close()
 
 
 @pytest.fixture(scope="module")
+def srv(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[Server]:
+    args: tuple[str, ...] | None = getattr(request.module, "SERVE_ARGS", None)
+    if args is None and not getattr(request.module, "OWN_SERVICE", False):
+        yield request.getfixturevalue("shared_srv")
+        return
+    s = _service(tmp_path_factory, *(args or ()))
+    yield s
+    s.close()
+
+
+@pytest.fixture(scope="session")
 def browser() -> Iterator[Browser]:
     with chromium() as b:
         yield b

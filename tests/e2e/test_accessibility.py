@@ -17,6 +17,8 @@ from api.auth import Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import WORKSPACES, open_hmi, panel, signed_in_page
 
+OWN_SERVICE = True  # adds an instructor and runs a class
+
 AXE = Path(__file__).resolve().parents[2] / "frontend" / "node_modules" / "axe-core" / "axe.min.js"
 TRAINER = "trainer"
 

@@ -10,6 +10,8 @@ from playwright.sync_api import Page, expect
 from tests.backend.server import Server
 from tests.e2e.browser import panel, shot
 
+OWN_SERVICE = True  # makes and revokes users and tokens
+
 
 def test_a_token_made_in_the_ui_works_until_revoked_there(page: Page, srv: Server) -> None:
     page.get_by_test_id("account-open").click()

@@ -16,6 +16,8 @@ from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import open_hmi, panel, shot
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
+OWN_SERVICE = True  # adds an observer
+
 RUN_TIMEOUT_MS = 90_000  # a run is seconds of machine time in a process; generous on 2 cores
 OLE = "ole"  # an observer
 

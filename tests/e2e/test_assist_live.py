@@ -16,6 +16,8 @@ from tests.e2e.browser import open_hmi, panel, shot
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 from tests.e2e.test_assist import RUN_TIMEOUT_MS, read
 
+OWN_SERVICE = True  # adds an observer
+
 FEED = 200.0  # mm/min
 # the run as nc_sim/assist/experiments.py plans it on X (kv 20/s): 2 s for the ramp, five time
 # constants at a third of kv (15/kv), a 1 s window; recorded a second more, and the move's

@@ -16,6 +16,8 @@ from nc_sim.machine.config import demo_lists
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import SIZES, panel, shot, signed_in_page
 
+OWN_SERVICE = True  # adds an instructor and runs classes
+
 TRAINER = "trainer"
 CLASS = "drill"
 # accel-curve's one fault at start is the spindle's (a torque-limited drive): X is as the demo's

@@ -19,6 +19,8 @@ from api.auth import Role
 from tests.backend.server import Server, add_users, bearer
 from tests.e2e.browser import SIZES, open_hmi, panel, shot
 
+OWN_SERVICE = True  # adds an instructor and runs a class
+
 TRAINER = "trainer"
 EXERCISE = tomllib.loads(
     (Path(__file__).resolve().parents[2] / "exercises" / "multi-gain.toml").read_text()

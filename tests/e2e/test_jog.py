@@ -15,6 +15,8 @@ from playwright.sync_api import Browser, Page, Request, expect
 from tests.backend.server import Server
 from tests.e2e.browser import number, open_hmi, poll, shot
 
+OWN_SERVICE = True  # stops and restarts the service
+
 HOLD_S = 0.5  # the UI's dead-man lease (frontend/src/state/jog.ts)
 
 

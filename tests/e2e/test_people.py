@@ -17,6 +17,8 @@ from tests.backend.server import OTHERS_PASSWORD as PASSWORD
 from tests.backend.server import Server, add_users
 from tests.e2e.browser import open_hmi, panel, poll
 
+OWN_SERVICE = True  # adds operators and observers
+
 ANA, BEN, OLE = "ana", "ben", "ole"  # two operators and an observer
 KV = "getriebe[0].kv"  # P-AXIS-00099, position loop gain of gear 1 [002]
 

@@ -13,6 +13,8 @@ from tests.backend.server import OTHERS_PASSWORD as PASSWORD
 from tests.backend.server import USER, Server, add_users
 from tests.e2e.browser import SIZES, open_hmi, panel, poll, shot
 
+OWN_SERVICE = True  # adds operators and observers
+
 ANA, BEN, IDA, OLE = "ana", "ben", "ida", "ole"  # two operators, an instructor, an observer
 KV = "getriebe[0].kv"  # P-AXIS-00099, position loop gain of gear 1 [002]
 

@@ -18,6 +18,8 @@ from api.auth import Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import SIZES, open_hmi, panel, shot
 
+OWN_SERVICE = True  # adds an observer
+
 F_PHYSICS = 22857 / 10000
 RUN_TIMEOUT_MS = 90_000  # a run is seconds of machine time in a process; generous on 2 cores
 

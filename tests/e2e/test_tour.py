@@ -13,6 +13,8 @@ from tests.backend.server import Server
 from tests.e2e.browser import SHOTS, open_hmi, panel, poll
 from tests.e2e.test_scope import capture_m19
 
+OWN_SERVICE = True  # its capture goes to the trace library the scope tests list
+
 TOUR = Path(__file__).resolve().parents[2] / "docs" / "tour"
 MAX_BYTES = 200_000  # small enough to keep in the repository
 

@@ -12,6 +12,8 @@ from playwright.sync_api import Page, expect
 from tests.backend.server import Server
 from tests.e2e.browser import panel, poll, shot
 
+SERVE_ARGS = ("--workers", "2")  # the machine moves to the other worker when its own dies
+
 
 def plotted(page: Page) -> tuple[float, float, float]:
     """The live plot's sample times: the first and last of its window, and the newest."""
