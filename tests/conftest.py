@@ -1,4 +1,5 @@
-"""Fixtures shared by the service and browser tests: each test gets a machine of its own."""
+"""Fixtures shared by the service and browser tests: each test gets a machine of its own, on
+the run's shared service unless its module needs a service of its own."""
 
 from __future__ import annotations
 
@@ -15,6 +16,31 @@ if TYPE_CHECKING:  # ray is imported only by the tests that start a cluster
     from tests.backend.raycluster import LocalCluster
 
 _serial = itertools.count(1)
+
+
+@pytest.fixture(scope="session")
+def shared_srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """The run's one plain service, for every module that has no reason for its own."""
+    s = Server(tmp_path_factory.mktemp("shared") / "shared.sqlite").start()
+    yield s
+    s.close()
+
+
+@pytest.fixture(scope="module")
+def srv(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[Server]:
+    """The module's service: the shared one, unless the module changes what all machines
+    share (users, classes, the trace library, the service itself) and says so with
+    `OWN_SERVICE = True`, or needs other arguments (`SERVE_ARGS`). A module may also define
+    its own `srv` (settings of its own)."""
+    args: tuple[str, ...] | None = getattr(request.module, "SERVE_ARGS", None)
+    if args is None and not getattr(request.module, "OWN_SERVICE", False):
+        yield request.getfixturevalue("shared_srv")
+        return
+    s = Server(tmp_path_factory.mktemp("own") / "own.sqlite", *(args or ())).start()
+    yield s
+    s.close()
 
 
 @pytest.fixture

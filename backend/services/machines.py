@@ -26,7 +26,7 @@ from backend.errors import ApiError, not_found
 from backend.services.control import MachineControl
 from backend.services.store import Store, StoredMachine
 from backend.workers.client import CALL_TIMEOUT_S, WorkerClient, WorkerGone, WorkerRefused
-from backend.workers.pool import WorkerPool
+from backend.workers.pool import NoLiveWorker, WorkerPool
 from backend.workers.protocol import (
     AddMachine,
     MachineInfo,
@@ -312,7 +312,10 @@ class MachineService:
         with its training faults as they stand (an armed one armed again, an active one at
         once), or restored from a snapshot's `state` (faults and all)."""
         with self._placing:
-            worker = worker or self.pool.choose(self._load)
+            try:
+                worker = worker or self.pool.choose(self._load)
+            except NoLiveWorker as e:
+                raise ApiError(503, {"message": str(e)}) from None
             self._building[proxy.id] = (proxy, worker)
         epoch = proxy.epoch + 1
         if faults is None:

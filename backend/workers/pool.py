@@ -46,6 +46,10 @@ def remove_stale_rings(base: Path) -> None:
             continue  # not ours, or another user's live gateway
 
 
+class NoLiveWorker(RuntimeError):
+    """Every worker is gone and none has started in their place yet."""
+
+
 class WorkerPool:
     """Starts, chooses and replaces workers."""
 
@@ -109,7 +113,7 @@ class WorkerPool:
         """The live worker running the fewest machines."""
         live = self.alive()
         if not live:
-            raise RuntimeError("no live worker")
+            raise NoLiveWorker("no worker is running (one is being started): try again shortly")
         return min(live, key=lambda w: len(machines_on(w)))
 
     def replace(self, dead: WorkerClient) -> None:

@@ -71,10 +71,6 @@ class Server:
         self.db = db
         self.extra = extra
         self.env = env or {}  # INBETRIEB_* settings
-        if "--workers" not in extra:
-            # one worker process unless a test is about several: each one costs a process
-            # start and a pacing loop, and this machine has two cores for the whole suite
-            self.env.setdefault("INBETRIEB_WORKERS", "1")
         self.port = free_port()
         self.base = f"http://127.0.0.1:{self.port}"
         self.ws_base = f"ws://127.0.0.1:{self.port}"

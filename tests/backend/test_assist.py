@@ -7,19 +7,11 @@ where the NC assumes multi_gain 10000): physics gives f = 22857 / 10000 [004 §3
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
 from tests.backend.server import Server
-
-
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("assist") / "assist.sqlite").start()
-    yield s
-    s.close()
 
 
 def _assist(srv: Server, mid: str, name: str, body: dict[str, Any]) -> Any:

@@ -10,7 +10,6 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
 from fractions import Fraction
 from typing import Any
 
@@ -21,13 +20,6 @@ from tests.backend.server import Server
 MANUAL_POINTS = [(12000, 16000), (24000, 8000), (36000, 4000), (48000, 2000)]  # 000 §2.8.4
 # the manual's speed table (000 §2.8.2), which the demo lathe's S1 carries
 TABLE = [(50, 560), (400, 800), (700, 3500), (3501, 4000), (3800, 5500), (5400, 7000)]
-
-
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("calc") / "calc.sqlite").start()
-    yield s
-    s.close()
 
 
 def post(srv: Server, mid: str, name: str, body: dict[str, Any]) -> Any:

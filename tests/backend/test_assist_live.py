@@ -10,20 +10,12 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import httpx
 import pytest
 
 from tests.backend.server import Server
-
-
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("live") / "live.sqlite").start()
-    yield s
-    s.close()
 
 
 def _live(srv: Server, mid: str, name: str, body: dict[str, Any]) -> httpx.Response:

@@ -4,7 +4,6 @@ export of the native list format, and everything surviving a restart of the serv
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -15,13 +14,6 @@ from tests.backend.server import USER, Server
 
 DATA = Path(__file__).resolve().parents[1] / "nc_sim" / "data"
 KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv
-
-
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("par") / "params.sqlite").start()
-    yield s
-    s.close()
 
 
 def values(srv: Server, mid: str, target: str | None = "X", scope: str = "axis") -> dict[str, Any]:

@@ -5,7 +5,6 @@ the baseline, the audit trail, bad input, and everything surviving a restart of 
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,13 +22,6 @@ from tests.backend.server import USER, Server
 
 KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv, in 0.01/s (004 §3.6)
 SIGN = resolve(Scope.AXIS, "lr_hw[0].vz_stellgr")  # 004 §3.5, takes effect at restart
-
-
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("versions") / "versions.sqlite").start()
-    yield s
-    s.close()
 
 
 def url(mid: str, path: str = "") -> str:

@@ -8,7 +8,6 @@ from __future__ import annotations
 import asyncio
 import sqlite3
 import time
-from collections.abc import Iterator
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -21,13 +20,6 @@ from tests.backend.server import PASSWORD, USER, Server
 from tests.backend.test_accounts import browser_like, cli, login
 
 CLOSE_WITHIN_S = 8.0  # the watch looks every 2 s; a loaded test machine gets slack
-
-
-@pytest.fixture(scope="module")
-def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("ws") / "ws.sqlite").start()
-    yield s
-    s.close()
 
 
 def session(srv: Server, name: str = USER, password: str = PASSWORD) -> httpx.Client:

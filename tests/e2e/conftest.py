@@ -1,9 +1,5 @@
-"""Browser tests: one real service and one headless Chromium (each page its own context) for
-the whole run; each test works on a machine of its own.
-
-A module whose tests change what all machines share (users, classes, the trace library, the
-service itself) gets a service of its own: `OWN_SERVICE = True`, or `SERVE_ARGS` for one started
-with other arguments."""
+"""Browser tests: one headless Chromium for the whole run (each page its own context); the
+service is the run's shared one unless a module asks for its own (tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -17,34 +13,10 @@ from tests.e2e.browser import DIST, chromium, open_hmi
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
-def _service(tmp_path_factory: pytest.TempPathFactory, *args: str) -> Server:
-    if not DIST.is_file():
-        pytest.fail("the frontend is not built: run `make test`, which builds it")
-    return Server(tmp_path_factory.mktemp("e2e") / "e2e.sqlite", *args).start()
-
-
-@pytest.fixture(scope="session")
-def shared_srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = _service(tmp_path_factory)
-    yield s
-    s.close()
-
-
-@pytest.fixture(scope="module")
-def srv(
-    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
-) -> Iterator[Server]:
-    args: tuple[str, ...] | None = getattr(request.module, "SERVE_ARGS", None)
-    if args is None and not getattr(request.module, "OWN_SERVICE", False):
-        yield request.getfixturevalue("shared_srv")
-        return
-    s = _service(tmp_path_factory, *(args or ()))
-    yield s
-    s.close()
-
-
 @pytest.fixture(scope="session")
 def browser() -> Iterator[Browser]:
+    if not DIST.is_file():
+        pytest.fail("the frontend is not built: run `make test`, which builds it")
     with chromium() as b:
         yield b
 

@@ -61,9 +61,12 @@ export function saveDraft(s: ScopeSetup): void {
 let lastNewest = "";
 
 export async function pollScope(): Promise<void> {
-  if (!machineId.value) return;
+  const asked = machineId.value;
+  if (!asked) return;
   try {
     const st = await http.get<ScopeStatus>(machineUrl("/scope"));
+    // an answer about the machine shown before a switch would show its capture on this one
+    if (machineId.value !== asked) return;
     scopeStatus.value = st;
     const newest = st.captures[0]?.id ?? "";
     if (newest && newest !== lastNewest && followNewest.value) shownId.value = newest;
