@@ -21,7 +21,8 @@ _serial = itertools.count(1)
 @pytest.fixture(scope="session")
 def shared_srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     """The run's one plain service, for every module that has no reason for its own."""
-    s = Server(tmp_path_factory.mktemp("shared") / "shared.sqlite").start()
+    # no demo machine: no test here uses it, and it would run in real time all along
+    s = Server(tmp_path_factory.mktemp("shared") / "shared.sqlite", "--no-demo").start()
     yield s
     s.close()
 
