@@ -21,8 +21,7 @@ _serial = itertools.count(1)
 @pytest.fixture(scope="session")
 def shared_srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     """The run's one plain service, for every module that has no reason for its own."""
-    # no demo machine: no test here uses it, and it would run in real time all along
-    s = Server(tmp_path_factory.mktemp("shared") / "shared.sqlite", "--no-demo").start()
+    s = Server(tmp_path_factory.mktemp("shared") / "shared.sqlite").start()
     yield s
     s.close()
 
