@@ -12,6 +12,8 @@ import pytest
 from nc_sim.params import registry
 from tests.backend.server import USER, Server
 
+OWN_SERVICE = True  # restarts the service
+
 DATA = Path(__file__).resolve().parents[1] / "nc_sim" / "data"
 KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv
 
