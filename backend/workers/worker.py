@@ -5,7 +5,8 @@ they arrive (a command acts in the cycle after the one being stepped, never a pe
 at each deadline it steps every machine's due cycles into its sample ring, looking for new
 requests between machines so an emergency stop never waits behind the others. Then it pushes
 what changed: new events and completed captures of every machine, the status of the watched
-ones (staggered over the status period), and about once a second its loop figures.
+ones (staggered over the status period), and about once a second its loop figures. While
+no machine is due to step (all paused, or none held) the loop sleeps until a request comes.
 
 Nothing else runs here: no HTTP, no JSON, no SQLite. A channel (a local pipe, or a queue in
 a Ray actor) brings requests and takes replies and pushes.
@@ -120,6 +121,7 @@ class Worker:
         self.backlog: deque[Envelope] = deque()  # taken from the channel, not yet carried out
         self.stopped = False
         self.news_due = False  # pacing changed: report at the end of this tick
+        self.awake_until = 0.0  # an idle loop served a request: it ticks until then
         # loop figures, read only by this thread
         self.ticks = self.overruns = self.missed = self.host_failures = 0
         self.work_s: deque[float] = deque(maxlen=5000)
@@ -135,6 +137,13 @@ class Worker:
         next_news = deadline + NEWS_PERIOD_S
         while not (self.stopped or self.channel.closed):
             period = self.period()
+            if self.idle():  # nothing to step: sleep until a request or the next news
+                remaining = next_news - time.monotonic()
+                if remaining > 0 and self.channel.wait(remaining):
+                    self.serve()
+                    # awake for a status period: what the request changed goes out as usual
+                    self.awake_until = time.monotonic() + self.status_period()
+                deadline = time.monotonic() - period  # then a pass now
             deadline += period
             while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
                 if self.backlog or self.channel.wait(remaining):
@@ -171,6 +180,17 @@ class Worker:
         Commands never wait for a tick."""
         n = max(1, math.ceil(len(self.hosts) / MACHINES_PER_PERIOD))
         return min(MAX_PERIOD_S, max(self.base_period_s, self.base_period_s * n))
+
+    def idle(self) -> bool:
+        """Nothing is due before a request arrives: every machine paused (or none held), no
+        step, assistant run, capture or request waiting. An idle worker sleeps instead of
+        waking every period (a paused machine's status changes only with a request)."""
+        if self.backlog or self.steps or self.assists or time.monotonic() < self.awake_until:
+            return False
+        return all(
+            h.pacing.mode == "pause" and h.pacing.step_to is None and not h.captures
+            for h in self.hosts.values()
+        )
 
     def status_period(self) -> float:
         """How often a watched machine's status is pushed: 20 times a second, 10 once the

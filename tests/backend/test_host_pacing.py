@@ -3,8 +3,12 @@ from when the stepping really ended (a clock of the test's own, never the wall).
 
 from __future__ import annotations
 
+import time
+
 from backend.workers.host import MachineHost
 from backend.workers.protocol import AddMachine
+from backend.workers.threaded import QueueChannel
+from backend.workers.worker import Worker
 from nc_sim.machine.config import demo_machine
 
 PERIOD_S = 0.01
@@ -55,3 +59,25 @@ def test_a_stalled_worker_shows_the_stall_and_then_the_catch_up() -> None:
     host.tick(1.0, 0.0)
     assert host.cycle == 1000
     assert abs(host.rt_factor() - 0.99 / 0.991) < 1e-6
+
+
+def test_a_worker_sleeps_only_while_nothing_is_due() -> None:
+    """A worker whose machines are all paused waits for a request instead of waking every
+    period; a running machine, a single step in progress or a request just served keep it
+    ticking (the served request's effects go out with the next status)."""
+    channel = QueueChannel(lambda push: None)
+    worker = Worker(channel, PERIOD_S, None)
+    assert worker.idle()  # no machines
+    host = host_on([0.0])
+    worker.hosts[host.id] = host
+    assert not worker.idle()  # a new machine runs in real time
+    host.set_mode("pause")
+    assert worker.idle()
+    host.start_step(10)
+    assert not worker.idle()
+    host.pacing.step_to = None
+    worker.awake_until = time.monotonic() + 60.0  # as after a request served while idle
+    assert not worker.idle()
+    worker.awake_until = 0.0
+    host.set_mode("fast")
+    assert not worker.idle()
