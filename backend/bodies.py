@@ -1,8 +1,10 @@
-"""Big bodies (parameter lists, CSV traces, NC programs): read with a size limit while they
-stream in, decoded strictly, documented in the schema.
+"""Request bodies: every route's size limit, and the big ones (parameter lists, CSV traces,
+NC programs) read while they stream in, decoded strictly, documented in the schema.
 
-The limit is enforced chunk by chunk, so a too large body is refused with 413 after at most
-`max_bytes` were held in memory, whatever its Content-Length claims.
+Every route has a body limit (FastAPI's `max_body_size`: the default for every router, more
+where a route takes uploads), enforced while the body streams in and before it is parsed: a
+declared Content-Length over it is refused before a byte is read, an undeclared or false one
+after at most the limit was held. The routes open without credentials take a small one.
 """
 
 from __future__ import annotations
@@ -12,23 +14,63 @@ from typing import Any, TypeVar
 from fastapi import Request
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ValidationError
+from starlette.middleware.body_limit import MAX_BODY_SIZE_SCOPE_KEY
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from backend.errors import ApiError
+from api.commands import PROGRAM_MAX_CHARS
+from api.common import ErrorBody, Refusal
+from backend.errors import ApiError, body_too_large
+
+DEFAULT_BODY_BYTES = 64 * 1024  # every route that says nothing else: commands, settings, …
+OPEN_BODY_BYTES = 4 * 1024  # the routes open without credentials (logging in)
+# a program's characters take up to 4 bytes in UTF-8, and JSON escapes some (newline: 2 bytes)
+PROGRAM_BODY_BYTES = 4 * PROGRAM_MAX_CHARS + 1024
+LISTS_BODY_BYTES = 8 * 1024 * 1024  # a machine's native parameter lists (a class's too)
+LIST_BODY_BYTES = 1_000_000  # one parameter list in the native format
+CHANGES_BODY_BYTES = 2 * 1024 * 1024  # up to 5000 parameter changes at once
+EXERCISE_BODY_BYTES = 4 * 100_000 + 1024  # an exercise file (TOML)
+CSV_BODY_BYTES = 64 * 1024 * 1024  # a trace as CSV
 
 
-async def read_text(request: Request, max_bytes: int, what: str) -> str:
-    """The body as UTF-8 text (a byte order mark is dropped); 413 beyond `max_bytes`,
-    422 when it is not UTF-8."""
-    declared = request.headers.get("content-length", "")
-    if declared.isascii() and declared.isdigit() and int(declared) > max_bytes:
-        raise _too_large(max_bytes, what)
-    chunks: list[bytes] = []
-    size = 0
-    async for chunk in request.stream():
-        size += len(chunk)
-        if size > max_bytes:
-            raise _too_large(max_bytes, what)
-        chunks.append(chunk)
+class BodyLimitAnswer:
+    """ASGI middleware: Starlette refuses a declared Content-Length over the route's limit
+    with a bare text 413 (an undeclared one reaches `errors`); this answers it with the usual
+    error body, the limit named."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        replaced = False
+
+        async def answer(message: Message) -> None:
+            nonlocal replaced
+            if message["type"] == "http.response.start" and _bare_413(message):
+                replaced = True
+                text = body_too_large(scope.get(MAX_BODY_SIZE_SCOPE_KEY, 0))
+                body = ErrorBody(detail=Refusal(message=text)).model_dump_json().encode()
+                headers = [(b"content-type", b"application/json")]
+                headers.append((b"content-length", str(len(body)).encode()))
+                await send({"type": "http.response.start", "status": 413, "headers": headers})
+                await send({"type": "http.response.body", "body": body})
+            elif not replaced:  # the bare answer's body goes nowhere
+                await send(message)
+
+        await self.app(scope, receive, answer)
+
+
+def _bare_413(start: Message) -> bool:
+    headers = dict(start.get("headers", []))
+    return bool(start["status"] == 413 and headers.get(b"content-type", b"").startswith(b"text/"))
+
+
+async def read_text(request: Request, what: str) -> str:
+    """The body as UTF-8 text (a byte order mark is dropped), 422 when it is not UTF-8 (its
+    size is the route's limit: 413 beyond it)."""
+    chunks = [chunk async for chunk in request.stream()]
     try:
         return b"".join(chunks).decode("utf-8-sig")
     except UnicodeDecodeError as e:
@@ -39,10 +81,10 @@ async def read_text(request: Request, max_bytes: int, what: str) -> str:
 M = TypeVar("M", bound=BaseModel)
 
 
-async def read_model(request: Request, model: type[M], max_bytes: int, what: str) -> M:
-    """The JSON body as `model`: 413 beyond `max_bytes` (before it is all in memory), 422
-    with the usual validation issues when it is no such JSON."""
-    raw = await read_text(request, max_bytes, what)
+async def read_model(request: Request, model: type[M], what: str) -> M:
+    """The JSON body as `model` (parsed by pydantic straight from the text, cheaper than
+    through Python objects): 422 with the usual validation issues when it is no such JSON."""
+    raw = await read_text(request, what)
     try:
         return model.model_validate_json(raw)
     except ValidationError as e:
@@ -55,10 +97,6 @@ def json_body(model: type[BaseModel], max_bytes: int) -> dict[str, Any]:
     schema = model.model_json_schema()
     schema["description"] = f"{schema.get('description', '')} (at most {max_bytes} bytes)".strip()
     return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
-
-
-def _too_large(max_bytes: int, what: str) -> ApiError:
-    return ApiError(413, {"message": f"{what} larger than {max_bytes} bytes"})
 
 
 def text_body(media_type: str, max_bytes: int, description: str) -> dict[str, Any]:

@@ -15,6 +15,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
+from starlette.middleware.body_limit import MAX_BODY_SIZE_SCOPE_KEY
 
 from api.common import ErrorBody, Refusal, ValidationIssue
 from backend.validation import FieldTexts, issue_text
@@ -48,6 +49,11 @@ def refusal_text(e: ApiError) -> str:
     """The refusal's message (for the audit trail)."""
     message = e.detail.get("message") if isinstance(e.detail, dict) else None
     return str(message if message is not None else e.detail)
+
+
+def body_too_large(limit: int) -> str:
+    """Why a request body was refused (413)."""
+    return f"request body larger than this route's limit of {limit} bytes"
 
 
 def not_found(what: str) -> ApiError:
@@ -113,5 +119,8 @@ def install(app: FastAPI) -> None:
         return _answer(422, issues)
 
     @app.exception_handler(HTTPException)
-    async def http_error(_request: Request, exc: HTTPException) -> JSONResponse:
+    async def http_error(request: Request, exc: HTTPException) -> JSONResponse:
+        limit = request.scope.get(MAX_BODY_SIZE_SCOPE_KEY)
+        if exc.status_code == 413 and limit is not None:  # a body over its route's limit
+            return _answer(413, Refusal(message=body_too_large(limit)))
         return _answer(exc.status_code, Refusal(message=str(exc.detail)), headers=exc.headers)

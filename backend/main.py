@@ -10,6 +10,7 @@ from fastapi.routing import APIRoute, APIWebSocketRoute
 
 from backend import VERSION, errors, frontend, openapi
 from backend.authn import Authentication, guarded
+from backend.bodies import DEFAULT_BODY_BYTES, OPEN_BODY_BYTES, BodyLimitAnswer
 from backend.deps import Services, rule_of
 from backend.errors import responses
 from backend.routes import (
@@ -59,10 +60,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         redoc_url=None,
     )
     app.add_middleware(Authentication)
+    app.add_middleware(BodyLimitAnswer)
     app.add_middleware(Perimeter, hosts=host_names(cfg.host, cfg.allowed_hosts))  # outermost
 
     errors.install(app)
-    app.include_router(auth.router)
+    app.include_router(auth.router, max_body_size=OPEN_BODY_BYTES)
     # every other route needs a token or a session (backend/authn.py)
     for module in (
         assist,
@@ -86,7 +88,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         versions,
         viewer,
     ):
-        app.include_router(module.router, responses=responses(401, 403))
+        app.include_router(
+            module.router, responses=responses(401, 403), max_body_size=DEFAULT_BODY_BYTES
+        )
     _every_route_has_a_rule(app)
     openapi.install(app)
     frontend.mount(app, cfg.frontend_dir)

@@ -25,6 +25,7 @@ from api.classes import (
     SeatLink,
     SeatResult,
 )
+from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, ApiError, responses
 from backend.services import training
@@ -49,7 +50,8 @@ def list_exercises(services: ServicesDep) -> list[ExerciseInfo]:
     "/exercises",
     status_code=201,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 409, 422),
+    responses=responses(403, 409, 413, 422),
+    max_body_size=EXERCISE_BODY_BYTES,
 )
 def upload_exercise(req: ExerciseUpload, services: ServicesDep, actor: ActorDep) -> ExerciseInfo:
     """Add an exercise file (TOML, the format of `exercises/`); a wrong file is refused with
@@ -69,7 +71,8 @@ def list_classes(services: ServicesDep) -> list[ClassInfo]:
     "/classes",
     status_code=201,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, 409, 422, why=WORKER_GONE),
+    responses=responses(403, 404, 409, 413, 422, why=WORKER_GONE),
+    max_body_size=LISTS_BODY_BYTES,  # the seats' machines may come from uploaded lists
 )
 def create_class(
     req: ClassCreate, request: Request, services: ServicesDep, actor: ActorDep

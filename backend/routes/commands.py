@@ -6,6 +6,7 @@ from fastapi import APIRouter
 
 from api.auth import Action
 from api.commands import Command, CommandResult, EmergencyStopCommand
+from backend.bodies import PROGRAM_BODY_BYTES
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services import programs
@@ -20,6 +21,7 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
     responses=responses(
         403,
         404,
+        413,
         why={
             404: "no such machine, or no stored program of that name (program_load)",
             409: "the NC refused the command (job error)",
@@ -27,6 +29,7 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
         }
         | WORKER_GONE,
     ),
+    max_body_size=PROGRAM_BODY_BYTES,  # a program_load may bring its text
 )
 async def command(
     cmd: Command, machine: MachineDep, actor: ActorDep, services: ServicesDep

@@ -9,6 +9,7 @@ from api.machines import MachineCreate, SimulationControl, StepRequest
 from api.service_axes import ServiceAxes
 from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
+from backend.bodies import LISTS_BODY_BYTES
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services.audit import Entry
@@ -34,7 +35,8 @@ def list_machines(services: ServicesDep, actor: ActorDep) -> list[MachineSummary
     "",
     status_code=201,
     dependencies=[permit(Action.MACHINES)],
-    responses=responses(403, 409, 422, why=WORKER_GONE),
+    responses=responses(403, 409, 413, 422, why=WORKER_GONE),
+    max_body_size=LISTS_BODY_BYTES,
 )
 def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -> MachineSummary:
     """A new machine from the demo or from native parameter lists; it starts running."""

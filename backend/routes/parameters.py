@@ -17,7 +17,13 @@ from api.parameters import (
     ParameterWriteResult,
     ScopeName,
 )
-from backend.bodies import read_text, text_answer, text_body
+from backend.bodies import (
+    CHANGES_BODY_BYTES,
+    LIST_BODY_BYTES,
+    read_text,
+    text_answer,
+    text_body,
+)
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services import parameters as params
@@ -30,7 +36,6 @@ ScopeQ = Annotated[ScopeName, Query(description="axis, channel or tool list")]
 TargetQ = Annotated[str | None, Query(description="axis name for the axis list")]
 _STALE = {409: "written by someone else since it was read: both values, nothing applied"}
 _REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"} | WORKER_GONE
-MAX_LIST_BYTES = 1_000_000
 
 
 @router.get("/parameters", dependencies=[permit(Action.OBSERVE)])
@@ -76,7 +81,8 @@ def values(
 @router.patch(
     "/machines/{mid}/parameters",
     dependencies=[permit(Action.CONFIGURE)],
-    responses=responses(403, 404, why=_STALE | _REJECTED),
+    responses=responses(403, 404, 413, why=_STALE | _REJECTED),
+    max_body_size=CHANGES_BODY_BYTES,
 )
 def write(
     req: ParameterWrite, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -112,7 +118,8 @@ def export(
     "/machines/{mid}/parameters/import",
     dependencies=[permit(Action.CONFIGURE)],
     responses=responses(403, 404, 413, why=_REJECTED),
-    openapi_extra=text_body("text/plain", MAX_LIST_BYTES, "a list in the native format"),
+    openapi_extra=text_body("text/plain", LIST_BODY_BYTES, "a list in the native format"),
+    max_body_size=LIST_BODY_BYTES,
 )
 async def import_list(
     request: Request,
@@ -123,7 +130,7 @@ async def import_list(
     target: TargetQ = None,
 ) -> ParameterWriteResult:
     """Import a native list (text/plain, UTF-8); a bad line is rejected with its line number."""
-    text = await read_text(request, MAX_LIST_BYTES, "parameter list")
+    text = await read_text(request, "parameter list")
     where = f" of {target}" if target else ""
     await run_in_threadpool(services.audit.flush)  # as in `write`
     what = f"import the {scope} list{where}"

@@ -9,19 +9,17 @@ from fastapi import APIRouter, Path, Request, Response
 from fastapi.concurrency import run_in_threadpool
 
 from api.auth import Action
-from api.commands import PROGRAM_MAX_CHARS, ProgramName
+from api.commands import ProgramName
 from api.programs import Program, ProgramInfo, ProgramPreview, ProgramText
-from backend.bodies import json_body, read_model
+from backend.bodies import PROGRAM_BODY_BYTES, json_body, read_model
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, responses
 from backend.services import programs
 from backend.workers.protocol import ReadStatus, StatusRead
 
 router = APIRouter(tags=["programs"])
-# a program's characters take up to 4 bytes in UTF-8, and JSON escapes some (newline: 2 bytes)
-MAX_BODY_BYTES = 4 * PROGRAM_MAX_CHARS + 1024
 NameDep = Annotated[ProgramName, Path()]
-BODY = json_body(ProgramText, MAX_BODY_BYTES)
+BODY = json_body(ProgramText, PROGRAM_BODY_BYTES)
 
 
 @router.get("/api/programs", dependencies=[permit(Action.OBSERVE)])
@@ -43,13 +41,14 @@ def read_program(name: NameDep, services: ServicesDep) -> Program:
     dependencies=[permit(Action.PROGRAMS)],
     responses=responses(403, 413, 422),
     openapi_extra=BODY,
+    max_body_size=PROGRAM_BODY_BYTES,
 )
 async def write_program(
     name: NameDep, request: Request, services: ServicesDep, actor: ActorDep
 ) -> ProgramInfo:
     """Create or replace a program (body `{text}`); audited. It is stored as written, errors
     and all: the preview and `program_load` check it."""
-    body = await read_model(request, ProgramText, MAX_BODY_BYTES, "program")
+    body = await read_model(request, ProgramText, "program")
     return await run_in_threadpool(programs.put, services.store, actor, name, body.text)
 
 
@@ -71,12 +70,13 @@ def delete_program(name: NameDep, services: ServicesDep, actor: ActorDep) -> Res
     dependencies=[permit(Action.OBSERVE)],
     responses=responses(404, 413, 422, why=WORKER_GONE),
     openapi_extra=BODY,
+    max_body_size=PROGRAM_BODY_BYTES,
 )
 async def program_preview(request: Request, machine: MachineDep) -> ProgramPreview:
     """Check a program on this machine and draw it: its first error (line, column, job
     error) and the commanded tool path up to there, from the machine's commanded positions,
     in the plane the program selects (else G17, or G18 on a lathe). Changes nothing."""
-    body = await read_model(request, ProgramText, MAX_BODY_BYTES, "program")
+    body = await read_model(request, ProgramText, "program")
     read = await machine.acall(ReadStatus(machine.id))
     assert isinstance(read, StatusRead)
     # a long program takes a while to interpret: off the event loop

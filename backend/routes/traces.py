@@ -11,7 +11,7 @@ from fastapi.responses import FileResponse, RedirectResponse
 
 from api.auth import Action
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
-from backend.bodies import read_text, text_answer, text_body
+from backend.bodies import CSV_BODY_BYTES, read_text, text_answer, text_body
 from backend.deps import ActorDep, ServicesDep, get_actor, permit
 from backend.errors import ApiError, not_found, responses
 from backend.routes.scope import BINARY
@@ -32,7 +32,6 @@ async def seat_scope(conn: HTTPConnection, services: ServicesDep) -> None:
 
 
 router = APIRouter(prefix="/api/traces", tags=["traces"], dependencies=[Depends(seat_scope)])
-MAX_CSV_BYTES = 64 * 1024 * 1024
 
 
 @router.get("", dependencies=[permit(Action.OBSERVE)])
@@ -52,7 +51,8 @@ def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
     status_code=201,
     dependencies=[permit(Action.CAPTURE)],
     responses=responses(403, 413, why={422: "bad CSV: which row or column, and why"}),
-    openapi_extra=text_body("text/csv", MAX_CSV_BYTES, "a trace as CSV, e.g. one exported"),
+    openapi_extra=text_body("text/csv", CSV_BODY_BYTES, "a trace as CSV, e.g. one exported"),
+    max_body_size=CSV_BODY_BYTES,
 )
 async def import_csv(
     request: Request,
@@ -61,7 +61,7 @@ async def import_csv(
     name: Annotated[str, Query(max_length=200)] = "",
 ) -> TraceInfo:
     """Store a CSV trace (body text/csv), e.g. one exported earlier, to overlay it."""
-    text = await read_text(request, MAX_CSV_BYTES, "CSV import")
+    text = await read_text(request, "CSV import")
     # parsing and writing take seconds for a big file: off the event loop
     trace = await run_in_threadpool(from_csv, text, name)
     info = await run_in_threadpool(services.traces.add, trace)

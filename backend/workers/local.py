@@ -71,6 +71,8 @@ def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) 
     wire.send(("ready",))
     try:
         worker.run()
+    except (BrokenPipeError, ConnectionResetError):
+        pass  # the gateway went away (stopped or killed): nobody is left to tell
     finally:
         for host in list(worker.hosts.values()):
             host.close()
