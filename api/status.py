@@ -258,9 +258,12 @@ class LoopStatus(BaseModel):
     ticks: int
     overruns: int = Field(description="ticks whose work ran past the next deadline")
     missed_deadlines: int = Field(description="deadlines skipped after overruns")
-    work_p50_ms: float
+    work_p50_ms: float = Field(
+        description="time the loop was busy per tick (stepping its machines and carrying out "
+        "requests), median"
+    )
     work_p99_ms: float
-    work_max_ms: float
+    work_max_ms: float = Field(description="the longest, a stall of the loop included")
     wake_late_p99_ms: float = Field(description="how late the loop woke, 99th percentile")
     recent_overruns: list[OverrunRecord] = Field(description="the last 20 overruns")
     host_failures: int = Field(

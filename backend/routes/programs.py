@@ -79,5 +79,4 @@ async def program_preview(request: Request, machine: MachineDep) -> ProgramPrevi
     body = await read_model(request, ProgramText, "program")
     read = await machine.acall(ReadStatus(machine.id))
     assert isinstance(read, StatusRead)
-    # a long program takes a while to interpret: off the event loop
-    return await run_in_threadpool(programs.program_preview, read.snapshot, body.text)
+    return await programs.program_preview_off_loop(read.snapshot, body.text)

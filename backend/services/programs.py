@@ -4,8 +4,11 @@ no kernel needed)."""
 
 from __future__ import annotations
 
+import asyncio
 from datetime import UTC, datetime
 from typing import Literal
+
+from fastapi.concurrency import run_in_threadpool
 
 from api.programs import PreviewError, PreviewSegment, Program, ProgramInfo, ProgramPreview
 from backend.errors import not_found
@@ -70,6 +73,18 @@ def delete(store: Store, actor: Actor, name: str) -> None:
 def stored_text(store: Store, name: str) -> str:
     """The text of a stored program, for `program_load` without a text; 404 without one."""
     return get(store, name).text
+
+
+# a preview may interpret up to MAX_PROGRAM_BLOCKS blocks (seconds, tens of MB): a few at a
+# time, the others wait their turn
+PREVIEWS_AT_ONCE = 2
+_previews = asyncio.Semaphore(PREVIEWS_AT_ONCE)
+
+
+async def program_preview_off_loop(snapshot: MachineSnapshot, text: str) -> ProgramPreview:
+    """`program_preview` on the thread pool, at most PREVIEWS_AT_ONCE at a time."""
+    async with _previews:
+        return await run_in_threadpool(program_preview, snapshot, text)
 
 
 def program_preview(snapshot: MachineSnapshot, text: str) -> ProgramPreview:

@@ -20,12 +20,20 @@ import math
 import os
 import time
 from collections import deque
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Protocol
 
 import numpy as np
 
 from backend.workers.host import MachineHost
+from backend.workers.interpreting import (
+    SLICE_S,
+    Interpreting,
+    Pending,
+    interpretation_needed,
+)
 from backend.workers.protocol import (
     AddMachine,
     ApplyValues,
@@ -119,12 +127,14 @@ class Worker:
         self.steps: list[tuple[int, str]] = []  # (request, machine) answered when its step ends
         self.assists: list[tuple[int, MachineHost]] = []  # live runs, answered when they end
         self.backlog: deque[Envelope] = deque()  # taken from the channel, not yet carried out
+        self.interpreting = Interpreting()  # programs interpreted in the loop's spare time
         self.stopped = False
         self.news_due = False  # pacing changed: report at the end of this tick
         self.awake_until = 0.0  # an idle loop served a request: it ticks until then
         # loop figures, read only by this thread
         self.ticks = self.overruns = self.missed = self.host_failures = 0
-        self.work_s: deque[float] = deque(maxlen=5000)
+        self.work_s: deque[float] = deque(maxlen=5000)  # per tick: stepping and serving
+        self.served_s = 0.0  # serving since the last tick
         self.late_s: deque[float] = deque(maxlen=5000)
         self.recent: deque[tuple[float, float, float]] = deque(maxlen=20)
         self._cpu = (time.monotonic(), time.process_time())
@@ -140,14 +150,17 @@ class Worker:
             if self.idle():  # nothing to step: sleep until a request or the next news
                 remaining = next_news - time.monotonic()
                 if remaining > 0 and self.channel.wait(remaining):
-                    self.serve()
+                    self._serve_timed()
                     # awake for a status period: what the request changed goes out as usual
                     self.awake_until = time.monotonic() + self.status_period()
                 deadline = time.monotonic() - period  # then a pass now
             deadline += period
             while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
-                if self.backlog or self.channel.wait(remaining):
-                    self.serve()
+                if self.interpreting.working() and not (self.backlog or self.channel.ready()):
+                    # a program in the spare time, in slices: a request never waits long
+                    self.interpreting.step(min(deadline, time.monotonic() + SLICE_S))
+                elif self.backlog or self.channel.wait(remaining):
+                    self._serve_timed()
             wake = checked = time.monotonic()
             for host in list(self.hosts.values()):
                 self._tick(host, deadline, period)
@@ -156,10 +169,11 @@ class Worker:
                 if now - checked >= SERVE_CHECK_S or self.backlog:
                     checked = now
                     if self.channel.ready() or self.backlog:
-                        self.serve()
+                        self._serve_timed()
                 self._push_news(host, wake)
             self._finish_steps()
             self._finish_assists()
+            self._finish_interpreting()
             self.channel.flush()  # the tick's pushes in one write
             done = time.monotonic()
             self._account(deadline, wake, done, deadline + period)
@@ -185,7 +199,9 @@ class Worker:
         """Nothing is due before a request arrives: every machine paused (or none held), no
         step, assistant run, capture or request waiting. An idle worker sleeps instead of
         waking every period (a paused machine's status changes only with a request)."""
-        if self.backlog or self.steps or self.assists or time.monotonic() < self.awake_until:
+        if self.backlog or self.steps or self.assists or self.interpreting:
+            return False
+        if time.monotonic() < self.awake_until:
             return False
         return all(
             h.pacing.mode == "pause" and h.pacing.step_to is None and not h.captures
@@ -202,9 +218,17 @@ class Worker:
     def stop(self) -> None:
         self.stopped = True
 
+    def _serve_timed(self) -> None:
+        """Serve, counting the time as the loop's work (a request that took long shows in
+        the loop's figures, not only in the lateness of the next tick)."""
+        t0 = time.monotonic()
+        self.serve()
+        self.served_s += time.monotonic() - t0
+
     def _account(self, deadline: float, wake: float, done: float, next_deadline: float) -> None:
         self.ticks += 1
-        self.work_s.append(done - wake)
+        self.work_s.append(done - wake + self.served_s)
+        self.served_s = 0.0
         self.late_s.append(wake - deadline)
         if done > next_deadline and self.hosts:  # without machines, lateness delays nobody
             self.overruns += 1
@@ -302,15 +326,19 @@ class Worker:
             if not waiting:
                 return
             req, request, sent_mono = waiting.popleft()
-            try:
-                value = self.handle(req, request, sent_mono)
-            except (NcUsageError, ValueError) as e:
-                value = Failure("invalid", str(e))
-            except Exception as e:  # a bug must not take the loop and the other machines
-                log.exception("request %r failed", request)
-                value = Failure("internal", f"{type(e).__name__}: {e}")
-            if value is not _DEFERRED:
-                self.channel.send(Reply(req, value))
+            self._answer(req, request, partial(self.handle, req, request, sent_mono))
+
+    def _answer(self, req: int, request: Request, carry_out: Callable[[], object]) -> None:
+        """Carry out a request and send its reply (unless it is deferred)."""
+        try:
+            value = carry_out()
+        except (NcUsageError, ValueError) as e:
+            value = Failure("invalid", str(e))
+        except Exception as e:  # a bug must not take the loop and the other machines
+            log.exception("request %r failed", request)
+            value = Failure("internal", f"{type(e).__name__}: {e}")
+        if value is not _DEFERRED:
+            self.channel.send(Reply(req, value))
 
     def _host(self, mid: str) -> MachineHost:
         host = self.hosts.get(mid)
@@ -344,7 +372,12 @@ class Worker:
                     gone.close()
                 return None
             case Submit():
-                return self._submit(self._host(r.mid), r, sent_mono)
+                host = self._host(r.mid)
+                pending = (req, r, sent_mono)
+                if self.interpreting.busy(host.id) and not isinstance(r.cmd, EmergencyStop):
+                    self.interpreting.hold(host.id, pending)  # after the program it waits for
+                    return _DEFERRED
+                return self._submit_or_interpret(host, pending)
             case Pace():
                 host = self._host(r.mid)
                 host.set_mode(r.mode, r.until_cycle)
@@ -399,6 +432,32 @@ class Worker:
             case InjectFault() | RemoveFault() | TakeSnapshot():
                 return training_request(self._host(r.mid), r)
         raise NcUsageError(f"unknown request {r!r}")
+
+    def _submit_or_interpret(self, host: MachineHost, pending: Pending) -> object:
+        """Carry out a submit, or first interpret the program it needs in the loop's spare time."""
+        _req, r, sent_mono = pending
+        job = interpretation_needed(host, r)
+        if job is None:
+            return self._submit(host, r, sent_mono)
+        self.interpreting.start(host, job, pending)
+        return _DEFERRED
+
+    def _finish_interpreting(self) -> None:
+        """Carry out the submits whose program is interpreted now, and those that waited
+        behind them, in order (one may need an interpretation of its own: then the rest wait
+        for that)."""
+        for host, waiting in self.interpreting.finish(lambda h: self.hosts.get(h.id) is h):
+            while waiting:
+                pending = waiting.popleft()
+                req, r, _sent = pending
+                if self.hosts.get(host.id) is not host:
+                    self.channel.send(Reply(req, Failure("not_found", f"machine '{host.id}'")))
+                    continue
+                self._answer(req, r, partial(self._submit_or_interpret, host, pending))
+                if self.interpreting.busy(host.id):
+                    for later in waiting:
+                        self.interpreting.hold(host.id, later)
+                    break
 
     def _submit(self, host: MachineHost, r: Submit, sent_mono: float) -> Submitted:
         outcome = host.machine.submit(r.cmd)

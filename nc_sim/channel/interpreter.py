@@ -21,7 +21,7 @@ absolute it is NaN here and G91 C is refused.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Generator, Iterable, Iterator, Mapping
 from dataclasses import replace
 
 from nc_sim.channel import canon
@@ -43,6 +43,10 @@ from nc_sim.channel.words import Line, ProgramError, Word, lex_line
 from nc_sim.errors import Code
 
 MAX_NESTING = 8  # subprogram levels
+# blocks one run of a program may take, repetitions included: what memory and the time to
+# interpret it can hold (about 40 µs and 1 KB a block); a program of the longest text runs
+# about 50 000 blocks
+MAX_PROGRAM_BLOCKS = 100_000
 _END_PROGRAM = (30, 2)
 _END_SUB = (17, 29)
 SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}  # #SLOPE[TYPE=..] (P-CHAN-00071)
@@ -71,6 +75,23 @@ def interpret(
     """Interpret a whole program into `sink`; `start` is where the axes are (default 0),
     `home` where G74 leaves them (their reference positions; default: where they were);
     `c_axis` the main spindle's name as the rotary axis, `rotary` whether it is that now."""
+    for _ in interpret_steps(text, sink, axes, spindles, start, skip_blocks, home, c_axis, rotary):
+        pass
+
+
+def interpret_steps(
+    text: str,
+    sink: canon.Sink,
+    axes: Iterable[str] = ("X", "Y", "Z"),
+    spindles: Iterable[str] = (),
+    start: Mapping[str, float] | None = None,
+    skip_blocks: bool = True,
+    home: Mapping[str, float] | None = None,
+    c_axis: str | None = None,
+    rotary: bool = False,
+) -> Iterator[None]:
+    """`interpret` a block at a time: each step interprets one block (a host may interleave
+    other work between the steps of a long program)."""
     names = tuple(a.upper() for a in axes)
     modal = Modal(
         rotary=rotary,
@@ -82,7 +103,7 @@ def interpret(
     run = _Run(
         split_program(text), sink, names, {s.upper() for s in spindles}, modal, skip_blocks, c_axis
     )
-    if not run.lines(run.prog.main, depth=0):
+    if not (yield from run.lines(run.prog.main, depth=0)):
         last = max(run.prog.main, default=0) + 1
         raise ProgramError("program ends without M30 or M02", last, 1, Code.PROGRAM_STRUCTURE)
 
@@ -101,7 +122,8 @@ def interpret_blocks(
     names = tuple(a.upper() for a in axes)
     work = replace(modal, position=dict(modal.position))
     run = _Run(split_program(text), sink, names, {s.upper() for s in spindles}, work, True, c_axis)
-    run.lines(run.prog.main, depth=0)
+    for _ in run.lines(run.prog.main, depth=0):
+        pass
     modal.__dict__.update(work.__dict__)
 
 
@@ -126,14 +148,39 @@ class _Run:
         self.modal = modal
         self.skip_blocks = skip_blocks
         self.ended = False
+        self.blocks = 0  # blocks interpreted so far, each repetition's again
+        self.outer_call: tuple[int, int] | None = None  # (line, column) of the main's call
 
-    def lines(self, indexes: list[int], depth: int) -> bool:
-        """Run these lines; True when a block ended them (M30/M02, or M17/M29 in a subprogram)."""
+    def count_block(self, line: int) -> None:
+        """One more block; beyond MAX_PROGRAM_BLOCKS the program is refused where the main
+        program calls the subprogram that makes it so long (or at the block itself)."""
+        self.blocks += 1
+        if self.blocks > MAX_PROGRAM_BLOCKS:
+            at_line, col = self.outer_call or (line, 1)
+            raise ProgramError(
+                f"the program runs more than {MAX_PROGRAM_BLOCKS} blocks "
+                "(subprogram repetitions included)",
+                at_line,
+                col,
+                Code.PROGRAM_STRUCTURE,
+            )
+
+    def lines(self, indexes: list[int], depth: int) -> Generator[None, None, bool]:
+        """Run these lines, a step per block; True when a block ended them (M30/M02, or
+        M17/M29 in a subprogram)."""
         for index in indexes:
             lexed = lex_line(self.prog.lines[index], index + 1, self.skip_blocks)
             if lexed.skipped or lexed.empty:
                 continue
-            end = _Block(self, lexed, index + 1, depth).run()
+            self.count_block(index + 1)
+            block = _Block(self, lexed, index + 1, depth)
+            end = block.run()
+            yield
+            if block.sub_call is not None:  # after the block's M functions, before its end
+                yield from self.call(*block.sub_call, depth)
+            if end in _END_PROGRAM and not self.ended:
+                self.sink.emit(canon.ProgramEnd(index + 1, end))
+                self.ended = True
             if self.ended:
                 return True
             if end is not None:
@@ -142,8 +189,10 @@ class _Run:
                 return True
         return False
 
-    def call(self, name: str, repetitions: int, line: int, col: int, depth: int) -> None:
-        """Run subprogram `name` `repetitions` times."""
+    def call(
+        self, name: str, repetitions: int, line: int, col: int, depth: int
+    ) -> Generator[None, None, None]:
+        """Run subprogram `name` `repetitions` times, a step per block."""
         if name not in self.prog.subprograms:
             raise ProgramError(
                 f"subprogram {name} is not defined", line, col, Code.PROGRAM_STRUCTURE
@@ -152,8 +201,10 @@ class _Run:
             raise ProgramError(
                 f"subprograms nested deeper than {MAX_NESTING}", line, col, Code.PROGRAM_STRUCTURE
             )
+        if depth == 0:
+            self.outer_call = (line, col)
         for _ in range(repetitions):
-            if not self.lines(self.prog.subprograms[name], depth + 1):
+            if not (yield from self.lines(self.prog.subprograms[name], depth + 1)):
                 at = self.prog.defined_at[name] + 1
                 raise ProgramError(
                     f"subprogram {name} ends without M17 or M29", at, 1, Code.PROGRAM_STRUCTURE
@@ -181,6 +232,7 @@ class _Block:
         self.g: dict[int, Word] = {}
         self.m: list[tuple[int, Word]] = []
         self.addr: dict[str, Word] = {}  # one each of the other addresses
+        self.sub_call: tuple[str, int, int, int] | None = None  # (name, runs, line, column)
         self.motion_g: int | None = None  # the block's G00-G03/G33/G63
         self.mode = 0  # the motion mode in force for this block (its own G or the modal one)
 
@@ -433,10 +485,7 @@ class _Block:
                 ending = m
             else:
                 self._emit(canon.MFunction(self.line, m))
-        self._subprogram_call()
-        if ending in _END_PROGRAM:
-            self._emit(canon.ProgramEnd(self.line, ending))
-            self.run_.ended = True
+        self._subprogram_call()  # the run calls it, then ends the program if the block does
         return ending
 
     def _subprogram_call(self) -> None:
@@ -453,6 +502,6 @@ class _Block:
                 raise self.error("P takes the number of runs, 1 or more", p_word.column + 1)
         if l_word is not None:
             name = str(_whole(l_word, self.line))
-            self.run_.call(name, repetitions, self.line, l_word.column, self.depth)
+            self.sub_call = (name, repetitions, self.line, l_word.column)
         elif local is not None:
-            self.run_.call(local[0], 1, self.line, local[1], self.depth)
+            self.sub_call = (local[0], 1, self.line, local[1])

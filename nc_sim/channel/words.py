@@ -43,6 +43,10 @@ class ProgramError(ValueError):
         self.code = code
         super().__init__(f"line {line}, column {column}: {detail} ({int(code)})")
 
+    def __reduce__(self) -> tuple[type[ProgramError], tuple[str, int, int, Code]]:
+        """Pickled with its fields (a machine's snapshot may hold one)."""
+        return (ProgramError, (self.detail, self.line, self.column, self.code))
+
 
 # how a word module reports a bad word: detail, column, job error code (BLOCK_SYNTAX default)
 Error = Callable[..., ProgramError]

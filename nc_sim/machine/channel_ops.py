@@ -9,11 +9,13 @@ operator sees.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from nc_sim.channel import canon
 from nc_sim.channel.canon import ListSink
-from nc_sim.channel.interpreter import interpret, interpret_blocks
+from nc_sim.channel.interpreter import interpret_blocks, interpret_steps
 from nc_sim.channel.words import ProgramError
 from nc_sim.commands import Accepted, Invalid, Outcome, Refused
 from nc_sim.errors import Code
@@ -28,15 +30,53 @@ if TYPE_CHECKING:
 PROGRAM_ACTIVE = (ChannelState.RUNNING, ChannelState.HELD, ChannelState.BLOCK_END)
 
 
+@dataclass(frozen=True)
+class Interpretation:
+    """A program's text and everything its interpretation depends on (the machine's names
+    and positions when it was asked for): `steps` needs nothing else, so a host may run it
+    between its other work and hand the machine the result (`ChannelOps.prime`)."""
+
+    text: str
+    axes: tuple[str, ...]
+    spindles: tuple[str, ...]
+    start: tuple[tuple[str, float], ...]
+    home: tuple[tuple[str, float], ...]
+    c_axis: str | None
+    rotary: bool
+
+    @property
+    def key(self) -> tuple[object, ...]:
+        """What makes two interpretations alike (NaN, an unknown C, equal to itself)."""
+        start = tuple((n, None if math.isnan(p) else p) for n, p in self.start)
+        return (self.text, self.axes, self.spindles, start, self.home, self.c_axis, self.rotary)
+
+    def steps(self, sink: canon.Sink) -> Iterator[None]:
+        """The interpretation into `sink`, a block per step (raises ProgramError)."""
+        start, home = dict(self.start), dict(self.home)
+        return interpret_steps(
+            self.text, sink, self.axes, self.spindles, start, True, home, self.c_axis, self.rotary
+        )
+
+    def run(self) -> list[canon.Call] | ProgramError:
+        """The program's canonical calls, or the error it stops at."""
+        sink = ListSink()
+        try:
+            for _ in self.steps(sink):
+                pass
+        except ProgramError as e:
+            return e
+        return sink.calls
+
+
 class ChannelOps:
     """Commands to the channel of one machine."""
 
     def __init__(self, m: Machine) -> None:
         self.m = m
         self.next_block = 1  # MDI block numbers
-        self._interpreted: (
-            tuple[tuple[str, tuple[tuple[str, float | None], ...]], list[canon.Call]] | None
-        ) = None
+        # the last interpretation's key and result: reused while the axes have not moved
+        self._interpreted: tuple[tuple[object, ...], list[canon.Call] | ProgramError] | None
+        self._interpreted = None
 
     @property
     def _names(self) -> tuple[list[str], list[str]]:
@@ -91,31 +131,43 @@ class ChannelOps:
         return Accepted(serial, m.cycle, block_id=bid)
 
     # --- programs -------------------------------------------------------------------------
-    def interpret_here(self, text: str) -> list[canon.Call]:
-        """A program's canonical calls from where the axes are now (raises ProgramError);
-        the calls of the last load are reused while the axes have not moved since."""
+    def interpretation(self, text: str) -> Interpretation:
+        """How `text` interprets from where the axes are now."""
         m = self.m
         start = {a.name: float(m.k.st[a.slot, L.S_P_CMD]) for a in m.axes}
         cax = m.cax
         if cax is not None:  # C where the rotary axis is; unknown while a spindle
             start[cax.c_name] = start[cax.ax.name] if cax.rotary else math.nan
-        key = (text, tuple((n, None if math.isnan(p) else p) for n, p in start.items()))
-        if self._interpreted is not None and self._interpreted[0] == key:
-            return self._interpreted[1]
-        sink = ListSink()
         axes, spindles = self._names
-        interpret(
+        return Interpretation(
             text,
-            sink,
-            axes,
-            spindles,
-            start,
-            home=self.home_positions(),
-            c_axis=cax.c_name if cax else None,
-            rotary=cax.rotary if cax else False,
+            tuple(axes),
+            tuple(spindles),
+            tuple(start.items()),
+            tuple(self.home_positions().items()),
+            cax.c_name if cax else None,
+            cax.rotary if cax else False,
         )
-        self._interpreted = (key, sink.calls)
-        return sink.calls
+
+    def interpreted(self, text: str) -> bool:
+        """Whether `text` from here is interpreted already (a load or a start takes no time)."""
+        done = self._interpreted
+        return done is not None and done[0] == self.interpretation(text).key
+
+    def prime(self, job: Interpretation, result: list[canon.Call] | ProgramError) -> None:
+        """Keep a result its host got by running `job` elsewhere (another thread)."""
+        self._interpreted = (job.key, result)
+
+    def interpret_here(self, text: str) -> list[canon.Call]:
+        """A program's canonical calls from where the axes are now (raises ProgramError);
+        the last result is reused while the axes have not moved since."""
+        job = self.interpretation(text)
+        if self._interpreted is None or self._interpreted[0] != job.key:
+            self._interpreted = (job.key, job.run())
+        result = self._interpreted[1]
+        if isinstance(result, ProgramError):
+            raise result
+        return result
 
     def program_load(self, name: str, text: str, serial: int) -> Outcome:
         """Check a program by interpreting it from here; keep it when it has no error."""

@@ -169,3 +169,60 @@ def test_an_emergency_stop_takes_effect_within_2_ms_under_a_flood(srv: Server, m
     within = sorted(latencies)[:-1]
     assert max(within) <= ESTOP_WITHIN_MS, sorted(latencies)[-5:]
     assert max(latencies) <= ESTOP_OUTLIER_MS, sorted(latencies)[-5:]
+
+
+def two_machines_together(srv: Server) -> tuple[str, str]:
+    """Two new machines on one worker (placed by load: of three, two share one)."""
+    ids = []
+    for k in range(3):
+        name = f"together{k}"
+        assert srv.http.post("/api/machines", json={"id": name, "demo": True}).status_code == 201
+        srv.wait_powered(name)
+        ids.append(name)
+    homes = [worker_of(srv, m)["id"] for m in ids]
+    a, b = next((a, b) for a, b in itertools.combinations(range(3), 2) if homes[a] == homes[b])
+    return ids[a], ids[b]
+
+
+BOMB = "%L1\nG91 G01 X0.001 F100\nM17\n%MAIN\nG90\nL1 P{reps}\nM30\n"
+
+
+def test_a_long_program_never_stalls_its_neighbours(srv: Server) -> None:
+    """The probe's repetition bomb: 45 000 runs of a subprogram (90 000 blocks) take seconds to
+    interpret.
+    Interpreted in the loop it froze every machine of the worker (an emergency stop to a
+    neighbour answered after 5 s); beside it, the neighbour's stops act as fast as ever.
+    Beyond 100 000 blocks the load is refused where the main program makes it so long."""
+    loader, neighbour = two_machines_together(srv)
+    done: dict[str, httpx.Response] = {}
+
+    def load() -> None:
+        with httpx.Client(base_url=srv.base, headers=srv.auth, timeout=60) as c:
+            body = {"type": "program_load", "name": "BOMB", "text": BOMB.format(reps=45_000)}
+            done["r"] = c.post(f"/api/machines/{loader}/commands", json=body)
+
+    thread = threading.Thread(target=load)
+    thread.start()
+    latencies: list[float] = []
+    try:
+        while thread.is_alive() or len(latencies) < 3:
+            r = srv.emergency_stop(neighbour)
+            assert r.status_code == 200, r.text
+            latencies.append(r.json()["latency_ms"])
+            assert srv.command(neighbour, {"type": "reset"}).status_code == 200
+            time.sleep(0.05)
+    finally:
+        thread.join(timeout=60)
+    assert done["r"].status_code == 200, done["r"].text
+    assert len(latencies) >= 10  # stops were sent throughout the interpretation
+    assert sorted(latencies)[len(latencies) // 2] <= ESTOP_WITHIN_MS
+    assert max(latencies) <= ESTOP_OUTLIER_MS, sorted(latencies)[-5:]
+    # the loaded program runs: cycle start answers at once (interpreted from here already)
+    assert srv.command(loader, {"type": "cycle_start"}).status_code == 200
+    assert srv.command(loader, {"type": "program_stop"}).status_code == 200
+    too_long = {"type": "program_load", "name": "BOMB", "text": BOMB.format(reps=200_001)}
+    r = srv.http.post(f"/api/machines/{neighbour}/commands", json=too_long, timeout=60)
+    assert r.status_code == 422
+    refusal = r.json()["detail"]
+    assert (refusal["line"], refusal["column"]) == (6, 1)  # L1 P200001
+    assert "more than 100000 blocks" in refusal["message"]

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from nc_sim.channel import canon
-from nc_sim.channel.interpreter import interpret
+from nc_sim.channel.interpreter import interpret, interpret_steps
 from nc_sim.channel.words import ProgramError
 from nc_sim.errors import Code
 
@@ -215,3 +215,32 @@ def test_random_thread_and_tapping_words_give_calls_or_a_program_error() -> None
                 assert call.pitch_mm > 0 and 0 <= call.offset_deg < 360, (text, call)
             if isinstance(call, canon.TapFeed):
                 assert call.speed_rpm != 0 and call.feed_mm_min > 0, (text, call)
+
+
+def test_a_program_runs_at_most_100000_blocks_and_is_refused_where_main_calls() -> None:
+    """Repetitions count as the blocks they run: a subprogram of two blocks (the move and
+    M17) run 50 000 times is exactly 100 000 blocks with the main's G90 and M30 over; nested
+    P5000 × P5000 (50 million moves) is refused as soon as the count passes the bound, where
+    the main program makes the call. 49 998 runs (99 996 + 3 blocks) still interpret whole."""
+    sub = "%L1\nG91 G01 X0.001 F100\nM17\n%L2\nL1 P5000\nM17\n%MAIN\nG90\n"
+    sink = canon.ListSink()
+    interpret(sub + "L1 P49998\nM30\n", sink, ("X",))
+    moves = [c for c in sink.calls if isinstance(c, canon.StraightFeed)]
+    assert len(moves) == 49_998
+    assert moves[-1].end[0][1] == pytest.approx(49.998)  # 49 998 µm-steps from 0
+    for main, col in (("L1 P50000\nM30\n", 1), ("G01 L2 P5000\nM30\n", 5)):
+        with pytest.raises(ProgramError) as e:
+            interpret(sub + main, canon.ListSink(), ("X",))
+        assert (e.value.line, e.value.column, e.value.code) == (9, col, Code.PROGRAM_STRUCTURE)
+        assert "more than 100000 blocks" in e.value.detail
+
+
+def test_a_program_interprets_a_block_per_step() -> None:
+    """A host interleaves its own work between steps: one step per block run, repetitions
+    included, and the calls so far are in the sink at every step."""
+    text = "%L1\nG91 G01 X1 F100\nM17\n%MAIN\nG90\nL1 P3\nM30\n"
+    sink = canon.ListSink()
+    seen = [len(sink.calls) for _ in interpret_steps(text, sink, ("X",))]
+    assert len(seen) == 1 + 1 + 3 * 2 + 1  # G90, L1 P3, three runs of two blocks, M30
+    assert seen == sorted(seen) and seen[-1] < len(sink.calls) + 1
+    assert isinstance(sink.calls[-1], canon.ProgramEnd)
