@@ -3,7 +3,7 @@ instructor's console frames, snapshots of a machine."""
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -131,7 +131,9 @@ class SeatSelection(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    seats: list[int] = Field(default_factory=list, max_length=MAX_SEATS)
+    seats: list[Annotated[int, Field(ge=1, le=MAX_SEATS)]] = Field(
+        default_factory=list, max_length=MAX_SEATS
+    )
 
 
 class Freeze(SeatSelection):

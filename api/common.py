@@ -6,6 +6,10 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
+# SQLite's integers are signed 64-bit: a larger number meant for the store (a row's number,
+# a version) is refused as out of range, never passed on to overflow there
+STORE_INT_MAX = 2**63 - 1
+
 
 class JobErrorModel(BaseModel):
     """One job error or event of a machine, numbered as the manuals number them."""

@@ -6,6 +6,8 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
+from api.common import STORE_INT_MAX
+
 
 class MachineLists(BaseModel):
     """A machine's native parameter lists (the text of .lis files)."""
@@ -29,7 +31,9 @@ class SimulationControl(BaseModel):
     """Run in real time, pause, or run as fast as possible (optionally up to a cycle)."""
 
     mode: Literal["run", "pause", "fast"]
-    until_cycle: int | None = Field(None, ge=0, description="fast: pause at this cycle")
+    until_cycle: int | None = Field(
+        None, ge=0, le=STORE_INT_MAX, description="fast: pause at this cycle"
+    )
 
 
 MAX_STEP_CYCLES = 1_000_000  # one request; longer spans run in fast mode with until_cycle

@@ -6,6 +6,8 @@ from typing import Literal
 
 from pydantic import BaseModel, Field, StrictFloat, StrictInt, StrictStr
 
+from api.common import STORE_INT_MAX
+
 ScopeName = Literal["axis", "channel", "tool"]
 Value = float | int | str
 
@@ -67,6 +69,7 @@ class ParameterChange(BaseModel):
     base_version: int | None = Field(
         None,
         ge=0,
+        le=STORE_INT_MAX,
         description="the version the edit was based on: refused (409, both values) "
         "when the parameter was written since; null: no check (a script's deliberate write)",
     )

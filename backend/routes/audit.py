@@ -9,6 +9,7 @@ from fastapi import APIRouter, Depends, Query, Response
 
 from api.audit import AuditKind, AuditPage, AuditVerification
 from api.auth import Action
+from api.common import STORE_INT_MAX
 from backend.bodies import text_answer
 from backend.deps import MachineDep, ServicesDep, permit
 from backend.errors import responses
@@ -55,7 +56,7 @@ def machine_audit(
     services: ServicesDep,
     f: FilterDep,
     limit: Limit = 200,
-    before_seq: Annotated[int | None, Query(ge=1)] = None,
+    before_seq: Annotated[int | None, Query(ge=1, le=STORE_INT_MAX)] = None,
 ) -> AuditPage:
     """The machine's rows (commands, parameters, control, pacing, traces), newest first."""
     return services.audit.page(_of(machine, f), limit, before_seq)
@@ -76,7 +77,7 @@ def audit(
     services: ServicesDep,
     f: FilterDep,
     limit: Limit = 200,
-    before_seq: Annotated[int | None, Query(ge=1)] = None,
+    before_seq: Annotated[int | None, Query(ge=1, le=STORE_INT_MAX)] = None,
 ) -> AuditPage:
     """Every row, logins and failed logins too, newest first."""
     return services.audit.page(f, limit, before_seq)

@@ -25,6 +25,7 @@ from api.classes import (
     SeatLink,
     SeatResult,
 )
+from api.common import STORE_INT_MAX
 from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import WORKER_GONE, ApiError, responses
@@ -201,7 +202,7 @@ def seat_audit(
     n: SeatNo,
     services: ServicesDep,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 200,
-    before_seq: Annotated[int | None, Query(ge=1)] = None,
+    before_seq: Annotated[int | None, Query(ge=1, le=STORE_INT_MAX)] = None,
 ) -> AuditPage:
     """What was done on the seat's machine (commands, parameters, faults, hints), newest
     first: for the debrief, also once the class has ended and its machine is gone."""

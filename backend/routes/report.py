@@ -6,10 +6,11 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Response
+from fastapi import APIRouter, Path, Query, Response
 from fastapi.responses import HTMLResponse
 
 from api.auth import Action
+from api.common import STORE_INT_MAX
 from api.report import AssistRun, AssistRunInfo, SignOff, SignOffRequest
 from backend.bodies import text_answer
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
@@ -49,7 +50,9 @@ def runs(
 @router.get(
     "/assist/runs/{run_id}", dependencies=[permit(Action.OBSERVE)], responses=responses(404)
 )
-def run(run_id: int, machine: MachineDep, services: ServicesDep) -> AssistRun:
+def run(
+    run_id: Annotated[int, Path(ge=1, le=STORE_INT_MAX)], machine: MachineDep, services: ServicesDep
+) -> AssistRun:
     """One stored run with everything the assistant answered (figures, changes, series)."""
     return services.assist_runs.get(machine.id, run_id)
 
