@@ -11,6 +11,7 @@ from pathlib import Path
 import uvicorn
 
 from api.telemetry import MAX_MESSAGE_BYTES
+from backend.http_limits import KeepaliveWebSocket, bounded_http
 from backend.main import create_app
 from backend.security import is_loopback, is_wildcard
 from backend.settings import Settings
@@ -77,6 +78,12 @@ def serve(host: str, port: int, overrides: Mapping[str, object], exposure: Expos
         log_level="warning",
         ws_max_size=MAX_MESSAGE_BYTES,
         ws_per_message_deflate=False,
+        http=bounded_http(settings.header_timeout_s),
+        ws=KeepaliveWebSocket,
+        # a websocket client that reads nothing answers no ping either: it is closed (1008)
+        # within client_stall_s, however large its buffers are
+        ws_ping_interval=settings.client_stall_s / 2,
+        ws_ping_timeout=settings.client_stall_s / 2,
         # forwarded headers (client address, scheme) count only from the one proxy named
         proxy_headers=exposure.proxy is not None,
         forwarded_allow_ips=exposure.proxy,

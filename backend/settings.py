@@ -30,6 +30,9 @@ class Settings(BaseSettings):
     send_buffer_bytes: int = Field(
         131072, ge=16384, description="kernel send buffer per connection (slow-client detection)"
     )
+    header_timeout_s: float = Field(
+        10.0, gt=0, le=300, description="a request head not complete this long after it began: 408"
+    )
     client_stall_s: float = Field(
         10.0, gt=0, description="a telemetry client whose send takes longer is disconnected"
     )

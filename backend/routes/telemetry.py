@@ -27,7 +27,8 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
     The client sends `{"type": "subscribe", "signals": [...]}` (again at any time to change
     them); `?signals=a,b` subscribes at once. A bad subscription gets an `error` reply; a
     binary message closes with 1003, JSON nested too deeply with 1007, a message over 64 KiB
-    with 1009, a client that does not read what we send with 1008.
+    with 1009, a client that does not read what we send with 1008 (one that reads nothing at
+    all answers no ping: the server's keepalive closes it with 1008 too).
     """
     try:
         machine = services.machines.get(mid)
@@ -52,6 +53,7 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
         while True:
             msg = await ws.receive()
             if msg["type"] == "websocket.disconnect":
+                hub.lost(sub, msg.get("code", 1005))
                 break
             code, reason = _read(sub, msg.get("text"))
             if not code and sub.flooding:

@@ -13,7 +13,9 @@ with the same signals and range share one encoded frame.
 
 Every client is bounded: at most `MAX_PENDING_REPLIES` control replies wait for it, and a send
 that has not finished within `stall_s` ends the connection (close code 1008), so a client that
-sends but never reads cannot grow the server's memory. The hub task is supervised: a failure
+sends but never reads cannot grow the server's memory. A client that reads nothing at all is
+found sooner by the server's websocket keepalive (no pong within `stall_s`: 1008 as well),
+counted as dropped too. The hub task is supervised: a failure
 while serving one client closes that client (1011); a failure of the hub itself is logged and
 the hub restarts, so no client can stop telemetry for the others.
 """
@@ -157,6 +159,13 @@ class TelemetryHub:
         if sub.sending is not None:
             sub.sending.cancel()
         return True
+
+    def lost(self, sub: Subscriber, code: int) -> None:
+        """The connection ended under us: by the server's keepalive (no pong in time: the
+        client reads nothing, 1008) counts as dropped, as a client we close for not reading."""
+        if code == CLOSE_POLICY and not sub.closed:
+            self.clients_dropped += 1
+        self.remove(sub)
 
     async def end(self, sub: Subscriber, code: int, reason: str) -> None:
         """End a client's connection with this close code (from its route handler)."""

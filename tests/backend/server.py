@@ -94,14 +94,19 @@ class Server:
         return f"Authorization: Bearer {self.token}\r\n"
 
     def start(self, stdout: IO[str] | None = None, timeout_s: float = 60.0) -> Server:
-        """Start the service; wait until it answers (`timeout_s`: a safety net, no measure)."""
+        """Start the service; wait until it answers (`timeout_s`: a safety net, no measure).
+        `stdout` takes what it prints, its log included."""
         if self.seed:
             self.token = seed_user(self.db)
             self.http.headers["Authorization"] = f"Bearer {self.token}"
         cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(self.port)]
         cmd += ["--db", str(self.db), *self.extra]
         self.proc = subprocess.Popen(
-            cmd, cwd=ROOT, env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env}, stdout=stdout
+            cmd,
+            cwd=ROOT,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env},
+            stdout=stdout,
+            stderr=None if stdout is None else subprocess.STDOUT,  # the log with it
         )
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:

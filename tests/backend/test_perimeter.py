@@ -1,15 +1,18 @@
 """The perimeter over real HTTP and websockets: a foreign Host or Origin is refused before a
 route runs (and nothing changes), every page carries a CSP that forbids framing and foreign
 sources, the API docs come from our own build, and `serve` refuses to listen beyond loopback
-without TLS."""
+without TLS. A request head must come in time and within its size; a websocket client must
+read (answer pings) and send UTF-8 text."""
 
 from __future__ import annotations
 
 import asyncio
 import re
+import socket
 import ssl
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -17,16 +20,88 @@ import httpx
 import pytest
 import websockets
 
+from tests.backend.rawws import RawWebSocket
 from tests.backend.server import ROOT, Server, free_port
 
 FOREIGN = "http://evil.example"
 
 
+HEADER_TIMEOUT_S = 1.0  # short here: the tests wait for it
+CLIENT_STALL_S = 2.0
+
+
 @pytest.fixture(scope="module")
 def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = Server(tmp_path_factory.mktemp("perimeter") / "p.sqlite").start()
+    folder = tmp_path_factory.mktemp("perimeter")
+    env = {
+        "INBETRIEB_HEADER_TIMEOUT_S": str(HEADER_TIMEOUT_S),
+        "INBETRIEB_CLIENT_STALL_S": str(CLIENT_STALL_S),
+    }
+    with (folder / "log.txt").open("w") as log:
+        s = Server(folder / "p.sqlite", env=env).start(stdout=log)
     yield s
     s.close()
+
+
+def service_log(srv: Server) -> str:
+    return (srv.db.parent / "log.txt").read_text()
+
+
+def raw_answer(srv: Server, head: bytes) -> bytes:
+    """What the service answers to these bytes sent as they are (up to its close)."""
+    with socket.create_connection(("127.0.0.1", srv.port), timeout=30) as raw:
+        raw.sendall(head)
+        answer = b""
+        while part := raw.recv(65536):
+            answer += part
+        return answer
+
+
+def test_a_request_head_not_sent_in_time_is_answered_408_and_closed(srv: Server) -> None:
+    """Half-sent heads held connections open for good (200 of them after 15 s)."""
+    answer = raw_answer(srv, b"GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n")
+    assert answer.startswith(b"HTTP/1.1 408 ")
+    assert f"within {HEADER_TIMEOUT_S:g} s".encode() in answer
+
+
+def test_a_url_or_headers_too_long_are_answered_at_once(srv: Server, mid: str) -> None:
+    """A 20 KB `?signals=` URL hung the websocket handshake; now 414, and 431 for headers."""
+    signals = ",".join(["X.pos_act_mm"] * 1700)  # 20 KB
+    upgrade = (
+        b"Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+        b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+    )
+    path = f"/api/machines/{mid}/telemetry?signals={signals}"
+    head = f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n{srv.auth_header}".encode()
+    answer = raw_answer(srv, head + upgrade + b"\r\n")
+    assert answer.startswith(b"HTTP/1.1 414 ") and b"URL longer than 8192 bytes" in answer
+    filler = b"".join(b"X-Filler-%d: %s\r\n" % (i, b"a" * 1000) for i in range(40))  # 40 KB
+    answer = raw_answer(srv, b"GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n" + filler)
+    assert answer.startswith(b"HTTP/1.1 431 ")
+    assert srv.http.get("/api/health").status_code == 200  # and the service goes on
+
+
+def test_a_websocket_client_that_reads_nothing_is_closed_as_not_reading(
+    srv: Server, mid: str
+) -> None:
+    """Its buffers can take megabytes before a send of ours would stall: the missed pong
+    finds it first, within the stall time, closed with 1008 and counted as dropped."""
+    dropped = srv.http.get("/api/service/status").json()["telemetry"]["clients_dropped"]
+    path = f"/api/machines/{mid}/telemetry?signals=X.pos_act_mm"
+    with RawWebSocket("127.0.0.1", srv.port, path, srv.auth_header, rcvbuf=4 << 20) as ws:
+        time.sleep(2 * CLIENT_STALL_S)  # reads nothing (answers no ping) for a while
+        assert ws.close_code() == 1008
+    status = srv.http.get("/api/service/status").json()["telemetry"]
+    assert status["clients_dropped"] == dropped + 1
+
+
+def test_text_that_is_not_utf8_closes_with_1007_and_one_log_line(srv: Server, mid: str) -> None:
+    path = f"/api/machines/{mid}/telemetry"
+    with RawWebSocket("127.0.0.1", srv.port, path, srv.auth_header, rcvbuf=1 << 20) as ws:
+        ws.send(b'{"type": "\xff\xfe"}')
+        assert ws.close_code() == 1007
+    log = service_log(srv)
+    assert "not UTF-8" in log and "Traceback" not in log
 
 
 def test_a_request_for_a_foreign_host_name_is_refused(srv: Server) -> None:
