@@ -8,6 +8,7 @@ it happened (`verify`), even when someone edits the file with the triggers dropp
 
 from __future__ import annotations
 
+import asyncio
 import csv
 import functools
 import hashlib
@@ -18,7 +19,7 @@ import queue
 import sqlite3
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
@@ -112,6 +113,18 @@ def _append_all(entries: list[Entry], db: sqlite3.Connection) -> list[int]:
     return append(db, entries)
 
 
+_Written = Callable[[int | BaseException], None]  # told a row's seq once it is committed
+
+
+def _settle(future: asyncio.Future[int], seq: int | BaseException) -> None:
+    if future.done():  # the waiting request was cancelled (its client went away)
+        return
+    if isinstance(seq, BaseException):
+        future.set_exception(seq)
+    else:
+        future.set_result(seq)
+
+
 @dataclass(frozen=True)
 class AuditFilter:
     """Which rows: all given conditions hold."""
@@ -171,8 +184,8 @@ class Audit:
     def __init__(self, store: Store) -> None:
         self.store = store
         # commands are recorded by a writer thread, in batches: the event loop that carries
-        # them out never waits for the disk
-        self._later: queue.Queue[Entry | None] = queue.Queue()
+        # them out never waits for the disk (a command's answer awaits its row's commit)
+        self._later: queue.Queue[tuple[Entry, _Written | None] | None] = queue.Queue()
         self._hurry = threading.Event()  # someone waits for the rows: write them now
         self._writer = threading.Thread(target=self._write, name="audit-writer", daemon=True)
         self._writer.start()
@@ -192,9 +205,24 @@ class Audit:
             self.record_later(replace(entry, outcome=f"refused ({e.status}): {refusal_text(e)}"))
             raise
 
-    def record_later(self, entry: Entry) -> None:
-        """Append one row soon, in order, without waiting."""
-        self._later.put(entry)
+    def record_later(self, entry: Entry, written: _Written | None = None) -> None:
+        """Append one row soon, in order, without waiting (`written` is told its seq, or the
+        error, on the writer's thread once the row is committed)."""
+        self._later.put((entry, written))
+
+    async def recorded(self, entry: Entry) -> int:
+        """Append one row and wait, without holding up the event loop, until it is committed
+        (it survives a crash of the service from then on); its seq. The writer writes at once
+        for it, without the batch's gathering time."""
+        loop = asyncio.get_running_loop()
+        future: asyncio.Future[int] = loop.create_future()
+
+        def written(seq: int | BaseException) -> None:
+            loop.call_soon_threadsafe(_settle, future, seq)
+
+        self.record_later(entry, written)
+        self._hurry.set()
+        return await future
 
     def flush(self) -> None:
         """Wait until every row given to `record_later` is written (at once, not after the
@@ -214,13 +242,19 @@ class Audit:
                 self._hurry.wait(BATCH_S)  # not a GIL hand-over from the event loop per command
             while not self._later.empty() and len(batch) < 500:
                 batch.append(self._later.get_nowait())
-            entries = [e for e in batch if e is not None]
+            items = [i for i in batch if i is not None]
+            outcome: list[int] | BaseException = []
             try:
-                if entries:
-                    self.store.transaction(functools.partial(_append_all, entries))
-            except Exception:  # the store is closed or failing: say so, keep serving
-                log.exception("audit rows lost: %d", len(entries))
+                if items:
+                    entries = [entry for entry, _ in items]
+                    outcome = self.store.transaction(functools.partial(_append_all, entries))
+            except Exception as e:  # the store is closed or failing: say so, keep serving
+                log.exception("audit rows lost: %d", len(items))
+                outcome = e
             finally:
+                for k, (_, written) in enumerate(items):
+                    if written is not None:
+                        written(outcome if isinstance(outcome, BaseException) else outcome[k])
                 for _ in batch:
                     self._later.task_done()
             if None in batch:

@@ -166,8 +166,10 @@ async def execute(
         outcome = f"refused ({e.status}): {refusal_text(e)}"
         raise
     finally:
+        # audited before it is answered: an acknowledged command is in the trail even when the
+        # service is killed straight after (the writer commits at once for it)
         if not _renewal(m, actor, cmd) or outcome != "ok":
-            audit.record_later(
+            await audit.recorded(
                 Entry(
                     actor=actor.name,
                     session=actor.session,

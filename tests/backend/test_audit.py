@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import io
+import signal
 import sqlite3
 from pathlib import Path
 from typing import Any
@@ -149,3 +150,26 @@ def test_a_store_of_an_earlier_version_keeps_its_parameter_history_in_the_chain(
         audit.stop()
     finally:
         store.close()
+
+
+def test_every_acknowledged_command_survives_a_kill_straight_after(
+    served: tuple[Server, dict[str, str]],
+) -> None:
+    """The probe killed the service (SIGKILL) 4-39 ms after acknowledgements and found 3 of
+    270 commands missing from the trail (written in batches later). A command is audited
+    before it is answered: every one answered is there after the restart."""
+    s, _ = served
+    assert s.proc is not None
+    for k in range(40):
+        body = {"type": "override", "percent": float(k)}
+        assert s.http.post("/api/machines/demo/commands", json=body).status_code == 200
+    s.proc.send_signal(signal.SIGKILL)  # straight after the last answer
+    s.proc.wait()
+    s.proc = None
+    again = Server(s.db).start()
+    try:
+        done = rows(again, machine="demo", kind="command", limit=100)
+        percents = sorted(r["detail"]["percent"] for r in done if r["detail"]["type"] == "override")
+        assert percents == [float(k) for k in range(40)]
+    finally:
+        again.close()
