@@ -39,7 +39,7 @@ def create_token(req: TokenCreate, services: ServicesDep, actor: ActorDep) -> To
     """A new API token of the requesting user, shown this once."""
     token = services.accounts.new_token(actor.name, req.label)
     info = token_info(services.accounts.token(public_id("token", token)))
-    services.audit.record_later(
+    services.audit.record(
         Entry(
             actor.name,
             actor.session,
@@ -70,7 +70,7 @@ def revoke_token(tid: str, services: ServicesDep, actor: ActorDep) -> Response:
     except AccountError as e:
         raise account_error(e) from None
     services.sessions.poke()  # its websockets and control go now
-    services.audit.record_later(
+    services.audit.record(
         Entry(
             actor.name,
             actor.session,

@@ -45,7 +45,7 @@ def add_user(req: UserCreate, services: ServicesDep, actor: ActorDep) -> UserInf
         services.accounts.add_user(req.name, req.role, req.password)
     except AccountError as e:
         raise account_error(e) from None
-    services.audit.record_later(
+    services.audit.record(
         Entry(
             actor.name,
             actor.session,
@@ -78,7 +78,7 @@ def change_user(name: str, req: UserChange, services: ServicesDep, actor: ActorD
         raise account_error(e) from None
     if req.password is not None:
         services.sessions.poke()
-    services.audit.record_later(
+    services.audit.record(
         Entry(actor.name, actor.session, "user", f"changed user {name}", detail=detail)
     )
     return _info(services.accounts, name)
@@ -100,7 +100,7 @@ def remove_user(name: str, services: ServicesDep, actor: ActorDep) -> Response:
     except AccountError as e:
         raise account_error(e) from None
     services.sessions.poke()
-    services.audit.record_later(
+    services.audit.record(
         Entry(actor.name, actor.session, "user", f"removed user {name}", detail={"user": name})
     )
     return Response(status_code=204)
