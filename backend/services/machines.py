@@ -1,9 +1,10 @@
 """The machines of the service as the gateway knows them: identity and parameter lists (kept in
 SQLite), which worker runs each, and what that worker last pushed.
 
-A machine runs on exactly one worker. When a worker dies its machines are rebuilt from their
-stored parameters on a live worker (a power cycle: cycle 0, new epoch), their viewers are
-told, and a replacement worker is started; machines on other workers never notice.
+A machine runs on exactly one worker. When a worker dies a replacement is started, then its
+machines are rebuilt from their stored parameters on the least loaded live workers, the
+replacement among them (a power cycle: cycle 0, new epoch), and their viewers are told;
+machines on other workers never notice.
 """
 
 from __future__ import annotations
@@ -469,7 +470,7 @@ class MachineService:
 
     def _rebuild_from(self, dead: WorkerClient) -> None:
         lost = self.on_machine(dead)
-        self.pool.replace(dead)
+        self.pool.replace(dead)  # first: the lost machines go to the least loaded, it among them
         why = f"its worker {dead.id} (pid {dead.pid}, node {dead.node}) stopped"
         for proxy in lost:
             if proxy.deleted:

@@ -3,13 +3,15 @@
 A program may run up to `MAX_PROGRAM_BLOCKS` blocks (repetitions included): seconds of
 interpretation. Done at once it froze every machine of the worker, an emergency stop to a
 neighbour's included. So a program load, or a cycle start that must interpret from new
-positions, is interpreted a few blocks at a time while the loop waits for its next deadline,
-with a look for requests between the slices; its reply waits, and so do the machine's later
+positions, is interpreted a few blocks at a time while the loop waits for its next deadline
+(at most INTERPRET_SHARE of each period), with a look for requests between the slices; its
+reply waits, and so do the machine's later
 commands (they must find the program loaded), except an emergency stop, which never waits.
 """
 
 from __future__ import annotations
 
+import gc
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -24,6 +26,9 @@ from nc_sim.machine.channel_ops import Interpretation
 from nc_sim.snapshot import ChannelState
 
 SLICE_S = 0.0002  # interpreting this long at most before the loop looks for requests
+# of each loop period at most: a worker's loop runs with real-time priority, and Linux stops
+# such a thread for 50 ms when it keeps a core busy for more than 95 % of a second
+INTERPRET_SHARE = 0.7
 BLOCKS_PER_LOOK = 4  # blocks between looks at the clock (a block takes about 40 µs)
 
 Pending = tuple[int, Submit, float]  # (request, the submit, when it was sent)
@@ -83,7 +88,20 @@ class Interpreting:
         self.jobs[mid].waiting.append(pending)
 
     def step(self, until_mono: float) -> None:
-        """Interpret until `until_mono` (monotonic time) or every program is done."""
+        """Interpret until `until_mono` (monotonic time) or every program is done.
+
+        A long program makes a hundred thousand objects that live on: Python's cyclic
+        collector would scan them all in one go every so often, a pause of 15-35 ms. So it
+        does not run during a slice, and what the slice left alive is frozen out of its reach
+        (freed as usual once nothing refers to it, only never scanned for cycles)."""
+        gc.disable()
+        try:
+            self._step(until_mono)
+        finally:
+            gc.freeze()
+            gc.enable()
+
+    def _step(self, until_mono: float) -> None:
         for job in self.jobs.values():
             try:
                 while job.result is None:

@@ -117,24 +117,19 @@ class WorkerPool:
         return min(live, key=lambda w: len(machines_on(w)))
 
     def replace(self, dead: WorkerClient) -> None:
-        """Start a worker in place of a dead one (in the background: machines are rebuilt on
-        the live ones meanwhile, the new one takes machines created later)."""
+        """Start a worker in place of a dead one and wait until it runs (a second or two: the
+        dead one's machines are rebuilt after it, spread by load over it and the others, so
+        the survivors do not end up with all of them). When it does not start, the others
+        are all there is."""
         self.replaced += 1
-
-        def start() -> None:
-            w = self._new()
-            try:
-                w.start(self._on_push, self._on_death)
-            except Exception:
-                log.exception("the replacement for worker %s did not start", dead.id)
-                return
-            with self._lock:
-                self.workers = [x for x in self.workers if x is not dead] + [w]
-
-        if self.alive():
-            threading.Thread(target=start, name="worker-replace", daemon=True).start()
-        else:
-            start()  # nothing left to rebuild on: wait for the new one
+        w = self._new()
+        try:
+            w.start(self._on_push, self._on_death)
+        except Exception:
+            log.exception("the replacement for worker %s did not start", dead.id)
+            return
+        with self._lock:
+            self.workers = [x for x in self.workers if x is not dead] + [w]
 
     def stop(self) -> None:
         for w in self.workers:

@@ -29,6 +29,7 @@ import numpy as np
 
 from backend.workers.host import MachineHost
 from backend.workers.interpreting import (
+    INTERPRET_SHARE,
     SLICE_S,
     Interpreting,
     Pending,
@@ -155,10 +156,14 @@ class Worker:
                     self.awake_until = time.monotonic() + self.status_period()
                 deadline = time.monotonic() - period  # then a pass now
             deadline += period
+            interpret_until = deadline - period * (1.0 - INTERPRET_SHARE)
             while (remaining := deadline - time.monotonic()) > 0 and not self.channel.closed:
-                if self.interpreting.working() and not (self.backlog or self.channel.ready()):
-                    # a program in the spare time, in slices: a request never waits long
-                    self.interpreting.step(min(deadline, time.monotonic() + SLICE_S))
+                if (
+                    self.interpreting.working()
+                    and time.monotonic() < interpret_until
+                    and not (self.backlog or self.channel.ready())
+                ):  # a program in the spare time, in slices: a request never waits long
+                    self.interpreting.step(min(interpret_until, time.monotonic() + SLICE_S))
                 elif self.backlog or self.channel.wait(remaining):
                     self._serve_timed()
             wake = checked = time.monotonic()

@@ -128,9 +128,13 @@ def test_a_killed_worker_s_machines_are_rebuilt_and_the_others_never_notice(srv:
     # rebuilt from its stored parameters: kv 1000 gives a lag of v/kv = 10 mm/s / 10 1/s
     srv.wait_powered(victim)
     assert lag_at_feed(srv, victim, 600) == pytest.approx(1.0, rel=1e-3)
-    # a replacement worker took the dead one's place
+    # a replacement worker took the dead one's place, and a share of its machines: the
+    # survivor did not get them all
     wait_for(lambda: sum(w["alive"] for w in service(srv)["workers"]) == 2)
     assert service(srv)["workers_replaced"] == before["workers_replaced"] + 1
+    old = {w["id"] for w in before["workers"]}
+    (fresh,) = [w for w in service(srv)["workers"] if w["id"] not in old]
+    assert fresh["machines"], "the replacement runs none of the rebuilt machines"
 
 
 def test_an_emergency_stop_takes_effect_within_2_ms_under_a_flood(srv: Server, mid: str) -> None:
