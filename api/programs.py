@@ -1,4 +1,5 @@
-"""NC programs: stored by name (service-wide), and a program's commanded tool path to preview."""
+"""NC programs: stored by name (service-wide, or a class seat's own), and a program's commanded
+tool path to preview."""
 
 from __future__ import annotations
 
@@ -24,6 +25,9 @@ class ProgramInfo(BaseModel):
     lines: int
     updated_at: datetime = Field(description="when it was last written, UTC")
     updated_by: str = Field(description="who wrote it last")
+    seat: str | None = Field(
+        None, description="a class seat's own program (that seat's machine); null: service-wide"
+    )
 
 
 class Program(ProgramInfo):

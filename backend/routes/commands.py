@@ -39,7 +39,7 @@ async def command(
     (only while holding control of the machine: the first command takes a free one)."""
     store = services.store
     return await execute(
-        actor, machine, cmd, services.audit, lambda name: programs.stored_text(store, name)
+        actor, machine, cmd, services.audit, lambda name: programs.stored_text(store, actor, name)
     )
 
 

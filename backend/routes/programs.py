@@ -23,17 +23,19 @@ BODY = json_body(ProgramText, PROGRAM_BODY_BYTES)
 
 
 @router.get("/api/programs", dependencies=[permit(Action.OBSERVE)])
-def list_programs(services: ServicesDep) -> list[ProgramInfo]:
-    """Every stored program (without its text), by name."""
-    return [programs.program_info(p) for p in services.store.programs()]
+def list_programs(services: ServicesDep, actor: ActorDep) -> list[ProgramInfo]:
+    """Every stored program (without its text), by name; a class's student: their seat's own
+    and the service-wide ones."""
+    return programs.listed(services.store, actor)
 
 
 @router.get(
     "/api/programs/{name}", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422)
 )
-def read_program(name: NameDep, services: ServicesDep) -> Program:
-    """A stored program with its text (names match regardless of case)."""
-    return programs.program_of(programs.get(services.store, name))
+def read_program(name: NameDep, services: ServicesDep, actor: ActorDep) -> Program:
+    """A stored program with its text (names match regardless of case; a student's own
+    first)."""
+    return programs.program_of(programs.get(services.store, actor, name))
 
 
 @router.put(

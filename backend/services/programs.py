@@ -1,6 +1,10 @@
-"""NC programs: the stored ones (service-wide, by name, every write audited) and the preview
-of a program's tool path on a machine (interpreted here: the interpreter is pure and cheap,
-no kernel needed)."""
+"""NC programs: the stored ones (by name, every write audited) and the preview of a program's
+tool path on a machine (interpreted here: the interpreter is pure, no kernel needed).
+
+Programs are service-wide, except a class's student's: a student writes, replaces and deletes
+the programs of their seat only (nobody else sees them), and reads those and the service-wide
+ones (the exercise's, written by the instructor); their own comes first by a name they share.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +15,7 @@ from typing import Literal
 from fastapi.concurrency import run_in_threadpool
 
 from api.programs import PreviewError, PreviewSegment, Program, ProgramInfo, ProgramPreview
-from backend.errors import not_found
+from backend.errors import ApiError, not_found
 from backend.services.audit import Entry
 from backend.services.auth import Actor
 from backend.services.store import Store, StoredProgram
@@ -25,6 +29,11 @@ from nc_sim.units import AxisKind
 _PLANE: dict[int, Literal["G17", "G18", "G19"]] = {17: "G17", 18: "G18", 19: "G19"}
 
 
+def owners(actor: Actor) -> tuple[str, ...]:
+    """Whose programs the actor reads, first match first: a student's seat, then everyone's."""
+    return ("",) if actor.seat is None else (actor.seat, "")
+
+
 def program_info(p: StoredProgram) -> ProgramInfo:
     return ProgramInfo(
         name=p.name,
@@ -32,6 +41,7 @@ def program_info(p: StoredProgram) -> ProgramInfo:
         lines=p.lines,
         updated_at=datetime.fromtimestamp(p.updated, UTC),
         updated_by=p.updated_by,
+        seat=p.owner or None,
     )
 
 
@@ -39,40 +49,62 @@ def program_of(p: StoredProgram) -> Program:
     return Program(**program_info(p).model_dump(), text=p.text)
 
 
-def get(store: Store, name: str) -> StoredProgram:
-    """The stored program `name` (any case); 404 without one."""
-    p = store.program(name)
+def listed(store: Store, actor: Actor) -> list[ProgramInfo]:
+    """The programs the actor reads, by name (without their text)."""
+    return [program_info(p) for p in store.programs(owners(actor))]
+
+
+def get(store: Store, actor: Actor, name: str) -> StoredProgram:
+    """The stored program `name` (any case) the actor reads; 404 without one."""
+    p = store.program(name, owners(actor))
     if p is None:
         raise not_found(f"program {name}")
     return p
 
 
 def put(store: Store, actor: Actor, name: str, text: str) -> ProgramInfo:
-    """Create or replace a program, audited with its size (the text is in the store)."""
-    before = store.program(name)
+    """Create or replace a program of the actor's (a student's: of their seat), audited with
+    its size (the text is in the store)."""
+    owner = actor.seat or ""
+    before = store.program(name, (owner,))
     verb = "replaced" if before is not None else "created"
+    where = f" of seat {owner}" if owner else ""
     entry = Entry(
         actor.name,
         actor.session,
         "program",
-        f"{verb} program {name} ({len(text)} characters)",
+        f"{verb} program {name}{where} ({len(text)} characters)",
+        machine=owner,
         detail={"name": name, "size": len(text), "lines": len(text.splitlines())},
     )
-    return program_info(store.put_program(name, text, entry))
+    return program_info(store.put_program(name, text, entry, owner))
 
 
 def delete(store: Store, actor: Actor, name: str) -> None:
-    """Delete a program (audited); 404 without one."""
+    """Delete a program of the actor's (audited); 404 without one, 403 for a student and a
+    service-wide program."""
+    owner = actor.seat or ""
+    where = f" of seat {owner}" if owner else ""
     entry = Entry(
-        actor.name, actor.session, "program", f"deleted program {name}", detail={"name": name}
+        actor.name,
+        actor.session,
+        "program",
+        f"deleted program {name}{where}",
+        machine=owner,
+        detail={"name": name},
     )
-    if not store.delete_program(name, entry):
-        raise not_found(f"program {name}")
+    if store.delete_program(name, entry, owner):
+        return
+    if owner and store.program(name, ("",)) is not None:
+        why = f"{actor.name} may delete only the programs of their seat, not the shared {name}"
+        raise ApiError(403, {"message": why})
+    raise not_found(f"program {name}")
 
 
-def stored_text(store: Store, name: str) -> str:
-    """The text of a stored program, for `program_load` without a text; 404 without one."""
-    return get(store, name).text
+def stored_text(store: Store, actor: Actor, name: str) -> str:
+    """The text of a stored program the actor reads, for `program_load` without a text; 404
+    without one."""
+    return get(store, actor, name).text
 
 
 # a preview may interpret up to MAX_PROGRAM_BLOCKS blocks (seconds, tens of MB): a few at a

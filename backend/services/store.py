@@ -21,6 +21,17 @@ from nc_sim.params import Value
 
 T = TypeVar("T")
 
+_PROGRAMS = """
+CREATE TABLE IF NOT EXISTS programs (
+    owner TEXT NOT NULL,           -- '' service-wide; a class seat's machine: that seat's own
+    name TEXT NOT NULL,            -- as written; unique per owner regardless of case
+    text TEXT NOT NULL,
+    size INTEGER NOT NULL,         -- characters
+    lines INTEGER NOT NULL,
+    updated REAL NOT NULL,         -- Unix time of the last write
+    updated_by TEXT NOT NULL,
+    PRIMARY KEY (owner, name)
+)"""
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS machines (
     id TEXT PRIMARY KEY,
@@ -48,15 +59,7 @@ CREATE TABLE IF NOT EXISTS traces (
     notes TEXT NOT NULL,
     meta TEXT NOT NULL             -- JSON TraceDetail (its name and notes live in the columns)
 );
-CREATE TABLE IF NOT EXISTS programs (
-    name TEXT PRIMARY KEY,         -- as written; unique regardless of case
-    text TEXT NOT NULL,
-    size INTEGER NOT NULL,         -- characters
-    lines INTEGER NOT NULL,
-    updated REAL NOT NULL,         -- Unix time of the last write
-    updated_by TEXT NOT NULL
-);
-CREATE UNIQUE INDEX IF NOT EXISTS programs_name ON programs (name COLLATE NOCASE);
+-- programs: _PROGRAMS above
 -- parameter versions of a machine (backend/services/versions.py)
 CREATE TABLE IF NOT EXISTS param_versions (
     id INTEGER PRIMARY KEY AUTOINCREMENT,  -- never reused: an old link never shows another
@@ -105,6 +108,7 @@ class StoredProgram:
     updated: float  # Unix time
     updated_by: str
     text: str = ""
+    owner: str = ""  # '' service-wide, else the class seat (machine) whose own it is
 
 
 @dataclass(frozen=True)
@@ -163,6 +167,7 @@ class Store:
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=NORMAL")  # WAL stays consistent; no sync per row
         self._db.executescript(_SCHEMA)
+        self._db.execute(_PROGRAMS)
         self._db.executescript(audit.SCHEMA)
         self._lock = threading.Lock()
         self._migrate()
@@ -175,6 +180,13 @@ class Store:
             self._db.execute(
                 "ALTER TABLE param_values ADD COLUMN version INTEGER NOT NULL DEFAULT 0"
             )
+        columns = [r[1] for r in self._db.execute("PRAGMA table_info(programs)")]
+        if "owner" not in columns:  # programs were service-wide only: all of them stay so
+            self.transaction(_programs_get_owners)
+        self._db.execute(
+            "CREATE UNIQUE INDEX IF NOT EXISTS programs_owner_name "
+            "ON programs (owner, name COLLATE NOCASE)"
+        )
         old = self._db.execute(
             "SELECT name FROM sqlite_master WHERE type = 'table' AND name = 'audit'"
         ).fetchone()
@@ -354,46 +366,63 @@ class Store:
             cur = self._db.execute("DELETE FROM traces WHERE id = ?", (tid,))
         return cur.rowcount > 0
 
-    # --- NC programs (service-wide, by name) --------------------------------------------------
-    def programs(self) -> list[StoredProgram]:
-        """Every stored program without its text, by name."""
+    # --- NC programs (by owner: service-wide '' or a class seat's own; then by name) ----------
+    def programs(self, owners: tuple[str, ...]) -> list[StoredProgram]:
+        """The programs of these owners without their text, by name (a name owned twice:
+        the first owner's)."""
+        marks = ", ".join("?" * len(owners))
         rows = self.query(
-            "SELECT name, size, lines, updated, updated_by FROM programs "
-            "ORDER BY name COLLATE NOCASE"
+            f"SELECT name, size, lines, updated, updated_by, '', owner FROM programs "
+            f"WHERE owner IN ({marks}) ORDER BY name COLLATE NOCASE",
+            owners,
         )
-        return [StoredProgram(*r) for r in rows]
+        found: dict[str, StoredProgram] = {}
+        for r in sorted(rows, key=lambda r: owners.index(r[6])):
+            found.setdefault(r[0].lower(), StoredProgram(*r))
+        return sorted(found.values(), key=lambda p: p.name.lower())
 
-    def program(self, name: str) -> StoredProgram | None:
-        """The program `name` (any case) with its text, None when there is none."""
-        rows = self.query(
-            "SELECT name, size, lines, updated, updated_by, text FROM programs "
-            "WHERE name = ? COLLATE NOCASE",
-            (name,),
-        )
-        return StoredProgram(*rows[0]) if rows else None
+    def program(self, name: str, owners: tuple[str, ...]) -> StoredProgram | None:
+        """The program `name` (any case) with its text, of the first of these owners that has
+        one; None when none has."""
+        for owner in owners:
+            rows = self.query(
+                "SELECT name, size, lines, updated, updated_by, text, owner FROM programs "
+                "WHERE owner = ? AND name = ? COLLATE NOCASE",
+                (owner, name),
+            )
+            if rows:
+                return StoredProgram(*rows[0])
+        return None
 
-    def put_program(self, name: str, text: str, entry: audit.Entry) -> StoredProgram:
-        """Create or replace a program (one of another case is replaced and renamed) and
-        append its audit row, in one transaction."""
+    def put_program(
+        self, name: str, text: str, entry: audit.Entry, owner: str = ""
+    ) -> StoredProgram:
+        """Create or replace an owner's program (one of another case is replaced and renamed)
+        and append its audit row, in one transaction."""
         now = time.time() if entry.time is None else entry.time
-        stored = StoredProgram(name, len(text), _lines(text), now, entry.actor, text)
+        stored = StoredProgram(name, len(text), _lines(text), now, entry.actor, text, owner)
 
         def work(db: sqlite3.Connection) -> None:
-            db.execute("DELETE FROM programs WHERE name = ? COLLATE NOCASE", (name,))
             db.execute(
-                "INSERT INTO programs VALUES (?, ?, ?, ?, ?, ?)",
-                (name, text, stored.size, stored.lines, now, entry.actor),
+                "DELETE FROM programs WHERE owner = ? AND name = ? COLLATE NOCASE", (owner, name)
+            )
+            db.execute(
+                "INSERT INTO programs VALUES (?, ?, ?, ?, ?, ?, ?)",
+                (owner, name, text, stored.size, stored.lines, now, entry.actor),
             )
             audit.append(db, [replace(entry, time=now)])
 
         self.transaction(work)
         return stored
 
-    def delete_program(self, name: str, entry: audit.Entry) -> bool:
-        """Delete a program and audit it in one transaction; False when there was none."""
+    def delete_program(self, name: str, entry: audit.Entry, owner: str = "") -> bool:
+        """Delete an owner's program and audit it in one transaction; False when there was
+        none."""
 
         def work(db: sqlite3.Connection) -> bool:
-            cur = db.execute("DELETE FROM programs WHERE name = ? COLLATE NOCASE", (name,))
+            cur = db.execute(
+                "DELETE FROM programs WHERE owner = ? AND name = ? COLLATE NOCASE", (owner, name)
+            )
             if cur.rowcount == 0:
                 return False
             audit.append(db, [entry])
@@ -405,3 +434,16 @@ class Store:
 def _lines(text: str) -> int:
     """Lines as an editor counts them (a last line without its newline counts)."""
     return len(text.splitlines())
+
+
+def _programs_get_owners(db: sqlite3.Connection) -> None:
+    """A store of an earlier version: its programs table (keyed by name alone) becomes the
+    owner-keyed one, every program service-wide."""
+    db.execute("ALTER TABLE programs RENAME TO programs_before_owners")
+    db.execute("DROP INDEX IF EXISTS programs_name")
+    db.execute(_PROGRAMS)
+    db.execute(
+        "INSERT INTO programs SELECT '', name, text, size, lines, updated, updated_by "
+        "FROM programs_before_owners"
+    )
+    db.execute("DROP TABLE programs_before_owners")

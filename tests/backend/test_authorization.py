@@ -21,7 +21,7 @@ import pytest
 from websockets.asyncio.client import connect
 from websockets.exceptions import InvalidStatus
 
-from api.auth import Role
+from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
 from tests.backend.server import Server, add_users
 
 ROLES = ["observer", "operator", "instructor", "admin"]
@@ -352,3 +352,42 @@ def test_a_student_reaches_their_seats_recordings_only(
     # the instructor reaches both
     assert s.http.get(f"/api/recordings/{rids[1]}/recording.rrd", headers=ida).status_code == 200
     assert s.http.post("/api/classes/rec/end", headers=ida).status_code == 200
+
+
+def test_a_student_writes_and_deletes_only_their_seats_programs(
+    srv: tuple[Server, dict[str, str]],
+) -> None:
+    """The probe's seat listed every program, wrote its own and deleted one an admin wrote.
+    A student reads the service-wide programs (the instructor's) and their seat's own; what
+    they write is their seat's (another seat never sees it, nor does the shared list); they
+    delete only their own (the shared one: 403)."""
+    s, tokens = srv
+    ida = {"Authorization": f"Bearer {tokens['ida']}"}
+    shared = "%MAIN\nG01 X10 F100\nM30\n"
+    assert s.http.put("/api/programs/CON", json={"text": shared}).status_code == 200
+    r = s.http.post(
+        "/api/classes", json={"id": "prg", "exercise": "sign-error", "seats": 2}, headers=ida
+    )
+    assert r.status_code == 201, r.text
+    links = [link["url"].replace(s.base, "") for link in r.json()["links"]]
+    with (
+        httpx.Client(base_url=s.base, timeout=30) as one,
+        httpx.Client(base_url=s.base, timeout=30) as two,
+    ):
+        for client, link in ((one, links[0]), (two, links[1])):
+            assert client.get(link, follow_redirects=False).status_code == 303
+            client.headers[CSRF_HEADER] = client.cookies[CSRF_COOKIE]
+        assert [p["name"] for p in one.get("/api/programs").json()] == ["CON"]
+        mine = "%MAIN\nG01 X20 F100\nM30\n"
+        written = one.put("/api/programs/con", json={"text": mine})  # shadows the shared CON
+        assert written.status_code == 200 and written.json()["seat"] == "prg-s01"
+        assert one.get("/api/programs/CON").json()["text"] == mine  # their own first
+        assert two.get("/api/programs/CON").json()["text"] == shared  # not seat 1's
+        assert s.http.get("/api/programs/CON").json()["text"] == shared  # nor the service's
+        assert [p["seat"] for p in s.http.get("/api/programs").json()] == [None]
+        assert two.delete("/api/programs/CON").status_code == 403  # the shared one
+        assert one.delete("/api/programs/CON").status_code == 204  # their own
+        assert one.get("/api/programs/CON").json()["text"] == shared  # the shared one again
+        assert one.delete("/api/programs/CON").status_code == 403
+    assert s.http.get("/api/programs/CON").status_code == 200  # still there
+    assert s.http.post("/api/classes/prg/end", headers=ida).status_code == 200

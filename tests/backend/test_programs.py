@@ -5,6 +5,7 @@ program on a machine, and `program_load` of a stored program by name."""
 from __future__ import annotations
 
 import math
+import sqlite3
 import time
 from collections.abc import Iterator
 from datetime import datetime
@@ -15,6 +16,7 @@ import pytest
 
 from api.auth import Role
 from api.commands import PROGRAM_MAX_CHARS
+from backend.services.store import Store
 from nc_sim.errors import Code
 from tests.backend.server import USER, Server, add_users, bearer
 
@@ -178,3 +180,22 @@ def test_preview_of_a_c_axis_program_draws_x_and_z(srv: Server, lathe: str) -> N
     ends = {s["line"]: s["points"][-1] for s in p["segments"]}
     assert ends[3] == [200.0, 100.0] and ends[4] == [250.0, 100.0]
     assert ends[5] == [250.0, 140.0] and ends[7] == [200.0, 120.0]
+
+
+def test_a_store_of_an_earlier_version_keeps_its_programs_service_wide(tmp_path: Path) -> None:
+    """Programs were keyed by name alone; opened now, each is a service-wide one."""
+    db = tmp_path / "old.sqlite"
+    with sqlite3.connect(db) as old:
+        old.execute(
+            "CREATE TABLE programs (name TEXT PRIMARY KEY, text TEXT NOT NULL, size INTEGER "
+            "NOT NULL, lines INTEGER NOT NULL, updated REAL NOT NULL, updated_by TEXT NOT NULL)"
+        )
+        old.execute("INSERT INTO programs VALUES ('Part1', 'M30\n', 4, 1, 1.0e9, 'ann')")
+    store = Store(db)
+    try:
+        (p,) = store.programs(("",))
+        assert (p.name, p.owner, p.updated_by) == ("Part1", "", "ann")
+        found = store.program("PART1", ("seat-s01", ""))
+        assert found is not None and found.text == "M30\n"
+    finally:
+        store.close()
