@@ -87,7 +87,9 @@ class Services:
         await asyncio.to_thread(classes.refreeze)
         hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
         tdir = settings.traces_path
-        traces = TraceService(store, tdir, machines)
+        traces = TraceService(
+            store, tdir, machines, settings.library_quota_mb, settings.library_user_quota_mb
+        )
         recorders = Recorders(tdir / "recordings", settings.recordings_quota_mb)
         viewer = RerunViewer(tdir / "rerun-viewer.log")
         hub.start()

@@ -33,6 +33,7 @@ WHY: dict[int, str] = {
     422: "bad input: which value, its range or why (nothing was applied)",
     502: "the Rerun viewer did not answer",
     503: "the Rerun viewer did not start",
+    507: "a disk quota is used up (which, how much, and what to delete)",
 }
 
 

@@ -45,6 +45,15 @@ class Settings(BaseSettings):
         description="disk space all recordings together may take (MB); a recording stops "
         "when it is used up, and none starts",
     )
+    library_quota_mb: float = Field(
+        4096.0,
+        gt=0,
+        description="disk space the trace library may take (MB), its derived files (the "
+        "Rerun .rrd of a trace) included: beyond, nothing more is stored (507)",
+    )
+    library_user_quota_mb: float = Field(
+        1024.0, gt=0, description="of that, what one user's saved and imported traces may take"
+    )
     ws_ticket_s: float = Field(
         30.0, gt=0, le=300, description="a websocket ticket is good this long (once)"
     )

@@ -50,7 +50,7 @@ def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
     "/import",
     status_code=201,
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 413, why={422: "bad CSV: which row or column, and why"}),
+    responses=responses(403, 413, 507, why={422: "bad CSV: which row or column, and why"}),
     openapi_extra=text_body("text/csv", CSV_BODY_BYTES, "a trace as CSV, e.g. one exported"),
     max_body_size=CSV_BODY_BYTES,
 )
@@ -64,7 +64,7 @@ async def import_csv(
     text = await read_text(request, "CSV import")
     # parsing and writing take seconds for a big file: off the event loop
     trace = await run_in_threadpool(from_csv, text, name)
-    info = await run_in_threadpool(services.traces.add, trace)
+    info = await run_in_threadpool(services.traces.add, trace, actor.name)
     _audit(services, actor, f"imported trace {info.id} ({info.name})")
     return info
 
@@ -105,7 +105,7 @@ def csv(tid: str, services: ServicesDep) -> Response:
     "/{tid}/trace.rrd",
     response_class=FileResponse,
     dependencies=[permit(Action.OBSERVE)],
-    responses=BINARY | responses(404),
+    responses=BINARY | responses(404, 507),
 )
 def rrd(tid: str, services: ServicesDep) -> FileResponse:
     """The trace as a Rerun recording."""
@@ -151,11 +151,11 @@ def measure(
     "/{tid}/save",
     status_code=201,
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 404, 409, 422),
+    responses=responses(403, 404, 409, 422, 507),
 )
 def save(tid: str, req: TraceSave, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Keep a recent capture in the library, with a name and notes."""
-    info = services.traces.save(tid, req)
+    info = services.traces.save(tid, req, actor.name)
     _audit(services, actor, f"saved trace {info.id} ({info.name})", info.machine)
     return info
 

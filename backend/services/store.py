@@ -57,7 +57,8 @@ CREATE TABLE IF NOT EXISTS traces (
     created REAL NOT NULL,
     name TEXT NOT NULL,
     notes TEXT NOT NULL,
-    meta TEXT NOT NULL             -- JSON TraceDetail (its name and notes live in the columns)
+    meta TEXT NOT NULL,            -- JSON TraceDetail (its name and notes live in the columns)
+    created_by TEXT NOT NULL DEFAULT ''  -- who saved or imported it (its files count for them)
 );
 -- programs: _PROGRAMS above
 -- parameter versions of a machine (backend/services/versions.py)
@@ -180,6 +181,9 @@ class Store:
             self._db.execute(
                 "ALTER TABLE param_values ADD COLUMN version INTEGER NOT NULL DEFAULT 0"
             )
+        columns = [r[1] for r in self._db.execute("PRAGMA table_info(traces)")]
+        if "created_by" not in columns:  # traces of earlier versions count for nobody
+            self._db.execute("ALTER TABLE traces ADD COLUMN created_by TEXT NOT NULL DEFAULT ''")
         columns = [r[1] for r in self._db.execute("PRAGMA table_info(programs)")]
         if "owner" not in columns:  # programs were service-wide only: all of them stay so
             self.transaction(_programs_get_owners)
@@ -325,13 +329,27 @@ class Store:
 
     # --- the trace library (samples live in files next to the database) -----------------------
     def add_trace(
-        self, tid: str, machine: str, created: float, name: str, notes: str, meta: str
+        self,
+        tid: str,
+        machine: str,
+        created: float,
+        name: str,
+        notes: str,
+        meta: str,
+        created_by: str,
     ) -> None:
         with self._lock:
             self._db.execute(
-                "INSERT INTO traces VALUES (?, ?, ?, ?, ?, ?)",
-                (tid, machine, created, name, notes, meta),
+                "INSERT INTO traces VALUES (?, ?, ?, ?, ?, ?, ?)",
+                (tid, machine, created, name, notes, meta, created_by),
             )
+
+    def trace_ids(self, created_by: str | None = None) -> list[str]:
+        """The stored traces' ids (of the one who saved or imported them, when given)."""
+        if created_by is None:
+            return [str(r[0]) for r in self.query("SELECT id FROM traces")]
+        rows = self.query("SELECT id FROM traces WHERE created_by = ?", (created_by,))
+        return [str(r[0]) for r in rows]
 
     def traces(self, machine: str | None = None) -> list[tuple[str, str, str, str]]:
         """(id, name, notes, meta JSON) of stored traces, newest first."""

@@ -7,6 +7,7 @@ format are made on demand and cached next to the samples.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import threading
@@ -31,6 +32,7 @@ from api.telemetry import FrameHeader, encode_frame
 from backend.errors import ApiError, not_found
 from backend.services.commands import job_error_model
 from backend.services.machines import Capture, MachineProxy, MachineService
+from backend.services.recorder import MB
 from backend.services.store import Store
 from backend.workers.protocol import ParamSnapshot
 from nc_sim.events import Event
@@ -97,11 +99,20 @@ def _info(detail: TraceDetail) -> TraceInfo:
 class TraceService:
     """Finds traces by id wherever they are; saves, lists, renames, deletes, compares."""
 
-    def __init__(self, store: Store, directory: Path, machines: MachineService) -> None:
+    def __init__(
+        self,
+        store: Store,
+        directory: Path,
+        machines: MachineService,
+        quota_mb: float = 4096.0,
+        user_quota_mb: float = 1024.0,
+    ) -> None:
         self.store = store
         self.dir = directory
         self.dir.mkdir(parents=True, exist_ok=True)
         self.machines = machines
+        self.quota_mb = quota_mb  # the library's files together, derived ones included
+        self.user_quota_mb = user_quota_mb  # one user's saved and imported traces
         self._lock = threading.Lock()
         self._cache: dict[str, Trace] = {}  # recent captures, converted once
 
@@ -184,29 +195,61 @@ class TraceService:
             out.append(info)
         return out
 
-    def add(self, trace: Trace) -> TraceInfo:
-        """Store a trace (a capture being saved, or an import): its samples durably on disk
-        first, then its row, so a committed row never points at a missing or partial file."""
+    # --- the quota ----------------------------------------------------------------------------
+    def used_mb(self, created_by: str | None = None) -> float:
+        """Disk space of the stored traces' files, samples and Rerun recordings (of the one
+        who saved or imported them, when given)."""
+        total = 0
+        for tid in self.store.trace_ids(created_by):
+            for suffix in (".npy", ".rrd"):
+                with contextlib.suppress(OSError):
+                    total += (self.dir / f"{tid}{suffix}").stat().st_size
+        return total / MB
+
+    def _room_for(self, mb: float, by: str | None, what: str) -> None:
+        """507 when storing `mb` more would pass the library's quota (or `by`'s)."""
+        used = self.used_mb()
+        if used + mb > self.quota_mb:
+            why = (
+                f"{what}: the trace library uses {used:.1f} MB of its {self.quota_mb:g} MB "
+                f"(this needs {mb:.1f} MB more): delete traces first"
+            )
+            raise ApiError(507, {"message": why})
+        if by is None:
+            return
+        mine = self.used_mb(by)
+        if mine + mb > self.user_quota_mb:
+            why = (
+                f"{what}: {by}'s traces use {mine:.1f} MB of their {self.user_quota_mb:g} MB "
+                f"(this needs {mb:.1f} MB more): delete some first"
+            )
+            raise ApiError(507, {"message": why})
+
+    def add(self, trace: Trace, by: str) -> TraceInfo:
+        """Store a trace (a capture being saved, or an import) for `by`, within the quotas:
+        its samples durably on disk first, then its row, so a committed row never points at
+        a missing or partial file."""
         d = trace.detail
+        self._room_for(trace.data.nbytes / MB, by, f"storing trace {d.id}")
         d.stored = True
         meta = d.model_dump_json()  # name and notes: the columns are the live ones
         path = self.dir / f"{d.id}.npy"
         _write_durably(path, trace.data)
         try:
-            self.store.add_trace(d.id, d.machine, d.created_unix, d.name, d.notes, meta)
+            self.store.add_trace(d.id, d.machine, d.created_unix, d.name, d.notes, meta, by)
         except BaseException:
             path.unlink(missing_ok=True)
             raise
         return _info(d)
 
-    def save(self, tid: str, req: TraceSave) -> TraceInfo:
+    def save(self, tid: str, req: TraceSave, by: str) -> TraceInfo:
         trace = self.get(tid)
         if trace.detail.stored:
             raise ApiError(409, {"message": f"trace {tid} is already in the library"})
         detail = trace.detail.model_copy(deep=True)
         detail.name = req.name or f"{detail.trigger or 'capture'} {detail.id[:6]}"
         detail.notes = req.notes
-        return self.add(Trace(detail, trace.data))
+        return self.add(Trace(detail, trace.data), by)
 
     def patch(self, tid: str, req: TracePatch) -> TraceInfo:
         trace = self.get(tid)
@@ -295,6 +338,8 @@ class TraceService:
         # a capture not (yet) saved gets its recording beside the recent ones, dropped with it
         path = self.dir / ("" if trace.detail.stored else "recent") / f"{tid}.rrd"
         if not path.exists():
+            if trace.detail.stored:  # it counts for the library from now on
+                self._room_for(trace.data.nbytes / MB, None, f"the Rerun recording of {tid}")
             path.parent.mkdir(exist_ok=True)
             d = trace.detail
             about = _about(d)
