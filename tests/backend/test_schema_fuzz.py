@@ -3,8 +3,10 @@ requests, valid and invalid ones; no answer may be a 5xx or differ from what the
 (status code documented, content type and body as documented).
 
 The fuzz has its own service, so what it does (deleting machines, E-stops, filling the trace
-library) cannot disturb other tests. Path parameters naming a machine are mostly pinned to that
-service's demo machine, so requests reach the services behind the routes, not only the 404.
+library) cannot disturb other tests. Path parameters are mostly pinned to real ids of that
+service (its demo machine, a trace, a version, an assistant run, a class and its seat, a fault,
+a snapshot, a recording, a program, a token, a user), so requests reach the services behind
+the routes, not only the 404.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import httpx
 import pytest
 import schemathesis
 from hypothesis import HealthCheck, Phase, given, settings
@@ -48,16 +51,63 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s.close()
 
 
-def _pinned(case: Case[Any], pin: bool) -> Case[Any]:
-    if pin and case.path_parameters and "mid" in case.path_parameters:
-        case.path_parameters["mid"] = "demo"
+def _created(r: httpx.Response) -> Any:
+    assert r.status_code in (200, 201), r.text
+    return r.json()
+
+
+@pytest.fixture(scope="module")
+def ids(srv: Server) -> dict[str, str]:
+    """Real ids of the fuzz's service for the path parameters, by name (and for the paths
+    where one name means another thing: a token's id, a user's name)."""
+    h = srv.http
+    csv = h.post("/api/traces/import", content=b"cycle,a\n1,2\n2,3\n")
+    fault = {"fault": {"kind": "motor_inverted", "axis": "X"}}
+    _created(h.post("/api/machines/demo/assist/sign-check", json={"axis": "X"}))
+    _created(h.post("/api/machines/demo/recording", json={"signals": ["X.pos_act_mm"]}))
+    _created(h.put("/api/programs/FUZZ", json={"text": "%MAIN\nG01 X1 F100\nM30\n"}))
+    user = {"name": "fuzzuser", "role": "observer", "password": "a long password"}
+    _created(h.post("/api/users", json=user))
+    return {
+        "mid": "demo",
+        "tid": _created(csv)["id"],
+        "vid": str(_created(h.post("/api/machines/demo/versions", json={"name": "fz"}))["id"]),
+        "run_id": str(_created(h.get("/api/machines/demo/assist/runs"))[0]["id"]),
+        "cid": _created(h.post("/api/classes", json=CLASS))["info"]["id"],
+        "n": "1",
+        "fid": str(_created(h.post("/api/machines/demo/faults", json=fault))["id"]),
+        "sid": str(_created(h.post("/api/machines/demo/snapshots", json={"label": "fz"}))["id"]),
+        "rid": _created(h.delete("/api/machines/demo/recording"))["id"],
+        "name": "FUZZ",
+        "token": _created(h.post("/api/auth/tokens", json={"label": "fz"}))["info"]["id"],
+        "user": "fuzzuser",
+    }
+
+
+CLASS = {"id": "fz", "exercise": "sign-error", "seats": 1}
+
+
+def _pinned(case: Case[Any], ids: dict[str, str] | None) -> Case[Any]:
+    """The case with its path parameters set to real ids (None: as generated)."""
+    if ids is None or not case.path_parameters:
+        return case
+    for name in case.path_parameters:
+        key = name
+        if case.path.startswith("/api/auth/tokens"):
+            key = "token"
+        elif case.path.startswith("/api/users"):
+            key = "user"
+        if key in ids:
+            case.path_parameters[name] = ids[key]
     return case
 
 
 Operation = APIOperation[Any, Any, Any, Any]
 
 
-def _fuzz(op: Operation, mode: GenerationMode, headers: dict[str, str]) -> str | None:
+def _fuzz(
+    op: Operation, mode: GenerationMode, headers: dict[str, str], ids: dict[str, str]
+) -> str | None:
     """Send the operation's generated requests; the first violation found, or None."""
     pin = op.label not in UNPINNED
 
@@ -71,7 +121,7 @@ def _fuzz(op: Operation, mode: GenerationMode, headers: dict[str, str]) -> str |
     )
     @given(case=op.as_strategy(generation_mode=mode), pin_this=st.booleans())
     def run(case: Case[Any], pin_this: bool) -> None:
-        _pinned(case, pin and pin_this).call_and_validate(
+        _pinned(case, ids if pin and pin_this else None).call_and_validate(
             checks=CHECKS, timeout=30, headers=headers
         )
 
@@ -83,7 +133,7 @@ def _fuzz(op: Operation, mode: GenerationMode, headers: dict[str, str]) -> str |
     return None
 
 
-def test_every_operation_answers_as_its_schema_says(srv: Server) -> None:
+def test_every_operation_answers_as_its_schema_says(srv: Server, ids: dict[str, str]) -> None:
     schema = schemathesis.openapi.from_url(f"{srv.base}/openapi.json")
     failures: list[str] = []
     operations = [r.ok() for r in schema.get_all_operations() if isinstance(r, Ok)]
@@ -92,7 +142,7 @@ def test_every_operation_answers_as_its_schema_says(srv: Server) -> None:
         # machine or trace name in the path is any string)
         negatable = len(op.body) > 0 or len(op.query) > 0
         for mode in [GenerationMode.POSITIVE] + [GenerationMode.NEGATIVE] * negatable:
-            found = _fuzz(op, mode, {"Authorization": f"Bearer {srv.token}"})
+            found = _fuzz(op, mode, {"Authorization": f"Bearer {srv.token}"}, ids)
             if found:
                 failures.append(found)
     assert len(operations) > 30  # the whole HTTP API was fuzzed
@@ -161,7 +211,7 @@ def _as_stranger(op: Operation) -> list[str]:
     )
     @given(case=op.as_strategy(generation_mode=GenerationMode.POSITIVE))
     def run(case: Case[Any]) -> None:
-        r = _pinned(case, True).call(timeout=30)
+        r = _pinned(case, {"mid": "demo"}).call(timeout=30)
         if r.status_code not in (401, 403):
             answered.append(f"{op.label}: {r.status_code}")
 
