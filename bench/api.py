@@ -70,6 +70,10 @@ def main() -> None:
                     if r.status_code != 200:
                         raise SystemExit(f"{kind}: {r.status_code} {r.text}")
                     handover.append(r.json()["latency_ms"])
+                    # a jog starts only once the last one's braking ended (not timed)
+                    stopped = bodies[i % len(bodies)].get("action") == "stop"
+                    while stopped and srv.axis("Z")["state"] != "STANDSTILL":
+                        time.sleep(0.001)
                 print(f"  {kind:4s} round trip  {figures(np.array(rtt) * 1e3)}")
                 print(f"  {kind:4s} hand-over   {figures(np.array(handover))}  (latency_ms)")
             seconds = time.monotonic() - t0

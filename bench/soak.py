@@ -1,0 +1,136 @@
+"""Soak: the real service under steady load for a while (10 minutes by default), watched for
+growth. Telemetry viewers (a separate client process) stream the demo lathe; a client sends
+about 10 commands a second (MDI blocks, overrides, now and then one the NC refuses with a job
+error) and reads the machine's status and audit as a page would.
+
+Prints the resident memory (RSS) of the gateway and of every worker at the start (after a
+warm-up minute) and at the end, the gateway's RSS each minute, and the store's growth (the
+SQLite file and its write-ahead log) per hour; then the commands sent, refused and failed.
+Bar: no steady growth of the gateway beyond a few MB per hour, no failed request.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.service import Viewers, fresh_status
+from tests.backend.server import Server
+
+SIGNALS = ["S1.speed_act_rpm", "S1.lag_deg", "Z.pos_act_mm", "X.lag_mm"]
+COMMANDS: list[dict[str, Any]] = [
+    {"type": "mdi", "block": "M3 S800"},
+    {"type": "override", "percent": 80.0},
+    {"type": "mdi", "block": "M5"},
+    {"type": "override", "percent": 100.0},
+]
+REFUSED: dict[str, Any] = {"type": "mdi", "block": "M3 S20000"}  # beyond every gear range: job error 90017
+RATE_HZ = 10.0
+
+
+def rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return 0.0
+
+
+def store_mb(db: Path) -> float:
+    return sum(p.stat().st_size for p in db.parent.glob(db.name + "*")) / 1e6
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--minutes", type=float, default=10.0)
+    parser.add_argument("--warmup-s", type=float, default=60.0)
+    parser.add_argument("--viewers", type=int, default=10)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        db = Path(tmp) / "soak.sqlite"
+        srv = Server(db).start()
+        assert srv.proc is not None
+        gateway = srv.proc.pid
+        try:
+            srv.wait_powered("demo")
+            url = f"{srv.ws_base}/api/machines/demo/telemetry"
+            viewers = Viewers([url] * args.viewers, SIGNALS, headers=srv.auth).start()
+            sent = refused = failed = 0
+            commands = itertools.cycle(COMMANDS)
+            t0 = time.monotonic()
+            end = t0 + args.warmup_s + args.minutes * 60
+            start: tuple[float, dict[str, float], float, float] | None = None
+            minute = t0 + args.warmup_s
+            k = 0
+            while (now := time.monotonic()) < end:
+                if start is None and now >= t0 + args.warmup_s:
+                    workers = {w["id"]: w["pid"] for w in fresh_status(srv.http)["workers"]}
+                    start = (
+                        rss_mb(gateway),
+                        {w: rss_mb(p) for w, p in workers.items()},
+                        store_mb(db),
+                        now,
+                    )
+                    print(
+                        f"after {args.warmup_s:.0f} s warm-up: gateway {start[0]:.1f} MB, "
+                        + ", ".join(f"{w} {m:.1f} MB" for w, m in start[1].items())
+                        + f", store {start[2]:.2f} MB",
+                        flush=True,
+                    )
+                if start is not None and now >= minute:
+                    print(
+                        f"  minute {round((now - start[3]) / 60):2d}: gateway "
+                        f"{rss_mb(gateway):.1f} MB, store {store_mb(db):.2f} MB",
+                        flush=True,
+                    )
+                    minute += 60
+                body = REFUSED if k % 300 == 299 else next(commands)  # a job error each 30 s
+                r = srv.command("demo", body)
+                sent += 1
+                refused += r.status_code == 409
+                failed += r.status_code not in (200, 409)
+                if k % 10 == 0:  # what an open page reads now and then
+                    failed += srv.http.get("/api/machines/demo/status").status_code != 200
+                    page = srv.http.get("/api/machines/demo/audit", params={"limit": 50})
+                    failed += page.status_code != 200
+                k += 1
+                time.sleep(max(0.0, t0 + k / RATE_HZ - time.monotonic()))
+            received = viewers.stop()
+            assert start is not None
+            hours = (time.monotonic() - start[3]) / 3600
+            workers = {w["id"]: w["pid"] for w in fresh_status(srv.http)["workers"]}
+            g1 = rss_mb(gateway)
+            print(
+                f"soak of {hours * 60:.1f} min, {args.viewers} viewers, "
+                f"{sent / (hours * 3600 + args.warmup_s):.1f} commands/s"
+            )
+            print(
+                f"  gateway RSS {start[0]:.1f} -> {g1:.1f} MB ({(g1 - start[0]) / hours:+.1f} MB/h)"
+            )
+            for wid, pid in workers.items():
+                before = start[1].get(wid)
+                was = f"{before:.1f}" if before is not None else "(new)"
+                print(f"  worker {wid} RSS {was} -> {rss_mb(pid):.1f} MB")
+            s1 = store_mb(db)
+            print(
+                f"  store {start[2]:.2f} -> {s1:.2f} MB ({(s1 - start[2]) / hours:+.1f} MB/h, "
+                f"{(s1 - start[2]) / hours * 24:.0f} MB/day)"
+            )
+            frames = sum(v.frames for v in received)
+            viewer_errors = [v.error for v in received if v.error]
+            print(
+                f"  commands {sent}: refused {refused} (job errors), failed {failed}; "
+                f"viewers: {frames} frames, {len(viewer_errors)} failed"
+            )
+        finally:
+            srv.close()
+
+
+if __name__ == "__main__":
+    main()
