@@ -31,7 +31,10 @@ COMMANDS: list[dict[str, Any]] = [
     {"type": "mdi", "block": "M5"},
     {"type": "override", "percent": 100.0},
 ]
-REFUSED: dict[str, Any] = {"type": "mdi", "block": "M3 S20000"}  # beyond every gear range: job error 90017
+REFUSED: dict[str, Any] = {
+    "type": "mdi",
+    "block": "M3 S20000",
+}  # beyond every gear range: job error 90017
 RATE_HZ = 10.0
 
 
@@ -51,17 +54,19 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=10.0)
     parser.add_argument("--warmup-s", type=float, default=60.0)
     parser.add_argument("--viewers", type=int, default=10)
+    parser.add_argument("--workers", type=int, help="worker processes (default: one per core)")
     args = parser.parse_args()
+    extra = ["--workers", str(args.workers)] if args.workers else []
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(tmp) / "soak.sqlite"
-        srv = Server(db).start()
+        srv = Server(db, *extra).start()
         assert srv.proc is not None
         gateway = srv.proc.pid
         try:
             srv.wait_powered("demo")
             url = f"{srv.ws_base}/api/machines/demo/telemetry"
             viewers = Viewers([url] * args.viewers, SIGNALS, headers=srv.auth).start()
-            sent = refused = failed = 0
+            sent = refused = failed = job_errors = 0
             commands = itertools.cycle(COMMANDS)
             t0 = time.monotonic()
             end = t0 + args.warmup_s + args.minutes * 60
@@ -93,6 +98,7 @@ def main() -> None:
                 body = REFUSED if k % 300 == 299 else next(commands)  # a job error each 30 s
                 r = srv.command("demo", body)
                 sent += 1
+                job_errors += body is REFUSED
                 refused += r.status_code == 409
                 failed += r.status_code not in (200, 409)
                 if k % 10 == 0:  # what an open page reads now and then
@@ -125,8 +131,9 @@ def main() -> None:
             frames = sum(v.frames for v in received)
             viewer_errors = [v.error for v in received if v.error]
             print(
-                f"  commands {sent}: refused {refused} (job errors), failed {failed}; "
-                f"viewers: {frames} frames, {len(viewer_errors)} failed"
+                f"  commands {sent}, {job_errors} of them bringing a job error ({refused} "
+                f"refused at once with 409, the others while queued, as an event), failed "
+                f"{failed}; viewers: {frames} frames, {len(viewer_errors)} failed"
             )
         finally:
             srv.close()
