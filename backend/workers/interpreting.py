@@ -4,9 +4,9 @@ A program may run up to `MAX_PROGRAM_BLOCKS` blocks (repetitions included): seco
 interpretation. Done at once it froze every machine of the worker, an emergency stop to a
 neighbour's included. So a program load, or a cycle start that must interpret from new
 positions, is interpreted a few blocks at a time while the loop waits for its next deadline
-(at most INTERPRET_SHARE of each period), with a look for requests between the slices; its
-reply waits, and so do the machine's later
-commands (they must find the program loaded), except an emergency stop, which never waits.
+(at most INTERPRET_SHARE of each period), with a look for requests between the slices. Its
+reply waits, and so do the machine's later commands (they must find the program loaded),
+except an emergency stop, which never waits.
 """
 
 from __future__ import annotations
