@@ -23,6 +23,7 @@ from backend.workers.ring import shm_dir
 log = logging.getLogger(__name__)
 
 Factory = Callable[[str, float, Path], WorkerClient]  # (id, loop period, ring folder)
+REPLACEMENT_WAIT_S = 10.0  # a dead worker's machines wait this long at most for its successor
 
 
 def default_count() -> int:
@@ -117,19 +118,30 @@ class WorkerPool:
         return min(live, key=lambda w: len(machines_on(w)))
 
     def replace(self, dead: WorkerClient) -> None:
-        """Start a worker in place of a dead one and wait until it runs (a second or two: the
-        dead one's machines are rebuilt after it, spread by load over it and the others, so
-        the survivors do not end up with all of them). When it does not start, the others
-        are all there is."""
+        """Start a worker in place of a dead one and wait until it runs, at most
+        REPLACEMENT_WAIT_S (a local one takes a second or two): the dead one's machines are
+        rebuilt after it, spread by load over it and the others, so the survivors do not end
+        up with all of them. One that takes longer (a Ray actor waiting for a node) joins
+        when it is up; the machines do not wait for it."""
         self.replaced += 1
-        w = self._new()
-        try:
-            w.start(self._on_push, self._on_death)
-        except Exception:
-            log.exception("the replacement for worker %s did not start", dead.id)
+        up = threading.Event()
+
+        def start() -> None:
+            w = self._new()
+            try:
+                w.start(self._on_push, self._on_death)
+            except Exception:
+                log.exception("the replacement for worker %s did not start", dead.id)
+                return
+            with self._lock:
+                self.workers = [x for x in self.workers if x is not dead] + [w]
+            up.set()
+
+        if not self.alive():
+            start()  # nothing left to rebuild on: wait for the new one
             return
-        with self._lock:
-            self.workers = [x for x in self.workers if x is not dead] + [w]
+        threading.Thread(target=start, name="worker-replace", daemon=True).start()
+        up.wait(REPLACEMENT_WAIT_S)
 
     def stop(self) -> None:
         for w in self.workers:

@@ -109,7 +109,8 @@ def test_a_node_that_leaves_has_its_machines_rebuilt_on_the_others(
         srv.wait_powered(leaver)  # the machine answers again, rebuilt and powered on
         r = srv.command(leaver, {"type": "mdi", "block": "M3 S500"})
         assert r.status_code == 200 and r.json()["accepted"], r.text
-        assert not next(w for w in service(srv)["workers"] if w["id"] == home["id"])["alive"]
+        # the node's worker is dead: listed as such, or replaced already
+        assert not any(w["alive"] for w in service(srv)["workers"] if w["id"] == home["id"])
     finally:
         ray_cluster.add_node(**NODE_ARGS)  # the next tests find the cluster as it was
         ray_cluster.wait_for_nodes()
