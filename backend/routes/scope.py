@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Query, Request
-from fastapi.responses import FileResponse, RedirectResponse, Response
+from fastapi.responses import RedirectResponse, Response, StreamingResponse
 
 from api.auth import Action
 from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
@@ -117,15 +119,35 @@ def recording_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) 
 
 @router.get(
     "/recordings/{rid}/recording.rrd",
-    response_class=FileResponse,
+    response_class=StreamingResponse,
     dependencies=[permit(Action.OBSERVE)],
     responses=BINARY | responses(404),
 )
-def recording_rrd(rid: str, services: ServicesDep, actor: ActorDep) -> FileResponse:
+def recording_rrd(rid: str, services: ServicesDep, actor: ActorDep) -> StreamingResponse:
     """The recording as a Rerun .rrd file (so far, while it runs); a class's student gets
     their seat's only (others: 404)."""
     path = services.recorders.path(rid, actor.seat)
-    return FileResponse(path, media_type="application/octet-stream", filename=f"{rid}.rrd")
+    # a running recording grows while it is sent: send the bytes there are now, no more
+    # (a file response would read on to the new end and overrun its Content-Length)
+    size = path.stat().st_size
+    return StreamingResponse(
+        _first_bytes(path, size),
+        media_type="application/octet-stream",
+        headers={
+            "Content-Length": str(size),
+            "Content-Disposition": f'attachment; filename="{rid}.rrd"',
+        },
+    )
+
+
+def _first_bytes(path: Path, size: int, chunk: int = 1 << 16) -> Iterator[bytes]:
+    with path.open("rb") as f:
+        while size > 0:
+            data = f.read(min(chunk, size))
+            if not data:
+                return
+            size -= len(data)
+            yield data
 
 
 @router.get(

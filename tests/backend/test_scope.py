@@ -272,6 +272,24 @@ def test_continuous_recording_writes_every_cycle(srv: Server, mid: str, tmp_path
     srv.command(mid, {"type": "spindle", "spindle": "S1", "m": 5})
 
 
+def test_a_running_recording_downloads_as_far_as_it_is_written(srv: Server, mid: str) -> None:
+    """The file grows while it is sent: each download is whole up to the size it had, with
+    that size as its Content-Length (a file response read on and broke the answer)."""
+    sigs = [s["name"] for s in srv.http.get(f"/api/machines/{mid}/signals").json()][:16]
+    rid = srv.http.post(f"/api/machines/{mid}/recording", json={"signals": sigs}).json()["id"]
+    srv.pace(mid, mode="run")  # in real time: it grows between and during the downloads
+    sizes = []
+    for _ in range(12):
+        r = srv.http.get(f"/api/recordings/{rid}/recording.rrd")
+        assert r.status_code == 200
+        assert len(r.content) == int(r.headers["content-length"]) > 0
+        assert r.headers["content-disposition"] == f'attachment; filename="{rid}.rrd"'
+        sizes.append(len(r.content))
+        time.sleep(0.05)
+    assert sizes == sorted(sizes) and sizes[-1] > sizes[0]  # it grew in real time
+    srv.http.delete(f"/api/machines/{mid}/recording")
+
+
 def listening(port: int) -> list[str]:
     """Local addresses of listening TCP sockets on `port` (from /proc/net/tcp and tcp6)."""
     out = []
