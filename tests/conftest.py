@@ -20,8 +20,11 @@ _serial = itertools.count(1)
 
 @pytest.fixture(scope="session")
 def shared_srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    """The run's one plain service, for every module that has no reason for its own."""
+    """The run's one plain service, for every module that has no reason for its own. Its
+    demo machine stays paused: the HMI opens it by default, but no test moves it, and in
+    real time it would cost a tenth of a core for the whole run."""
     s = Server(tmp_path_factory.mktemp("shared") / "shared.sqlite").start()
+    s.pace("demo", mode="pause")
     yield s
     s.close()
 
