@@ -19,11 +19,10 @@ import secrets
 from dataclasses import replace
 
 from starlette.requests import HTTPConnection
-from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from api.auth import CLIENT_HEADER, CSRF_HEADER, SESSION_COOKIE
-from api.common import ErrorBody, Refusal
+from backend.errors import Forbidden, NotLoggedIn, answer
 from backend.security import SAFE_METHODS
 from backend.services.accounts import Accounts, public_id
 from backend.services.auth import Actor
@@ -40,8 +39,8 @@ def guarded(path: str) -> bool:
     return path.startswith(GUARDED_PREFIXES) and path not in OPEN_PATHS
 
 
-def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | tuple[int, str]:
-    """The actor behind a request, or why there is none (status, message)."""
+def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | NotLoggedIn | Forbidden:
+    """The actor behind a request, or the refusal saying why there is none."""
     kind = conn.scope["type"]
     # a browser tab's id: websockets cannot send headers, so they name it in the query
     client = (conn.headers.get(CLIENT_HEADER) or conn.query_params.get("client") or "")[:64]
@@ -49,25 +48,25 @@ def identify(accounts: Accounts, conn: HTTPConnection) -> Actor | tuple[int, str
     if ticket is not None and (kind == "websocket" or conn.scope["method"] == "GET"):
         actor = accounts.redeem_ticket(ticket, kind, conn.scope["path"])
         if actor is None:
-            return 401, "unknown, used or expired ticket"
+            return NotLoggedIn("unknown, used or expired ticket")
         return actor if actor.client or not client else replace(actor, client=client)
     auth = conn.headers.get("authorization", "")
     if auth[:7].lower() == "bearer ":
         token = auth[7:].strip()
         user = accounts.token_user(token)
         if user is None:
-            return 401, "unknown or revoked API token"
+            return NotLoggedIn("unknown or revoked API token")
         return Actor(user.name, user.role, public_id("token", token), client)
     if kind == "websocket":
-        return 401, "a websocket needs a ticket (POST /api/auth/ws-ticket) or an API token"
+        return NotLoggedIn("a websocket needs a ticket (POST /api/auth/ws-ticket) or an API token")
     sid = conn.cookies.get(SESSION_COOKIE)
     session = accounts.session(sid) if sid else None
     if session is None or not sid:
-        return 401, "the session has ended: log in again" if sid else "not logged in"
+        return NotLoggedIn("the session has ended: log in again" if sid else "not logged in")
     if conn.scope["method"] not in SAFE_METHODS:
         sent = conn.headers.get(CSRF_HEADER, "")
         if not secrets.compare_digest(sent.encode(), session.csrf.encode()):
-            return 403, f"missing or wrong {CSRF_HEADER} header"
+            return Forbidden(f"missing or wrong {CSRF_HEADER} header")
     user = session.user
     return Actor(user.name, user.role, public_id("session", sid), client)
 
@@ -90,11 +89,8 @@ class Authentication:
             scope.setdefault("state", {})["actor"] = replace(found, seat=seat) if seat else found
             await self.app(scope, receive, send)
             return
-        status, why = found
         if scope["type"] == "websocket":  # closed before the accept: an HTTP 403 for the client
-            await send({"type": "websocket.close", "code": 1008, "reason": why})
+            await send({"type": "websocket.close", "code": 1008, "reason": str(found)})
             return
-        body = ErrorBody(detail=Refusal(message=why)).model_dump(mode="json")
-        headers = {"www-authenticate": "Bearer"} if status == 401 else None
-        response = JSONResponse(body, status_code=status, headers=headers)
-        await response(scope, receive, send)
+        headers = {"www-authenticate": "Bearer"} if isinstance(found, NotLoggedIn) else None
+        await answer(found, headers)(scope, receive, send)

@@ -19,7 +19,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from api.commands import PROGRAM_MAX_CHARS
 from api.common import ErrorBody, Refusal
-from backend.errors import ApiError, body_too_large
+from backend.errors import OK, Invalid, TooLarge, body_too_large, http_status
 
 DEFAULT_BODY_BYTES = 64 * 1024  # every route that says nothing else: commands, settings, …
 OPEN_BODY_BYTES = 4 * 1024  # the routes open without credentials (logging in)
@@ -54,7 +54,8 @@ class BodyLimitAnswer:
                 body = ErrorBody(detail=Refusal(message=text)).model_dump_json().encode()
                 headers = [(b"content-type", b"application/json")]
                 headers.append((b"content-length", str(len(body)).encode()))
-                await send({"type": "http.response.start", "status": 413, "headers": headers})
+                status = http_status(TooLarge)
+                await send({"type": "http.response.start", "status": status, "headers": headers})
                 await send({"type": "http.response.body", "body": body})
             elif not replaced:  # the bare answer's body goes nowhere
                 await send(message)
@@ -64,7 +65,8 @@ class BodyLimitAnswer:
 
 def _bare_413(start: Message) -> bool:
     headers = dict(start.get("headers", []))
-    return bool(start["status"] == 413 and headers.get(b"content-type", b"").startswith(b"text/"))
+    plain = headers.get(b"content-type", b"").startswith(b"text/")
+    return bool(start["status"] == http_status(TooLarge) and plain)
 
 
 async def read_text(request: Request, what: str) -> str:
@@ -75,7 +77,7 @@ async def read_text(request: Request, what: str) -> str:
         return b"".join(chunks).decode("utf-8-sig")
     except UnicodeDecodeError as e:
         msg = f"{what}: not UTF-8 text (byte {e.start} is {e.object[e.start]:#04x})"
-        raise ApiError(422, {"message": msg}) from None
+        raise Invalid(msg) from None
 
 
 M = TypeVar("M", bound=BaseModel)
@@ -114,4 +116,4 @@ def text_body(media_type: str, max_bytes: int, description: str) -> dict[str, An
 def text_answer(media_type: str, description: str) -> dict[int | str, Any]:
     """`responses=` entry documenting a 200 answer of text in this media type."""
     content = {media_type: {"schema": {"type": "string"}}}
-    return {200: {"content": content, "description": description}}
+    return {OK: {"content": content, "description": description}}

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from api.auth import MIN_PASSWORD, Role
-from backend.services.accounts import AccountError, Accounts
+from backend.services.accounts import AccountError, Accounts, BadPassword
 from backend.services.store import Store
 from backend.settings import Settings
 
@@ -49,9 +49,9 @@ def _password(args: argparse.Namespace) -> str:
     else:
         pw = getpass.getpass("password: ")
         if getpass.getpass("again: ") != pw:
-            raise AccountError("the passwords differ")
+            raise BadPassword("the passwords differ")
     if len(pw) < MIN_PASSWORD:
-        raise AccountError(f"a password has at least {MIN_PASSWORD} characters")
+        raise BadPassword(f"a password has at least {MIN_PASSWORD} characters")
     return pw
 
 

@@ -13,7 +13,7 @@ from fastapi.requests import HTTPConnection
 
 from api.audit import AuditKind
 from api.auth import HELD, Action
-from backend.errors import ApiError, refusal_text
+from backend.errors import ApiError, NotLoggedIn, refusal_text
 from backend.security import SAFE_METHODS, is_loopback
 from backend.services.accounts import Accounts
 from backend.services.assist import Assistants
@@ -164,7 +164,7 @@ async def get_actor(conn: HTTPConnection) -> Actor:
     """Who sends this request, as the authentication middleware found (backend/authn.py)."""
     actor: Actor | None = conn.scope.get("state", {}).get("actor")
     if actor is None:  # a route outside the guarded paths asked: nobody
-        raise ApiError(401, {"message": "not logged in"})
+        raise NotLoggedIn("not logged in")
     return actor
 
 

@@ -22,10 +22,16 @@ from typing import Any
 from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIOProtocol
 
+from backend.errors import HEADERS_TOO_LARGE, REQUEST_TIMEOUT, URI_TOO_LONG
+
 MAX_URL_BYTES = 8 * 1024  # a telemetry URL with every signal of a large machine fits
 MAX_HEADER_BYTES = 32 * 1024  # names and values of one request's headers together
 
-_REASONS = {408: b"Request Timeout", 414: b"URI Too Long", 431: b"Request Header Fields Too Large"}
+_REASONS = {
+    REQUEST_TIMEOUT: b"Request Timeout",
+    URI_TOO_LONG: b"URI Too Long",
+    HEADERS_TOO_LARGE: b"Request Header Fields Too Large",
+}
 
 
 CLOSE_NOT_READING = 1008  # websocket close code (RFC 6455 7.4.1): policy violation
@@ -61,13 +67,13 @@ def bounded_http(header_timeout_s: float) -> type[HttpToolsProtocol]:
         def on_url(self, url: bytes) -> None:
             self.url_bytes += len(url)
             if self.url_bytes > MAX_URL_BYTES:
-                self._refuse(414, f"URL longer than {MAX_URL_BYTES} bytes")
+                self._refuse(URI_TOO_LONG, f"URL longer than {MAX_URL_BYTES} bytes")
             super().on_url(url)
 
         def on_header(self, name: bytes, value: bytes) -> None:
             self.header_bytes += len(name) + len(value)
             if self.header_bytes > MAX_HEADER_BYTES:
-                self._refuse(431, f"headers longer than {MAX_HEADER_BYTES} bytes")
+                self._refuse(HEADERS_TOO_LARGE, f"headers longer than {MAX_HEADER_BYTES} bytes")
             super().on_header(name, value)
 
         def on_headers_complete(self) -> None:
@@ -97,7 +103,8 @@ def bounded_http(header_timeout_s: float) -> type[HttpToolsProtocol]:
         def _too_slow(self) -> None:
             self.head_timer = None
             if not self.transport.is_closing():
-                self._answer(408, f"request head not complete within {header_timeout_s:g} s")
+                why = f"request head not complete within {header_timeout_s:g} s"
+                self._answer(REQUEST_TIMEOUT, why)
 
         def _answer(self, status: int, why: str) -> None:
             body = why.encode()

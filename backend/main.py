@@ -12,7 +12,7 @@ from backend import VERSION, errors, frontend, openapi
 from backend.authn import Authentication, guarded
 from backend.bodies import DEFAULT_BODY_BYTES, OPEN_BODY_BYTES, BodyLimitAnswer
 from backend.deps import Services, rule_of
-from backend.errors import responses
+from backend.errors import Forbidden, NotLoggedIn, responses
 from backend.routes import (
     assist,
     audit,
@@ -89,7 +89,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         viewer,
     ):
         app.include_router(
-            module.router, responses=responses(401, 403), max_body_size=DEFAULT_BODY_BYTES
+            module.router,
+            responses=responses(NotLoggedIn, Forbidden),
+            max_body_size=DEFAULT_BODY_BYTES,
         )
     _every_route_has_a_rule(app)
     openapi.install(app)

@@ -23,7 +23,7 @@ from api.telemetry import (
     Subscribe,
     Subscribed,
 )
-from backend.errors import WHY
+from backend.errors import STATUS, BadRequest
 
 WEBSOCKET_MODELS: tuple[type[BaseModel], ...] = (
     Subscribe,
@@ -74,7 +74,10 @@ def _one_error_body(doc: dict[str, Any]) -> None:
             if answer and "HTTPValidationError" in str(answer.get("content")):
                 answer["content"] = content
             if "application/json" in op.get("requestBody", {}).get("content", {}):
-                answers.setdefault("400", {"description": WHY[400], "content": content})
+                answers.setdefault(
+                    str(STATUS[BadRequest][0]),
+                    {"description": STATUS[BadRequest][1], "content": content},
+                )
     schemas = doc["components"]["schemas"]
     if "ErrorBody" not in schemas:
         _, defs = models_json_schema(

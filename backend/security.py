@@ -18,10 +18,9 @@ import ipaddress
 from collections.abc import Iterable
 
 from starlette.datastructures import Headers
-from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from api.common import ErrorBody, Refusal
+from backend.errors import ApiError, BadRequest, Forbidden, answer
 
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
@@ -90,13 +89,13 @@ class Perimeter:
             return
         headers = Headers(scope=scope)
         host = headers.get("host", "")
-        why = None
+        why: ApiError | None = None
         if _hostname(host) not in self.hosts:
-            why = (400, f"Host {host!r} is not a name of this service")
+            why = BadRequest(f"Host {host!r} is not a name of this service")
         elif kind == "websocket" or scope["method"] not in SAFE_METHODS:
             why = self._cross_site(scope, headers, host)
         if why is not None:
-            await self._refuse(scope, receive, send, *why)
+            await self._refuse(scope, receive, send, why)
             return
         if kind == "websocket":
             await self.app(scope, receive, send)
@@ -115,21 +114,20 @@ class Perimeter:
         await self.app(scope, receive, with_headers)
 
     @staticmethod
-    def _cross_site(scope: Scope, headers: Headers, host: str) -> tuple[int, str] | None:
+    def _cross_site(scope: Scope, headers: Headers, host: str) -> Forbidden | None:
         origin = headers.get("origin")
         if origin is not None:
             scheme = {"ws": "http", "wss": "https"}.get(scope["scheme"], scope["scheme"])
             if origin.lower() != f"{scheme}://{host}".lower():
-                return 403, f"requests from {origin} may not change anything here"
+                return Forbidden(f"requests from {origin} may not change anything here")
         if headers.get("sec-fetch-site") == "cross-site":
-            return 403, "cross-site requests may not change anything here"
+            return Forbidden("cross-site requests may not change anything here")
         return None
 
     @staticmethod
-    async def _refuse(scope: Scope, receive: Receive, send: Send, status: int, why: str) -> None:
+    async def _refuse(scope: Scope, receive: Receive, send: Send, e: ApiError) -> None:
         if scope["type"] == "websocket":
             # closing before accepting: the client gets an HTTP 403
-            await send({"type": "websocket.close", "code": 1008, "reason": why[:120]})
+            await send({"type": "websocket.close", "code": 1008, "reason": str(e)[:120]})
             return
-        body = ErrorBody(detail=Refusal(message=why)).model_dump(mode="json")
-        await JSONResponse(body, status_code=status)(scope, receive, send)
+        await answer(e)(scope, receive, send)

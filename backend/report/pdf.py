@@ -13,7 +13,7 @@ import signal
 import tempfile
 from pathlib import Path
 
-from backend.errors import ApiError
+from backend.errors import Unavailable
 
 PRINT_TIMEOUT_S = 60.0
 
@@ -21,12 +21,9 @@ PRINT_TIMEOUT_S = 60.0
 async def html_to_pdf(html: str, chromium: Path, timeout_s: float = PRINT_TIMEOUT_S) -> bytes:
     """Print `html` to PDF bytes with `chromium`; 503 when it is missing, fails or hangs."""
     if not chromium.is_file():
-        raise ApiError(
-            503,
-            {
-                "message": f"the PDF needs Chromium at {chromium}, which is not installed "
-                "(apt install chromium); the HTML report works without it"
-            },
+        raise Unavailable(
+            f"the PDF needs Chromium at {chromium}, which is not installed "
+            "(apt install chromium); the HTML report works without it"
         )
     with tempfile.TemporaryDirectory(prefix="inbetrieb-report-") as tmp:
         page, out = Path(tmp) / "report.html", Path(tmp) / "report.pdf"
@@ -53,10 +50,10 @@ async def html_to_pdf(html: str, chromium: Path, timeout_s: float = PRINT_TIMEOU
                 os.killpg(proc.pid, signal.SIGKILL)
             await proc.wait()
             why = f"Chromium did not print the report within {timeout_s:g} s"
-            raise ApiError(503, {"message": why}) from None
+            raise Unavailable(why) from None
         data = out.read_bytes() if out.is_file() else b""
         if proc.returncode != 0 or not data.startswith(b"%PDF-"):
             tail = err.decode("utf-8", "replace").strip().splitlines()[-1:] or [""]
             why = f"Chromium could not print the report (exit {proc.returncode}): {tail[0]}"
-            raise ApiError(503, {"message": why[:500]})
+            raise Unavailable(why[:500])
         return data

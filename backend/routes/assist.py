@@ -23,16 +23,26 @@ from api.assist import (
 )
 from api.auth import Action
 from backend.deps import ActorDep, MachineDep, Services, ServicesDep, permit
-from backend.errors import responses
+from backend.errors import (
+    NO_CONTENT,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    TimedOut,
+    Unavailable,
+    Why,
+    responses,
+)
 from backend.services.assist import cancel_live, run_live
 from backend.services.auth import Actor
 from backend.services.calculators import calculate, gear_selection
 from backend.services.machines import MachineProxy
 
 router = APIRouter(prefix="/api/machines/{mid}/assist", tags=["assistants"])
-_WHY = {
-    422: "the experiment cannot run as asked (no feed, unknown axis, refused motion)",
-    504: "the experiment did not end in time",
+_WHY: Why = {
+    Invalid: "the experiment cannot run as asked (no feed, unknown axis, refused motion)",
+    TimedOut: "the experiment did not end in time",
 }
 
 
@@ -57,7 +67,7 @@ async def _live(
 @router.post(
     "/multi-gain",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_WHY),
+    responses=responses(NotFound, Invalid, why=_WHY),
 )
 async def multi_gain(
     body: MultiGainRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -72,7 +82,7 @@ async def multi_gain(
 @router.post(
     "/sign-check",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_WHY),
+    responses=responses(NotFound, Invalid, why=_WHY),
 )
 async def sign_check(
     body: SignCheckRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -86,7 +96,7 @@ async def sign_check(
 @router.post(
     "/loop-gain",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_WHY),
+    responses=responses(NotFound, Invalid, why=_WHY),
 )
 async def loop_gain(
     body: LoopGainRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -100,7 +110,7 @@ async def loop_gain(
 @router.post(
     "/curve-run-up",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_WHY),
+    responses=responses(NotFound, Invalid, why=_WHY),
 )
 async def curve_run_up(
     body: CurveRunUpRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -114,13 +124,15 @@ async def curve_run_up(
 
 # The calculators: pure arithmetic, answered in the request (a thread of the pool, not the
 # assistants' process: no kernel, no simulation). The machine supplies the values "before".
-_CALC_WHY = {422: "the inputs do not fit together (which one, and why) or the axis is unknown"}
+_CALC_WHY: Why = {
+    Invalid: "the inputs do not fit together (which one, and why) or the axis is unknown"
+}
 
 
 @router.post(
     "/resolution",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_CALC_WHY),
+    responses=responses(NotFound, Invalid, why=_CALC_WHY),
 )
 def resolution(body: ResolutionRequest, machine: MachineDep) -> AssistResult:
     """004 §3.4: wegaufz/wegaufn = encoder increments per motor revolution over the distance
@@ -131,7 +143,7 @@ def resolution(body: ResolutionRequest, machine: MachineDep) -> AssistResult:
 @router.post(
     "/multi-gain-calc",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_CALC_WHY),
+    responses=responses(NotFound, Invalid, why=_CALC_WHY),
 )
 def multi_gain_calc(body: MultiGainCalcRequest, machine: MachineDep) -> AssistResult:
     """004 §3.6.1: multi_gain = f · n, the command value per motor rpm f (from the drive's
@@ -142,7 +154,7 @@ def multi_gain_calc(body: MultiGainCalcRequest, machine: MachineDep) -> AssistRe
 @router.post(
     "/speed-scaling",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_CALC_WHY),
+    responses=responses(NotFound, Invalid, why=_CALC_WHY),
 )
 def speed_scaling(body: SpeedScalingRequest, machine: MachineDep) -> AssistResult:
     """000 §2.2.4: v_reso_num/v_reso_denom = increments over the distance (0.001°) the
@@ -153,7 +165,7 @@ def speed_scaling(body: SpeedScalingRequest, machine: MachineDep) -> AssistResul
 @router.post(
     "/curve-fit",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_CALC_WHY),
+    responses=responses(NotFound, Invalid, why=_CALC_WHY),
 )
 def curve_fit(body: CurveFitRequest, machine: MachineDep) -> AssistResult:
     """000 §2.8.4: the coefficients of the spindle gear's acceleration curve (types 1, 2, 3)
@@ -164,7 +176,7 @@ def curve_fit(body: CurveFitRequest, machine: MachineDep) -> AssistResult:
 @router.post(
     "/gear-ranges",
     dependencies=[permit(Action.ASSIST)],
-    responses=responses(404, 422, why=_CALC_WHY),
+    responses=responses(NotFound, Invalid, why=_CALC_WHY),
 )
 def gear_ranges(body: GearSelectionRequest, machine: MachineDep) -> GearSelectionResult:
     """000 §2.8.2: the main spindle's six speed ranges (as edited, else the machine's), the
@@ -173,17 +185,19 @@ def gear_ranges(body: GearSelectionRequest, machine: MachineDep) -> GearSelectio
     return gear_selection(machine.cfg, body)
 
 
-_LIVE_WHY = {
-    409: "another assistant runs, the run was cancelled (E-stop, cancel) or the machine rebuilt",
-    422: "the NC refused the run's motion (not ready, limits, busy) or bad inputs",
-    503: "the machine has no worker now, or the run did not end in time (then it is cancelled)",
+_LIVE_WHY: Why = {
+    Conflict: "another assistant runs, the run was cancelled (E-stop, cancel) or the machine "
+    "rebuilt",
+    Invalid: "the NC refused the run's motion (not ready, limits, busy) or bad inputs",
+    Unavailable: "the machine has no worker now, or the run did not end in time (then it is "
+    "cancelled)",
 }
 
 
 @router.post(
     "/live/multi-gain",
     dependencies=[permit(Action.COMMAND)],
-    responses=responses(403, 404, 409, 422, 503, why=_LIVE_WHY),
+    responses=responses(Forbidden, NotFound, Conflict, Invalid, Unavailable, why=_LIVE_WHY),
 )
 async def multi_gain_live(
     body: MultiGainRequest, machine: MachineDep, actor: ActorDep, services: ServicesDep
@@ -197,7 +211,7 @@ async def multi_gain_live(
 @router.post(
     "/live/sign-check",
     dependencies=[permit(Action.COMMAND)],
-    responses=responses(403, 404, 409, 422, 503, why=_LIVE_WHY),
+    responses=responses(Forbidden, NotFound, Conflict, Invalid, Unavailable, why=_LIVE_WHY),
 )
 async def sign_check_live(
     body: SignCheckRequest, machine: MachineDep, actor: ActorDep, services: ServicesDep
@@ -209,9 +223,11 @@ async def sign_check_live(
 
 @router.post(
     "/live/cancel",
-    status_code=204,
+    status_code=NO_CONTENT,
     dependencies=[permit(Action.STOP)],
-    responses=responses(403, 404, 409, why={409: "no assistant runs on the machine"}),
+    responses=responses(
+        Forbidden, NotFound, Conflict, why={Conflict: "no assistant runs on the machine"}
+    ),
 )
 async def cancel(
     body: LiveCancel, machine: MachineDep, actor: ActorDep, services: ServicesDep

@@ -12,7 +12,7 @@ from api.auth import Action
 from api.common import STORE_INT_MAX
 from backend.bodies import text_answer
 from backend.deps import MachineDep, ServicesDep, permit
-from backend.errors import responses
+from backend.errors import Forbidden, NotFound, responses
 from backend.services.audit import MAX_PAGE, AuditFilter
 
 router = APIRouter(prefix="/api", tags=["audit"])
@@ -49,7 +49,7 @@ def _of(machine: MachineDep, f: AuditFilter) -> AuditFilter:
 
 
 @router.get(
-    "/machines/{mid}/audit", dependencies=[permit(Action.OBSERVE)], responses=responses(404)
+    "/machines/{mid}/audit", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound)
 )
 def machine_audit(
     machine: MachineDep,
@@ -66,13 +66,13 @@ def machine_audit(
     "/machines/{mid}/audit.csv",
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
-    responses=CSV_ANSWER | responses(404),
+    responses=CSV_ANSWER | responses(NotFound),
 )
 def machine_audit_csv(machine: MachineDep, services: ServicesDep, f: FilterDep) -> Response:
     return _csv(services.audit.csv(_of(machine, f)), f"audit-{machine.id}")
 
 
-@router.get("/audit", dependencies=[permit(Action.USERS)], responses=responses(403))
+@router.get("/audit", dependencies=[permit(Action.USERS)], responses=responses(Forbidden))
 def audit(
     services: ServicesDep,
     f: FilterDep,
@@ -87,13 +87,13 @@ def audit(
     "/audit.csv",
     response_class=Response,
     dependencies=[permit(Action.USERS)],
-    responses=CSV_ANSWER | responses(403),
+    responses=CSV_ANSWER | responses(Forbidden),
 )
 def audit_csv(services: ServicesDep, f: FilterDep) -> Response:
     return _csv(services.audit.csv(f), "audit")
 
 
-@router.get("/audit/verify", dependencies=[permit(Action.USERS)], responses=responses(403))
+@router.get("/audit/verify", dependencies=[permit(Action.USERS)], responses=responses(Forbidden))
 def verify(services: ServicesDep) -> AuditVerification:
     """Recompute the hash chain: the first row changed, inserted or removed since written."""
     return services.audit.verify()

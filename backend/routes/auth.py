@@ -8,7 +8,15 @@ from fastapi.responses import HTMLResponse, RedirectResponse
 
 from api.auth import CSRF_COOKIE, SESSION_COOKIE, Action, LoginRequest, Me, Role, WsTicket
 from backend.deps import ActorDep, ServicesDep, permit
-from backend.errors import ApiError, responses
+from backend.errors import (
+    NO_CONTENT,
+    SEE_OTHER,
+    ApiError,
+    NotLoggedIn,
+    TooManyAttempts,
+    responses,
+    http_status,
+)
 from backend.services.accounts import SESSION_S, User, public_id
 from backend.services.audit import Entry
 from backend.services.auth import Actor
@@ -38,25 +46,28 @@ def _start_session(
 
 @router.post(
     "/api/auth/login",
-    responses=responses(401, why={401: "wrong name or password", 429: "too many failed logins"}),
+    responses=responses(
+        NotLoggedIn,
+        why={NotLoggedIn: "wrong name or password", TooManyAttempts: "too many failed logins"},
+    ),
 )
 def login(body: LoginRequest, request: Request, response: Response, services: ServicesDep) -> Me:
     """Log in: the session and CSRF cookies are set (HttpOnly and SameSite=Strict)."""
     address = request.client.host if request.client else "?"
     accounts = services.accounts
 
-    def refused(status: int, why: str) -> ApiError:
+    def refused(e: ApiError) -> ApiError:
         services.audit.record_later(
-            Entry(body.name, "", "login_failed", "login", outcome=why, address=address)
+            Entry(body.name, "", "login_failed", "login", outcome=str(e), address=address)
         )
-        return ApiError(status, {"message": why})
+        return e
 
     if accounts.throttled(address):
-        raise refused(429, "too many failed logins: wait a minute")
+        raise refused(TooManyAttempts("too many failed logins: wait a minute"))
     user = accounts.check_password(body.name, body.password)
     if user is None:
         accounts.failed(address)
-        raise refused(401, "wrong name or password")
+        raise refused(NotLoggedIn("wrong name or password"))
     actor = _start_session(response, request, services, user)
     services.audit.record_later(
         Entry(actor.name, actor.session, "login", "login with password", address=address)
@@ -64,7 +75,7 @@ def login(body: LoginRequest, request: Request, response: Response, services: Se
     return actor.me
 
 
-@router.post("/api/auth/logout", status_code=204, response_class=Response)
+@router.post("/api/auth/logout", status_code=NO_CONTENT, response_class=Response)
 def logout(request: Request, services: ServicesDep) -> Response:
     """End this session (the cookies go too)."""
     sid = request.cookies.get(SESSION_COOKIE)
@@ -77,19 +88,21 @@ def logout(request: Request, services: ServicesDep) -> Response:
         services.control.end_session(key, f"{session.user.name} logged out")
         services.sessions.poke()  # its websockets close now
         services.audit.record_later(Entry(session.user.name, key, "logout", "logout"))
-    response = Response(status_code=204)
+    response = Response(status_code=NO_CONTENT)
     response.delete_cookie(SESSION_COOKIE, path="/")
     response.delete_cookie(CSRF_COOKIE, path="/")
     return response
 
 
-@router.get("/api/auth/me", dependencies=[permit(Action.OBSERVE)], responses=responses(401))
+@router.get("/api/auth/me", dependencies=[permit(Action.OBSERVE)], responses=responses(NotLoggedIn))
 async def me(actor: ActorDep) -> Me:
     """Who this session (or API token) is."""
     return actor.me
 
 
-@router.post("/api/auth/ws-ticket", dependencies=[permit(Action.OBSERVE)], responses=responses(401))
+@router.post(
+    "/api/auth/ws-ticket", dependencies=[permit(Action.OBSERVE)], responses=responses(NotLoggedIn)
+)
 async def ws_ticket(actor: ActorDep, services: ServicesDep) -> WsTicket:
     """A ticket that opens one websocket as this session (and browser tab) within
     `expires_in_s`, once: `/api/machines/{mid}/telemetry?ticket=...` or (instructors) the
@@ -111,8 +124,8 @@ def once(token: str, request: Request, services: ServicesDep) -> Response:
                 "", "", "login_failed", "one-time link", outcome="used or expired", address=address
             )
         )
-        return HTMLResponse(_LINK_USED, status_code=401)
-    response = RedirectResponse("/", status_code=303)
+        return HTMLResponse(_LINK_USED, status_code=http_status(NotLoggedIn))
+    response = RedirectResponse("/", status_code=SEE_OTHER)
     actor = _start_session(response, request, services, user)
     services.audit.record_later(
         Entry(actor.name, actor.session, "login", "login with a one-time link", address=address)

@@ -28,7 +28,19 @@ from api.classes import (
 from api.common import STORE_INT_MAX
 from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES
 from backend.deps import ActorDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, ApiError, responses
+from backend.errors import (
+    CREATED,
+    NO_CONTENT,
+    WORKER_GONE,
+    ApiError,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    TooLarge,
+    Why,
+    responses,
+)
 from backend.services import training
 from backend.services.audit import MAX_PAGE, AuditFilter
 from backend.services.classes import Classes
@@ -38,10 +50,10 @@ router = APIRouter(prefix="/api", tags=["training"])
 
 ClassId = Annotated[str, Path(pattern=CLASS_ID, description="a class's id")]
 SeatNo = Annotated[int, Path(ge=1, le=60, description="seat number from 1")]
-_RUNNING = {409: "the class has ended"}
+_RUNNING: Why = {Conflict: "the class has ended"}
 
 
-@router.get("/exercises", dependencies=[permit(Action.TEACH)], responses=responses(403))
+@router.get("/exercises", dependencies=[permit(Action.TEACH)], responses=responses(Forbidden))
 def list_exercises(services: ServicesDep) -> list[ExerciseInfo]:
     """Shipped and uploaded exercises, with every hint's text (instructors)."""
     return services.exercises.list()
@@ -49,9 +61,9 @@ def list_exercises(services: ServicesDep) -> list[ExerciseInfo]:
 
 @router.post(
     "/exercises",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 409, 413, 422),
+    responses=responses(Forbidden, Conflict, TooLarge, Invalid),
     max_body_size=EXERCISE_BODY_BYTES,
 )
 def upload_exercise(req: ExerciseUpload, services: ServicesDep, actor: ActorDep) -> ExerciseInfo:
@@ -62,7 +74,7 @@ def upload_exercise(req: ExerciseUpload, services: ServicesDep, actor: ActorDep)
     return info
 
 
-@router.get("/classes", dependencies=[permit(Action.TEACH)], responses=responses(403))
+@router.get("/classes", dependencies=[permit(Action.TEACH)], responses=responses(Forbidden))
 def list_classes(services: ServicesDep) -> list[ClassInfo]:
     """Every class, running and ended, newest first."""
     return [services.classes.info(c) for c in services.classes.all()]
@@ -70,9 +82,9 @@ def list_classes(services: ServicesDep) -> list[ClassInfo]:
 
 @router.post(
     "/classes",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, 409, 413, 422, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, Conflict, TooLarge, Invalid, why=WORKER_GONE),
     max_body_size=LISTS_BODY_BYTES,  # the seats' machines may come from uploaded lists
 )
 def create_class(
@@ -93,7 +105,9 @@ def create_class(
     return created
 
 
-@router.get("/classes/{cid}", dependencies=[permit(Action.TEACH)], responses=responses(403, 404))
+@router.get(
+    "/classes/{cid}", dependencies=[permit(Action.TEACH)], responses=responses(Forbidden, NotFound)
+)
 def get_class(cid: ClassId, services: ServicesDep) -> ClassInfo:
     return services.classes.info(services.classes.get(cid))
 
@@ -101,7 +115,7 @@ def get_class(cid: ClassId, services: ServicesDep) -> ClassInfo:
 @router.post(
     "/classes/{cid}/end",
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, why=_RUNNING),
+    responses=responses(Forbidden, NotFound, why=_RUNNING),
 )
 def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo:
     """End the class: its machines and logins go; its record, results, injected faults,
@@ -120,7 +134,7 @@ def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo
 @router.post(
     "/classes/{cid}/freeze",
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, why=_RUNNING | WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=_RUNNING | WORKER_GONE),
 )
 def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) -> ClassInfo:
     """Freeze (pause) or resume seats' machines; a student cannot resume a frozen seat."""
@@ -136,9 +150,9 @@ def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) ->
 
 @router.post(
     "/classes/{cid}/broadcast",
-    status_code=204,
+    status_code=NO_CONTENT,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, why=_RUNNING),
+    responses=responses(Forbidden, NotFound, why=_RUNNING),
 )
 def broadcast(cid: ClassId, req: Broadcast, services: ServicesDep, actor: ActorDep) -> None:
     """A message every selected seat's HMI shows as a banner."""
@@ -149,9 +163,9 @@ def broadcast(cid: ClassId, req: Broadcast, services: ServicesDep, actor: ActorD
 
 @router.post(
     "/classes/{cid}/faults",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, 422, why=_RUNNING | WORKER_GONE),
+    responses=responses(Forbidden, NotFound, Invalid, why=_RUNNING | WORKER_GONE),
 )
 def inject_class(
     cid: ClassId, req: ClassFault, services: ServicesDep, actor: ActorDep
@@ -162,7 +176,9 @@ def inject_class(
 
 
 @router.get(
-    "/classes/{cid}/seats/{n}", dependencies=[permit(Action.TEACH)], responses=responses(403, 404)
+    "/classes/{cid}/seats/{n}",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(Forbidden, NotFound),
 )
 def seat_detail(cid: ClassId, n: SeatNo, services: ServicesDep) -> SeatDetail:
     """A seat's checks, hints and faults (for the console and the debrief: an ended
@@ -180,7 +196,7 @@ def seat_detail(cid: ClassId, n: SeatNo, services: ServicesDep) -> SeatDetail:
     )
 
 
-@router.get("/auth/seat-result", responses=responses(404))
+@router.get("/auth/seat-result", responses=responses(NotFound))
 def seat_result(request: Request, services: ServicesDep) -> SeatResult:
     """The final result of the class seat this browser was logged in to, once the class
     has ended and its login has gone (open: the ended session's cookie names the seat,
@@ -188,14 +204,14 @@ def seat_result(request: Request, services: ServicesDep) -> SeatResult:
     sid = request.cookies.get(SESSION_COOKIE, "")
     result = services.classes.result_of(sid) if sid else None
     if result is None:
-        raise ApiError(404, {"message": "this browser's session was no seat of an ended class"})
+        raise NotFound("this browser's session was no seat of an ended class")
     return result
 
 
 @router.get(
     "/classes/{cid}/seats/{n}/audit",
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404),
+    responses=responses(Forbidden, NotFound),
 )
 def seat_audit(
     cid: ClassId,
@@ -213,7 +229,7 @@ def seat_audit(
 @router.post(
     "/classes/{cid}/seats/{n}/link",
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, why=_RUNNING),
+    responses=responses(Forbidden, NotFound, why=_RUNNING),
 )
 def seat_link(
     cid: ClassId, n: SeatNo, request: Request, services: ServicesDep, actor: ActorDep

@@ -8,7 +8,7 @@ from api.auth import Action
 from api.commands import Command, CommandResult, EmergencyStopCommand
 from backend.bodies import PROGRAM_BODY_BYTES
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import WORKER_GONE, Conflict, Forbidden, Invalid, NotFound, TooLarge, responses
 from backend.services import programs
 from backend.services.commands import execute
 
@@ -19,13 +19,13 @@ router = APIRouter(prefix="/api/machines", tags=["commands"])
     "/{mid}/commands",
     dependencies=[permit(Action.COMMAND)],
     responses=responses(
-        403,
-        404,
-        413,
+        Forbidden,
+        NotFound,
+        TooLarge,
         why={
-            404: "no such machine, or no stored program of that name (program_load)",
-            409: "the NC refused the command (job error)",
-            422: "bad input (an NC block with the column of the error)",
+            NotFound: "no such machine, or no stored program of that name (program_load)",
+            Conflict: "the NC refused the command (job error)",
+            Invalid: "bad input (an NC block with the column of the error)",
         }
         | WORKER_GONE,
     ),
@@ -46,7 +46,7 @@ async def command(
 @router.post(
     "/{mid}/emergency-stop",
     dependencies=[permit(Action.STOP)],
-    responses=responses(403, 404, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
 )
 async def emergency_stop(
     machine: MachineDep, actor: ActorDep, services: ServicesDep

@@ -7,12 +7,12 @@ from fastapi import APIRouter
 from api.auth import Action
 from api.control import ControlAction, ControlState
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import responses
+from backend.errors import Conflict, Forbidden, NotFound, responses
 
 router = APIRouter(prefix="/api/machines", tags=["control"])
 
 
-@router.get("/{mid}/control", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
+@router.get("/{mid}/control", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound))
 def control_state(machine: MachineDep) -> ControlState:
     """Who holds the machine and who asks for it (also pushed with the status)."""
     return machine.control.state()
@@ -22,10 +22,10 @@ def control_state(machine: MachineDep) -> ControlState:
     "/{mid}/control",
     dependencies=[permit(Action.CONTROL)],
     responses=responses(
-        403,
-        404,
+        Forbidden,
+        NotFound,
         why={
-            409: "nothing to request (the machine is free, or yours); a student's seat is "
+            Conflict: "nothing to request (the machine is free, or yours); a student's seat is "
             "frozen by the instructor",
         },
     ),

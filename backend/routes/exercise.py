@@ -7,14 +7,14 @@ from fastapi import APIRouter
 from api.auth import Action
 from api.classes import Exercise, HintInfo, HintTake
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import responses
+from backend.errors import Forbidden, NotFound, responses
 from backend.services.classes import Classes
 from backend.services.exercises import exercise_info, hint_infos
 
 router = APIRouter(prefix="/api/machines/{mid}/exercise", tags=["training"])
 
 
-@router.get("", dependencies=[permit(Action.EXERCISE)], responses=responses(403, 404))
+@router.get("", dependencies=[permit(Action.EXERCISE)], responses=responses(Forbidden, NotFound))
 def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Exercise:
     """The exercise of the seat this machine is (404 when it is none): the task, every
     check as it stands on the live machine, the hints (their text once taken), the score;
@@ -41,7 +41,7 @@ def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> 
 @router.post(
     "/hints",
     dependencies=[permit(Action.EXERCISE)],
-    responses=responses(403, 404, why={403: "not the seat's own student"}),
+    responses=responses(Forbidden, NotFound, why={Forbidden: "not the seat's own student"}),
 )
 def take_hint(
     req: HintTake, machine: MachineDep, services: ServicesDep, actor: ActorDep

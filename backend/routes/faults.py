@@ -9,7 +9,7 @@ from fastapi import APIRouter, Path, Response
 from api.auth import Action
 from api.faults import FaultInfo, FaultInject
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import CREATED, NO_CONTENT, WORKER_GONE, Forbidden, Invalid, NotFound, responses
 from backend.services import training
 from backend.services.audit import Entry
 
@@ -18,7 +18,7 @@ router = APIRouter(prefix="/api/machines/{mid}/faults", tags=["training"])
 FaultId = Annotated[int, Path(ge=1, le=2**31, description="a fault's id on its machine")]
 
 
-@router.get("", dependencies=[permit(Action.TEACH)], responses=responses(403, 404))
+@router.get("", dependencies=[permit(Action.TEACH)], responses=responses(Forbidden, NotFound))
 def list_faults(machine: MachineDep) -> list[FaultInfo]:
     """The faults injected into the machine, active or armed."""
     return training.faults_of(machine)
@@ -26,9 +26,9 @@ def list_faults(machine: MachineDep) -> list[FaultInfo]:
 
 @router.post(
     "",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, 422, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, Invalid, why=WORKER_GONE),
 )
 def inject(
     req: FaultInject, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -45,9 +45,9 @@ def inject(
 
 @router.delete(
     "/{fid}",
-    status_code=204,
+    status_code=NO_CONTENT,
     dependencies=[permit(Action.TEACH)],
-    responses=responses(403, 404, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
 )
 def remove(fid: FaultId, machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Response:
     """Take a fault out: the plant is as its parameters say again."""
@@ -55,4 +55,4 @@ def remove(fid: FaultId, machine: MachineDep, services: ServicesDep, actor: Acto
     services.audit.record(
         Entry(actor.name, actor.session, "training", f"removed fault {fid}", machine.id)
     )
-    return Response(status_code=204)
+    return Response(status_code=NO_CONTENT)

@@ -11,7 +11,17 @@ from api.status import MachineStatus, MachineSummary, SimulationStatus
 from api.telemetry import SignalInfo
 from backend.bodies import LISTS_BODY_BYTES
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import (
+    CREATED,
+    NO_CONTENT,
+    WORKER_GONE,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    TooLarge,
+    responses,
+)
 from backend.services.audit import Entry
 from backend.services.service_axes import service_axes
 from backend.services.status import (
@@ -33,9 +43,9 @@ def list_machines(services: ServicesDep, actor: ActorDep) -> list[MachineSummary
 
 @router.post(
     "",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.MACHINES)],
-    responses=responses(403, 409, 413, 422, why=WORKER_GONE),
+    responses=responses(Forbidden, Conflict, TooLarge, Invalid, why=WORKER_GONE),
     max_body_size=LISTS_BODY_BYTES,
 )
 def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -> MachineSummary:
@@ -57,7 +67,7 @@ def create_machine(req: MachineCreate, services: ServicesDep, actor: ActorDep) -
 @router.get(
     "/{mid}/service-axes",
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(404, why=WORKER_GONE),
+    responses=responses(NotFound, why=WORKER_GONE),
 )
 async def service_axes_view(machine: MachineDep) -> ServiceAxes:
     """The service-axis view: per axis and spindle kv, expected lag (1 − ff)·v/kv, measured
@@ -68,14 +78,14 @@ async def service_axes_view(machine: MachineDep) -> ServiceAxes:
 @router.get(
     "/{mid}/status",
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(404, why=WORKER_GONE),
+    responses=responses(NotFound, why=WORKER_GONE),
 )
 async def status(machine: MachineDep) -> MachineStatus:
     """Full snapshot: HLI objects, axis and spindle states, gear, job errors, PLC."""
     return await machine_status(machine)
 
 
-@router.get("/{mid}/signals", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
+@router.get("/{mid}/signals", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound))
 def signals(machine: MachineDep) -> list[SignalInfo]:
     """Every signal the machine records each cycle (for telemetry subscriptions)."""
     return signal_infos(machine)
@@ -84,7 +94,7 @@ def signals(machine: MachineDep) -> list[SignalInfo]:
 @router.post(
     "/{mid}/restart",
     dependencies=[permit(Action.COMMAND)],
-    responses=responses(403, 404, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
 )
 def restart(mid: str, services: ServicesDep, actor: ActorDep) -> MachineSummary:
     """Power off and on (only while holding control): cycle 0, every stored value (pending
@@ -95,20 +105,23 @@ def restart(mid: str, services: ServicesDep, actor: ActorDep) -> MachineSummary:
 
 
 @router.delete(
-    "/{mid}", status_code=204, dependencies=[permit(Action.MACHINES)], responses=responses(403, 404)
+    "/{mid}",
+    status_code=NO_CONTENT,
+    dependencies=[permit(Action.MACHINES)],
+    responses=responses(Forbidden, NotFound),
 )
 def delete(mid: str, services: ServicesDep, actor: ActorDep) -> Response:
     services.machines.delete(mid)
     services.audit.record(
         Entry(actor.name, actor.session, "machine", f"deleted machine {mid}", mid)
     )
-    return Response(status_code=204)
+    return Response(status_code=NO_CONTENT)
 
 
 @router.post(
     "/{mid}/simulation",
     dependencies=[permit(Action.SIMULATE)],
-    responses=responses(403, 404, 422, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, Invalid, why=WORKER_GONE),
 )
 def pace(
     req: SimulationControl, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -124,7 +137,7 @@ def pace(
 @router.post(
     "/{mid}/simulation/step",
     dependencies=[permit(Action.SIMULATE)],
-    responses=responses(403, 404, 422, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, Invalid, why=WORKER_GONE),
 )
 def step(
     req: StepRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep

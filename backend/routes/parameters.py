@@ -25,7 +25,16 @@ from backend.bodies import (
     text_body,
 )
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import (
+    WORKER_GONE,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    TooLarge,
+    Why,
+    responses,
+)
 from backend.services import parameters as params
 from backend.services.audit import Entry
 from nc_sim.params import Scope, registry
@@ -34,8 +43,10 @@ router = APIRouter(prefix="/api", tags=["parameters"])
 
 ScopeQ = Annotated[ScopeName, Query(description="axis, channel or tool list")]
 TargetQ = Annotated[str | None, Query(description="axis name for the axis list")]
-_STALE = {409: "written by someone else since it was read: both values, nothing applied"}
-_REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"} | WORKER_GONE
+_STALE: Why = {Conflict: "written by someone else since it was read: both values, nothing applied"}
+_REJECTED: Why = {
+    Invalid: "rejected values: parameter, range, unit (nothing applied)"
+} | WORKER_GONE
 
 
 @router.get("/parameters", dependencies=[permit(Action.OBSERVE)])
@@ -63,7 +74,7 @@ def definitions() -> list[ParameterDef]:
 @router.get(
     "/machines/{mid}/parameters",
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(404, 422),
+    responses=responses(NotFound, Invalid),
 )
 def values(
     machine: MachineDep,
@@ -81,7 +92,7 @@ def values(
 @router.patch(
     "/machines/{mid}/parameters",
     dependencies=[permit(Action.CONFIGURE)],
-    responses=responses(403, 404, 413, why=_STALE | _REJECTED),
+    responses=responses(Forbidden, NotFound, TooLarge, why=_STALE | _REJECTED),
     max_body_size=CHANGES_BODY_BYTES,
 )
 def write(
@@ -103,7 +114,7 @@ def write(
     "/machines/{mid}/parameters/export",
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
-    responses=text_answer("text/plain", "the list") | responses(404, 422),
+    responses=text_answer("text/plain", "the list") | responses(NotFound, Invalid),
 )
 def export(
     machine: MachineDep, actor: ActorDep, scope: ScopeQ = "axis", target: TargetQ = None
@@ -117,7 +128,7 @@ def export(
 @router.post(
     "/machines/{mid}/parameters/import",
     dependencies=[permit(Action.CONFIGURE)],
-    responses=responses(403, 404, 413, why=_REJECTED),
+    responses=responses(Forbidden, NotFound, TooLarge, why=_REJECTED),
     openapi_extra=text_body("text/plain", LIST_BODY_BYTES, "a list in the native format"),
     max_body_size=LIST_BODY_BYTES,
 )

@@ -13,7 +13,15 @@ from api.commands import ProgramName
 from api.programs import Program, ProgramInfo, ProgramPreview, ProgramText
 from backend.bodies import PROGRAM_BODY_BYTES, json_body, read_model
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import (
+    NO_CONTENT,
+    WORKER_GONE,
+    Forbidden,
+    Invalid,
+    NotFound,
+    TooLarge,
+    responses,
+)
 from backend.services import programs
 from backend.workers.protocol import ReadStatus, StatusRead
 
@@ -30,7 +38,9 @@ def list_programs(services: ServicesDep, actor: ActorDep) -> list[ProgramInfo]:
 
 
 @router.get(
-    "/api/programs/{name}", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422)
+    "/api/programs/{name}",
+    dependencies=[permit(Action.OBSERVE)],
+    responses=responses(NotFound, Invalid),
 )
 def read_program(name: NameDep, services: ServicesDep, actor: ActorDep) -> Program:
     """A stored program with its text (names match regardless of case; a student's own
@@ -41,7 +51,7 @@ def read_program(name: NameDep, services: ServicesDep, actor: ActorDep) -> Progr
 @router.put(
     "/api/programs/{name}",
     dependencies=[permit(Action.PROGRAMS)],
-    responses=responses(403, 413, 422),
+    responses=responses(Forbidden, TooLarge, Invalid),
     openapi_extra=BODY,
     max_body_size=PROGRAM_BODY_BYTES,
 )
@@ -56,21 +66,21 @@ async def write_program(
 
 @router.delete(
     "/api/programs/{name}",
-    status_code=204,
+    status_code=NO_CONTENT,
     response_class=Response,
     dependencies=[permit(Action.PROGRAMS)],
-    responses=responses(403, 404, 422),
+    responses=responses(Forbidden, NotFound, Invalid),
 )
 def delete_program(name: NameDep, services: ServicesDep, actor: ActorDep) -> Response:
     """Delete a stored program; audited."""
     programs.delete(services.store, actor, name)
-    return Response(status_code=204)
+    return Response(status_code=NO_CONTENT)
 
 
 @router.post(
     "/api/machines/{mid}/program-preview",
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(404, 413, 422, why=WORKER_GONE),
+    responses=responses(NotFound, TooLarge, Invalid, why=WORKER_GONE),
     openapi_extra=BODY,
     max_body_size=PROGRAM_BODY_BYTES,
 )

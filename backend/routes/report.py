@@ -14,7 +14,7 @@ from api.common import STORE_INT_MAX
 from api.report import AssistRun, AssistRunInfo, SignOff, SignOffRequest
 from backend.bodies import text_answer
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import responses
+from backend.errors import CREATED, OK, Forbidden, Invalid, NotFound, Unavailable, Why, responses
 from backend.report.pdf import html_to_pdf
 from backend.services.assist_runs import MAX_LIST
 from backend.services.audit import Entry
@@ -31,13 +31,13 @@ TraceIds = Annotated[
         f"{MAX_TRACES})",
     ),
 ]
-_TRACE_WHY = {422: "a trace of another machine, without samples, or too many"}
+_TRACE_WHY: Why = {Invalid: "a trace of another machine, without samples, or too many"}
 _PDF: dict[int | str, Any] = {
-    200: {"content": {"application/pdf": {}}, "description": "the report as PDF"}
+    OK: {"content": {"application/pdf": {}}, "description": "the report as PDF"}
 }
 
 
-@router.get("/assist/runs", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
+@router.get("/assist/runs", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound))
 def runs(
     machine: MachineDep,
     services: ServicesDep,
@@ -48,7 +48,7 @@ def runs(
 
 
 @router.get(
-    "/assist/runs/{run_id}", dependencies=[permit(Action.OBSERVE)], responses=responses(404)
+    "/assist/runs/{run_id}", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound)
 )
 def run(
     run_id: Annotated[int, Path(ge=1, le=STORE_INT_MAX)], machine: MachineDep, services: ServicesDep
@@ -62,7 +62,7 @@ def run(
     response_class=Response,  # its errors are JSON, as every route's
     dependencies=[permit(Action.OBSERVE)],
     responses=text_answer("text/html", "the report, printable (A4)")
-    | responses(404, 422, why=_TRACE_WHY),
+    | responses(NotFound, Invalid, why=_TRACE_WHY),
 )
 async def report(
     machine: MachineDep, services: ServicesDep, actor: ActorDep, trace: TraceIds
@@ -79,7 +79,9 @@ async def report(
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
     responses=_PDF
-    | responses(404, 422, why=_TRACE_WHY | {503: "Chromium is missing or failed to print"}),
+    | responses(
+        NotFound, Invalid, why=_TRACE_WHY | {Unavailable: "Chromium is missing or failed to print"}
+    ),
 )
 async def report_pdf(
     machine: MachineDep, services: ServicesDep, actor: ActorDep, trace: TraceIds
@@ -92,7 +94,9 @@ async def report_pdf(
     return Response(pdf, media_type="application/pdf", headers={"content-disposition": disposition})
 
 
-@router.get("/report/sign-offs", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
+@router.get(
+    "/report/sign-offs", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound)
+)
 def sign_offs(machine: MachineDep, services: ServicesDep) -> list[SignOff]:
     """Who signed the machine's commissioning off, oldest first."""
     return services.reports.sign_offs(machine.id)
@@ -100,9 +104,9 @@ def sign_offs(machine: MachineDep, services: ServicesDep) -> list[SignOff]:
 
 @router.post(
     "/report/sign-off",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.SIGN_OFF)],
-    responses=responses(403, 404, 422),
+    responses=responses(Forbidden, NotFound, Invalid),
 )
 def sign_off(
     body: SignOffRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep

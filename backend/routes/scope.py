@@ -12,21 +12,32 @@ from fastapi.responses import RedirectResponse, Response, StreamingResponse
 from api.auth import Action
 from api.scope import RecordingInfo, RecordingStart, ScopeSetupModel, ScopeStatus
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import (
+    CREATED,
+    OK,
+    TEMPORARY_REDIRECT,
+    WORKER_GONE,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    QuotaUsedUp,
+    responses,
+)
 from backend.services import scope
 from backend.services.audit import Entry
 from backend.services.viewer import viewer_url
 
 router = APIRouter(prefix="/api", tags=["scope"])
 BINARY: dict[int | str, dict[str, Any]] = {
-    200: {"content": {"application/octet-stream": {}}, "description": "binary frame"}
+    OK: {"content": {"application/octet-stream": {}}, "description": "binary frame"}
 }
 
 
 @router.get(
     "/machines/{mid}/scope",
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(404, why=WORKER_GONE),
+    responses=responses(NotFound, why=WORKER_GONE),
 )
 def scope_status(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     """State of the scope, its setup and the recent captures (newest first)."""
@@ -36,7 +47,7 @@ def scope_status(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
 @router.put(
     "/machines/{mid}/scope",
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 404, why={422: "bad setup"} | WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why={Invalid: "bad setup"} | WORKER_GONE),
 )
 def scope_arm(req: ScopeSetupModel, machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     """Arm (or start rolling) with this setup; the pre-trigger fills from recent history."""
@@ -47,7 +58,7 @@ def scope_arm(req: ScopeSetupModel, machine: MachineDep, services: ServicesDep) 
 @router.post(
     "/machines/{mid}/scope/force",
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 404, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
 )
 def scope_force(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     """Trigger now (an armed scope only)."""
@@ -58,7 +69,7 @@ def scope_force(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
 @router.post(
     "/machines/{mid}/scope/stop",
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 404, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
 )
 def scope_stop(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     scope.stop(machine)
@@ -69,7 +80,7 @@ def scope_stop(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
     "/machines/{mid}/scope/roll",
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
-    responses=BINARY | responses(404, 409, 422, why=WORKER_GONE),
+    responses=BINARY | responses(NotFound, Conflict, Invalid, why=WORKER_GONE),
 )
 def scope_roll(
     machine: MachineDep,
@@ -81,9 +92,15 @@ def scope_roll(
 
 @router.post(
     "/machines/{mid}/recording",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.RECORD)],
-    responses=responses(403, 404, 409, 422, why={507: "the recordings' disk quota is used up"}),
+    responses=responses(
+        Forbidden,
+        NotFound,
+        Conflict,
+        Invalid,
+        why={QuotaUsedUp: "the recordings' disk quota is used up"},
+    ),
 )
 def recording_start(
     req: RecordingStart, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -107,7 +124,7 @@ def recording_start(
 @router.delete(
     "/machines/{mid}/recording",
     dependencies=[permit(Action.RECORD)],
-    responses=responses(403, 404, 409),
+    responses=responses(Forbidden, NotFound, Conflict),
 )
 def recording_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> RecordingInfo:
     info = services.recorders.end(machine.id)
@@ -121,7 +138,7 @@ def recording_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) 
     "/recordings/{rid}/recording.rrd",
     response_class=StreamingResponse,
     dependencies=[permit(Action.OBSERVE)],
-    responses=BINARY | responses(404),
+    responses=BINARY | responses(NotFound),
 )
 def recording_rrd(rid: str, services: ServicesDep, actor: ActorDep) -> StreamingResponse:
     """The recording as a Rerun .rrd file (so far, while it runs); a class's student gets
@@ -153,9 +170,9 @@ def _first_bytes(path: Path, size: int, chunk: int = 1 << 16) -> Iterator[bytes]
 @router.get(
     "/recordings/{rid}/viewer",
     response_class=RedirectResponse,
-    status_code=307,
+    status_code=TEMPORARY_REDIRECT,
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(404),
+    responses=responses(NotFound),
 )
 def recording_viewer(
     rid: str, request: Request, services: ServicesDep, actor: ActorDep

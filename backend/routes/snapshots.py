@@ -9,7 +9,7 @@ from fastapi import APIRouter, Path
 from api.auth import Action
 from api.classes import SnapshotCreate, SnapshotInfo
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import CREATED, WORKER_GONE, Forbidden, Invalid, NotFound, responses
 from backend.services.audit import Entry
 
 router = APIRouter(prefix="/api/machines/{mid}/snapshots", tags=["training"])
@@ -17,7 +17,7 @@ router = APIRouter(prefix="/api/machines/{mid}/snapshots", tags=["training"])
 SnapshotId = Annotated[int, Path(ge=1, le=2**53, description="a snapshot's id")]
 
 
-@router.get("", dependencies=[permit(Action.SIMULATE)], responses=responses(403, 404))
+@router.get("", dependencies=[permit(Action.SIMULATE)], responses=responses(Forbidden, NotFound))
 def list_snapshots(machine: MachineDep, services: ServicesDep) -> list[SnapshotInfo]:
     """The machine's snapshots, oldest first (the newest 8 are kept, in memory)."""
     return services.snapshots.list(machine.id)
@@ -25,9 +25,9 @@ def list_snapshots(machine: MachineDep, services: ServicesDep) -> list[SnapshotI
 
 @router.post(
     "",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.SIMULATE)],
-    responses=responses(403, 404, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
 )
 def take(
     req: SnapshotCreate, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -51,7 +51,7 @@ def take(
 @router.post(
     "/{sid}/restore",
     dependencies=[permit(Action.SIMULATE)],
-    responses=responses(403, 404, 422, why=WORKER_GONE),
+    responses=responses(Forbidden, NotFound, Invalid, why=WORKER_GONE),
 )
 def restore(
     sid: SnapshotId, machine: MachineDep, services: ServicesDep, actor: ActorDep

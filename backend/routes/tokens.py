@@ -7,8 +7,8 @@ from fastapi import APIRouter, Response
 
 from api.auth import Action, TokenCreate, TokenCreated, TokenInfo
 from backend.deps import ActorDep, ServicesDep, permit
-from backend.errors import ApiError, responses
-from backend.services.accounts import AccountError, TokenEntry, public_id
+from backend.errors import CREATED, NO_CONTENT, Forbidden, NotFound, responses
+from backend.services.accounts import TokenEntry, public_id
 from backend.services.audit import Entry
 from backend.services.auth import authorize
 
@@ -21,12 +21,7 @@ def token_info(t: TokenEntry) -> TokenInfo:
     )
 
 
-def account_error(e: AccountError) -> ApiError:
-    """An account request that cannot be carried out, as its refusal (404 or 409)."""
-    return ApiError(e.status, {"message": str(e)})
-
-
-@router.get("", dependencies=[permit(Action.OBSERVE)], responses=responses(403))
+@router.get("", dependencies=[permit(Action.OBSERVE)], responses=responses(Forbidden))
 def list_tokens(services: ServicesDep, actor: ActorDep, all: bool = False) -> list[TokenInfo]:
     """The requesting user's API tokens; everyone's with `all=true` (admins)."""
     if all:
@@ -34,7 +29,7 @@ def list_tokens(services: ServicesDep, actor: ActorDep, all: bool = False) -> li
     return [token_info(t) for t in services.accounts.tokens(None if all else actor.name)]
 
 
-@router.post("", status_code=201, dependencies=[permit(Action.OBSERVE)])
+@router.post("", status_code=CREATED, dependencies=[permit(Action.OBSERVE)])
 def create_token(req: TokenCreate, services: ServicesDep, actor: ActorDep) -> TokenCreated:
     """A new API token of the requesting user, shown this once."""
     token = services.accounts.new_token(actor.name, req.label)
@@ -53,22 +48,19 @@ def create_token(req: TokenCreate, services: ServicesDep, actor: ActorDep) -> To
 
 @router.delete(
     "/{tid}",
-    status_code=204,
+    status_code=NO_CONTENT,
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(403, 404),
+    responses=responses(Forbidden, NotFound),
 )
 def revoke_token(tid: str, services: ServicesDep, actor: ActorDep) -> Response:
     """Revoke an API token (one's own; an admin anyone's)."""
     attempt = Entry(actor.name, actor.session, "token", f"revoke API token {tid}")
-    try:
-        with services.audit.refusals(attempt):  # another's token, and no admin
-            token = services.accounts.token(tid)
-            if token.user != actor.name:
-                authorize(actor, Action.USERS)
-        services.accounts.revoke_token(tid)
-    except AccountError as e:
-        raise account_error(e) from None
+    token = services.accounts.token(tid)  # none: 404, not recorded as a refusal
+    with services.audit.refusals(attempt):  # another's token, and no admin
+        if token.user != actor.name:
+            authorize(actor, Action.USERS)
+    services.accounts.revoke_token(tid)
     services.sessions.poke()  # its websockets and control go now
     services.audit.record(
         Entry(
@@ -79,4 +71,4 @@ def revoke_token(tid: str, services: ServicesDep, actor: ActorDep) -> Response:
             detail={"token": tid, "user": token.user, "label": token.label},
         )
     )
-    return Response(status_code=204)
+    return Response(status_code=NO_CONTENT)

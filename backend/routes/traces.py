@@ -13,7 +13,20 @@ from api.auth import Action
 from api.scope import MeasurementsModel, TraceCompare, TraceDetail, TraceInfo, TracePatch, TraceSave
 from backend.bodies import CSV_BODY_BYTES, read_text, text_answer, text_body
 from backend.deps import ActorDep, ServicesDep, get_actor, permit
-from backend.errors import ApiError, not_found, responses
+from backend.errors import (
+    CREATED,
+    NO_CONTENT,
+    TEMPORARY_REDIRECT,
+    ApiError,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    QuotaUsedUp,
+    TooLarge,
+    not_found,
+    responses,
+)
 from backend.routes.scope import BINARY
 from backend.services.audit import Entry
 from backend.services.trace_csv import from_csv, to_csv
@@ -40,7 +53,9 @@ def library(services: ServicesDep, actor: ActorDep, machine: str | None = None) 
     return services.traces.library(actor.seat or machine)
 
 
-@router.get("/compare", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422))
+@router.get(
+    "/compare", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound, Invalid)
+)
 def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
     """Parameters that differ between two traces, and the channels they share."""
     return services.traces.compare(a, b)
@@ -48,9 +63,11 @@ def compare(a: str, b: str, services: ServicesDep) -> TraceCompare:
 
 @router.post(
     "/import",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 413, 507, why={422: "bad CSV: which row or column, and why"}),
+    responses=responses(
+        Forbidden, TooLarge, QuotaUsedUp, why={Invalid: "bad CSV: which row or column, and why"}
+    ),
     openapi_extra=text_body("text/csv", CSV_BODY_BYTES, "a trace as CSV, e.g. one exported"),
     max_body_size=CSV_BODY_BYTES,
 )
@@ -69,7 +86,7 @@ async def import_csv(
     return info
 
 
-@router.get("/{tid}", dependencies=[permit(Action.OBSERVE)], responses=responses(404))
+@router.get("/{tid}", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound))
 def detail(tid: str, services: ServicesDep) -> TraceDetail:
     """Description, parameters that differed from defaults, and the events in the record."""
     return services.traces.get(tid).detail
@@ -79,7 +96,7 @@ def detail(tid: str, services: ServicesDep) -> TraceDetail:
     "/{tid}/data",
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
-    responses=BINARY | responses(404),
+    responses=BINARY | responses(NotFound),
 )
 def data(tid: str, services: ServicesDep) -> Response:
     """Every sample as one binary frame (api/telemetry.py format)."""
@@ -90,7 +107,7 @@ def data(tid: str, services: ServicesDep) -> Response:
     "/{tid}/csv",
     response_class=Response,
     dependencies=[permit(Action.OBSERVE)],
-    responses=text_answer("text/csv", "CSV text") | responses(404),
+    responses=text_answer("text/csv", "CSV text") | responses(NotFound),
 )
 def csv(tid: str, services: ServicesDep) -> Response:
     trace = services.traces.get(tid)
@@ -105,7 +122,7 @@ def csv(tid: str, services: ServicesDep) -> Response:
     "/{tid}/trace.rrd",
     response_class=FileResponse,
     dependencies=[permit(Action.OBSERVE)],
-    responses=BINARY | responses(404, 507),
+    responses=BINARY | responses(NotFound, QuotaUsedUp),
 )
 def rrd(tid: str, services: ServicesDep) -> FileResponse:
     """The trace as a Rerun recording."""
@@ -116,9 +133,9 @@ def rrd(tid: str, services: ServicesDep) -> FileResponse:
 @router.get(
     "/{tid}/viewer",
     response_class=RedirectResponse,
-    status_code=307,
+    status_code=TEMPORARY_REDIRECT,
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(404),
+    responses=responses(NotFound),
 )
 def viewer(tid: str, request: Request, services: ServicesDep, actor: ActorDep) -> RedirectResponse:
     """Open the trace in the bundled Rerun web viewer. Its loader fetches the .rrd without
@@ -132,7 +149,7 @@ def viewer(tid: str, request: Request, services: ServicesDep, actor: ActorDep) -
 @router.get(
     "/{tid}/measure",
     dependencies=[permit(Action.OBSERVE)],
-    responses=responses(404, why={422: "unknown channel, empty window"}),
+    responses=responses(NotFound, why={Invalid: "unknown channel, empty window"}),
 )
 def measure(
     tid: str,
@@ -149,9 +166,9 @@ def measure(
 
 @router.post(
     "/{tid}/save",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(403, 404, 409, 422, 507),
+    responses=responses(Forbidden, NotFound, Conflict, Invalid, QuotaUsedUp),
 )
 def save(tid: str, req: TraceSave, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Keep a recent capture in the library, with a name and notes."""
@@ -161,7 +178,9 @@ def save(tid: str, req: TraceSave, services: ServicesDep, actor: ActorDep) -> Tr
 
 
 @router.patch(
-    "/{tid}", dependencies=[permit(Action.CAPTURE)], responses=responses(403, 404, 409, 422)
+    "/{tid}",
+    dependencies=[permit(Action.CAPTURE)],
+    responses=responses(Forbidden, NotFound, Conflict, Invalid),
 )
 def patch(tid: str, req: TracePatch, services: ServicesDep, actor: ActorDep) -> TraceInfo:
     """Rename a stored trace or change its notes."""
@@ -172,9 +191,9 @@ def patch(tid: str, req: TracePatch, services: ServicesDep, actor: ActorDep) -> 
 
 @router.delete(
     "/{tid}",
-    status_code=204,
+    status_code=NO_CONTENT,
     dependencies=[permit(Action.DELETE_TRACE)],
-    responses=responses(403, 404),
+    responses=responses(Forbidden, NotFound),
 )
 def delete(tid: str, services: ServicesDep, actor: ActorDep) -> None:
     try:

@@ -8,9 +8,8 @@ from fastapi import APIRouter, Response
 
 from api.auth import Action, UserChange, UserCreate, UserInfo
 from backend.deps import ActorDep, ServicesDep, permit
-from backend.errors import ApiError, responses
-from backend.routes.tokens import account_error
-from backend.services.accounts import AccountError, Accounts, UserEntry
+from backend.errors import CREATED, NO_CONTENT, Conflict, Invalid, NotFound, responses
+from backend.services.accounts import Accounts, UserEntry
 from backend.services.audit import Entry
 
 router = APIRouter(prefix="/api/users", tags=["users"])
@@ -23,7 +22,7 @@ def _user_info(u: UserEntry) -> UserInfo:
 def _info(accounts: Accounts, name: str) -> UserInfo:
     user = next((u for u in accounts.users() if u.name == name), None)
     if user is None:
-        raise ApiError(404, {"message": f"no user {name!r}"})
+        raise NotFound(f"no user {name!r}")
     return _user_info(user)
 
 
@@ -35,16 +34,13 @@ def list_users(services: ServicesDep) -> list[UserInfo]:
 
 @router.post(
     "",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.USERS)],
-    responses=responses(409, why={409: "the name is taken"}),
+    responses=responses(Conflict, why={Conflict: "the name is taken"}),
 )
 def add_user(req: UserCreate, services: ServicesDep, actor: ActorDep) -> UserInfo:
     """A new user with a role and password."""
-    try:
-        services.accounts.add_user(req.name, req.role, req.password)
-    except AccountError as e:
-        raise account_error(e) from None
+    services.accounts.add_user(req.name, req.role, req.password)
     services.audit.record(
         Entry(
             actor.name,
@@ -60,22 +56,21 @@ def add_user(req: UserCreate, services: ServicesDep, actor: ActorDep) -> UserInf
 @router.patch(
     "/{name}",
     dependencies=[permit(Action.USERS)],
-    responses=responses(404, 409, why={409: "the last admin", 422: "nothing to change"}),
+    responses=responses(
+        NotFound, Conflict, why={Conflict: "the last admin", Invalid: "nothing to change"}
+    ),
 )
 def change_user(name: str, req: UserChange, services: ServicesDep, actor: ActorDep) -> UserInfo:
     """A new role and/or password; a new password ends the user's sessions."""
     if req.role is None and req.password is None:
-        raise ApiError(422, {"message": "give a role or a password to change"})
+        raise Invalid("give a role or a password to change")
     detail: dict[str, str] = {"user": name}
-    try:
-        if req.role is not None:
-            services.accounts.set_role(name, req.role)
-            detail["role"] = req.role.value
-        if req.password is not None:
-            services.accounts.set_password(name, req.password)
-            detail["password"] = "changed"  # never the password
-    except AccountError as e:
-        raise account_error(e) from None
+    if req.role is not None:
+        services.accounts.set_role(name, req.role)
+        detail["role"] = req.role.value
+    if req.password is not None:
+        services.accounts.set_password(name, req.password)
+        detail["password"] = "changed"  # never the password
     if req.password is not None:
         services.sessions.poke()
     services.audit.record(
@@ -86,21 +81,18 @@ def change_user(name: str, req: UserChange, services: ServicesDep, actor: ActorD
 
 @router.delete(
     "/{name}",
-    status_code=204,
+    status_code=NO_CONTENT,
     response_class=Response,
     dependencies=[permit(Action.USERS)],
-    responses=responses(404, 409, why={409: "yourself, or the last admin"}),
+    responses=responses(NotFound, Conflict, why={Conflict: "yourself, or the last admin"}),
 )
 def remove_user(name: str, services: ServicesDep, actor: ActorDep) -> Response:
     """Remove a user with their sessions and tokens."""
     if name == actor.name:
-        raise ApiError(409, {"message": "you cannot remove yourself: ask another admin"})
-    try:
-        services.accounts.remove_user(name)
-    except AccountError as e:
-        raise account_error(e) from None
+        raise Conflict("you cannot remove yourself: ask another admin")
+    services.accounts.remove_user(name)
     services.sessions.poke()
     services.audit.record(
         Entry(actor.name, actor.session, "user", f"removed user {name}", detail={"user": name})
     )
-    return Response(status_code=204)
+    return Response(status_code=NO_CONTENT)

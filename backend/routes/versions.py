@@ -11,7 +11,17 @@ from api.auth import Action
 from api.parameters import ParameterWriteResult
 from api.versions import RollbackRequest, VersionCreate, VersionDiff, VersionInfo
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import WORKER_GONE, responses
+from backend.errors import (
+    CREATED,
+    NO_CONTENT,
+    WORKER_GONE,
+    Conflict,
+    Forbidden,
+    Invalid,
+    NotFound,
+    Why,
+    responses,
+)
 from backend.services.audit import Entry
 from backend.services.versions import STATE_PATTERN
 
@@ -24,11 +34,15 @@ _STATE = (
 )
 FromState = Annotated[str, Query(alias="from", pattern=STATE_PATTERN, description=_STATE)]
 ToState = Annotated[str, Query(pattern=STATE_PATTERN, description=_STATE)]
-_TAKEN = {409: "a version of that name exists (any case), or the machine has the most it keeps"}
-_REJECTED = {422: "rejected values: parameter, range, unit (nothing applied)"} | WORKER_GONE
+_TAKEN: Why = {
+    Conflict: "a version of that name exists (any case), or the machine has the most it keeps"
+}
+_REJECTED: Why = {
+    Invalid: "rejected values: parameter, range, unit (nothing applied)"
+} | WORKER_GONE
 
 
-@router.get("", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422))
+@router.get("", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound, Invalid))
 def list_versions(machine: MachineDep, services: ServicesDep) -> list[VersionInfo]:
     """The machine's versions, newest first; the baseline is marked."""
     return services.versions.of(machine.id)
@@ -36,9 +50,9 @@ def list_versions(machine: MachineDep, services: ServicesDep) -> list[VersionInf
 
 @router.post(
     "",
-    status_code=201,
+    status_code=CREATED,
     dependencies=[permit(Action.VERSIONS)],
-    responses=responses(403, 404, 422, why=_TAKEN),
+    responses=responses(Forbidden, NotFound, Invalid, why=_TAKEN),
 )
 def take_version(
     req: VersionCreate, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -51,7 +65,7 @@ def take_version(
         return services.versions.take(actor, machine.id, req.name, req.note, req.baseline)
 
 
-@router.get("/diff", dependencies=[permit(Action.OBSERVE)], responses=responses(404, 422))
+@router.get("/diff", dependencies=[permit(Action.OBSERVE)], responses=responses(NotFound, Invalid))
 def compare(
     machine: MachineDep,
     services: ServicesDep,
@@ -67,7 +81,7 @@ def compare(
 @router.post(
     "/{vid}/baseline",
     dependencies=[permit(Action.VERSIONS)],
-    responses=responses(403, 404, 422),
+    responses=responses(Forbidden, NotFound, Invalid),
 )
 def set_baseline(
     vid: VersionId, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -82,7 +96,7 @@ def set_baseline(
 @router.post(
     "/{vid}/rollback",
     dependencies=[permit(Action.CONFIGURE)],
-    responses=responses(403, 404, why=_REJECTED),
+    responses=responses(Forbidden, NotFound, why=_REJECTED),
 )
 async def rollback(
     vid: VersionId,
@@ -104,10 +118,12 @@ async def rollback(
 
 @router.delete(
     "/{vid}",
-    status_code=204,
+    status_code=NO_CONTENT,
     response_class=Response,
     dependencies=[permit(Action.VERSIONS)],
-    responses=responses(403, 404, 422, why={409: "the baseline: make another one first"}),
+    responses=responses(
+        Forbidden, NotFound, Invalid, why={Conflict: "the baseline: make another one first"}
+    ),
 )
 def delete_version(
     vid: VersionId, machine: MachineDep, services: ServicesDep, actor: ActorDep
@@ -117,4 +133,4 @@ def delete_version(
     what = f"delete version {vid}"
     with services.audit.refusals(Entry(actor.name, actor.session, "version", what, machine.id)):
         services.versions.delete(actor, machine.id, vid)
-    return Response(status_code=204)
+    return Response(status_code=NO_CONTENT)

@@ -10,7 +10,7 @@ from starlette.background import BackgroundTask
 
 from api.auth import Action
 from backend.deps import ServicesDep, permit
-from backend.errors import ApiError
+from backend.errors import ViewerSilent
 
 router = APIRouter(include_in_schema=False)
 _PASS = ("content-type", "content-encoding", "content-length", "cache-control", "etag")
@@ -36,7 +36,7 @@ async def rerun_asset(path: str, request: Request, services: ServicesDep) -> Str
         )
     except httpx.TransportError as e:
         await client.aclose()
-        raise ApiError(502, {"message": f"Rerun viewer: {e}"}) from None
+        raise ViewerSilent(f"Rerun viewer: {e}") from None
 
     async def close() -> None:
         await upstream.aclose()

@@ -19,6 +19,7 @@ from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError
 
 from api.auth import Role
+from backend.errors import ApiError, Conflict, Invalid, NotFound
 from backend.services.auth import Actor
 from backend.services.store import Store
 
@@ -122,13 +123,20 @@ class Ticket:
     until: float
 
 
-class AccountError(ValueError):
-    """A user management request that cannot be carried out: `status` 404 for an unknown
-    user or token, 409 for a conflict (duplicate name, the last admin)."""
+class AccountError(ApiError):
+    """A user management request that cannot be carried out."""
 
-    def __init__(self, message: str, status: int = 409) -> None:
-        super().__init__(message)
-        self.status = status
+
+class NoSuchAccount(AccountError, NotFound):
+    """An unknown user or API token."""
+
+
+class AccountConflict(AccountError, Conflict):
+    """A name that is taken, or the last admin to remove or demote."""
+
+
+class BadPassword(AccountError, Invalid):
+    """A password too short, or typed differently twice (the command line)."""
 
 
 class Accounts:
@@ -154,7 +162,7 @@ class Accounts:
 
     def add_user(self, name: str, role: Role, password: str | None) -> None:
         if self._user(name) is not None:
-            raise AccountError(f"user {name!r} exists")
+            raise AccountConflict(f"user {name!r} exists")
         hashed = self._hasher.hash(password) if password else ""
         self.store.run(
             "INSERT INTO users VALUES (?, ?, ?, ?)", (name, role.value, hashed, time.time())
@@ -169,7 +177,7 @@ class Accounts:
     def set_role(self, name: str, role: Role) -> None:
         """A new role (never demoting the last admin); it applies from the next request."""
         if self._user(name) is None:
-            raise AccountError(f"no user {name!r}", 404)
+            raise NoSuchAccount(f"no user {name!r}")
         if role != Role.ADMIN:
             self._keep_an_admin(name, "demote")
         self.store.run("UPDATE users SET role = ? WHERE name = ?", (role.value, name))
@@ -178,15 +186,15 @@ class Accounts:
         """Refuse to take away the last admin: nobody could manage users any more."""
         user = self._user(name)
         if user is None:
-            raise AccountError(f"no user {name!r}", 404)
+            raise NoSuchAccount(f"no user {name!r}")
         admins = self.store.query("SELECT COUNT(*) FROM users WHERE role = ?", (Role.ADMIN.value,))
         if user[0] == Role.ADMIN.value and admins[0][0] <= 1:
-            raise AccountError(f"{name} is the last admin: cannot {doing} them")
+            raise AccountConflict(f"{name} is the last admin: cannot {doing} them")
 
     def set_password(self, name: str, password: str) -> None:
         """A new password; the user's sessions end."""
         if self._user(name) is None:
-            raise AccountError(f"no user {name!r}", 404)
+            raise NoSuchAccount(f"no user {name!r}")
         self.store.run(
             "UPDATE users SET hash = ? WHERE name = ?", (self._hasher.hash(password), name)
         )
@@ -319,7 +327,7 @@ class Accounts:
     def new_token(self, name: str, label: str = "", once: bool = False) -> str:
         """An API token for scripts, or a one-time login link's token (good for ONCE_S)."""
         if self._user(name) is None:
-            raise AccountError(f"no user {name!r}", 404)
+            raise NoSuchAccount(f"no user {name!r}")
         token = secrets.token_urlsafe(32)
         now = time.time()
         self.store.run(
@@ -359,11 +367,11 @@ class Accounts:
         return [TokenEntry(f"token-{r[0][:_DIGEST_CHARS]}", r[1], r[2], r[3], r[4]) for r in rows]
 
     def token(self, token_id: str) -> TokenEntry:
-        """An API token by its public id; 404 AccountError when there is none."""
+        """An API token by its public id; NoSuchAccount when there is none."""
         prefix = _digest_prefix(token_id, "token")
         found = [t for t in self.tokens() if prefix and t.id == token_id]
         if not found:
-            raise AccountError(f"no API token {token_id}", 404)
+            raise NoSuchAccount(f"no API token {token_id}")
         return found[0]
 
     def revoke_token(self, token_id: str) -> None:

@@ -17,7 +17,7 @@ from typing import Any
 from pydantic import BaseModel
 
 from api.assist import AssistResult
-from backend.errors import ApiError
+from backend.errors import Invalid, TimedOut, Unavailable
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
@@ -71,9 +71,9 @@ class Assistants:
             answer = await asyncio.wait_for(fut, RUN_TIMEOUT_S)
         except TimeoutError:
             why = f"the {name} experiment did not end within {RUN_TIMEOUT_S:g} s"
-            raise ApiError(504, {"message": why}) from None
+            raise TimedOut(why) from None
         if "error" in answer:
-            raise ApiError(422, {"message": f"{name}: {answer['error']}"})
+            raise Invalid(f"{name}: {answer['error']}")
         return AssistResult.model_validate(answer)
 
     def stop(self) -> None:
@@ -96,9 +96,8 @@ async def run_live(
     with audit.refusals(entry):
         try:
             answer = await machine.acall(start, LIVE_TIMEOUT_S)
-        except ApiError as e:
-            if e.status == 503:  # no answer in time: the run must not go on unattended
-                machine.post(AssistCancel(machine.id, "the run did not end in time"))
+        except Unavailable:  # no answer in time: the run must not go on unattended
+            machine.post(AssistCancel(machine.id, "the run did not end in time"))
             raise
     assert isinstance(answer, dict)
     result = AssistResult.model_validate(answer)

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from api.auth import ALLOWED, Action, Me, Role
-from backend.errors import ApiError, not_found
+from backend.errors import Forbidden, not_found
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,4 @@ def authorize(actor: Actor, action: Action, machine: str | None = None) -> None:
         raise not_found(f"machine '{machine}'")
     if action not in ALLOWED[actor.role]:
         where = f" on {machine}" if machine else ""
-        raise ApiError(
-            403, {"message": f"{actor.name} ({actor.role.value}) may not {action.value}{where}"}
-        )
+        raise Forbidden(f"{actor.name} ({actor.role.value}) may not {action.value}{where}")

@@ -25,7 +25,7 @@ from api.assist import (
     ResolutionRequest,
     SpeedScalingRequest,
 )
-from backend.errors import ApiError
+from backend.errors import Invalid
 from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
 from nc_sim.assist.curve_fit import curve_fit
 from nc_sim.assist.result import Change, Result
@@ -123,7 +123,7 @@ def calculate(cfg: MachineConfig, name: str, req: BaseModel) -> AssistResult:
             for c in result.changes
         ]
     except NcUsageError as e:
-        raise ApiError(422, {"message": f"{name}: {e}"}) from None
+        raise Invalid(f"{name}: {e}") from None
     answer = AssistResult.model_validate(result.as_json())
     return answer.model_copy(update={"changes": changes})
 
@@ -151,7 +151,7 @@ def gear_selection(cfg: MachineConfig, req: GearSelectionRequest) -> GearSelecti
     name = cfg.main_spindle
     i = spindel_index(cfg, name) if name else None
     if name is None or i is None:
-        raise ApiError(422, {"message": "the machine has no main spindle (main_spindle_ax_nr)"})
+        raise Invalid("the machine has no main spindle (main_spindle_ax_nr)")
     own = range_table(cfg, i)
     ranges = (
         [GearRange(float(r.min_rpm), float(r.max_rpm)) for r in req.ranges]

@@ -31,7 +31,7 @@ from api.classes import (
 )
 from api.faults import FaultInfo, FaultInject
 from api.machines import MachineCreate, MachineLists
-from backend.errors import ApiError, not_found
+from backend.errors import ApiError, Conflict, Forbidden, Invalid, not_found
 from backend.services import training
 from backend.services.accounts import Accounts, digest
 from backend.services.audit import Audit, Entry
@@ -239,7 +239,7 @@ class Classes:
         """A class that has not ended; 404 for none, 409 for one that has ended."""
         c = self.get(cid)
         if c.ended_unix is not None:
-            raise ApiError(409, {"message": f"class '{cid}' has ended"})
+            raise Conflict(f"class '{cid}' has ended")
         return c
 
     def seat(self, cid: str, n: int) -> Seat:
@@ -349,12 +349,12 @@ class Classes:
         self._check_template(ex, req.lists)
         with self._lock:
             if req.id in self._classes:
-                raise ApiError(409, {"message": f"class '{req.id}' exists (ended or not)"})
+                raise Conflict(f"class '{req.id}' exists (ended or not)")
             taken = {u.name for u in self.accounts.users()}
             names = [seat_name(req.id, n) for n in range(1, req.seats + 1)]
             clash = [n for n in names if n in taken or self._exists(n)]
             if clash:
-                raise ApiError(409, {"message": f"'{clash[0]}' is taken (a user or machine)"})
+                raise Conflict(f"'{clash[0]}' is taken (a user or machine)")
             now = time.time()
             c = Class(req.id, req.title or ex.title, ex, text, actor.name, now, None, [], req.lists)
             self._classes[c.id] = c  # reserved while the seats are built
@@ -399,7 +399,7 @@ class Classes:
             check_fits(ex, f"exercise '{ex.id}'", template)
         except (ExerciseError, ParamListError, NcUsageError) as e:
             machine = "the demo lathe" if lists is None else "the uploaded lists"
-            raise ApiError(422, {"message": f"{e} (the machine: {machine})"}) from None
+            raise Invalid(f"{e} (the machine: {machine})") from None
 
     def _exists(self, mid: str) -> bool:
         try:
@@ -499,7 +499,7 @@ class Classes:
         (their pages show the result, `result_of`)."""
         with self._lock:
             if c.ended_unix is not None:
-                raise ApiError(409, {"message": f"class '{c.id}' has ended"})
+                raise Conflict(f"class '{c.id}' has ended")
             for seat in c.seats:
                 proxy = self.proxy(seat)
                 if proxy is not None:
@@ -601,12 +601,9 @@ class Classes:
         """A hint's text; taken once, it costs its points. Only the seat's own student takes
         one (403 for anyone else: an instructor watching would charge the student)."""
         if actor.name != seat.user:
-            raise ApiError(
-                403,
-                {
-                    "message": f"only seat {seat.n}'s student ({seat.student}, login "
-                    f"{seat.user}) takes its hints: a hint costs the student's points"
-                },
+            raise Forbidden(
+                f"only seat {seat.n}'s student ({seat.student}, login "
+                f"{seat.user}) takes its hints: a hint costs the student's points"
             )
         if not 1 <= n <= len(c.exercise.hints):
             raise not_found(f"hint {n} (hints 1..{len(c.exercise.hints)})")

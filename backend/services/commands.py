@@ -37,6 +37,7 @@ from api.commands import (
     SpindlePositionCommand,
 )
 from api.common import JobErrorModel, Refusal
+from backend import errors
 from backend.errors import ApiError, refusal_text
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor
@@ -66,8 +67,8 @@ def job_error_model(e: Event) -> JobErrorModel:
     )
 
 
-def _refuse(status: int, message: str, **kw: object) -> ApiError:
-    return ApiError(status, Refusal.model_validate({"message": message, **kw}).model_dump())
+def _refuse(kind: type[ApiError], message: str, **kw: object) -> ApiError:
+    return kind(Refusal.model_validate({"message": message, **kw}).model_dump())
 
 
 StoredText = Callable[[str], str]
@@ -75,7 +76,7 @@ StoredText = Callable[[str], str]
 
 
 def _no_store(name: str) -> str:
-    raise _refuse(422, f"program_load of {name} needs the program text here")
+    raise _refuse(errors.Invalid, f"program_load of {name} needs the program text here")
 
 
 def to_nc(cmd: Command | EmergencyStopCommand, stored: StoredText = _no_store) -> nc.Command:
@@ -108,7 +109,7 @@ def to_nc(cmd: Command | EmergencyStopCommand, stored: StoredText = _no_store) -
             return nc.JogStop(cmd.axis)
         case JogCommand():
             if cmd.distance is None:
-                raise _refuse(422, "jog step needs a distance")
+                raise _refuse(errors.Invalid, "jog step needs a distance")
             return nc.JogStep(cmd.axis, cmd.direction * cmd.distance, cmd.feed_mm_min)
         case MoveCommand():
             return nc.Move(cmd.axis, cmd.target, cmd.rapid, cmd.feed_mm_min)
@@ -126,7 +127,7 @@ def to_nc(cmd: Command | EmergencyStopCommand, stored: StoredText = _no_store) -
             return nc.Reset()
         case EmergencyStopCommand():
             return nc.EmergencyStop()
-    raise _refuse(422, f"unknown command {cmd!r}")
+    raise _refuse(errors.Invalid, f"unknown command {cmd!r}")
 
 
 def _describe(cmd: Command | EmergencyStopCommand) -> str:
@@ -201,12 +202,17 @@ async def _execute(
     match done.outcome:
         case Invalid() as bad:
             raise _refuse(
-                422, bad.message, code=bad.code, line=bad.line, column=bad.column, serial=serial
+                errors.Invalid,
+                bad.message,
+                code=bad.code,
+                line=bad.line,
+                column=bad.column,
+                serial=serial,
             )
         case Refused() as refused:
             e = refused.error
             model = job_error_model(e).model_dump()
-            raise _refuse(409, e.message, code=e.code, error=model, serial=serial)
+            raise _refuse(errors.Conflict, e.message, code=e.code, error=model, serial=serial)
         case Accepted() as ok:
             if reset_values:
                 with m.lock:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from api.auth import Action
 from api.control import REQUEST_S, ControlAction, ControlParty, ControlState
-from backend.errors import ApiError
+from backend.errors import ApiError, Conflict, Forbidden, NotFound
 from backend.services.audit import Audit, Entry
 from backend.services.auth import Actor, authorize
 from backend.tasks import cancel
@@ -85,10 +85,7 @@ class Control:
         """409 for a class's student on their seat while the instructor has it frozen."""
         by = m.control.frozen_by
         if by is not None and actor.seat is not None:
-            raise ApiError(
-                409,
-                {"message": f"{by} froze {m.id}: you act on it again once they resume it"},
-            )
+            raise Conflict(f"{by} froze {m.id}: you act on it again once they resume it")
 
     # --- asked by every action only a holder may do ----------------------------------------
     def hold(self, actor: Actor, m: MachineProxy) -> None:
@@ -112,12 +109,8 @@ class Control:
             elsewhere = " in another session (a browser or an API token): release it there"
         else:
             elsewhere = ""
-        raise ApiError(
-            403,
-            {
-                "message": f"control of {m.id} is held by {_who(holder)}{elsewhere}: "
-                "request it to act",
-            },
+        raise Forbidden(
+            f"control of {m.id} is held by {_who(holder)}{elsewhere}: request it to act"
         )
 
     # --- the control route ------------------------------------------------------------------
@@ -140,24 +133,18 @@ class Control:
                     try:
                         authorize(actor, Action.TAKE_CONTROL, m.id)
                     except ApiError:
-                        raise ApiError(
-                            403,
-                            {
-                                "message": f"control of {m.id} is held by {_who(c.holder)}: "
-                                "request it (only an instructor or admin takes it)"
-                            },
+                        raise Forbidden(
+                            f"control of {m.id} is held by {_who(c.holder)}: "
+                            "request it (only an instructor or admin takes it)"
                         ) from None
                 was = f" from {_who(c.holder)}" if c.holder else ""
                 self._change(m, _party(actor), actor, f"took control{was}")
             case "request":
                 if mine or c.holder is None:
-                    raise ApiError(
-                        409,
-                        {
-                            "message": "nothing to request: take the free machine"
-                            if c.holder is None
-                            else "you hold control already"
-                        },
+                    raise Conflict(
+                        "nothing to request: take the free machine"
+                        if c.holder is None
+                        else "you hold control already"
                     )
                 if all(_key(r) != _key(actor) for r in c.requests):
                     c.requests.append(_party(actor))
@@ -169,12 +156,12 @@ class Control:
                     self._changed(m, actor, "withdrew the request for control")
             case "grant" | "refuse":
                 if not mine:
-                    raise ApiError(403, {"message": f"only the holder may {req.action} control"})
+                    raise Forbidden(f"only the holder may {req.action} control")
                 asked = [
                     r for r in c.requests if (r.session, r.client) == (req.session, req.client)
                 ]
                 if not asked:
-                    raise ApiError(404, {"message": "no such request (withdrawn or lapsed)"})
+                    raise NotFound("no such request (withdrawn or lapsed)")
                 c.requests.remove(asked[0])
                 if req.action == "refuse":
                     self._changed(m, actor, f"refused control to {_who(asked[0])}")

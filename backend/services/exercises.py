@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from api.classes import CheckInfo, ExerciseInfo, HintInfo
-from backend.errors import ApiError, not_found
+from backend.errors import Conflict, Invalid, not_found
 from backend.services.store import Store
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
@@ -100,12 +100,12 @@ class Exercises:
             ex = parse_exercise(text, "upload")
             check_fits(ex, "upload")  # its axes and values fit its machine template
         except (ExerciseError, ParamListError, NcUsageError) as e:
-            raise ApiError(422, {"message": str(e)}) from None
+            raise Invalid(str(e)) from None
         with self._lock:
             if ex.id in self._shipped:
-                raise ApiError(409, {"message": f"exercise '{ex.id}' is shipped: choose an id"})
+                raise Conflict(f"exercise '{ex.id}' is shipped: choose an id")
             if ex.id not in self._by_id and len(self._by_id) >= MAX_UPLOADED + len(self._shipped):
-                raise ApiError(409, {"message": f"at most {MAX_UPLOADED} uploaded exercises"})
+                raise Conflict(f"at most {MAX_UPLOADED} uploaded exercises")
             self._by_id[ex.id] = (ex, f"uploaded by {user}", text)
         self.store.run(
             "INSERT OR REPLACE INTO exercises VALUES (?, ?, ?, ?)", (ex.id, text, user, time.time())

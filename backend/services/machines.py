@@ -23,7 +23,7 @@ import numpy as np
 
 from api.machines import MachineCreate
 from api.telemetry import NoticeKind
-from backend.errors import ApiError, not_found
+from backend.errors import WORKER_FAILURE, ApiError, Conflict, Invalid, Unavailable, not_found
 from backend.services.control import MachineControl
 from backend.services.store import Store, StoredMachine
 from backend.workers.client import CALL_TIMEOUT_S, WorkerClient, WorkerGone, WorkerRefused
@@ -192,15 +192,14 @@ class MachineProxy:
     def _worker(self) -> WorkerClient:
         worker = self.worker
         if worker is None or not worker.alive:
-            raise ApiError(503, {"message": f"machine '{self.id}' is being rebuilt: try again"})
+            raise Unavailable(f"machine '{self.id}' is being rebuilt: try again")
         return worker
 
     def _answer(self, e: WorkerGone | WorkerRefused) -> ApiError:
         """A worker's failure as the API answers it."""
         if isinstance(e, WorkerGone):
-            return ApiError(503, {"message": f"machine '{self.id}': {e}; it is rebuilt"})
-        code = {"not_found": 404, "invalid": 422, "conflict": 409}.get(e.failure.kind, 500)
-        return ApiError(code, {"message": e.failure.message})
+            return Unavailable(f"machine '{self.id}': {e}; it is rebuilt")
+        return WORKER_FAILURE[e.failure.kind](e.failure.message)
 
     def post(self, request: Request) -> None:
         """A request whose answer nobody waits for (watching)."""
@@ -316,7 +315,7 @@ class MachineService:
             try:
                 worker = worker or self.pool.choose(self._load)
             except NoLiveWorker as e:
-                raise ApiError(503, {"message": str(e)}) from None
+                raise Unavailable(str(e)) from None
             self._building[proxy.id] = (proxy, worker)
         epoch = proxy.epoch + 1
         if faults is None:
@@ -376,7 +375,7 @@ class MachineService:
         """A new machine placed on a worker; a class's seat gets its exercise's starting
         `values` (written into its lists: the caller stores them), `faults` and checks."""
         if req.id in self._proxies:
-            raise ApiError(409, {"message": f"machine '{req.id}' exists"})
+            raise Conflict(f"machine '{req.id}' exists")
         sm = StoredMachine(
             req.id,
             req.name or req.id,
@@ -392,13 +391,13 @@ class MachineService:
         try:
             apply_values(cfg, values or [])
         except NcUsageError as e:
-            raise ApiError(422, {"message": str(e)}) from None
+            raise Invalid(str(e)) from None
         proxy = MachineProxy(sm, cfg)
         proxy.exercise = exercise
         try:
             self._place(proxy, faults=faults)
         except (WorkerGone, WorkerRefused) as e:
-            raise ApiError(503, {"message": f"no worker could build the machine: {e}"}) from None
+            raise Unavailable(f"no worker could build the machine: {e}") from None
         self.store.add_machine(sm)
         with self._lock:
             self._proxies[sm.id] = proxy
@@ -416,7 +415,7 @@ class MachineService:
             try:
                 self._place(proxy, worker)
             except (WorkerGone, WorkerRefused) as e:
-                raise ApiError(503, {"message": f"machine '{mid}': {e}"}) from None
+                raise Unavailable(f"machine '{mid}': {e}") from None
         return proxy
 
     def restore(self, mid: str, state: bytes, params: ParamSnapshot) -> MachineProxy:
@@ -434,7 +433,7 @@ class MachineService:
             try:
                 self._place(proxy, worker, state, mode=mode)
             except (WorkerGone, WorkerRefused) as e:
-                raise ApiError(503, {"message": f"machine '{mid}': {e}"}) from None
+                raise Unavailable(f"machine '{mid}': {e}") from None
         return proxy
 
     def delete(self, mid: str) -> None:
@@ -499,15 +498,14 @@ def lists_rejected(e: ParamListError | NcUsageError) -> ApiError:
     """The 422 of parameter lists a machine cannot be built from: each problem with its
     parameter and line."""
     if isinstance(e, NcUsageError):
-        return ApiError(422, {"message": str(e)})
-    return ApiError(
-        422,
+        return Invalid(str(e))
+    return Invalid(
         {
             "message": f"parameter list rejected: {e}",
             "problems": [
                 {"parameter": p.name, "line": p.line, "message": p.detail} for p in e.errors
             ],
-        },
+        }
     )
 
 

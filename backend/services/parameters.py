@@ -20,7 +20,7 @@ from api.parameters import (
     ParameterValue,
     ParameterWriteResult,
 )
-from backend.errors import ApiError
+from backend.errors import ApiError, Conflict, Forbidden, Invalid
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, Pending
 from backend.services.store import Store, StoredChange, parameter_entry
@@ -54,9 +54,7 @@ def _target(m: MachineProxy, scope: Scope, target: str | None) -> str:
         return ""
     names = [ax.name for ax in m.cfg.axes]
     if target not in names:
-        raise ApiError(
-            422, {"message": f"axis parameters need a target, one of {', '.join(names)}"}
-        )
+        raise Invalid(f"axis parameters need a target, one of {', '.join(names)}")
     return target
 
 
@@ -79,12 +77,11 @@ def _problem(e: ParamError, scope: Scope, target: str, line: int | None = None) 
 
 def _rejected(problems: list[ParameterProblem]) -> ApiError:
     first = problems[0].message if problems else "rejected"
-    return ApiError(
-        422,
+    return Invalid(
         {
             "message": f"{len(problems)} parameter value(s) rejected, nothing applied: {first}",
             "problems": [p.model_dump() for p in problems],
-        },
+        }
     )
 
 
@@ -124,10 +121,7 @@ def write(
     written since), then store, audit and apply them."""
     plant = [c.name for c in changes if c.name.startswith(PLANT)]
     if plant and plant_hidden(actor):
-        raise ApiError(
-            403,
-            {"message": f"{plant[0]}: the simulated plant is the instructor's on a class seat"},
-        )
+        raise Forbidden(f"{plant[0]}: the simulated plant is the instructor's on a class seat")
     with m.lock:
         problems: list[ParameterProblem] = []
         parsed: list[tuple[Scope, str, ParamDef, str, Value]] = []
@@ -155,13 +149,12 @@ def write(
             raise _rejected(problems)
         stale = _stale(m, store, changes, parsed)
         if stale:
-            raise ApiError(
-                409,
+            raise Conflict(
                 {
                     "message": f"{stale[0].parameter} was written by {stale[0].by} since you "
                     f"read it (now {stale[0].current}): nothing applied",
                     "stale": [v.model_dump() for v in stale],
-                },
+                }
             )
         stored: list[StoredChange] = []
         changed: list[tuple[Scope, str, ParamDef, str, Value]] = []
@@ -341,7 +334,7 @@ def import_list(
     except ParamListError as e:
         raise _rejected([_problem(p, scope, tgt) for p in e.errors]) from None
     if not plist.values:
-        raise ApiError(422, {"message": "the list holds no parameter values"})
+        raise Invalid("the list holds no parameter values")
     lines = {ln.name: i for i, ln in enumerate(plist.lines, start=1) if ln.name}
     changes = [
         ParameterChange(scope=scope.value, target=tgt or None, name=n, value=v)

@@ -15,7 +15,7 @@ from typing import Literal
 from fastapi.concurrency import run_in_threadpool
 
 from api.programs import PreviewError, PreviewSegment, Program, ProgramInfo, ProgramPreview
-from backend.errors import ApiError, not_found
+from backend.errors import Forbidden, not_found
 from backend.services.audit import Entry
 from backend.services.auth import Actor
 from backend.services.store import Store, StoredProgram
@@ -97,7 +97,7 @@ def delete(store: Store, actor: Actor, name: str) -> None:
         return
     if owner and store.program(name, ("",)) is not None:
         why = f"{actor.name} may delete only the programs of their seat, not the shared {name}"
-        raise ApiError(403, {"message": why})
+        raise Forbidden(why)
     raise not_found(f"program {name}")
 
 

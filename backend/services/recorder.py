@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from api.scope import RecordingInfo
-from backend.errors import ApiError, not_found
+from backend.errors import Conflict, Invalid, QuotaUsedUp, not_found
 from backend.services.machines import MachineProxy
 from nc_sim.events import Event
 
@@ -159,16 +159,16 @@ class Recorders:
         """Start recording from the next cycle; 409 when the machine already records."""
         bad = [n for n in signals if n not in m.signal_by_name]
         if bad:
-            raise ApiError(422, {"message": f"recording: unknown signals {bad}"})
+            raise Invalid(f"recording: unknown signals {bad}")
         if self.active(m.id) is not None:
-            raise ApiError(409, {"message": f"{m.id} is already recording: stop it first"})
+            raise Conflict(f"{m.id} is already recording: stop it first")
         used = self.used_mb()
         if used >= self.quota_mb:
             why = (
                 f"recordings use {used:.1f} MB of their {self.quota_mb:g} MB disk quota: "
                 f"remove some from {self.dir}"
             )
-            raise ApiError(507, {"message": why})
+            raise QuotaUsedUp(why)
         rid = uuid.uuid4().hex[:12]
         path = self.dir / f"{rid}.rrd"
         about = f"# continuous recording of {m.name} ({m.id})\n- signals: " + ", ".join(signals)
@@ -204,7 +204,7 @@ class Recorders:
     def end(self, mid: str) -> RecordingInfo:
         rec = self.active(mid)
         if rec is None:
-            raise ApiError(409, {"message": f"{mid} is not recording"})
+            raise Conflict(f"{mid} is not recording")
         rec.stop("stopped on request")
         return rec.info()
 

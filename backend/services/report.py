@@ -11,7 +11,7 @@ import time
 from typing import Any
 
 from api.report import SignOff, SignOffRequest
-from backend.errors import ApiError
+from backend.errors import Invalid
 from backend.report import html
 from backend.services.assist_runs import AssistRuns
 from backend.services.audit import Audit, AuditFilter, Entry, append
@@ -127,7 +127,7 @@ class Reports:
         baseline: list[html.BaselineRow] | None,
     ) -> html.ReportData:
         if len(trace_ids) > MAX_TRACES:
-            raise ApiError(422, {"message": f"trace: at most {MAX_TRACES} traces in one report"})
+            raise Invalid(f"trace: at most {MAX_TRACES} traces in one report")
         traces = [self._trace(m.id, tid) for tid in dict.fromkeys(trace_ids)]
         runs = self.runs.runs(m.id, MAX_RUNS)
         total_runs = self.store.query(
@@ -160,11 +160,9 @@ class Reports:
         t = self.traces.get(tid)  # 404 when unknown
         d = t.detail
         if d.machine not in (mid, IMPORTED):  # an import without a machine may go anywhere
-            raise ApiError(
-                422, {"message": f"trace: {tid} was recorded on machine {d.machine}, not {mid}"}
-            )
+            raise Invalid(f"trace: {tid} was recorded on machine {d.machine}, not {mid}")
         if not d.channels or t.data.shape[-1] == 0:
-            raise ApiError(422, {"message": f"trace: {tid} holds no samples"})
+            raise Invalid(f"trace: {tid} holds no samples")
         main = d.channels[0]
         return html.TracePlot(
             id=d.id,

@@ -9,7 +9,7 @@ import numpy as np
 
 from api.scope import EventTriggerModel, LevelTriggerModel, ScopeSetupModel, ScopeStatus
 from api.telemetry import FrameHeader, encode_frame
-from backend.errors import ApiError
+from backend.errors import ApiError, Invalid
 from backend.services.machines import MachineProxy
 from backend.services.recorder import Recorders
 from backend.services.traces import TraceService
@@ -26,7 +26,7 @@ from nc_sim.scope import (
 
 def _unknown(m: MachineProxy, names: list[str], what: str) -> ApiError:
     bad = [n for n in names if n not in m.signal_by_name]
-    return ApiError(422, {"message": f"{what}: unknown signals {bad}"})
+    return Invalid(f"{what}: unknown signals {bad}")
 
 
 def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
@@ -42,7 +42,7 @@ def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
         trigger = LevelTrigger(sig, t.level, t.edge == "rising", t.hysteresis)
     elif isinstance(t, EventTriggerModel):
         if t.axis is not None and t.axis not in m.axes:
-            raise ApiError(422, {"message": f"trigger: no axis {t.axis}"})
+            raise Invalid(f"trigger: no axis {t.axis}")
         trigger = EventTrigger(EventKind(t.event), t.axis, t.m)
     length = round(req.length_s / m.cycle_s)
     setup = ScopeSetup(
@@ -55,7 +55,7 @@ def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
     try:
         setup.check()
     except ValueError as e:
-        raise ApiError(422, {"message": str(e)}) from None
+        raise Invalid(str(e)) from None
     return setup
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from api.scope import ChannelInfo, TraceDetail
-from backend.errors import ApiError, clip
+from backend.errors import ApiError, Invalid, clip
 from backend.services.traces import Trace
 
 _HEAD = re.compile(r"^(?P<name>.+?)(?: \[(?P<unit>[^\]]*)\])?$")
@@ -45,7 +45,7 @@ def to_csv(trace: Trace) -> str:
 
 
 def _bad(message: str) -> ApiError:
-    return ApiError(422, {"message": f"CSV import: {message}"})
+    return Invalid(f"CSV import: {message}")
 
 
 def from_csv(text: str, name: str = "") -> Trace:

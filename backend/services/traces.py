@@ -29,7 +29,7 @@ from api.scope import (
     TraceSave,
 )
 from api.telemetry import FrameHeader, encode_frame
-from backend.errors import ApiError, not_found
+from backend.errors import Conflict, Invalid, QuotaUsedUp, not_found
 from backend.services.commands import job_error_model
 from backend.services.machines import Capture, MachineProxy, MachineService
 from backend.services.recorder import MB
@@ -214,7 +214,7 @@ class TraceService:
                 f"{what}: the trace library uses {used:.1f} MB of its {self.quota_mb:g} MB "
                 f"(this needs {mb:.1f} MB more): delete traces first"
             )
-            raise ApiError(507, {"message": why})
+            raise QuotaUsedUp(why)
         if by is None:
             return
         mine = self.used_mb(by)
@@ -223,7 +223,7 @@ class TraceService:
                 f"{what}: {by}'s traces use {mine:.1f} MB of their {self.user_quota_mb:g} MB "
                 f"(this needs {mb:.1f} MB more): delete some first"
             )
-            raise ApiError(507, {"message": why})
+            raise QuotaUsedUp(why)
 
     def add(self, trace: Trace, by: str) -> TraceInfo:
         """Store a trace (a capture being saved, or an import) for `by`, within the quotas:
@@ -245,7 +245,7 @@ class TraceService:
     def save(self, tid: str, req: TraceSave, by: str) -> TraceInfo:
         trace = self.get(tid)
         if trace.detail.stored:
-            raise ApiError(409, {"message": f"trace {tid} is already in the library"})
+            raise Conflict(f"trace {tid} is already in the library")
         detail = trace.detail.model_copy(deep=True)
         detail.name = req.name or f"{detail.trigger or 'capture'} {detail.id[:6]}"
         detail.notes = req.notes
@@ -254,7 +254,7 @@ class TraceService:
     def patch(self, tid: str, req: TracePatch) -> TraceInfo:
         trace = self.get(tid)
         if not trace.detail.stored:
-            raise ApiError(409, {"message": f"trace {tid} is not in the library: save it first"})
+            raise Conflict(f"trace {tid} is not in the library: save it first")
         d = trace.detail
         name = d.name if req.name is None else req.name
         self.store.update_trace(tid, name, d.notes if req.notes is None else req.notes)
@@ -314,14 +314,14 @@ class TraceService:
         trace = self.get(tid)
         names = [c.name for c in trace.detail.channels]
         if channel not in names:
-            raise ApiError(422, {"message": f"channel {channel} is not in trace {tid}: {names}"})
+            raise Invalid(f"channel {channel} is not in trace {tid}: {names}")
         k = names.index(channel)
         t = trace.times_s()
         lo = t[0] if t0_s is None else t0_s
         hi = t[-1] if t1_s is None else t1_s
         sel = (t >= lo - 1e-12) & (t <= hi + 1e-12)
         if np.count_nonzero(sel) < 2:
-            raise ApiError(422, {"message": f"window {lo:g} … {hi:g} s holds fewer than 2 samples"})
+            raise Invalid(f"window {lo:g} … {hi:g} s holds fewer than 2 samples")
         ref = 0.0 if trace.detail.trigger_cycle is not None and lo <= 0.0 <= hi else None
         m = measure(t[sel], trace.data[k][sel], band_pct, band_abs, ref)
         return MeasurementsModel(

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 from api.parameters import ParameterChange, ParameterWriteResult
 from api.versions import ParamDiff, VersionInfo
-from backend.errors import ApiError, not_found
+from backend.errors import ApiError, Conflict, not_found
 from backend.services import audit
 from backend.services import parameters as params
 from backend.services.auth import Actor
@@ -143,10 +143,7 @@ def diff(m: MachineProxy, a: Lists, b: Lists) -> list[ParamDiff]:
 
 
 def _taken(name: str, mid: str) -> ApiError:
-    return ApiError(
-        409,
-        {"message": f"machine {mid} already has a version named '{name}': choose another name"},
-    )
+    return Conflict(f"machine {mid} already has a version named '{name}': choose another name")
 
 
 class Versions:
@@ -231,12 +228,8 @@ class Versions:
                 "SELECT count(*) FROM param_versions WHERE machine = ?", (mid,)
             ).fetchone()[0]
             if count >= MAX_VERSIONS:
-                raise ApiError(
-                    409,
-                    {
-                        "message": f"machine {mid} has {count} versions, the most it keeps: "
-                        "delete old ones first"
-                    },
+                raise Conflict(
+                    f"machine {mid} has {count} versions, the most it keeps: delete old ones first"
                 )
             if baseline:
                 db.execute("UPDATE param_versions SET baseline = 0 WHERE machine = ?", (mid,))
@@ -281,12 +274,9 @@ class Versions:
         self.machines.get(mid)
         row = self._row(mid, vid)
         if row[6]:
-            raise ApiError(
-                409,
-                {
-                    "message": f"version '{row[2]}' is the baseline of {mid}: make another "
-                    "version the baseline first"
-                },
+            raise Conflict(
+                f"version '{row[2]}' is the baseline of {mid}: make another "
+                "version the baseline first"
             )
         entry = audit.Entry(
             actor.name,

@@ -30,7 +30,7 @@ from urllib.parse import quote
 
 from fastapi import Request
 
-from backend.errors import ApiError
+from backend.errors import Unavailable
 
 
 def viewer_url(request: Request, rrd_path: str) -> str:
@@ -120,7 +120,7 @@ class RerunViewer:
                 time.sleep(0.1)
             self.stop_locked()
             msg = f"the Rerun viewer did not start (see {self.log_path})"
-            raise ApiError(503, {"message": msg})
+            raise Unavailable(msg)
 
     def analytics_config(self) -> Path:
         return self.home / "config" / "rerun" / "analytics.json"

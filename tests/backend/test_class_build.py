@@ -12,7 +12,7 @@ import pytest
 from api.auth import Role
 from api.classes import ClassCreate
 from api.machines import MachineCreate
-from backend.errors import ApiError, not_found
+from backend.errors import ApiError, Unavailable, not_found
 from backend.services.accounts import Accounts
 from backend.services.audit import Audit
 from backend.services.auth import Actor
@@ -46,7 +46,7 @@ class Machines:
         try:
             threading.Event().wait(0.02)  # a build takes a while: others may overlap
             if req.id == self.fail:
-                raise ApiError(503, {"message": f"no worker could build '{req.id}'"})
+                raise Unavailable(f"no worker could build '{req.id}'")
             control = type("Control", (), {"holder": None})()
             proxy = type("Proxy", (), {"id": req.id, "control": control})()
             with self.lock:
