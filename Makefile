@@ -64,6 +64,7 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
 	$(PY) -m mypy
+	$(VENV)/bin/lint-imports --no-cache
 	cd frontend && npx tsc --noEmit
 
 test:

@@ -20,8 +20,8 @@ from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experime
 from nc_sim.assist.loop_gain import loop_gain
 from nc_sim.assist.result import Result
 from nc_sim.assist.run_up import curve_run_up
+from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
-from nc_sim.machine.config import MachineConfig
 from nc_sim.params import ParamListError
 from nc_sim.params.listfile import ParamError
 

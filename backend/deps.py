@@ -18,7 +18,8 @@ from backend.security import SAFE_METHODS, is_loopback
 from backend.services.accounts import Accounts
 from backend.services.assist import Assistants
 from backend.services.assist_runs import AssistRuns
-from backend.services.audit import Audit, Entry
+from backend.services.audit import Audit
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor, authorize
 from backend.services.classes import Classes
 from backend.services.console import ConsoleHub

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nc_sim.machine.config import MachineConfig, demo_machine, machine_from_lists
+from nc_sim.config import MachineConfig, demo_machine, machine_from_lists
 from nc_sim.scenario import ScenarioResult, run_scenario
 
 

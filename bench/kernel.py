@@ -12,7 +12,7 @@ from nc_sim.assist.procedure import LiveRun
 from nc_sim.channel.canon import ListSink
 from nc_sim.channel.interpreter import interpret
 from nc_sim.commands import CycleStart, Mdi, ProgramLoad
-from nc_sim.machine.config import demo_machine
+from nc_sim.config import demo_machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
 

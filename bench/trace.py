@@ -28,7 +28,7 @@ from backend.services.store import StoredMachine
 from backend.workers.host import MachineHost
 from backend.workers.protocol import AddMachine
 from nc_sim.commands import Move, SpindleRun
-from nc_sim.machine.config import demo_machine
+from nc_sim.config import demo_machine
 
 BLOCK = 250  # cycles per loop tick and per recorder pump (0.25 s at 1 kHz)
 

@@ -39,9 +39,9 @@ from nc_sim.commands import (
     SpindlePosition,
     SpindleRun,
 )
+from nc_sim.config import MachineConfig, apply_overrides
 from nc_sim.errors import NcUsageError
 from nc_sim.events import EVENT_LOG_LEN, Event
-from nc_sim.machine.config import MachineConfig, apply_overrides
 from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope, resolve
 from nc_sim.params.listfile import parse_value

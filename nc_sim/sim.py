@@ -14,9 +14,9 @@ import pickle
 
 import numpy as np
 
+from nc_sim.config import MachineConfig
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
-from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 
 

@@ -14,11 +14,11 @@ from backend.errors import (
     ApiError,
     NotLoggedIn,
     TooManyAttempts,
-    responses,
     http_status,
+    responses,
 )
 from backend.services.accounts import SESSION_S, User, public_id
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 
 router = APIRouter(tags=["auth"])

@@ -11,7 +11,7 @@ from api.faults import FaultInfo, FaultInject
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import CREATED, NO_CONTENT, WORKER_GONE, Forbidden, Invalid, NotFound, responses
 from backend.services import training
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 
 router = APIRouter(prefix="/api/machines/{mid}/faults", tags=["training"])
 

@@ -22,7 +22,7 @@ from backend.errors import (
     TooLarge,
     responses,
 )
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.service_axes import service_axes
 from backend.services.status import (
     machine_status,

@@ -36,7 +36,7 @@ from backend.errors import (
     responses,
 )
 from backend.services import parameters as params
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from nc_sim.params import Scope, registry
 
 router = APIRouter(prefix="/api", tags=["parameters"])

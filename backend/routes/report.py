@@ -17,7 +17,7 @@ from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import CREATED, OK, Forbidden, Invalid, NotFound, Unavailable, Why, responses
 from backend.report.pdf import html_to_pdf
 from backend.services.assist_runs import MAX_LIST
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.report import MAX_TRACES
 
 router = APIRouter(prefix="/api/machines/{mid}", tags=["report"])

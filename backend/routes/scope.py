@@ -25,7 +25,7 @@ from backend.errors import (
     responses,
 )
 from backend.services import scope
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.viewer import viewer_url
 
 router = APIRouter(prefix="/api", tags=["scope"])

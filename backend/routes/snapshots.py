@@ -10,7 +10,7 @@ from api.auth import Action
 from api.classes import SnapshotCreate, SnapshotInfo
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import CREATED, WORKER_GONE, Forbidden, Invalid, NotFound, responses
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 
 router = APIRouter(prefix="/api/machines/{mid}/snapshots", tags=["training"])
 

@@ -9,7 +9,7 @@ from api.auth import Action, TokenCreate, TokenCreated, TokenInfo
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import CREATED, NO_CONTENT, Forbidden, NotFound, responses
 from backend.services.accounts import TokenEntry, public_id
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.auth import authorize
 
 router = APIRouter(prefix="/api/auth/tokens", tags=["auth"])

@@ -28,7 +28,7 @@ from backend.errors import (
     responses,
 )
 from backend.routes.scope import BINARY
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.trace_csv import from_csv, to_csv
 from backend.services.viewer import viewer_url
 

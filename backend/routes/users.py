@@ -10,7 +10,7 @@ from api.auth import Action, UserChange, UserCreate, UserInfo
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import CREATED, NO_CONTENT, Conflict, Invalid, NotFound, responses
 from backend.services.accounts import Accounts, UserEntry
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 
 router = APIRouter(prefix="/api/users", tags=["users"])
 

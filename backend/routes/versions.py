@@ -22,7 +22,7 @@ from backend.errors import (
     Why,
     responses,
 )
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.versions import STATE_PATTERN
 
 router = APIRouter(prefix="/api/machines/{mid}/versions", tags=["versions"])

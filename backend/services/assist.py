@@ -18,11 +18,12 @@ from pydantic import BaseModel
 
 from api.assist import AssistResult
 from backend.errors import Invalid, TimedOut, Unavailable
-from backend.services.audit import Audit, Entry
+from backend.services.audit import Audit
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.workers.protocol import AssistCancel, AssistStart
-from nc_sim.machine.config import MachineConfig
+from nc_sim.config import MachineConfig
 
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 

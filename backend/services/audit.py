@@ -11,7 +11,6 @@ from __future__ import annotations
 import asyncio
 import csv
 import functools
-import hashlib
 import io
 import json
 import logging
@@ -21,92 +20,21 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
-from api.audit import AuditKind, AuditPage, AuditRecord, AuditVerification
+from api.audit import AuditPage, AuditRecord, AuditVerification
 from backend.errors import ApiError, refusal_text
+from backend.services.audit_log import COLUMNS, Entry, append, row_hash
 
 if TYPE_CHECKING:
     from backend.services.store import Store
 
 log = logging.getLogger(__name__)
 
-SCHEMA = """
-CREATE TABLE IF NOT EXISTS audit_log (
-    seq INTEGER PRIMARY KEY,       -- 1, 2, 3, ...: a gap is a removed row
-    time REAL NOT NULL,
-    actor TEXT NOT NULL,
-    session TEXT NOT NULL,
-    address TEXT NOT NULL,
-    machine TEXT NOT NULL,         -- '' for service-wide rows
-    kind TEXT NOT NULL,
-    action TEXT NOT NULL,
-    detail TEXT NOT NULL,          -- JSON, keys sorted
-    outcome TEXT NOT NULL,
-    prev TEXT NOT NULL,            -- the row before's hash ('' before the first)
-    hash TEXT NOT NULL
-);
-CREATE INDEX IF NOT EXISTS audit_log_machine ON audit_log (machine, kind);
-CREATE TRIGGER IF NOT EXISTS audit_log_no_update BEFORE UPDATE ON audit_log
-BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
-CREATE TRIGGER IF NOT EXISTS audit_log_no_delete BEFORE DELETE ON audit_log
-BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
-"""
-_COLUMNS = "seq, time, actor, session, address, machine, kind, action, detail, outcome, prev, hash"
 MAX_PAGE = 1000
 BATCH_S = 0.05  # rows recorded later wait at most this long (plus the write) for the disk
 CSV_ROWS = 100_000  # an export holds at most this many rows (newest)
-
-
-@dataclass(frozen=True)
-class Entry:
-    """One thing to record. `time` is now unless given (rows carried over from older files)."""
-
-    actor: str
-    session: str
-    kind: AuditKind
-    action: str
-    machine: str = ""
-    detail: dict[str, Any] = field(default_factory=dict)
-    outcome: str = "ok"
-    address: str = ""
-    time: float | None = None
-
-
-def _row_hash(prev: str, fields: tuple[object, ...]) -> str:
-    text = "\x1f".join([prev, *(repr(f) if isinstance(f, float) else str(f) for f in fields)])
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def append(db: sqlite3.Connection, entries: list[Entry]) -> list[int]:
-    """Chain the entries onto the trail (inside the caller's transaction); their seqs."""
-    last = db.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
-    seq, prev = (last[0], last[1]) if last else (0, "")
-    now = time.time()
-    seqs = []
-    for e in entries:
-        seq += 1
-        fields = (
-            seq,
-            float(e.time if e.time is not None else now),
-            e.actor,
-            e.session,
-            e.address,
-            e.machine,
-            e.kind,
-            e.action,
-            json.dumps(e.detail, sort_keys=True, separators=(",", ":"), default=str),
-            e.outcome,
-        )
-        digest = _row_hash(prev, fields)
-        db.execute(
-            f"INSERT INTO audit_log ({_COLUMNS}) VALUES ({', '.join('?' * 12)})",
-            (*fields, prev, digest),
-        )
-        prev = digest
-        seqs.append(seq)
-    return seqs
 
 
 def _append_all(entries: list[Entry], db: sqlite3.Connection) -> list[int]:
@@ -269,7 +197,7 @@ class Audit:
             where += (" AND" if where else " WHERE") + " seq < ?"
             args += (before_seq,)
         rows = self.store.query(
-            f"SELECT {_COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
+            f"SELECT {COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
             (*args, min(limit, MAX_PAGE)),
         )
         return AuditPage(rows=[_record(r) for r in rows], total=total)
@@ -279,7 +207,7 @@ class Audit:
         self.flush()
         where, args = f.where()
         rows = self.store.query(
-            f"SELECT {_COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
+            f"SELECT {COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
             (*args, CSV_ROWS),
         )
         out = io.StringIO()
@@ -310,14 +238,14 @@ class Audit:
     def verify(self) -> AuditVerification:
         """Recompute the chain from the first row: the first row edited, inserted or lost."""
         self.flush()
-        rows = self.store.query(f"SELECT {_COLUMNS} FROM audit_log ORDER BY seq")
+        rows = self.store.query(f"SELECT {COLUMNS} FROM audit_log ORDER BY seq")
         prev = ""
         for i, r in enumerate(rows, start=1):
             if r[0] != i:
                 return AuditVerification(
                     ok=False, rows=i - 1, first_bad_seq=i, message=f"row {i} is missing"
                 )
-            if r[10] != prev or _row_hash(prev, tuple(r[:10])) != r[11]:
+            if r[10] != prev or row_hash(prev, tuple(r[:10])) != r[11]:
                 return AuditVerification(
                     ok=False,
                     rows=i - 1,

@@ -29,8 +29,8 @@ from backend.errors import Invalid
 from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
 from nc_sim.assist.curve_fit import curve_fit
 from nc_sim.assist.result import Change, Result
+from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
-from nc_sim.machine.config import MachineConfig
 from nc_sim.params import Scope, Value, resolve
 from nc_sim.spindle.gears import GearChoice, GearRange, m_of, range_table, select_gear
 from nc_sim.spindle.gears import spindle_index as spindel_index

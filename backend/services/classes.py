@@ -34,14 +34,15 @@ from api.machines import MachineCreate, MachineLists
 from backend.errors import ApiError, Conflict, Forbidden, Invalid, not_found
 from backend.services import training
 from backend.services.accounts import Accounts, digest
-from backend.services.audit import Audit, Entry
+from backend.services.audit import Audit
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.exercises import Exercises
 from backend.services.machines import MachineProxy, MachineService, lists_rejected
 from backend.services.store import Store, StoredChange, parameter_entry
 from backend.workers.protocol import Pace
+from nc_sim.config import machine_from_lists
 from nc_sim.errors import NcUsageError
-from nc_sim.machine.config import machine_from_lists
 from nc_sim.params import ParamListError
 from nc_sim.training.checks import CheckResult
 from nc_sim.training.exercise import Exercise, ExerciseError, parse_exercise

@@ -39,7 +39,8 @@ from api.commands import (
 from api.common import JobErrorModel, Refusal
 from backend import errors
 from backend.errors import ApiError, refusal_text
-from backend.services.audit import Audit, Entry
+from backend.services.audit import Audit
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.services.parameters import pending_values, took_pending

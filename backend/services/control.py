@@ -1,6 +1,6 @@
 """One operator per machine: who holds control, who asks for it, and when it lapses.
 
-The state lives on each MachineProxy (`m.control`) and changes only here, under one lock.
+The state lives on each machine's proxy (`m.control`) and changes only here, under one lock.
 Every change is audited and pushed with the machine's status (its `seq` makes the telemetry
 hub send the status again at once). When control changes hands the old holder's jogs stop:
 a held jog belongs to its holder's session.
@@ -12,20 +12,19 @@ import asyncio
 import threading
 import time
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from api.auth import Action
 from api.control import REQUEST_S, ControlAction, ControlParty, ControlState
 from backend.errors import ApiError, Conflict, Forbidden, NotFound
-from backend.services.audit import Audit, Entry
+from backend.services.audit import Audit
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor, authorize
 from backend.tasks import cancel
-from backend.workers.protocol import Submit
+from backend.workers.protocol import Request, Submit
 from nc_sim import commands as nc
-
-if TYPE_CHECKING:
-    from backend.services.machines import MachineProxy, MachineService
 
 SWEEP_S = 0.5  # how often lapsed holders and requests are looked for
 Key = tuple[str, str]  # (session, client)
@@ -33,7 +32,7 @@ Key = tuple[str, str]  # (session, client)
 
 @dataclass
 class MachineControl:
-    """Control of one machine (kept on its MachineProxy)."""
+    """Control of one machine (kept on its machine's proxy)."""
 
     holder: ControlParty | None = None
     requests: list[ControlParty] = field(default_factory=list)
@@ -66,6 +65,24 @@ def _party(actor: Actor) -> ControlParty:
     )
 
 
+class Controlled(Protocol):
+    """What control needs of a machine (`Controlled` is one)."""
+
+    id: str
+    control: MachineControl
+
+    @property
+    def axes(self) -> list[str]: ...
+
+    def post(self, request: Request) -> None: ...
+
+
+class Machines(Protocol):
+    """What control needs of the machines (`Machines` is one)."""
+
+    def proxies(self) -> Sequence[Controlled]: ...
+
+
 def _who(p: ControlParty) -> str:
     return f"{p.user} ({p.role.value})"
 
@@ -73,7 +90,7 @@ def _who(p: ControlParty) -> str:
 class Control:
     """Takes, requests, grants and releases control of every machine."""
 
-    def __init__(self, machines: MachineService, audit: Audit, grace_s: float) -> None:
+    def __init__(self, machines: Machines, audit: Audit, grace_s: float) -> None:
         self.machines = machines
         self.audit = audit
         self.grace_s = grace_s
@@ -81,14 +98,14 @@ class Control:
         self._task: asyncio.Task[None] | None = None
 
     @staticmethod
-    def _not_frozen(actor: Actor, m: MachineProxy) -> None:
+    def _not_frozen(actor: Actor, m: Controlled) -> None:
         """409 for a class's student on their seat while the instructor has it frozen."""
         by = m.control.frozen_by
         if by is not None and actor.seat is not None:
             raise Conflict(f"{by} froze {m.id}: you act on it again once they resume it")
 
     # --- asked by every action only a holder may do ----------------------------------------
-    def hold(self, actor: Actor, m: MachineProxy) -> None:
+    def hold(self, actor: Actor, m: Controlled) -> None:
         """Pass if the actor holds the machine (taking it when free); 403 naming the holder
         otherwise, 409 for a student while their seat is frozen."""
         with self._lock:
@@ -114,13 +131,13 @@ class Control:
         )
 
     # --- the control route ------------------------------------------------------------------
-    def act(self, actor: Actor, m: MachineProxy, req: ControlAction) -> ControlState:
+    def act(self, actor: Actor, m: Controlled, req: ControlAction) -> ControlState:
         """Carry out a take, request, cancel, grant, refuse or release; the state after it."""
         with self._lock:
             self._act(actor, m, req)
             return m.control.state()
 
-    def _act(self, actor: Actor, m: MachineProxy, req: ControlAction) -> None:
+    def _act(self, actor: Actor, m: Controlled, req: ControlAction) -> None:
         c = m.control
         mine = c.holder is not None and _key(c.holder) == _key(actor)
         if req.action in ("take", "request"):
@@ -173,7 +190,7 @@ class Control:
                     self._change(m, None, actor, "released control")
 
     # --- connections, sessions, lapse -------------------------------------------------------
-    def connected(self, actor: Actor, m: MachineProxy) -> None:
+    def connected(self, actor: Actor, m: Controlled) -> None:
         """A websocket of this client watches the machine."""
         with self._lock:
             c = m.control
@@ -182,7 +199,7 @@ class Control:
                 c.release_at = None
                 c.seq += 1
 
-    def disconnected(self, actor: Actor, m: MachineProxy) -> None:
+    def disconnected(self, actor: Actor, m: Controlled) -> None:
         """One of its websockets closed; the last one starts the grace period of a holder."""
         with self._lock:
             c = m.control
@@ -232,13 +249,13 @@ class Control:
             self.sweep()
 
     # --- changes (holding the lock) ---------------------------------------------------------
-    def _lapse(self, m: MachineProxy, why: str) -> None:
+    def _lapse(self, m: Controlled, why: str) -> None:
         holder = m.control.holder
         assert holder is not None
         actor = Actor(holder.user, holder.role, holder.session, holder.client)
         self._change(m, None, actor, why)
 
-    def _change(self, m: MachineProxy, to: ControlParty | None, by: Actor, what: str) -> None:
+    def _change(self, m: Controlled, to: ControlParty | None, by: Actor, what: str) -> None:
         """A new holder (or none): the old holder's jogs stop, the change is audited."""
         c = m.control
         old = c.holder
@@ -256,7 +273,7 @@ class Control:
         )
 
     def _changed(
-        self, m: MachineProxy, by: Actor, what: str, detail: dict[str, object] | None = None
+        self, m: Controlled, by: Actor, what: str, detail: dict[str, object] | None = None
     ) -> None:
         m.control.seq += 1
         self.audit.record_later(  # the event loop may be here: never wait for the disk

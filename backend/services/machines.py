@@ -45,10 +45,10 @@ from backend.workers.protocol import (
     WorkerNews,
 )
 from backend.workers.ring import SampleRing
+from nc_sim.config import MachineConfig, demo_machine, machine_from_lists
 from nc_sim.errors import NcUsageError
 from nc_sim.events import Event, EventLog
 from nc_sim.faults import NOW, Fault, FaultState, Trigger
-from nc_sim.machine.config import MachineConfig, demo_machine, machine_from_lists
 from nc_sim.params import ParamListError, Scope, Value
 from nc_sim.scope import Record
 from nc_sim.signals import Signal

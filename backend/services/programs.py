@@ -16,7 +16,7 @@ from fastapi.concurrency import run_in_threadpool
 
 from api.programs import PreviewError, PreviewSegment, Program, ProgramInfo, ProgramPreview
 from backend.errors import Forbidden, not_found
-from backend.services.audit import Entry
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.store import Store, StoredProgram
 from nc_sim.channel import canon

@@ -14,7 +14,8 @@ from api.report import SignOff, SignOffRequest
 from backend.errors import Invalid
 from backend.report import html
 from backend.services.assist_runs import AssistRuns
-from backend.services.audit import Audit, AuditFilter, Entry, append
+from backend.services.audit import Audit, AuditFilter
+from backend.services.audit_log import Entry, append
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.services.store import Store

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
-from backend.services import audit
+from backend.services import audit_log
 from nc_sim.params import Value
 
 T = TypeVar("T")
@@ -124,11 +124,11 @@ class StoredMachine:
 
 def parameter_entry(
     mid: str, actor: str, session: str, c: StoredChange, comment: str, when: float | None = None
-) -> audit.Entry:
+) -> audit_log.Entry:
     """The audit row of one accepted parameter change."""
     where = f"{c.target}: " if c.target else ""
     old = "default" if c.old is None else c.old
-    return audit.Entry(
+    return audit_log.Entry(
         actor=actor,
         session=session,
         kind="parameter",
@@ -169,7 +169,7 @@ class Store:
         self._db.execute("PRAGMA synchronous=NORMAL")  # WAL stays consistent; no sync per row
         self._db.executescript(_SCHEMA)
         self._db.execute(_PROGRAMS)
-        self._db.executescript(audit.SCHEMA)
+        self._db.executescript(audit_log.SCHEMA)
         self._lock = threading.Lock()
         self._migrate()
 
@@ -220,7 +220,7 @@ class Store:
         ]
         with self._db:
             self._db.execute("BEGIN")
-            audit.append(self._db, entries)
+            audit_log.append(self._db, entries)
             self._db.execute("DROP TABLE audit")
 
     def transaction(self, work: Callable[[sqlite3.Connection], T]) -> T:
@@ -294,12 +294,14 @@ class Store:
             ).fetchall()
         return [(r[0], r[1], r[2], json.loads(r[3])) for r in rows]
 
-    def write(self, mid: str, changes: list[StoredChange], entries: list[audit.Entry]) -> list[int]:
+    def write(
+        self, mid: str, changes: list[StoredChange], entries: list[audit_log.Entry]
+    ) -> list[int]:
         """Store accepted changes and their audit rows (one each) in one transaction; each
         value's version is its audit row's seq. The versions, in the order of `changes`."""
 
         def work(db: sqlite3.Connection) -> list[int]:
-            seqs = audit.append(db, entries)
+            seqs = audit_log.append(db, entries)
             for c, seq in zip(changes, seqs, strict=True):
                 db.execute(
                     "INSERT OR REPLACE INTO param_values VALUES (?, ?, ?, ?, ?, ?)",
@@ -413,7 +415,7 @@ class Store:
         return None
 
     def put_program(
-        self, name: str, text: str, entry: audit.Entry, owner: str = ""
+        self, name: str, text: str, entry: audit_log.Entry, owner: str = ""
     ) -> StoredProgram:
         """Create or replace an owner's program (one of another case is replaced and renamed)
         and append its audit row, in one transaction."""
@@ -428,12 +430,12 @@ class Store:
                 "INSERT INTO programs VALUES (?, ?, ?, ?, ?, ?, ?)",
                 (owner, name, text, stored.size, stored.lines, now, entry.actor),
             )
-            audit.append(db, [replace(entry, time=now)])
+            audit_log.append(db, [replace(entry, time=now)])
 
         self.transaction(work)
         return stored
 
-    def delete_program(self, name: str, entry: audit.Entry, owner: str = "") -> bool:
+    def delete_program(self, name: str, entry: audit_log.Entry, owner: str = "") -> bool:
         """Delete an owner's program and audit it in one transaction; False when there was
         none."""
 
@@ -443,7 +445,7 @@ class Store:
             )
             if cur.rowcount == 0:
                 return False
-            audit.append(db, [entry])
+            audit_log.append(db, [entry])
             return True
 
         return self.transaction(work)

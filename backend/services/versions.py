@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 from api.parameters import ParameterChange, ParameterWriteResult
 from api.versions import ParamDiff, VersionInfo
 from backend.errors import ApiError, Conflict, not_found
-from backend.services import audit
+from backend.services import audit_log
 from backend.services import parameters as params
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, MachineService
@@ -213,7 +213,7 @@ class Versions:
         rows = [[s, t, n, v] for (s, t), values in live_lists(m).items() for n, v in values.items()]
         now = time.time()
         what = "baseline" if baseline else "version"
-        entry = audit.Entry(
+        entry = audit_log.Entry(
             actor.name,
             actor.session,
             "version",
@@ -239,7 +239,7 @@ class Versions:
                 (mid, name, note, now, actor.name, int(baseline), json.dumps(rows)),
             )
             vid = int(cur.lastrowid or 0)
-            audit.append(db, [replace(entry, detail={**entry.detail, "id": vid})])
+            audit_log.append(db, [replace(entry, detail={**entry.detail, "id": vid})])
             return vid
 
         try:
@@ -252,7 +252,7 @@ class Versions:
         """Make a version the machine's baseline (the previous one stays a plain version)."""
         self.machines.get(mid)
         row = self._row(mid, vid)
-        entry = audit.Entry(
+        entry = audit_log.Entry(
             actor.name,
             actor.session,
             "version",
@@ -264,7 +264,7 @@ class Versions:
         def work(db: sqlite3.Connection) -> None:
             db.execute("UPDATE param_versions SET baseline = 0 WHERE machine = ?", (mid,))
             db.execute("UPDATE param_versions SET baseline = 1 WHERE id = ?", (vid,))
-            audit.append(db, [entry])
+            audit_log.append(db, [entry])
 
         self.store.transaction(work)
         return _info(self._row(mid, vid))
@@ -278,7 +278,7 @@ class Versions:
                 f"version '{row[2]}' is the baseline of {mid}: make another "
                 "version the baseline first"
             )
-        entry = audit.Entry(
+        entry = audit_log.Entry(
             actor.name,
             actor.session,
             "version",
@@ -289,7 +289,7 @@ class Versions:
 
         def work(db: sqlite3.Connection) -> None:
             db.execute("DELETE FROM param_versions WHERE id = ?", (vid,))
-            audit.append(db, [entry])
+            audit_log.append(db, [entry])
 
         self.store.transaction(work)
 
@@ -310,7 +310,7 @@ class Versions:
             else ParameterWriteResult(changes=[])
         )
         n = len(result.changes)
-        entry = audit.Entry(
+        entry = audit_log.Entry(
             actor.name,
             actor.session,
             "version",
@@ -318,5 +318,5 @@ class Versions:
             mid,
             detail={"id": vid, "name": row[2], "changed": len(result.changes), "comment": comment},
         )
-        self.store.transaction(lambda db: audit.append(db, [entry]))
+        self.store.transaction(lambda db: audit_log.append(db, [entry]))
         return result

@@ -13,9 +13,9 @@ from typing import Literal
 
 from nc_sim import commands as nc
 from nc_sim.commands import Outcome
+from nc_sim.config import MachineConfig
 from nc_sim.events import Event
 from nc_sim.faults import Fault, FaultState, Trigger
-from nc_sim.machine.config import MachineConfig
 from nc_sim.params import Value
 from nc_sim.scope import Record, ScopeSetup
 from nc_sim.signals import Signal

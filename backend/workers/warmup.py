@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import gc
 
-from nc_sim.machine.config import demo_machine
+from nc_sim.config import demo_machine
 from nc_sim.scenario import run_scenario
 
 _SESSION = {

@@ -25,8 +25,8 @@ from nc_sim.assist.procedure import ExperimentError, Procedure, Wait, on_copy
 from nc_sim.assist.result import Change, Figure, Result, Series
 from nc_sim.axis.state import Axis
 from nc_sim.commands import Accepted, HliWrite, Move, Refused, Reset, SpindleRun
+from nc_sim.config import MachineConfig
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.snapshot import AxisState
 from nc_sim.units import MM_MIN_PER_MM_S, RPM_TO_DEG_S, AxisKind

@@ -33,9 +33,9 @@ from nc_sim.assist.experiments import _refusal  # the NC's refusal in its words,
 from nc_sim.assist.procedure import ExperimentError, Wait, on_copy
 from nc_sim.assist.result import Change, Figure, Result, Series
 from nc_sim.commands import Accepted, Move
+from nc_sim.config import MachineConfig, apply_overrides
 from nc_sim.errors import NcUsageError
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig, apply_overrides
 from nc_sim.machine.machine import Machine
 from nc_sim.measure import measure
 from nc_sim.params import Scope

@@ -20,8 +20,8 @@ from typing import TypeVar
 import numpy as np
 
 from nc_sim.assist.result import Result
+from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
-from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation

@@ -23,9 +23,9 @@ from nc_sim.assist.curve_fit import (
 )
 from nc_sim.assist.result import Figure, Result
 from nc_sim.commands import Accepted, SpindleRun
+from nc_sim.config import MachineConfig, apply_overrides
 from nc_sim.errors import NcUsageError
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig, apply_overrides
 from nc_sim.params import Scope
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation

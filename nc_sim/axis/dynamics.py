@@ -12,7 +12,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from nc_sim.machine.config import AxisConfig
+from nc_sim.config import AxisConfig
 from nc_sim.profiles.plan import SHAPE_LINEAR, SHAPE_SIN2, make_limits
 from nc_sim.snapshot import LimitKind
 

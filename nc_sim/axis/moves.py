@@ -14,10 +14,10 @@ from nc_sim.axis.dynamics import Motion, Sourced, feedhold_limits, param, veloci
 from nc_sim.axis.homing import Homing
 from nc_sim.axis.motion import AxisMotion
 from nc_sim.axis.state import Axis
+from nc_sim.config import MachineConfig
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig
 from nc_sim.snapshot import AxisState
 from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
 

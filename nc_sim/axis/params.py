@@ -7,9 +7,9 @@ import math
 
 from nc_sim.axis.plant import push_plant
 from nc_sim.axis.state import Axis
+from nc_sim.config import AxisConfig
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
-from nc_sim.machine.config import AxisConfig
 from nc_sim.params.definitions import OPMODE_SYMBOLS
 from nc_sim.units import AxisKind, v_reso_digits_per_unit_s
 

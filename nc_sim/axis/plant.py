@@ -10,29 +10,11 @@ change, changeover) keeps the faults in force, and removing them gives back what
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
+from nc_sim.axis.faults import PlantFaults
+from nc_sim.axis.state import Axis
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
-
-if TYPE_CHECKING:
-    from nc_sim.axis.state import Axis
-
-
-@dataclass
-class PlantFaults:
-    """What the faults in force change in one axis' plant; the default is a sound plant."""
-
-    motor_inverted: bool = False  # the motor turns against the drive's command
-    encoder_inverted: bool = False  # the encoder counts the other way
-    speed_factor: float = 1.0  # the drive's speed per D/A digit, times this
-    gear_factors: dict[int, float] = field(default_factory=dict)  # gear -> mechanical ratio ×
-    encoder_factor: float = 1.0  # the encoder counts this times the true position
-    noise_rms: float = 0.0  # white noise on the encoder's reading (mm | °)
-    friction: float = 0.0  # Coulomb friction: speed lost against the motion (unit/s)
-    backlash: float = 0.0  # play between motor and load (mm | °)
-    a_max: float = 0.0  # the drive accelerates no faster than this (unit/s²), 0 = its own
 
 
 def push_plant(k: Kernel, ax: Axis) -> None:

@@ -8,12 +8,12 @@ from typing import Protocol
 
 from nc_sim.axis.drive import STATUS_BY_DRIVE, DriveStatus
 from nc_sim.axis.dynamics import Motion
-from nc_sim.axis.plant import PlantFaults
+from nc_sim.axis.faults import PlantFaults
+from nc_sim.config import AxisConfig
 from nc_sim.events import Event
 from nc_sim.hli import axis_units
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
-from nc_sim.machine.config import AxisConfig
 from nc_sim.snapshot import AxisState
 from nc_sim.units import AxisKind, Quantity, eng_unit
 

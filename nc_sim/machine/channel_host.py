@@ -18,6 +18,7 @@ from nc_sim.channel.planner import AxisDynamics, element_limits, single_stage
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
+from nc_sim.machine.core import MachineCore
 from nc_sim.plc import Waiter
 from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
 from nc_sim.snapshot import AxisState
@@ -28,7 +29,6 @@ from nc_sim.units import AxisKind
 
 if TYPE_CHECKING:
     from nc_sim.axis.state import Axis
-    from nc_sim.machine.machine import Machine
 
 _M_OF: dict[type[canon.Call], int] = {canon.SpindleOff: 5, canon.SpindleOrient: 19}
 _SYNC_PARAM = {
@@ -41,7 +41,7 @@ _SYNC_PARAM = {
 class MachineChannelHost:
     """Carries the channel's actions out on the machine's axes, spindles and PLC."""
 
-    def __init__(self, m: Machine, path_axes: list[Axis]) -> None:
+    def __init__(self, m: MachineCore, path_axes: list[Axis]) -> None:
         self.m = m
         self.path_axes = path_axes
         self.m_pending: dict[int, int] = {}  # action -> M functions not yet acknowledged

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from nc_sim.channel import canon
 from nc_sim.channel.canon import ListSink
@@ -21,11 +20,9 @@ from nc_sim.commands import Accepted, Invalid, Outcome, Refused
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
+from nc_sim.machine.core import MachineCore
 from nc_sim.snapshot import ChannelState
 from nc_sim.units import AxisKind
-
-if TYPE_CHECKING:
-    from nc_sim.machine.machine import Machine
 
 PROGRAM_ACTIVE = (ChannelState.RUNNING, ChannelState.HELD, ChannelState.BLOCK_END)
 
@@ -71,7 +68,7 @@ class Interpretation:
 class ChannelOps:
     """Commands to the channel of one machine."""
 
-    def __init__(self, m: Machine) -> None:
+    def __init__(self, m: MachineCore) -> None:
         self.m = m
         self.next_block = 1  # MDI block numbers
         # the last interpretation's key and result: reused while the axes have not moved

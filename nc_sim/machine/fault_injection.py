@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
-from nc_sim.axis.plant import PlantFaults, change_plant
+from nc_sim.axis.faults import PlantFaults
+from nc_sim.axis.plant import change_plant
 from nc_sim.axis.state import Axis
 from nc_sim.errors import NcUsageError
 from nc_sim.faults import (
@@ -39,10 +39,8 @@ from nc_sim.faults import (
     Trigger,
 )
 from nc_sim.kernel import layout as L
+from nc_sim.machine.core import MachineCore
 from nc_sim.snapshot import AxisState
-
-if TYPE_CHECKING:
-    from nc_sim.machine.machine import Machine
 
 GEAR_STAGES = 6  # M40-M45: gear stages 1..6, gear records getriebe[0..5]
 _WORD = 0xFFFFFFFF
@@ -75,7 +73,7 @@ def noise_state(seed: int) -> int:
 class FaultInjection:
     """The faults injected into one machine; `Machine.inject`, `remove_fault`, `faults`."""
 
-    def __init__(self, m: Machine) -> None:
+    def __init__(self, m: MachineCore) -> None:
         self.m = m
         self._faults: list[Injected] = []
         self._next_id = 1

@@ -52,6 +52,7 @@ from nc_sim.commands import (
 from nc_sim.commands import (
     PlcMode as SetPlcMode,  # the command; nc_sim.plc.PlcMode is the PLC's behaviour
 )
+from nc_sim.config import MachineConfig
 from nc_sim.errors import MESSAGES, Code, NcUsageError, is_error
 from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, Event, EventLog
 from nc_sim.faults import NOW, Fault, FaultState, Trigger
@@ -59,7 +60,6 @@ from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
 from nc_sim.machine.channel_host import MachineChannelHost
 from nc_sim.machine.channel_ops import PROGRAM_ACTIVE, ChannelOps
-from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.fault_injection import FaultInjection
 from nc_sim.machine.panel import Panel
 from nc_sim.machine.readout import machine_snapshot

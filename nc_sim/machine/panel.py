@@ -3,24 +3,20 @@ block) and HLI writes of the channel's and the axes' control units [000 §2.9, 0
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from nc_sim import hli
 from nc_sim.axis.state import Axis
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.events import Event
+from nc_sim.machine.core import MachineCore
 from nc_sim.plc import Waiter
 from nc_sim.snapshot import ChannelState
 from nc_sim.units import AxisKind
-
-if TYPE_CHECKING:
-    from nc_sim.machine.machine import Machine
 
 
 class Panel:
     """Manual commands to one machine."""
 
-    def __init__(self, m: Machine) -> None:
+    def __init__(self, m: MachineCore) -> None:
         self.m = m
 
     # --- the spindle buttons [000] -------------------------------------------------------

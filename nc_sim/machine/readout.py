@@ -11,6 +11,7 @@ from nc_sim.axis.state import Axis, target_and_distance
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.step import moving_direction
 from nc_sim.machine.channel_ops import PROGRAM_ACTIVE
+from nc_sim.machine.core import MachineCore
 from nc_sim.snapshot import (
     AxisSnapshot,
     ChannelSnapshot,
@@ -26,7 +27,6 @@ from nc_sim.snapshot import (
 from nc_sim.units import AxisKind, Quantity, display_velocity, to_raw
 
 if TYPE_CHECKING:
-    from nc_sim.machine.machine import Machine
     from nc_sim.spindle.caxis import CAxis
 
 _LOOP = {
@@ -36,7 +36,7 @@ _LOOP = {
 }
 
 
-def axis_snapshot(m: Machine, ax: Axis) -> AxisSnapshot:
+def axis_snapshot(m: MachineCore, ax: Axis) -> AxisSnapshot:
     """One axis or spindle as the HLI shows it now."""
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
     cax = m.cax if m.cax is not None and m.cax.ax is ax else None
@@ -102,7 +102,7 @@ def _homing(ax: Axis) -> HomingSnapshot | None:
     return HomingSnapshot(phase, moved, to_go, display_velocity(speed, ax.kind)[0])
 
 
-def _signals(m: Machine, ax: Axis, spindle: bool, cax: CAxis | None) -> InterfaceSignals:
+def _signals(m: MachineCore, ax: Axis, spindle: bool, cax: CAxis | None) -> InterfaceSignals:
     """The 003 §4.2 status signals, as the kernel records them."""
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
     way = moving_direction(float(st[L.S_V_ACT]), float(m.k.pr[ax.slot, L.P_INPOS_WIN]))
@@ -119,7 +119,7 @@ def _signals(m: Machine, ax: Axis, spindle: bool, cax: CAxis | None) -> Interfac
     )
 
 
-def _zero_passage(m: Machine) -> str | None:
+def _zero_passage(m: MachineCore) -> str | None:
     """A G33 thread waiting for its coupling angle, in the operator's words."""
     e = m.channel.path.current
     if e is None or e.coupling is None:
@@ -131,7 +131,7 @@ def _zero_passage(m: Machine) -> str | None:
     return f"zero passage of {name} at {c.theta0_deg % 360.0:g}° (G33)"
 
 
-def channel_snapshot(m: Machine) -> ChannelSnapshot:
+def channel_snapshot(m: MachineCore) -> ChannelSnapshot:
     """The channel's program state and modal state now."""
     ch = m.channel
     c = ch.progress
@@ -159,7 +159,7 @@ def channel_snapshot(m: Machine) -> ChannelSnapshot:
     )
 
 
-def machine_snapshot(m: Machine) -> MachineSnapshot:
+def machine_snapshot(m: MachineCore) -> MachineSnapshot:
     """The whole machine now (its events are read from `m.events` by cursor)."""
     # the event that set each axis' job error, once: an emergency stop is one error
     active = {e.seq: e for ax in m.axes if (e := ax.error_event) is not None}

@@ -1,5 +1,6 @@
 """Parameter registry and the native parameter list format."""
 
+from nc_sim.params.definitions import registry
 from nc_sim.params.listfile import (
     ParamError,
     ParamList,
@@ -10,7 +11,7 @@ from nc_sim.params.listfile import (
     resolve,
     validate_values,
 )
-from nc_sim.params.registry import DType, Effect, ParamDef, Registry, Scope, registry
+from nc_sim.params.registry import DType, Effect, ParamDef, Registry, Scope
 
 __all__ = [
     "DType",

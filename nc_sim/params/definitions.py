@@ -9,7 +9,7 @@ sign inversion names without IDs, the simulated drive) but give no ID.
 
 from __future__ import annotations
 
-from nc_sim.params.registry import DType, Effect, ParamDef, Scope
+from nc_sim.params.registry import DType, Effect, ParamDef, Registry, Scope
 from nc_sim.units import Quantity
 
 A, C, T = Scope.AXIS, Scope.CHANNEL, Scope.TOOL
@@ -1794,3 +1794,14 @@ DEFINITIONS: list[ParamDef] = [
     ),
     _p("P-TOOL-00015", "wz[i].a_max", T, R64, ACC, 1, 0, None, title="Maximum acceleration"),
 ]
+
+
+_REGISTRY: Registry | None = None
+
+
+def registry() -> Registry:
+    """The registry of all parameters the simulated NC knows (built on first use)."""
+    global _REGISTRY
+    if _REGISTRY is None:
+        _REGISTRY = Registry(DEFINITIONS)
+    return _REGISTRY

@@ -18,13 +18,13 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 from nc_sim.params.curves import curve_problems
+from nc_sim.params.definitions import registry
 from nc_sim.params.registry import (
     DTYPE_LIMITS,
     DType,
     ParamDef,
     Registry,
     Scope,
-    registry,
 )
 from nc_sim.units import AxisKind
 

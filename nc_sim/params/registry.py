@@ -143,16 +143,3 @@ class Registry:
         if d is None:
             return None
         return d, idx
-
-
-def registry() -> Registry:
-    """The registry of all parameters the simulated NC knows."""
-    global _REGISTRY
-    if _REGISTRY is None:
-        from nc_sim.params.definitions import DEFINITIONS
-
-        _REGISTRY = Registry(DEFINITIONS)
-    return _REGISTRY
-
-
-_REGISTRY: Registry | None = None

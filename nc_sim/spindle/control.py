@@ -18,10 +18,10 @@ from nc_sim.axis.motion import AxisMotion
 from nc_sim.axis.params import changeover_speeds, push_params, speed_controlled
 from nc_sim.axis.state import Axis
 from nc_sim.axis.watchdog import curve_s
+from nc_sim.config import MachineConfig
 from nc_sim.errors import Code, NcUsageError
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig
 from nc_sim.plc import Handshake
 from nc_sim.profiles.plan import (
     new_plan,

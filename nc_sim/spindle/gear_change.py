@@ -4,8 +4,6 @@ its acknowledgement, the new gear record) and what the spindle runs again afterw
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from nc_sim.axis.params import push_params, speed_controlled
 from nc_sim.axis.state import Axis
 from nc_sim.errors import Code
@@ -19,17 +17,15 @@ from nc_sim.spindle.gears import (
     select_gear,
     spindle_index,
 )
+from nc_sim.spindle.interface import SpindleOps
 from nc_sim.spindle.task import SpindleTask, TaskPhase
 from nc_sim.units import RPM_TO_DEG_S
-
-if TYPE_CHECKING:
-    from nc_sim.spindle.control import SpindleControl
 
 
 class GearStages:
     """The gear stages of the spindles of one channel."""
 
-    def __init__(self, sp: SpindleControl) -> None:
+    def __init__(self, sp: SpindleOps) -> None:
         self.sp = sp
 
     def table(self, ax: Axis) -> tuple[int, list[GearRange]] | None:

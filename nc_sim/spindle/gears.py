@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from nc_sim.config import MachineConfig
 from nc_sim.errors import Code
-from nc_sim.machine.config import MachineConfig
 
 
 @dataclass(frozen=True)

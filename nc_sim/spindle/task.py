@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 from enum import IntEnum
 from functools import partial
-from typing import TYPE_CHECKING
 
 from nc_sim.axis.params import changeover_speeds
 from nc_sim.axis.plant import encoder_reading
@@ -23,9 +22,7 @@ from nc_sim.kernel import layout as L
 from nc_sim.plc import Waiter
 from nc_sim.snapshot import AxisState
 from nc_sim.spindle.gears import m_of
-
-if TYPE_CHECKING:
-    from nc_sim.spindle.control import SpindleControl
+from nc_sim.spindle.interface import SpindleOps
 
 V_EPS = 1e-9
 
@@ -47,7 +44,7 @@ class SpindleTask:
 
     def __init__(
         self,
-        sp: SpindleControl,
+        sp: SpindleOps,
         ax: Axis,
         kind: str,
         pos_deg: float,

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+from nc_sim.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.faults import GearRatioWrong
-from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.params import Scope, Value
 from nc_sim.spindle.gears import range_table, spindle_index
 from nc_sim.training.checks import SpeedReachedCheck

@@ -16,7 +16,7 @@ from websockets.exceptions import InvalidStatus
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
 from backend.services.classes import Class, Classes, Seat
-from nc_sim.machine.config import demo_lists
+from nc_sim.config import demo_lists
 from nc_sim.training.exercise import parse_exercise
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
 from tests.backend.test_accounts import browser_like, login

@@ -15,8 +15,8 @@ from api.commands import Command as ApiCommand
 from api.commands import EmergencyStopCommand
 from backend.services.commands import to_nc
 from nc_sim.commands import Accepted, Refused
+from nc_sim.config import demo_machine
 from nc_sim.errors import Code, NcUsageError
-from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import commands, run_scenario
 from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import make

@@ -9,7 +9,7 @@ from backend.workers.host import MachineHost
 from backend.workers.protocol import AddMachine
 from backend.workers.threaded import QueueChannel
 from backend.workers.worker import Worker
-from nc_sim.machine.config import demo_machine
+from nc_sim.config import demo_machine
 
 PERIOD_S = 0.01
 

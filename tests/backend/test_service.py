@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from nc_sim.machine.config import demo_lists
+from nc_sim.config import demo_lists
 from tests.backend.server import Server
 
 KV_X = 20.0  # 1/s, demo X: getriebe[0].kv 2000 [0.01/s], no feedforward

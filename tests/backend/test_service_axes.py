@@ -12,7 +12,7 @@ import pytest
 
 from tests.backend.server import Server
 
-KV_X = 20.0  # getriebe[0].kv 2000 in 0.01/s (nc_sim/machine/demo/axis_1.lis)
+KV_X = 20.0  # getriebe[0].kv 2000 in 0.01/s (nc_sim/config/demo/axis_1.lis)
 
 
 @pytest.fixture(scope="module")

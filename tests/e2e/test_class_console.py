@@ -12,7 +12,7 @@ import pytest
 from playwright.sync_api import Browser, FilePayload, Locator, Page, expect
 
 from api.auth import Role
-from nc_sim.machine.config import demo_lists
+from nc_sim.config import demo_lists
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users
 from tests.e2e.browser import SIZES, panel, shot, signed_in_page
 

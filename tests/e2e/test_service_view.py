@@ -16,7 +16,7 @@ from tests.backend.server import Server
 from tests.e2e.browser import open_hmi, panel, poll, shot
 
 FEED_MM_MIN = 1000.0
-KV_X = 20.0  # getriebe[0].kv 2000 in 0.01/s (nc_sim/machine/demo/axis_1.lis)
+KV_X = 20.0  # getriebe[0].kv 2000 in 0.01/s (nc_sim/config/demo/axis_1.lis)
 
 
 def _value(box: Locator, test_id: str) -> float:

@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 
 from nc_sim.commands import Accepted, CycleStart, Mdi, ProgramLoad
+from nc_sim.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.kernel import layout as L
-from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope
 from nc_sim.sim import Simulation

@@ -13,8 +13,8 @@ from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
 from nc_sim.assist.curve_fit import curve_fit
 from nc_sim.assist.result import Result
 from nc_sim.assist.run_up import curve_run_up
+from nc_sim.config import apply_overrides, demo_machine
 from nc_sim.errors import NcUsageError
-from nc_sim.machine.config import apply_overrides, demo_machine
 from nc_sim.params import Scope
 
 POLY = {

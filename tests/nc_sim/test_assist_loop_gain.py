@@ -21,7 +21,7 @@ import pytest
 from nc_sim.assist.loop_gain import loop_gain
 from nc_sim.assist.procedure import ExperimentError
 from nc_sim.assist.result import Result
-from nc_sim.machine.config import MachineConfig, apply_overrides, demo_machine
+from nc_sim.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.params import Scope
 
 T_S = 0.020  # the plant's drive time constant

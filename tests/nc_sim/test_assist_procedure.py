@@ -8,7 +8,7 @@ import random
 
 from nc_sim.assist.experiments import multi_gain, multi_gain_experiment, sign_check
 from nc_sim.assist.procedure import LiveRun, Start
-from nc_sim.machine.config import MachineConfig
+from nc_sim.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from nc_sim.commands import Mdi
+from nc_sim.config import demo_machine
 from nc_sim.errors import Code
 from nc_sim.events import EVENT_LOG_LEN, OUTCOME_LOG_LEN, EventLog
-from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import run_scenario
 from tests.nc_sim.sim_helpers import make
 

@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[2]
 GATEWAY_IMPORTS = (
     "backend.main",  # the whole gateway: app, routes, services, worker clients
     "nc_sim.params",
-    "nc_sim.machine.config",
+    "nc_sim.config",
     "nc_sim.commands",
     "nc_sim.events",
     "nc_sim.errors",
@@ -30,7 +30,7 @@ def test_the_gateways_modules_import_without_the_kernel() -> None:
         f"for name in {GATEWAY_IMPORTS!r}:\n"
         "    importlib.import_module(name)\n"
         "from nc_sim.signals import Signal, machine_signals, signal_columns\n"
-        "from nc_sim.machine.config import demo_machine\n"
+        "from nc_sim.config import demo_machine\n"
         "from nc_sim.params import registry\n"
         "demo_machine()  # reading and validating lists checks the acceleration curves too\n"
         f"print(json.dumps([m for m in {KERNEL_SIDE!r} if m in sys.modules]))\n"

@@ -23,8 +23,8 @@ from nc_sim.commands import (
     Refused,
     Reset,
 )
+from nc_sim.config import MachineConfig
 from nc_sim.errors import Code
-from nc_sim.machine.config import MachineConfig
 from nc_sim.machine.machine import Machine
 from nc_sim.sim import Simulation
 from tests.nc_sim.sim_helpers import L, make, mdi, record

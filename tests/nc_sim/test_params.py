@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from nc_sim.machine.config import apply_overrides, demo_machine
+from nc_sim.config import apply_overrides, demo_machine
 from nc_sim.params import ParamError, ParamListError, Scope, format_list, parse_list, registry
 from nc_sim.params.listfile import parse_value
 from nc_sim.units import AxisKind, Quantity, raw_unit, to_eng, v_reso_digits_per_unit_s

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from nc_sim.commands import CycleStart, Feedhold, ProgramLoad, SingleBlock
+from nc_sim.config import demo_machine
 from nc_sim.errors import Code, NcUsageError
-from nc_sim.machine.config import demo_machine
 from nc_sim.scenario import PROGRAM_NAME, commands, run_scenario
 
 TWO_MOVES = "G00 X10\nG01 Z-95 F600\nM30\n"  # the demo stands at X50 Z-100

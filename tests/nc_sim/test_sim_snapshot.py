@@ -27,6 +27,7 @@ from nc_sim.commands import (
     SpindlePosition,
     SpindleRun,
 )
+from nc_sim.config import demo_machine
 from nc_sim.faults import (
     Backlash,
     DriveGainWrong,
@@ -37,7 +38,6 @@ from nc_sim.faults import (
     PlcSlowAck,
     Trigger,
 )
-from nc_sim.machine.config import demo_machine
 from nc_sim.sim import Simulation, restore, snapshot_bytes
 from tests.nc_sim.sim_helpers import make, mdi
 

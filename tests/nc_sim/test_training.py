@@ -24,7 +24,7 @@ from nc_sim.commands import (
     Reset,
     SpindlePosition,
 )
-from nc_sim.machine.config import apply_overrides
+from nc_sim.config import apply_overrides
 from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope, Value
 from nc_sim.sim import Simulation

@@ -153,7 +153,7 @@ def machine_from_lists(
 
 def demo_lists() -> tuple[str, dict[int, str]]:
     """The shipped demo lathe: channel list and axis lists (package data, read-only)."""
-    base = resources.files("nc_sim.machine") / "demo"
+    base = resources.files("nc_sim.config") / "demo"
     channel = (base / "channel.lis").read_text(encoding="utf-8")
     axes: dict[int, str] = {}
     for entry in base.iterdir():
@@ -165,7 +165,7 @@ def demo_lists() -> tuple[str, dict[int, str]]:
 def demo_machine() -> MachineConfig:
     """The demo lathe: main spindle S1 with six gear ranges, linear axes X and Z."""
     channel, axes = demo_lists()
-    tools = (resources.files("nc_sim.machine") / "demo" / "tools.lis").read_text(encoding="utf-8")
+    tools = (resources.files("nc_sim.config") / "demo" / "tools.lis").read_text(encoding="utf-8")
     return machine_from_lists("demo", channel, axes, tools)
 
 

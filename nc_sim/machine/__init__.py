@@ -1,0 +1,1 @@
+"""One simulated machine: its axes, spindles, channel, PLC and service readouts composed."""
