@@ -12,6 +12,17 @@ from enum import StrEnum
 
 RPM_TO_DEG_S = 6.0  # 1 rpm = 360°/60 s
 MM_MIN_PER_MM_S = 60.0
+MS_PER_S = 1000.0
+
+
+def per_second(v_per_min: float) -> float:
+    """A feed or speed per minute (mm/min, °/min) as per second."""
+    return v_per_min / MM_MIN_PER_MM_S
+
+
+def per_minute(v_per_s: float) -> float:
+    """A speed per second (mm/s, °/s) as per minute (the unit of F)."""
+    return v_per_s * MM_MIN_PER_MM_S
 
 
 class AxisKind(StrEnum):

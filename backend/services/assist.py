@@ -28,9 +28,15 @@ from nc_sim.config import MachineConfig
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 
 
+class ExperimentRefused(Exception):
+    """The experiment cannot run as asked (raised in the assistants' process, re-raised
+    here: an exception pickles across the process pool)."""
+
+
 def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
-    """In the assistants' process: run one experiment; its answer or {"error": why}. The
-    kernel is imported here, in that process: the gateway itself never loads it."""
+    """In the assistants' process: run one experiment; its answer (ExperimentRefused when it
+    cannot run). The kernel is imported here, in that process: the gateway itself never
+    loads it."""
     from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
     from nc_sim.assist.loop_gain import loop_gain
     from nc_sim.assist.procedure import ExperimentError
@@ -47,7 +53,7 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     try:
         return experiments[name](cfg, **args).as_json()
     except (ExperimentError, NcUsageError) as e:
-        return {"error": str(e)}
+        raise ExperimentRefused(str(e)) from None
 
 
 class Assistants:
@@ -73,8 +79,8 @@ class Assistants:
         except TimeoutError:
             why = f"the {name} experiment did not end within {RUN_TIMEOUT_S:g} s"
             raise TimedOut(why) from None
-        if "error" in answer:
-            raise Invalid(f"{name}: {answer['error']}")
+        except ExperimentRefused as e:
+            raise Invalid(f"{name}: {e}") from None
         return AssistResult.model_validate(answer)
 
     def stop(self) -> None:

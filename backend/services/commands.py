@@ -48,6 +48,7 @@ from backend.workers.protocol import Submit, Submitted, Values
 from nc_sim import commands as nc
 from nc_sim.commands import Accepted, Invalid, Refused
 from nc_sim.events import Event
+from nc_sim.units import MS_PER_S
 
 
 def job_error_model(e: Event) -> JobErrorModel:
@@ -224,5 +225,5 @@ async def _execute(
         block_id=ok.block_id,
         acknowledged=ok.acknowledged,
         state=done.state,
-        latency_ms=done.latency_s * 1e3,
+        latency_ms=done.latency_s * MS_PER_S,
     )

@@ -39,6 +39,7 @@ from nc_sim.params import (
     validate_values,
 )
 from nc_sim.params.listfile import axis_kind_of, parse_value, value_range
+from nc_sim.params.registry import normalise_name
 from nc_sim.units import AxisKind
 
 Key = tuple[str, str, str]  # scope, target ('' for channel and tool), name
@@ -285,7 +286,8 @@ def read(
                 continue
             d = resolve(scope, name)
             pending = m.pending.get((scope.value, tgt, name))
-            gear = int(name[9]) + 1 if name.startswith("getriebe[") else None
+            key, indices = normalise_name(name)  # getriebe[2].kv: the gear record 2, M42
+            gear = indices[0] + 1 if key.startswith("getriebe[]") else None
             lo, hi = value_range(d, name, written) if d.is_numeric else (None, None)
             out.append(
                 ParameterValue(

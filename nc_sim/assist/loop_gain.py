@@ -40,7 +40,7 @@ from nc_sim.machine.machine import Machine
 from nc_sim.measure import measure
 from nc_sim.params import Scope
 from nc_sim.sim import Simulation
-from nc_sim.units import MM_MIN_PER_MM_S, AxisKind
+from nc_sim.units import MM_MIN_PER_MM_S, MS_PER_S, AxisKind, per_minute
 
 NAME = "loop-gain"
 SWEEP_FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0)  # × the axis' kv when none are given
@@ -233,7 +233,9 @@ def loop_gain(
     distance = (step if step else STEP_WINDOWS * window) * direction
     if distance == 0:
         raise ExperimentError("the step needs a distance: exact_stop_window is 0, give step")
-    feed = feed_mm_min or float(f"{FEED_SHARE * ax.cfg.eng('getriebe.vb_eilgang', g) * 60:.2g}")
+    feed = feed_mm_min or float(
+        f"{per_minute(FEED_SHARE * ax.cfg.eng('getriebe.vb_eilgang', g)):.2g}"
+    )
     if feed <= 0:
         raise ExperimentError("the ramp needs a feed: feed_mm_min > 0")
     v = feed / MM_MIN_PER_MM_S * direction
@@ -246,7 +248,7 @@ def loop_gain(
         st = on_copy(c, lambda m: _step(m, name, distance, after_s, window))
         rp = on_copy(c, lambda m: _ramp(m, name, feed, v, after_s, window))
         responses.append(KvResponse(kv, st, rp))
-    target = Target(overshoot_pct, settle_ms / 1000.0)
+    target = Target(overshoot_pct, settle_ms / MS_PER_S)
     setup = Setup(name, g, unit, kv_raw, distance, feed, v, ff, window)
     return _answer(setup, target, responses)
 
@@ -284,7 +286,7 @@ def _figures(su: Setup, r: KvResponse) -> list[Figure]:
     ]
     if r.step.settling_s is not None:
         out.append(
-            Figure("settling_ms" + at, r.step.settling_s * 1000, "ms", "step: into the window")
+            Figure("settling_ms" + at, r.step.settling_s * MS_PER_S, "ms", "step: into the window")
         )
     out += [
         Figure("lag" + at, abs(r.ramp.lag), u, "ramp: steady lag"),
@@ -293,7 +295,9 @@ def _figures(su: Setup, r: KvResponse) -> list[Figure]:
     ]
     if r.ramp.lag_settling_s is not None:
         out.append(
-            Figure("lag_settling_ms" + at, r.ramp.lag_settling_s * 1000, "ms", "ramp: lag settled")
+            Figure(
+                "lag_settling_ms" + at, r.ramp.lag_settling_s * MS_PER_S, "ms", "ramp: lag settled"
+            )
         )
     return out
 
@@ -308,7 +312,7 @@ def _answer(su: Setup, target: Target, responses: list[KvResponse]) -> Result:
         Figure("feed", su.feed, f"{su.unit}/min", "G01 ramp"),
         Figure("window", su.window, su.unit, "exact-stop window (settling band)"),
         Figure("overshoot_max_pct", target.overshoot_pct, "%", "target: step overshoot"),
-        Figure("settle_max_ms", target.settling_s * 1000, "ms", "target: step settling"),
+        Figure("settle_max_ms", target.settling_s * MS_PER_S, "ms", "target: step settling"),
     ]
     if chosen is not None:
         figures.append(Figure("kv_new", chosen.kv, "1/s", "the highest kv meeting the target"))
@@ -325,7 +329,7 @@ def _answer(su: Setup, target: Target, responses: list[KvResponse]) -> Result:
         Series(
             "settling_vs_kv",
             tuple(r.kv for r in settled),
-            tuple(r.step.settling_s * 1000 for r in settled if r.step.settling_s is not None),
+            tuple(r.step.settling_s * MS_PER_S for r in settled if r.step.settling_s is not None),
             "1/s",
             "ms",
         ),
@@ -334,7 +338,7 @@ def _answer(su: Setup, target: Target, responses: list[KvResponse]) -> Result:
     notes = [
         f"kv = {r.kv:g}/s: the run ended in a job error: {r.error}" for r in responses if r.error
     ]
-    aim = f"overshoot ≤ {target.overshoot_pct:g} %, settling ≤ {target.settling_s * 1000:g} ms"
+    aim = f"overshoot ≤ {target.overshoot_pct:g} %, settling ≤ {target.settling_s * MS_PER_S:g} ms"
     changes: list[Change] = []
     if chosen is None:
         slow = all(
@@ -384,7 +388,7 @@ def _answer(su: Setup, target: Target, responses: list[KvResponse]) -> Result:
             "axis": su.axis,
             "kvs": ",".join(f"{r.kv:g}" for r in responses),
             "overshoot_pct": target.overshoot_pct,
-            "settle_ms": target.settling_s * 1000,
+            "settle_ms": target.settling_s * MS_PER_S,
             "step": abs(su.step),
             "feed_mm_min": su.feed,
             "direction": 1 if su.step > 0 else -1,

@@ -19,7 +19,7 @@ from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
 from nc_sim.snapshot import AxisState
-from nc_sim.units import AxisKind, Quantity, feed_per_min, to_eng
+from nc_sim.units import AxisKind, Quantity, feed_per_min, per_second, to_eng
 
 _FAR = 1e9  # jog target of a spindle (a modulo axis: no position range)
 # positions the NC represents: SGN32 in 0.1 µm | 0.0001° (the range of P-AXIS-00177/00178);
@@ -175,7 +175,7 @@ class Moves:
         err = self.homing_required(ax)
         if err:
             return err
-        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        feed = per_second(feed_mm_min) if feed_mm_min else None
         if ax.kind is AxisKind.SPINDLE:
             target = self.spindle.target(ax, target % 360.0, None)
         return self.start_move(ax, target, Motion.RAPID if rapid else Motion.FEED, feed)
@@ -213,7 +213,7 @@ class Moves:
             target = k.pr[ax.slot, L.P_SWE_POS if d > 0 else L.P_SWE_NEG]
         else:  # towards the end of the position range: far, but a move that ends
             target = d * POSITION_RANGE
-        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        feed = per_second(feed_mm_min) if feed_mm_min else None
         err = self._jog_feed_refused(ax, feed)
         if err:
             return err
@@ -244,7 +244,7 @@ class Moves:
         if ax.state is not AxisState.STANDSTILL:
             return self.motion.fail(ax, Code.AXIS_BUSY)
         target = self.motion.k.st[ax.slot, L.S_P_CMD] + distance
-        feed = feed_mm_min / 60.0 if feed_mm_min else None
+        feed = per_second(feed_mm_min) if feed_mm_min else None
         return self._jog_feed_refused(ax, feed) or self.start_move(ax, target, Motion.MANUAL, feed)
 
     # --- reset --------------------------------------------------------------------------

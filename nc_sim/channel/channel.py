@@ -22,6 +22,7 @@ from nc_sim.channel.path import MAX_WINDOW, Path
 from nc_sim.channel.state import ChannelProgress, LoadedProgram
 from nc_sim.events import Event
 from nc_sim.snapshot import ChannelState
+from nc_sim.units import per_minute, per_second
 
 
 @dataclass
@@ -59,7 +60,7 @@ class Channel:
         self.step_granted = False  # single block: cycle start lets one more block run
         self.filling = True  # topping the window up (until full, then again at half)
         self.modal: tuple[int, int, bool, float | None] = (0, 17, True, None)
-        self.feed_scale = 1.0 / 60.0  # F (mm/min) -> mm/s, times the override
+        self.feed_scale = per_second(1.0)  # F (mm/min) -> mm/s, times the override
         self.override = 1.0
         self.mdi = MdiQueue()
         self.feedhold = False  # the channel's HLI feedhold (the machine sets it)
@@ -452,7 +453,7 @@ class Channel:
 
     # --- status ---------------------------------------------------------------------------
     def path_feed_mm_min(self) -> float:
-        return self.path.speed * 60.0
+        return per_minute(self.path.speed)
 
     def distance_to_go_mm(self) -> float | None:
         return self.path.distance_to_go()

@@ -20,7 +20,7 @@ from nc_sim.axis.dynamics import Dynamics, Motion, Sourced
 from nc_sim.axis.state import Axis
 from nc_sim.kernel import layout as L
 from nc_sim.snapshot import AxisServiceSnapshot, GainReading, LimitInForce
-from nc_sim.units import AxisKind, display_velocity
+from nc_sim.units import AxisKind, display_velocity, per_second
 
 if TYPE_CHECKING:
     from nc_sim.machine.machine import Machine
@@ -109,7 +109,7 @@ def _limits(
         feed = m.channel.modal[3]  # F of the block the path is in, mm/min
         if m.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS and feed:
             ovr = m.moves.override(ax)  # the path's F × channel override
-            v = Sourced(feed / 60.0 * ovr, "F (path)", None, "programmed")
+            v = Sourced(per_second(feed) * ovr, "F (path)", None, "programmed")
         dyn: Dynamics = m.motion.dynamics(ax, motion)
         kind: AxisKind = AxisKind.ROTARY if ax.kind is AxisKind.SPINDLE else ax.kind
     else:

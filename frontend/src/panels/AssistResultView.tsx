@@ -6,6 +6,7 @@ import { figure } from "../state/assist";
 import { fmt } from "../ui/format";
 import { AssistChart, type Level } from "./AssistChart";
 import { LoopGainView } from "./LoopGainResult";
+import { RPM_TO_DEG_S, perSecond } from "../ui/units";
 
 /** Names the manual gives the figures, and the decimals they read with. */
 const FIGURES: Record<string, { label: string; decimals: number; sig?: number }> = {
@@ -80,7 +81,7 @@ function levels(r: AssistResult, spindle: boolean): Level[] {
   const kv = figure(r, "kv");
   const s = figure(r, "s");
   if (v === null || kv === null || s === null) return [];
-  const perS = spindle ? v * 6 : v / 60; // rpm -> °/s; mm/min (°/min) -> per s
+  const perS = spindle ? v * RPM_TO_DEG_S : perSecond(v); // rpm -> °/s; mm/min (°/min) -> per s
   const sign = Math.sign(s) || 1;
   return [
     { label: "v/kv (expected)", value: (sign * perS) / kv },

@@ -17,6 +17,7 @@ import { AssistField } from "./AssistField";
 import { AssistResultView, settled } from "./AssistResultView";
 import { LiveProgress } from "./LiveProgress";
 import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
+import { perSecond } from "../ui/units";
 
 const ASSISTANTS: { name: AssistantName; label: string; section: string }[] = [
   { name: "multi-gain", label: "multi_gain by experiment", section: "004 §3.6.2" },
@@ -382,6 +383,6 @@ function describe(
     return `${ax.name} runs up to ${sp} (${dir}), then turns position-controlled at constant speed${turn} and stops (M5) ${copy} ${formula}`;
   }
   const feed = typeof values.feed === "number" ? values.feed : null;
-  const travel = feed !== null && moveS !== null ? ` (about ${dir}${n1((feed / 60) * moveS)} ${unit})` : "";
+  const travel = feed !== null && moveS !== null ? ` (about ${dir}${n1(perSecond(feed) * moveS)} ${unit})` : "";
   return `${ax.name} moves at ${feed !== null ? `${n1(feed)} ${unit}/min` : "the feed"} (${dir}) at constant speed${about}${travel} ${copy} ${formula}`;
 }

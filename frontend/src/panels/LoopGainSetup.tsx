@@ -5,6 +5,7 @@ import type { AxisStatus, LoopGainRequest } from "../api/types";
 import { numbers, paramsVersion } from "../state/params";
 import { machineId } from "../state/session";
 import { AssistField } from "./AssistField";
+import { perSecond, rawVelocityPerMin } from "../ui/units";
 
 // as nc_sim/assist/loop_gain.py: the default sweep, step, ramp feed and recording lengths
 const SWEEP_FACTORS = [0.5, 0.75, 1, 1.5, 2, 2.5, 3];
@@ -40,7 +41,7 @@ export function useAxisNow(ax: AxisStatus | undefined): AxisNow | null {
         setNow({
           kv: (m.get(`getriebe[${g}].kv`) ?? NaN) / 100, // 0.01/s
           window: (m.get("kenngr.exact_stop_window") ?? NaN) * 1e-4, // 0.1 µm | 0.0001°
-          rapidPerMin: (m.get(`getriebe[${g}].vb_eilgang`) ?? NaN) * 1e-3 * 60, // µm/s | 0.001°/s
+          rapidPerMin: rawVelocityPerMin(m.get(`getriebe[${g}].vb_eilgang`) ?? NaN),
         }),
       () => setNow(null),
     );
@@ -96,7 +97,7 @@ export function describeLoopGain(ax: AxisStatus, v: ReturnType<typeof checkLoopG
   let plan = "";
   if (kvs && feed !== null) {
     const settle = SETTLE_TAUS / kvs[0];
-    const travel = (feed / 60) * (settle + RAMP_WINDOW_S + RAMP_MARGIN_S);
+    const travel = perSecond(feed) * (settle + RAMP_WINDOW_S + RAMP_MARGIN_S);
     const total = kvs.length * (2 * settle + RAMP_WINDOW_S + 0.2);
     plan = ` Each ramp commands +${n3(travel)} ${unit} and is recorded for about ${n3(settle + RAMP_WINDOW_S + 0.1)} s; all runs together take about ${n3(total)} s of simulated time.`;
   }
