@@ -45,7 +45,7 @@ from backend.workers.protocol import (
     WorkerNews,
 )
 from backend.workers.ring import SampleRing
-from nc_sim.config import MachineConfig, demo_machine, machine_from_lists
+from nc_sim.config import MachineConfig, apply_values, demo_machine, machine_from_lists
 from nc_sim.errors import NcUsageError
 from nc_sim.events import Event, EventLog
 from nc_sim.faults import NOW, Fault, FaultState, Trigger
@@ -297,7 +297,7 @@ class MachineService:
             cfg = demo_machine()
         else:
             cfg = machine_from_lists(sm.name, sm.channel_list, sm.axis_lists or {}, sm.tool_list)
-        apply_stored(cfg, self.store.values(sm.id))
+        apply_values(cfg, self.store.values(sm.id), skip_missing_axes=True)
         return cfg
 
     def _place(
@@ -507,18 +507,3 @@ def lists_rejected(e: ParamListError | NcUsageError) -> ApiError:
             ],
         }
     )
-
-
-def apply_values(cfg: MachineConfig, values: Values) -> None:
-    """Write values into a machine's lists (NcUsageError for a target it does not have)."""
-    for scope, target, name, value in values:
-        cfg.list_values(Scope(scope), target)[name] = value
-
-
-def apply_stored(cfg: MachineConfig, stored: list[tuple[str, str, str, Value]]) -> None:
-    """Layer stored values over a machine's base lists (at start-up and restart)."""
-    for scope, target, name, value in stored:
-        try:
-            cfg.list_values(Scope(scope), target)[name] = value
-        except NcUsageError:
-            continue  # an axis that the base lists no longer define

@@ -25,6 +25,7 @@ from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, Pending
 from backend.services.store import Store, StoredChange, parameter_entry
 from backend.workers.protocol import ApplyValues, Values
+from nc_sim.config import apply_values
 from nc_sim.params import (
     Effect,
     ParamDef,
@@ -183,8 +184,7 @@ def write(
                 waiting.add(key)
         if now:  # the running machine first: a write it cannot take is not stored
             m.call(ApplyValues(m.id, now))
-            for scope_name, target, name, value in now:
-                m.cfg.list_values(Scope(scope_name), target)[name] = value
+            apply_values(m.cfg, now)
         versions = store.write(
             m.id,
             stored,
@@ -248,8 +248,8 @@ def pending_values(m: MachineProxy, effects: set[str]) -> Values:
 def took_pending(m: MachineProxy, values: Values) -> None:
     """The running machine took these pending values: they are written now, and no longer
     pending unless a newer value is (call holding `m.lock`)."""
+    apply_values(m.cfg, values)
     for scope, target, name, value in values:
-        m.cfg.list_values(Scope(scope), target)[name] = value
         key = (scope, target, name)
         if key in m.pending and m.pending[key].value == value:
             del m.pending[key]

@@ -13,7 +13,7 @@ from typing import Literal
 
 from nc_sim import commands as nc
 from nc_sim.commands import Outcome
-from nc_sim.config import MachineConfig
+from nc_sim.config import MachineConfig, ValueWrite
 from nc_sim.events import Event
 from nc_sim.faults import Fault, FaultState, Trigger
 from nc_sim.params import Value
@@ -22,8 +22,8 @@ from nc_sim.signals import Signal
 from nc_sim.snapshot import AxisServiceSnapshot, MachineSnapshot
 
 Mode = Literal["run", "pause", "fast"]
-# (scope, target, name) -> value: parameter values a worker writes into a machine's lists
-Values = list[tuple[str, str, str, Value]]
+# parameter values a worker writes into a machine's lists
+Values = list[ValueWrite]
 ParamSnapshot = dict[tuple[str, str], dict[str, Value]]
 
 

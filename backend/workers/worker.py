@@ -68,8 +68,8 @@ from backend.workers.protocol import (
 )
 from backend.workers.training import training_request
 from nc_sim.commands import Accepted, EmergencyStop, JogStart, JogStop
+from nc_sim.config import apply_values
 from nc_sim.errors import NcUsageError
-from nc_sim.params import Scope
 
 log = logging.getLogger(__name__)
 
@@ -494,9 +494,7 @@ _DEFERRED = object()
 
 
 def _apply(host: MachineHost, values: Values) -> None:
-    cfg = host.machine.cfg
-    for scope, target, name, value in values:
-        cfg.list_values(Scope(scope), target)[name] = value
+    apply_values(host.machine.cfg, values)
     host.machine.refresh_params()
 
 

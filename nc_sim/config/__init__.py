@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 
@@ -111,6 +111,25 @@ class MachineConfig:
             if self.channel.get(f"spindel[{i}].log_achs_nr") == nr and nr:
                 return str(self.channel.get(f"spindel[{i}].bezeichnung", f"S{i + 1}"))
         return None
+
+
+# (scope, target, list name, value): one parameter value to write into a machine's lists
+ValueWrite = tuple[str, str, str, Value]
+
+
+def apply_values(
+    cfg: MachineConfig, values: Iterable[ValueWrite], *, skip_missing_axes: bool = False
+) -> None:
+    """Write values into a machine's lists: the one way values get there, in the gateway's
+    copy and the worker's machine alike. NcUsageError for an axis the machine does not
+    have, unless `skip_missing_axes` (stored values of an axis the lists no longer
+    define)."""
+    for scope, target, name, value in values:
+        try:
+            cfg.list_values(Scope(scope), target)[name] = value
+        except NcUsageError:
+            if not skip_missing_axes:
+                raise
 
 
 def _axis_numbers(channel: Mapping[str, Value]) -> list[tuple[str, int, bool]]:
