@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nc_sim.channel.randprog import random_program
 from nc_sim.commands import Accepted, CycleStart, ProgramLoad
 from nc_sim.snapshot import ChannelState
+from tests.nc_sim.randprog import random_program
 from tests.nc_sim.sim_helpers import L, make
 
 BOUNDS = {"X": (20.0, 80.0), "Z": (-130.0, -70.0)}
