@@ -123,7 +123,7 @@ def calculate(cfg: MachineConfig, name: str, req: BaseModel) -> AssistResult:
             for c in result.changes
         ]
     except NcUsageError as e:
-        raise Invalid(f"{name}: {e}") from None
+        raise Invalid(str(e)) from None  # the route names the calculator
     answer = AssistResult.model_validate(result.as_json())
     return answer.model_copy(update={"changes": changes})
 

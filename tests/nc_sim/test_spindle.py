@@ -564,7 +564,7 @@ def test_gear_change_sequence_adopts_the_new_gear_record_and_resumes() -> None:
     m.submit(Mdi("M3 S650"))  # from M42 (start-up stage 3) to M41
     rec = record(sim, 4.0)[:, s.slot]
     assert s.gear == 2 and s.state is AxisState.ENDLESS
-    out = next(e for e in m.events if e.code == Code.EV_M_OUTPUT and "M41" in e.message)
+    out = next(e for e in m.events if e.code == Code.EV_M_OUTPUT and e.m == 41)
     ack = next(e for e in m.events if e.code == Code.EV_GEAR_CHANGED)
     delay = cfg.channel_eng("plc.m_ack_delay")
     assert ack.cycle - out.cycle == round(delay / DT)
@@ -582,7 +582,7 @@ def test_gear_change_sequence_adopts_the_new_gear_record_and_resumes() -> None:
     m.submit(Mdi("S950"))  # back to M42 with kv 20/s, via the M41 change position 45°
     rec = record(sim, 6.0)[:, s.slot]
     assert s.gear == 3 and rec[-1, L.R_LAG] == pytest.approx(950 * RPM / 20.0, rel=0.01)
-    out = next(e for e in m.events if e.code == Code.EV_M_OUTPUT and "M42" in e.message)
+    out = next(e for e in m.events if e.code == Code.EV_M_OUTPUT and e.m == 42)
     assert abs((rec[out.cycle - c0 - 1, L.R_P_ACT] - 45.0 + 180) % 360 - 180) <= window
 
 

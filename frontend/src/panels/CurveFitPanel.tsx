@@ -39,7 +39,7 @@ async function fitAll(base: Omit<CurveFitRequest, "typ">, chosen: Typ, first?: A
     TYPES.map(({ typ }) =>
       typ === chosen && first
         ? Promise.resolve<AssistResult | string>(first)
-        : calculate("curve-fit", { ...base, typ }).catch((e: unknown) => `type ${typ}: ${refusalOf(e).message.replace(/^curve-fit: /, "")}`),
+        : calculate("curve-fit", { ...base, typ }).catch((e: unknown) => `type ${typ}: ${refusalOf(e).message}`),
     ),
   );
   const result = answers[chosen - 1];
