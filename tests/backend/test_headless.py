@@ -64,20 +64,20 @@ def test_spindle_override_scenario(tmp_path: Path) -> None:
     assert {"t_s", "axis", "code", "message"} <= set(events[0])
 
 
-def readme_scenario() -> str:
-    """The scenario example of README.md, as printed there (the first toml block after
-    "Scenario format")."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+def guide_scenario() -> str:
+    """The scenario example of the API guide (docs/api-guide.md), as printed there (the first
+    toml block after "Scenario format")."""
+    text = (ROOT / "docs" / "api-guide.md").read_text(encoding="utf-8")
     after = text[text.index("Scenario format (TOML):") :]
     start = after.index("```toml\n") + len("```toml\n")
     return after[start : after.index("```", start)]
 
 
-def test_the_readme_scenario_runs_as_written(tmp_path: Path) -> None:
+def test_the_guides_scenario_runs_as_written(tmp_path: Path) -> None:
     """`t_s = 0.0, mdi = "M3 S1000"` on a fresh demo: time 0 is the moment the machine is
     ready, so the block is accepted; override 50 % at 1.5 s gives 500 rpm [000 §2.4.1]."""
-    scenario = tmp_path / "readme.toml"
-    scenario.write_text(readme_scenario(), encoding="utf-8")
+    scenario = tmp_path / "guide.toml"
+    scenario.write_text(guide_scenario(), encoding="utf-8")
     res = run_cli(scenario, tmp_path / "out")
     assert res.returncode == 0, res.stderr
     lines = (tmp_path / "out" / "events.jsonl").read_text().splitlines()

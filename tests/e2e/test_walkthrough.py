@@ -1,7 +1,7 @@
-"""The README's commissioning walkthrough on the demo lathe, done in the browser as written:
-baseline, sign check, multi_gain by experiment on the machine itself, Apply and check again,
-the gear ranges, a version, the report signed off. Its screenshots are the README's
-(tests/e2e/screenshots/walkthrough-*.png, copied to docs/walkthrough/).
+"""The user guide's commissioning walkthrough on the demo lathe (docs/user-guide.md), done in
+the browser as written: baseline, sign check, multi_gain by experiment on the machine itself,
+Apply and check again, the gear ranges, a version, the report signed off. Its screenshots are
+the guide's (tests/e2e/screenshots/walkthrough-*.png, copied to docs/walkthrough/).
 
 The X drive is made wrong as the walkthrough asks (`sim.drive_gain` 22857 digits per 1 m/min
 where the NC assumes 10000): f = 2.2857 [004 §3.6.2], and after Apply k equals kv (f = 1).
@@ -19,7 +19,7 @@ from tests.e2e.test_assist import RUN_TIMEOUT_MS, read
 
 
 def _shot(part: Locator, name: str) -> None:
-    """A panel alone: the README shows what the step is about."""
+    """A panel alone: the user guide shows what the step is about."""
     SHOTS.mkdir(exist_ok=True)
     part.scroll_into_view_if_needed()
     part.screenshot(path=str(SHOTS / f"walkthrough-{name}.png"))

@@ -1,5 +1,5 @@
 """Event and job-error codes: every code has its own meaning in words, each kind of event its
-own code, and the README's tables list them all."""
+own code, and the user guide's tables (docs/user-guide.md) list them all."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from nc_sim.commands import Accepted, Mdi, SpindleRun
 from nc_sim.errors import MESSAGES, Code
 from tests.nc_sim.sim_helpers import make, record
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+GUIDE = Path(__file__).resolve().parents[2] / "docs" / "user-guide.md"
 
 
 def test_every_code_has_a_message_in_words() -> None:
@@ -42,7 +42,7 @@ def test_a_gear_change_is_not_logged_as_an_hli_write() -> None:
     assert changed == ["S1 gear M42 -> M40"]  # and it completed
 
 
-def test_the_readme_tables_list_every_code() -> None:
-    text = README.read_text()
+def test_the_user_guides_tables_list_every_code() -> None:
+    text = GUIDE.read_text(encoding="utf-8")
     documented = {int(c) for c in re.findall(r"^\| (\d+) \|", text, flags=re.M)}
     assert {int(c) for c in Code} <= documented, sorted({int(c) for c in Code} - documented)

@@ -1,5 +1,5 @@
 """Scenario actions of the NC channel: `program`, `cycle_start`, `feedhold`, `single_block`
-(README: scenario format), their validation and a bad program's line and column."""
+(docs/api-guide.md: scenario format), their validation and a bad program's line and column."""
 
 from __future__ import annotations
 
