@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, Field, field_validator, model_validator
 
 from api.commands import AxisName
+from api.common import unit
 
 
 class MultiGainRequest(BaseModel):
@@ -27,12 +28,16 @@ class SignCheckRequest(BaseModel):
     the engineer saw it (+1 as commanded, -1 the other way; null: the simulated plant's)."""
 
     axis: AxisName
-    distance: float = Field(1.0, ge=-100, le=100, description="mm (° for rotary)")
+    distance: float = Field(
+        1.0, ge=-100, le=100, description="mm (° for rotary)", json_schema_extra=unit("mm")
+    )
     feed_mm_min: float = Field(100.0, gt=0, le=1e5, description="mm/min (°/min)")
     observed: Literal[1, -1] | None = None
 
 
-KvPerS = Annotated[float, Field(gt=0, le=10000, description="kv, 1/s")]
+KvPerS = Annotated[
+    float, Field(gt=0, le=10000, description="kv, 1/s", json_schema_extra=unit("1/s"))
+]
 
 
 class LoopGainRequest(BaseModel):
@@ -47,7 +52,11 @@ class LoopGainRequest(BaseModel):
     overshoot_pct: float = Field(5.0, ge=0, le=100, description="target: step overshoot, %")
     settle_ms: float = Field(200.0, gt=0, le=10000, description="target: step settling, ms")
     step: float | None = Field(
-        None, gt=0, le=100, description="G00 step, mm (° for rotary); null: 20 exact-stop windows"
+        None,
+        gt=0,
+        le=100,
+        description="G00 step, mm (° for rotary); null: 20 exact-stop windows",
+        json_schema_extra=unit("mm"),
     )
     feed_mm_min: float | None = Field(
         None, gt=0, le=1e5, description="G01 ramp feed, mm/min (°/min); null: 5 % of rapid"
@@ -141,16 +150,26 @@ class MultiGainCalcRequest(BaseModel):
 
     axis: AxisName
     gear: GearStage = 1
-    digits_per_rpm: float | None = Field(None, gt=0, le=1e9, description="digits per motor rpm")
+    digits_per_rpm: float | None = Field(
+        None, gt=0, le=1e9, description="digits per motor rpm", json_schema_extra=unit("digits/rpm")
+    )
     full_scale_digits: int | None = Field(
         None, gt=0, le=2147483647, description="command value at full scale, digits"
     )
     full_scale_rpm: float | None = Field(None, gt=0, le=1e6, description="motor rpm at full scale")
     speed_weighting_rpm: float | None = Field(
-        None, gt=0, le=1e3, description="SERCOS rotary weighting, rpm per digit"
+        None,
+        gt=0,
+        le=1e3,
+        description="SERCOS rotary weighting, rpm per digit",
+        json_schema_extra=unit("rpm/digit"),
     )
     speed_weighting_m_per_min: float | None = Field(
-        None, gt=0, le=1e3, description="SERCOS translatory weighting, m/min per digit"
+        None,
+        gt=0,
+        le=1e3,
+        description="SERCOS translatory weighting, m/min per digit",
+        json_schema_extra=unit("m/min/digit"),
     )
     pitch_mm: float | None = Field(None, gt=0, le=1e4, description="mm per output revolution")
     gear_ratio: GearRatio = 1.0
@@ -183,7 +202,9 @@ class CurveFitRequest(BaseModel):
     typ: Literal[1, 2, 3] = 2
     points: list[CurvePoint] = Field(min_length=3, max_length=500)
     n_limit_deg_s: float | None = Field(None, gt=0, le=1e7, description="limit speed, °/s")
-    a_min: float = Field(0.0, ge=0, le=1e9, description="the curve's floor, °/s²")
+    a_min: float = Field(
+        0.0, ge=0, le=1e9, description="the curve's floor, °/s²", json_schema_extra=unit("°/s²")
+    )
 
 
 class CurveRunUpRequest(BaseModel):

@@ -6,6 +6,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
+from api.common import unit
+
 AxisName = Annotated[str, Field(min_length=1, max_length=16, description="axis or spindle name")]
 SpindleName = Annotated[
     str, Field(min_length=1, max_length=16, description="spindle name; S is the main spindle")
@@ -74,7 +76,9 @@ class JogCommand(BaseModel):
     axis: AxisName
     action: Literal["start", "stop", "step"]
     direction: Literal[-1, 1] = 1
-    distance: float | None = Field(None, ge=-1e6, le=1e6, description="step, mm | °")
+    distance: float | None = Field(
+        None, ge=-1e6, le=1e6, description="step, mm | °", json_schema_extra=unit("mm")
+    )
     feed_mm_min: JogFeed | None = None
     hold_s: float | None = Field(
         None,

@@ -6,6 +6,13 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
+
+def unit(symbol: str) -> dict[str, Any]:
+    """`json_schema_extra=` naming the unit of a field whose name does not (its schema's
+    `x-unit`: refusals name it, e.g. "must be at most 100 mm")."""
+    return {"x-unit": symbol}
+
+
 # SQLite's integers are signed 64-bit: a larger number meant for the store (a row's number,
 # a version) is refused as out of range, never passed on to overflow there
 STORE_INT_MAX = 2**63 - 1

@@ -7,6 +7,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from api.common import unit
+
 AXIS = Field(pattern=r"^[A-Z][A-Z0-9]{0,7}$", description="axis or spindle name")
 FACTOR = Field(gt=0.01, le=100.0, description="factor against the correct value (1 = none)")
 
@@ -58,7 +60,9 @@ class EncoderNoiseModel(_Fault):
     model_config = ConfigDict(title="Encoder noise")
     kind: Literal["encoder_noise"] = "encoder_noise"
     axis: str = AXIS
-    rms: float = Field(gt=0, le=10.0, description="root mean square, mm | °")
+    rms: float = Field(
+        gt=0, le=10.0, description="root mean square, mm | °", json_schema_extra=unit("mm")
+    )
     seed: int = Field(1, ge=0, le=2**31 - 1)
 
 
@@ -78,7 +82,9 @@ class FrictionModel(_Fault):
     model_config = ConfigDict(title="Friction")
     kind: Literal["friction"] = "friction"
     axis: str = AXIS
-    v_loss: float = Field(gt=0, le=1000.0, description="speed lost, mm/s | °/s")
+    v_loss: float = Field(
+        gt=0, le=1000.0, description="speed lost, mm/s | °/s", json_schema_extra=unit("mm/s")
+    )
 
 
 class BacklashModel(_Fault):

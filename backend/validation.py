@@ -8,8 +8,14 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-# unit suffixes of field names (the project names units in field names where ambiguous)
+# unit suffixes of field names (the project names units in field names where ambiguous),
+# longest first; a field whose name does not say its unit has it as `x-unit` in its schema
 _UNIT_SUFFIX = [
+    ("_m_per_min", "m/min"),
+    ("_deg_s2", "°/s²"),
+    ("_deg_s", "°/s"),
+    ("_mm_s", "mm/s"),
+    ("_digits", "digits"),
     ("_mm_min", "mm/min"),
     ("_rpm", "rpm"),
     ("_deg", "°"),
@@ -23,30 +29,32 @@ _LOC_ROOTS = {"body", "query", "path", "header", "cookie"}
 
 
 class FieldTexts:
-    """Meaning of every request field, from the OpenAPI schema: keyed by (tag, field), the
-    tag being the `type` literal of a command union member (None for other models)."""
+    """Meaning and unit of every request field, from the OpenAPI schema: keyed by (tag,
+    field), the tag being the `type` literal of a command union member (None for other
+    models)."""
 
     def __init__(self, openapi: Mapping[str, Any]) -> None:
-        self._by_tag: dict[tuple[str | None, str], str] = {}  # "" when it has none
-        self._by_name: dict[str, set[str]] = {}
+        # (description, x-unit), "" where the schema has none
+        self._by_tag: dict[tuple[str | None, str], tuple[str, str]] = {}
+        self._by_name: dict[str, set[tuple[str, str]]] = {}
         schemas = openapi.get("components", {}).get("schemas", {})
         for schema in schemas.values():
             props: Mapping[str, Any] = schema.get("properties", {})
             tag = props.get("type", {}).get("const")
             for name, prop in props.items():
-                text = _description(prop)
+                texts = (_description(prop), _schema_unit(prop))
                 if tag is not None:
-                    self._by_tag[(tag, name)] = text
-                if text:
-                    self._by_name.setdefault(name, set()).add(text)
+                    self._by_tag[(tag, name)] = texts
+                if any(texts):
+                    self._by_name.setdefault(name, set()).add(texts)
 
-    def description(self, tag: str | None, name: str) -> str:
-        """The field's description, or "" when the schema has none (or, for a field of no
-        command, models describe it differently)."""
+    def texts(self, tag: str | None, name: str) -> tuple[str, str]:
+        """The field's description and unit ("" where the schema has none, or where models
+        describe a field of no command differently)."""
         if (tag, name) in self._by_tag:
             return self._by_tag[(tag, name)]
         texts = self._by_name.get(name, set())
-        return next(iter(texts)) if len(texts) == 1 else ""
+        return next(iter(texts)) if len(texts) == 1 else ("", "")
 
 
 def _description(prop: Mapping[str, Any]) -> str:
@@ -58,20 +66,32 @@ def _description(prop: Mapping[str, Any]) -> str:
     return ""
 
 
-def _unit(name: str, description: str) -> str:
+def _schema_unit(prop: Mapping[str, Any]) -> str:
+    if "x-unit" in prop:
+        return str(prop["x-unit"])
+    for alt in prop.get("anyOf", []):  # Optional[...]: on the non-null member
+        if unit := _schema_unit(alt):
+            return unit
+    items = prop.get("items")  # a list of values with a unit (kv values to try)
+    return _schema_unit(items) if isinstance(items, Mapping) else ""
+
+
+def _unit(name: str, schema_unit: str) -> str:
+    """The unit its schema names, else the one its name says (feed_mm_min)."""
+    if schema_unit:
+        return schema_unit
     if name in _NAMED_UNITS:
         return _NAMED_UNITS[name]
     for suffix, unit in _UNIT_SUFFIX:
         if name.endswith(suffix):
             return unit
-    m = re.match(r"[^,;(]*,\s*([^\s,;(]+)", description)  # "meaning, unit ..."
-    return m.group(1) if m else ""
+    return schema_unit
 
 
-def _meaning(tag: str | None, name: str, description: str) -> str:
+def _meaning(tag: str | None, name: str, description: str, unit: str) -> str:
     if description:
         first = re.split(r"[,;:(]", description, maxsplit=1)[0].strip()
-        if first and first != _unit(name, description):
+        if first and first != unit:
             return first
     words = name
     for suffix, _ in _UNIT_SUFFIX:
@@ -118,7 +138,8 @@ def issue_text(
         return f"The request {_rule(kind, ctx, '', msg)}."
     name = names[-1]
     tag = names[-2] if len(names) > 1 else None
-    description = fields.description(tag, name)
-    meaning = _meaning(tag, name, description)
-    text = f"{meaning} {_rule(kind, ctx, _unit(name, description), msg)}"
+    description, schema_unit = fields.texts(tag, name)
+    unit = _unit(name, schema_unit)
+    meaning = _meaning(tag, name, description, unit)
+    text = f"{meaning} {_rule(kind, ctx, unit, msg)}"
     return text[0].upper() + text[1:] + "."

@@ -1,6 +1,6 @@
 """Scripted experiments: parameter overrides and timed actions on one machine.
 
-The scenario is the parsed TOML as a dict (see README, `examples/`). `run_scenario` is pure:
+The scenario is the parsed TOML as a dict (see docs/api-guide.md, `examples/`). `run_scenario` is pure:
 it returns the trace columns and the event list; writing files is the caller's business.
 Scenario time 0 is the moment the machine is ready: the runner first lets the power-on
 sequence run (drives boot, the PLC switches them on), as an engineer waits for a machine to
@@ -96,8 +96,8 @@ PROGRAM_NAME = "scenario"  # the label of a `program` action's text without `nam
 
 
 def commands(action: Mapping[str, Any]) -> tuple[Command, ...]:
-    """The commands a TOML action stands for, submitted in this order (README: scenario
-    format); `program` is a load and a cycle start. A missing or mistyped field is an
+    """The commands a TOML action stands for, submitted in this order (docs/api-guide.md:
+    scenario format); `program` is a load and a cycle start. A missing or mistyped field is an
     NcUsageError naming the action and the field."""
     kind = next((k for k in ACTIONS if k in action), None)
     if kind is None:
