@@ -125,6 +125,47 @@ def test_schema_violations_read_as_sentences_with_meaning_and_unit(
     assert "Input should" not in issue["text"]
 
 
+@pytest.mark.parametrize(
+    ("path", "body", "text"),
+    [
+        # a unit the name spells in parts (°/s, not the "s" of its last part)
+        (
+            "assist/curve-run-up",
+            {"axis": "S1", "n_limit_deg_s": 2e7},
+            "Limit speed must be at most 1e+07 °/s.",
+        ),
+        # the unit of each value of a list, named by the schema (x-unit)
+        (
+            "assist/loop-gain",
+            {"axis": "X", "kvs": [0]},
+            "Kv values to try must be greater than 0 1/s.",
+        ),
+        # the schema's unit before the name's last part (digits per rpm, not rpm)
+        (
+            "assist/multi-gain-calc",
+            {"axis": "X", "digits_per_rpm": 0},
+            "Digits per motor rpm must be greater than 0 digits/rpm.",
+        ),
+        # within a list of points: °/s (the description's parse gave "s")
+        (
+            "assist/curve-fit",
+            {
+                "axis": "S1",
+                "points": [{"n_deg_s": 2e7, "a_deg_s2": 1}] + [{"n_deg_s": 1, "a_deg_s2": 1}] * 2,
+            },
+            "Speed n must be at most 1e+07 °/s.",
+        ),
+    ],
+)
+def test_refusals_name_the_unit_the_schema_gives(
+    srv: Server, mid: str, path: str, body: dict[str, object], text: str
+) -> None:
+    r = srv.http.post(f"/api/machines/{mid}/{path}", json=body)
+    assert r.status_code == 422, r.text
+    (issue,) = r.json()["detail"]
+    assert issue["text"] == text
+
+
 def test_lag_of_a_feed_move_is_v_over_kv(srv: Server, mid: str) -> None:
     """G1 at F600 (10 mm/s) without feedforward: steady lag = v/kv = 0.5 mm."""
     srv.pace(mid, mode="pause")
