@@ -14,7 +14,7 @@ from tests.backend.server import USER, Server
 
 OWN_SERVICE = True  # restarts the service
 
-DATA = Path(__file__).resolve().parents[1] / "nc_sim" / "data"
+DATA = Path(__file__).resolve().parents[1] / "nc_sim" / "params" / "data"
 KV = registry().by_id("P-AXIS-00099")  # getriebe[i].kv
 
 

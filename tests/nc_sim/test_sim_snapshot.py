@@ -38,7 +38,7 @@ from nc_sim.faults import (
     Trigger,
 )
 from nc_sim.sim import Simulation, restore, snapshot_bytes
-from tests.nc_sim.randprog import random_program
+from tests.nc_sim.channel.randprog import random_program
 from tests.nc_sim.sim_helpers import make, mdi
 
 

@@ -1,4 +1,4 @@
-"""The interpreter against seeded random programs (tests/nc_sim/randprog.py).
+"""The interpreter against seeded random programs (tests/nc_sim/channel/randprog.py).
 
 The generator works out every motion itself while it writes the program (the position after
 each block, each arc's centre from the start and the I/J/K it wrote, or the centre it chose
@@ -21,7 +21,7 @@ from nc_sim.channel import canon
 from nc_sim.channel.arc_words import ARC_RADIUS_TOLERANCE_MM
 from nc_sim.channel.interpreter import interpret
 from nc_sim.channel.words import ProgramError
-from tests.nc_sim.randprog import GeneratedProgram, mutate, random_program
+from tests.nc_sim.channel.randprog import GeneratedProgram, mutate, random_program
 
 SEEDS = range(200)
 CHANNELS = [(("X", "Z"), ()), (("X", "Y", "Z"), ("S2",)), (("Y", "Z"), ())]

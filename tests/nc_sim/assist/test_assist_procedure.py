@@ -13,7 +13,7 @@ from nc_sim.machine.machine import Machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
 from nc_sim.snapshot import AxisState
-from tests.nc_sim.test_assist_experiments import lathe
+from tests.nc_sim.assist.test_assist_experiments import lathe
 
 
 def _powered(cfg: MachineConfig) -> tuple[Simulation, Machine]:

@@ -11,7 +11,7 @@ import pytest
 
 from nc_sim.commands import Accepted, CycleStart, ProgramLoad
 from nc_sim.snapshot import ChannelState
-from tests.nc_sim.randprog import random_program
+from tests.nc_sim.channel.randprog import random_program
 from tests.nc_sim.sim_helpers import L, make
 
 BOUNDS = {"X": (20.0, 80.0), "Z": (-130.0, -70.0)}

@@ -33,7 +33,7 @@ from nc_sim.training.exercise import Exercise, ExerciseError, parse_exercise
 from nc_sim.training.score import score, time_weight
 from nc_sim.training.seat import start_seat
 
-EXERCISES = Path(__file__).resolve().parents[2] / "exercises"
+EXERCISES = Path(__file__).resolve().parents[3] / "exercises"
 NAMES = ("sign-error", "multi-gain", "gear-change-plc", "accel-curve", "c-axis")
 CHUNK = 100  # cycles per feed: the worker's 10 Hz at 1 ms
 
