@@ -1,7 +1,8 @@
 """Scripted experiments: parameter overrides and timed actions on one machine.
 
-The scenario is the parsed TOML as a dict (see docs/api-guide.md, `examples/`). `run_scenario` is pure:
-it returns the trace columns and the event list; writing files is the caller's business.
+The scenario is the parsed TOML as a dict (see docs/api-guide.md, `examples/`).
+`run_scenario` is pure: it returns the trace columns and the event list; writing files is the
+caller's business.
 Scenario time 0 is the moment the machine is ready: the runner first lets the power-on
 sequence run (drives boot, the PLC switches them on), as an engineer waits for a machine to
 come up before the first block; events of that sequence carry negative times.
