@@ -13,7 +13,7 @@ from fastapi.requests import HTTPConnection
 
 from api.audit import AuditKind
 from api.auth import HELD, Action
-from backend.errors import ApiError, NotLoggedIn, refusal_text
+from backend.errors import ApiError, NotLoggedIn
 from backend.security import SAFE_METHODS, is_loopback
 from backend.services.accounts import Accounts
 from backend.services.assist import Assistants
@@ -208,7 +208,7 @@ def permit(action: Action) -> Any:
                 services.control.hold(actor, services.machines.get(mid))
         except ApiError as e:
             if conn.scope["type"] == "websocket":  # refused before the accept: HTTP 403
-                raise WebSocketException(1008, refusal_text(e)[:120]) from None
+                raise WebSocketException(1008, str(e)[:120]) from None
             if conn.scope["method"] not in SAFE_METHODS:  # an attempt to change something
                 services.audit.record_later(
                     Entry(
@@ -217,7 +217,7 @@ def permit(action: Action) -> Any:
                         _KIND[action],
                         f"{conn.scope['method']} {conn.scope['path']}",
                         mid or "",
-                        outcome=f"refused ({e.status}): {refusal_text(e)}",
+                        outcome=f"refused ({e.status}): {e}",
                     )
                 )
             raise

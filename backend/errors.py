@@ -135,11 +135,6 @@ WORKER_FAILURE: dict[str, type[ApiError]] = {
 }
 
 
-def refusal_text(e: ApiError) -> str:
-    """The refusal's message (for the audit trail)."""
-    return str(e)
-
-
 def body_too_large(limit: int) -> str:
     """Why a request body was refused (413)."""
     return f"request body larger than this route's limit of {limit} bytes"

@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from api.audit import AuditPage, AuditRecord, AuditVerification
-from backend.errors import ApiError, refusal_text
+from backend.errors import ApiError
 from backend.services.audit_log import COLUMNS, Entry, append, row_hash
 
 if TYPE_CHECKING:
@@ -130,7 +130,7 @@ class Audit:
         try:
             yield
         except ApiError as e:
-            self.record_later(replace(entry, outcome=f"refused ({e.status}): {refusal_text(e)}"))
+            self.record_later(replace(entry, outcome=f"refused ({e.status}): {e}"))
             raise
 
     def record_later(self, entry: Entry, written: _Written | None = None) -> None:

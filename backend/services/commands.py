@@ -38,7 +38,7 @@ from api.commands import (
 )
 from api.common import JobErrorModel, Refusal
 from backend import errors
-from backend.errors import ApiError, refusal_text
+from backend.errors import ApiError
 from backend.services.audit import Audit
 from backend.services.audit_log import Entry
 from backend.services.auth import Actor
@@ -166,7 +166,7 @@ async def execute(
     try:
         return await _execute(m, cmd, stored)
     except ApiError as e:
-        outcome = f"refused ({e.status}): {refusal_text(e)}"
+        outcome = f"refused ({e.status}): {e}"
         raise
     finally:
         # audited before it is answered: an acknowledged command is in the trail even when the
