@@ -1,67 +1,115 @@
-"""Commissioning assistants [004 §3.5, §3.6]: what to run, and what they answer."""
+"""Commissioning assistants [004 §3.4-§3.6, 000 §2.2.4, §2.8.4]: what to run, and what they
+answer. Each assistant's request model is made from its descriptor (nc_sim/assist/registry.py):
+its inputs with their ranges, units and defaults."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import BaseModel, Field, create_model, field_validator, model_validator
 
 from api.commands import AxisName
 from api.common import unit
+from nc_sim.assist.descriptor import (
+    REQUIRED,
+    Assistant,
+    AxisChoice,
+    Choice,
+    Flag,
+    Input,
+    Kind,
+    Number,
+    NumberList,
+    Table,
+)
+from nc_sim.assist.registry import ASSISTANTS
 
 
-class MultiGainRequest(BaseModel):
-    """multi_gain by experiment (004 §3.6.2): an axis at constant feed, or a spindle turning
-    position-controlled at constant speed; the lag averaged over `window_s`."""
-
-    axis: AxisName
-    feed_mm_min: float | None = Field(
-        None, gt=0, le=1e6, description="axis feed, mm/min (°/min for a rotary axis)"
-    )
-    speed_rpm: float | None = Field(None, gt=0, le=1e5, description="spindle speed, rpm")
-    window_s: float = Field(1.0, ge=0.2, le=30, description="averaged over, s")
-    direction: Literal[1, -1] = 1
+def _bounds(n: Number) -> dict[str, Any]:
+    out: dict[str, Any] = {"description": n.text}
+    if n.lo is not None:
+        out["gt" if n.lo_open else "ge"] = int(n.lo) if n.integer else n.lo
+    if n.hi is not None:
+        out["le"] = int(n.hi) if n.integer else n.hi
+    if n.unit:
+        out["json_schema_extra"] = unit(n.unit)
+    return out
 
 
-class SignCheckRequest(BaseModel):
-    """The sign check (004 §3.5): a short move; `observed` is the way the machine moved as
-    the engineer saw it (+1 as commanded, -1 the other way; null: the simulated plant's)."""
-
-    axis: AxisName
-    distance: float = Field(
-        1.0, ge=-100, le=100, description="mm (° for rotary)", json_schema_extra=unit("mm")
-    )
-    feed_mm_min: float = Field(100.0, gt=0, le=1e5, description="mm/min (°/min)")
-    observed: Literal[1, -1] | None = None
+def _number(n: Number) -> Any:
+    return Annotated[int if n.integer else float, Field(**_bounds(n))]
 
 
-KvPerS = Annotated[
-    float, Field(gt=0, le=10000, description="kv, 1/s", json_schema_extra=unit("1/s"))
-]
+def _field(i: Input) -> tuple[Any, Any]:
+    """(type, default) of one input as pydantic takes it."""
+    default: Any = ... if i.default is REQUIRED else i.default
+    bounds: dict[str, Any]
+    match i:
+        case Number():
+            t: Any = _number(i)
+            bounds = {}
+        case Choice():
+            t = Literal[tuple(o for o, _ in i.options)]
+            meaning = ", ".join(f"{o} {text}" for o, text in i.options)
+            labels = {"x-labels": {str(o): text for o, text in i.options}}  # the HMI's options
+            bounds = {"description": f"{i.text}: {meaning}", "json_schema_extra": labels}
+        case Flag():
+            t, bounds = bool, {"description": i.text}
+        case AxisChoice():  # the HMI offers the machine's axes of these kinds
+            kinds = {"x-axis-kinds": list(i.kinds)}
+            t, bounds = AxisName, {"description": i.text, "json_schema_extra": kinds}
+        case NumberList():
+            t = list[_number(i.item)]  # type: ignore[misc]
+            bounds = {"min_length": i.min_len, "max_length": i.max_len, "description": i.text}
+        case Table():
+            columns: dict[str, Any] = {c.name: (_number(c), ...) for c in i.columns}
+            row = create_model(i.row, **columns)
+            t = list[row]
+            bounds = {"min_length": i.min_len, "max_length": i.max_len, "description": i.text}
+    if i.optional:
+        t = t | None
+    return t, Field(default, **bounds)
 
 
-class LoopGainRequest(BaseModel):
-    """The position loop gain sweep (004 §3.6): at each kv a G00 step and a G01 ramp on a
-    copy; the highest kv whose step overshoots at most `overshoot_pct` and settles into the
-    exact-stop window within `settle_ms` is proposed."""
+def request_model(a: Assistant) -> type[BaseModel]:
+    """The API model of assistant `a`'s inputs (named as the descriptor says)."""
+    fields: dict[str, Any] = {i.name: _field(i) for i in a.inputs}
+    doc = f"{a.title} ({a.section}): {a.text}"
+    return create_model(a.request, __doc__=doc, **fields)
 
-    axis: AxisName
-    kvs: list[KvPerS] | None = Field(
-        None, min_length=1, max_length=12, description="kv values to try, 1/s (null: 0.5×-3×)"
-    )
-    overshoot_pct: float = Field(5.0, ge=0, le=100, description="target: step overshoot, %")
-    settle_ms: float = Field(200.0, gt=0, le=10000, description="target: step settling, ms")
-    step: float | None = Field(
-        None,
-        gt=0,
-        le=100,
-        description="G00 step, mm (° for rotary); null: 20 exact-stop windows",
-        json_schema_extra=unit("mm"),
-    )
-    feed_mm_min: float | None = Field(
-        None, gt=0, le=1e5, description="G01 ramp feed, mm/min (°/min); null: 5 % of rapid"
-    )
-    direction: Literal[1, -1] = 1
+
+REQUESTS: dict[str, type[BaseModel]] = {a.name: request_model(a) for a in ASSISTANTS}
+"""Every assistant's request model, by the assistant's name."""
+
+
+class AssistantInfo(BaseModel):
+    """One assistant as the HMI offers it: its form is made from `request` (a JSON schema)."""
+
+    name: str
+    title: str
+    section: str = Field(description="the manual's section, e.g. 004 §3.6.2")
+    text: str
+    kind: Kind = Field(description="calculator: answered at once; experiment: on a copy")
+    live: bool = Field(description="may run on the machine itself")
+    summary: list[str] = Field(description="the figures that say what a run found")
+    request: dict[str, Any] = Field(description="the JSON schema of its inputs")
+
+
+def catalogue() -> list[AssistantInfo]:
+    """Every assistant, in the order the HMI offers them."""
+    return [
+        AssistantInfo(
+            name=a.name,
+            title=a.title,
+            section=a.section,
+            text=a.text,
+            kind=a.kind,
+            live=bool(a.live),
+            summary=list(a.summary),
+            request=REQUESTS[a.name].model_json_schema(),
+        )
+        for a in ASSISTANTS
+    ]
 
 
 class LiveCancel(BaseModel):
@@ -123,99 +171,6 @@ class AssistResult(BaseModel):
 # pure arithmetic on the inputs; the machine only supplies the values "before".
 
 GearStage = Annotated[int, Field(ge=1, le=6, description="gear stage 1-6 (M40-M45, getriebe[0-5])")]
-GearRatio = Annotated[
-    float, Field(gt=0, le=1e6, description="i: motor revolutions per output revolution")
-]
-
-
-class ResolutionRequest(BaseModel):
-    """wegaufz/wegaufn (004 §3.4): a linear axis gives `pitch_mm`, a rotary axis or spindle
-    sets `rotary` (360° per revolution) — exactly one of the two."""
-
-    axis: AxisName
-    gear: GearStage = 1
-    increments_per_rev: int = Field(
-        gt=0, le=4294967295, description="encoder increments per motor revolution"
-    )
-    pitch_mm: float | None = Field(None, gt=0, le=1e4, description="mm per output revolution")
-    rotary: bool = False
-    gear_ratio: GearRatio = 1.0
-
-
-class MultiGainCalcRequest(BaseModel):
-    """multi_gain by calculation (004 §3.6.1): exactly one drive scaling — `digits_per_rpm`,
-    the D/A full scale (`full_scale_digits` at `full_scale_rpm`), or a SERCOS weighting
-    (`speed_weighting_rpm` rotary, `speed_weighting_m_per_min` translatory). No `pitch_mm`:
-    rotary (1000 °/min), else linear (1 m/min)."""
-
-    axis: AxisName
-    gear: GearStage = 1
-    digits_per_rpm: float | None = Field(
-        None, gt=0, le=1e9, description="digits per motor rpm", json_schema_extra=unit("digits/rpm")
-    )
-    full_scale_digits: int | None = Field(
-        None, gt=0, le=2147483647, description="command value at full scale, digits"
-    )
-    full_scale_rpm: float | None = Field(None, gt=0, le=1e6, description="motor rpm at full scale")
-    speed_weighting_rpm: float | None = Field(
-        None,
-        gt=0,
-        le=1e3,
-        description="SERCOS rotary weighting, rpm per digit",
-        json_schema_extra=unit("rpm/digit"),
-    )
-    speed_weighting_m_per_min: float | None = Field(
-        None,
-        gt=0,
-        le=1e3,
-        description="SERCOS translatory weighting, m/min per digit",
-        json_schema_extra=unit("m/min/digit"),
-    )
-    pitch_mm: float | None = Field(None, gt=0, le=1e4, description="mm per output revolution")
-    gear_ratio: GearRatio = 1.0
-
-
-class SpeedScalingRequest(BaseModel):
-    """v_reso_num/v_reso_denom of a speed-controlled spindle (000 §2.2.4): `increments`
-    output turn the motor at `speed_rpm`; time base 0 minute, 1 second, 2 cycle."""
-
-    axis: AxisName
-    increments: int = Field(gt=0, le=4294967295, description="value output to the drive")
-    speed_rpm: float = Field(gt=0, le=1e6, description="motor speed at that value, rpm")
-    time_base: Literal[0, 1, 2] = 0
-    cycle_ms: float | None = Field(None, gt=0, le=1000, description="cycle time (time base 2), ms")
-    gear_ratio: GearRatio = 1.0
-
-
-class CurvePoint(BaseModel):
-    n_deg_s: float = Field(ge=0, le=1e7, description="speed n, °/s")
-    a_deg_s2: float = Field(gt=0, le=1e9, description="acceleration a, °/s²")
-
-
-class CurveFitRequest(BaseModel):
-    """The acceleration curve (000 §2.8.4) of type `typ` (1 hyperbola, 2 polynomial,
-    3 asynchronous) from points: 4 (polynomial) or 3 (hyperbola) are interpolated with the
-    first as (n_limit, a_konst), more are fitted by least squares."""
-
-    axis: AxisName = Field(description="the spindle")
-    gear: GearStage = 1
-    typ: Literal[1, 2, 3] = 2
-    points: list[CurvePoint] = Field(min_length=3, max_length=500)
-    n_limit_deg_s: float | None = Field(None, gt=0, le=1e7, description="limit speed, °/s")
-    a_min: float = Field(
-        0.0, ge=0, le=1e9, description="the curve's floor, °/s²", json_schema_extra=unit("°/s²")
-    )
-
-
-class CurveRunUpRequest(BaseModel):
-    """Run the spindle up with M3 in `gear` on a copy of the machine and fit `typ` to the
-    measured a(n) (000 §2.8.4)."""
-
-    axis: AxisName = Field(description="the spindle")
-    gear: GearStage = 1
-    typ: Literal[1, 2, 3] = 2
-    speed_rpm: float | None = Field(None, gt=0, le=1e5, description="top speed (default vb_max)")
-    n_limit_deg_s: float | None = Field(None, gt=0, le=1e7, description="limit speed, °/s")
 
 
 class GearRangeValues(BaseModel):

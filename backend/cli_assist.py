@@ -1,8 +1,9 @@
 """`inbetrieb assist NAME [--machine demo|DIR] [--set TARGET.PARAM=VALUE ...] [options] [--json]`:
 the commissioning assistants (nc_sim/assist) headless, in simulated time.
 
-`ASSISTANTS` maps each name to (argument setup, run): a new assistant registers itself there
-and gets the shared options (--machine, --set, --json) for free.
+The options are made from each assistant's descriptor (nc_sim/assist/registry.py): one per
+input (`--feed-mm-min`, or the short name the descriptor gives, `--feed`), with its range and
+unit in the help; the inputs are checked as the service checks them.
 """
 
 from __future__ import annotations
@@ -11,22 +12,26 @@ import argparse
 import json
 import sys
 from collections.abc import Callable
-from fractions import Fraction
 from pathlib import Path
 
-from nc_sim.assist.calculators import multi_gain, resolution, speed_scaling
-from nc_sim.assist.curve_fit import curve_fit
-from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
-from nc_sim.assist.loop_gain import loop_gain
+from nc_sim.assist.descriptor import (
+    Assistant,
+    AxisChoice,
+    Choice,
+    Flag,
+    Input,
+    Number,
+    NumberList,
+    Table,
+)
+from nc_sim.assist.registry import ASSISTANTS, assistant
 from nc_sim.assist.result import Result
-from nc_sim.assist.run_up import curve_run_up
+from nc_sim.assist.run import run as run_assistant
 from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 from nc_sim.params.listfile import ParamError
-
-Setup = Callable[[argparse.ArgumentParser], None]
-Run = Callable[[argparse.Namespace, Callable[[], MachineConfig]], Result]
+from nc_sim.units import AxisKind
 
 
 class UsageError(Exception):
@@ -53,245 +58,80 @@ def _machine(args: argparse.Namespace) -> MachineConfig:
     return cfg
 
 
-def _fraction(text: str) -> Fraction:
-    """A number or a quotient of numbers: 139.81, 1048576*32/(4000*60) is not allowed, but
-    33554432/240 is."""
-    try:
-        return Fraction(text)
-    except (ValueError, ZeroDivisionError):
-        raise argparse.ArgumentTypeError(f"not a number or fraction: {text!r}") from None
+def _option(i: Input) -> str:
+    return "--" + (i.cli or i.name.replace("_", "-"))
 
 
-def _points(text: str) -> list[tuple[float, float]]:
-    try:
-        pairs = [p.split(":") for p in text.split(",") if p.strip()]
-        return [(float(n), float(a)) for n, a in pairs]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"points must be n:a pairs (°/s:°/s²) separated by commas, not {text!r}"
-        ) from None
+def _numbers(i: NumberList) -> Callable[[str], list[float]]:
+    def parse(text: str) -> list[float]:
+        try:
+            return [float(k) for k in text.split(",") if k.strip()]
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"{i.name} must be numbers ({i.item.unit}) separated by commas, not {text!r}"
+            ) from None
+
+    return parse
 
 
-def _setup_resolution(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--increments", type=int, required=True, help="encoder increments per motor revolution"
-    )
-    way = p.add_mutually_exclusive_group(required=True)
-    way.add_argument("--pitch", type=float, help="spindle pitch, mm per revolution (linear axis)")
-    way.add_argument(
-        "--rotary", action="store_true", help="rotary axis or spindle: 360° per revolution"
-    )
-    p.add_argument(
-        "--gear-ratio", type=float, default=1.0, help="i: motor revolutions per output revolution"
-    )
-    p.add_argument("--axis", default="X")
-    p.add_argument("--gear", type=int, default=1)
+def _rows(i: Table) -> Callable[[str], list[dict[str, float]]]:
+    names = [c.name for c in i.columns]
+    units = ":".join(c.unit for c in i.columns)
+
+    def parse(text: str) -> list[dict[str, float]]:
+        try:
+            rows = [p.split(":") for p in text.split(",") if p.strip()]
+            return [dict(zip(names, map(float, r), strict=True)) for r in rows]
+        except ValueError:
+            pairs = ":".join(n.split("_")[0] for n in names)
+            raise argparse.ArgumentTypeError(
+                f"{i.name} must be {pairs} pairs ({units}) separated by commas, not {text!r}"
+            ) from None
+
+    return parse
 
 
-def _run_resolution(args: argparse.Namespace, _machine: Callable[[], MachineConfig]) -> Result:
-    return resolution(
-        args.increments,
-        pitch_mm=args.pitch,
-        rotary=args.rotary,
-        gear_ratio=args.gear_ratio,
-        target=args.axis,
-        gear=args.gear,
-    )
+def _add(p: argparse.ArgumentParser, i: Input) -> None:
+    """The option of one input, with its range and unit in the help."""
+    option, dest = _option(i), i.name
+    match i:
+        case Number():
+            kind: Callable[[str], object] = int if i.integer else float
+            p.add_argument(option, dest=dest, type=kind, help=f"{i.text} ({i.range_text()})")
+        case Choice():
+            meaning = ", ".join(f"{o} {t}" for o, t in i.options)
+            choices = [o for o, _ in i.options]
+            p.add_argument(option, dest=dest, type=int, choices=choices, help=meaning)
+        case Flag():
+            p.add_argument(option, dest=dest, action="store_true", default=None, help=i.text)
+        case AxisChoice():
+            p.add_argument(option, dest=dest, help=f"{i.text} (default: the machine's first)")
+        case NumberList():
+            p.add_argument(option, dest=dest, type=_numbers(i), help=i.text)
+        case Table():
+            p.add_argument(option, dest=dest, type=_rows(i), help=i.text)
 
 
-def _setup_multi_gain_calc(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--digits-per-rpm", type=_fraction, help="f: command value per motor rpm (a/b allowed)"
-    )
-    p.add_argument("--full-scale-digits", type=int, help="D/A value at full scale (32767 at 10 V)")
-    p.add_argument("--full-scale-rpm", type=float, help="motor speed at full scale")
-    p.add_argument(
-        "--weighting-rpm", type=float, help="SERCOS rotary speed weighting, rpm per digit"
-    )
-    p.add_argument(
-        "--weighting-m-per-min", type=float, help="SERCOS translatory weighting, m/min per digit"
-    )
-    p.add_argument(
-        "--pitch", type=float, help="mm per output revolution (linear axis; none: rotary)"
-    )
-    p.add_argument(
-        "--gear-ratio", type=float, default=1.0, help="i: motor revolutions per output revolution"
-    )
-    p.add_argument("--axis", default="X")
-    p.add_argument("--gear", type=int, default=1)
-
-
-def _run_multi_gain_calc(args: argparse.Namespace, _machine: Callable[[], MachineConfig]) -> Result:
-    return multi_gain(
-        digits_per_rpm=args.digits_per_rpm,
-        full_scale_digits=args.full_scale_digits,
-        full_scale_rpm=args.full_scale_rpm,
-        speed_weighting_rpm=args.weighting_rpm,
-        speed_weighting_m_per_min=args.weighting_m_per_min,
-        pitch_mm=args.pitch,
-        gear_ratio=args.gear_ratio,
-        target=args.axis,
-        gear=args.gear,
-    )
-
-
-def _setup_speed_scaling(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--increments", type=int, required=True, help="value output to the drive")
-    p.add_argument("--rpm", type=float, required=True, help="motor speed at that value")
-    p.add_argument(
-        "--time-base", type=int, default=0, choices=(0, 1, 2), help="0 minute, 1 second, 2 cycle"
-    )
-    p.add_argument("--cycle-ms", type=float, help="cycle time for time base 2")
-    p.add_argument(
-        "--gear-ratio", type=float, default=1.0, help="i: motor revolutions per spindle revolution"
-    )
-    p.add_argument("--spindle", default="S1")
-
-
-def _run_speed_scaling(args: argparse.Namespace, _machine: Callable[[], MachineConfig]) -> Result:
-    return speed_scaling(
-        args.increments,
-        args.rpm,
-        time_base=args.time_base,
-        cycle_ms=args.cycle_ms,
-        gear_ratio=args.gear_ratio,
-        target=args.spindle,
-    )
-
-
-def _setup_curve_fit(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--type",
-        type=int,
-        required=True,
-        choices=(1, 2, 3),
-        help="1 hyperbola, 2 polynomial, 3 asynchronous",
-    )
-    p.add_argument("--points", type=_points, required=True, help="n:a,n:a,... in °/s and °/s²")
-    p.add_argument(
-        "--n-limit", type=float, help="limit speed °/s (default: the first point, or searched)"
-    )
-    p.add_argument("--a-min", type=float, default=0.0, help="the curve's floor, °/s²")
-    p.add_argument("--spindle", default="S1")
-    p.add_argument("--gear", type=int, default=1)
-
-
-def _run_curve_fit(args: argparse.Namespace, _machine: Callable[[], MachineConfig]) -> Result:
-    return curve_fit(
-        args.type,
-        args.points,
-        n_limit_deg_s=args.n_limit,
-        a_min=args.a_min,
-        target=args.spindle,
-        gear=args.gear,
-    )
-
-
-def _setup_curve_run_up(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--spindle", default="S1")
-    p.add_argument("--gear", type=int, required=True, help="gear stage 1-6")
-    p.add_argument("--type", type=int, default=2, choices=(1, 2, 3), help="curve type to fit")
-    p.add_argument("--rpm", type=float, help="top speed of the run-up (default the gear's vb_max)")
-    p.add_argument("--n-limit", type=float, help="limit speed °/s (default: searched)")
-
-
-def _run_curve_run_up(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
-    return curve_run_up(
-        machine(),
-        args.spindle,
-        args.gear,
-        args.type,
-        speed_rpm=args.rpm,
-        n_limit_deg_s=args.n_limit,
-    )
-
-
-def _setup_multi_gain(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--axis", required=True, help="axis or spindle name (X, S1)")
-    speed = p.add_mutually_exclusive_group(required=True)
-    speed.add_argument("--feed", type=float, help="axis feed, mm/min (°/min for a rotary axis)")
-    speed.add_argument("--speed", type=float, help="spindle speed, rpm (position-controlled)")
-    p.add_argument("--window", type=float, default=1.0, help="averaged over, s (default 1)")
-
-
-def _run_multi_gain(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
-    return multi_gain_experiment(
-        machine(), args.axis, feed_mm_min=args.feed, speed_rpm=args.speed, window_s=args.window
-    )
-
-
-def _setup_sign_check(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--axis", required=True, help="axis name (X)")
-    p.add_argument("--distance", type=float, default=1.0, help="mm or ° (default 1)")
-    p.add_argument("--feed", type=float, default=100.0, help="mm/min (default 100)")
-    p.add_argument(
-        "--observed",
-        type=int,
-        choices=(1, -1),
-        help="the way the machine moved as you saw it: 1 as commanded, -1 the other way "
-        "(default: the simulated plant's)",
-    )
-
-
-def _run_sign_check(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
-    return sign_check_experiment(machine(), args.axis, args.distance, args.feed, args.observed)
-
-
-def _kvs(text: str) -> list[float]:
-    try:
-        return [float(k) for k in text.split(",") if k.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"kv values must be numbers (1/s) separated by commas, not {text!r}"
-        ) from None
-
-
-def _setup_loop_gain(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--axis", required=True, help="axis name (X)")
-    p.add_argument(
-        "--kv", type=_kvs, help="kv values to try, 1/s: 10,20,40 (default 0.5x to 3x the axis' kv)"
-    )
-    p.add_argument(
-        "--overshoot-pct", type=float, default=5.0, help="target: step overshoot, %% (default 5)"
-    )
-    p.add_argument(
-        "--settle-ms", type=float, default=200.0, help="target: step settling, ms (default 200)"
-    )
-    p.add_argument("--step", type=float, help="G00 step, mm or ° (default 20 exact-stop windows)")
-    p.add_argument("--feed", type=float, help="G01 ramp feed, mm/min (default 5 %% of rapid)")
-    p.add_argument("--direction", type=int, default=1, choices=(1, -1))
-
-
-def _run_loop_gain(args: argparse.Namespace, machine: Callable[[], MachineConfig]) -> Result:
-    return loop_gain(
-        machine(),
-        args.axis,
-        args.kv,
-        args.overshoot_pct,
-        args.settle_ms,
-        step=args.step,
-        feed_mm_min=args.feed,
-        direction=args.direction,
-    )
-
-
-ASSISTANTS: dict[str, tuple[Setup, Run]] = {
-    "multi-gain": (_setup_multi_gain, _run_multi_gain),
-    "sign-check": (_setup_sign_check, _run_sign_check),
-    "loop-gain": (_setup_loop_gain, _run_loop_gain),
-    "resolution": (_setup_resolution, _run_resolution),
-    "multi-gain-calc": (_setup_multi_gain_calc, _run_multi_gain_calc),
-    "speed-scaling": (_setup_speed_scaling, _run_speed_scaling),
-    "curve-fit": (_setup_curve_fit, _run_curve_fit),
-    "curve-run-up": (_setup_curve_run_up, _run_curve_run_up),
-}
+def _inputs(a: Assistant, args: argparse.Namespace, cfg: MachineConfig) -> dict[str, object]:
+    """The options given; an axis not given is the machine's first of the kinds it takes."""
+    values = {i.name: getattr(args, i.name) for i in a.inputs}
+    values = {k: v for k, v in values.items() if v is not None}
+    for i in a.inputs:
+        if isinstance(i, AxisChoice) and i.name not in values:
+            kinds = {"linear": AxisKind.LINEAR, "rotary": AxisKind.ROTARY}
+            wanted = {kinds.get(k, AxisKind.SPINDLE) for k in i.kinds}
+            first = next((x.name for x in cfg.axes if x.kind in wanted), None)
+            if first is None:
+                raise UsageError(f"{_option(i)}: the machine has no {' or '.join(i.kinds)}")
+            values[i.name] = first
+    return values
 
 
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p_assist = sub.add_parser("assist", help="run a commissioning assistant headless")
     names = p_assist.add_subparsers(dest="assistant", required=True)
-    for name, (setup, _run) in ASSISTANTS.items():
-        p = names.add_parser(name)
+    for a in ASSISTANTS:
+        p = names.add_parser(a.name, help=f"{a.title} ({a.section})", description=a.text)
         p.add_argument(
             "--machine", default="demo", help="demo, or a folder with channel.lis and axis_<n>.lis"
         )
@@ -303,7 +143,8 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
             help="parameter override (repeat)",
         )
         p.add_argument("--json", action="store_true", help="print the result as JSON")
-        setup(p)
+        for i in a.inputs:
+            _add(p, i)
 
 
 def _summary(result: Result) -> str:
@@ -316,9 +157,10 @@ def _summary(result: Result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chosen assistant; a bad option or input is a message on stderr and exit 2."""
-    _setup, assistant = ASSISTANTS[args.assistant]
+    a = assistant(args.assistant)
     try:
-        result = assistant(args, lambda: _machine(args))
+        cfg = _machine(args)
+        result = run_assistant(a.name, cfg, _inputs(a, args, cfg))
     except (UsageError, NcUsageError, ParamListError, ParamError, OSError, ValueError) as e:
         print(f"inbetrieb assist {args.assistant}: {e}", file=sys.stderr)
         return 2

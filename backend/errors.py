@@ -189,9 +189,14 @@ def install(app: FastAPI) -> None:
     fields: list[FieldTexts] = []  # from the schema on first use (routes are all added then)
 
     @app.exception_handler(RequestValidationError)
-    async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
+    async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
         if not fields:
             fields.append(FieldTexts(app.openapi()))
+        # the route's body model: a field name several models use means what this one says
+        body = getattr(request.scope.get("route"), "body_field", None)
+        model = getattr(
+            getattr(getattr(body, "field_info", None), "annotation", None), "__name__", None
+        )
         issues = [
             ValidationIssue(
                 loc=list(e.get("loc", ())),
@@ -205,6 +210,7 @@ def install(app: FastAPI) -> None:
                         str(e.get("type", "")),
                         e.get("ctx") or {},
                         str(e.get("msg", "")),
+                        model,
                     )
                 ),
             )

@@ -36,23 +36,28 @@ class FieldTexts:
     def __init__(self, openapi: Mapping[str, Any]) -> None:
         # (description, x-unit), "" where the schema has none
         self._by_tag: dict[tuple[str | None, str], tuple[str, str]] = {}
+        self._by_model: dict[tuple[str, str], tuple[str, str]] = {}
         self._by_name: dict[str, set[tuple[str, str]]] = {}
         schemas = openapi.get("components", {}).get("schemas", {})
-        for schema in schemas.values():
+        for model, schema in schemas.items():
             props: Mapping[str, Any] = schema.get("properties", {})
             tag = props.get("type", {}).get("const")
             for name, prop in props.items():
                 texts = (_description(prop), _schema_unit(prop))
                 if tag is not None:
                     self._by_tag[(tag, name)] = texts
+                self._by_model[(model, name)] = texts
                 if any(texts):
                     self._by_name.setdefault(name, set()).add(texts)
 
-    def texts(self, tag: str | None, name: str) -> tuple[str, str]:
-        """The field's description and unit ("" where the schema has none, or where models
-        describe a field of no command differently)."""
+    def texts(self, tag: str | None, name: str, model: str | None = None) -> tuple[str, str]:
+        """The field's description and unit: of the command `tag`, else of the route's body
+        `model`, else of the one meaning all models give `name` ("" where the schema has
+        none, or where models describe the field differently)."""
         if (tag, name) in self._by_tag:
             return self._by_tag[(tag, name)]
+        if model is not None and (model, name) in self._by_model:
+            return self._by_model[(model, name)]
         texts = self._by_name.get(name, set())
         return next(iter(texts)) if len(texts) == 1 else ("", "")
 
@@ -130,15 +135,21 @@ def _rule(kind: str, ctx: Mapping[str, Any], unit: str, msg: str) -> str:
 
 
 def issue_text(
-    fields: FieldTexts, loc: Sequence[str | int], kind: str, ctx: Mapping[str, Any], msg: str
+    fields: FieldTexts,
+    loc: Sequence[str | int],
+    kind: str,
+    ctx: Mapping[str, Any],
+    msg: str,
+    model: str | None = None,
 ) -> str:
-    """One schema violation as a sentence, e.g. "Jog feed must be greater than 0 mm/min"."""
+    """One schema violation as a sentence, e.g. "Jog feed must be greater than 0 mm/min";
+    `model` names the route's body model (its schema component)."""
     names = [p for p in loc if isinstance(p, str) and p not in _LOC_ROOTS]
     if not names:
         return f"The request {_rule(kind, ctx, '', msg)}."
     name = names[-1]
     tag = names[-2] if len(names) > 1 else None
-    description, schema_unit = fields.texts(tag, name)
+    description, schema_unit = fields.texts(tag, name, model if len(names) == 1 else None)
     unit = _unit(name, schema_unit)
     meaning = _meaning(tag, name, description, unit)
     text = f"{meaning} {_rule(kind, ctx, unit, msg)}"

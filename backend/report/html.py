@@ -15,14 +15,8 @@ from api.assist import AssistSeries
 from api.audit import AuditRecord
 from api.report import AssistRun, SignOff
 from backend.report import svg
+from nc_sim.assist.registry import BY_NAME
 
-# the manual's name and section of each assistant (others are shown by their name)
-ASSISTANTS = {
-    "multi-gain": ("multi_gain by experiment", "004 §3.6.2"),
-    "sign-check": ("Direction and sign check", "004 §3.5"),
-    "curve-run-up": ("Acceleration curve from a run-up", "000 §2.8.4"),
-    "loop-gain": ("Position loop gain", "004 §3.6"),
-}
 MAX_LINES = 4  # series in one plot before they are split by name
 MAX_LEVELS = 3  # reference levels drawn on one plot
 AXIS_KINDS = {"linear": "linear axis", "rotary": "rotary axis", "spindle": "spindle"}
@@ -126,8 +120,9 @@ def _table(head: Sequence[str], rows: list[str], cls: str = "") -> str:
 
 
 def _assistant(name: str) -> str:
-    label, section = ASSISTANTS.get(name, (name, ""))
-    return f"{label} [{section}]" if section else label
+    """The manual's name and section of an assistant (one no longer known: its name)."""
+    a = BY_NAME.get(name)
+    return f"{a.title} [{a.section}]" if a else name
 
 
 def _cover(d: ReportData) -> str:

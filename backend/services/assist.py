@@ -1,7 +1,8 @@
-"""Commissioning assistants on a copy of a machine (nc_sim/assist): the machine's parameters
-as the gateway holds them, an experiment in simulated time in a process of its own (so
-neither the gateway's event loop nor a worker's real-time loop waits for it), the answer as
-the API model. Nothing here touches the live machine: Apply is a parameter write.
+"""Commissioning assistants (nc_sim/assist, by their descriptors in registry.py): on a copy
+of a machine — its parameters as the gateway holds them — an experiment runs in simulated
+time in a process of its own (so neither the gateway's event loop nor a worker's real-time
+loop waits for it), a calculator at once; live, the machine's worker paces the run. The answer
+is the API model; Apply is a parameter write.
 """
 
 from __future__ import annotations
@@ -9,7 +10,6 @@ from __future__ import annotations
 import asyncio
 import copy
 import multiprocessing
-from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from typing import Any
@@ -23,6 +23,8 @@ from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.workers.protocol import AssistCancel, AssistStart
+from nc_sim.assist.result import ExperimentError
+from nc_sim.assist.run import run
 from nc_sim.config import MachineConfig
 
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
@@ -37,23 +39,20 @@ def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
     """In the assistants' process: run one experiment; its answer (ExperimentRefused when it
     cannot run). The kernel is imported here, in that process: the gateway itself never
     loads it."""
-    from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
-    from nc_sim.assist.loop_gain import loop_gain
-    from nc_sim.assist.procedure import ExperimentError
-    from nc_sim.assist.result import Result
-    from nc_sim.assist.run_up import curve_run_up
-    from nc_sim.errors import NcUsageError
-
-    experiments: dict[str, Callable[..., Result]] = {
-        "multi-gain": multi_gain_experiment,
-        "sign-check": sign_check_experiment,
-        "loop-gain": loop_gain,
-        "curve-run-up": lambda cfg, axis, **kw: curve_run_up(cfg, axis, **kw),
-    }
     try:
-        return experiments[name](cfg, **args).as_json()
-    except (ExperimentError, NcUsageError) as e:
+        return run(name, cfg, args).as_json()
+    except ExperimentError as e:
         raise ExperimentRefused(str(e)) from None
+
+
+def calculate(cfg: MachineConfig, name: str, req: BaseModel) -> AssistResult:
+    """Calculator `name` on the request's inputs (pure arithmetic, no kernel: answered in the
+    gateway), its changes with the machine's values before; Invalid with the calculator's
+    reason when the inputs do not fit together."""
+    try:
+        return AssistResult.model_validate(run(name, cfg, req.model_dump()).as_json())
+    except ExperimentError as e:
+        raise Invalid(str(e)) from None  # the route names the calculator
 
 
 class Assistants:

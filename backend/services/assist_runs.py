@@ -14,21 +14,17 @@ from api.assist import AssistResult
 from api.report import AssistRun, AssistRunInfo
 from backend.errors import not_found
 from backend.services.store import Store
+from nc_sim.assist.registry import BY_NAME
 
 MAX_LIST = 200  # runs in one list (newest)
-# the figures that say what a run found, per assistant (others: its first three)
-_SUMMARY = {
-    "multi-gain": ("k", "f", "kv_new"),
-    "sign-check": ("max_lag", "lag_max", "runaway"),
-    "curve-run-up": ("max_error", "run_up_s"),
-    "loop-gain": ("kv", "kv_new"),
-}
 _INFO = "id, machine, assistant, user, time, live, ok, axis, summary"
 
 
 def summary(result: AssistResult) -> str:
-    """The main figures in words: 'k = 8.75 1/s, f = 2.29; 3 changes proposed'."""
-    names = _SUMMARY.get(result.assistant)
+    """The main figures in words: 'k = 8.75 1/s, f = 2.29; 3 changes proposed' (the
+    descriptor's summary figures, else the first three)."""
+    a = BY_NAME.get(result.assistant)
+    names = a.summary if a else ()
     figs = (
         [f for n in names for f in result.figures if f.name == n] if names else result.figures[:3]
     )

@@ -28,8 +28,8 @@ from backend.workers.protocol import (
     StatusRead,
 )
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
-from nc_sim.assist.experiments import PROCEDURES
 from nc_sim.assist.procedure import LiveRun
+from nc_sim.assist.run import live
 from nc_sim.commands import JogStop
 from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
@@ -164,12 +164,10 @@ class MachineHost:
         self.scope.completed.clear()
 
     def start_assist(self, r: AssistStart) -> LiveRun:
-        """Start a live assistant run (one at a time); ValueError for an unknown name. A run
-        refused at once (its motion refused) comes back done, with its error."""
-        start = PROCEDURES.get(r.name)
-        if start is None:
-            raise ValueError(f"no live assistant '{r.name}' ({', '.join(PROCEDURES)})")
-        self.live = LiveRun(self.machine, lambda m: start(m, **r.args), self.cycle_s)
+        """Start a live assistant run (one at a time); ValueError (an ExperimentError) when
+        it cannot run live or as asked, KeyError for an unknown name. A run refused at once
+        (its motion refused) comes back done, with its error."""
+        self.live = LiveRun(self.machine, live(r.name, r.args), self.cycle_s)
         self.live_of = r
         return self.live
 

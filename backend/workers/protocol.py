@@ -128,7 +128,7 @@ class ScopeRoll:
 
 @dataclass(frozen=True)
 class AssistStart:
-    """Run assistant `name` live on the machine (nc_sim/assist/experiments.PROCEDURES) with
+    """Run assistant `name` live on the machine (nc_sim/assist/registry.py) with
     `args`; answered when it ends: its result as JSON values, or a Failure."""
 
     mid: str

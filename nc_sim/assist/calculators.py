@@ -13,6 +13,7 @@ import math
 from fractions import Fraction
 
 from nc_sim.assist.result import Change, Figure, Result, Value
+from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
 from nc_sim.params.definitions import U32MAX
 from nc_sim.units import (
@@ -279,4 +280,88 @@ def _inputs(**values: Value | None) -> dict[str, Value]:
     return {k: v for k, v in values.items() if v is not None}
 
 
-__all__ = ["exact", "list_fraction", "multi_gain", "resolution", "speed_scaling"]
+# --- as the assistants' registry runs them (nc_sim/assist/registry.py): the machine's
+# configuration, then the inputs by their API names
+
+
+def resolution_of(
+    cfg: MachineConfig,
+    axis: str,
+    gear: int,
+    increments_per_rev: int,
+    pitch_mm: float | None,
+    rotary: bool,
+    gear_ratio: float,
+) -> Result:
+    """`resolution` for `axis` of the machine."""
+    return resolution(
+        increments_per_rev,
+        pitch_mm=pitch_mm,
+        rotary=rotary,
+        gear_ratio=gear_ratio,
+        target=cfg.axis(axis).name,
+        gear=gear,
+    )
+
+
+def multi_gain_of(
+    cfg: MachineConfig,
+    axis: str,
+    gear: int,
+    digits_per_rpm: float | None,
+    full_scale_digits: int | None,
+    full_scale_rpm: float | None,
+    speed_weighting_rpm: float | None,
+    speed_weighting_m_per_min: float | None,
+    pitch_mm: float | None,
+    gear_ratio: float,
+) -> Result:
+    """`multi_gain` for `axis` of the machine."""
+    return multi_gain(
+        digits_per_rpm=digits_per_rpm,
+        full_scale_digits=full_scale_digits,
+        full_scale_rpm=full_scale_rpm,
+        speed_weighting_rpm=speed_weighting_rpm,
+        speed_weighting_m_per_min=speed_weighting_m_per_min,
+        pitch_mm=pitch_mm,
+        gear_ratio=gear_ratio,
+        target=cfg.axis(axis).name,
+        gear=gear,
+    )
+
+
+def speed_scaling_of(
+    cfg: MachineConfig,
+    axis: str,
+    increments: int,
+    speed_rpm: float,
+    time_base: int,
+    cycle_ms: float | None,
+    gear_ratio: float,
+) -> Result:
+    """`speed_scaling` for the spindle `axis`; time base 2 without `cycle_ms` takes the
+    machine's own cycle (P-CHAN cycle_time)."""
+    if not cfg.axis(axis).is_spindle:
+        raise NcUsageError(f"axis: {axis} is not a spindle (v_reso scales a spindle's speed)")
+    if time_base == 2 and cycle_ms is None:
+        cycle_ms = cfg.cycle_s * 1000.0
+    return speed_scaling(
+        increments,
+        speed_rpm,
+        time_base=time_base,
+        cycle_ms=cycle_ms,
+        gear_ratio=gear_ratio,
+        target=axis,
+    )
+
+
+__all__ = [
+    "exact",
+    "list_fraction",
+    "multi_gain",
+    "multi_gain_of",
+    "resolution",
+    "resolution_of",
+    "speed_scaling",
+    "speed_scaling_of",
+]

@@ -25,6 +25,7 @@ from nc_sim.accel_curve import (
     CurveParams,
 )
 from nc_sim.assist.result import Change, Figure, Result, Series, Value
+from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
 from nc_sim.units import Quantity, to_raw
 
@@ -268,6 +269,23 @@ def curve_fit(
             **({} if n_limit_deg_s is None else {"n_limit_deg_s": n_limit_deg_s}),
         },
     )
+
+
+def curve_fit_of(
+    cfg: MachineConfig,
+    axis: str,
+    gear: int,
+    typ: int,
+    points: Sequence[dict[str, float]],
+    n_limit_deg_s: float | None,
+    a_min: float,
+) -> Result:
+    """`curve_fit` for the spindle `axis` of the machine, from points {n_deg_s, a_deg_s2}
+    (the assistants' registry)."""
+    if not cfg.axis(axis).is_spindle:
+        raise NcUsageError(f"axis: {axis} is not a spindle (the curve is a spindle gear's)")
+    pairs = [(p["n_deg_s"], p["a_deg_s2"]) for p in points]
+    return curve_fit(typ, pairs, n_limit_deg_s=n_limit_deg_s, a_min=a_min, target=axis, gear=gear)
 
 
 def measured_accel(

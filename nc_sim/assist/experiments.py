@@ -17,12 +17,11 @@ a preview on a copy) and answers with a `Result`.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
-from nc_sim.assist.procedure import ExperimentError, Procedure, Wait, on_copy
-from nc_sim.assist.result import Change, Figure, Result, Series
+from nc_sim.assist.procedure import Procedure, Wait, on_copy
+from nc_sim.assist.result import Change, ExperimentError, Figure, Result, Series
 from nc_sim.axis.state import Axis
 from nc_sim.commands import Accepted, HliWrite, Move, Refused, Reset, SpindleRun
 from nc_sim.config import MachineConfig
@@ -302,11 +301,3 @@ def sign_check(
         not tripped,
         {"axis": ax.name, "distance": distance, "feed_mm_min": feed_mm_min},
     )
-
-
-PROCEDURES: dict[str, Callable[..., Procedure]] = {
-    "multi-gain": multi_gain,
-    "sign-check": sign_check,
-}
-"""The experiments that can also run live, by name: each takes the machine, then its
-arguments as keywords."""

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nc_sim.assist.experiments import _refusal  # the NC's refusal in its words, as there
-from nc_sim.assist.procedure import ExperimentError, Wait, on_copy
-from nc_sim.assist.result import Change, Figure, Result, Series
+from nc_sim.assist.procedure import Wait, on_copy
+from nc_sim.assist.result import Change, ExperimentError, Figure, Result, Series
 from nc_sim.commands import Accepted, Move
 from nc_sim.config import MachineConfig, apply_overrides
 from nc_sim.errors import NcUsageError

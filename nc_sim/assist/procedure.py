@@ -19,16 +19,12 @@ from typing import TypeVar
 
 import numpy as np
 
-from nc_sim.assist.result import Result
+from nc_sim.assist.result import ExperimentError, Result
 from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
 from nc_sim.machine.machine import Machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
-
-
-class ExperimentError(ValueError):
-    """The experiment cannot run as asked (unknown axis, no speed, refused motion)."""
 
 
 @dataclass(frozen=True)

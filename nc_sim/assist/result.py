@@ -8,6 +8,11 @@ from typing import Any
 Value = float | int | str
 
 
+class ExperimentError(ValueError):
+    """The assistant cannot run as asked (bad inputs, unknown axis, no speed, refused
+    motion)."""
+
+
 @dataclass(frozen=True)
 class Figure:
     """One measured or computed figure, in the unit the manual gives it in."""

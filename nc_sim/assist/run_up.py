@@ -40,15 +40,16 @@ BINS = 60
 
 def curve_run_up(
     cfg: MachineConfig,
-    spindle: str,
+    axis: str,
     gear: int,
     typ: int,
     *,
     speed_rpm: float | None = None,
     n_limit_deg_s: float | None = None,
 ) -> Result:
-    """Run `spindle` up with M3 in `gear` (1-6) to `speed_rpm` (default: the gear's vb_max)
+    """Run the spindle `axis` up with M3 in `gear` (1-6) to `speed_rpm` (default: the gear's vb_max)
     and fit a curve of type `typ` to the measured a(n) by least squares."""
+    spindle = axis
     cfg = copy.deepcopy(cfg)
     ax = cfg.axis(spindle)
     if not ax.is_spindle:

@@ -277,7 +277,10 @@ def test_the_calculators_do_not_load_the_kernel() -> None:
     """The gateway never imports the numba kernel (only the assistants' process does): the
     routes of the calculators and the gear preview keep it that way."""
     code = (
-        "import sys, backend.main, backend.services.calculators;"
+        "import sys, backend.main, backend.services.gear_ranges;"
+        "from nc_sim.assist.run import run; from nc_sim.config import demo_machine;"
+        "inputs = {'axis': 'X', 'increments_per_rev': 4096, 'pitch_mm': 5.0};"
+        "assert run('resolution', demo_machine(), inputs).changes[0].after == 4096;"
         "bad = [m for m in sys.modules if m == 'numba' or m == 'nc_sim.kernel.step'];"
         "print(bad); sys.exit(1 if bad else 0)"
     )

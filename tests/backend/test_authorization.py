@@ -33,6 +33,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/auth/me"): ("observer", FREE),
     ("GET", "/api/service/status"): ("observer", FREE),
     ("GET", "/api/machines"): ("observer", FREE),
+    ("GET", "/api/assistants"): ("observer", FREE),
     ("POST", "/api/machines"): ("admin", FREE),
     ("GET", "/api/machines/{mid}/status"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/service-axes"): ("observer", FREE),

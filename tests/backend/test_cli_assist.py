@@ -55,7 +55,7 @@ def test_multi_gain_calc_terminal_spindle_and_sercos_rotary() -> None:
         "5",
     )
     assert figure(out, "multi_gain") == pytest.approx(50.5668, rel=2e-5)
-    out = answer("multi-gain-calc", "--weighting-rpm", "1e-4", "--axis", "C")
+    out = answer("multi-gain-calc", "--weighting-rpm", "1e-4", "--axis", "S1")
     assert after(out) == {"getriebe[0].multi_gain_z": 10000000, "getriebe[0].multi_gain_n": 360}
 
 
@@ -91,14 +91,24 @@ def test_curve_run_up_on_the_demo_with_overrides() -> None:
     ("args", "message"),
     [
         (["curve-fit", "--type", "2", "--points", "12000:16000,oops"], "n:a pairs"),
-        (["curve-fit", "--type", "2", "--points", "12000:16000,24000:8000"], "at least 4"),
+        (["curve-fit", "--type", "2", "--points", "12000:16000,24000:8000"], "3 to 500 rows"),
+        (
+            ["curve-fit", "--type", "2", "--points", "12000:16000,24000:8000,36000:4000"],
+            "at least 4",
+        ),
         (["multi-gain-calc", "--full-scale-rpm", "9000"], "both digits and rpm"),
         (["curve-run-up", "--gear", "6", "--set", "S1.nonsense=1"], "nonsense"),
         (["curve-run-up", "--gear", "6", "--set", "S1-no-dot"], "TARGET.PARAM=VALUE"),
         (["curve-run-up", "--gear", "6", "--machine", "no/such/dir"], "no/such/dir"),
-        (["resolution", "--increments", "4096", "--pitch", "0"], "positive"),
+        (
+            ["resolution", "--increments", "4096", "--pitch", "0"],
+            "pitch_mm: 0 is out of range (> 0",
+        ),
         (["loop-gain", "--axis", "X", "--kv", "10,fast"], "separated by commas"),
-        (["loop-gain", "--axis", "X", "--kv", "0,20"], "kv values must be > 0"),
+        (
+            ["loop-gain", "--axis", "X", "--kv", "0,20"],
+            "kvs: 0 is out of range (> 0 and ≤ 10000 1/s)",
+        ),
         (["loop-gain", "--axis", "S1"], "spindle"),
     ],
 )

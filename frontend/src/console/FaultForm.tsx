@@ -6,16 +6,12 @@ import { ApiError } from "../api/http";
 import type { ClassInfo, FaultInject, Refusal } from "../api/types";
 import { injectClass, injectSeat, seats } from "../state/classes";
 import { Panel } from "../ui/Panel";
+import { codeSpans } from "../ui/codeSpans";
 import { RefusalLine } from "../ui/useCommand";
 import { faultCatalogue, rangeText, type FaultKind } from "./faultCatalogue";
 import { faultFor } from "./uiState";
 
 type When = "now" | "after" | "motion";
-
-/** A schema description's `code spans` as code, the rest as text (no other markdown there). */
-function codeSpans(text: string) {
-  return text.split(/`([^`]+)`/).map((part, i) => (i % 2 ? <code key={i}>{part}</code> : part));
-}
 
 export function FaultForm(props: { c: ClassInfo; target: number[] }) {
   const { c, target } = props;

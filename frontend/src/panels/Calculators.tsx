@@ -5,6 +5,8 @@
 // and the proposed changes before → after, which Apply puts on trial (Keep / Revert).
 import { useEffect, useState } from "preact/hooks";
 import type { AssistResult, AxisStatus, Refusal } from "../api/types";
+import type { AssistantInfo } from "../api/types";
+import { catalogue, loadCatalogue, runAssistant } from "../state/assist";
 import { type CalculatorBodies, calculate } from "../state/calculators";
 import { may } from "../state/control";
 import { machineId, online, status } from "../state/session";
@@ -15,28 +17,30 @@ import { ApplyBar, Field, checkNumber, refusalOf } from "./CalcParts";
 import "./calculators.css";
 import { CurveFitPanel } from "./CurveFitPanel";
 import { GearRanges } from "./GearRanges";
+import { codeSpans } from "../ui/codeSpans";
+import { SchemaFields, axesFor, formBody, formFields, startTexts } from "./SchemaForm";
 
-type Tool = "resolution" | "multi-gain-calc" | "speed-scaling" | "curve-fit" | "gear-ranges";
-
-const TOOLS: { name: Tool; label: string; section: string }[] = [
-  { name: "resolution", label: "Resolution", section: "004 §3.4" },
-  { name: "multi-gain-calc", label: "multi_gain by calculation", section: "004 §3.6.1" },
-  { name: "speed-scaling", label: "Speed scaling", section: "000 §2.2.4" },
-  { name: "curve-fit", label: "Acceleration curve fit", section: "000 §2.8.4" },
-  { name: "gear-ranges", label: "Gear ranges", section: "000 §2.8.2" },
-];
+// the calculators of the catalogue (GET /api/assistants) with a guided form of their own;
+// any other gets the form its request schema describes. The gear-range preview is not an
+// assistant (it answers a selection table, not a proposal with figures).
+const FORM_TOOLS = new Set<string>(["resolution", "multi-gain-calc", "speed-scaling"]);
+const GEAR_RANGES = { name: "gear-ranges", title: "Gear ranges", section: "000 §2.8.2" };
 
 /** The calculators' area of the Commissioning workspace. */
 export function Calculators() {
-  const [tool, setTool] = useState<Tool>("resolution");
+  const [tool, setTool] = useState("resolution");
   const mayAssist = may("assist");
+  useEffect(() => void loadCatalogue(), []);
+  const calculators = catalogue.value.filter((a) => a.kind === "calculator");
+  const TOOLS = [...calculators, GEAR_RANGES];
+  const info = calculators.find((a) => a.name === tool);
   return (
     <Panel title="Calculators" id="calc">
       <div class="calc-tools" role="tablist" aria-label="calculator">
         {TOOLS.map((t) => (
           <button type="button" role="tab" key={t.name} aria-selected={t.name === tool} class={t.name === tool ? "active" : ""}
             data-testid={`calc-pick-${t.name}`} onClick={() => setTool(t.name)}>
-            {t.label} <span class="hint">({t.section})</span>
+            {t.title} <span class="hint">({t.section})</span>
           </button>
         ))}
       </div>
@@ -45,7 +49,15 @@ export function Calculators() {
           Read-only: the calculators need the role operator.
         </p>
       ) : null}
-      {tool === "curve-fit" ? <CurveFitPanel /> : tool === "gear-ranges" ? <GearRanges /> : <FormCalculator key={tool} tool={tool} />}
+      {tool === "curve-fit" ? (
+        <CurveFitPanel />
+      ) : tool === "gear-ranges" ? (
+        <GearRanges />
+      ) : FORM_TOOLS.has(tool) ? (
+        <FormCalculator key={tool} tool={tool as FormTool} section={info?.section ?? ""} />
+      ) : info ? (
+        <SchemaCalculator key={tool} info={info} />
+      ) : null}
     </Panel>
   );
 }
@@ -117,7 +129,7 @@ function formChecks(tool: FormTool, inp: Inputs, rotary: boolean) {
 
 const num = (v: number | string | null | undefined): number | null => (typeof v === "number" ? v : null);
 
-function FormCalculator(props: { tool: FormTool }) {
+function FormCalculator(props: { tool: FormTool; section: string }) {
   const { tool } = props;
   const all = status.value?.axes ?? [];
   const axes = tool === "speed-scaling" ? all.filter((a) => a.kind === "spindle") : all;
@@ -238,7 +250,7 @@ function FormCalculator(props: { tool: FormTool }) {
         {tool !== "speed-scaling" ? (rotary ? <p class="hint">Rotary: 360° per output revolution.</p> : field("pitch", "Spindle pitch (per output revolution)", "mm")) : null}
         {field("ratio", "Gear ratio i (motor revolutions per output revolution)", "")}
         <p class="assist-what" data-testid="calc-formula">
-          {FORMULAS[tool]} <span class="hint">({TOOLS.find((t) => t.name === tool)?.section})</span>
+          {FORMULAS[tool]} <span class="hint">({props.section})</span>
         </p>
         <p class="hint calc-example">
           Manual's example: {ex.text}{" "}
@@ -262,6 +274,72 @@ function FormCalculator(props: { tool: FormTool }) {
           <>
             <AssistResultView result={result} spindle={ax?.kind === "spindle"} />
             <ApplyBar assistant={tool} changes={result.changes} testid="calc" />
+          </>
+        ) : (
+          <p class="hint assist-empty">Type the inputs, Calculate: the figures and the proposed parameters follow.</p>
+        )}
+      </div>
+    </div>
+  );
+}
+
+/** A calculator without a guided form: the form its request schema describes. */
+function SchemaCalculator(props: { info: AssistantInfo }) {
+  const { info } = props;
+  const fields = formFields(info.request);
+  const axes = axesFor(fields, status.value?.axes ?? []);
+  const [axisName, setAxisName] = useState("");
+  const ax = axes.find((a) => a.name === axisName) ?? axes[0];
+  const [texts, setTexts] = useState(() => startTexts(fields));
+  const [result, setResult] = useState<AssistResult | null>(null);
+  const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const [busy, setBusy] = useState(false);
+  const form = formBody(fields, texts, ax?.name ?? "");
+  const bad = Object.keys(form.errors).length > 0;
+  useEffect(() => setResult(null), [machineId.value, ax?.name]);
+
+  async function run() {
+    setBusy(true);
+    setRefusal(null);
+    try {
+      setResult(await runAssistant(info.name, form.body, "copy"));
+    } catch (e) {
+      setRefusal(refusalOf(e));
+      setResult(null);
+    } finally {
+      setBusy(false);
+    }
+  }
+  return (
+    <div class="assist" data-testid={`calc-${info.name}`}>
+      <div class="assist-setup">
+        <label class="assist-field">
+          <span>Axis</span>
+          <select data-testid="calc-axis" value={ax?.name} onChange={(e) => setAxisName((e.target as HTMLSelectElement).value)}>
+            {axes.map((a) => (
+              <option key={a.name} value={a.name}>
+                {a.name} ({a.kind})
+              </option>
+            ))}
+          </select>
+        </label>
+        <SchemaFields fields={fields} texts={texts} errors={form.errors} disabled={busy} testid="calc-in"
+          set={(k, v) => setTexts({ ...texts, [k]: v })} />
+        <p class="assist-what" data-testid="calc-formula">
+          {codeSpans(info.text)} <span class="hint">({info.section})</span>
+        </p>
+        <div class="row">
+          <button type="button" data-testid="calc-run" disabled={!online.value || !ax || busy || bad || !may("assist")} onClick={() => void run()}>
+            Calculate
+          </button>
+        </div>
+        <RefusalLine refusal={refusal} id="calc-refusal" />
+      </div>
+      <div class="assist-out">
+        {result ? (
+          <>
+            <AssistResultView result={result} spindle={ax?.kind === "spindle"} />
+            <ApplyBar assistant={info.name} changes={result.changes} testid="calc" />
           </>
         ) : (
           <p class="hint assist-empty">Type the inputs, Calculate: the figures and the proposed parameters follow.</p>

@@ -6,7 +6,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { AssistResult, AxisStatus, Refusal } from "../api/types";
-import { type AssistantName, type Where, applyProposal, liveRun, restartMachine, runAssistant } from "../state/assist";
+import { type Where, applyProposal, catalogue, liveRun, loadCatalogue, restartMachine, runAssistant } from "../state/assist";
 import { commandBlocked, configureBlocked, may } from "../state/control";
 import { numbers, paramsVersion, trial } from "../state/params";
 import { me } from "../state/auth";
@@ -18,12 +18,13 @@ import { AssistResultView, settled } from "./AssistResultView";
 import { LiveProgress } from "./LiveProgress";
 import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
 import { perSecond } from "../ui/units";
+import { codeSpans } from "../ui/codeSpans";
+import { SchemaFields, axesFor, formBody, formFields, startTexts } from "./SchemaForm";
 
-const ASSISTANTS: { name: AssistantName; label: string; section: string }[] = [
-  { name: "multi-gain", label: "multi_gain by experiment", section: "004 §3.6.2" },
-  { name: "sign-check", label: "Direction and sign check", section: "004 §3.5" },
-  { name: "loop-gain", label: "Position loop gain (kv sweep)", section: "004 §3.6" },
-];
+// the assistants with a guided form of their own here; every other experiment of the
+// catalogue gets the form its request schema describes
+type Guided = "multi-gain" | "sign-check" | "loop-gain";
+const GUIDED = new Set<string>(["multi-gain", "sign-check", "loop-gain"]);
 
 /** The limits of api/assist.py, checked as the engineer types (the service checks again). */
 interface Inputs {
@@ -61,7 +62,12 @@ const n1 = (v: number) => String(+v.toPrecision(3));
 
 export function Commissioning() {
   const axes = status.value?.axes ?? [];
-  const [name, setName] = useState<AssistantName>("multi-gain");
+  const [name, setName] = useState<string>("multi-gain");
+  const assistants = catalogue.value.filter((a) => a.kind === "experiment");
+  const info = assistants.find((a) => a.name === name);
+  const fields = info ? formFields(info.request) : [];
+  const [texts, setTexts] = useState<Record<string, string>>({});
+  const guided = GUIDED.has(name);
   const [axisName, setAxisName] = useState("X");
   const [inp, setInp] = useState<Inputs>(START);
   const [result, setResult] = useState<AssistResult | null>(null);
@@ -74,7 +80,7 @@ export function Commissioning() {
   const [restarted, setRestarted] = useState(false); // since the proposal was applied
   const [kv, setKv] = useState<number | null>(null); // 1/s, for the run's expected duration
 
-  const choices = axes.filter((a) => name === "multi-gain" || a.kind !== "spindle");
+  const choices = axesFor(fields, axes);
   const ax: AxisStatus | undefined = choices.find((a) => a.name === axisName) ?? choices[0];
   const spindle = ax?.kind === "spindle";
   const unit = ax?.unit ?? "mm";
@@ -85,11 +91,18 @@ export function Commissioning() {
   const [lg, setLg] = useState(LOOP_GAIN_START);
   const lgValues = checkLoopGain(lg);
   const axNow = useAxisNow(ax);
-  const errors = name === "loop-gain" ? loopGainErrors(lgValues) : used.filter((v): v is string => typeof v === "string");
+  const form = formBody(fields, texts, ax?.name ?? "");
+  const errors = !guided
+    ? Object.values(form.errors)
+    : name === "loop-gain"
+      ? loopGainErrors(lgValues)
+      : used.filter((v): v is string => typeof v === "string");
   const mayAssist = may("assist");
   const busy = busySince !== null;
   const blocked = configureBlocked.value;
 
+  useEffect(() => void loadCatalogue(), []);
+  useEffect(() => setTexts(startTexts(fields)), [name, assistants.length]);
   useEffect(() => {
     // a result belongs to its machine, assistant and axis
     setResult(null);
@@ -120,8 +133,9 @@ export function Commissioning() {
     setElapsed(0);
     setRefusal(null);
     try {
-      const r =
-        name === "loop-gain"
+      const r = !guided
+        ? await runAssistant(name, form.body, at)
+        : name === "loop-gain"
           ? await runAssistant("loop-gain", loopGainRequest(ax.name, lgValues), "copy")
           : name === "multi-gain"
           ? await runAssistant("multi-gain", {
@@ -201,11 +215,11 @@ export function Commissioning() {
         <div class="assist-setup">
           <fieldset class="assist-choice" disabled={busy}>
             <legend>Assistant</legend>
-            {ASSISTANTS.map((a) => (
+            {assistants.map((a) => (
               <label key={a.name}>
                 <input type="radio" name="assistant" data-testid={`assist-pick-${a.name}`} checked={a.name === name}
                   onChange={() => setName(a.name)} />
-                {a.label} <span class="hint">({a.section})</span>
+                {a.title} <span class="hint">({a.section})</span>
               </label>
             ))}
           </fieldset>
@@ -220,7 +234,10 @@ export function Commissioning() {
               ))}
             </select>
           </label>
-          {name === "multi-gain" ? (
+          {!guided ? (
+            <SchemaFields fields={fields} texts={texts} errors={form.errors} disabled={busy} testid="assist-in"
+              set={(k, v) => setTexts({ ...texts, [k]: v })} />
+          ) : name === "multi-gain" ? (
             <>
               {spindle
                 ? field("speed", "Speed", "rpm", "assist-speed")
@@ -252,7 +269,7 @@ export function Commissioning() {
               </label>
             </>
           )}
-          {ax ? <p class="assist-what" data-testid="assist-what">{name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
+          {ax ? <p class="assist-what" data-testid="assist-what">{!guided ? codeSpans(info?.text ?? "") : name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name as Guided, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
               title={mayAssist ? "a copy of the machine, in simulated time: nothing moves" : `a user in the role ${me.value?.role ?? ""} may not run assistants`}
@@ -260,8 +277,8 @@ export function Commissioning() {
               {busy && where === "copy" ? "Running…" : applied && name === "multi-gain" ? "Preview again to check" : result ? "Preview again" : "Preview on a copy"}
             </button>
             <button type="button" class="secondary" data-testid="assist-run-live"
-              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming || name === "loop-gain"}
-              title={name === "loop-gain" ? "the kv sweep runs on copies only: each kv on a copy of its own" : liveBlocked || "the machine itself moves: you confirm the motion first"} onClick={() => setConfirming(true)}>
+              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming || !info?.live}
+              title={!info?.live ? "it runs on copies of the machine only" : liveBlocked || "the machine itself moves: you confirm the motion first"} onClick={() => setConfirming(true)}>
               Run on the machine…
             </button>
             {busy && where === "copy" ? (
@@ -278,7 +295,7 @@ export function Commissioning() {
           {confirming && ax ? (
             <div class="assist-confirm" role="alertdialog" aria-labelledby="assist-confirm-title" data-testid="assist-confirm">
               <b id="assist-confirm-title">The machine will move</b>
-              <p>{describe(name, ax, inp, values, kv, "machine")}</p>
+              <p>{guided ? describe(name as Guided, ax, inp, values, kv, "machine") : codeSpans(info?.text ?? "")}</p>
               <p class="hint">Keep clear of the machine. The E-stop and Cancel end the run at once.</p>
               <div class="row">
                 <button type="button" data-testid="assist-confirm-live" onClick={() => void run("machine")} disabled={!!liveBlocked}>
@@ -309,7 +326,9 @@ export function Commissioning() {
                 {applied ? (
                   <span class="hint" data-testid="assist-applied">
                     Applied: Keep or Revert in the trial bar above.
-                    {name === "loop-gain"
+                    {!guided
+                      ? " Run again to check."
+                      : name === "loop-gain"
                       ? " Run again to see the sweep around the new kv."
                       : name === "multi-gain"
                       ? " Run again to check: k must now equal kv (f ≈ 1)."
@@ -342,7 +361,7 @@ export function Commissioning() {
 
 /** What the run will do, in the manual's words, with the motion it needs. */
 function describe(
-  name: AssistantName,
+  name: Guided,
   ax: AxisStatus,
   inp: Inputs,
   values: ReturnType<typeof checked>,

@@ -4,6 +4,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { AssistRunInfo, Refusal, SignOff, SignOffRequest, TraceInfo } from "../api/types";
+import { loadCatalogue, titleOf } from "../state/assist";
 import { me } from "../state/auth";
 import { may } from "../state/control";
 import { machineId, machineUrl } from "../state/session";
@@ -14,12 +15,6 @@ const RUNS_SHOWN = 20;
 const REFRESH_MS = 3000; // a run ends in the assistant's panel: the list follows within this
 
 const when = (unix: number) => new Date(unix * 1000).toLocaleString();
-const LABELS: Record<string, string> = {
-  "multi-gain": "multi_gain by experiment",
-  "sign-check": "Direction and sign check",
-  "curve-run-up": "Acceleration curve from a run-up",
-  "loop-gain": "Position loop gain",
-};
 
 function refusalOf(e: unknown): Refusal {
   return e instanceof ApiError ? e.refusal : { message: e instanceof Error ? e.message : String(e), problems: [] };
@@ -57,6 +52,7 @@ export function ReportPanel() {
       // the connection lamp says it; the next refresh tries again
     }
   }
+  useEffect(() => void loadCatalogue(), []);
   useEffect(() => {
     setChosen([]);
     setRefusal(null);
@@ -119,7 +115,7 @@ export function ReportPanel() {
                   <tr key={r.id} data-testid={`report-run-${r.id}`}>
                     <td class="num">{r.id}</td>
                     <td>
-                      {LABELS[r.assistant] ?? r.assistant}
+                      {titleOf(r.assistant)}
                       <div class="hint">{r.live ? "live" : "on a copy"}</div>
                     </td>
                     <td>{r.axis}</td>

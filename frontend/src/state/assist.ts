@@ -1,35 +1,36 @@
 // The commissioning assistants (api/assist.py): run one on a copy of the machine, and apply
 // its proposal through the parameter write the editor uses, on trial (Keep / Revert).
-import { computed } from "@preact/signals";
+import { computed, signal } from "@preact/signals";
 import { http } from "../api/http";
-import type {
-  AssistChange,
-  AssistProgress,
-  AssistResult,
-  LoopGainRequest,
-  MultiGainRequest,
-  ParameterWriteResult,
-  Scope,
-  SignCheckRequest,
-} from "../api/types";
+import type { AssistantInfo, AssistChange, AssistProgress, AssistResult, ParameterWriteResult, Scope } from "../api/types";
 import { type Change, loadList, trial, trialMessage, writeChanges } from "./params";
 import { machineId, machineUrl, status } from "./session";
-
-export type AssistantName = "multi-gain" | "sign-check" | "loop-gain";
 
 /** Where a run happens: on a copy of the machine in simulated time, or on the machine. */
 export type Where = "copy" | "machine";
 
-/** Run an assistant; rejects with the service's refusal (ApiError: 422 says which input,
- * 409 a live run cancelled or another running). */
-export function runAssistant(name: "multi-gain", body: MultiGainRequest, where: Where): Promise<AssistResult>;
-export function runAssistant(name: "sign-check", body: SignCheckRequest, where: Where): Promise<AssistResult>;
-export function runAssistant(name: "loop-gain", body: LoopGainRequest, where: "copy"): Promise<AssistResult>;
-export function runAssistant(
-  name: AssistantName,
-  body: MultiGainRequest | SignCheckRequest | LoopGainRequest,
-  where: Where,
-): Promise<AssistResult> {
+/** Every assistant as the service describes it (title, section, where it runs, the schema
+ * its form is made from), read once per page. */
+export const catalogue = signal<AssistantInfo[]>([]);
+let asked: Promise<void> | null = null;
+export function loadCatalogue(): Promise<void> {
+  asked ??= http.get<AssistantInfo[]>("/api/assistants").then(
+    (list) => void (catalogue.value = list),
+    () => void (asked = null), // asked again by the next panel that needs it
+  );
+  return asked;
+}
+
+/** "multi_gain by experiment [004 §3.6.2]": an assistant by its title (its name when the
+ * service no longer knows it). */
+export function titleOf(name: string): string {
+  const a = catalogue.value.find((x) => x.name === name);
+  return a ? `${a.title} [${a.section}]` : name;
+}
+
+/** Run an assistant with the body its request schema describes; rejects with the service's
+ * refusal (ApiError: 422 says which input, 409 a live run cancelled or another running). */
+export function runAssistant(name: string, body: object, where: Where): Promise<AssistResult> {
   return http.post<AssistResult>(machineUrl(where === "machine" ? `/assist/live/${name}` : `/assist/${name}`), body);
 }
 

@@ -12,6 +12,7 @@ import type {
   ResolutionRequest,
   SpeedScalingRequest,
 } from "../api/types";
+import { runAssistant } from "./assist";
 import { machineUrl } from "./session";
 
 export interface CalculatorBodies {
@@ -25,7 +26,7 @@ export type CalculatorName = keyof CalculatorBodies;
 
 /** Run a calculator; rejects with the service's refusal (ApiError: 422 names the input). */
 export function calculate<N extends CalculatorName>(name: N, body: CalculatorBodies[N]): Promise<AssistResult> {
-  return http.post<AssistResult>(machineUrl(`/assist/${name}`), body);
+  return runAssistant(name, body, "copy");
 }
 
 /** The stage the NC's rule selects for each S in turn, for the ranges as edited. */

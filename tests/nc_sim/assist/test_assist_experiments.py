@@ -13,8 +13,7 @@ from typing import Any
 import pytest
 
 from nc_sim.assist.experiments import multi_gain_experiment, sign_check_experiment
-from nc_sim.assist.procedure import ExperimentError
-from nc_sim.assist.result import Result
+from nc_sim.assist.result import ExperimentError, Result
 from nc_sim.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.params import Scope
 
