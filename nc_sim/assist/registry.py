@@ -362,6 +362,43 @@ ASSISTANTS: tuple[Assistant, ...] = (
         ),
         "nc_sim.assist.curve_fit:curve_fit_of",
     ),
+    Assistant(
+        "resolution-check",
+        "Resolution check",
+        "004 §3.4",
+        "The axis moves a known distance; the travel the NC counts is compared with the "
+        "travel measured on the machine (`measured`, a dial gauge or laser; null: the "
+        "simulated plant's). k = NC travel / measured travel; beyond what the measurement "
+        "resolves, wegaufz/wegaufn · k is proposed.",
+        Kind.EXPERIMENT,
+        "ResolutionCheckRequest",
+        (
+            AxisChoice(kinds=_AXES),
+            Number("distance", "travel, mm (° for rotary)", "mm", -1000, 1000, default=10.0),
+            Number(
+                "feed_mm_min",
+                "feed, mm/min (°/min for rotary)",
+                "mm/min",
+                0,
+                1e5,
+                True,
+                1000.0,
+                cli="feed",
+            ),
+            Number(
+                "measured",
+                "travel measured on the machine, mm (°); empty: the simulated plant's",
+                "mm",
+                -1000,
+                1000,
+                default=None,
+                optional=True,
+            ),
+        ),
+        "nc_sim.assist.resolution_check:resolution_check_experiment",
+        ("k", "deviation_ppm"),
+        live="nc_sim.assist.resolution_check:resolution_check",
+    ),
 )
 """Every assistant, in the order the HMI offers them."""
 

@@ -109,3 +109,28 @@ def test_a_refused_motion_is_a_422_in_the_ncs_words(srv: Server, lathe: str) -> 
     r = _live(srv, lathe, "multi-gain", {"axis": "S1", "speed_rpm": 50000})
     assert r.status_code == 422 and "refused" in r.text
     assert srv.axis("S1", lathe)["state"] == s0["state"]
+
+
+def test_an_assistant_from_its_descriptor_alone_runs_live_and_is_listed(
+    srv: Server, lathe: str
+) -> None:
+    """The resolution check exists only as its procedure and its registry entry: the
+    catalogue lists it with its request schema, the live route runs it on the machine (with
+    an encoder delivering 1.02 × the increments per unit set, the NC counts 1.02 × the true
+    travel, k = 1.02), the run list and its summary come from the descriptor."""
+    listed = {a["name"]: a for a in srv.http.get("/api/assistants").json()}
+    check = listed["resolution-check"]
+    assert check["kind"] == "experiment" and check["live"] and check["section"] == "004 §3.4"
+    assert check["request"]["properties"]["distance"]["x-unit"] == "mm"
+    fault = {"fault": {"kind": "encoder_resolution_wrong", "axis": "X", "factor": 1.02}}
+    assert srv.http.post(f"/api/machines/{lathe}/faults", json=fault).status_code == 201
+    x0 = srv.axis("X", lathe)["pos_cmd"]
+    r = _live(srv, lathe, "resolution-check", {"axis": "X", "distance": 20})
+    assert r.status_code == 200, r.text
+    fig = {f["name"]: f["value"] for f in r.json()["figures"]}
+    assert fig["k"] == pytest.approx(1.02, abs=50e-6)
+    assert srv.axis("X", lathe)["pos_cmd"] - x0 == pytest.approx(20, abs=1e-9)
+    runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    assert runs[0]["assistant"] == "resolution-check" and runs[0]["summary"].startswith("k = 1.02")
+    bad = _live(srv, lathe, "resolution-check", {"axis": "X", "distance": 5000})
+    assert bad.status_code == 422 and "1000 mm" in bad.text

@@ -105,6 +105,8 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/machines/{mid}/assist/gear-ranges"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/live/multi-gain"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/assist/live/sign-check"): ("operator", HELD),
+    ("POST", "/api/machines/{mid}/assist/resolution-check"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/live/resolution-check"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/assist/live/cancel"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),

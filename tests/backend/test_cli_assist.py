@@ -149,3 +149,14 @@ def test_the_loop_gain_sweep_from_the_command_line() -> None:
     assert after(out) == {"getriebe[0].kv": 1500}
     assert figure(out, "lag@10") == pytest.approx(10.0 / 10.0, abs=1e-4)  # 600 mm/min = 10 mm/s
     assert figure(out, "overshoot_pct@30") > 5.0
+
+
+def test_an_assistant_gets_its_options_from_its_descriptor() -> None:
+    """The resolution check's options come from the registry alone: Z moves -50 mm on a copy,
+    the dial gauge said 49.9 mm, so k = 50/49.9 and wegaufz/wegaufn (1/1) becomes k."""
+    out = answer("resolution-check", "--axis", "Z", "--distance", "-50", "--measured", "-49.9")
+    assert figure(out, "k") == pytest.approx(50 / 49.9, rel=5e-6)
+    pair = after(out)
+    assert pair["getriebe[0].wegaufz"] / pair["getriebe[0].wegaufn"] == pytest.approx(
+        50 / 49.9, rel=5e-6
+    )

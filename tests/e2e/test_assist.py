@@ -108,6 +108,29 @@ def test_the_sign_check_says_the_signs_are_right_on_the_demo(page: Page) -> None
     shot(page, "assist-sign-check-desktop")
 
 
+def test_an_assistant_without_a_form_of_its_own_gets_one_from_its_schema(page: Page) -> None:
+    """The resolution check has no panel code: its form comes from the catalogue's schema
+    (range checked as typed), its result from the common view. Z moves -50 mm on a copy and
+    the engineer measured 49.9 mm: k = 50/49.9 and wegaufz/wegaufn · k is proposed."""
+    page.get_by_test_id("tab-Commissioning").click()
+    box = panel(page, "assist")
+    box.get_by_test_id("assist-pick-resolution-check").check()
+    box.get_by_test_id("assist-axis").select_option("Z")
+    distance = box.get_by_test_id("assist-in-distance")
+    distance.fill("5000")
+    expect(box.get_by_test_id("assist-in-distance-error")).to_contain_text("≤ 1000 mm")
+    expect(box.get_by_test_id("assist-run")).to_be_disabled()
+    distance.fill("-50")
+    box.get_by_test_id("assist-in-measured").fill("-49.9")
+    expect(box.get_by_test_id("assist-what")).to_contain_text("wegaufz/wegaufn · k")
+    box.get_by_test_id("assist-run").click()
+    expect(box.get_by_test_id("assist-result")).to_be_visible(timeout=RUN_TIMEOUT_MS)
+    assert read(box, "assist-fig-k") == pytest.approx(50 / 49.9, rel=1e-4)
+    expect(box.get_by_test_id("assist-change-getriebe[0].wegaufz")).to_be_visible()
+    expect(box.get_by_test_id("assist-apply")).to_be_enabled()
+    shot(page, "assist-resolution-check-desktop")
+
+
 def test_the_sign_check_finds_an_inverted_encoder_and_applies_the_flip(
     browser: Browser, srv: Server, mid: str
 ) -> None:
