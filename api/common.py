@@ -51,8 +51,14 @@ class JobErrorModel(BaseModel):
     signal: str | None = Field(
         None,
         max_length=16,
-        description="the PLC interface signal it concerns (ROTMOD, ROTMOD_Q, SPMOD, SPMOD_Q) "
-        "for signal set/reset events; null for none",
+        description="the PLC interface signal (ROTMOD, ROTMOD_Q, SPMOD, SPMOD_Q) or HLI unit "
+        "(feedhold, DriveOn, override, ...) it concerns: signal set/reset events and HLI "
+        "writes; null for none",
+    )
+    value: float | None = Field(
+        None,
+        description="the value it concerns: the position reached (in position, mm | °), the "
+        "value written (an HLI unit, a signal 0/1); null for none",
     )
 
 

@@ -44,6 +44,7 @@ def write_events(path: Path, result: ScenarioResult) -> None:
                 "line": e.line,
                 "column": e.column,
                 "signal": e.signal,
+                "value": e.value,
             }
             f.write(json.dumps(rec) + "\n")
 

@@ -49,7 +49,7 @@ def demo(out: Path) -> tuple[MachineHost, MachineProxy]:
     """The demo lathe as a worker holds it, and the gateway's proxy reading its ring."""
     host = MachineHost(AddMachine("demo", "Demo lathe", demo_machine(), 1), out / "demo.ring")
     proxy = MachineProxy(StoredMachine("demo", "Demo lathe", "demo"), demo_machine())
-    proxy.attach(None, host.info())
+    proxy.link.attach(None, host.info())
     host.advance(20)  # the PLC switches the drives on
     return host, proxy
 

@@ -41,7 +41,8 @@ class Event:
     gear: int | None = None  # the gear stage 1..6 it concerns (gear change started, changed)
     line: int | None = None  # the program line (from 1) it concerns: a program error, a block
     column: int | None = None  # the column (from 1) of a program error
-    signal: str | None = None  # the PLC interface signal it concerns (ROTMOD, SPMOD_Q, ...)
+    signal: str | None = None  # the PLC signal or HLI unit it concerns (ROTMOD, feedhold, ...)
+    value: float | None = None  # the position reached (in position), the value written
 
     @property
     def error(self) -> bool:
@@ -64,6 +65,7 @@ class Log(Protocol):
         line: int | None = None,
         column: int | None = None,
         signal: str | None = None,
+        value: float | None = None,
     ) -> Event: ...
 
 

@@ -229,7 +229,7 @@ class Handshake:
             return
         self.plc.signals[signal] = on
         code = Code.EV_SIGNAL_ON if on else Code.EV_SIGNAL_OFF
-        self.log(code, axis, f"{signal} = {int(on)}", signal=signal)
+        self.log(code, axis, f"{signal} = {int(on)}", signal=signal, value=int(on))
 
     def on_cycle(self, cycle: int) -> None:
         """The PLC's acknowledgements due in this cycle, then the timeouts that ran out."""

@@ -89,6 +89,6 @@ async def program_preview(request: Request, machine: MachineDep) -> ProgramPrevi
     error) and the commanded tool path up to there, from the machine's commanded positions,
     in the plane the program selects (else G17, or G18 on a lathe). Changes nothing."""
     body = await read_model(request, ProgramText, "program")
-    read = await machine.acall(ReadStatus(machine.id))
+    read = await machine.link.acall(ReadStatus(machine.id))
     assert isinstance(read, StatusRead)
     return await programs.program_preview_off_loop(read.snapshot, body.text)

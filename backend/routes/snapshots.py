@@ -68,5 +68,5 @@ def restore(
             machine.id,
         )
     )
-    machine.notice("restored", f"{actor.name} restored the machine to {info.t_s:.1f} s")
+    machine.notices.add("restored", f"{actor.name} restored the machine to {info.t_s:.1f} s")
     return info

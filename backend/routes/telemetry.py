@@ -41,8 +41,8 @@ async def telemetry(ws: WebSocket, mid: str, services: ServicesDep, actor: Actor
     sub.reply(
         Hello(
             machine=machine.id,
-            cycle=machine.cycle,
-            cycle_s=machine.cycle_s,
+            cycle=machine.link.cycle,
+            cycle_s=machine.link.cycle_s,
             signals=signal_infos(machine),
         )
     )

@@ -21,7 +21,7 @@ from argon2.exceptions import InvalidHashError, VerificationError
 from api.auth import Role
 from backend.errors import ApiError, Conflict, Invalid, NotFound
 from backend.services.auth import Actor
-from backend.services.store import Store
+from backend.services.store import Row, Store
 
 SESSION_S = 12 * 3600.0  # a shift; then log in again
 TICKET_S = 300.0  # a ticket for one URL (a viewer that cannot send the session) lives this long
@@ -151,14 +151,14 @@ class Accounts:
         self._tickets: dict[str, Ticket] = {}
         self._used: dict[str, float] = {}  # token digest -> monotonic time last_used was written
         self._lock = threading.Lock()
-        columns = [r[1] for r in store.query("PRAGMA table_info(tokens)")]
+        columns = [r["name"] for r in store.query("PRAGMA table_info(tokens)")]
         if "last_used" not in columns:  # a store of an earlier version
             store.run("ALTER TABLE tokens ADD COLUMN last_used REAL")
 
     # --- users ------------------------------------------------------------------------------
     def users(self) -> list[UserEntry]:
         rows = self.store.query("SELECT name, role, created FROM users ORDER BY created")
-        return [UserEntry(r[0], Role(r[1]), r[2]) for r in rows]
+        return [UserEntry(r["name"], Role(r["role"]), r["created"]) for r in rows]
 
     def add_user(self, name: str, role: Role, password: str | None) -> None:
         if self._user(name) is not None:
@@ -187,8 +187,9 @@ class Accounts:
         user = self._user(name)
         if user is None:
             raise NoSuchAccount(f"no user {name!r}")
-        admins = self.store.query("SELECT COUNT(*) FROM users WHERE role = ?", (Role.ADMIN.value,))
-        if user[0] == Role.ADMIN.value and admins[0][0] <= 1:
+        sql = "SELECT COUNT(*) AS n FROM users WHERE role = ?"
+        admins = self.store.query(sql, (Role.ADMIN.value,))[0]["n"]
+        if user["role"] == Role.ADMIN.value and admins <= 1:
             raise AccountConflict(f"{name} is the last admin: cannot {doing} them")
 
     def set_password(self, name: str, password: str) -> None:
@@ -210,23 +211,24 @@ class Accounts:
     def first_admin(self) -> str | None:
         sql = "SELECT name FROM users WHERE role = ? ORDER BY created"
         rows = self.store.query(sql, (Role.ADMIN.value,))
-        return rows[0][0] if rows else None
+        return rows[0]["name"] if rows else None
 
-    def _user(self, name: str) -> tuple[str, str] | None:
+    def _user(self, name: str) -> Row | None:
+        """The user's role and hash."""
         rows = self.store.query("SELECT role, hash FROM users WHERE name = ?", (name,))
-        return (rows[0][0], rows[0][1]) if rows else None
+        return rows[0] if rows else None
 
     # --- logging in -------------------------------------------------------------------------
     def check_password(self, name: str, password: str) -> User | None:
         """The user if the password is theirs (as slow for an unknown name as for a known)."""
         user = self._user(name)
-        hashed = user[1] if user and user[1] else self._dummy
+        hashed = user["hash"] if user and user["hash"] else self._dummy
         ok: bool
         try:
             ok = self._hasher.verify(hashed, password)
         except (VerificationError, InvalidHashError):
             ok = False
-        return User(name, Role(user[0])) if ok and user and user[1] else None
+        return User(name, Role(user["role"])) if ok and user and user["hash"] else None
 
     def throttled(self, address: str) -> bool:
         """Too many failed logins from this address lately."""
@@ -260,8 +262,8 @@ class Accounts:
         )
         if not rows:
             return None
-        user, role, csrf = rows[0]
-        return Session(User(user, Role(role)), csrf)
+        r = rows[0]
+        return Session(User(r["user"], Role(r["role"])), r["csrf"])
 
     def sessions_of(self, name: str) -> list[tuple[str, float]]:
         """(digest, expiry unix time) of each of the user's live sessions."""
@@ -269,7 +271,7 @@ class Accounts:
             "SELECT digest, expires FROM sessions WHERE user = ? AND expires > ?",
             (name, time.time()),
         )
-        return [(d, float(e)) for d, e in rows]
+        return [(r["digest"], float(r["expires"])) for r in rows]
 
     def end_session(self, sid: str) -> None:
         self.store.run("DELETE FROM sessions WHERE digest = ?", (digest(sid),))
@@ -315,13 +317,13 @@ class Accounts:
         now = time.time()
         n = _DIGEST_CHARS
         rows = self.store.query(
-            f"SELECT 'session-' || substr(s.digest, 1, {n}), s.user FROM sessions s "
+            f"SELECT 'session-' || substr(s.digest, 1, {n}) AS id, s.user FROM sessions s "
             "JOIN users u ON u.name = s.user WHERE s.expires > ? "
             f"UNION ALL SELECT 'token-' || substr(t.digest, 1, {n}), t.user FROM tokens t "
             "JOIN users u ON u.name = t.user WHERE t.kind = 'api'",
             (now,),
         )
-        return {r[0]: r[1] for r in rows}
+        return {r["id"]: r["user"] for r in rows}
 
     # --- tokens and one-time links ----------------------------------------------------------
     def new_token(self, name: str, label: str = "", once: bool = False) -> str:
@@ -364,7 +366,16 @@ class Accounts:
         if user is not None:
             sql, args = sql + " AND user = ?", (user,)
         rows = self.store.query(sql + " ORDER BY created", args)
-        return [TokenEntry(f"token-{r[0][:_DIGEST_CHARS]}", r[1], r[2], r[3], r[4]) for r in rows]
+        return [
+            TokenEntry(
+                f"token-{r['digest'][:_DIGEST_CHARS]}",
+                r["user"],
+                r["label"],
+                r["created"],
+                r["last_used"],
+            )
+            for r in rows
+        ]
 
     def token(self, token_id: str) -> TokenEntry:
         """An API token by its public id; NoSuchAccount when there is none."""
@@ -393,4 +404,4 @@ class Accounts:
             "WHERE t.digest = ? AND t.kind = ? AND (t.expires IS NULL OR t.expires > ?)",
             (digest(token), kind, time.time()),
         )
-        return User(rows[0][0], Role(rows[0][1])) if rows else None
+        return User(rows[0]["user"], Role(rows[0]["role"])) if rows else None

@@ -101,9 +101,9 @@ async def run_live(
     start = AssistStart(machine.id, name, args, actor.name)
     with audit.refusals(entry):
         try:
-            answer = await machine.acall(start, LIVE_TIMEOUT_S)
+            answer = await machine.link.acall(start, LIVE_TIMEOUT_S)
         except Unavailable:  # no answer in time: the run must not go on unattended
-            machine.post(AssistCancel(machine.id, "the run did not end in time"))
+            machine.link.post(AssistCancel(machine.id, "the run did not end in time"))
             raise
     assert isinstance(answer, dict)
     result = AssistResult.model_validate(answer)
@@ -116,5 +116,5 @@ async def cancel_live(machine: MachineProxy, why: str, actor: Actor, audit: Audi
     """End the machine's live run now (409 when none runs)."""
     entry = Entry(actor.name, actor.session, "assist", "assist live cancel", machine.id)
     with audit.refusals(entry):
-        await machine.acall(AssistCancel(machine.id, f"{why} ({actor.name})"))
+        await machine.link.acall(AssistCancel(machine.id, f"{why} ({actor.name})"))
     audit.record(entry)

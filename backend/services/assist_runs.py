@@ -13,7 +13,7 @@ from typing import Any
 from api.assist import AssistResult
 from api.report import AssistRun, AssistRunInfo
 from backend.errors import not_found
-from backend.services.store import Store
+from backend.services.store import Row, Store
 from nc_sim.assist.registry import BY_NAME
 
 MAX_LIST = 200  # runs in one list (newest)
@@ -34,17 +34,17 @@ def summary(result: AssistResult) -> str:
     return f"{text}; {proposal}" if text else proposal
 
 
-def _info(r: tuple[Any, ...]) -> AssistRunInfo:
+def _info(r: Row) -> AssistRunInfo:
     return AssistRunInfo(
-        id=r[0],
-        machine=r[1],
-        assistant=r[2],
-        user=r[3],
-        time_unix=r[4],
-        live=bool(r[5]),
-        ok=bool(r[6]),
-        axis=r[7],
-        summary=r[8],
+        id=r["id"],
+        machine=r["machine"],
+        assistant=r["assistant"],
+        user=r["user"],
+        time_unix=r["time"],
+        live=bool(r["live"]),
+        ok=bool(r["ok"]),
+        axis=r["axis"],
+        summary=r["summary"],
     )
 
 
@@ -112,6 +112,8 @@ class AssistRuns:
         return _run(rows[0])
 
 
-def _run(r: tuple[Any, ...]) -> AssistRun:
-    info = _info(r[:9])
-    return AssistRun(**info.model_dump(), result=AssistResult.model_validate(json.loads(r[9])))
+def _run(r: Row) -> AssistRun:
+    info = _info(r)
+    return AssistRun(
+        **info.model_dump(), result=AssistResult.model_validate(json.loads(r["result"]))
+    )

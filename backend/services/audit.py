@@ -21,20 +21,24 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from api.audit import AuditPage, AuditRecord, AuditVerification
 from backend.errors import ApiError
 from backend.services.audit_log import COLUMNS, Entry, append, row_hash
 
 if TYPE_CHECKING:
-    from backend.services.store import Store
+    from backend.services.store import Row, Store
 
 log = logging.getLogger(__name__)
 
 MAX_PAGE = 1000
 BATCH_S = 0.05  # rows recorded later wait at most this long (plus the write) for the disk
 CSV_ROWS = 100_000  # an export holds at most this many rows (newest)
+# a row's fields the CSV shows as they are (after seq and time), and those its hash covers
+# (audit_log.append: all but prev and hash)
+_CSV_FIELDS = ("actor", "session", "address", "machine", "kind", "action", "detail", "outcome")
+_HASHED = ("seq", "time", *_CSV_FIELDS)
 
 
 def _append_all(entries: list[Entry], db: sqlite3.Connection) -> list[int]:
@@ -90,19 +94,19 @@ class AuditFilter:
         return (" WHERE " + " AND ".join(conds) if conds else ""), tuple(args)
 
 
-def _record(r: tuple[Any, ...]) -> AuditRecord:
+def _record(r: Row) -> AuditRecord:
     return AuditRecord(
-        seq=r[0],
-        time_unix=r[1],
-        actor=r[2],
-        session=r[3],
-        address=r[4],
-        machine=r[5],
-        kind=r[6],
-        action=r[7],
-        detail=json.loads(r[8]),
-        outcome=r[9],
-        hash=r[11],
+        seq=r["seq"],
+        time_unix=r["time"],
+        actor=r["actor"],
+        session=r["session"],
+        address=r["address"],
+        machine=r["machine"],
+        kind=r["kind"],
+        action=r["action"],
+        detail=json.loads(r["detail"]),
+        outcome=r["outcome"],
+        hash=r["hash"],
     )
 
 
@@ -192,7 +196,7 @@ class Audit:
         """Matching rows, newest first (older ones: `before_seq`), and how many match."""
         self.flush()
         where, args = f.where()
-        total = self.store.query(f"SELECT count(*) FROM audit_log{where}", args)[0][0]
+        total = self.store.query(f"SELECT count(*) AS n FROM audit_log{where}", args)[0]["n"]
         if before_seq is not None:
             where += (" AND" if where else " WHERE") + " seq < ?"
             args += (before_seq,)
@@ -229,10 +233,10 @@ class Audit:
         )
         for r in reversed(rows):
             stamp = (
-                time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(r[1]))
-                + f".{int(r[1] % 1 * 1000):03d}Z"
+                time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(r["time"]))
+                + f".{int(r['time'] % 1 * 1000):03d}Z"
             )
-            writer.writerow([r[0], stamp, *r[2:10], r[11]])
+            writer.writerow([r["seq"], stamp, *(r[c] for c in _CSV_FIELDS), r["hash"]])
         return out.getvalue()
 
     def verify(self) -> AuditVerification:
@@ -241,16 +245,17 @@ class Audit:
         rows = self.store.query(f"SELECT {COLUMNS} FROM audit_log ORDER BY seq")
         prev = ""
         for i, r in enumerate(rows, start=1):
-            if r[0] != i:
+            if r["seq"] != i:
                 return AuditVerification(
                     ok=False, rows=i - 1, first_bad_seq=i, message=f"row {i} is missing"
                 )
-            if r[10] != prev or row_hash(prev, tuple(r[:10])) != r[11]:
+            fields = tuple(r[c] for c in _HASHED)
+            if r["prev"] != prev or row_hash(prev, fields) != r["hash"]:
                 return AuditVerification(
                     ok=False,
                     rows=i - 1,
-                    first_bad_seq=r[0],
-                    message=f"row {r[0]} was changed after it was written",
+                    first_bad_seq=r["seq"],
+                    message=f"row {r['seq']} was changed after it was written",
                 )
-            prev = r[11]
+            prev = r["hash"]
         return AuditVerification(ok=True, rows=len(rows), message=f"all {len(rows)} rows intact")

@@ -60,7 +60,7 @@ def row_hash(prev: str, fields: tuple[object, ...]) -> str:
 def append(db: sqlite3.Connection, entries: list[Entry]) -> list[int]:
     """Chain the entries onto the trail (inside the caller's transaction); their seqs."""
     last = db.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
-    seq, prev = (last[0], last[1]) if last else (0, "")
+    seq, prev = (last["seq"], last["hash"]) if last else (0, "")
     now = time.time()
     seqs = []
     for e in entries:

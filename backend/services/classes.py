@@ -179,28 +179,39 @@ class Classes:
             "SELECT id, title, exercise, exercise_text, instructor, created, ended FROM classes"
         )
         templates = {
-            cid: MachineLists(
-                channel_list=channel,
-                axis_lists={int(k): v for k, v in json.loads(axes).items()},
-                tool_list=tools,
+            t["class"]: MachineLists(
+                channel_list=t["channel_list"],
+                axis_lists={int(k): v for k, v in json.loads(t["axis_lists"]).items()},
+                tool_list=t["tool_list"],
             )
-            for cid, channel, axes, tools in self.store.query(
+            for t in self.store.query(
                 "SELECT class, channel_list, axis_lists, tool_list FROM class_lists"
             )
         }
-        for cid, title, _eid, text, instructor, created, ended in rows:
+        for r in rows:
+            cid, text = r["id"], r["exercise_text"]
             seats = []
-            for n, student, user, machine, progress in self.store.query(
+            for s in self.store.query(
                 "SELECT n, student, user, machine, progress FROM seats WHERE class = ? ORDER BY n",
                 (cid,),
             ):
-                seat = Seat(cid, n, student, user, machine)
-                seat.load_progress(progress)
+                seat = Seat(cid, s["n"], s["student"], s["user"], s["machine"])
+                seat.load_progress(s["progress"])
                 seats.append(seat)
             ex = parse_exercise(text, f"class {cid}")
-            c = Class(cid, title, ex, text, instructor, created, ended, seats, templates.get(cid))
+            c = Class(
+                cid,
+                r["title"],
+                ex,
+                text,
+                r["instructor"],
+                r["created"],
+                r["ended"],
+                seats,
+                templates.get(cid),
+            )
             self._classes[cid] = c
-            if ended is None:
+            if r["ended"] is None:
                 self._index(c)
                 # the machines are built after this (MachineService.load): with the checks
                 # and the exercise's faults (an instructor's own are gone with the service)
@@ -288,14 +299,14 @@ class Classes:
     def update(self, seat: Seat, proxy: MachineProxy) -> bool:
         """Take the seat machine's newest pushed status in (its seat time and check
         results); True when a check passed for the first time."""
-        st = proxy.status
+        st = proxy.link.status
         if st is None:
             return False
         t_s = st.pacing.cycle * st.pacing.cycle_s
-        if proxy.epoch != seat.epoch:  # a new build: the seat's clock goes on from here
+        if proxy.link.epoch != seat.epoch:  # a new build: the seat's clock goes on from here
             if seat.epoch_start_s is not None:
                 seat.time_base_s = seat.seat_time_s
-            seat.epoch, seat.epoch_start_s = proxy.epoch, t_s
+            seat.epoch, seat.epoch_start_s = proxy.link.epoch, t_s
         seat.last_t_s = t_s
         news = False
         for r in st.checks:
@@ -526,8 +537,8 @@ class Classes:
         try:
             return training.faults_of(proxy)
         except ApiError:
-            faults = sorted(proxy.faults.values(), key=lambda f: f.id)
-            return [training.fault_info(f, proxy.cycle_s) for f in faults]
+            faults = sorted(proxy.link.faults.values(), key=lambda f: f.id)
+            return [training.fault_info(f, proxy.link.cycle_s) for f in faults]
 
     def result_of(self, sid: str) -> SeatResult | None:
         """The final result of the seat an ended class's session was logged in to (None for
@@ -536,10 +547,10 @@ class Classes:
             "SELECT class, n FROM ended_sessions WHERE digest = ? AND expires > ?",
             (digest(sid), time.time()),
         )
-        c = self._classes.get(rows[0][0]) if rows else None
+        c = self._classes.get(rows[0]["class"]) if rows else None
         if c is None or c.ended_unix is None:
             return None
-        seat = self.seat(c.id, rows[0][1])
+        seat = self.seat(c.id, rows[0]["n"])
         s = exercise_score(c.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
         return SeatResult(
             class_id=c.id,
@@ -564,12 +575,12 @@ class Classes:
         """Pause (or run again) the seats' machines, each with a banner on its HMI."""
         for seat in seats:
             m = self.machines.get(seat.machine)
-            m.call(Pace(m.id, "pause" if frozen else "run"))
+            m.link.call(Pace(m.id, "pause" if frozen else "run"))
             m.control.frozen_by = by if frozen else None  # its student cannot take control
             seat.frozen = frozen
             self.save(seat)
             word = "froze" if frozen else "resumed"
-            m.notice("frozen" if frozen else "resumed", f"{by} {word} the machine")
+            m.notices.add("frozen" if frozen else "resumed", f"{by} {word} the machine")
 
     def refreeze(self) -> None:
         """After the machines are built at start-up: the seats frozen before pause again."""
@@ -578,13 +589,13 @@ class Classes:
                 frozen = [s for s in c.seats if s.frozen and self.proxy(s) is not None]
                 for seat in frozen:
                     m = self.machines.get(seat.machine)
-                    m.call(Pace(m.id, "pause"))
+                    m.link.call(Pace(m.id, "pause"))
                     m.control.frozen_by = c.instructor
 
     def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
         """A message as a banner on every one of the seats' HMIs."""
         for seat in seats:
-            self.machines.get(seat.machine).notice("message", f"{by}: {text}")
+            self.machines.get(seat.machine).notices.add("message", f"{by}: {text}")
 
     def inject(self, seats: list[Seat], req: FaultInject, actor: Actor) -> list[SeatFaults]:
         """A fault into each of the seats' machines (each audited on its machine); every

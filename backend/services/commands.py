@@ -9,7 +9,6 @@ the column of a bad NC block.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -66,6 +65,7 @@ def job_error_model(e: Event) -> JobErrorModel:
         line=e.line,
         column=e.column,
         signal=e.signal,
+        value=e.value,
     )
 
 
@@ -144,11 +144,9 @@ def _renewal(m: MachineProxy, actor: Actor, cmd: Command | EmergencyStopCommand)
         return False
     key = (cmd.axis, actor.session, actor.client)
     if cmd.action == "stop":
-        m.jogs_audited.pop(key, None)
+        m.jogs.stop(key)
         return False
-    now, last = time.monotonic(), m.jogs_audited.get(key)
-    m.jogs_audited[key] = (cmd.direction, cmd.feed_mm_min, now)
-    return last is not None and last[:2] == (cmd.direction, cmd.feed_mm_min) and now - last[2] < 1
+    return m.jogs.start(key, cmd.direction, cmd.feed_mm_min)
 
 
 async def execute(
@@ -188,7 +186,7 @@ async def execute(
 async def _execute(
     m: MachineProxy, cmd: Command | EmergencyStopCommand, stored: StoredText
 ) -> CommandResult:
-    serial = m.next_serial()
+    serial = m.link.next_serial()
     nc_cmd = replace(to_nc(cmd, stored), serial=serial)
     jog_hold_s, jog_release = None, False
     if isinstance(cmd, JogCommand) and cmd.action != "step":  # the dead-man lease of a jog
@@ -199,7 +197,7 @@ async def _execute(
         with m.lock:
             reset_values = pending_values(m, {"reset"})
     submit = Submit(m.id, nc_cmd, jog_hold_s, jog_release, reset_values)
-    done = await m.acall(submit)
+    done = await m.link.acall(submit)
     assert isinstance(done, Submitted)
     match done.outcome:
         case Invalid() as bad:

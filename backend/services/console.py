@@ -55,11 +55,11 @@ def seat_frame(
     """One seat now, from its machine's newest pushed status, with the `peaks` of its axes
     since the previous frame (an axis without: its status values)."""
     progress, score = classes.score(c, seat)
-    st = m.status if m is not None else None
+    st = m.link.status if m is not None else None
     holder = m.control.holder if m is not None else None
     axes: list[AxisLine] = []
     error, code, channel, status_unix = None, None, "—", None
-    mode = "gone" if m is None else (m.pacing.mode if m.pacing is not None else "run")
+    mode = "gone" if m is None else (m.link.pacing.mode if m.link.pacing is not None else "run")
     if st is not None:
         snap = st.snapshot
         axes = [
@@ -94,7 +94,7 @@ def seat_frame(
         control=holder.user if holder is not None else None,
         progress=progress,
         score=score,
-        faults=len(m.faults) if m is not None else 0,
+        faults=len(m.link.faults) if m is not None else 0,
         seat_time_s=seat.seat_time_s,
         status_unix=status_unix,
     )
@@ -131,7 +131,7 @@ class ConsoleHub:
                 m = self.classes.proxy(seat)
                 if m is not None and seat.machine not in self._watched:
                     self._watched.add(seat.machine)
-                    m.watch(True)
+                    m.link.watch(True)
 
     def unwatch(self, c: Class) -> None:
         for seat in c.seats:
@@ -152,17 +152,17 @@ class ConsoleHub:
         frame (as far back as the ring holds them: a machine run fast between two frames;
         a frame period back for the first frame; the newest cycle's while it stands paused),
         from the machine's sample ring."""
-        ring, epoch = m.ring, m.epoch
+        ring, epoch = m.link.ring, m.link.epoch
         if ring is None:
             return {}
         head = ring.head
         known, first = self._peaks_from.get(m.id, (-1, 0))
         if known != epoch:
-            first = head - round(GRID_S / m.cycle_s) + 1
+            first = head - round(GRID_S / m.link.cycle_s) + 1
         first = min(max(first, 1), head)
         lines = [
             (a, lag, speed)
-            for a in m.axes
+            for a in m.link.axes
             if (lag := _signal(m, a, LAG_SIGNALS)) and (speed := _signal(m, a, SPEED_SIGNALS))
         ]
         if first < 1 or not lines:
@@ -222,4 +222,6 @@ class ConsoleHub:
 
 def _signal(m: MachineProxy, axis: str, names: tuple[str, ...]) -> Signal | None:
     """The axis' first signal of these names that the machine records."""
-    return next((s for n in names if (s := m.signal_by_name.get(f"{axis}.{n}")) is not None), None)
+    return next(
+        (s for n in names if (s := m.link.signal_by_name.get(f"{axis}.{n}")) is not None), None
+    )

@@ -65,16 +65,23 @@ def _party(actor: Actor) -> ControlParty:
     )
 
 
-class Controlled(Protocol):
-    """What control needs of a machine (`Controlled` is one)."""
-
-    id: str
-    control: MachineControl
+class Link(Protocol):
+    """What control needs of a machine's worker link (`MachineLink` is one)."""
 
     @property
     def axes(self) -> list[str]: ...
 
     def post(self, request: Request) -> None: ...
+
+
+class Controlled(Protocol):
+    """What control needs of a machine (`MachineProxy` is one)."""
+
+    id: str
+    control: MachineControl
+
+    @property
+    def link(self) -> Link: ...
 
 
 class Machines(Protocol):
@@ -266,8 +273,8 @@ class Control:
             if not c.connections[_key(to)]:  # a script, or a tab whose socket is gone
                 c.release_at = time.time() + self.grace_s
         if old is not None:
-            for axis in m.axes:  # a jog lease of the old holder must not outlive its control
-                m.post(Submit(m.id, nc.JogStop(axis), None, True, []))
+            for axis in m.link.axes:  # a jog lease of the old holder must not outlive it
+                m.link.post(Submit(m.id, nc.JogStop(axis), None, True, []))
         self._changed(
             m, by, what, {"from": old.user if old else None, "to": to.user if to else None}
         )

@@ -66,12 +66,12 @@ class Exercises:
             check_fits(ex, path.name)
             self._by_id[ex.id] = (ex, f"shipped: {path.name}", text)
         self._shipped = frozenset(self._by_id)
-        for eid, text, user in store.query("SELECT id, text, user FROM exercises ORDER BY time"):
+        for r in store.query("SELECT id, text, user FROM exercises ORDER BY time"):
             try:
-                ex = parse_exercise(text, f"uploaded {eid}")
+                ex = parse_exercise(r["text"], f"uploaded {r['id']}")
             except ExerciseError:
                 continue  # stored under an older format: listed no more
-            self._by_id[ex.id] = (ex, f"uploaded by {user}", text)
+            self._by_id[ex.id] = (ex, f"uploaded by {r['user']}", r["text"])
 
     def list(self) -> list[ExerciseInfo]:
         with self._lock:

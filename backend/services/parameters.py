@@ -22,7 +22,8 @@ from api.parameters import (
 )
 from backend.errors import ApiError, Conflict, Forbidden, Invalid
 from backend.services.auth import Actor
-from backend.services.machines import MachineProxy, Pending
+from backend.services.machines import MachineProxy
+from backend.services.pending import Pending
 from backend.services.store import Store, StoredChange, parameter_entry
 from backend.workers.protocol import ApplyValues, Values
 from nc_sim.config import apply_values
@@ -183,7 +184,7 @@ def write(
                 m.pending[key] = Pending(value, d.effect.value)
                 waiting.add(key)
         if now:  # the running machine first: a write it cannot take is not stored
-            m.call(ApplyValues(m.id, now))
+            m.link.call(ApplyValues(m.id, now))
             apply_values(m.cfg, now)
         versions = store.write(
             m.id,
@@ -221,7 +222,7 @@ def _stale(
         version = versions.get(key, 0)
         if c.base_version is None or c.base_version == version:
             continue
-        row = store.query("SELECT actor, time FROM audit_log WHERE seq = ?", (version,))
+        rows = store.query("SELECT actor, time FROM audit_log WHERE seq = ?", (version,))
         current = m.pending[key].value if key in m.pending else None
         if current is None:
             current = m.cfg.list_values(scope, target).get(name)
@@ -233,8 +234,8 @@ def _stale(
                 current=current,
                 base_version=c.base_version,
                 version=version,
-                by=row[0][0] if row else "?",
-                time_unix=row[0][1] if row else None,
+                by=rows[0]["actor"] if rows else "?",
+                time_unix=rows[0]["time"] if rows else None,
             )
         )
     return stale

@@ -71,17 +71,17 @@ class Recording:
             if not self.active:
                 return
             m = self.machine
-            sigs = [m.signal_by_name[n] for n in self.signals]
-            ended = m.deleted or m.epoch != self.epoch
+            sigs = [m.link.signal_by_name[n] for n in self.signals]
+            ended = m.deleted or m.link.epoch != self.epoch
             if ended:
                 head, data, start = self.cursor - 1, None, self.cursor
                 events: list[Event] = []
             else:
-                head = m.cycle
+                head = m.link.cycle
                 data, start = (None, self.cursor)
                 if head >= self.cursor:
-                    data, start = m.samples(sigs, self.cursor, head, 1)
-                events, _, self.events_from, _ = m.events_since(self.events_from)
+                    data, start = m.link.samples(sigs, self.cursor, head, 1)
+                events, _, self.events_from, _ = m.link.events_since(self.events_from)
             if data is not None:
                 self.skipped += start - self.cursor
                 self.writer.block(start, data)
@@ -157,7 +157,7 @@ class Recorders:
 
     def begin(self, m: MachineProxy, signals: list[str]) -> RecordingInfo:
         """Start recording from the next cycle; 409 when the machine already records."""
-        bad = [n for n in signals if n not in m.signal_by_name]
+        bad = [n for n in signals if n not in m.link.signal_by_name]
         if bad:
             raise Invalid(f"recording: unknown signals {bad}")
         if self.active(m.id) is not None:
@@ -175,18 +175,18 @@ class Recorders:
         from backend.services import rrd
 
         stream = rrd.open_stream(path, rid, m.id, about)
-        first = m.cycle + 1
+        first = m.link.cycle + 1
         rec = Recording(
             rid,
             m,
             list(signals),
             path,
-            rrd.RrdWriter(stream, m.id, signals, m.cycle_s),
-            m.epoch,
+            rrd.RrdWriter(stream, m.id, signals, m.link.cycle_s),
+            m.link.epoch,
             first,
             first,
             time.time(),
-            events_from=m.events.cursor,
+            events_from=m.link.events.cursor,
         )
         self.all[rid] = rec
         return rec.info()

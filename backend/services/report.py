@@ -88,7 +88,13 @@ class Reports:
         )
         return [
             SignOff(
-                id=r[0], machine=r[1], name=r[2], role=r[3], remark=r[4], user=r[5], time_unix=r[6]
+                id=r["id"],
+                machine=r["machine"],
+                name=r["name"],
+                role=r["role"],
+                remark=r["remark"],
+                user=r["user"],
+                time_unix=r["time"],
             )
             for r in rows
         ]
@@ -132,8 +138,8 @@ class Reports:
         traces = [self._trace(m.id, tid) for tid in dict.fromkeys(trace_ids)]
         runs = self.runs.runs(m.id, MAX_RUNS)
         total_runs = self.store.query(
-            "SELECT count(*) FROM assist_runs WHERE machine = ?", (m.id,)
-        )[0][0]
+            "SELECT count(*) AS n FROM assist_runs WHERE machine = ?", (m.id,)
+        )[0]["n"]
         f = AuditFilter(machine=m.id, kinds_left_out=EXCERPT_LEAVES_OUT)
         page = self.audit.page(f, MAX_AUDIT)
         commands = self.audit.page(AuditFilter(machine=m.id, kind="command"), 0).total
@@ -182,21 +188,21 @@ class Reports:
         """Who ran assistants or changed parameters on the machine, first to last."""
         seen: dict[str, list[float]] = {}  # user -> [runs, changes, first, last]
         rows = self.store.query(
-            "SELECT user, count(*), min(time), max(time) FROM assist_runs WHERE machine = ? "
-            "GROUP BY user",
+            "SELECT user, count(*) AS n, min(time) AS first, max(time) AS last FROM assist_runs "
+            "WHERE machine = ? GROUP BY user",
             (mid,),
         )
-        for user, n, first, last in rows:
-            seen[user] = [n, 0, first, last]
+        for r in rows:
+            seen[r["user"]] = [r["n"], 0, r["first"], r["last"]]
         self.audit.flush()
         rows = self.store.query(
-            "SELECT actor, count(*), min(time), max(time) FROM audit_log WHERE machine = ? "
-            "AND kind = 'parameter' AND outcome = 'ok' GROUP BY actor",
+            "SELECT actor, count(*) AS n, min(time) AS first, max(time) AS last FROM audit_log "
+            "WHERE machine = ? AND kind = 'parameter' AND outcome = 'ok' GROUP BY actor",
             (mid,),
         )
-        for user, n, first, last in rows:
-            s = seen.setdefault(user, [0, 0, first, last])
-            s[1], s[2], s[3] = n, min(s[2], first), max(s[3], last)
+        for r in rows:
+            s = seen.setdefault(r["actor"], [0, 0, r["first"], r["last"]])
+            s[1], s[2], s[3] = r["n"], min(s[2], r["first"]), max(s[3], r["last"])
         out = [html.Commissioner(u, int(v[0]), int(v[1]), v[2], v[3]) for u, v in seen.items()]
         return sorted(out, key=lambda c: c.first_unix)
 

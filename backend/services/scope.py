@@ -25,28 +25,28 @@ from nc_sim.scope import (
 
 
 def _unknown(m: MachineProxy, names: list[str], what: str) -> ApiError:
-    bad = [n for n in names if n not in m.signal_by_name]
+    bad = [n for n in names if n not in m.link.signal_by_name]
     return Invalid(f"{what}: unknown signals {bad}")
 
 
 def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
     """The kernel-side setup; 422 naming an unknown signal or axis or a length too long."""
-    if any(n not in m.signal_by_name for n in req.channels):
+    if any(n not in m.link.signal_by_name for n in req.channels):
         raise _unknown(m, req.channels, "channels")
     trigger: Trigger | None = None
     t = req.trigger
     if isinstance(t, LevelTriggerModel):
-        if t.signal not in m.signal_by_name:
+        if t.signal not in m.link.signal_by_name:
             raise _unknown(m, [t.signal], "trigger")
-        sig = m.signal_by_name[t.signal]
+        sig = m.link.signal_by_name[t.signal]
         trigger = LevelTrigger(sig, t.level, t.edge == "rising", t.hysteresis)
     elif isinstance(t, EventTriggerModel):
-        if t.axis is not None and t.axis not in m.axes:
+        if t.axis is not None and t.axis not in m.link.axes:
             raise Invalid(f"trigger: no axis {t.axis}")
         trigger = EventTrigger(EventKind(t.event), t.axis, t.m)
-    length = round(req.length_s / m.cycle_s)
+    length = round(req.length_s / m.link.cycle_s)
     setup = ScopeSetup(
-        [m.signal_by_name[n] for n in req.channels],
+        [m.link.signal_by_name[n] for n in req.channels],
         length,
         req.pretrigger_pct,
         ScopeMode(req.mode),
@@ -62,25 +62,25 @@ def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
 def arm(m: MachineProxy, req: ScopeSetupModel) -> None:
     """(Re)arm the scope with a setup; a capture in progress is dropped."""
     setup = engine_setup(m, req)
-    m.call(ScopeArm(m.id, setup))
-    m.scope_setup = req
+    m.link.call(ScopeArm(m.id, setup))
+    m.captures.setup = req
 
 
 def force(m: MachineProxy) -> None:
     """Trigger an armed scope now."""
-    m.call(ScopeAct(m.id, "force"))
+    m.link.call(ScopeAct(m.id, "force"))
 
 
 def stop(m: MachineProxy) -> None:
     """Stop recording; a capture in progress is dropped."""
-    m.call(ScopeAct(m.id, "stop"))
+    m.link.call(ScopeAct(m.id, "stop"))
 
 
 def status(m: MachineProxy, traces: TraceService, recorders: Recorders) -> ScopeStatus:
-    st = m.call(ScopeAct(m.id, "state"))
+    st = m.link.call(ScopeAct(m.id, "state"))
     assert isinstance(st, ScopeState)
     idle = st.length_cycles == 0
-    setup = m.scope_setup if not idle else None
+    setup = m.captures.setup if not idle else None
     assert setup is None or isinstance(setup, ScopeSetupModel)
     return ScopeStatus(
         state=st.state,
@@ -99,17 +99,17 @@ def roll_frame(m: MachineProxy, max_points: int) -> bytes:
     """The newest record length of the running scope as a binary frame, every `stride`-th
     cycle so that at most `max_points` samples per channel go out (a roll is for watching;
     a capture carries every cycle)."""
-    roll = m.call(ScopeRoll(m.id, max_points))
+    roll = m.link.call(ScopeRoll(m.id, max_points))
     assert isinstance(roll, Roll)
     data = roll.data
     assert isinstance(data, np.ndarray)
-    t0 = m.pacing.t0_unix if m.pacing else 0.0
+    t0 = m.link.pacing.t0_unix if m.link.pacing else 0.0
     header = FrameHeader(
         machine=m.id,
         first_cycle=roll.first_cycle,
         count=data.shape[1],
         stride=roll.stride,
-        cycle_s=m.cycle_s,
+        cycle_s=m.link.cycle_s,
         t0_unix=t0,
         signals=roll.signals,
         decimated=roll.stride > 1,

@@ -34,6 +34,6 @@ def _axis(a: AxisServiceSnapshot) -> AxisService:
 
 async def service_axes(m: MachineProxy) -> ServiceAxes:
     """Every axis and spindle of the machine in the service-axis view, fresh from its worker."""
-    read = await m.acall(ReadServiceAxes(m.id))
+    read = await m.link.acall(ReadServiceAxes(m.id))
     assert isinstance(read, ServiceAxesRead)
     return ServiceAxes(cycle=read.cycle, axes=[_axis(a) for a in read.axes])

@@ -177,7 +177,7 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
     return MachineStatus(
         id=m.id,
         name=m.name,
-        simulation=with_loop_health(simulation_status(read.pacing, m.epoch), m.worker),
+        simulation=with_loop_health(simulation_status(read.pacing, m.link.epoch), m.link.worker),
         channel_units=dict(snap.channel_units),
         emergency_stop=snap.emergency_stop,
         queued_blocks=snap.queued_blocks,
@@ -200,7 +200,7 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
             signals=dict(snap.plc.signals),
         ),
         job_errors=[job_error_model(e) for e in snap.job_errors],
-        recent_events=[job_error_model(e) for e in m.recent_events(RECENT_EVENTS)]
+        recent_events=[job_error_model(e) for e in m.link.recent_events(RECENT_EVENTS)]
         if recent_events
         else [],
         control=m.control.state(),
@@ -210,25 +210,25 @@ def status_of(m: MachineProxy, read: StatusRead, recent_events: bool = True) -> 
 
 async def machine_status(m: MachineProxy) -> MachineStatus:
     """Everything the HMI shows about a machine, fresh from its worker (one cycle)."""
-    read = await m.acall(ReadStatus(m.id))
+    read = await m.link.acall(ReadStatus(m.id))
     assert isinstance(read, StatusRead)
     return status_of(m, read)
 
 
 def machine_simulation(m: MachineProxy) -> SimulationStatus:
     """The machine's pacing as last reported (about a second old at most), its cycle live."""
-    p = m.pacing
+    p = m.link.pacing
     if p is None:
-        p = Pacing("run", m.cycle, m.cycle_s, 0.0, None, 0.0, 0)
-    sim = simulation_status(p, m.epoch)
-    sim.cycle = max(sim.cycle, m.cycle)
+        p = Pacing("run", m.link.cycle, m.link.cycle_s, 0.0, None, 0.0, 0)
+    sim = simulation_status(p, m.link.epoch)
+    sim.cycle = max(sim.cycle, m.link.cycle)
     sim.t_s = sim.cycle * sim.cycle_s
-    return with_loop_health(sim, m.worker)
+    return with_loop_health(sim, m.link.worker)
 
 
 def signal_infos(m: MachineProxy) -> list[SignalInfo]:
     """Every signal the machine records each cycle, for the catalogue and `hello`."""
-    return [SignalInfo(name=s.name, axis=s.axis, unit=s.unit, kind=s.kind) for s in m.signals]
+    return [SignalInfo(name=s.name, axis=s.axis, unit=s.unit, kind=s.kind) for s in m.link.signals]
 
 
 def machine_summary(m: MachineProxy) -> MachineSummary:
@@ -236,9 +236,9 @@ def machine_summary(m: MachineProxy) -> MachineSummary:
         id=m.id,
         name=m.name,
         source="demo" if m.source == "demo" else "lists",
-        axes=list(m.info.axes) if m.info else [],
-        mode=m.pacing.mode if m.pacing else "run",
-        cycle=m.cycle,
+        axes=list(m.link.info.axes) if m.link.info else [],
+        mode=m.link.pacing.mode if m.link.pacing else "run",
+        cycle=m.link.cycle,
         seat=m.exercise is not None,
     )
 
@@ -283,7 +283,7 @@ def worker_statuses(machines: MachineService) -> list[WorkerStatus]:
 def paced(machine: MachineProxy, request: Pace | Step) -> SimulationStatus:
     """Carry out a pacing request (run, pause, fast, step); the answer is the pacing it
     left."""
-    p = machine.call(request)
+    p = machine.link.call(request)
     assert isinstance(p, Pacing)
-    machine.pacing = p
-    return with_loop_health(simulation_status(p, machine.epoch), machine.worker)
+    machine.link.pacing = p
+    return with_loop_health(simulation_status(p, machine.link.epoch), machine.link.worker)

@@ -21,6 +21,9 @@ from nc_sim.params import Value
 
 T = TypeVar("T")
 
+# a row of a query: its columns by name (`row["machine"]`), never by position
+Row = sqlite3.Row
+
 _PROGRAMS = """
 CREATE TABLE IF NOT EXISTS programs (
     owner TEXT NOT NULL,           -- '' service-wide; a class seat's machine: that seat's own
@@ -113,6 +116,16 @@ class StoredProgram:
 
 
 @dataclass(frozen=True)
+class StoredTrace:
+    """A trace in the library (its samples live in a file next to the database)."""
+
+    id: str
+    name: str
+    notes: str
+    meta: str  # JSON TraceDetail (its name and notes are the columns above)
+
+
+@dataclass(frozen=True)
 class StoredMachine:
     id: str
     name: str
@@ -165,6 +178,7 @@ class Store:
     def __init__(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         self._db = sqlite3.connect(str(path), check_same_thread=False, isolation_level=None)
+        self._db.row_factory = Row  # every row, in `query` and in a transaction's work
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=NORMAL")  # WAL stays consistent; no sync per row
         self._db.executescript(_SCHEMA)
@@ -176,15 +190,15 @@ class Store:
     def _migrate(self) -> None:
         """Files of earlier versions: parameter values get versions, and the parameter audit
         table becomes the start of the chained trail."""
-        columns = [r[1] for r in self._db.execute("PRAGMA table_info(param_values)")]
+        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(param_values)")]
         if "version" not in columns:
             self._db.execute(
                 "ALTER TABLE param_values ADD COLUMN version INTEGER NOT NULL DEFAULT 0"
             )
-        columns = [r[1] for r in self._db.execute("PRAGMA table_info(traces)")]
+        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(traces)")]
         if "created_by" not in columns:  # traces of earlier versions count for nobody
             self._db.execute("ALTER TABLE traces ADD COLUMN created_by TEXT NOT NULL DEFAULT ''")
-        columns = [r[1] for r in self._db.execute("PRAGMA table_info(programs)")]
+        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(programs)")]
         if "owner" not in columns:  # programs were service-wide only: all of them stay so
             self.transaction(_programs_get_owners)
         self._db.execute(
@@ -202,19 +216,19 @@ class Store:
         ).fetchall()
         entries = [
             parameter_entry(
-                r[1],
-                r[2],
+                r["machine"],
+                r["actor"],
                 "",
                 StoredChange(
-                    r[3],
-                    r[4],
-                    r[5],
-                    None if r[6] is None else json.loads(r[6]),
-                    json.loads(r[7]),
-                    r[8],
+                    r["scope"],
+                    r["target"],
+                    r["name"],
+                    None if r["old"] is None else json.loads(r["old"]),
+                    json.loads(r["new"]),
+                    r["effect"],
                 ),
-                r[9],
-                r[0],
+                r["comment"],
+                r["time"],
             )
             for r in rows
         ]
@@ -239,7 +253,8 @@ class Store:
         with self._lock:
             self._db.executescript(sql)
 
-    def query(self, sql: str, args: tuple[object, ...] = ()) -> list[tuple[Any, ...]]:
+    def query(self, sql: str, args: tuple[object, ...] = ()) -> list[Row]:
+        """The rows of a SELECT, read by column name (`AS` names a computed column)."""
         with self._lock:
             return self._db.execute(sql, args).fetchall()
 
@@ -255,7 +270,12 @@ class Store:
             ).fetchall()
         return [
             StoredMachine(
-                r[0], r[1], r[2], r[3], {int(k): v for k, v in json.loads(r[4]).items()}, r[5]
+                r["id"],
+                r["name"],
+                r["source"],
+                r["channel_list"],
+                {int(k): v for k, v in json.loads(r["axis_lists"]).items()},
+                r["tool_list"],
             )
             for r in rows
         ]
@@ -292,7 +312,7 @@ class Store:
             rows = self._db.execute(
                 "SELECT scope, target, name, value FROM param_values WHERE machine = ?", (mid,)
             ).fetchall()
-        return [(r[0], r[1], r[2], json.loads(r[3])) for r in rows]
+        return [(r["scope"], r["target"], r["name"], json.loads(r["value"])) for r in rows]
 
     def write(
         self, mid: str, changes: list[StoredChange], entries: list[audit_log.Entry]
@@ -316,7 +336,7 @@ class Store:
         rows = self.query(
             "SELECT scope, target, name, version FROM param_values WHERE machine = ?", (mid,)
         )
-        return {(r[0], r[1], r[2]): r[3] for r in rows}
+        return {(r["scope"], r["target"], r["name"]): r["version"] for r in rows}
 
     def parameter_history(
         self, mid: str, limit: int = 1000
@@ -327,7 +347,7 @@ class Store:
             "WHERE machine = ? AND kind = ? AND outcome = 'ok' ORDER BY seq DESC LIMIT ?",
             (mid, "parameter", limit),
         )
-        return [(r[0], r[1], r[2], json.loads(r[3])) for r in reversed(rows)]
+        return [(r["seq"], r["time"], r["actor"], json.loads(r["detail"])) for r in reversed(rows)]
 
     # --- the trace library (samples live in files next to the database) -----------------------
     def add_trace(
@@ -349,31 +369,31 @@ class Store:
     def trace_ids(self, created_by: str | None = None) -> list[str]:
         """The stored traces' ids (of the one who saved or imported them, when given)."""
         if created_by is None:
-            return [str(r[0]) for r in self.query("SELECT id FROM traces")]
+            return [str(r["id"]) for r in self.query("SELECT id FROM traces")]
         rows = self.query("SELECT id FROM traces WHERE created_by = ?", (created_by,))
-        return [str(r[0]) for r in rows]
+        return [str(r["id"]) for r in rows]
 
-    def traces(self, machine: str | None = None) -> list[tuple[str, str, str, str]]:
-        """(id, name, notes, meta JSON) of stored traces, newest first."""
+    def traces(self, machine: str | None = None) -> list[StoredTrace]:
+        """The stored traces, newest first."""
         q = "SELECT id, name, notes, meta FROM traces"
         args: tuple[str, ...] = ()
         if machine is not None:
             q, args = q + " WHERE machine = ?", (machine,)
         with self._lock:
             rows = self._db.execute(q + " ORDER BY created DESC", args).fetchall()
-        return [(r[0], r[1], r[2], r[3]) for r in rows]
+        return [_trace(r) for r in rows]
 
-    def trace(self, tid: str) -> tuple[str, str, str, str] | None:
+    def trace(self, tid: str) -> StoredTrace | None:
         with self._lock:
             r = self._db.execute(
                 "SELECT id, name, notes, meta FROM traces WHERE id = ?", (tid,)
             ).fetchone()
-        return (r[0], r[1], r[2], r[3]) if r else None
+        return _trace(r) if r else None
 
     def trace_machine(self, tid: str) -> str | None:
         """The machine a stored trace was captured on, None for no such trace."""
         rows = self.query("SELECT machine FROM traces WHERE id = ?", (tid,))
-        return str(rows[0][0]) if rows else None
+        return str(rows[0]["machine"]) if rows else None
 
     def update_trace(self, tid: str, name: str, notes: str) -> None:
         with self._lock:
@@ -392,13 +412,13 @@ class Store:
         the first owner's)."""
         marks = ", ".join("?" * len(owners))
         rows = self.query(
-            f"SELECT name, size, lines, updated, updated_by, '', owner FROM programs "
+            f"SELECT name, size, lines, updated, updated_by, '' AS text, owner FROM programs "
             f"WHERE owner IN ({marks}) ORDER BY name COLLATE NOCASE",
             owners,
         )
         found: dict[str, StoredProgram] = {}
-        for r in sorted(rows, key=lambda r: owners.index(r[6])):
-            found.setdefault(r[0].lower(), StoredProgram(*r))
+        for r in sorted(rows, key=lambda r: owners.index(r["owner"])):
+            found.setdefault(r["name"].lower(), _program(r))
         return sorted(found.values(), key=lambda p: p.name.lower())
 
     def program(self, name: str, owners: tuple[str, ...]) -> StoredProgram | None:
@@ -411,7 +431,7 @@ class Store:
                 (owner, name),
             )
             if rows:
-                return StoredProgram(*rows[0])
+                return _program(rows[0])
         return None
 
     def put_program(
@@ -449,6 +469,16 @@ class Store:
             return True
 
         return self.transaction(work)
+
+
+def _trace(r: Row) -> StoredTrace:
+    return StoredTrace(r["id"], r["name"], r["notes"], r["meta"])
+
+
+def _program(r: Row) -> StoredProgram:
+    return StoredProgram(
+        r["name"], r["size"], r["lines"], r["updated"], r["updated_by"], r["text"], r["owner"]
+    )
 
 
 def _lines(text: str) -> int:

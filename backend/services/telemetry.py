@@ -91,16 +91,16 @@ class Subscriber:
         """Stream these signals from the current cycle (also after a reconnect); the reply,
         `subscribed` or `error`, goes out before the next frame."""
         m = self.machine
-        unknown = [n for n in req.signals if n not in m.signal_by_name]
+        unknown = [n for n in req.signals if n not in m.link.signal_by_name]
         if unknown:
             more = f" and {len(unknown) - 10} more" if len(unknown) > 10 else ""
             self.reply(ErrorMessage(message=f"unknown signals: {unknown[:10]}{more}"))
             return
-        self.signals = [m.signal_by_name[n] for n in req.signals]
+        self.signals = [m.link.signal_by_name[n] for n in req.signals]
         rate = req.max_rate_hz or math.inf  # bounded by the protocol (api/telemetry.py)
-        self.min_stride = max(1, math.ceil(1.0 / (m.cycle_s * rate)))
-        self.cursor = m.cycle + 1
-        self.epoch = m.epoch
+        self.min_stride = max(1, math.ceil(1.0 / (m.link.cycle_s * rate)))
+        self.cursor = m.link.cycle + 1
+        self.epoch = m.link.epoch
         self.reply(
             Subscribed(signals=req.signals, first_cycle=self.cursor - 1, stride=self.min_stride)
         )
@@ -134,19 +134,21 @@ class TelemetryHub:
     def add(self, ws: WebSocket, m: MachineProxy, actor: Actor) -> Subscriber:
         """A new viewer of `m`: from now on its worker pushes the machine's status."""
         # the newest events first, as event messages: the viewer's log starts filled
-        events = max(0, m.events.cursor - RECENT_EVENTS)
-        sub = Subscriber(ws, m, actor, cursor=m.cycle + 1, event_cursor=events, epoch=m.epoch)
+        events = max(0, m.link.events.cursor - RECENT_EVENTS)
+        sub = Subscriber(
+            ws, m, actor, cursor=m.link.cycle + 1, event_cursor=events, epoch=m.link.epoch
+        )
         self.on_connect(actor, m)
-        sub.notice_seq = m.notices[-1].seq - 1 if m.notices else 0  # the newest notice again
+        sub.notice_seq = max(0, m.notices.newest_seq - 1)  # the newest notice again
         self.subscribers.add(sub)
-        m.watch(True)
+        m.link.watch(True)
         return sub
 
     def remove(self, sub: Subscriber) -> None:
         if sub in self.subscribers:
             m = sub.machine
             self.on_disconnect(sub.actor, m)
-            m.watch(False)
+            m.link.watch(False)
         sub.closed = True
         self.subscribers.discard(sub)
 
@@ -255,32 +257,33 @@ class TelemetryHub:
         m = sub.machine
         out: list[str | bytes] = list(sub.control)
         sub.control.clear()
-        if sub.epoch != m.epoch:  # the machine was rebuilt: follow it from cycle 1
-            sub.epoch, sub.cursor, sub.event_cursor = m.epoch, 1, 0
+        if sub.epoch != m.link.epoch:  # the machine was rebuilt: follow it from cycle 1
+            sub.epoch, sub.cursor, sub.event_cursor = m.link.epoch, 1, 0
         out += [
             NoticeMessage(
                 seq=n.seq, kind=n.kind, message=n.message, time_unix=n.time_unix
             ).model_dump_json()
-            for n in list(m.notices)
-            if n.seq > sub.notice_seq
+            for n in m.notices.since(sub.notice_seq)
         ]
-        if m.notices:
-            sub.notice_seq = max(sub.notice_seq, m.notices[-1].seq)
+        sub.notice_seq = max(sub.notice_seq, m.notices.newest_seq)
         control = m.control.seq  # a control change goes out at once, not with the next push
-        if m.status is not None and (sub.status_seq, sub.control_seq) != (m.status_seq, control):
-            sub.status_seq, sub.control_seq = m.status_seq, control
-            key = ("status", m.id, m.epoch, m.status_seq, control)
+        if m.link.status is not None and (sub.status_seq, sub.control_seq) != (
+            m.link.status_seq,
+            control,
+        ):
+            sub.status_seq, sub.control_seq = m.link.status_seq, control
+            key = ("status", m.id, m.link.epoch, m.link.status_seq, control)
             if key not in texts:
-                status = status_of(m, m.status, recent_events=False)
+                status = status_of(m, m.link.status, recent_events=False)
                 texts[key] = StatusMessage(status=status).model_dump_json()
             out.append(texts[key])
-        head = m.cycle
+        head = m.link.cycle
         if sub.signals and head >= sub.cursor:
             out.append(self._frame(sub, head, cache))
-        events, first_seq, sub.event_cursor, dropped = m.events_since(sub.event_cursor)
+        events, first_seq, sub.event_cursor, dropped = m.link.events_since(sub.event_cursor)
         for seq, e in enumerate(events, first_seq):
             missed = dropped if seq == first_seq else 0
-            ekey = ("event", m.id, m.epoch, seq, missed)  # encoded once for every viewer
+            ekey = ("event", m.id, m.link.epoch, seq, missed)  # encoded once for every viewer
             if ekey not in texts:
                 msg = EventMessage(seq=seq, missed=missed, event=job_error_model(e))
                 texts[ekey] = msg.model_dump_json()
@@ -292,17 +295,17 @@ class TelemetryHub:
         m = sub.machine
         span = head - sub.cursor + 1
         stride = max(sub.min_stride, math.ceil(span / self.max_frame_samples))
-        key = (m.id, m.epoch, tuple(s.name for s in sub.signals), sub.cursor, head, stride)
+        key = (m.id, m.link.epoch, tuple(s.name for s in sub.signals), sub.cursor, head, stride)
         built = cache.get(key)
         if built is None:
-            data, start = m.samples(sub.signals, sub.cursor, head, stride)
+            data, start = m.link.samples(sub.signals, sub.cursor, head, stride)
             header = FrameHeader(
                 machine=m.id,
                 first_cycle=start,
                 count=data.shape[1],
                 stride=stride,
-                cycle_s=m.cycle_s,
-                t0_unix=m.pacing.t0_unix if m.pacing else 0.0,
+                cycle_s=m.link.cycle_s,
+                t0_unix=m.link.pacing.t0_unix if m.link.pacing else 0.0,
                 signals=[s.name for s in sub.signals],
                 decimated=stride > sub.min_stride,
                 skipped_cycles=start - sub.cursor,

@@ -30,8 +30,9 @@ from api.scope import (
 )
 from api.telemetry import FrameHeader, encode_frame
 from backend.errors import Conflict, Invalid, QuotaUsedUp, not_found
+from backend.services.captures import Capture
 from backend.services.commands import job_error_model
-from backend.services.machines import Capture, MachineProxy, MachineService
+from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import MB
 from backend.services.store import Store
 from backend.workers.protocol import ParamSnapshot
@@ -72,6 +73,7 @@ class Trace:
                 line=e.line,
                 column=e.column,
                 signal=e.signal,
+                value=e.value,
             )
             for e in self.detail.events
         ]
@@ -147,7 +149,7 @@ class TraceService:
         trace = Trace(detail, rec.data)
         with self._lock:
             self._cache[cap.id] = trace
-            live = {c.id for p in self.machines.proxies() for c in p.captures}
+            live = {c.id for p in self.machines.proxies() for c in p.captures.recent()}
             for k in [k for k in self._cache if k not in live]:
                 del self._cache[k]
                 (self.dir / "recent" / f"{k}.rrd").unlink(missing_ok=True)
@@ -155,7 +157,7 @@ class TraceService:
 
     def recent(self, m: MachineProxy) -> list[TraceInfo]:
         """The machine's recent captures, newest first."""
-        caps = list(m.captures)
+        caps = m.captures.recent()
         out = []
         for c in reversed(caps):
             info = _info(self._from_capture(m, c).detail)
@@ -165,19 +167,18 @@ class TraceService:
 
     def get(self, tid: str) -> Trace:
         """A recent capture or a stored trace; 404 when neither."""
-        row = self.store.trace(tid)
-        if row is not None:
-            _, name, notes, meta = row
+        stored = self.store.trace(tid)
+        if stored is not None:
             try:
-                detail = TraceDetail.model_validate_json(meta)
+                detail = TraceDetail.model_validate_json(stored.meta)
                 data = np.load(self.dir / f"{tid}.npy")
             except (ValidationError, OSError, ValueError) as e:
                 # a damaged row (an older version stored NaN) or lost samples: only deletable
                 raise not_found(f"readable stored trace {tid} ({type(e).__name__})") from None
-            detail.name, detail.notes = name, notes
+            detail.name, detail.notes = stored.name, stored.notes
             return Trace(detail, data)
         for m in self.machines.proxies():
-            cap = next((c for c in list(m.captures) if c.id == tid), None)
+            cap = m.captures.find(tid)
             if cap is not None:
                 return self._from_capture(m, cap)
         raise not_found(f"trace {tid}")
@@ -185,13 +186,13 @@ class TraceService:
     # --- the library ------------------------------------------------------------------------
     def library(self, machine: str | None = None) -> list[TraceInfo]:
         out = []
-        for tid, name, notes, meta in self.store.traces(machine):
+        for t in self.store.traces(machine):
             try:
-                info = TraceInfo.model_validate_json(meta)
+                info = TraceInfo.model_validate_json(t.meta)
             except ValidationError as e:  # one damaged row must not hide the others
-                log.warning("stored trace %s is not readable, left out: %s", tid, e)
+                log.warning("stored trace %s is not readable, left out: %s", t.id, e)
                 continue
-            info.name, info.notes = name, notes
+            info.name, info.notes = t.name, t.notes
             out.append(info)
         return out
 

@@ -97,24 +97,26 @@ def fault_info(state: FaultState, cycle_s: float) -> FaultInfo:
 def faults_of(m: MachineProxy) -> list[FaultInfo]:
     """The machine's injected faults, as its worker has them now (the pushed status may not
     have come yet for a machine just built)."""
-    read = m.call(ReadStatus(m.id))
+    read = m.link.call(ReadStatus(m.id))
     assert isinstance(read, StatusRead)
-    m.faults = {f.id: f for f in read.faults}
-    return [fault_info(f, m.cycle_s) for f in sorted(m.faults.values(), key=lambda f: f.id)]
+    m.link.faults = {f.id: f for f in read.faults}
+    return [
+        fault_info(f, m.link.cycle_s) for f in sorted(m.link.faults.values(), key=lambda f: f.id)
+    ]
 
 
 def inject(m: MachineProxy, req: FaultInject) -> FaultInfo:
     """Inject a fault (422 in the NC's words for an axis or gear the machine lacks)."""
     trigger = Trigger(req.trigger.after_s, req.trigger.on_motion)
-    state = m.call(InjectFault(m.id, to_fault(req.fault), trigger))
+    state = m.link.call(InjectFault(m.id, to_fault(req.fault), trigger))
     assert isinstance(state, FaultState)
-    m.faults[state.id] = state
-    return fault_info(state, m.cycle_s)
+    m.link.faults[state.id] = state
+    return fault_info(state, m.link.cycle_s)
 
 
 def remove(m: MachineProxy, fid: int) -> None:
-    m.call(RemoveFault(m.id, fid))
-    m.faults.pop(fid, None)
+    m.link.call(RemoveFault(m.id, fid))
+    m.link.faults.pop(fid, None)
 
 
 @dataclass(frozen=True)
@@ -138,7 +140,7 @@ class Snapshots:
             return [k.info for k in self._kept.get(mid, ())]
 
     def take(self, actor: Actor, m: MachineProxy, label: str) -> SnapshotInfo:
-        snap = m.call(TakeSnapshot(m.id))
+        snap = m.link.call(TakeSnapshot(m.id))
         assert isinstance(snap, Snapshot)
         info = SnapshotInfo(
             id=next(self._ids),

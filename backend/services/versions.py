@@ -24,7 +24,7 @@ from backend.services import audit_log
 from backend.services import parameters as params
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy, MachineService
-from backend.services.store import Store
+from backend.services.store import Row, Store
 from nc_sim.params import ParamDef, ParamError, Scope, Value, resolve
 from nc_sim.params.listfile import axis_kind_of
 from nc_sim.units import AxisKind
@@ -46,16 +46,16 @@ class State:
     label: str
 
 
-def _info(r: tuple[object, ...]) -> VersionInfo:
-    lists = json.loads(str(r[7]))
+def _info(r: Row) -> VersionInfo:
+    lists = json.loads(str(r["lists"]))
     return VersionInfo(
-        id=int(str(r[0])),
-        machine=str(r[1]),
-        name=str(r[2]),
-        note=str(r[3]),
-        created_unix=float(str(r[4])),
-        created_by=str(r[5]),
-        baseline=bool(r[6]),
+        id=int(str(r["id"])),
+        machine=str(r["machine"]),
+        name=str(r["name"]),
+        note=str(r["note"]),
+        created_unix=float(str(r["created"])),
+        created_by=str(r["created_by"]),
+        baseline=bool(r["baseline"]),
         values=len(lists),
     )
 
@@ -162,7 +162,7 @@ class Versions:
         )
         return [_info(r) for r in rows]
 
-    def _row(self, mid: str, vid: int) -> tuple[object, ...]:
+    def _row(self, mid: str, vid: int) -> Row:
         rows = self.store.query(
             f"SELECT {_COLUMNS} FROM param_versions WHERE machine = ? AND id = ?", (mid, vid)
         )
@@ -170,7 +170,7 @@ class Versions:
             raise not_found(f"version {vid} of machine {mid}")
         return rows[0]
 
-    def _baseline_row(self, mid: str) -> tuple[object, ...] | None:
+    def _baseline_row(self, mid: str) -> Row | None:
         rows = self.store.query(
             f"SELECT {_COLUMNS} FROM param_versions WHERE machine = ? AND baseline = 1", (mid,)
         )
@@ -185,8 +185,8 @@ class Versions:
         row = self._baseline_row(m.id) if which == BASELINE else self._row(m.id, int(which))
         if row is None:
             raise not_found(f"a baseline of machine {m.id} (set one first)")
-        what = "baseline" if row[6] else "version"
-        return State(_lists(str(row[7])), f"{what} '{row[2]}'")
+        what = "baseline" if row["baseline"] else "version"
+        return State(_lists(str(row["lists"])), f"{what} '{row['name']}'")
 
     def compare(self, mid: str, a: str, b: str) -> tuple[State, State, list[ParamDiff]]:
         """The differences from state `a` to state `b`."""
@@ -225,8 +225,8 @@ class Versions:
 
         def work(db: sqlite3.Connection) -> int:
             count = db.execute(
-                "SELECT count(*) FROM param_versions WHERE machine = ?", (mid,)
-            ).fetchone()[0]
+                "SELECT count(*) AS n FROM param_versions WHERE machine = ?", (mid,)
+            ).fetchone()["n"]
             if count >= MAX_VERSIONS:
                 raise Conflict(
                     f"machine {mid} has {count} versions, the most it keeps: delete old ones first"
@@ -256,9 +256,9 @@ class Versions:
             actor.name,
             actor.session,
             "version",
-            f"set baseline: version '{row[2]}'",
+            f"set baseline: version '{row['name']}'",
             mid,
-            detail={"id": vid, "name": row[2]},
+            detail={"id": vid, "name": row["name"]},
         )
 
         def work(db: sqlite3.Connection) -> None:
@@ -273,18 +273,18 @@ class Versions:
         """Delete a version; the baseline only after another took its place."""
         self.machines.get(mid)
         row = self._row(mid, vid)
-        if row[6]:
+        if row["baseline"]:
             raise Conflict(
-                f"version '{row[2]}' is the baseline of {mid}: make another "
+                f"version '{row['name']}' is the baseline of {mid}: make another "
                 "version the baseline first"
             )
         entry = audit_log.Entry(
             actor.name,
             actor.session,
             "version",
-            f"deleted version '{row[2]}'",
+            f"deleted version '{row['name']}'",
             mid,
-            detail={"id": vid, "name": row[2]},
+            detail={"id": vid, "name": row["name"]},
         )
 
         def work(db: sqlite3.Connection) -> None:
@@ -300,10 +300,10 @@ class Versions:
         row = self._row(mid, vid)
         changes = [
             ParameterChange(scope=c.scope, target=c.target, name=c.parameter, value=c.after)
-            for c in diff(m, live_lists(m), _lists(str(row[7])))
+            for c in diff(m, live_lists(m), _lists(str(row["lists"])))
             if c.after is not None
         ]
-        why = f"rollback to version '{row[2]}'" + (f": {comment}" if comment else "")
+        why = f"rollback to version '{row['name']}'" + (f": {comment}" if comment else "")
         result = (
             params.write(actor, m, self.store, changes, why)
             if changes
@@ -314,9 +314,14 @@ class Versions:
             actor.name,
             actor.session,
             "version",
-            f"rolled back to version '{row[2]}' ({n} value{'' if n == 1 else 's'} changed)",
+            f"rolled back to version '{row['name']}' ({n} value{'' if n == 1 else 's'} changed)",
             mid,
-            detail={"id": vid, "name": row[2], "changed": len(result.changes), "comment": comment},
+            detail={
+                "id": vid,
+                "name": row["name"],
+                "changed": len(result.changes),
+                "comment": comment,
+            },
         )
         self.store.transaction(lambda db: audit_log.append(db, [entry]))
         return result

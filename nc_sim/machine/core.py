@@ -111,4 +111,5 @@ class MachineCore(Protocol):
         line: int | None = None,
         column: int | None = None,
         signal: str | None = None,
+        value: float | None = None,
     ) -> Event: ...

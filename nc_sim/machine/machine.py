@@ -363,10 +363,11 @@ class Machine:
         line: int | None = None,
         column: int | None = None,
         signal: str | None = None,
+        value: float | None = None,
     ) -> Event:
         """Record an error (its meaning, then the detail) or an event (its detail, which
         reads as a message of its own, else the meaning), numbered by the event log, with
-        the M function and gear stage it concerns as fields."""
+        the M function, gear stage, signal and value it concerns as fields."""
         msg = MESSAGES[code]
         if detail:
             msg = f"{msg}: {detail}" if is_error(code) else detail
@@ -382,6 +383,7 @@ class Machine:
             line=line,
             column=column,
             signal=signal,
+            value=value,
         )
         self.events.append(ev)
         return ev

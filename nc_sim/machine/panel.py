@@ -67,7 +67,7 @@ class Panel:
             self.m.moves.reset(ax)
             return
         ax.units[unit] = int(value)
-        self.m.log(Code.EV_HLI, ax.name, f"{unit} = {int(value)}")
+        self.m.log(Code.EV_HLI, ax.name, f"{unit} = {int(value)}", signal=unit, value=int(value))
         if unit in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
             self.m.motion.enables_changed(ax)
         elif unit in ("override", "override_valid", "reduced_speed"):
@@ -76,7 +76,7 @@ class Panel:
     def channel_unit(self, unit: str, value: int) -> None:
         old = self.m.channel_units[unit]
         self.m.channel_units[unit] = hli.clamp(unit, value)
-        self.m.log(Code.EV_HLI, "", f"channel {unit} = {value}")
+        self.m.log(Code.EV_HLI, "", f"channel {unit} = {value}", signal=unit, value=value)
         if unit == "override":
             cap = self.m.cfg.channel_eng("max_vb_override")
             self.m.channel.override = min(self.m.channel_units["override"] * 1e-3, cap)

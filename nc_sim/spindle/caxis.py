@@ -329,7 +329,9 @@ class CAxis:
             if self.requests[signal] != on:
                 self.requests[signal] = on
                 code = Code.EV_SIGNAL_ON if on else Code.EV_SIGNAL_OFF
-                self.sp.motion.log(code, self.ax.name, f"{signal} = {int(on)}", signal=signal)
+                self.sp.motion.log(
+                    code, self.ax.name, f"{signal} = {int(on)}", signal=signal, value=int(on)
+                )
 
     # --- the modes ------------------------------------------------------------------------
     def _enter(self, mode: SpindleMode, record: bool = False) -> None:

@@ -181,6 +181,7 @@ class SpindleTask:
             ax.name,
             f"{ax.name} at {self.pos_deg:g}° ({self.kind})",
             m=19 if self.kind == "M19" else None,  # the in-position that ends M19 [000 §2.3]
+            value=self.pos_deg,
         )
 
     def on_event(self, ev: int) -> bool:

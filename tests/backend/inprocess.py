@@ -37,14 +37,14 @@ def machine_service(tmp: Path, workers: int = 1) -> Iterator[MachineService]:
 def paused_demo(service: MachineService, mid: str, powered: bool = True) -> MachineProxy:
     """A demo lathe, paused; powered on (stepped 100 cycles) unless told otherwise."""
     m = service.create(MachineCreate(id=mid, name=mid, demo=True))
-    m.call(Pace(mid, "pause"))
+    m.link.call(Pace(mid, "pause"))
     if powered:
         step(m, 100)
     return m
 
 
 def step(m: MachineProxy, cycles: int) -> None:
-    m.call(Step(m.id, cycles))
+    m.link.call(Step(m.id, cycles))
 
 
 def wait_until(pred: object, timeout_s: float = 10.0) -> None:

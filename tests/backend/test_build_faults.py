@@ -33,7 +33,7 @@ def no_status_reads(service: MachineService) -> list[Request]:
 
 
 def kinds(service: MachineService, mid: str) -> list[tuple[int, str, bool]]:
-    faults = service.get(mid).faults
+    faults = service.get(mid).link.faults
     return [(f.id, f.fault.kind, f.active_since is not None) for f in faults.values()]
 
 
@@ -48,7 +48,7 @@ def test_created_restarted_and_restored_machines_know_their_faults_at_once(
         service.restart("m")  # a power cycle: injected again, the armed one armed again
         assert kinds(service, "m") == [(1, "motor_inverted", True), (2, "plc_slow_ack", False)]
         m = service.get("m")
-        worker: WorkerClient = m.worker  # type: ignore[assignment]
+        worker: WorkerClient = m.link.worker  # type: ignore[assignment]
         snap = worker.call(TakeSnapshot("m"))
         service.create(MachineCreate(id="n", name="n", demo=True))
         assert kinds(service, "n") == []

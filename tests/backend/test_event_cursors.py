@@ -37,7 +37,7 @@ def service(tmp_path: Path) -> Iterator[MachineService]:
 def _flood(m: MachineProxy, n: int) -> None:
     """n refused MDI blocks: one event each, none of them sets a job error."""
     for _ in range(n):
-        m.call(Submit(m.id, Mdi("G1 X")))
+        m.link.call(Submit(m.id, Mdi("G1 X")))
 
 
 def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it(
@@ -48,8 +48,8 @@ def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it(
     step(host, 10)
     _flood(host, EVENT_LOG_LEN + 100)
     step(host, 10)
-    wait_until(lambda: host.events.cursor >= EVENT_LOG_LEN + 100)
-    assert all(e.code == Code.BLOCK_SYNTAX for e in host.events)  # E-stop dropped
+    wait_until(lambda: host.link.events.cursor >= EVENT_LOG_LEN + 100)
+    assert all(e.code == Code.BLOCK_SYNTAX for e in host.link.events)  # E-stop dropped
     st = asyncio.run(machine_status(host))
     assert [(e.code, e.cycle) for e in st.job_errors] == [(int(Code.EMERGENCY_STOP), stop.cycle)]
     assert len(st.recent_events) == RECENT_EVENTS
@@ -65,10 +65,10 @@ def test_a_telemetry_client_that_fell_behind_learns_how_many_events_it_missed(
         hub = TelemetryHub(1.0, 1000)  # ticked by hand below
         ws = FakeSocket()
         sub = hub.add(cast(WebSocket, ws), host, INSTRUCTOR)
-        start, cursor[0] = host.events.cursor, sub.event_cursor
+        start, cursor[0] = host.link.events.cursor, sub.event_cursor
         # more than the log holds before the next frame (blocking calls: off the loop)
         await asyncio.to_thread(_flood, host, EVENT_LOG_LEN + 250)
-        wait_until(lambda: host.events.cursor == start + EVENT_LOG_LEN + 250)
+        wait_until(lambda: host.link.events.cursor == start + EVENT_LOG_LEN + 250)
         hub.tick()
         await asyncio.sleep(0.05)  # let the send task run
         return [json.loads(t) for t in ws.texts]

@@ -129,20 +129,22 @@ def test_spindle_sequences_scenario_exposes_the_spindle_signals(tmp_path: Path) 
     assert at[11.9]["S1.in_position"] == "1" and at[11.9]["S1.homed"] == "1"
     assert abs((float(at[11.9]["S1.pos_act_deg"]) - 90.0 + 180) % 360 - 180) <= 0.1
     events = [json.loads(line) for line in (tmp_path / "events.jsonl").read_text().splitlines()]
-    messages = [e["message"] for e in events]
-    assert "S1 gear M42 -> M41" in messages and "S1 gear M41 -> M42" in messages
-    assert any(m.startswith("M41 output") for m in messages)
-    assert sum(m == "S1 at 90° (M19)" for m in messages) == 1
     assert not [e for e in events if e["error"]]
-    # the same facts as fields: gear stage 2 is M41, 3 is M42; M19 done is in position, m 19
+    # the facts are fields: gear stage 2 is M41, 3 is M42; M19 done is in position, m 19
     assert [e["seq"] for e in events] == list(
         range(events[0]["seq"], len(events) + events[0]["seq"])
     )
-    changed = [e["gear"] for e in events if e["code"] == Code.EV_GEAR_CHANGED]
-    assert changed == [2, 3]
-    assert any(e["code"] == Code.EV_M_OUTPUT and (e["m"], e["gear"]) == (41, 2) for e in events)
+    changed = [e for e in events if e["code"] == Code.EV_GEAR_CHANGED]
+    assert [(e["axis"], e["gear"]) for e in changed] == [("S1", 2), ("S1", 3)]
+    assert [e["message"] for e in changed] == ["S1 gear M42 -> M41", "S1 gear M41 -> M42"]
+    m41 = [e for e in events if e["code"] == Code.EV_M_OUTPUT and e["m"] == 41]
+    assert m41 and all(e["gear"] == 2 for e in m41)
+    assert all(e["message"].startswith("M41 output") for e in m41)
     # in position after M19 (m 19), then after S[G74] homing (no M function)
-    assert [e["m"] for e in events if e["code"] == Code.EV_IN_POSITION] == [19, None]
+    in_position = [e for e in events if e["code"] == Code.EV_IN_POSITION]
+    assert [(e["axis"], e["m"]) for e in in_position] == [("S1", 19), ("S1", None)]
+    assert in_position[0]["value"] == pytest.approx(90.0)  # where it stopped, °
+    assert in_position[0]["message"] == "S1 at 90° (M19)"
 
 
 def test_a_program_action_reaches_the_channel_with_line_and_column(tmp_path: Path) -> None:
@@ -165,7 +167,12 @@ def test_a_program_action_reaches_the_channel_with_line_and_column(tmp_path: Pat
     errors = [e for e in events if e["error"]]
     assert [(e["code"], e["line"], e["column"]) for e in errors] == [(Code.ARC_GEOMETRY, 3, 12)]
     assert errors[0]["t_s"] == pytest.approx(0.05)
-    assert any(e["message"] == "channel feedhold = 1" for e in events)  # the next action ran
+    # the next action ran: a channel HLI write at its time, the unit and value as fields
+    hli = [e for e in events if e["code"] == Code.EV_HLI and e["axis"] == ""]
+    assert [(e["t_s"], e["signal"], e["value"]) for e in hli] == [
+        (pytest.approx(0.1), "feedhold", 1)
+    ]
+    assert hli[0]["message"] == "channel feedhold = 1"
 
 
 def test_a_mistyped_channel_action_stops_the_run_naming_it(tmp_path: Path) -> None:

@@ -19,6 +19,7 @@ import pytest
 
 from api.telemetry import decode_frame
 from backend.services.viewer import rerun_cli
+from nc_sim.errors import Code
 from nc_sim.snapshot import AxisState
 from tests.backend.server import Server
 
@@ -90,7 +91,8 @@ def test_m19_capture_has_the_asked_pretrigger_and_its_trigger_at_the_first_m19_c
     state = data[3]
     assert state[200] == AxisState.POSITIONING and state[199] != AxisState.POSITIONING
     detail = srv.http.get(f"/api/traces/{cap['id']}").json()
-    assert any(e["message"].startswith("M19") for e in detail["events"])
+    m19 = [e for e in detail["events"] if e["code"] == Code.EV_M_START and e["m"] == 19]
+    assert [e["axis"] for e in m19] == ["S1"]
 
 
 def test_level_trigger_fires_once_in_single_mode(srv: Server, mid: str) -> None:

@@ -283,8 +283,8 @@ def test_override_and_gear_change(srv: Server, mid: str) -> None:
     wait_for(
         lambda: srv.axis("S1", mid)["gear"] == 5 and srv.axis("S1", mid)["state"] == "STANDSTILL"
     )
-    events = [e["message"] for e in srv.status(mid)["recent_events"]]
-    assert any("M44" in m for m in events)
+    events = srv.status(mid)["recent_events"]
+    assert any(e["axis"] == "S1" and e["m"] == 44 for e in events)
 
 
 def test_plc_manual_acknowledgement(srv: Server, mid: str) -> None:

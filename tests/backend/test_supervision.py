@@ -27,7 +27,7 @@ FRAME_S = 0.005
 def _subscribe(hub: TelemetryHub, m: MachineProxy) -> tuple[Subscriber, FakeSocket]:
     ws = FakeSocket()
     sub = hub.add(cast(WebSocket, ws), m, INSTRUCTOR)
-    sub.signals, sub.min_stride = [m.signal_by_name["X.pos_act_mm"]], 1
+    sub.signals, sub.min_stride = [m.link.signal_by_name["X.pos_act_mm"]], 1
     return sub, ws
 
 
@@ -63,7 +63,7 @@ def test_a_client_whose_frames_fail_is_closed_and_the_others_go_on(
     def fail(*_: object) -> Any:
         raise OverflowError("samples of an impossible range")
 
-    monkeypatch.setattr(broken, "samples", fail)
+    monkeypatch.setattr(broken.link, "samples", fail)
 
     async def run() -> None:
         hub = TelemetryHub(FRAME_S, 1000)
@@ -74,7 +74,7 @@ def test_a_client_whose_frames_fail_is_closed_and_the_others_go_on(
         await _until(lambda: bad.close_code is not None)
         assert bad.close_code == CLOSE_INTERNAL and hub.clients_dropped == 1
         step(host, 100)
-        end = host.cycle
+        end = host.link.cycle
         await _until(lambda: bool(good.frames) and _last_cycle(good) == end)
         assert hub.restarts == 0
         await hub.stop()
@@ -97,7 +97,7 @@ def test_a_failing_hub_is_restarted(host: MachineProxy, monkeypatch: pytest.Monk
         hub.start()
         _, ws = _subscribe(hub, host)
         step(host, 100)
-        end = host.cycle
+        end = host.link.cycle
         await _until(lambda: bool(ws.frames) and _last_cycle(ws) == end)
         assert hub.restarts == 2
         await hub.stop()
@@ -109,20 +109,20 @@ def test_a_machine_that_fails_in_the_loop_is_paused_and_the_others_keep_time(
     service: MachineService, host: MachineProxy, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     broken = paused_demo(service, "b", powered=False)
-    assert isinstance(broken.worker, InProcessWorker)
-    worker = broken.worker.core.worker
+    assert isinstance(broken.link.worker, InProcessWorker)
+    worker = broken.link.worker.core.worker
 
     def fail(*_: object) -> None:
         raise RuntimeError("kernel bug")
 
     monkeypatch.setattr(worker.hosts["b"], "advance", fail)
-    broken.call(Pace("b", "run"))
-    host.call(Pace("m", "run"))
-    c0 = host.cycle
-    wait_until(lambda: worker.host_failures and host.cycle > c0 + 50)
+    broken.link.call(Pace("b", "run"))
+    host.link.call(Pace("m", "run"))
+    c0 = host.link.cycle
+    wait_until(lambda: worker.host_failures and host.link.cycle > c0 + 50)
     assert worker.host_failures == 1  # paused after its first failure, not every tick
     assert worker.hosts["b"].pacing.mode == "pause"
-    assert host.cycle > c0 + 50
+    assert host.link.cycle > c0 + 50
 
 
 def test_a_failing_recording_ends_and_the_others_go_on(

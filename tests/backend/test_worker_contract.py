@@ -83,19 +83,19 @@ def m(service: MachineService) -> MachineProxy:
 
 
 def submit(m: MachineProxy, cmd: Command) -> Submitted:
-    done = m.call(Submit(m.id, cmd))
+    done = m.link.call(Submit(m.id, cmd))
     assert isinstance(done, Submitted)
     return done
 
 
 def step(m: MachineProxy, cycles: int) -> Pacing:
-    pacing = m.call(Step(m.id, cycles))
+    pacing = m.link.call(Step(m.id, cycles))
     assert isinstance(pacing, Pacing)
     return pacing
 
 
 def read_status(m: MachineProxy) -> StatusRead:
-    status = m.call(ReadStatus(m.id))
+    status = m.link.call(ReadStatus(m.id))
     assert isinstance(status, StatusRead)
     return status
 
@@ -116,13 +116,13 @@ def test_a_step_moves_the_cycle_exactly_and_its_samples_reach_the_gateway(
     m: MachineProxy,
 ) -> None:
     start = step(m, 1).cycle
-    pos = m.signal_by_name["X.pos_cmd_mm"]
-    x0 = float(m.samples([pos], start, start, 1)[0][0, 0])
+    pos = m.link.signal_by_name["X.pos_cmd_mm"]
+    x0 = float(m.link.samples([pos], start, start, 1)[0][0, 0])
     submit(m, Move("X", x0 + 50.0, rapid=False, feed_mm_min=600.0))
     assert step(m, 700).cycle == start + 700
     assert read_status(m).pacing.cycle == start + 700
-    assert m.cycle == start + 700  # the gateway's ring holds every stepped cycle
-    data, first = m.samples([pos], start + 1, start + 700, 1)
+    assert m.link.cycle == start + 700  # the gateway's ring holds every stepped cycle
+    data, first = m.link.samples([pos], start + 1, start + 700, 1)
     assert first == start + 1 and data.shape == (1, 700)
     # G01 at 600 mm/min: 10 mm/s, 0.01 mm per 1 ms cycle once at feed (consecutive rows)
     assert np.diff(data[0, -300:]) == pytest.approx(0.01, abs=1e-9)
@@ -130,31 +130,31 @@ def test_a_step_moves_the_cycle_exactly_and_its_samples_reach_the_gateway(
 
 
 def test_pacing_answers_with_where_time_stands(m: MachineProxy) -> None:
-    paused = m.call(Pace(m.id, "pause"))
+    paused = m.link.call(Pace(m.id, "pause"))
     assert isinstance(paused, Pacing) and paused.mode == "pause"
-    again = m.call(Pace(m.id, "pause"))
+    again = m.link.call(Pace(m.id, "pause"))
     assert isinstance(again, Pacing) and again.cycle == paused.cycle  # paused: time stands
 
 
 def test_events_and_a_scope_capture_reach_the_gateway(m: MachineProxy) -> None:
-    read = m.events_since(0)
+    read = m.link.events_since(0)
     seen = read[2]
     submit(m, EmergencyStop())
     step(m, 5)
-    wait_until(lambda: any(e.code == Code.EMERGENCY_STOP for e in m.events_since(seen)[0]))
-    pos = m.signal_by_name["X.pos_act_mm"]
+    wait_until(lambda: any(e.code == Code.EMERGENCY_STOP for e in m.link.events_since(seen)[0]))
+    pos = m.link.signal_by_name["X.pos_act_mm"]
     setup = ScopeSetup([pos], 200, 25.0, ScopeMode.SINGLE, LevelTrigger(pos, 1e6))
-    m.call(ScopeArm(m.id, setup))
-    m.call(ScopeAct(m.id, "force"))
+    m.link.call(ScopeArm(m.id, setup))
+    m.link.call(ScopeAct(m.id, "force"))
     step(m, 300)
-    wait_until(lambda: len(m.captures) == 1)
-    record = m.captures[-1].record
+    wait_until(lambda: len(m.captures.recent()) == 1)
+    record = m.captures.recent()[-1].record
     assert record.forced and record.count == 200 and record.channels == [pos]
 
 
 def test_a_removed_machine_is_gone_from_its_worker(service: MachineService) -> None:
     m = paused_demo(service, f"c{next(_serial)}")
-    worker = m.worker
+    worker = m.link.worker
     assert worker is not None
     service.delete(m.id)
     with pytest.raises(WorkerRefused) as refused:
@@ -167,7 +167,7 @@ def test_a_removed_machine_is_gone_from_its_worker(service: MachineService) -> N
 def test_a_dead_worker_is_detected_and_its_machines_rebuilt_on_another(
     service: MachineService, transport: tuple[str, Factory], m: MachineProxy
 ) -> None:
-    dead, epoch, rebuilt = m.worker, m.epoch, service.rebuilt
+    dead, epoch, rebuilt = m.link.worker, m.link.epoch, service.rebuilt
     assert dead is not None
     if transport[0] == "local":
         assert dead.pid is not None
@@ -176,10 +176,10 @@ def test_a_dead_worker_is_detected_and_its_machines_rebuilt_on_another(
         import ray
 
         ray.kill(dead.actor)  # type: ignore[attr-defined]
-    wait_until(lambda: m.worker is not dead and m.epoch == epoch + 1, 30)
+    wait_until(lambda: m.link.worker is not dead and m.link.epoch == epoch + 1, 30)
     assert not dead.alive and service.rebuilt > rebuilt
     assert read_status(m).pacing.mode == "run"  # the rebuilt machine answers, running
-    wait_until(lambda: m.cycle > 0)  # its samples flow from the new worker
+    wait_until(lambda: m.link.cycle > 0)  # its samples flow from the new worker
     wait_until(lambda: len(service.pool.alive()) == 2, 60)  # a replacement took its place
 
 
@@ -193,5 +193,5 @@ def test_machines_created_at_once_spread_over_the_workers(tmp_path: Path) -> Non
                 range(4),
             )
         )
-        per_worker = Counter(id(m.worker) for m in made)
+        per_worker = Counter(id(m.link.worker) for m in made)
         assert sorted(per_worker.values()) == [2, 2]

@@ -19,7 +19,7 @@ export function restartLog(message: string): void {
   seen.clear();
   dismissed.value = new Set();
   addEvents([
-    { cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null, line: null, column: null, signal: null },
+    { cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null, line: null, column: null, signal: null, value: null },
   ]);
 }
 
