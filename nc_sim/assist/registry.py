@@ -374,10 +374,10 @@ ASSISTANTS: tuple[Assistant, ...] = (
         "ResolutionCheckRequest",
         (
             AxisChoice(kinds=_AXES),
-            Number("distance", "travel, mm (° for rotary)", "mm", -1000, 1000, default=10.0),
+            Number("distance", "distance to move (° for rotary)", "mm", -1000, 1000, default=10.0),
             Number(
                 "feed_mm_min",
-                "feed, mm/min (°/min for rotary)",
+                "feed (°/min for rotary)",
                 "mm/min",
                 0,
                 1e5,
@@ -387,7 +387,7 @@ ASSISTANTS: tuple[Assistant, ...] = (
             ),
             Number(
                 "measured",
-                "travel measured on the machine, mm (°); empty: the simulated plant's",
+                "travel measured on the machine (empty: the simulated plant's)",
                 "mm",
                 -1000,
                 1000,

@@ -32,6 +32,17 @@ RESOLUTION_UNIT = {AxisKind.LINEAR: "0.1 µm", AxisKind.ROTARY: "0.0001°"}  # w
 FLOOR_PPM = 20.0  # a travel agreeing within this (and two increments) is right
 
 
+def _simplest(k: float, within_ppm: float) -> Fraction:
+    """The fraction with the smallest denominator within `within_ppm` of k: a measured 49.9 mm
+    on 50 mm is 500/499, not the float's 1.00200400..."""
+    bound = 10
+    while True:
+        f = Fraction(k).limit_denominator(bound)
+        if abs(float(f) / k - 1.0) * PPM <= within_ppm or bound > 10**9:
+            return f
+        bound *= 10
+
+
 def resolution_check_experiment(
     cfg: MachineConfig,
     axis: str,
@@ -91,9 +102,7 @@ def resolution_check(
     tolerance_ppm = FLOOR_PPM + PPM * 2.0 * inc / abs(nc_travel)
     off_ppm = (k - 1.0) * PPM
     z, n = int(ax.cfg.raw("getriebe.wegaufz", g)), int(ax.cfg.raw("getriebe.wegaufn", g))
-    new_z, new_n, note = list_fraction(
-        Fraction(z) * Fraction(round(k * PPM), round(PPM)), Fraction(n)
-    )
+    new_z, new_n, note = list_fraction(Fraction(z) * _simplest(k, tolerance_ppm / 10), Fraction(n))
     gi = g - 1
     unit = ax.pos_unit
     figures = (

@@ -21,11 +21,11 @@ export function loadCatalogue(): Promise<void> {
   return asked;
 }
 
-/** "multi_gain by experiment [004 §3.6.2]": an assistant by its title (its name when the
+/** "multi_gain by experiment (004 §3.6.2)": an assistant by its title (its name when the
  * service no longer knows it). */
 export function titleOf(name: string): string {
   const a = catalogue.value.find((x) => x.name === name);
-  return a ? `${a.title} [${a.section}]` : name;
+  return a ? `${a.title} (${a.section})` : name;
 }
 
 /** Run an assistant with the body its request schema describes; rejects with the service's

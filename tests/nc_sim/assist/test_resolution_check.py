@@ -43,7 +43,7 @@ def test_a_measured_travel_given_by_the_engineer_decides() -> None:
     r = run("resolution-check", lathe(), {"axis": "Z", "distance": -50.0, "measured": -49.9})
     assert r.figure("nc_travel") == pytest.approx(-50.0, abs=2e-4)  # two increments of 0.1 µm
     assert r.figure("k") == pytest.approx(50 / 49.9, rel=5e-6)
-    assert float(_pair(r)) == pytest.approx(50 / 49.9, rel=5e-6)
+    assert _pair(r) == Fraction(500, 499)  # the simplest fraction within what was measured
 
 
 def test_travels_that_agree_propose_nothing() -> None:
