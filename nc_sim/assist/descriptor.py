@@ -11,10 +11,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any, Literal, TypeAlias
-
-Scalar = float | int | str | bool | None
-InputValue: TypeAlias = Scalar | list[float] | list[dict[str, float]]
+from typing import Any, Literal
 
 
 class Kind(StrEnum):
