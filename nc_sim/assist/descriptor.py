@@ -179,7 +179,8 @@ Input = Number | Choice | Flag | AxisChoice | NumberList | Table
 @dataclass(frozen=True)
 class Assistant:
     """One assistant. `run` is "module:function" taking the machine's configuration and the
-    inputs as keywords and answering a `Result` (on a copy; a calculator: at once); `live`,
+    inputs as keywords and answering a `Result` (on a copy; a calculator: at once; empty for
+    an experiment whose `live` procedure runs on a fresh copy as it is); `live`,
     when it may run on the machine itself, takes the machine and the inputs and is a
     `Procedure` its worker paces. `request` names the API's model of its inputs; `summary`
     the figures that say what a run found (the run list, the report)."""

@@ -395,7 +395,7 @@ ASSISTANTS: tuple[Assistant, ...] = (
                 optional=True,
             ),
         ),
-        "nc_sim.assist.resolution_check:resolution_check_experiment",
+        "",  # on a copy: the live procedure as it is
         ("k", "deviation_ppm"),
         live="nc_sim.assist.resolution_check:resolution_check",
     ),

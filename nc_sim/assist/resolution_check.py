@@ -16,10 +16,9 @@ import numpy as np
 
 from nc_sim.assist.calculators import list_fraction
 from nc_sim.assist.experiments import _check_axis, _refusal, _stop, _thin
-from nc_sim.assist.procedure import Procedure, Wait, on_copy
+from nc_sim.assist.procedure import Procedure, Wait
 from nc_sim.assist.result import Change, ExperimentError, Figure, Result, Series
 from nc_sim.commands import Accepted, Move
-from nc_sim.config import MachineConfig
 from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
 from nc_sim.snapshot import AxisState
@@ -41,17 +40,6 @@ def _simplest(k: float, within_ppm: float) -> Fraction:
         if abs(float(f) / k - 1.0) * PPM <= within_ppm or bound > 10**9:
             return f
         bound *= 10
-
-
-def resolution_check_experiment(
-    cfg: MachineConfig,
-    axis: str,
-    distance: float = 10.0,
-    feed_mm_min: float = 1000.0,
-    measured: float | None = None,
-) -> Result:
-    """`resolution_check` on a fresh copy of the machine `cfg` describes (the preview)."""
-    return on_copy(cfg, lambda m: resolution_check(m, axis, distance, feed_mm_min, measured))
 
 
 def resolution_check(

@@ -37,6 +37,15 @@ def _with_before(cfg: MachineConfig, result: Result) -> Result:
     return replace(result, changes=tuple(changes))
 
 
+def _live_on_copy(a: Assistant, cfg: MachineConfig, inputs: dict[str, Any]) -> Result:
+    """The live procedure on a fresh copy of the machine (imported here: the kernel loads only
+    where an experiment runs, never for a calculator)."""
+    on_copy = resolve("nc_sim.assist.procedure:on_copy")
+    start = resolve(a.live)
+    result: Result = on_copy(cfg, lambda m: start(m, **inputs))
+    return result
+
+
 def run(name: str, cfg: MachineConfig, values: Mapping[str, object]) -> Result:
     """Assistant `name` with `values` on a copy of the machine `cfg` describes (a calculator:
     on its parameters); ExperimentError when the inputs or the machine do not allow it."""
@@ -44,7 +53,7 @@ def run(name: str, cfg: MachineConfig, values: Mapping[str, object]) -> Result:
     inputs = _inputs(a, values)
     try:
         cfg.axis(str(inputs.get("axis", "")))
-        result: Result = resolve(a.run)(cfg, **inputs)
+        result: Result = resolve(a.run)(cfg, **inputs) if a.run else _live_on_copy(a, cfg, inputs)
     except NcUsageError as e:
         raise ExperimentError(str(e)) from None
     return _with_before(cfg, result) if a.kind is Kind.CALCULATOR else result
