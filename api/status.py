@@ -254,7 +254,10 @@ class OverrunRecord(BaseModel):
 class LoopStatus(BaseModel):
     """A worker's real-time loop, which paces the worker's machines."""
 
-    period_s: float = Field(description="loop period, s (it steps every due cycle per tick)")
+    period_s: float = Field(
+        description="loop period, s (it steps every due cycle per tick; the longest, 0.01 s, "
+        "while every machine of the worker rests)"
+    )
     ticks: int
     overruns: int = Field(description="ticks whose work ran past the next deadline")
     missed_deadlines: int = Field(description="deadlines skipped after overruns")

@@ -213,6 +213,19 @@ class MachineHost:
                 del self.jog_leases[axis]
                 self.machine.submit(JogStop(axis))  # the dead-man released the key
 
+    def resting(self) -> bool:
+        """Nothing is commanded to move in the newest cycle (no set-point speed on any axis
+        or spindle), no jog held, no assistant, capture or step under way: the loop may step
+        this machine in longer stretches (what it records is the same, only sent in fewer
+        batches)."""
+        p = self.pacing
+        if p.mode != "run" or p.step_to is not None or self.jog_leases or self.scope.active:
+            return p.mode == "pause" and p.step_to is None
+        if self.live is not None:
+            return False
+        newest = self.ring.rows[self.sim.cycle % self.ring.cycles]
+        return not newest[:, L.R_V_CMD].any()
+
     def due_cycle(self, now_mono: float) -> int:
         """The cycle real time calls for now (while running)."""
         return int((now_mono - self.pacing.anchor_mono) / self.cycle_s)

@@ -81,6 +81,9 @@ WORKER_NICE = -10  # the fallback when real-time scheduling is not allowed
 WORKER_RT_PRIORITY = 10  # SCHED_FIFO priority (1 lowest, 99 highest) of a worker's loop
 MAX_SERVE = 64  # requests carried out at a time before the loop looks at its deadline
 MAX_PERIOD_S = 0.01  # the longest loop period (telemetry waits at most this for samples)
+# while every machine rests (nothing commanded to move) the loop ticks at MAX_PERIOD_S: a
+# resting machine's tick costs as much Python as a moving one's, and at rest its samples
+# need not arrive every 2 ms. A request wakes the loop at once (it steps with it now).
 MACHINES_PER_PERIOD = 4  # machines per base period before the period grows
 CLASS_MACHINES = 16  # a worker holding more runs a class: statuses at CLASS_STATUS_PERIOD_S
 
@@ -132,6 +135,7 @@ class Worker:
         self.stopped = False
         self.news_due = False  # pacing changed: report at the end of this tick
         self.awake_until = 0.0  # an idle loop served a request: it ticks until then
+        self.resting = False  # every machine rested after the last tick (the long period)
         # loop figures, read only by this thread
         self.ticks = self.overruns = self.missed = self.host_failures = 0
         self.work_s: deque[float] = deque(maxlen=5000)  # per tick: stepping and serving
@@ -166,6 +170,9 @@ class Worker:
                     self.interpreting.step(min(interpret_until, time.monotonic() + SLICE_S))
                 elif self.backlog or self.channel.wait(remaining):
                     self._serve_timed()
+                    if period > self.base_period_s and self.resting:  # step with it now
+                        self.resting = False
+                        deadline = time.monotonic()
             wake = checked = time.monotonic()
             for host in list(self.hosts.values()):
                 self._tick(host, deadline, period)
@@ -179,6 +186,7 @@ class Worker:
             self._finish_steps()
             self._finish_assists()
             self._finish_interpreting()
+            self.resting = all(h.resting() for h in self.hosts.values())
             self.channel.flush()  # the tick's pushes in one write
             done = time.monotonic()
             self._account(deadline, wake, done, deadline + period)
@@ -193,10 +201,13 @@ class Worker:
 
     def period(self) -> float:
         """The loop period for the machines held now: the configured one for a few
-        machines, longer for a class of them, at most MAX_PERIOD_S. A machine's tick costs
+        machines, longer for a class of them, at most MAX_PERIOD_S; MAX_PERIOD_S while
+        every machine rests. A machine's tick costs
         a kernel call whose Python around it (wake-ups, drive status, the ring) outweighs a
         few cycles: stepped in stretches of 10 cycles, an idle seat costs a few µs per ms.
         Commands never wait for a tick."""
+        if self.resting:
+            return max(MAX_PERIOD_S, self.base_period_s)
         n = max(1, math.ceil(len(self.hosts) / MACHINES_PER_PERIOD))
         return min(MAX_PERIOD_S, max(self.base_period_s, self.base_period_s * n))
 

@@ -1,5 +1,5 @@
 // One live plot: chosen signals (subscribed by state/plots.ts, on screen or not) over a 1–30 s
-// window, drawn with uPlot at most once per animation frame and only when new samples arrived;
+// window, drawn with uPlot at most 25 times a second and only when new samples arrived;
 // pause, drag-zoom (pauses), autoscale, cursor readout in the legend, and the newest value of
 // every trace under the chart.
 import { useEffect, useRef, useState } from "preact/hooks";
@@ -8,9 +8,11 @@ import "uplot/dist/uPlot.min.css";
 import type { PlotConfig } from "../state/plots";
 import { catalogue, rings } from "../state/telemetry";
 import { fmt, tickLabels } from "../ui/format";
+import { drawLoop } from "../ui/drawLoop";
 import { SignalPicker } from "../ui/SignalPicker";
 
 export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+const MAX_DRAWS_PER_S = 25; // smooth to the eye; more only costs the browser
 export const fps = { frames: 0, draws: 0 }; // read by bench/ui.py through window.inbetrieb
 
 function unitOf(name: string): string {
@@ -59,25 +61,25 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
     plot.current = u;
     const ro = new ResizeObserver(() => u.setSize({ width: Math.max(200, el.clientWidth), height: Math.max(160, el.clientHeight) }));
     ro.observe(el);
-    let raf = 0;
     let seen = -1;
     let lastLatest = 0;
-    const frame = (now: number) => {
-      raf = requestAnimationFrame(frame);
-      fps.frames++;
-      const r = rings.value;
-      if (pausedRef.current || r.version === seen) return;
-      seen = r.version;
-      u.setData(r.window(config.windowS, config.signals) as uPlot.AlignedData);
-      fps.draws++;
-      if (now - lastLatest > 200) {
-        lastLatest = now;
-        setLatest(config.signals.map((s) => r.latest(s)));
-      }
-    };
-    raf = requestAnimationFrame(frame);
+    const stop = drawLoop(
+      () => !pausedRef.current && rings.value.version !== seen,
+      (now) => {
+        fps.frames++;
+        const r = rings.value;
+        seen = r.version;
+        u.setData(r.window(config.windowS, config.signals) as uPlot.AlignedData);
+        fps.draws++;
+        if (now - lastLatest > 200) {
+          lastLatest = now;
+          setLatest(config.signals.map((s) => r.latest(s)));
+        }
+      },
+      MAX_DRAWS_PER_S,
+    );
     return () => {
-      cancelAnimationFrame(raf);
+      stop();
       ro.disconnect();
       u.destroy();
       plot.current = null;

@@ -7,8 +7,10 @@ import type { ChannelStatus, ProgramPreview } from "../api/types";
 import type { Rings } from "../state/rings";
 import { status } from "../state/session";
 import { frameListeners, unwant, want } from "../state/telemetry";
+import { drawLoop } from "../ui/drawLoop";
 import { fmt } from "../ui/format";
 
+const MAX_DRAWS_PER_S = 25; // the actual path grows smoothly to the eye
 const MAX_ACTUAL = 20_000; // points of the actual path kept (the oldest go first)
 const MIN_STEP_MM = 0.001; // a new actual point only once the tool moved this far
 const MARGIN_PX = 40;
@@ -107,33 +109,33 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
   useEffect(() => {
     const el = canvas.current;
     if (!el) return;
-    let raf = 0;
-    const draw = () => {
-      raf = requestAnimationFrame(draw);
-      const w = el.clientWidth, ht = el.clientHeight;
-      const dpr = window.devicePixelRatio || 1;
-      if (el.width !== Math.round(w * dpr) || el.height !== Math.round(ht * dpr)) {
-        el.width = Math.round(w * dpr);
-        el.height = Math.round(ht * dpr);
-        dirty.current = true;
-      }
-      if (fitted.current) {
-        const f = fit(props.preview, w, ht);
-        const old = view.current;
-        if (!old || old.cx !== f.cx || old.cy !== f.cy || old.pxPerMm !== f.pxPerMm) dirty.current = true;
-        view.current = f;
-      }
-      if (!dirty.current || !view.current) return;
-      dirty.current = false;
-      const ctx = el.getContext("2d");
-      if (!ctx) return;
-      paint(ctx, dpr, w, ht, view.current, props.preview, props.blockLine, actual.current);
-      const a = actual.current; // for tests and tools: how much of the actual path is drawn, from where
-      el.dataset.actualPoints = String(a.length / 2);
-      el.dataset.actualFrom = a.length ? `${a[0].toFixed(3)} ${a[1].toFixed(3)}` : "";
+    const resized = new ResizeObserver(() => (dirty.current = true));
+    resized.observe(el);
+    const stop = drawLoop(
+      () => dirty.current,
+      () => {
+        const w = el.clientWidth, ht = el.clientHeight;
+        const dpr = window.devicePixelRatio || 1;
+        if (el.width !== Math.round(w * dpr) || el.height !== Math.round(ht * dpr)) {
+          el.width = Math.round(w * dpr);
+          el.height = Math.round(ht * dpr);
+        }
+        if (fitted.current) view.current = fit(props.preview, w, ht);
+        if (!view.current) return;
+        dirty.current = false;
+        const ctx = el.getContext("2d");
+        if (!ctx) return;
+        paint(ctx, dpr, w, ht, view.current, props.preview, props.blockLine, actual.current);
+        const a = actual.current; // for tests and tools: how much of the actual path is drawn, from where
+        el.dataset.actualPoints = String(a.length / 2);
+        el.dataset.actualFrom = a.length ? `${a[0].toFixed(3)} ${a[1].toFixed(3)}` : "";
+      },
+      MAX_DRAWS_PER_S,
+    );
+    return () => {
+      stop();
+      resized.disconnect();
     };
-    raf = requestAnimationFrame(draw);
-    return () => cancelAnimationFrame(raf);
   }, [props.preview, props.blockLine]);
 
   const toMm = (e: MouseEvent): [number, number] | null => {

@@ -34,12 +34,31 @@ const STALE_MS = 2000; // status comes about 20 times a second
 const PROBE_MS = 1000;
 let lastStatusMs = 0;
 
+// Numbers are shown at most 10 times a second, as on a controller's own screen: each shown
+// status re-renders every panel that reads it, and at the 20 pushes a second that cost the
+// browser a fifth of a core. A status arriving after a quiet spell shows at once.
+const SHOW_EVERY_MS = 100;
+let shownMs = 0;
+let newest: MachineStatus | null = null;
+let showTimer = 0;
+
+function show(): void {
+  showTimer = 0;
+  shownMs = Date.now();
+  if (newest && newest.id === machineId.value) status.value = newest;
+  newest = null;
+}
+
 /** A status pushed for the current machine. */
 export function statusArrived(st: MachineStatus): void {
   if (st.id !== machineId.value) return;
-  status.value = st;
+  newest = st;
   lastStatusMs = Date.now();
   statusStale.value = false;
+  if (showTimer) return;
+  const wait = shownMs + SHOW_EVERY_MS - lastStatusMs;
+  if (wait <= 0) show();
+  else showTimer = window.setTimeout(show, wait);
 }
 
 let probing = false;
