@@ -112,6 +112,8 @@ HliUnit = Literal[
     "TorquePermission",
     "ReleaseFeedhold",
     "reduced_speed",
+    "reduced_speed_zone",
+    "reduced_speed_2_zone",
     "spindle_stop_at_program_end",
     "spindle_reset",
     "override_valid",

@@ -17,9 +17,12 @@ AXIS_UNITS = (
     "TorquePermission",
     "ReleaseFeedhold",
     "reduced_speed",
+    "reduced_speed_zone",  # in safety zone 1 (P-AXIS-00093 … 00085) [002 §2.8]
+    "reduced_speed_2_zone",  # in safety zone 2 (P-AXIS-00105 … 00097)
     "spindle_stop_at_program_end",
     "spindle_reset",
 )
+REDUCED_SPEED_UNITS = ("reduced_speed", "reduced_speed_zone", "reduced_speed_2_zone")
 OVERRIDE_MAX = 2000  # override in 0.1 %: 0 … 200 %
 
 
@@ -38,6 +41,8 @@ def axis_units() -> dict[str, int]:
         "TorquePermission": 0,
         "ReleaseFeedhold": 0,
         "reduced_speed": 0,
+        "reduced_speed_zone": 0,
+        "reduced_speed_2_zone": 0,
         "spindle_stop_at_program_end": 0,
     }
 

@@ -8,6 +8,7 @@ through the narrow `SpindleMode`.
 
 from __future__ import annotations
 
+import math
 from typing import Protocol
 
 from nc_sim.axis.dynamics import Motion, Sourced, feedhold_limits, param, velocity_in_force
@@ -25,6 +26,41 @@ _FAR = 1e9  # jog target of a spindle (a modulo axis: no position range)
 # positions the NC represents: SGN32 in 0.1 µm | 0.0001° (the range of P-AXIS-00177/00178);
 # an unhomed axis may go anywhere within it, a target beyond it is meaningless (90003)
 POSITION_RANGE = to_eng(Quantity.POSITION, 2**31 - 1)
+
+
+def reduced_speed(ax: Axis, motion: Motion, span: tuple[float, float]) -> Sourced | None:
+    """The axis speed the PLC's reduced-speed requests allow (unit/s, not scaled by the
+    override), or None while they ask for none [002 §2.8]:
+
+    - `reduced_speed` (a door open): P-AXIS-00155 for rapid traverse (P-AXIS-00214 when it
+      is unset), P-AXIS-00214 for every other motion;
+    - `reduced_speed_zone` / `reduced_speed_2_zone`: P-AXIS-00030 (zone 2: P-AXIS-00503, or
+      P-AXIS-00030 when it is 0) for a motion whose positions `span` (lowest, highest)
+      reach into safety zone 1 (P-AXIS-00093 … P-AXIS-00085) or 2
+      (P-AXIS-00105 … P-AXIS-00097). The whole motion keeps the zone's speed, so the axis is
+      never faster inside the zone (the NC slows only inside it: we are on the safe side).
+
+    It limits the axis whichever motion it takes part in (jog, single-axis move, the path)."""
+    limits: list[Sourced] = []
+    if ax.units["reduced_speed"]:
+        name = "getriebe.rapid_speed_red" if motion is Motion.RAPID else "getriebe.vb_max_red"
+        red = param(ax.cfg, name, ax.gear, "reduced_speed")
+        if not red.value:
+            red = param(ax.cfg, "getriebe.vb_max_red", ax.gear, "reduced_speed")
+        limits.append(red)
+    lo, hi = span
+    for unit, zone, speed in (
+        ("reduced_speed_zone", "kenngr.red_speed_zone", "getriebe.vb_max_red_zone"),
+        ("reduced_speed_2_zone", "kenngr.red_speed_zone_2", "getriebe.vb_max_red_zone_2"),
+    ):
+        neg, pos = ax.cfg.eng(zone + "_neg"), ax.cfg.eng(zone + "_pos")
+        if ax.units[unit] and neg < pos and lo <= pos and hi >= neg:
+            red = param(ax.cfg, speed, ax.gear, "reduced_speed")
+            if not red.value:
+                red = param(ax.cfg, "getriebe.vb_max_red_zone", ax.gear, "reduced_speed")
+            limits.append(red)
+    limits = [r for r in limits if r.value > 0]
+    return min(limits, key=lambda r: r.value) if limits else None
 
 
 class SpindleMode(Protocol):
@@ -67,13 +103,11 @@ class Moves:
         base = velocity_in_force(ax.cfg, ax.gear, motion, ax.feed)
         ovr = self.override(ax)
         v = Sourced(base.value * ovr, base.source, base.param_id, base.kind)
-        if ax.units["reduced_speed"]:
-            name = "getriebe.rapid_speed_red" if motion is Motion.RAPID else "getriebe.vb_max_red"
-            red = param(ax.cfg, name, ax.gear, "reduced_speed")
-            if not red.value:
-                red = param(ax.cfg, "getriebe.vb_max_red", ax.gear, "reduced_speed")
-            if 0 < red.value < v.value:
-                return red, 1.0
+        p = float(self.motion.k.st[ax.slot, L.S_P_CMD])
+        to = ax.target if ax.target is not None and math.isfinite(ax.target) else p
+        red = reduced_speed(ax, motion, (min(p, to), max(p, to)))
+        if red is not None and red.value < v.value:
+            return red, 1.0
         return v, ovr
 
     def _vmax(self, ax: Axis, motion: Motion) -> float:

@@ -60,8 +60,20 @@ def push_params(k: Kernel, ax: Axis) -> None:
     pr[s, L.P_FF] = ax.ff_weight if spindle else c.eng("lr_param.ff_weight")
     pr[s, L.P_MG] = c.eng("getriebe.multi_gain_z", g) / c.eng("getriebe.multi_gain_n", g)
     pr[s, L.P_DA_MAX] = c.eng("lr_hw.da_max")
-    pr[s, L.P_SIGN_CMD] = -1.0 if c.flag("lr_hw.vz_stellgr") else 1.0
-    pr[s, L.P_SIGN_FB] = -1.0 if c.flag("lr_hw.vz_istw") else 1.0
+    # P-AXIS-00159: a gear stage of a spindle may reverse both the output and the actual
+    # value: the spindle turns the other way, the NC sees the same [000]
+    reverse = spindle and bool(c.raw("getriebe.reverse", g))
+    rev = -1.0 if reverse else 1.0
+    pr[s, L.P_SIGN_CMD] = rev * (-1.0 if c.flag("lr_hw.vz_stellgr") else 1.0)
+    sign_fb, pr[s, L.P_SIGN_FB] = (
+        pr[s, L.P_SIGN_FB],
+        rev * (-1.0 if c.flag("lr_hw.vz_istw") else 1.0),
+    )
+    if reverse != ax.reversed:  # a gear change: the NC's actual position must not jump
+        if sign_fb != 0.0:  # (0: the row is new)
+            x_enc = pr[s, L.P_ENC_SIGN] * pr[s, L.P_ENC_FACTOR] * k.st[s, L.S_X_MOTOR]
+            pr[s, L.P_ENC_OFFSET] += (sign_fb - pr[s, L.P_SIGN_FB]) * x_enc
+        ax.reversed = reverse
     # one increment = wegaufn/wegaufz in 0.1 µm or 0.0001°
     pr[s, L.P_ENC_INC] = c.eng("getriebe.wegaufn", g) / c.eng("getriebe.wegaufz", g)
     pr[s, L.P_LAG_MAX] = c.eng("getriebe.lag_max", g)

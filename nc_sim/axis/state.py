@@ -65,6 +65,7 @@ class Axis:
     # spindle only
     override_suppressed: bool = False  # G167 until the next S[REV..]
     ff_weight: float = 0.0  # G135/G136/G137 feedforward weight 0..1
+    reversed: bool = False  # getriebe[i].reverse of the gear stage in force (P-AXIS-00159)
     tool: ToolLimits = field(default_factory=ToolLimits)  # in force
     tool_pending: ToolLimits | None = None  # adopted at the next start from standstill
     speed_ctrl: bool = False  # M3/M4 programmed above the changeover speed P-AXIS-00767

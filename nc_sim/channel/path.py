@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -136,10 +137,7 @@ class Path:
         axes = [dynamics(e) for e in elems]
         for i, e in enumerate(elems):
             if e.rapid:
-                ax = [
-                    AxisDynamics(a.v_max * override, a.lim, a.a_trans, a.j_trans, a.tr_geom_s)
-                    for a in axes[i]
-                ]
+                ax = [replace(a, v_max=a.v_max * override) for a in axes[i]]
                 limits.append(element_limits(e, ax, np.inf))
             else:
                 limits.append(element_limits(e, axes[i], (e.feed_mm_min or 0.0) * feed_scale))

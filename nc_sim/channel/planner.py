@@ -4,7 +4,8 @@ The kernel runs the plan (nc_sim/kernel/step.py `_advance_path`): path length, s
 acceleration in the channel's slot, every path axis set from the element's geometry. Here:
 
 - each element's speed cap is F (G01/G02/G03, × channel override) or rapid, and no axis above
-  its own maximum: v_path ≤ v_max_axis / |d axis / d u| (the weakest axis limits the path);
+  its own maximum: v_path ≤ v_max_axis / |d axis / d u| (the weakest axis limits the path),
+  nor above the reduced speed the PLC asks for on it [002 §2.8];
   on arcs also the centripetal acceleration (half the weakest plane axis' acceleration) and
   the geometric jerk v³/r² ≤ a / tr_geom (P-AXIS-00199);
 - path acceleration and deceleration are the weakest axis' projected on the path, ramp times
@@ -37,6 +38,7 @@ from nc_sim.profiles.plan import (
     LIM_TR_ACC_UP,
     LIM_TR_DEC_DOWN,
     LIM_TR_DEC_UP,
+    LIM_V12,
     make_limits,
     move_through,
     speed_within,
@@ -55,6 +57,7 @@ class AxisDynamics:
     a_trans: float  # acceleration allowed at a corner (P-AXIS-00013)
     j_trans: float  # jerk allowed at a tangential transition (P-AXIS-00154)
     tr_geom_s: float  # geometric ramp time (P-AXIS-00199)
+    v_red: float = math.inf  # the PLC's reduced speed [002 §2.8], whatever the override
 
 
 @dataclass
@@ -73,12 +76,43 @@ def single_stage(lim: np.ndarray) -> tuple[float, float]:
     return float(a_acc), float(a_dec)
 
 
+@dataclass
+class _Stages:
+    """The path's step-shaped acceleration (or deceleration) over its axes [002 §2.2.2]: each
+    axis gives stage 1 below its changeover speed and stage 2 above it, both seen on the path
+    (divided by the axis' share of the path motion, its changeover speed too)."""
+
+    low: float = math.inf  # path acceleration while every axis is in its first stage
+    high: float = math.inf  # ... in its second stage
+    first_change: float = math.inf  # lowest path speed at which an axis changes stage
+    last_change: float = 0.0  # highest
+
+    def add(self, a1: float, a2: float, v12: float, share: float, wgt: float) -> None:
+        self.low = min(self.low, share * a1 / wgt)
+        self.high = min(self.high, share * a2 / wgt)
+        self.first_change = min(self.first_change, v12 / wgt)
+        self.last_change = max(self.last_change, v12 / wgt)
+
+    def row(self) -> tuple[float, float, float]:
+        """(stage 1, stage 2, changeover path speed) of the one changeover the path plan
+        has. Between the axes' changeovers some axes are in one stage and some in the other:
+        there the lower of the two holds, so the changeover goes to the first axis' when
+        stage 2 is the lower one and to the last axis' otherwise (exact for a single axis
+        and for axes that change together)."""
+        if self.high == self.low or not math.isfinite(self.first_change):
+            return self.low, 0.0, 0.0
+        v12 = self.first_change if self.high < self.low else self.last_change
+        if not math.isfinite(v12):  # an axis of a single stage never changes: stage 1 above
+            return min(self.low, self.high), 0.0, 0.0
+        return self.low, self.high, v12
+
+
 def element_limits(e: Element, axes: list[AxisDynamics], feed_mm_s: float) -> Limits:
     """Speed cap and limits row of one element; `feed_mm_s` is F × override (∞ for G00
     before the axes' rapid speeds, which already carry the override)."""
     weights = e.weights()
     v_cap = feed_mm_s
-    a_acc = a_dec = math.inf
+    acc_stages, dec_stages = _Stages(), _Stages()
     tr = [0.0, 0.0, 0.0, 0.0]
     shape = 0.0
     a_plane = math.inf
@@ -89,9 +123,9 @@ def element_limits(e: Element, axes: list[AxisDynamics], feed_mm_s: float) -> Li
             continue
         acc, dec = single_stage(ax.lim)
         share = (1.0 - CENTRIPETAL_SHARE) if i in plane else 1.0
-        v_cap = min(v_cap, ax.v_max / wgt)
-        a_acc = min(a_acc, share * acc / wgt)
-        a_dec = min(a_dec, share * dec / wgt)
+        v_cap = min(v_cap, min(ax.v_max, ax.v_red) / wgt)
+        acc_stages.add(*_stages_of(ax.lim, LIM_A_ACC, LIM_A_ACC2), share, wgt)
+        dec_stages.add(*_stages_of(ax.lim, LIM_A_DEC, LIM_A_DEC2), share, wgt)
         cols = (LIM_TR_ACC_UP, LIM_TR_ACC_DOWN, LIM_TR_DEC_UP, LIM_TR_DEC_DOWN)
         tr = [max(t, float(ax.lim[c])) for t, c in zip(tr, cols, strict=True)]
         shape = max(shape, float(ax.lim[LIM_SHAPE]))
@@ -106,10 +140,24 @@ def element_limits(e: Element, axes: list[AxisDynamics], feed_mm_s: float) -> Li
             v_cap = min(v_cap, math.sqrt(CENTRIPETAL_SHARE * a_plane * r) / speed_in_plane)
         if math.isfinite(j_geom):
             v_cap = min(v_cap, (j_geom * r * r) ** (1.0 / 3.0) / speed_in_plane)
+    a_acc, a_acc2, v12_acc = acc_stages.row()
+    a_dec, a_dec2, v12_dec = dec_stages.row()
+    if v12_acc != v12_dec:  # the plan has one changeover speed: the lower stage throughout
+        a_acc, a_acc2 = min(a_acc, a_acc2 or a_acc), 0.0
+        a_dec, a_dec2 = min(a_dec, a_dec2 or a_dec), 0.0
+        v12_acc = 0.0
     if not math.isfinite(a_acc):  # moves no axis (cannot happen for a queued element)
         a_acc = a_dec = 1.0
-    lim = make_limits(a_acc, a_dec, tr[0], tr[1], tr[2], tr[3], shape)
+    lim = make_limits(a_acc, a_dec, tr[0], tr[1], tr[2], tr[3], shape, a_acc2, a_dec2, v12_acc)
     return Limits(max(v_cap, 0.0), lim)
+
+
+def _stages_of(lim: np.ndarray, first: int, second: int) -> tuple[float, float, float]:
+    """(stage 1, stage 2, changeover speed) of one axis' limits row; a single-stage row has
+    the same acceleration on both sides of an infinite changeover speed."""
+    if lim[second] <= 0:
+        return float(lim[first]), float(lim[first]), math.inf
+    return float(lim[first]), float(lim[second]), float(lim[LIM_V12])
 
 
 def junction_speed(a: Element, b: Element, axes: list[AxisDynamics], cycle_s: float) -> float:

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from nc_sim.axis.dynamics import Motion, feedhold_limits, motion_limits, velocity_limit
+from nc_sim.axis.moves import reduced_speed
 from nc_sim.channel import canon
 from nc_sim.channel.execution import PLC_INFO
 from nc_sim.channel.geometry import Element, point_at
@@ -46,7 +47,8 @@ class MachineChannelHost:
         self.path_axes = path_axes
         self.m_pending: dict[int, int] = {}  # action -> M functions not yet acknowledged
         self.stopping: dict[int, Axis] = {}  # M5 action -> its spindle (until standstill)
-        self.reaching: dict[int, Axis] = {}  # M3/M4/S action -> its spindle (speed reached)
+        # M3/M4/S action -> its spindle (speed reached) and the cycle it was commanded in
+        self.reaching: dict[int, tuple[Axis, int]] = {}
         self.homing: dict[int, list[list[str]]] = {}  # G74 action -> order groups to come
         self.moving = False  # the path axes move for the channel (not for a jog)
         self.next_id = 1  # numbers of actions
@@ -144,7 +146,7 @@ class MachineChannelHost:
                 if isinstance(call, canon.SpindleOff):
                     self.stopping[action_id] = ax
                 elif isinstance(call, canon.SpindleOn | canon.SpindleSpeed):
-                    self.reaching[action_id] = ax
+                    self.reaching[action_id] = (ax, m.cycle)
                 ok = spindle_call(m.sp, ax, call, action_id) is None
                 mfunc = _M_OF.get(type(call)) or getattr(call, "m", None)
                 if ok and mfunc is not None and self.synch_plc(ax, mfunc):
@@ -225,15 +227,19 @@ class MachineChannelHost:
             self.homing.pop(action_id, None)
             return True
         m = self.m
-        return all(m.moves.home(m.axis(name), action_id) is None for name in groups.pop(0))
+        # a spindle homes beside the program: nothing waits for it, but its job error stops
+        # the program (block 0) [000 §2.7]
+        return all(
+            m.moves.home(ax, 0 if ax.kind is AxisKind.SPINDLE else action_id) is None
+            for ax in (m.axis(name) for name in groups.pop(0))
+        )
 
     def busy(self, action_id: int) -> bool:
         axes = self.m.axes
         if action_id in self.homing:
-            # the next G74 group starts when only spindles of this one still home: a spindle
-            # homes unsynchronised with the axes [000 §2.7]
-            mine = [a for a in axes if a.block_id == action_id]
-            if all(a.kind is AxisKind.SPINDLE for a in mine) and not self._home_next(action_id):
+            # the next G74 group starts when the axes of this one are homed (its spindle
+            # homes unsynchronised, the block does not wait for it) [000 §2.7]
+            if not any(a.block_id == action_id for a in axes) and not self._home_next(action_id):
                 self.homing.pop(action_id, None)
             if action_id in self.homing:
                 return True
@@ -246,10 +252,14 @@ class MachineChannelHost:
             if ax.state is not AxisState.STANDSTILL or not self.m.k.ist[ax.slot, L.I_STOPPED]:
                 return True
             del self.stopping[action_id]
-        ax = self.reaching.get(action_id)
-        if ax is not None:
+        reaching = self.reaching.get(action_id)
+        if reaching is not None:
+            ax, since = reaching
             turning = ax.state in (AxisState.ENDLESS, AxisState.OPEN_LOOP)
-            if turning and not self.m.k.ist[ax.slot, L.I_SPEED_REACHED]:
+            # the flag of the cycle the speed was commanded in still compares with the old
+            # speed: only a later cycle's says whether the new one is reached [000 §2.5.2]
+            fresh = self.m.cycle > since
+            if turning and not (fresh and self.m.k.ist[ax.slot, L.I_SPEED_REACHED]):
                 return True
             del self.reaching[action_id]
         return False
@@ -272,7 +282,24 @@ class MachineChannelHost:
         if i is None:
             return 0
         name = f"m{call.m}_synch" if isinstance(call, canon.SpindleOn) else _SYNC_PARAM[type(call)]
-        return int(self.m.cfg.channel_raw(f"spindel[{i}].{name}"))
+        sync = int(self.m.cfg.channel_raw(f"spindel[{i}].{name}"))
+        gear = self._gear_change_of(call)
+        if gear is not None:  # the gear change's M40-M45 synchronises as m_synch says
+            sync |= int(self.m.cfg.channel_raw(f"m_synch[{39 + gear}]"))
+        return sync
+
+    def _gear_change_of(self, call: canon.Call) -> int | None:
+        """The gear stage a speed of the main spindle changes to (M40-M45 as 1-6), None
+        without a change [000 §2.8.2]: judged from the stage in force when the block is
+        prepared."""
+        m = self.m
+        if not isinstance(call, canon.SpindleOn | canon.SpindleSpeed) or not m.gear_change_enabled:
+            return None
+        ax = m.axis(call.spindle)
+        if ax.name != m.main_spindle or call.speed_rpm is None:
+            return None
+        choice = m.sp.gears.choose(ax, call.speed_rpm, call.gear)
+        return choice.gear if choice.error is None and choice.gear != ax.gear else None
 
     def program_end(self, call: canon.ProgramEnd) -> None:
         program_end(self.m.sp, self.m.axes)
@@ -348,7 +375,8 @@ class MachineChannelHost:
         reduced = bool(self.m.channel_units["reduced_acceleration"])
         cycle = self.m.k.cycle_s
         corr = bool(self.m.cfg.channel_raw("corr_v_trans_jerk"))
-        out = []
+        spans = _spans(e)
+        out: list[AxisDynamics] = []
         for ax in self.path_axes:
             g = ax.gear
             lim = motion_limits(ax.cfg, g, motion, self.m.slope, reduced)
@@ -369,7 +397,10 @@ class MachineChannelHost:
             tr_geom = ax.cfg.eng("getriebe.dynamik.tr_geom", g) or ax.cfg.eng(
                 "getriebe.dynamik.tr_min", g
             )
-            out.append(AxisDynamics(v_max, lim, a_trans, j_trans, tr_geom))
+            # a door open, a safety zone: each axis at its reduced speed
+            red = reduced_speed(ax, motion, spans[len(out)])
+            v_red = math.inf if red is None else red.value
+            out.append(AxisDynamics(v_max, lim, a_trans, j_trans, tr_geom, v_red))
         return out
 
     def hold_limits(self, e: Element | None) -> np.ndarray:
@@ -410,3 +441,11 @@ class MachineChannelHost:
                 self.m.motion.set_state(ax, AxisState.STANDSTILL)
                 if st[ax.slot, L.S_P_CMD] != self.path_start[i]:  # it moved on the path
                     self.m.log(Code.EV_MOTION_DONE, ax.name)
+
+
+def _spans(e: Element, samples: int = 16) -> list[tuple[float, float]]:
+    """Each path axis' lowest and highest position on the element (an arc sampled)."""
+    if e.arc is None:
+        return [(min(a, b), max(a, b)) for a, b in zip(e.start, e.end, strict=True)]
+    pts = np.array([point_at(e, e.length * i / samples) for i in range(samples + 1)])
+    return [(float(c.min()), float(c.max())) for c in pts.T]

@@ -35,6 +35,8 @@ class MachineCore(Protocol):
 
     slope: int  # the path's acceleration profile (G-code slope type), set by the channel
 
+    def slope_at_program_start(self) -> None: ...
+
     @property
     def cfg(self) -> MachineConfig: ...
 

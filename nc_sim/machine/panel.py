@@ -70,8 +70,10 @@ class Panel:
         self.m.log(Code.EV_HLI, ax.name, f"{unit} = {int(value)}", signal=unit, value=int(value))
         if unit in ("DriveOn", "TorquePermission", "ReleaseFeedhold"):
             self.m.motion.enables_changed(ax)
-        elif unit in ("override", "override_valid", "reduced_speed"):
+        elif unit in ("override", "override_valid") or unit in hli.REDUCED_SPEED_UNITS:
             self.m.moves.replan(ax)
+            if unit in hli.REDUCED_SPEED_UNITS:
+                self.m.channel.replan()  # a path the axis is on slows (or speeds up) with it
 
     def channel_unit(self, unit: str, value: int) -> None:
         old = self.m.channel_units[unit]

@@ -44,6 +44,7 @@ _INDEX_LIMITS = {
     "lr_hw": 1,
     "achse": 32,
     "wz": 1000,
+    "m_synch": 1000,  # M0 … M999
 }
 
 

@@ -90,3 +90,31 @@ def test_a_program_action_runs_the_program_to_its_end() -> None:
     # the G01 block: Z never faster than its feed
     z_speed = np.abs(np.asarray(res.columns["Z.vel_cmd_mm_min"]))
     assert z_speed.max() <= 600.0 * (1 + 1e-9)
+
+
+def test_a_scenario_expresses_the_door_the_gear_change_sync_and_the_stop_at_m30() -> None:
+    """What the manuals' audit added, in a scenario's own words: the PLC's reduced speed on a
+    program's path [002 §2.8], m_synch of the gear change [000 §2.8.2] and the HLI unit
+    spindle_stop_at_program_end."""
+    scenario = {
+        "duration_s": 12.0,
+        "parameters": {
+            "channel": {"m_synch[42]": "MVS_SVS"},
+            "Z": {"getriebe[0].vb_max_red": 25000},  # 25 mm/s, in µm/s
+        },
+        "actions": [
+            {"t_s": 0.0, "hli": {"axis": "Z", "unit": "reduced_speed", "value": 1}},
+            {"t_s": 0.0, "hli": {"axis": "S1", "unit": "spindle_stop_at_program_end", "value": 1}},
+            {"t_s": 0.1, "program": "M3 S650\nS950 G01 Z-50 F6000\nM30\n"},
+        ],
+    }
+    res = run_scenario(demo_machine(), scenario)
+    assert not [e for e in res.events if e.error]
+    z_speed = np.abs(np.asarray(res.columns["Z.vel_cmd_mm_min"]))
+    assert z_speed.max() == pytest.approx(1500.0)  # 25 mm/s, not F6000
+    gear = np.asarray(res.columns["S1.gear"])
+    in_m41 = int(np.argmax(gear == 2))
+    in_m42 = in_m41 + int(np.argmax(gear[in_m41:] == 3))
+    assert int(np.argmax(z_speed > 0)) > in_m42  # the block waited for its gear change
+    assert res.columns["Z.pos_cmd_mm"][-1] == pytest.approx(-50.0)
+    assert res.columns["S1.speed_cmd_rpm"][-1] == 0.0  # M30 stopped it
