@@ -1,5 +1,5 @@
 // One live plot: chosen signals (subscribed by state/plots.ts, on screen or not) over a 1–30 s
-// window, drawn with uPlot at most 25 times a second and only when new samples arrived;
+// window, drawn with uPlot at most 50 times a second and only when new samples arrived;
 // pause, drag-zoom (pauses), autoscale, cursor readout in the legend, and the newest value of
 // every trace under the chart.
 import { useEffect, useRef, useState } from "preact/hooks";
@@ -12,7 +12,7 @@ import { drawLoop } from "../ui/drawLoop";
 import { SignalPicker } from "../ui/SignalPicker";
 
 export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
-const MAX_DRAWS_PER_S = 25; // smooth to the eye; more only costs the browser
+const MAX_DRAWS_PER_S = 50; // as often as telemetry frames come (every 20 ms), never more
 export const fps = { frames: 0, draws: 0 }; // read by bench/ui.py through window.inbetrieb
 
 function unitOf(name: string): string {
