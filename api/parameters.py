@@ -27,6 +27,9 @@ class ParameterDef(BaseModel):
     per_gear: bool
     title: str
     source: str
+    without_effect: str = Field(
+        "", description="why the simulation accepts it without effect (empty: it acts)"
+    )
 
 
 class ParameterValue(BaseModel):
@@ -44,6 +47,9 @@ class ParameterValue(BaseModel):
     gear: int | None = Field(None, description="gear stage 1..6 of a getriebe[i] entry")
     pending: Value | None = Field(None, description="written, takes effect at reset/restart")
     title: str = Field("", description="what the manual says it is")
+    without_effect: str = Field(
+        "", description="why the simulation accepts it without effect (empty: it acts)"
+    )
     min: float | None = Field(None, description="lower bound in list units, as the list stands")
     max: float | None = Field(None, description="upper bound in list units, as the list stands")
     eng_factor: float | None = Field(

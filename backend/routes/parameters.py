@@ -66,6 +66,7 @@ def definitions() -> list[ParameterDef]:
             per_gear=d.per_gear,
             title=d.title,
             source=d.source,
+            without_effect=d.without_effect,
         )
         for d in registry()
     ]

@@ -304,6 +304,7 @@ def read(
                     gear=gear,
                     pending=pending.value if pending else None,
                     title=d.title,
+                    without_effect=d.without_effect,
                     min=lo,
                     max=hi,
                     eng_factor=d.display_unit(kind)[0] if d.is_numeric else None,

@@ -57,9 +57,23 @@ def _p(
     title: str = "",
     source: str = "manual",
     symbols: dict[str, int] | None = None,
+    without_effect: str = "",
 ) -> ParamDef:
     return ParamDef(
-        pid, name, scope, dtype, q, default, lo, hi, effect, types, title, source, symbols or {}
+        pid,
+        name,
+        scope,
+        dtype,
+        q,
+        default,
+        lo,
+        hi,
+        effect,
+        types,
+        title,
+        source,
+        symbols or {},
+        without_effect,
     )
 
 
@@ -1483,6 +1497,10 @@ DEFINITIONS: list[ParamDef] = [
         0,
         3,
         title="Jerk limitation in polynomials",
+        without_effect=(
+            "polynomial contouring (#HSC) is not simulated: there is no polynomial path whose"
+            " jerk it could check"
+        ),
     ),
     _p(
         "P-CHAN-00002",
@@ -1536,6 +1554,10 @@ DEFINITIONS: list[ParamDef] = [
         0,
         None,
         title="Resolution of rotary axes",
+        without_effect=(
+            "rotary positions are kept as floating-point degrees here: there is no internal "
+            "integer representation to convert"
+        ),
     ),
     _p(
         "P-CHAN-00082",
@@ -1603,6 +1625,7 @@ DEFINITIONS: list[ParamDef] = [
         2,
         effect=RESTART,
         title="Machine ID with C axis face machining",
+        without_effect=("the C axis' face machining transformations (#TRAFO) are not simulated"),
     ),
     _p(
         "P-CHAN-00007",
@@ -1637,6 +1660,10 @@ DEFINITIONS: list[ParamDef] = [
         1,
         effect=RESTART,
         title="Spindle controlled by the PLC",
+        without_effect=(
+            "every spindle here is an NC spindle; a spindle the PLC controls on its own is "
+            "not simulated"
+        ),
     ),
     _p(
         "P-CHAN-00004",

@@ -81,6 +81,8 @@ class ParamDef:
     title: str = ""
     source: str = "manual"
     symbols: dict[str, int] = field(default_factory=dict)
+    # why the simulation accepts it without any effect (empty: it acts, and a test shows how)
+    without_effect: str = ""
 
     @property
     def per_gear(self) -> bool:

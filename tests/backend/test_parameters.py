@@ -67,6 +67,12 @@ def test_registry_and_values_per_gear_record(srv: Server, mid: str) -> None:
     defs = {d["id"]: d for d in srv.http.get("/api/parameters").json()}
     assert defs["P-AXIS-00099"]["name"] == "getriebe[i].kv"
     assert defs["P-AXIS-00099"]["per_gear"]
+    # a parameter the simulation takes without effect says why, in the registry and in the
+    # machine's list; one that acts says nothing
+    assert "floating-point" in defs["P-CHAN-00078"]["without_effect"]
+    assert defs["P-AXIS-00099"]["without_effect"] == ""
+    channel = values(srv, mid, None, "channel")
+    assert channel["rund_aufloes"]["without_effect"] == defs["P-CHAN-00078"]["without_effect"]
     v = values(srv, mid, "S1")
     assert [v[f"getriebe[{g}].kv"]["gear"] for g in range(6)] == [1, 2, 3, 4, 5, 6]
     x = values(srv, mid)["getriebe[0].kv"]

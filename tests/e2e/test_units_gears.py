@@ -83,3 +83,20 @@ def test_gear_bars_on_an_rpm_scale_and_the_gear_mapping(page: Page) -> None:
     )
     page.set_viewport_size({"width": SIZES["tablet"][0], "height": SIZES["tablet"][1]})
     shot(page, "parameters-gears-tablet")
+
+
+def test_a_parameter_without_effect_in_the_simulation_says_so_and_why(page: Page) -> None:
+    # P-CHAN-00078 rund_aufloes converts rotary positions to an internal integer
+    # representation the simulation does not have (issue 36: the editor shows the reason)
+    page.get_by_role("tab", name="Parameters").click()
+    params = panel(page, "parameters")
+    params.get_by_test_id("param-target").select_option("Channel")
+    params.get_by_test_id("param-search").fill("rund_aufloes")
+    mark = params.get_by_test_id("param-no-effect-rund_aufloes")
+    expect(mark).to_contain_text("no effect here")
+    expect(mark).to_contain_text("floating-point degrees")
+    shot(page, "parameter-without-effect")
+    params.get_by_test_id("param-target").select_option("Axis X")
+    params.get_by_test_id("param-search").fill("kv")
+    expect(params.get_by_test_id("param-row-getriebe[0].kv")).to_be_visible()
+    expect(params.locator("[data-testid^=param-no-effect-]")).to_have_count(0)  # kv acts

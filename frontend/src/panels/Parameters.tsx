@@ -309,6 +309,11 @@ function ParameterList() {
                   <td>
                     <div class="mono">{p.name}</div>
                     <div class="hint">{p.title}</div>
+                    {p.without_effect ? (
+                      <div class="hint no-effect" data-testid={`param-no-effect-${p.name}`}>
+                        <span class="tag no-effect-tag">no effect here</span> {p.without_effect}
+                      </div>
+                    ) : null}
                   </td>
                   <td class="num">
                     <input

@@ -1,6 +1,7 @@
 """The path's dynamics as the dynamics manual [002] gives them: the step-shaped profile's two
 acceleration stages [002 §2.2.2] and the PLC's reduced speed [002 §2.8] on program and MDI
-path motion. Expected numbers are the demo lathe's parameters (axis lists), not our output."""
+path motion, the slope type at program start [002 §3.2.1] and the safety zones. Expected
+numbers are the parameters the tests write (or the demo lathe's lists), not our output."""
 
 from __future__ import annotations
 
@@ -15,13 +16,20 @@ from nc_sim.sim import Simulation
 from tests.nc_sim.sim_helpers import L, make, mdi, record, run_program
 
 STEP_SHAPED = {"prog_start.slope.profile": 0}  # P-CHAN-00071: step-shaped at program start
-# the demo's X and Z (axis_1/2.lis), lslope_profil: G00 3000 mm/s² below 166.666 mm/s and
-# 2000 above (a_grenz_stufe_1/2, vb_grenz_stufe_1_2); G01 2000 and 1000 (a_stufe_1/2,
-# vb_stufe_1_2) changing at the same speed
-V12 = 166.666
-RAPID = (3000.0, 2000.0)
-FEED = (2000.0, 1000.0)
-V_RAPID = 333.333  # vb_eilgang, mm/s
+# lslope_profil of X and Z, written by the tests (in the list's units: mm/s², µm/s):
+# G00 4000 mm/s² below 120 mm/s, 1500 above; G01 2500 and 800 changing at the same speed
+V12 = 120.0
+RAPID = (4000.0, 1500.0)
+FEED = (2500.0, 800.0)
+STAGES = {
+    "getriebe[0].lslope_profil.a_grenz_stufe_1": 4000,
+    "getriebe[0].lslope_profil.a_grenz_stufe_2": 1500,
+    "getriebe[0].lslope_profil.vb_grenz_stufe_1_2": 120000,
+    "getriebe[0].lslope_profil.a_stufe_1": 2500,
+    "getriebe[0].lslope_profil.a_stufe_2": 800,
+    "getriebe[0].lslope_profil.vb_stufe_1_2": 120000,
+}
+V_RAPID = 333.333  # the demo's vb_eilgang, mm/s
 
 
 def _stages(v: np.ndarray, a: np.ndarray, v12: float, dv: float) -> tuple[set[float], set[float]]:
@@ -35,7 +43,7 @@ def _stages(v: np.ndarray, a: np.ndarray, v12: float, dv: float) -> tuple[set[fl
 
 def test_a_rapid_path_block_accelerates_in_each_stage_of_the_step_shaped_profile() -> None:
     # 002 §2.2.2: below vb_grenz_stufe_1_2 the first G00 stage, above it the second
-    _sim, m, rec = run_program("G00 Z100\nM30\n", 1.5, channel=STEP_SHAPED)
+    _sim, m, rec = run_program("G00 Z100\nM30\n", 1.5, {"Z": STAGES}, STEP_SHAPED)
     z = m.axis("Z").slot
     v, a = rec[:, z, L.R_V_CMD], rec[:, z, L.R_A_CMD]
     assert np.abs(v).max() == pytest.approx(V_RAPID, rel=1e-6)
@@ -62,7 +70,7 @@ def test_every_program_starts_with_the_profile_of_p_chan_00071() -> None:
     mdi(m, "#SLOPE[TYPE=STEP]")
     mdi(m, "G00 Z-90")
     step = _first_ramp(m, record(sim, 1.0))
-    assert step == pytest.approx([RAPID[0]] * 5)  # a step to a_grenz_stufe_1 in its first cycle
+    assert step == pytest.approx([3000.0] * 5)  # a step to the demo's a_grenz_stufe_1
     assert isinstance(m.submit(ProgramLoad("p", "G00 Z-50\nM30\n")), Accepted)
     assert isinstance(m.submit(CycleStart()), Accepted)
     ramp = _first_ramp(m, record(sim, 1.0))
@@ -80,8 +88,9 @@ def test_a_reset_brings_back_the_profile_of_p_chan_00071() -> None:
 
 def test_a_feed_path_block_on_two_axes_keeps_each_axis_in_its_stage() -> None:
     # a 45° line at F18000 (300 mm/s on the path, 212 mm/s per axis): each axis changes stage
-    # at its own 166.666 mm/s, that is at 235.7 mm/s on the path
-    _sim, m, rec = run_program("G01 X200 Z50 F18000\nM30\n", 2.0, channel=STEP_SHAPED)
+    # at its own 120 mm/s, that is at 169.7 mm/s on the path
+    axes = {"X": STAGES, "Z": STAGES}
+    _sim, m, rec = run_program("G01 X200 Z50 F18000\nM30\n", 2.0, axes, STEP_SHAPED)
     for name in ("X", "Z"):
         slot = m.axis(name).slot
         v, a = rec[:, slot, L.R_V_CMD], rec[:, slot, L.R_A_CMD]
