@@ -116,3 +116,64 @@ def test_a_right_angle_corner_is_taken_at_the_weighted_transition_acceleration(
     v_corner = A * weight / 1000.0 * 0.001  # mm/s
     speed = np.hypot(vx, vz)[corner - 2 : corner + 2]
     assert speed.min() == pytest.approx(v_corner, abs=A * 0.001)
+
+
+def _hold(axis_params: dict[str, Any], channel: dict[str, Any], *start: Command) -> np.ndarray:
+    """Z's commanded acceleration after `start` ran 1 s and feedhold came (P-CHAN-00097 = 1:
+    the feedhold set brakes)."""
+    sim, m, _cfg = make({"Z": axis_params}, {"use_drive_curr_limit": 1, **channel})
+    for c in start:
+        assert isinstance(m.submit(c), Accepted), c
+    sim.run(1000)
+    assert isinstance(m.submit(HliWrite("feedhold", 1)), Accepted)
+    rec = record(sim, 1.0)
+    return np.asarray(rec[:, m.axis("Z").slot, L.R_A_CMD])
+
+
+def test_feedhold_brakes_a_step_shaped_move_at_its_own_deceleration() -> None:
+    # P-AXIS-00024 lslope_profil.a_feedh (step-shaped profile, P-CHAN-00097 = 1)
+    a = _hold(
+        {"getriebe[0].lslope_profil.a_feedh": 700},
+        {"prog_start.slope.profile": 0},
+        HliWrite("reduced_acceleration", 0),
+        Move("Z", 200.0, False, 6000.0),
+    )
+    assert -a.min() == pytest.approx(700.0)
+
+
+def test_feedhold_brakes_a_jog_at_the_manual_mode_feedhold_set() -> None:
+    # P-AXIS-00259 hb.a_feedh over the ramp time P-AXIS-00360 hb.tr_feedh
+    params = {"handbetrieb.hb.a_feedh": 600, "handbetrieb.hb.tr_feedh": 30000}
+    a = _hold(params, {}, JogStart("Z", 1))
+    assert -a.min() == pytest.approx(600.0)
+    assert _cycles(-a, 0.0, 600.0) == pytest.approx(30, abs=1)
+
+
+@pytest.mark.parametrize(("ref_richt", "sign"), [(0, -1.0), (1, 1.0)])
+def test_homing_comes_onto_its_reference_in_the_direction_ref_richt_gives(
+    ref_richt: int, sign: float
+) -> None:
+    # INB-AXIS-0007 kenngr.ref_richt: 1 homes towards +, 0 towards -; whichever side of the
+    # cam Z starts, its last move (onto the zero mark) runs that way, and it ends homed
+    sim, m, _cfg = make({"Z": {"kenngr.ref_richt": ref_richt}})
+    assert isinstance(m.submit(Home("Z")), Accepted)
+    rec = record(sim, 12.0)
+    z = m.axis("Z").slot
+    v = rec[:, z, L.R_V_CMD]
+    assert rec[-1, z, L.R_HOMED] == 1
+    assert np.sign(v[np.flatnonzero(v != 0)[-1]]) == sign
+
+
+@pytest.mark.parametrize(("tr_geom_us", "v_arc"), [(0, 70.71), (500000, 46.42)])
+def test_an_arc_is_slowed_by_the_geometric_ramp_time(tr_geom_us: int, v_arc: float) -> None:
+    # P-AXIS-00199 tr_geom [002 §2.3.3]: on an arc of radius r the geometric jerk v³/r² stays
+    # under a/tr_geom; without it (0: the demo's tr_min of 1 ms) the centripetal acceleration
+    # limits: half of a = 2000 mm/s², v = sqrt(0.5 a r). r = 5 mm: 70.71 mm/s; with
+    # tr_geom 0.5 s: (2000 / 0.5 · 25)^(1/3) = 46.42 mm/s
+    params = {"getriebe[0].dynamik.tr_geom": tr_geom_us}
+    program = "G18 G01 X50 Z-100 F9000\nG02 X50 Z-90 K5\nM30\n"  # a half circle, r = 5
+    _sim, m, rec = run_program(program, 3.0, {"X": params, "Z": params})
+    lines = rec[:, m.channel_slot, L.R_LINE]
+    vx, vz = rec[:, m.axis("X").slot, L.R_V_CMD], rec[:, m.axis("Z").slot, L.R_V_CMD]
+    on_arc = np.hypot(vx, vz)[lines == 2]
+    assert on_arc.max() == pytest.approx(v_arc, rel=1e-3)
