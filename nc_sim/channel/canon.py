@@ -229,6 +229,15 @@ class SetSlope(Call):
 
 
 @dataclass(frozen=True)
+class Weighting(Call):
+    """G130-G133 [002 §2.5.1]: the path axes' acceleration and ramp time weightings in percent
+    (100: as the axis list has them) in force from this block on, for feed blocks."""
+
+    acceleration: tuple[tuple[str, float], ...]
+    ramp_time: tuple[tuple[str, float], ...]
+
+
+@dataclass(frozen=True)
 class ManualMode(Call):
     """G200 exclusive manual mode, G201 manual mode with parallel path interpolation (002 §2.6)."""
 
@@ -268,6 +277,7 @@ _NAMES: dict[type[Call], str] = {
     SelectTool: "SELECT_TOOL",
     Home: "HOME",
     SetSlope: "SET_SLOPE",
+    Weighting: "WEIGHTING",
     ManualMode: "MANUAL_MODE",
     MFunction: "M_FUNCTION",
     ProgramEnd: "PROGRAM_END",

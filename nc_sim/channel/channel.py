@@ -125,6 +125,8 @@ class Channel:
             modal = self.mdi.modal
             self.ex = self._execution([])
             self.ex.feed_mm_min, self.ex.plane = modal.feed_mm_min, modal.plane
+            self.ex.acceleration_weight = dict(modal.acceleration_weight)
+            self.ex.ramp_time_weight = dict(modal.ramp_time_weight)
             self.wait = None
             self.last_key = None
             self.step_granted = True

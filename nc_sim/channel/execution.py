@@ -90,6 +90,9 @@ class Execution:
     late: list[_Late] = field(default_factory=list)
     feed_mm_min: float | None = None
     plane: int = 17
+    # G130-G133 in force, percent per axis (an axis not named: 100); feed blocks take them
+    acceleration_weight: dict[str, float] = field(default_factory=dict)
+    ramp_time_weight: dict[str, float] = field(default_factory=dict)
     mdi_blocks: deque[tuple[int, list[canon.Call]]] = field(default_factory=deque)
     block: int = 0  # the MDI block being translated
 
@@ -136,6 +139,9 @@ class Execution:
             match call:
                 case canon.SetFeedRate():
                     self.feed_mm_min = call.feed_mm_min
+                case canon.Weighting():  # a property of the feed blocks that follow
+                    self.acceleration_weight = dict(call.acceleration)
+                    self.ramp_time_weight = dict(call.ramp_time)
                 case canon.StraightTraverse() | canon.StraightFeed() | canon.ArcFeed():
                     is_feed = not isinstance(call, canon.StraightTraverse)
                     if is_feed:
@@ -152,6 +158,9 @@ class Execution:
                         if isinstance(call, canon.ArcFeed):
                             g = 3 if call.turn > 0 else 2
                         e.modal = (g, self.plane, call.absolute, self.feed_mm_min)
+                        if is_feed:
+                            e.acceleration_weight = self._fractions(self.acceleration_weight)
+                            e.ramp_time_weight = self._fractions(self.ramp_time_weight)
                         e.exact_stop = bool(after) or call.exact_stop
                         self.steps.append(Step(line, element=e))
                         start = e.end.copy()
@@ -185,6 +194,12 @@ class Execution:
                 case _:  # gear change, homing, other M functions: at rest, waited for
                     self.steps.append(Step(line, call=call, rest=True, wait=True))
         self.steps.extend(after)
+
+    def _fractions(self, percent: dict[str, float]) -> np.ndarray | None:
+        """Per path axis as a fraction; None when every axis is at 100 %."""
+        if all(v == 100.0 for v in percent.values()):
+            return None
+        return np.array([percent.get(a, 100.0) / 100.0 for a in self.axes])
 
     def _coupled(self, call: canon.ThreadFeed | canon.TapFeed, start: np.ndarray) -> Element | None:
         """The element of a G33/G63 block: a straight line whose path follows the spindle."""

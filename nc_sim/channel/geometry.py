@@ -40,6 +40,9 @@ class Element:
     modal: tuple[int, int, bool, float | None] = (0, 17, True, None)  # G, plane, G90, F
     actions: list[tuple[canon.Call, int]] = field(default_factory=list)  # start on leaving it
     coupling: Coupling | None = None  # G33/G63: the path follows a spindle
+    # G130-G133 of a feed block, per path axis as a fraction (None: 100 %) [002 §2.5.1]
+    acceleration_weight: np.ndarray | None = None
+    ramp_time_weight: np.ndarray | None = None
 
     def tangent(self, at_end: bool) -> np.ndarray:
         """Unit tangent (d point / d u) at the start or the end."""

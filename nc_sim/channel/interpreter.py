@@ -6,9 +6,10 @@ G51/G52, G90/G91, F, S, the G33 pitch and offset) carry over from block to block
 program raises `ProgramError` with line, column and job error code; calls emitted before it
 stay in the sink (the program stops there).
 
-Within a block the calls come in a fixed order: F, #SLOPE/#CAX, T/D, M40-M45, spindle, G17-G19,
-G200/G201, G04, G74, motion, other M functions, subprogram call, end (M17/M29/M30/M02). When a
-spindle function acts relative to the motion is the synchronisation type's business (000 §2.5),
+Within a block the calls come in a fixed order: F, #SLOPE/#CAX, T/D, M40-M45, spindle,
+G17-G19, G200/G201, G130-G133, G04, G74, motion, other M functions, subprogram call, end
+(M17/M29/M30/M02). When a spindle function acts relative to the motion is the
+synchronisation type's business (000 §2.5),
 decided where the calls are consumed; they carry the block's line for that.
 
 A main spindle with a rotary-axis name (`c_axis`, P-CHAN-00010) is either a spindle or the
@@ -39,6 +40,7 @@ from nc_sim.channel.thread_words import (
     tapping,
     thread_feed,
 )
+from nc_sim.channel.weight_words import weighting
 from nc_sim.channel.words import Line, ProgramError, Word, lex_line
 from nc_sim.errors import Code
 
@@ -51,7 +53,7 @@ _END_PROGRAM = (30, 2)
 _END_SUB = (17, 29)
 SLOPE_TYPES = {"STEP": 0, "TRAPEZ": 1, "SIN2": 2, "HSC": 3}  # #SLOPE[TYPE=..] (P-CHAN-00071)
 _MOTION_G = (0, 1, 2, 3, 33, 63)  # the modal block types; G04 is not one
-_SUPPORTED_G = (4, 17, 18, 19, 51, 52, 60, 74, 90, 91, 200, 201, *_MOTION_G, *SPINDLE_G)
+_SUPPORTED_G = (4, 17, 18, 19, 51, 52, 60, 74, 90, 91, 130, 132, 200, 201, *_MOTION_G, *SPINDLE_G)
 _EXCLUSIVE_G = (
     (_MOTION_G, "motion G codes"),
     ((17, 18, 19), "planes"),
@@ -378,6 +380,20 @@ class _Block:
             for g in (200, 201):
                 if g in gs:
                     self._emit(canon.ManualMode(self.line, g))
+        if self.lexed.g_values or 130 in gs or 132 in gs:
+            self._emit(
+                weighting(
+                    self.line,
+                    gs,
+                    self.lexed.g_values,
+                    self.addr,
+                    self.run_.axes,
+                    modal,
+                    self.motion_g,
+                    self.error,
+                )
+            )
+            return
         if self.lexed.offsets:
             set_thread_offset(self.lexed.offsets, self.mode, modal, self.error)
         axis_words = [self.addr[a] for a in self.run_.axes if a in self.addr]

@@ -24,7 +24,8 @@ class Modal:
 
     At program start: G00, G17, G90, G52, no feed (G01/G02/G03 need an F first), no speed, no
     pitch, offset 0°; the position is where the program starts (the machine's, given to the
-    interpreter). Pitch and offset stay until the program ends [000 §2.8.7].
+    interpreter). Pitch and offset stay until the program ends [000 §2.8.7]; so do the
+    G130-G133 weightings (100 % at the start).
     """
 
     motion: int = 0
@@ -38,6 +39,9 @@ class Modal:
     rotary: bool = False  # the main spindle is the rotary axis C (003), not a spindle
     position: dict[str, float] = field(default_factory=dict)  # NaN: not known (C as spindle)
     home_position: dict[str, float] = field(default_factory=dict)  # where G74 ends, per axis
+    # G130/G131 and G132/G133: percent per axis, an axis not named is at 100 [002 §2.5.1]
+    acceleration_weight: dict[str, float] = field(default_factory=dict)
+    ramp_time_weight: dict[str, float] = field(default_factory=dict)
 
 
 def target(end: Mapping[str, float], axes: tuple[str, ...]) -> tuple[tuple[str, float], ...]:

@@ -2,6 +2,7 @@
 
 N10 G01 X10 F500 (comment) ; comment      /N20 ... (block skip)
 #SLOPE[TYPE=TRAPEZ]   #CAX   #CAX OFF   S[M3 REV1000]   M19 S.POS=90   G33 Z48 K1.5 S.OFFSET=180
+G130 X70 Z50   G131 = 50
 LL tapered thread   L123 P2
 """
 
@@ -26,6 +27,7 @@ _TOKEN = re.compile(
     r"|(?a:(?P<call>LL\s+(?P<name>[^;(]*)))"
     r"|(?a:(?P<spec>(?P<sname>S[0-9]*)\[))"
     r"|(?a:(?P<pos>(?P<pname>S[0-9]*)\.\s*(?P<pkey>POS|OFFSET)\s*=?\s*(?P<pval>" + _NUM + r")))"
+    r"|(?a:(?P<gset>G\s*(?P<gnum>[0-9]+)\s*=\s*(?P<gval>" + _NUM + r")))"
     r"|(?a:(?P<word>(?P<letter>[A-Z])\s*(?P<val>" + _NUM + r")))"
     r"|(?P<bad>[\s\S])"
     r")",
@@ -73,6 +75,7 @@ class Line:
     )  # S[..]: name, body, name col
     positions: list[tuple[str, float, int]] = field(default_factory=list)  # S.POS: name, deg, col
     offsets: list[tuple[str, float, int]] = field(default_factory=list)  # S.OFFSET: name, deg, col
+    g_values: list[tuple[int, float, int]] = field(default_factory=list)  # G131 = 50: G, value, col
     local_call: tuple[str, int] | None = None  # LL name
     skipped: bool = False
 
@@ -80,7 +83,12 @@ class Line:
     def empty(self) -> bool:
         """Nothing to do on this line."""
         return not (
-            self.words or self.hashes or self.specific or self.positions or self.offsets
+            self.words
+            or self.hashes
+            or self.specific
+            or self.positions
+            or self.offsets
+            or self.g_values
         ) and (self.local_call is None)
 
 
@@ -144,6 +152,9 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
         elif kind == "spec":
             body, pos = _bracket_body(text, pos - 1, line, m.group("sname"))
             out.specific.append((m.group("sname").upper(), body, col))
+        elif kind == "gset":  # G131 = 50, G133 = 80: a G function with its value
+            value = _number(m.group("gval"), line, m.start("gval") + 1)
+            out.g_values.append((int(m.group("gnum")), value, col))
         elif kind == "pos":  # S.POS (M19) or S.OFFSET (G33)
             deg = _number(m.group("pval"), line, m.start("pval") + 1)
             dotted = out.positions if m.group("pkey").upper() == "POS" else out.offsets

@@ -21,7 +21,16 @@ from nc_sim.events import Event
 from nc_sim.kernel import layout as L
 from nc_sim.machine.core import MachineCore
 from nc_sim.plc import Waiter
-from nc_sim.profiles.plan import LIM_A_ACC, LIM_TR_ACC_UP
+from nc_sim.profiles.plan import (
+    LIM_A_ACC,
+    LIM_A_ACC2,
+    LIM_A_DEC,
+    LIM_A_DEC2,
+    LIM_TR_ACC_DOWN,
+    LIM_TR_ACC_UP,
+    LIM_TR_DEC_DOWN,
+    LIM_TR_DEC_UP,
+)
 from nc_sim.snapshot import AxisState
 from nc_sim.spindle.coupled import start_tap, start_thread
 from nc_sim.spindle.gears import spindle_index
@@ -376,10 +385,19 @@ class MachineChannelHost:
         cycle = self.m.k.cycle_s
         corr = bool(self.m.cfg.channel_raw("corr_v_trans_jerk"))
         spans = _spans(e)
+        acc_mode = int(self.m.cfg.channel_raw("prog_start.slope.acceleration"))
+        ramp_mode = int(self.m.cfg.channel_raw("prog_start.slope.ramp_time"))
         out: list[AxisDynamics] = []
-        for ax in self.path_axes:
+        for i, ax in enumerate(self.path_axes):
             g = ax.gear
             lim = motion_limits(ax.cfg, g, motion, self.m.slope, reduced)
+            if e.acceleration_weight is not None:  # G130/G131, capped at a_max
+                a_max = ax.cfg.eng("getriebe.dynamik.a_max", g)
+                cols = _ACC_WEIGHTED[acc_mode]
+                lim[cols] = np.minimum(lim[cols] * e.acceleration_weight[i], a_max)
+            if e.ramp_time_weight is not None:  # G132/G133
+                cols = _RAMP_WEIGHTED[ramp_mode]
+                lim[cols] = lim[cols] * e.ramp_time_weight[i]
             if motion is Motion.RAPID:
                 v_max = velocity_limit(ax.cfg, g, motion, None)
             else:
@@ -441,6 +459,24 @@ class MachineChannelHost:
                 self.m.motion.set_state(ax, AxisState.STANDSTILL)
                 if st[ax.slot, L.S_P_CMD] != self.path_start[i]:  # it moved on the path
                     self.m.log(Code.EV_MOTION_DONE, ax.name)
+
+
+# what G130/G131 weight by P-CHAN-00001: all accelerations, those while the speed grows,
+# those while it falls; G132/G133 by P-CHAN-00073: all ramp times, or one of T_R,accel,inc
+# (tr_beschl_zu), T_R,accel,red (tr_beschl_ab), T_R,decel,inc (tr_brems_zu), T_R,decel,red
+# (tr_brems_ab) [002 §3.2.1]
+_ACC_WEIGHTED = {
+    0: [LIM_A_ACC, LIM_A_DEC, LIM_A_ACC2, LIM_A_DEC2],
+    1: [LIM_A_ACC, LIM_A_ACC2],
+    2: [LIM_A_DEC, LIM_A_DEC2],
+}
+_RAMP_WEIGHTED = {
+    0: [LIM_TR_ACC_UP, LIM_TR_ACC_DOWN, LIM_TR_DEC_UP, LIM_TR_DEC_DOWN],
+    1: [LIM_TR_ACC_UP],
+    2: [LIM_TR_ACC_DOWN],
+    3: [LIM_TR_DEC_UP],
+    4: [LIM_TR_DEC_DOWN],
+}
 
 
 def _spans(e: Element, samples: int = 16) -> list[tuple[float, float]]:

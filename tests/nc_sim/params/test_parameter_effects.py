@@ -30,8 +30,6 @@ NOT_YET_AUDITED = frozenset(
         "P-AXIS-00241",
         "P-AXIS-00242",
         "P-AXIS-00766",
-        "P-CHAN-00073",
-        "P-CHAN-00001",
         "P-CHAN-00009",
         "P-CHAN-00002",
         "P-CHAN-00208",
