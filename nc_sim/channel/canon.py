@@ -9,7 +9,7 @@ axes), feeds in mm/min, times in s, speeds in rpm. Every call carries the 1-base
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from typing import Protocol
+from typing import Literal, Protocol
 
 
 def _num(value: float) -> str:
@@ -237,6 +237,22 @@ class Weighting(Call):
     ramp_time: tuple[tuple[str, float], ...]
 
 
+PathLimit = float | Literal["default"] | None  # as programmed, the channel list's, or none
+
+
+@dataclass(frozen=True)
+class VectorLimit(Call):
+    """#VECTOR LIMIT ON/OFF [002 §2.5.2]: the path's own velocity (mm/min), acceleration and
+    deceleration limits (in the unit of P-CHAN-00351) in force from this block on, and the
+    blocks they act on (feed, rapid traverse)."""
+
+    velocity: PathLimit = None
+    acceleration: PathLimit = None
+    deceleration: PathLimit = None
+    feed: bool = True
+    rapid: bool = True
+
+
 @dataclass(frozen=True)
 class ManualMode(Call):
     """G200 exclusive manual mode, G201 manual mode with parallel path interpolation (002 §2.6)."""
@@ -278,6 +294,7 @@ _NAMES: dict[type[Call], str] = {
     Home: "HOME",
     SetSlope: "SET_SLOPE",
     Weighting: "WEIGHTING",
+    VectorLimit: "VECTOR_LIMIT",
     ManualMode: "MANUAL_MODE",
     MFunction: "M_FUNCTION",
     ProgramEnd: "PROGRAM_END",

@@ -100,7 +100,12 @@ class Channel:
 
     def _execution(self, calls: list[canon.Call]) -> Execution:
         return Execution(
-            calls, self.axes, self.host.sync_of, self.host.new_action_id, self.rotary_axes
+            calls,
+            self.axes,
+            self.host.sync_of,
+            self.host.new_action_id,
+            self.rotary_axes,
+            path_limits=self.host.path_limits,
         )
 
     def _held_if_feedhold(self) -> None:
@@ -127,6 +132,7 @@ class Channel:
             self.ex.feed_mm_min, self.ex.plane = modal.feed_mm_min, modal.plane
             self.ex.acceleration_weight = dict(modal.acceleration_weight)
             self.ex.ramp_time_weight = dict(modal.ramp_time_weight)
+            self.ex.vector_limit = modal.vector_limit
             self.wait = None
             self.last_key = None
             self.step_granted = True

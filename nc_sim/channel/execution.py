@@ -93,6 +93,9 @@ class Execution:
     # G130-G133 in force, percent per axis (an axis not named: 100); feed blocks take them
     acceleration_weight: dict[str, float] = field(default_factory=dict)
     ramp_time_weight: dict[str, float] = field(default_factory=dict)
+    # #VECTOR LIMIT in force, and how the channel turns it into mm/s and mm/s²
+    vector_limit: canon.VectorLimit | None = None
+    path_limits: Callable[[canon.VectorLimit], tuple[float, float, float]] | None = None
     mdi_blocks: deque[tuple[int, list[canon.Call]]] = field(default_factory=deque)
     block: int = 0  # the MDI block being translated
 
@@ -139,6 +142,8 @@ class Execution:
             match call:
                 case canon.SetFeedRate():
                     self.feed_mm_min = call.feed_mm_min
+                case canon.VectorLimit():  # a property of the blocks that follow
+                    self.vector_limit = call
                 case canon.Weighting():  # a property of the feed blocks that follow
                     self.acceleration_weight = dict(call.acceleration)
                     self.ramp_time_weight = dict(call.ramp_time)
@@ -161,6 +166,7 @@ class Execution:
                         if is_feed:
                             e.acceleration_weight = self._fractions(self.acceleration_weight)
                             e.ramp_time_weight = self._fractions(self.ramp_time_weight)
+                        e.path_limit = self._path_limit(is_feed)
                         e.exact_stop = bool(after) or call.exact_stop
                         self.steps.append(Step(line, element=e))
                         start = e.end.copy()
@@ -194,6 +200,13 @@ class Execution:
                 case _:  # gear change, homing, other M functions: at rest, waited for
                     self.steps.append(Step(line, call=call, rest=True, wait=True))
         self.steps.extend(after)
+
+    def _path_limit(self, is_feed: bool) -> tuple[float, float, float] | None:
+        """The #VECTOR LIMIT of a feed or rapid block, None when none acts on it."""
+        v = self.vector_limit
+        if v is None or self.path_limits is None or not (v.feed if is_feed else v.rapid):
+            return None
+        return self.path_limits(v)
 
     def _fractions(self, percent: dict[str, float]) -> np.ndarray | None:
         """Per path axis as a fraction; None when every axis is at 100 %."""

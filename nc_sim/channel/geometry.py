@@ -43,6 +43,8 @@ class Element:
     # G130-G133 of a feed block, per path axis as a fraction (None: 100 %) [002 §2.5.1]
     acceleration_weight: np.ndarray | None = None
     ramp_time_weight: np.ndarray | None = None
+    # #VECTOR LIMIT on it: path speed (mm/s), acceleration and deceleration (mm/s²)
+    path_limit: tuple[float, float, float] | None = None
 
     def tangent(self, at_end: bool) -> np.ndarray:
         """Unit tangent (d point / d u) at the start or the end."""

@@ -31,6 +31,10 @@ class ChannelHost(Protocol):
     def sync_of(self, call: canon.Call) -> int:
         """Synchronisation type in force for a spindle call [000 §2.5]."""
 
+    def path_limits(self, call: canon.VectorLimit) -> tuple[float, float, float]:
+        """#VECTOR LIMIT as path speed (mm/s), acceleration and deceleration (mm/s²); ∞
+        where it sets none [002 §2.5.2]."""
+
     def check_element(self, e: Element) -> Event | None:
         """None when the element may run, else the job error (logged) that forbids it."""
 

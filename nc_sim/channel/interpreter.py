@@ -40,6 +40,7 @@ from nc_sim.channel.thread_words import (
     tapping,
     thread_feed,
 )
+from nc_sim.channel.vector_words import vector_limit
 from nc_sim.channel.weight_words import weighting
 from nc_sim.channel.words import Line, ProgramError, Word, lex_line
 from nc_sim.errors import Code
@@ -292,6 +293,12 @@ class _Block:
                     at = col + len("#SLOPE") if body is None else body_col
                     raise self.error(f"#SLOPE needs [TYPE= one of {', '.join(SLOPE_TYPES)}]", at)
                 self._emit(canon.SetSlope(self.line, SLOPE_TYPES[key[5:]]))
+            elif cmd.startswith("VECTOR LIMIT"):
+                modal = self.run_.modal
+                modal.vector_limit = vector_limit(
+                    cmd, body, col, body_col, modal.vector_limit, self.line, self.error
+                )
+                self._emit(modal.vector_limit)
             elif cmd in ("CAX", "CAX OFF"):
                 c = self.run_.c_axis
                 self._rotary(cax_command(cmd, body, key, col, body_col, c, self.error))

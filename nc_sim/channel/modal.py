@@ -6,6 +6,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from nc_sim.channel import canon
+
 # plane -> (first axis, second axis, normal axis); G02/G03 turn as seen from +normal
 PLANES: dict[int, tuple[str, str, str]] = {
     17: ("X", "Y", "Z"),
@@ -42,6 +44,7 @@ class Modal:
     # G130/G131 and G132/G133: percent per axis, an axis not named is at 100 [002 §2.5.1]
     acceleration_weight: dict[str, float] = field(default_factory=dict)
     ramp_time_weight: dict[str, float] = field(default_factory=dict)
+    vector_limit: canon.VectorLimit | None = None  # #VECTOR LIMIT in force [002 §2.5.2]
 
 
 def target(end: Mapping[str, float], axes: tuple[str, ...]) -> tuple[tuple[str, float], ...]:

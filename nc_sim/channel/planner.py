@@ -142,6 +142,11 @@ def element_limits(e: Element, axes: list[AxisDynamics], feed_mm_s: float) -> Li
             v_cap = min(v_cap, (j_geom * r * r) ** (1.0 / 3.0) / speed_in_plane)
     a_acc, a_acc2, v12_acc = acc_stages.row()
     a_dec, a_dec2, v12_dec = dec_stages.row()
+    if e.path_limit is not None:  # #VECTOR LIMIT: the path's own limits [002 §2.5.2]
+        v_path, acc_path, dec_path = e.path_limit
+        v_cap = min(v_cap, v_path)
+        a_acc, a_acc2 = min(a_acc, acc_path), min(a_acc2, acc_path)
+        a_dec, a_dec2 = min(a_dec, dec_path), min(a_dec2, dec_path)
     if v12_acc != v12_dec:  # the plan has one changeover speed: the lower stage throughout
         a_acc, a_acc2 = min(a_acc, a_acc2 or a_acc), 0.0
         a_dec, a_dec2 = min(a_dec, a_dec2 or a_dec), 0.0

@@ -2,7 +2,7 @@
 
 N10 G01 X10 F500 (comment) ; comment      /N20 ... (block skip)
 #SLOPE[TYPE=TRAPEZ]   #CAX   #CAX OFF   S[M3 REV1000]   M19 S.POS=90   G33 Z48 K1.5 S.OFFSET=180
-G130 X70 Z50   G131 = 50
+G130 X70 Z50   G131 = 50   #VECTOR LIMIT ON [ACC=1000 VEL=1500 FEED]   #VECTOR LIMIT OFF
 LL tapered thread   L123 P2
 """
 
@@ -23,7 +23,8 @@ _TOKEN = re.compile(
     r"\s*(?:"
     r"(?P<end>;|\Z)"
     r"|(?P<comment>\()"
-    r"|(?a:(?P<hash>#(?P<cmd>[A-Z_]+(?:[ \t]+OFF\b)?)\s*(?P<open>\[)?))"
+    r"|(?a:(?P<hash>#(?P<cmd>[A-Z_]+(?:[ \t]+LIMIT[ \t]+(?:ON|OFF)(?:[ \t]+ALL)?\b|[ \t]+OFF\b)?)"
+    r"\s*(?P<open>\[)?))"
     r"|(?a:(?P<call>LL\s+(?P<name>[^;(]*)))"
     r"|(?a:(?P<spec>(?P<sname>S[0-9]*)\[))"
     r"|(?a:(?P<pos>(?P<pname>S[0-9]*)\.\s*(?P<pkey>POS|OFFSET)\s*=?\s*(?P<pval>" + _NUM + r")))"

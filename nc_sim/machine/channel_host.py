@@ -297,6 +297,23 @@ class MachineChannelHost:
             sync |= int(self.m.cfg.channel_raw(f"m_synch[{39 + gear}]"))
         return sync
 
+    def path_limits(self, call: canon.VectorLimit) -> tuple[float, float, float]:
+        cfg = self.m.cfg
+        # P-CHAN-00351: MM_S2, or mm/min² (MM_M2, the default)
+        per_s2 = 1.0 if str(cfg.channel_raw("vector.acc_dec_unit")).upper() == "MM_S2" else 1 / 3600
+
+        def limit(value: canon.PathLimit, default: str, scale: float) -> float:
+            if value is None:
+                return math.inf
+            raw = float(cfg.channel_raw(default)) if value == "default" else value
+            return raw * scale
+
+        return (
+            limit(call.velocity, "vector.velocity", 1 / 60),
+            limit(call.acceleration, "vector.acceleration", per_s2),
+            limit(call.deceleration, "vector.deceleration", per_s2),
+        )
+
     def _gear_change_of(self, call: canon.Call) -> int | None:
         """The gear stage a speed of the main spindle changes to (M40-M45 as 1-6), None
         without a change [000 §2.8.2]: judged from the stage in force when the block is
