@@ -63,11 +63,14 @@ class StraightTraverse(Call):
 
 @dataclass(frozen=True)
 class StraightFeed(Call):
-    """G01: straight line to `end` at the feed set by the last `SetFeedRate`."""
+    """G01: straight line to `end` at the feed set by the last `SetFeedRate`; with effective
+    distances RX/RY/RZ (mm) a rotary axis' move counts on the path as the arc the tool
+    contact point travels at that distance [003 §1.2]."""
 
     end: tuple[tuple[str, float], ...]
     absolute: bool = field(default=True, kw_only=True)  # G90 in force (for the status)
     exact_stop: bool = field(default=False, kw_only=True)  # G60: the path stops at its end
+    effective: tuple[float, float, float] | None = field(default=None, kw_only=True)
 
 
 @dataclass(frozen=True)

@@ -156,7 +156,14 @@ class Execution:
                     e = (
                         arc(self.axes, start, call, self.feed_mm_min, self.linear)
                         if isinstance(call, canon.ArcFeed)
-                        else straight(self.axes, start, call, self.feed_mm_min, self.linear)
+                        else straight(
+                            self.axes,
+                            start,
+                            call,
+                            self.feed_mm_min,
+                            self.linear,
+                            self._radii(call) if isinstance(call, canon.StraightFeed) else None,
+                        )
                     )
                     if e is not None:
                         g = 0 if not is_feed else 1
@@ -200,6 +207,21 @@ class Execution:
                 case _:  # gear change, homing, other M functions: at rest, waited for
                     self.steps.append(Step(line, call=call, rest=True, wait=True))
         self.steps.extend(after)
+
+    def _radii(self, call: canon.StraightFeed) -> np.ndarray | None:
+        """Each rotary axis' effective radius from RX/RY/RZ: the distance of the tool contact
+        point from its axis of rotation (A about X, B about Y, C and the spindle as C about
+        Z) [003 §1.2]; None without RX/RY/RZ."""
+        if call.effective is None:
+            return None
+        rx, ry, rz = call.effective
+        about = {"A": (ry, rz), "B": (rx, rz)}
+        return np.array(
+            [
+                float(np.hypot(*about.get(a, (rx, ry)))) if a in self.rotary_axes else 0.0
+                for a in self.axes
+            ]
+        )
 
     def _path_limit(self, is_feed: bool) -> tuple[float, float, float] | None:
         """The #VECTOR LIMIT of a feed or rapid block, None when none acts on it."""

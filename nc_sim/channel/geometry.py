@@ -113,13 +113,21 @@ def straight(
     call: canon.StraightTraverse | canon.StraightFeed | canon.ThreadFeed | canon.TapFeed,
     feed_mm_min: float | None,
     linear: np.ndarray | None = None,
+    radius_mm: np.ndarray | None = None,
 ) -> Element | None:
     """The element of a G00/G01 (or G33/G63) block from `start`; None when it does not move.
     Its path length is over the `linear` axes (mask, default all): a rotary axis follows in
-    proportion, and alone its degrees are the path (F in °/min)."""
+    proportion, and alone its degrees are the path (F in °/min). With `radius_mm` (per axis,
+    from RX/RY/RZ [003 §1.2]) a rotary axis' degrees count as the arc at that radius."""
     end = _vector(axes, call.end, start)
     d = end - start
-    length = _length(d, linear)
+    if radius_mm is not None and linear is not None:
+        arc_mm = np.radians(d) * radius_mm * (1.0 - linear)  # rotary axes only
+        length = float(np.hypot(np.linalg.norm(d * linear), np.linalg.norm(arc_mm)))
+        if length < 1e-9:
+            length = _length(d, linear)
+    else:
+        length = _length(d, linear)
     if length < 1e-9:
         return None
     rapid = isinstance(call, canon.StraightTraverse)

@@ -421,12 +421,18 @@ class _Block:
             raise self.error("I/J/K/R only with G02/G03", arc_words[0].column)
         col = self.g[self.motion_g].column if self.motion_g is not None else 0
         if not axis_words and not arc_words:
+            if self.lexed.effective:  # effective distances of a move that is not there
+                name, (_v, at) = next(iter(self.lexed.effective.items()))
+                raise self.error(f"{name} needs a move in its block", at)
             if pitch is not None:  # under G33 I/J/K are the pitch
                 raise pitch_not_moved(pitch.letter, pitch.column, self.error)
             if mode == 63 and 63 in gs:  # G63 selected: its feed and speed are checked now
                 tapping(modal, col, self.error)
             return
         col = col or (axis_words + arc_words)[0].column
+        if self.lexed.effective and mode not in (0, 1):
+            name, (_v, at) = next(iter(self.lexed.effective.items()))
+            raise self.error(f"{name} only in G00/G01 blocks", at)
         c = self.run_.c_axis
         if c is not None and (rotary := motion_mode(c, mode, self.addr, self.error)) is not None:
             self._rotary(rotary)
@@ -447,7 +453,15 @@ class _Block:
         elif modal.feed_mm_min is None:
             raise self.error("G01/G02/G03 need a feed F first", col, Code.FEED_MISSING)
         elif mode == 1:
-            self._emit(canon.StraightFeed(self.line, to, **self._motion_flags()))
+            self._emit(
+                canon.StraightFeed(
+                    self.line,
+                    to,
+                    absolute=modal.absolute,
+                    exact_stop=60 in self.g,
+                    effective=self._effective(),
+                )
+            )
         else:
             self._emit(
                 arc_feed(
@@ -463,6 +477,13 @@ class _Block:
                 )
             )
         modal.position = end
+
+    def _effective(self) -> tuple[float, float, float] | None:
+        """RX/RY/RZ of this block (mm, 0 for one not given), None without any [003 §1.2]."""
+        eff = self.lexed.effective
+        if not eff:
+            return None
+        return (eff.get("RX", (0.0, 0))[0], eff.get("RY", (0.0, 0))[0], eff.get("RZ", (0.0, 0))[0])
 
     def _motion_flags(self) -> dict[str, bool]:
         """G90/G91 in force (for the status) and G60 exact stop (this block only)."""

@@ -2,7 +2,8 @@
 
 N10 G01 X10 F500 (comment) ; comment      /N20 ... (block skip)
 #SLOPE[TYPE=TRAPEZ]   #CAX   #CAX OFF   S[M3 REV1000]   M19 S.POS=90   G33 Z48 K1.5 S.OFFSET=180
-G130 X70 Z50   G131 = 50   #VECTOR LIMIT ON [ACC=1000 VEL=1500 FEED]   #VECTOR LIMIT OFF
+G01 X-70 C-270 RX50   G130 X70 Z50   G131 = 50
+#VECTOR LIMIT ON [ACC=1000 VEL=1500 FEED]   #VECTOR LIMIT OFF
 LL tapered thread   L123 P2
 """
 
@@ -29,6 +30,7 @@ _TOKEN = re.compile(
     r"|(?a:(?P<spec>(?P<sname>S[0-9]*)\[))"
     r"|(?a:(?P<pos>(?P<pname>S[0-9]*)\.\s*(?P<pkey>POS|OFFSET)\s*=?\s*(?P<pval>" + _NUM + r")))"
     r"|(?a:(?P<gset>G\s*(?P<gnum>[0-9]+)\s*=\s*(?P<gval>" + _NUM + r")))"
+    r"|(?a:(?P<eff>R(?P<eaxis>[XYZ])\s*(?P<eval>" + _NUM + r")))"
     r"|(?a:(?P<word>(?P<letter>[A-Z])\s*(?P<val>" + _NUM + r")))"
     r"|(?P<bad>[\s\S])"
     r")",
@@ -77,6 +79,8 @@ class Line:
     positions: list[tuple[str, float, int]] = field(default_factory=list)  # S.POS: name, deg, col
     offsets: list[tuple[str, float, int]] = field(default_factory=list)  # S.OFFSET: name, deg, col
     g_values: list[tuple[int, float, int]] = field(default_factory=list)  # G131 = 50: G, value, col
+    # RX/RY/RZ: a rotary move's effective distances in mm, with their columns [003 §1.2]
+    effective: dict[str, tuple[float, int]] = field(default_factory=dict)
     local_call: tuple[str, int] | None = None  # LL name
     skipped: bool = False
 
@@ -90,6 +94,7 @@ class Line:
             or self.positions
             or self.offsets
             or self.g_values
+            or self.effective
         ) and (self.local_call is None)
 
 
@@ -153,6 +158,11 @@ def lex_line(text: str, line: int, skip_blocks: bool) -> Line:
         elif kind == "spec":
             body, pos = _bracket_body(text, pos - 1, line, m.group("sname"))
             out.specific.append((m.group("sname").upper(), body, col))
+        elif kind == "eff":  # RX50: effective distance along X
+            name = "R" + m.group("eaxis").upper()
+            if name in out.effective:
+                raise ProgramError(f"{name} twice in one block", line, col)
+            out.effective[name] = (_number(m.group("eval"), line, m.start("eval") + 1), col)
         elif kind == "gset":  # G131 = 50, G133 = 80: a G function with its value
             value = _number(m.group("gval"), line, m.start("gval") + 1)
             out.g_values.append((int(m.group("gnum")), value, col))
