@@ -105,9 +105,10 @@ class MachineConfig:
 
     @property
     def main_spindle(self) -> str | None:
-        """Configured name of the main spindle (spindel[i] whose log_achs_nr matches)."""
+        """Configured name of the main spindle (of the spdl_anzahl spindel[i], the one whose
+        log_achs_nr is main_spindle_ax_nr)."""
         nr = self.channel_raw("main_spindle_ax_nr")
-        for i in range(6):
+        for i in range(int(self.channel.get("spdl_anzahl", 0))):
             if self.channel.get(f"spindel[{i}].log_achs_nr") == nr and nr:
                 return str(self.channel.get(f"spindel[{i}].bezeichnung", f"S{i + 1}"))
         return None

@@ -183,3 +183,19 @@ def test_zone_2_has_its_own_speed_or_that_of_zone_1() -> None:
         pytest.approx(20.0)
     )
     assert _top_speed(zone2, "G01 Z-50 F6000") == pytest.approx(100.0)  # zone 1 not signalled
+
+
+@pytest.mark.parametrize("lookahead", [1, 60])
+def test_the_look_ahead_reaches_as_far_as_lookahead_blocks(lookahead: int) -> None:
+    # INB-CHAN-0006 lookahead_blocks: 30 collinear blocks of 1 mm at F6000 (100 mm/s). The
+    # path must be able to stop at the end of what it sees: seeing one block (1 mm) it cannot
+    # get near 100 mm/s (from rest to rest over 1 mm with the 2000 mm/s² and 20 ms ramps of
+    # Z it peaks below 40 mm/s); seeing 60 (all 30) it runs at F
+    blocks = "".join(f"G01 Z{-100 + i} F6000\n" for i in range(1, 31))
+    channel = {"lookahead_blocks": lookahead}
+    _sim, m, rec = run_program(blocks + "M30\n", 4.0, channel=channel)
+    top = float(np.abs(rec[:, m.axis("Z").slot, L.R_V_CMD]).max())
+    if lookahead == 1:
+        assert top < 40.0
+    else:
+        assert top == pytest.approx(100.0)

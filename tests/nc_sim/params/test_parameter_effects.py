@@ -31,14 +31,6 @@ NOT_YET_AUDITED = frozenset(
         "P-AXIS-00242",
         "P-AXIS-00766",
         "P-CHAN-00009",
-        "P-CHAN-00082",
-        "P-CHAN-00051",
-        "P-CHAN-00053",
-        "P-CHAN-00007",
-        "P-CHAN-00036",
-        "P-CHAN-00043",
-        "INB-CHAN-0002",
-        "INB-CHAN-0006",
     }
 )
 

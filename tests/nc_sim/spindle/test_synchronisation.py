@@ -98,3 +98,21 @@ def test_the_gear_change_of_a_lone_s_waits_as_its_m_synch_says(synchronised: boo
         assert x_starts > gear_changed
     else:  # in the background: the path does not wait for it
         assert x_starts < gear_changed
+
+
+@pytest.mark.parametrize(("m19_synch", "spindle_first"), [(MVS_SVS, True), (0x8, False)])
+def test_m19_in_a_motion_block_goes_before_or_after_it_as_m19_synch_says(
+    m19_synch: int, spindle_first: bool
+) -> None:
+    # P-CHAN-00043 spindel[i].m19_synch [000 §2.5]: MVS_SVS orients before the block's
+    # motion and the path waits for it in position; MNS_SNS (the demo's) after the motion
+    channel = {"spindel[0].m19_synch": m19_synch}
+    _sim, m, rec = run_program("M19 S.POS=90 G01 X60 F1000\nM30\n", 8.0, channel=channel)
+    x, s = m.axis("X").slot, m.axis("S1").slot
+    x_moves = np.flatnonzero(np.abs(rec[:, x, L.R_V_CMD]) > 1e-9)
+    s_moves = np.flatnonzero(np.abs(rec[:, s, L.R_V_CMD]) > 1e-9)
+    assert rec[-1, s, L.R_P_CMD] % 360.0 == pytest.approx(90.0)
+    if spindle_first:
+        assert s_moves[-1] < x_moves[0]
+    else:
+        assert x_moves[-1] < s_moves[0]
