@@ -199,3 +199,19 @@ def test_the_look_ahead_reaches_as_far_as_lookahead_blocks(lookahead: int) -> No
         assert top < 40.0
     else:
         assert top == pytest.approx(100.0)
+
+
+@pytest.mark.parametrize(("corr", "v_transition"), [(0, 100.0), (1, 31.62)])
+def test_a_tangent_line_to_arc_transition_is_slowed_by_corr_v_trans_jerk(
+    corr: int, v_transition: float
+) -> None:
+    # P-CHAN-00009 corr_v_trans_jerk [002 §2.3.2]: a tangent transition from a line into an arc
+    # of r = 10 mm jumps the normal axis' acceleration by v²/r. Switched on, no axis' jerk at
+    # the transition exceeds j_trans = a/tr · r_trans_weight/1000 = 2000/0.02 · 1, so
+    # v = sqrt(j_trans · cycle · r) = sqrt(100000 · 0.001 · 10) = 31.62 mm/s; off, the path
+    # keeps F6000 = 100 mm/s (within what the arc allows: sqrt(0.5 · 2000 · 10) = 100 mm/s)
+    channel = {"corr_v_trans_jerk": corr}
+    _sim, m, rec = run_program("G18 G01 Z-90 F6000\nG03 X60 Z-80 R10\nM30\n", 3.0, channel=channel)
+    speed = np.hypot(rec[:, m.axis("X").slot, L.R_V_CMD], rec[:, m.axis("Z").slot, L.R_V_CMD])
+    at = int(np.argmax(rec[:, m.channel_slot, L.R_LINE] == 2))
+    assert speed[at - 3 : at + 3].min() == pytest.approx(v_transition, rel=1e-3)

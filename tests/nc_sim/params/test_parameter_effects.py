@@ -25,12 +25,7 @@ NOT_YET_AUDITED = frozenset(
         "P-AXIS-00095",
         "P-AXIS-00126",
         "P-AXIS-00127",
-        "P-AXIS-00027",
-        "P-AXIS-00240",
-        "P-AXIS-00241",
-        "P-AXIS-00242",
         "P-AXIS-00766",
-        "P-CHAN-00009",
     }
 )
 

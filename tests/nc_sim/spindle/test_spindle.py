@@ -464,6 +464,9 @@ def _ramp_time(a_of_n: Callable[[float], float], v: float) -> float:
 
 @pytest.mark.parametrize("typ", [1, 2, 3])
 def test_curve_ramp_takes_the_integral_of_dn_over_a_and_never_exceeds_the_curve(typ: int) -> None:
+    # the curve's parameters, as getriebe[5].beschl_kennlinie.* below: typ, n_grenz, a_konst,
+    # b1, b2 (P-AXIS-00027), b3, a_min; for type 3 a_max (P-AXIS-00240), n1 (P-AXIS-00241)
+    # and n2 (P-AXIS-00242)
     b1 = {1: 2.285714e4, 2: -0.88888888, 3: 0.0}[typ]
     b3 = {1: 2.857142e-2, 2: -1.92901234e-10, 3: 0.0}[typ]
     params: dict[str, float] = {
