@@ -1,5 +1,8 @@
 """CNC-controlled homing G74 of an axis [002 §2.7]: to the reference cam at vb_refmax, off it
 at vb_reflow, the zero pulse at the cam's edge sets kenngr.ref_pos, then to ref_pos.
+Without reversal (P-AXIS-00157 ref_ohne_rev) the zero pulse is taken where the axis runs onto
+the cam, in the search direction; without a cam (P-AXIS-00156 ref_ohne_nocken) the axis
+searches the zero pulse alone, at vb_reflow in the homing direction.
 
 A `Sequence` (nc_sim/axis/state.py): the cam events advance its phases, the end of the last
 plan ends it. Spindles home by their own task (nc_sim/spindle/task.py).
@@ -24,12 +27,14 @@ class HomingPhase(IntEnum):
     TO_CAM = 1
     OFF_CAM = 2
     TO_REF = 3
+    TO_MARK = 4  # without a cam: the zero pulse alone
 
 
 PHASE_NAMES = {
     HomingPhase.TO_CAM: "search for the cam",
     HomingPhase.OFF_CAM: "leaving the cam",
     HomingPhase.TO_REF: "to the reference position",
+    HomingPhase.TO_MARK: "search for the zero pulse",
 }
 
 
@@ -70,7 +75,10 @@ class Homing:
         motion.forget_reference(ax)
         motion.set_state(ax, AxisState.HOMING)
         on_cam = bool(motion.k.ist[ax.slot, L.I_CAM]) == (cls._direction(ax) > 0)
-        seq = cls(ax, motion, HomingPhase.OFF_CAM if on_cam else HomingPhase.TO_CAM)
+        phase = HomingPhase.OFF_CAM if on_cam else HomingPhase.TO_CAM
+        if ax.cfg.flag("kenngr.ref_ohne_nocken"):
+            phase = HomingPhase.TO_MARK
+        seq = cls(ax, motion, phase)
         ax.sequence = seq
         seq._search()
         return None
@@ -84,6 +92,8 @@ class Homing:
         ax, d = self.ax, self._direction(self.ax)
         if self.phase is HomingPhase.TO_CAM:
             v, what = d * ax.cfg.eng("getriebe.vb_refmax", ax.gear), "search for the cam"
+        elif self.phase is HomingPhase.TO_MARK:
+            v, what = d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), "search for the zero pulse"
         else:
             v, what = -d * ax.cfg.eng("getriebe.vb_reflow", ax.gear), "leaving the cam"
         self.speed = abs(v)
@@ -113,9 +123,14 @@ class Homing:
         if ev & L.EV_CAM and ax.state is AxisState.HOMING:
             cam = bool(self.motion.k.ist[ax.slot, L.I_CAM])
             d = self._direction(ax)
-            if self.phase is HomingPhase.TO_CAM and cam == (d > 0):
-                self.phase = HomingPhase.OFF_CAM
-                self._search()
+            if self.phase is HomingPhase.TO_MARK:  # the zero pulse, from either side
+                self._edge()
+            elif self.phase is HomingPhase.TO_CAM and cam == (d > 0):
+                if ax.cfg.flag("kenngr.ref_ohne_rev"):  # on, not back off the cam
+                    self._edge()
+                else:
+                    self.phase = HomingPhase.OFF_CAM
+                    self._search()
             elif self.phase is HomingPhase.OFF_CAM and cam != (d > 0):
                 self._edge()
         if not ev & L.EV_PLAN_DONE or ax.state is not AxisState.HOMING:

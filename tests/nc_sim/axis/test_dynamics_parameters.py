@@ -177,3 +177,41 @@ def test_an_arc_is_slowed_by_the_geometric_ramp_time(tr_geom_us: int, v_arc: flo
     vx, vz = rec[:, m.axis("X").slot, L.R_V_CMD], rec[:, m.axis("Z").slot, L.R_V_CMD]
     on_arc = np.hypot(vx, vz)[lines == 2]
     assert on_arc.max() == pytest.approx(v_arc, rel=1e-3)
+
+
+REFMAX, REFLOW = 83.333, 16.666  # the demo Z's vb_refmax, vb_reflow (mm/s)
+
+
+def _homing(params: dict[str, Any]) -> tuple[np.ndarray, float, bool]:
+    """Z's commanded velocity while it homes towards + from -100 mm, its final position and
+    whether it ended homed."""
+    sim, m, _cfg = make({"Z": {"kenngr.ref_richt": 1, **params}})
+    assert isinstance(m.submit(Home("Z")), Accepted)
+    rec = record(sim, 12.0)
+    z = m.axis("Z").slot
+    return rec[:, z, L.R_V_CMD], float(rec[-1, z, L.R_P_CMD]), bool(rec[-1, z, L.R_HOMED])
+
+
+def _turns(v: np.ndarray) -> int:
+    """How often the motion changes direction."""
+    signs = np.sign(v[np.abs(v) > 1e-9])
+    return int(np.count_nonzero(np.diff(signs)))
+
+
+def test_homing_without_reversal_takes_the_zero_pulse_on_the_way_onto_the_cam() -> None:
+    # P-AXIS-00157 ref_ohne_rev: onto the cam at vb_refmax, the zero pulse latched there, back
+    # to ref_pos (the pulse's position, passed meanwhile): one turn. With reversal the axis
+    # first backs off the cam at vb_reflow and turns once more onto the zero pulse.
+    v, end, homed = _homing({"kenngr.ref_ohne_rev": 1})
+    assert homed and end == pytest.approx(0.0) and _turns(v) == 1
+    v, end, homed = _homing({})
+    assert homed and end == pytest.approx(0.0) and _turns(v) == 2
+
+
+def test_homing_without_a_cam_searches_the_zero_pulse_at_the_low_speed() -> None:
+    # P-AXIS-00156 ref_ohne_nocken: no cam search at vb_refmax, the zero pulse at vb_reflow
+    v, end, homed = _homing({"kenngr.ref_ohne_nocken": 1})
+    assert homed and end == pytest.approx(0.0)
+    assert np.abs(v).max() == pytest.approx(REFLOW)
+    v, _end, _homed = _homing({})
+    assert np.abs(v).max() == pytest.approx(REFMAX)
