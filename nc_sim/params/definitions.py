@@ -1131,6 +1131,10 @@ DEFINITIONS: list[ParamDef] = [
         1200,
         types="S",
         title="Weighting of velocity feedforward after changeover",
+        without_effect=(
+            "the simulated drive has no velocity feedforward of its own to weight at the "
+            "changeover (and for CNC-controlled drives it has no meaning [001 §2.2])"
+        ),
     ),
     _p(
         "P-AXIS-00767",

@@ -23,7 +23,6 @@ NOT_YET_AUDITED = frozenset(
         "P-AXIS-00095",
         "P-AXIS-00126",
         "P-AXIS-00127",
-        "P-AXIS-00766",
     }
 )
 
