@@ -118,3 +118,24 @@ def test_a_scenario_expresses_the_door_the_gear_change_sync_and_the_stop_at_m30(
     assert int(np.argmax(z_speed > 0)) > in_m42  # the block waited for its gear change
     assert res.columns["Z.pos_cmd_mm"][-1] == pytest.approx(-50.0)
     assert res.columns["S1.speed_cmd_rpm"][-1] == 0.0  # M30 stopped it
+
+
+def test_a_scenario_sets_a_safety_zone_and_its_signal() -> None:
+    # zone 1 of X from 40 to 60 mm (0.1 µm) at 10 mm/s (µm/s) [002 §2.8]: a move into it
+    scenario = {
+        "duration_s": 4.0,
+        "parameters": {
+            "X": {
+                "kenngr.red_speed_zone_neg": 400000,
+                "kenngr.red_speed_zone_pos": 600000,
+                "getriebe[0].vb_max_red_zone": 10000,
+            }
+        },
+        "actions": [
+            {"t_s": 0.0, "hli": {"axis": "X", "unit": "reduced_speed_zone", "value": 1}},
+            {"t_s": 0.1, "mdi": "G01 X70 F3000"},  # from X50, inside the zone
+        ],
+    }
+    res = run_scenario(demo_machine(), scenario)
+    x_speed = np.abs(np.asarray(res.columns["X.vel_cmd_mm_min"]))
+    assert x_speed.max() == pytest.approx(600.0)  # 10 mm/s, not F3000
