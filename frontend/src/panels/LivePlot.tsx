@@ -6,7 +6,7 @@ import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { PlotConfig } from "../state/plots";
-import { catalogue, rings } from "../state/telemetry";
+import { catalogue, frameListeners, rings } from "../state/telemetry";
 import { fmt, tickLabels } from "../ui/format";
 import { drawLoop } from "../ui/drawLoop";
 import { SignalPicker } from "../ui/SignalPicker";
@@ -61,25 +61,24 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
     plot.current = u;
     const ro = new ResizeObserver(() => u.setSize({ width: Math.max(200, el.clientWidth), height: Math.max(160, el.clientHeight) }));
     ro.observe(el);
-    let seen = -1;
     let lastLatest = 0;
-    const stop = drawLoop(
-      () => !pausedRef.current && rings.value.version !== seen,
-      (now) => {
-        fps.frames++;
-        const r = rings.value;
-        seen = r.version;
-        u.setData(r.window(config.windowS, config.signals) as uPlot.AlignedData);
-        fps.draws++;
-        if (now - lastLatest > 200) {
-          lastLatest = now;
-          setLatest(config.signals.map((s) => r.latest(s)));
-        }
-      },
-      MAX_DRAWS_PER_S,
-    );
+    const loop = drawLoop((now) => {
+      if (pausedRef.current) return;
+      fps.frames++;
+      const r = rings.value;
+      u.setData(r.window(config.windowS, config.signals) as uPlot.AlignedData);
+      fps.draws++;
+      if (now - lastLatest > 200) {
+        lastLatest = now;
+        setLatest(config.signals.map((s) => r.latest(s)));
+      }
+    }, MAX_DRAWS_PER_S);
+    const onFrame = () => loop.kick(); // new samples: draw them
+    frameListeners.add(onFrame);
+    loop.kick();
     return () => {
-      stop();
+      frameListeners.delete(onFrame);
+      loop.stop();
       ro.disconnect();
       u.destroy();
       plot.current = null;

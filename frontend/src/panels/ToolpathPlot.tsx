@@ -7,7 +7,7 @@ import type { ChannelStatus, ProgramPreview } from "../api/types";
 import type { Rings } from "../state/rings";
 import { status } from "../state/session";
 import { frameListeners, unwant, want } from "../state/telemetry";
-import { drawLoop } from "../ui/drawLoop";
+import { type DrawLoop, drawLoop } from "../ui/drawLoop";
 import { fmt } from "../ui/format";
 
 const MAX_DRAWS_PER_S = 25; // the actual path grows smoothly to the eye
@@ -55,6 +55,12 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
   const fitted = useRef(true); // follows the program's extent until the user zooms or pans
   const actual = useRef<number[]>([]); // h0, v0, h1, v1, ...
   const dirty = useRef(true);
+  const loopRef = useRef<DrawLoop | null>(null);
+  /** Something changed the picture: draw it again (in the next frame at most). */
+  const markDirty = () => {
+    dirty.current = true;
+    loopRef.current?.kick();
+  };
   const [cursor, setCursor] = useState<[number, number] | null>(null);
   const [, redraw] = useState(0);
   const axes = props.preview?.axes ?? null;
@@ -78,6 +84,7 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
         a.push(hs[i], vs[i]);
         dirty.current = true;
       }
+      if (dirty.current) loopRef.current?.kick();
       if (a.length > 2 * MAX_ACTUAL) a.splice(0, a.length - 2 * MAX_ACTUAL);
     };
     frameListeners.add(take);
@@ -98,21 +105,16 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
     if (runState && before && IN_A_RUN.has(runState) && !IN_A_RUN.has(before)) {
       const a = actual.current;
       actual.current = a.length ? a.slice(-2) : []; // from where the tool stands
-      dirty.current = true;
+      markDirty();
     }
   }, [runState]);
 
-  useEffect(() => {
-    dirty.current = true;
-  }, [props.preview, props.blockLine]);
+  useEffect(markDirty, [props.preview, props.blockLine]);
 
   useEffect(() => {
     const el = canvas.current;
     if (!el) return;
-    const resized = new ResizeObserver(() => (dirty.current = true));
-    resized.observe(el);
-    const stop = drawLoop(
-      () => dirty.current,
+    const loop = drawLoop(
       () => {
         const w = el.clientWidth, ht = el.clientHeight;
         const dpr = window.devicePixelRatio || 1;
@@ -132,8 +134,13 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
       },
       MAX_DRAWS_PER_S,
     );
+    loopRef.current = loop;
+    const resized = new ResizeObserver(markDirty);
+    resized.observe(el);
+    markDirty();
     return () => {
-      stop();
+      loop.stop();
+      loopRef.current = null;
       resized.disconnect();
     };
   }, [props.preview, props.blockLine]);
@@ -156,11 +163,11 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
         <span class="legend"><i class="sw rapid" /> rapid <i class="sw feed" /> feed <i class="sw actual" /> actual</span>
         <span class="hint mono" data-testid="toolpath-cursor">{cursor ? `${h} ${fmt(cursor[0], 3)}  ${v} ${fmt(cursor[1], 3)}` : ""}</span>
         <button type="button" class="secondary" data-testid="toolpath-fit"
-          onClick={() => { fitted.current = true; dirty.current = true; redraw((n) => n + 1); }}>
+          onClick={() => { fitted.current = true; markDirty(); redraw((n) => n + 1); }}>
           Fit
         </button>
         <button type="button" class="secondary" data-testid="toolpath-clear" title="forget the actual path drawn so far"
-          onClick={() => { actual.current = []; dirty.current = true; }}>
+          onClick={() => { actual.current = []; markDirty(); }}>
           Clear actual
         </button>
       </div>
@@ -176,7 +183,7 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
           // zoom about the pointer: the point under it stays put
           view.current = { cx: at[0] - (at[0] - vw.cx) / k, cy: at[1] - (at[1] - vw.cy) / k, pxPerMm: vw.pxPerMm * k };
           fitted.current = false;
-          dirty.current = true;
+          markDirty();
         }}
         onMouseDown={(e) => (drag.current = { x: e.clientX, y: e.clientY })}
         onMouseMove={(e) => {
@@ -186,11 +193,11 @@ export function ToolpathPlot(props: { preview: ProgramPreview | null; blockLine:
           view.current = { ...vw, cx: vw.cx - (e.clientX - d.x) / vw.pxPerMm, cy: vw.cy + (e.clientY - d.y) / vw.pxPerMm };
           drag.current = { x: e.clientX, y: e.clientY };
           fitted.current = false;
-          dirty.current = true;
+          markDirty();
         }}
         onMouseUp={() => (drag.current = null)}
         onMouseLeave={() => { drag.current = null; setCursor(null); }}
-        onDblClick={() => { fitted.current = true; dirty.current = true; }}
+        onDblClick={() => { fitted.current = true; markDirty(); }}
       />
     </div>
   );
