@@ -104,7 +104,7 @@ class Moves:
         ovr = self.override(ax)
         v = Sourced(base.value * ovr, base.source, base.param_id, base.kind)
         p = float(self.motion.k.st[ax.slot, L.S_P_CMD])
-        to = ax.target if ax.target is not None and math.isfinite(ax.target) else p
+        to = ax.target if math.isfinite(ax.target) else p  # no target (a search): here
         red = reduced_speed(ax, motion, (min(p, to), max(p, to)))
         if red is not None and red.value < v.value:
             return red, 1.0
