@@ -38,6 +38,11 @@ class ControlState(BaseModel):
         description="without a live connection (a closed tab, a script between requests) "
         "control is released then, unless the holder comes back or acts",
     )
+    seq: int = Field(
+        0,
+        ge=0,
+        description="changes so far: of two states (an answer, a push) the higher is the newer",
+    )
 
 
 ControlVerb = Literal["take", "request", "cancel", "grant", "refuse", "release"]

@@ -48,6 +48,7 @@ class MachineControl:
             requests=list(self.requests),
             connected=not lost,
             release_at_unix=self.release_at if lost else None,
+            seq=self.seq,
         )
 
 

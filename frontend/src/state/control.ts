@@ -58,7 +58,7 @@ export async function act(action: ControlAction["action"], party?: ControlParty)
   const body: ControlAction = { action, session: party?.session ?? null, client: party?.client ?? null };
   const state = await http.post<ControlState>(machineUrl("/control"), body);
   const st = status.value;
-  if (st) status.value = { ...st, control: state };
+  if (st && state.seq >= (st.control?.seq ?? 0)) status.value = { ...st, control: state };
 }
 
 /** Who holds the machine, as a key that changes only when the holder does. */

@@ -45,8 +45,15 @@ let showTimer = 0;
 function show(): void {
   showTimer = 0;
   shownMs = Date.now();
-  if (newest && newest.id === machineId.value) status.value = newest;
+  if (newest && newest.id === machineId.value) status.value = newerControl(newest, status.value);
   newest = null;
+}
+
+/** `st` with the newer of its and `shown`'s control: a push sent before a control action's answer
+ * may arrive after it, and must not bring back the state the action ended. */
+function newerControl(st: MachineStatus, shown: MachineStatus | null): MachineStatus {
+  const own = shown?.id === st.id ? shown.control : null;
+  return own && st.control && own.seq > st.control.seq ? { ...st, control: own } : st;
 }
 
 /** A status pushed for the current machine. */
