@@ -150,6 +150,27 @@ def motion_dynamics(
     return Dynamics(a_acc, a_dec, (trs[0], trs[1], trs[2], trs[3]), shape)
 
 
+def _share(whole: Sourced, cfg: AxisConfig, name: str) -> Sourced:
+    part, pid = cfg.ref(name)
+    return Sourced(whole.value * cfg.eng(name), f"{part} × {whole.source}", pid)
+
+
+def parallel_manual_dynamics(cfg: AxisConfig, gear: int) -> tuple[Dynamics, Sourced]:
+    """G201, the manual motion of a path axis while the path runs [002 §2.6.2]: its share
+    hb_proz_a_max (P-AXIS-00082) of the axis acceleration P-AXIS-00008, with the manual ramp
+    time P-AXIS-00359, and its top speed, the share hb_proz_v_max (P-AXIS-00083) of P-AXIS-00212."""
+    a = _share(param(cfg, "getriebe.dynamik.a_max", gear), cfg, "handbetrieb.ipo.hb_proz_a_max")
+    tr = param(cfg, "handbetrieb.hb.tr", gear)
+    v = _share(param(cfg, "getriebe.dynamik.vb_max", gear), cfg, "handbetrieb.ipo.hb_proz_v_max")
+    return Dynamics(a, a, (tr, tr, tr, tr)), v
+
+
+def path_share(cfg: AxisConfig) -> tuple[float, float]:
+    """G201: the fractions of P-AXIS-00212 and P-AXIS-00008 the path may use, ipo_proz_v_max
+    (P-AXIS-00095) and ipo_proz_a_max (P-AXIS-00094); the rest is manual mode's [002 §2.6.2]."""
+    return cfg.eng("handbetrieb.ipo.ipo_proz_v_max"), cfg.eng("handbetrieb.ipo.ipo_proz_a_max")
+
+
 def motion_limits(
     cfg: AxisConfig, gear: int, motion: Motion, slope: int, reduced: bool = False
 ) -> np.ndarray:

@@ -31,11 +31,13 @@ from nc_sim.units import AxisKind
 @dataclass
 class ChannelContext:
     """What the axes take from their channel: its HLI control units (override, feedhold,
-    reduced_acceleration), the slope type in force (P-CHAN-00071, #SLOPE) and the E-stop."""
+    reduced_acceleration), the slope type in force (P-CHAN-00071, #SLOPE), the E-stop and
+    whether G201 is in force (jog on the path's axes while it runs) [002 §2.6.2]."""
 
     units: dict[str, int]
     slope: int
     estop: bool = False
+    parallel_manual: bool = False
 
 
 def _no_mode_events(ax: Axis, ev: int) -> None:
@@ -257,6 +259,9 @@ class AxisMotion:
             if ev & L.EV_SPEED_REACHED:
                 self.log(Code.EV_SPEED_REACHED, ax.name)
             self.mode_events(ax, ev)
+        if ev & L.EV_PLAN_DONE and ax.jog_on_path:  # G201: the jog on top of the path ended
+            ax.jog_on_path = False
+            return
         seq = ax.sequence
         if seq is not None and seq.on_event(ev):
             return

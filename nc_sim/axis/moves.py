@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
+from nc_sim.axis import parallel_jog
 from nc_sim.axis.dynamics import Motion, Sourced, feedhold_limits, param, velocity_in_force
 from nc_sim.axis.homing import Homing
 from nc_sim.axis.motion import AxisMotion
@@ -140,6 +141,8 @@ class Moves:
             return
         use_set = bool(self.cfg.channel_raw("use_drive_curr_limit"))
         for ax in axes:
+            if ax.jog_on_path:  # a G201 jog stops with the path (a new key press resumes it)
+                parallel_jog.stop(self.motion, ax)
             if (
                 self.as_axis(ax)
                 and self.motion.k.ist[ax.slot, L.I_ROLE] != L.ROLE_PATH_AXIS  # the path holds
@@ -251,7 +254,18 @@ class Moves:
         err = self._jog_feed_refused(ax, feed)
         if err:
             return err
+        if parallel_jog.on_path(self.motion, ax):
+            return self._jog_on_path(ax, None, d, feed)
         return self.start_move(ax, target, Motion.MANUAL, feed, state=AxisState.JOG)
+
+    def _jog_on_path(
+        self, ax: Axis, distance: float | None, direction: float, feed: float | None
+    ) -> Event | None:
+        """A jog of an axis the program's path moves: with G201 on top of the path."""
+        err = parallel_jog.refused(self.motion, ax) or self.motion.drive_refusal(ax)
+        if err is None:
+            parallel_jog.jog(self.motion, ax, distance, int(direction), feed, self.override(ax))
+        return err
 
     def _jog_feed_refused(self, ax: Axis, feed: float | None) -> Event | None:
         """A jog feed above the axis' G200 maximum (P-AXIS-00213) is refused naming that
@@ -270,11 +284,17 @@ class Moves:
 
     def jog_stop(self, ax: Axis) -> None:
         """Release of the jog key: brake with the manual-mode deceleration."""
-        if ax.state is AxisState.JOG:
+        if ax.jog_on_path:
+            parallel_jog.stop(self.motion, ax)
+        elif ax.state is AxisState.JOG:
             self.stop(ax, Motion.MANUAL)
 
     def jog_step(self, ax: Axis, distance: float, feed_mm_min: float | None = None) -> Event | None:
-        """Incremental jog by `distance` (mm | °) with G200 dynamics."""
+        """Incremental jog by `distance` (mm | °) with G200 dynamics (G201: on top of the path)."""
+        if parallel_jog.on_path(self.motion, ax):
+            feed = per_second(feed_mm_min) if feed_mm_min else None
+            err = self._jog_feed_refused(ax, feed)
+            return err or self._jog_on_path(ax, distance, math.copysign(1.0, distance), feed)
         if ax.state is not AxisState.STANDSTILL:
             return self.motion.fail(ax, Code.AXIS_BUSY)
         target = self.motion.k.st[ax.slot, L.S_P_CMD] + distance

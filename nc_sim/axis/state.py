@@ -58,6 +58,7 @@ class Axis:
     speed_prog: float = 0.0  # spindle: programmed signed speed (°/s) before override
     slope: int = 1
     hold: bool = False  # braked by feedhold, resumes on release
+    jog_on_path: bool = False  # G201: a jog of its own on top of the running path
     homed: bool = False
     error_event: Event | None = None  # the job error in force (what set it), None without
     block_id: int | None = None  # MDI block this motion belongs to

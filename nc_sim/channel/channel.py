@@ -133,6 +133,7 @@ class Channel:
             self.ex.acceleration_weight = dict(modal.acceleration_weight)
             self.ex.ramp_time_weight = dict(modal.ramp_time_weight)
             self.ex.vector_limit = modal.vector_limit
+            self.ex.parallel_manual = modal.parallel_manual
             self.wait = None
             self.last_key = None
             self.step_granted = True
@@ -412,6 +413,7 @@ class Channel:
             self.modal = (self.modal[0], call.plane, self.modal[2], self.modal[3])
             return True
         if isinstance(call, canon.ManualMode):
+            self.host.manual_mode(call.g == 201)
             return True
         err = self.host.start_action(call, aid)
         if err is not None:

@@ -96,6 +96,7 @@ class Execution:
     # #VECTOR LIMIT in force, and how the channel turns it into mm/s and mm/s²
     vector_limit: canon.VectorLimit | None = None
     path_limits: Callable[[canon.VectorLimit], tuple[float, float, float]] | None = None
+    parallel_manual: bool = False  # G201 in force [002 §2.6.2]
     mdi_blocks: deque[tuple[int, list[canon.Call]]] = field(default_factory=deque)
     block: int = 0  # the MDI block being translated
 
@@ -174,6 +175,7 @@ class Execution:
                             e.acceleration_weight = self._fractions(self.acceleration_weight)
                             e.ramp_time_weight = self._fractions(self.ramp_time_weight)
                         e.path_limit = self._path_limit(is_feed)
+                        e.parallel_manual = self.parallel_manual
                         e.exact_stop = bool(after) or call.exact_stop
                         self.steps.append(Step(line, element=e))
                         start = e.end.copy()
@@ -202,7 +204,10 @@ class Execution:
                 case canon.SelectPlane():
                     self.plane = call.plane
                     self.steps.append(Step(line, call=call))
-                case canon.SelectTool() | canon.SetSlope() | canon.ManualMode():
+                case canon.ManualMode():  # a property of the blocks that follow, and of jogs
+                    self.parallel_manual = call.g == 201
+                    self.steps.append(Step(line, call=call))
+                case canon.SelectTool() | canon.SetSlope():
                     self.steps.append(Step(line, call=call))
                 case _:  # gear change, homing, other M functions: at rest, waited for
                     self.steps.append(Step(line, call=call, rest=True, wait=True))

@@ -45,6 +45,7 @@ class Element:
     ramp_time_weight: np.ndarray | None = None
     # #VECTOR LIMIT on it: path speed (mm/s), acceleration and deceleration (mm/s²)
     path_limit: tuple[float, float, float] | None = None
+    parallel_manual: bool = False  # G201: the path keeps its share of the axes' dynamics
 
     def tangent(self, at_end: bool) -> np.ndarray:
         """Unit tangent (d point / d u) at the start or the end."""

@@ -35,6 +35,9 @@ class ChannelHost(Protocol):
         """#VECTOR LIMIT as path speed (mm/s), acceleration and deceleration (mm/s²); ∞
         where it sets none [002 §2.5.2]."""
 
+    def manual_mode(self, parallel: bool) -> None:
+        """G201 (`parallel`): the path's axes may be jogged while it runs; G200: not."""
+
     def check_element(self, e: Element) -> Event | None:
         """None when the element may run, else the job error (logged) that forbids it."""
 

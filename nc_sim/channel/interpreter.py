@@ -386,6 +386,7 @@ class _Block:
                 modal.diameter = 51 in gs
             for g in (200, 201):
                 if g in gs:
+                    modal.parallel_manual = g == 201
                     self._emit(canon.ManualMode(self.line, g))
         if self.lexed.g_values or 130 in gs or 132 in gs:
             self._emit(

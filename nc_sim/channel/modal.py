@@ -45,6 +45,7 @@ class Modal:
     acceleration_weight: dict[str, float] = field(default_factory=dict)
     ramp_time_weight: dict[str, float] = field(default_factory=dict)
     vector_limit: canon.VectorLimit | None = None  # #VECTOR LIMIT in force [002 §2.5.2]
+    parallel_manual: bool = False  # G201 in force, G200 the default [002 §2.6]
 
 
 def target(end: Mapping[str, float], axes: tuple[str, ...]) -> tuple[tuple[str, float], ...]:

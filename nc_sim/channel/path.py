@@ -201,11 +201,13 @@ class Path:
         st[self.slot, L.S_V_CMD] = st[self.slot, L.S_A_CMD] = 0.0
         for s in self._on_path():
             ist[s, L.I_ROLE] = L.ROLE_AXIS
-            ist[s, L.I_PLAN_N] = 0
-            st[s, L.S_V_CMD] = st[s, L.S_A_CMD] = 0.0
-            st[s, L.S_TARGET] = st[s, L.S_P_CMD]
             ist[s, L.I_IN_POS] = 0
             ist[s, L.I_LINE] = 0
+            jogging = ist[s, L.I_PLAN_N] > 0  # a G201 manual motion goes on, at its speed
+            self.k.absorb_manual(s)
+            if not jogging:
+                st[s, L.S_V_CMD] = st[s, L.S_A_CMD] = 0.0
+                st[s, L.S_TARGET] = st[s, L.S_P_CMD]
 
     def abandon(self) -> None:
         """Leave the path where it is (emergency stop, error): the axes keep their motion
@@ -217,3 +219,4 @@ class Path:
         for s in self._on_path():
             self.k.ist[s, L.I_ROLE] = L.ROLE_AXIS
             self.k.ist[s, L.I_PLAN_N] = 0
+            self.k.absorb_manual(s)

@@ -52,6 +52,7 @@ class Kernel:
         self.n += count
         for s in range(first, self.n):
             self.st[s, L.S_TARGET] = math.nan
+            self.st[s, L.S_MAN_TARGET] = math.nan
             self.st[s, L.S_OVERRIDE] = 1.0
             # no loop-opening speeds and no curve cap until the machine sets them
             for col in (L.P_V_CTRL_LIMIT, L.P_V_SPEED_CTRL, L.P_A_CAP):
@@ -94,6 +95,35 @@ class Kernel:
         if n == 0 and not math.isnan(target):
             self.st[slot, L.S_P_CMD] = target
             self.st[slot, L.S_V_CMD] = 0.0
+
+    def load_manual_plan(self, slot: int, seg: np.ndarray, n: int, target: float) -> None:
+        """Start a G201 manual motion of a path axis: a plan of its offset (S_MAN_*) from the
+        offset's position and velocity now; `target` the offset's end, NaN for a velocity
+        plan [002 §2.6.2]."""
+        st = self.st
+        self.seg[slot, :n] = seg[:n]
+        self.ist[slot, L.I_PLAN_N] = n
+        self.ist[slot, L.I_PLAN_K] = 0
+        st[slot, L.S_SEG_TAU] = 0.0
+        st[slot, L.S_SEG_P0] = st[slot, L.S_MAN_P]
+        st[slot, L.S_SEG_V0] = st[slot, L.S_MAN_V]
+        st[slot, L.S_MAN_TARGET] = target
+        if n == 0 and not math.isnan(target):
+            st[slot, L.S_MAN_P] = target
+            st[slot, L.S_MAN_V] = 0.0
+
+    def absorb_manual(self, slot: int) -> None:
+        """The path lets go of a slot: its manual offset becomes part of its position, and a
+        manual motion still running goes on as the slot's own plan (the path is at rest, so
+        the command position is the path's end plus the offset)."""
+        st = self.st
+        base = st[slot, L.S_P_CMD] - st[slot, L.S_MAN_P]
+        if self.ist[slot, L.I_PLAN_N] > 0:
+            st[slot, L.S_SEG_P0] += base
+            st[slot, L.S_TARGET] = st[slot, L.S_MAN_TARGET] + base
+        for col in (L.S_MAN_P, L.S_MAN_V, L.S_MAN_A):
+            st[slot, col] = 0.0
+        st[slot, L.S_MAN_TARGET] = math.nan
 
     def load_curve(self, slot: int, v_target: float) -> None:
         """Start a curve-controlled speed change (pr P_CURVE_*) towards v_target."""

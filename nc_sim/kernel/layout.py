@@ -28,7 +28,13 @@ S_V_TARGET = 16  # end speed of a curve-controlled speed change (I_CURVE), unit/
 S_OVERRIDE = 17  # override in force as a fraction (written by the Python layer, recorded)
 S_V_MODEL = 18  # drive speed of the ideal loop the lag monitoring compares with
 S_PLAY = 19  # backlash: how far the motor is ahead of the load (S_X_MOTOR), within ±width/2
-S_COLS = 20
+# G201 [002 §2.6.2]: a path axis' manual motion on top of the path, planned on the slot's own
+# plan (I_PLAN_*, S_SEG_*) while the path drives the slot; P, V, A in this order like S_P_CMD…
+S_MAN_P = 20  # manual offset added to the path's command position
+S_MAN_V = 21  # its velocity
+S_MAN_A = 22  # its acceleration
+S_MAN_TARGET = 23  # its target, NaN for a velocity plan (a jog braking to a hold)
+S_COLS = 24
 
 # --- pr: float parameters (engineering units) -----------------------------------------------
 P_KV = 0  # 1/s

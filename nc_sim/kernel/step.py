@@ -156,6 +156,10 @@ from nc_sim.kernel.layout import (
     S_DA,
     S_LAG,
     S_LAG_MODEL,
+    S_MAN_A,
+    S_MAN_P,
+    S_MAN_TARGET,
+    S_MAN_V,
     S_OVERRIDE,
     S_P_ACT,
     S_P_CMD,
@@ -217,8 +221,12 @@ def _advance_curve(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: 
 
 
 @njit(cache=True)
-def _advance_plan(st: np.ndarray, ist: np.ndarray, plan: np.ndarray, s: int, dt: float) -> int:
-    """Move slot s by dt along its plan (segment rows `plan`); EV_PLAN_DONE when it ends."""
+def _advance_plan(
+    st: np.ndarray, ist: np.ndarray, plan: np.ndarray, s: int, dt: float, out: int, tcol: int
+) -> int:
+    """Move slot s by dt along its plan (segment rows `plan`), writing position, velocity and
+    acceleration to the columns from `out` on (S_P_CMD, or S_MAN_P for a G201 manual motion)
+    with its target in `tcol`; EV_PLAN_DONE when it ends."""
     n = ist[s, I_PLAN_N]
     left = dt
     k = ist[s, I_PLAN_K]
@@ -232,9 +240,9 @@ def _advance_plan(st: np.ndarray, ist: np.ndarray, plan: np.ndarray, s: int, dt:
             tau += left
             p, v, a = seg_eval(st[s, S_SEG_P0], st[s, S_SEG_V0], a0, j, shape, T, tau)
             st[s, S_SEG_TAU] = tau
-            st[s, S_P_CMD] = p
-            st[s, S_V_CMD] = v
-            st[s, S_A_CMD] = a
+            st[s, out] = p
+            st[s, out + 1] = v
+            st[s, out + 2] = a
             return 0
         left -= T - tau
         p, v, a = seg_eval(st[s, S_SEG_P0], st[s, S_SEG_V0], a0, j, shape, T, T)
@@ -245,16 +253,16 @@ def _advance_plan(st: np.ndarray, ist: np.ndarray, plan: np.ndarray, s: int, dt:
         ist[s, I_PLAN_K] = k
         if k >= n:
             ist[s, I_PLAN_N] = 0
-            target = st[s, S_TARGET]
+            target = st[s, tcol]
             if not math.isnan(target):  # position plan: end exactly on the target, at rest
-                st[s, S_P_CMD] = target
-                st[s, S_V_CMD] = 0.0
+                st[s, out] = target
+                st[s, out + 1] = 0.0
             else:  # velocity plan: keep the final speed (a stop ends at 0, not at round-off)
                 if abs(v) < 1e-9:
                     v = 0.0
-                st[s, S_P_CMD] = p + v * left
-                st[s, S_V_CMD] = v
-            st[s, S_A_CMD] = 0.0
+                st[s, out] = p + v * left
+                st[s, out + 1] = v
+            st[s, out + 2] = 0.0
             return EV_PLAN_DONE
 
 
@@ -270,7 +278,7 @@ def _advance_setpoint(
         st[s, S_P_CMD] += st[s, S_V_CMD] * dt
         st[s, S_A_CMD] = 0.0
         return 0
-    return _advance_plan(st, ist, seg[s], s, dt)
+    return _advance_plan(st, ist, seg[s], s, dt, S_P_CMD, S_TARGET)
 
 
 @njit(cache=True)
@@ -335,25 +343,30 @@ def _advance_coupled(
 def _advance_path(
     st: np.ndarray,
     ist: np.ndarray,
+    seg: np.ndarray,
     pi: np.ndarray,
     pel: np.ndarray,
     pplan: np.ndarray,
     p: int,
     dt: float,
-) -> int:
+) -> tuple[int, int]:
     """Coupled path mode: advance path p's length along its plan (the channel slot) and set
     every path axis' command position, velocity and acceleration from the geometry element
-    the length lies in. Returns EV_BLOCK on entering the next element, EV_PLAN_DONE when the
-    plan ends (the path at rest)."""
+    the length lies in, plus the axis' G201 manual offset (its own plan moves that).
+
+    Returns the channel's events (EV_BLOCK on entering the next element, EV_PLAN_DONE when
+    the plan ends with the path at rest) and 1 when an axis' manual motion ended (its slot
+    has EV_PLAN_DONE)."""
     c = pi[p, PI_SLOT]
     if pi[p, PI_COUNT] == 0:
-        return 0
+        return 0, 0
     ev = 0
+    manual_done = 0
     head = pi[p, PI_HEAD]
     if pel[p, head, E_SPDL] > 0.0:
         ev |= _advance_coupled(st, ist, pel, p, head, c)
     elif ist[c, I_PLAN_N] > 0:
-        ev |= _advance_plan(st, ist, pplan[p], c, dt)
+        ev |= _advance_plan(st, ist, pplan[p], c, dt, S_P_CMD, S_TARGET)
     s = st[c, S_P_CMD]
     while pi[p, PI_COUNT] > 1:
         e = pi[p, PI_HEAD]
@@ -373,6 +386,11 @@ def _advance_path(
         slot = pi[p, PI_AX0 + i]
         if ist[slot, I_ROLE] != ROLE_PATH_AXIS:
             continue  # not on the path now (a spindle in spindle mode)
+        # G201: the axis' manual motion on top of the path
+        manual = ist[slot, I_PLAN_N] > 0
+        if manual and _advance_plan(st, ist, seg[slot], slot, dt, S_MAN_P, S_MAN_TARGET) != 0:
+            ist[slot, I_EVENTS] |= EV_PLAN_DONE
+            manual_done = 1
         lin = pel[p, e, E_LIN + i]
         st[slot, S_P_CMD] = pel[p, e, E_P0 + i] + lin * u
         st[slot, S_V_CMD] = lin * v
@@ -393,7 +411,13 @@ def _advance_path(
         st[s1, S_V_CMD] = r * w * cs * v
         st[s0, S_A_CMD] = -r * w * sn * a - r * w * w * cs * v * v
         st[s1, S_A_CMD] = r * w * cs * a - r * w * w * sn * v * v
-    return ev
+    for i in range(pi[p, PI_NAX]):
+        slot = pi[p, PI_AX0 + i]
+        if ist[slot, I_ROLE] == ROLE_PATH_AXIS:
+            st[slot, S_P_CMD] += st[slot, S_MAN_P]
+            st[slot, S_V_CMD] += st[slot, S_MAN_V]
+            st[slot, S_A_CMD] += st[slot, S_MAN_A]
+    return ev, manual_done
 
 
 @njit(cache=True)
@@ -661,10 +685,11 @@ def run_cycles(
     for c in range(n):
         any_event = 0
         for p in range(pi.shape[0]):
-            ev = _advance_path(st, ist, pi, pel, pplan, p, dt)
+            ev, manual_done = _advance_path(st, ist, seg, pi, pel, pplan, p, dt)
             if ev != 0:
                 ist[pi[p, PI_SLOT], I_EVENTS] |= ev
                 any_event = 1
+            any_event |= manual_done
         for s in range(slots):
             role = ist[s, I_ROLE]
             if role == ROLE_CHANNEL:

@@ -10,7 +10,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from nc_sim.axis.dynamics import Motion, feedhold_limits, motion_limits, velocity_limit
+from nc_sim.axis.dynamics import (
+    Motion,
+    feedhold_limits,
+    motion_limits,
+    path_share,
+    velocity_limit,
+)
 from nc_sim.axis.moves import reduced_speed
 from nc_sim.channel import canon
 from nc_sim.channel.execution import PLC_INFO
@@ -101,6 +107,7 @@ class MachineChannelHost:
         self.moving = False
         inactive = self.m.channel.path.inactive
         for a in self.path_axes:
+            a.jog_on_path = False  # its offset stopped with the path, where it was
             if a.state is AxisState.MOVING and a.slot not in inactive:
                 self.m.moves.stop(a, Motion.FEED)
 
@@ -327,6 +334,9 @@ class MachineChannelHost:
         choice = m.sp.gears.choose(ax, call.speed_rpm, call.gear)
         return choice.gear if choice.error is None and choice.gear != ax.gear else None
 
+    def manual_mode(self, parallel: bool) -> None:
+        self.m.motion.ctx.parallel_manual = parallel
+
     def program_end(self, call: canon.ProgramEnd) -> None:
         program_end(self.m.sp, self.m.axes)
 
@@ -353,7 +363,7 @@ class MachineChannelHost:
         return all(
             abs(k.st[a.slot, L.S_P_CMD] - k.st[a.slot, L.S_P_ACT]) <= k.pr[a.slot, L.P_INPOS_WIN]
             for a in self.path_axes
-            if a.slot not in inactive
+            if a.slot not in inactive and not a.jog_on_path  # a G201 jog is not the path's
         )
 
     def check_element(self, e: Element) -> Event | None:
@@ -419,6 +429,11 @@ class MachineChannelHost:
                 v_max = velocity_limit(ax.cfg, g, motion, None)
             else:
                 v_max = ax.cfg.eng("getriebe.dynamik.vb_max", g)
+            if e.parallel_manual:  # G201: the path's share, the rest is the jog's
+                v_part, a_part = path_share(ax.cfg)
+                v_max = min(v_max, v_part * ax.cfg.eng("getriebe.dynamik.vb_max", g))
+                cols = _ACC_WEIGHTED[0]
+                lim[cols] = lim[cols] * a_part
             a = float(lim[LIM_A_ACC])
             tr = float(lim[LIM_TR_ACC_UP])
             w = float(ax.cfg.raw("getriebe.dynamik.a_trans_weight", g))
@@ -476,6 +491,12 @@ class MachineChannelHost:
                 self.m.motion.set_state(ax, AxisState.STANDSTILL)
                 if st[ax.slot, L.S_P_CMD] != self.path_start[i]:  # it moved on the path
                     self.m.log(Code.EV_MOTION_DONE, ax.name)
+            if line is None and ax.jog_on_path and self.m.k.ist[ax.slot, L.I_ROLE] == L.ROLE_AXIS:
+                # the path let go of it while a G201 jog runs: the jog goes on as one of its own
+                ax.jog_on_path = False
+                ax.motion, ax.feed = Motion.MANUAL, None
+                ax.target = float(st[ax.slot, L.S_TARGET])
+                self.m.motion.set_state(ax, AxisState.JOG)
 
 
 # what G130/G131 weight by P-CHAN-00001: all accelerations, those while the speed grows,

@@ -205,7 +205,7 @@ class ChannelOps:
             return fail(None, Code.CHANNEL_ERROR_STATE, "reset first")
         if ch.braking:
             return fail(None, Code.AXIS_BUSY, "the stopped program's path is still braking")
-        m.slope_at_program_start()
+        m.modal_at_program_start()
         try:
             ch.start()
         except ProgramError as e:

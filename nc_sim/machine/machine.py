@@ -163,10 +163,12 @@ class Machine:
     def slope(self, value: int) -> None:
         self.ctx.slope = value
 
-    def slope_at_program_start(self) -> None:
-        """Back to the profile every program starts with (P-CHAN-00071): a #SLOPE of an
-        earlier program or MDI block holds only until the next start or reset [002 §2.2.1]."""
+    def modal_at_program_start(self) -> None:
+        """Back to the profile every program starts with (P-CHAN-00071) and exclusive manual
+        mode G200: a #SLOPE or G201 of an earlier program or MDI block holds only until the
+        next start or reset [002 §2.2.1, §2.6]."""
         self.ctx.slope = int(self.cfg.channel_raw("prog_start.slope.profile"))
+        self.ctx.parallel_manual = False
 
     @property
     def estop(self) -> bool:
@@ -416,7 +418,7 @@ class Machine:
         gives its TorquePermission back once the reset has cleared the error."""
         estop, self.ctx.estop = self.ctx.estop, False
         self.channel.reset()
-        self.slope_at_program_start()
+        self.modal_at_program_start()
         if self.cax is not None:
             self.cax.reset()
         self.handshake.clear()
