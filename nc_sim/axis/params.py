@@ -137,3 +137,14 @@ def power_on(k: Kernel, ax: Axis) -> None:
     x, cam, mod = k.st[s, L.S_X_MOTOR], k.pr[s, L.P_CAM_POS], k.pr[s, L.P_MODULO]
     k.ist[s, L.I_CAM] = math.floor((x - cam) / mod) if mod > 0 else int(x >= cam)
     k.st[s, L.S_OVERRIDE] = 1.0
+
+
+def modulo_range(c: AxisConfig, gear: int) -> tuple[float, float]:
+    """Where a rotary axis' or spindle's position is shown and programmed, in °: modulou
+    (P-AXIS-00127) up to, not including, moduloo (P-AXIS-00126) of the gear in force."""
+    return c.eng("getriebe.modulou", gear), c.eng("getriebe.moduloo", gear)
+
+
+def in_modulo(p: float, lo: float, hi: float) -> float:
+    """`p` (°) as the angle within lo ≤ angle < hi."""
+    return lo + (p - lo) % (hi - lo)

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 from nc_sim.axis.drive import READY_FOR_CONTROL_LOOP_ON, READY_FOR_POWER_ON
 from nc_sim.axis.homing import Homing
+from nc_sim.axis.params import in_modulo, modulo_range
 from nc_sim.axis.state import Axis, target_and_distance
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.step import moving_direction
@@ -48,6 +49,11 @@ def axis_snapshot(m: MachineCore, ax: Axis) -> AxisSnapshot:
     if on_path is not None:
         target, to_go = on_path, on_path - float(st[L.S_P_CMD])
     drive = ax.drive.reported()
+    pos_cmd, pos_act = float(st[L.S_P_CMD]), float(st[L.S_P_ACT])
+    if ax.kind is AxisKind.SPINDLE:  # a modulo axis: shown within its range [000 §3.2.2]
+        lo, hi = modulo_range(ax.cfg, ax.gear)
+        pos_cmd, pos_act = in_modulo(pos_cmd, lo, hi), in_modulo(pos_act, lo, hi)
+        target = None if target is None else in_modulo(target, lo, hi)
     spindle = None
     if ax.kind is AxisKind.SPINDLE:
         spindle = SpindleSnapshot(
@@ -66,8 +72,8 @@ def axis_snapshot(m: MachineCore, ax: Axis) -> AxisSnapshot:
         state=ax.state.name,
         pos_unit="mm" if ax.kind is AxisKind.LINEAR else "deg",
         vel_unit=vel_unit,
-        pos_cmd=float(st[L.S_P_CMD]),
-        pos_act=float(st[L.S_P_ACT]),
+        pos_cmd=pos_cmd,
+        pos_act=pos_act,
         lag=float(st[L.S_LAG]),
         vel_cmd=vel_cmd,
         vel_act=vel_act,

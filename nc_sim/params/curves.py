@@ -65,3 +65,24 @@ def curve_problems(values: Values, reg: Registry) -> list[tuple[str, str]]:
             )
         )
     return problems
+
+
+def modulo_problems(values: Values, reg: Registry) -> list[tuple[str, str]]:
+    """(parameter name, message) for a gear record whose modulo range
+    (modulou P-AXIS-00127 … moduloo P-AXIS-00126) is not one revolution: the simulated rotary
+    axes and spindles turn 360° per modulo cycle (their encoder's zero mark comes once in it)."""
+    problems: list[tuple[str, str]] = []
+    for g in range(GEARS):
+        hi_name, lo_name = f"getriebe[{g}].moduloo", f"getriebe[{g}].modulou"
+        if hi_name not in values and lo_name not in values:
+            continue
+        lo, hi = _eng(values, reg, lo_name), _eng(values, reg, hi_name)
+        if abs(hi - lo - 360.0) > 1e-9:
+            problems.append(
+                (
+                    hi_name,
+                    f"{hi_name} {hi:g}° − {lo_name} {lo:g}° = {hi - lo:g}°: the modulo range "
+                    "(P-AXIS-00127 … P-AXIS-00126) must span one revolution, 360°",
+                )
+            )
+    return problems

@@ -17,7 +17,7 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from nc_sim.params.curves import curve_problems
+from nc_sim.params.curves import curve_problems, modulo_problems
 from nc_sim.params.definitions import registry
 from nc_sim.params.registry import (
     DTYPE_LIMITS,
@@ -308,8 +308,8 @@ def validate_values(
         except ParamError as e:
             e.line = (lines or {}).get(name)
             errors.append(ParamError(e.detail, name=name, line=e.line, limits=e.limits))
-    if scope is Scope.AXIS and not errors:  # the list as a whole: its curves must accelerate
-        for name, message in curve_problems(values, reg):
+    if scope is Scope.AXIS and not errors:  # the list as a whole: curves, modulo range
+        for name, message in [*curve_problems(values, reg), *modulo_problems(values, reg)]:
             errors.append(ParamError(message, name=name, line=(lines or {}).get(name)))
     return errors
 

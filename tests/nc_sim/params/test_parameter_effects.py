@@ -1,7 +1,7 @@
 """Every registered parameter acts, and a behaviour test shows it, or the registry says why
 the simulation accepts it without effect (issue 36, item 12): the parameter editor shows that
 reason. A test shows a parameter when it names it (its ID or list name) outside the list
-parsing tests. The parameters not yet audited are listed here and may only shrink."""
+parsing tests."""
 
 from __future__ import annotations
 
@@ -13,14 +13,6 @@ from nc_sim.params.registry import ParamDef
 
 TESTS = Path(__file__).resolve().parents[2]
 PARSING = Path(__file__).resolve().parent  # tests/nc_sim/params: list syntax, not behaviour
-
-# registered, acting or not, without a behaviour test yet: the audit's remaining work
-NOT_YET_AUDITED = frozenset(
-    {
-        "P-AXIS-00126",
-        "P-AXIS-00127",
-    }
-)
 
 
 def _test_text() -> str:
@@ -38,19 +30,9 @@ def _named(d: ParamDef, text: str) -> bool:
 def test_every_parameter_has_a_behaviour_test_or_says_why_it_has_no_effect() -> None:
     text = _test_text()
     lacking = [
-        f"{d.id} {d.name}"
-        for d in DEFINITIONS
-        if not d.without_effect and d.id not in NOT_YET_AUDITED and not _named(d, text)
+        f"{d.id} {d.name}" for d in DEFINITIONS if not d.without_effect and not _named(d, text)
     ]
     assert not lacking, "no behaviour test and no without_effect reason: " + ", ".join(lacking)
-
-
-def test_the_list_of_parameters_still_to_audit_only_shrinks() -> None:
-    text = _test_text()
-    by_id = {d.id: d for d in DEFINITIONS}
-    assert by_id.keys() >= NOT_YET_AUDITED
-    done = sorted(i for i in NOT_YET_AUDITED if by_id[i].without_effect or _named(by_id[i], text))
-    assert not done, f"tested or marked now, take them off NOT_YET_AUDITED: {done}"
 
 
 def test_a_parameter_without_effect_says_why_in_a_sentence() -> None:
