@@ -12,7 +12,7 @@ import pytest
 from playwright.sync_api import Page, expect
 
 from tests.backend.server import Server
-from tests.e2e.browser import number, poll, shot
+from tests.e2e.browser import number, panel, poll, shot
 
 # The demo's gear range table is the manual's example [000 §2.8.2], rpm per stage M40..M45.
 GEAR_RANGES = [(50, 560), (400, 800), (700, 3500), (3501, 4000), (3800, 5500), (5400, 7000)]
@@ -45,6 +45,34 @@ def test_m3_speed_rises_to_s_and_m5_stops(page: Page) -> None:
     # beyond it by the speed filter's resolution, so a lone count while creeping to rest may
     # still read ~2 rpm; the settled loop then rests at exactly 0
     poll(lambda: number(page, "vact-S1") == 0.0, "S1 at rest")
+
+
+def _draws_per_frame(page: Page, frames: int = 100) -> float:
+    """Live-plot draws per telemetry frame over the next `frames` frames (about 2 s)."""
+    before = page.evaluate("[inbetrieb.fps.draws, inbetrieb.frames.received]")
+    poll(
+        lambda: page.evaluate("inbetrieb.frames.received") >= before[1] + frames,
+        f"{frames} telemetry frames",
+    )
+    after = page.evaluate("[inbetrieb.fps.draws, inbetrieb.frames.received]")
+    return float(after[0] - before[0]) / float(after[1] - before[1])
+
+
+def test_the_plot_refresh_is_chosen_kept_and_draws_that_often(page: Page) -> None:
+    """50/s draws every telemetry frame (one every 20 ms); 10/s one in five or so, still
+    showing the newest samples; the choice survives a reload."""
+    plot = panel(page, "plot")
+    rate = plot.get_by_test_id("plot-rate")
+    rate.select_option("50")
+    page.get_by_test_id("s-input").fill("600")
+    page.get_by_test_id("m3").click()
+    every = _draws_per_frame(page)
+    rate.select_option("10")
+    fewer = _draws_per_frame(page)
+    assert every > 0.6 and fewer < every / 2, (every, fewer)
+    poll(lambda: abs(latest(page, "S1.speed_act_rpm") - 600) < 1.0, "plot at 600 rpm")
+    page.reload()
+    expect(panel(page, "plot").get_by_test_id("plot-rate")).to_have_value("10")
 
 
 def test_m19_orients_to_90_degrees_within_the_window(page: Page, srv: Server, mid: str) -> None:

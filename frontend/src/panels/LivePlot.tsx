@@ -1,18 +1,18 @@
 // One live plot: chosen signals (subscribed by state/plots.ts, on screen or not) over a 1–30 s
-// window, drawn with uPlot at most 50 times a second and only when new samples arrived;
+// window, drawn with uPlot at most as often as the refresh rate says (state/plots.ts) and only
+// when new samples arrived;
 // pause, drag-zoom (pauses), autoscale, cursor readout in the legend, and the newest value of
 // every trace under the chart.
 import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
-import type { PlotConfig } from "../state/plots";
+import { type PlotConfig, plotRate } from "../state/plots";
 import { catalogue, frameListeners, rings } from "../state/telemetry";
 import { fmt, tickLabels } from "../ui/format";
 import { drawLoop } from "../ui/drawLoop";
 import { SignalPicker } from "../ui/SignalPicker";
 
 export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
-const MAX_DRAWS_PER_S = 50; // as often as telemetry frames come (every 20 ms), never more
 export const fps = { frames: 0, draws: 0 }; // read by bench/ui.py through window.inbetrieb
 
 function unitOf(name: string): string {
@@ -72,7 +72,7 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
         lastLatest = now;
         setLatest(config.signals.map((s) => r.latest(s)));
       }
-    }, MAX_DRAWS_PER_S);
+    }, plotRate.value);
     const onFrame = () => loop.kick(); // new samples: draw them
     frameListeners.add(onFrame);
     loop.kick();
@@ -83,7 +83,7 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
       u.destroy();
       plot.current = null;
     };
-  }, [config.signals.join(","), config.windowS, yRange, catalogue.value.length]);
+  }, [config.signals.join(","), config.windowS, yRange, catalogue.value.length, plotRate.value]);
 
   function toggleAutoscale() {
     const y = plot.current?.scales.y;

@@ -1,5 +1,5 @@
 // Several live plots side by side (their configuration and subscription: state/plots.ts).
-import { defaultPlots, plots as plotsSignal, setPlots } from "../state/plots";
+import { PLOT_RATES, defaultPlots, plotRate, plots as plotsSignal, setPlotRate, setPlots } from "../state/plots";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
 import { LivePlot } from "./LivePlot";
@@ -15,17 +15,30 @@ export function Plots(props: { single?: boolean }) {
       title={props.single ? "Live plot" : "Live plots"}
       id={props.single ? "plot" : "plots"}
       actions={
-        props.single ? null : (
-          <span class="row">
+        <span class="row">
+          <label title="how often the plots redraw: lower spares a slow computer or a remote desktop">
+            Refresh{" "}
+            <select data-testid="plot-rate" value={plotRate.value}
+              onChange={(e) => setPlotRate(Number((e.target as HTMLSelectElement).value))}>
+              {PLOT_RATES.map((r) => (
+                <option key={r} value={r}>
+                  {r}/s
+                </option>
+              ))}
+            </select>
+          </label>
+          {props.single ? null : (
             <button type="button" data-testid="plot-add"
               onClick={() => update([...plots, { id: `p${Date.now()}`, signals: [], windowS: 10 }])}>
               + Add plot
             </button>
+          )}
+          {props.single ? null : (
             <button type="button" class="link" onClick={() => update(defaultPlots(cat))}>
               defaults
             </button>
-          </span>
-        )
+          )}
+        </span>
       }
     >
       <div class={props.single ? "plots single" : "plots"}>

@@ -6,7 +6,7 @@ import { computed, effect, signal } from "@preact/signals";
 import { http } from "../api/http";
 import type { ParameterChange, ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
 import { me } from "./auth";
-import { holderKey } from "./control";
+import { holderKey, standing } from "./control";
 import { machineId, machineUrl, status } from "./session";
 import { kept, keptSignal } from "./workspace";
 
@@ -163,11 +163,21 @@ export async function revertTrial(): Promise<void> {
   }
 }
 
-effect(() => {
-  void machineId.value; // a message belongs to the machine it was about ...
-  void holderKey.value; // ... and to its holder at the time ("Kept." is old news to the next)
+function clearTrialMessage(): void {
   trialMessage.value = "";
   revertWaitsForRestart.value = false;
+}
+
+effect(() => {
+  void machineId.value; // a message belongs to the machine it was about
+  clearTrialMessage();
+});
+
+effect(() => {
+  // ... and to its holder at the time: "Kept." is old news to the next one. A tab that took the
+  // free machine by applying keeps its own news (that holder change may show after its Keep).
+  void holderKey.value;
+  if (standing.peek() !== "mine") clearTrialMessage();
 });
 
 effect(() => {

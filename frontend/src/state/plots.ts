@@ -50,3 +50,22 @@ effect(() => {
 });
 
 effect(() => want("plots", [...new Set(plots.value.flatMap((p) => p.signals))]));
+
+/** How often a live plot may redraw, per second: 50 draws every telemetry frame; 25 and 10 spare
+ * a slow computer or a remote desktop (the samples are all drawn, only less often). Kept in this
+ * browser for every machine. */
+export const PLOT_RATES = [50, 25, 10] as const;
+const RATE_KEY = "inbetrieb.plotRate";
+
+function savedRate(): number {
+  const r = Number(localStorage.getItem(RATE_KEY));
+  return (PLOT_RATES as readonly number[]).includes(r) ? r : PLOT_RATES[0];
+}
+
+export const plotRate = signal<number>(savedRate());
+
+/** Change how often the live plots redraw (and keep it). */
+export function setPlotRate(perS: number): void {
+  plotRate.value = perS;
+  localStorage.setItem(RATE_KEY, String(perS));
+}
