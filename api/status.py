@@ -182,6 +182,11 @@ class ModalStatus(BaseModel):
     distance: Literal["G90", "G91"]
     feed_mm_min: float | None = Field(description="F in force, mm/min; null before the first F")
     slope: int = Field(description="acceleration profile (#SLOPE, P-CHAN-00071): 0 step ... 3 HSC")
+    manual_mode: Literal["G200", "G201"] = Field(
+        "G200",
+        description="G201: the path's axes may be jogged while it runs (manual mode with "
+        "parallel path interpolation); G200: not [002 §2.6]",
+    )
 
 
 class ChannelStatus(BaseModel):

@@ -158,6 +158,7 @@ class ModalSnapshot:
     absolute: bool  # G90
     feed_mm_min: float | None
     slope: int  # P-CHAN-00071 / #SLOPE
+    parallel_manual: bool = False  # G201 in force [002 §2.6.2]
 
 
 @dataclass(frozen=True)

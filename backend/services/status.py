@@ -161,6 +161,7 @@ def channel_status(c: ChannelSnapshot) -> ChannelStatus:
             distance="G90" if md.absolute else "G91",
             feed_mm_min=md.feed_mm_min,
             slope=md.slope,
+            manual_mode="G201" if md.parallel_manual else "G200",
         ),
         path_feed_mm_min=c.path_feed_mm_min,
         distance_to_go_mm=c.distance_to_go_mm,

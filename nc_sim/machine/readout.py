@@ -153,7 +153,12 @@ def channel_snapshot(m: MachineCore) -> ChannelSnapshot:
         single_block=c.single_block,
         mdi=c.mdi,
         modal=ModalSnapshot(
-            motion=g, plane=plane, absolute=absolute, feed_mm_min=feed, slope=m.slope
+            motion=g,
+            plane=plane,
+            absolute=absolute,
+            feed_mm_min=feed,
+            slope=m.slope,
+            parallel_manual=m.motion.ctx.parallel_manual,
         ),
         path_feed_mm_min=ch.path_feed_mm_min(),
         distance_to_go_mm=ch.distance_to_go_mm(),

@@ -104,7 +104,9 @@ export function MdiState() {
   const ch = s?.channel;
   if (!s || !ch) return null;
   const md = ch.modal;
-  const words = [md.motion, md.plane, md.distance, md.feed_mm_min != null ? `F${md.feed_mm_min}` : "no F"].join(" ");
+  const words = [md.motion, md.plane, md.distance, md.feed_mm_min != null ? `F${md.feed_mm_min}` : "no F"]
+    .concat(md.manual_mode === "G201" ? ["G201"] : [])
+    .join(" ");
   const running = ch.mdi ? `running, ${s.queued_blocks} block${s.queued_blocks === 1 ? "" : "s"} queued` : "idle";
   const held = ch.mdi && ch.state === "held" ? " (feedhold)" : "";
   return (

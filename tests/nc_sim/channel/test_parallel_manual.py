@@ -126,11 +126,14 @@ def test_without_g201_a_path_axis_is_not_jogged() -> None:
 
 
 def test_a_new_program_starts_in_g200() -> None:
-    """G201 holds until the program ends [002 §2.6]: the next program may not be jogged."""
+    """G201 holds until the next start or reset [002 §2.6]: the next program may not be
+    jogged. The status says which is in force."""
     sim, m = _start("N10 G201\nN20 G91 G01 Z-5 F6000\nN30 M30\n")
     record(sim, 1.0)
+    assert m.snapshot().channel.modal.parallel_manual
     assert isinstance(m.submit(ProgramLoad("next", "N10 G91 G01 Z-300 F6000\nN20 M30\n")), Accepted)
     assert isinstance(m.submit(CycleStart()), Accepted)
     record(sim, 0.3)
+    assert not m.snapshot().channel.modal.parallel_manual
     outcome = m.submit(JogStep("Z", 1.0))
     assert isinstance(outcome, Refused) and outcome.code == Code.AXIS_BUSY
