@@ -145,7 +145,7 @@ def main() -> None:
         srv = Server(Path(tmp) / "bench.sqlite").start()
         try:
             with chromium() as browser:
-                page = open_hmi(browser, srv.base, "demo")
+                page = open_hmi(browser, srv.base, "demo", plot_rate=50)  # the HMI's default
                 page.evaluate(
                     "(s) => localStorage.setItem('inbetrieb.plots.demo', s)",
                     json.dumps([{"id": "bench", "signals": SIGNALS, "windowS": 10}]),

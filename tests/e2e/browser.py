@@ -37,9 +37,17 @@ WORKSPACES = [
 SHOTS = Path(__file__).resolve().parent / "screenshots"
 # The tests' pages redraw their live plots 10 times a second (the HMI's "Refresh" choice, kept in
 # the browser), not the default 50: a test watches values, not motion, and 50 redraws a second
-# of a full-HD page would cost Chromium a fifth of a core per page. A test may choose another.
-PLOT_RATE = """if (localStorage.getItem("inbetrieb.plotRate") === null)
-  localStorage.setItem("inbetrieb.plotRate", "10");"""
+# of a full-HD page would cost Chromium a fifth of a core per page. A test may choose another;
+# bench/ui.py measures the default.
+TEST_PLOT_RATE = 10
+
+
+def _plot_rate(per_s: int) -> str:
+    """A page script: the Refresh choice `per_s` unless the page's user chose one."""
+    return f"""if (localStorage.getItem("inbetrieb.plotRate") === null)
+  localStorage.setItem("inbetrieb.plotRate", "{per_s}");"""
+
+
 DIST = Path(__file__).resolve().parents[2] / "frontend" / "dist" / "index.html"
 
 
@@ -55,14 +63,19 @@ def chromium() -> Iterator[Browser]:
 
 
 def signed_in_page(
-    browser: Browser, base: str, size: str = "desktop", user: str = USER, password: str = PASSWORD
+    browser: Browser,
+    base: str,
+    size: str = "desktop",
+    user: str = USER,
+    password: str = PASSWORD,
+    plot_rate: int = TEST_PLOT_RATE,
 ) -> Page:
     """A fresh page (its own browser context) logged in as `user` (the test admin unless
     told): the session cookie is set through the context's request API, as the login form
-    would set it."""
+    would set it. Its live plots redraw `plot_rate` times a second."""
     w, h = SIZES[size]
     page = browser.new_page(viewport={"width": w, "height": h})
-    page.add_init_script(PLOT_RATE)
+    page.add_init_script(_plot_rate(plot_rate))
     page.set_default_timeout(15_000)
     r = page.request.post(f"{base}/api/auth/login", data={"name": user, "password": password})
     assert r.ok, r.text()
@@ -76,10 +89,11 @@ def open_hmi(
     size: str = "desktop",
     user: str = USER,
     password: str = PASSWORD,
+    plot_rate: int = TEST_PLOT_RATE,
 ) -> Page:
     """A fresh page on the HMI showing `machine` (the test's own), connected to the service,
-    logged in as `user` (the test admin unless told)."""
-    page = signed_in_page(browser, base, size, user, password)
+    logged in as `user` (the test admin unless told), its live plots at `plot_rate` per s."""
+    page = signed_in_page(browser, base, size, user, password, plot_rate)
     page.goto(f"{base}/#{machine}")
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
     return page
