@@ -23,7 +23,8 @@ KINDS = {1: "hyperbola", 2: "polynomial", 3: "asynchronous"}
 Values = Mapping[str, float | int | str]  # one axis list, list units
 
 
-def _eng(values: Values, reg: Registry, name: str) -> float:
+def list_eng(values: Values, reg: Registry, name: str) -> float:
+    """An axis list entry in engineering units (its default when the list leaves it out)."""
     found = reg.lookup(Scope.AXIS, name)
     assert found is not None, name
     d = found[0]
@@ -34,11 +35,11 @@ def _eng(values: Values, reg: Registry, name: str) -> float:
 def curve_of(values: Values, reg: Registry, gear_index: int) -> CurveParams:
     """The curve of getriebe[gear_index] in an axis list (defaults where unset)."""
     pre = f"getriebe[{gear_index}].beschl_kennlinie."
-    typ = int(_eng(values, reg, pre + "typ"))
+    typ = int(list_eng(values, reg, pre + "typ"))
     n_limit, a_konst, b1, b2, b3, a_min, a_max3, n1, n2 = (
-        _eng(values, reg, pre + n) for n in CURVE_NAMES
+        list_eng(values, reg, pre + n) for n in CURVE_NAMES
     )
-    a_cap = _eng(values, reg, f"getriebe[{gear_index}].dynamik.a_max")
+    a_cap = list_eng(values, reg, f"getriebe[{gear_index}].dynamik.a_max")
     return CurveParams(typ, n_limit, a_konst, b1, b2, b3, a_min, a_max3, n1, n2, a_cap)
 
 
@@ -51,7 +52,7 @@ def curve_problems(values: Values, reg: Registry) -> list[tuple[str, str]]:
         if name not in values or int(float(str(values[name]))) == 0:
             continue
         curve = curve_of(values, reg, g)
-        vb_max = _eng(values, reg, f"getriebe[{g}].dynamik.vb_max")
+        vb_max = list_eng(values, reg, f"getriebe[{g}].dynamik.vb_max")
         dead = curve.dead_speed(0.0, vb_max)
         if dead is None:
             continue
@@ -64,25 +65,4 @@ def curve_problems(values: Values, reg: Registry) -> list[tuple[str, str]]:
                 f"{vb_max / RPM_TO_DEG_S:g} rpm (P-AXIS-00202)",
             )
         )
-    return problems
-
-
-def modulo_problems(values: Values, reg: Registry) -> list[tuple[str, str]]:
-    """(parameter name, message) for a gear record whose modulo range
-    (modulou P-AXIS-00127 … moduloo P-AXIS-00126) is not one revolution: the simulated rotary
-    axes and spindles turn 360° per modulo cycle (their encoder's zero mark comes once in it)."""
-    problems: list[tuple[str, str]] = []
-    for g in range(GEARS):
-        hi_name, lo_name = f"getriebe[{g}].moduloo", f"getriebe[{g}].modulou"
-        if hi_name not in values and lo_name not in values:
-            continue
-        lo, hi = _eng(values, reg, lo_name), _eng(values, reg, hi_name)
-        if abs(hi - lo - 360.0) > 1e-9:
-            problems.append(
-                (
-                    hi_name,
-                    f"{hi_name} {hi:g}° − {lo_name} {lo:g}° = {hi - lo:g}°: the modulo range "
-                    "(P-AXIS-00127 … P-AXIS-00126) must span one revolution, 360°",
-                )
-            )
     return problems

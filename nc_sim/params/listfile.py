@@ -17,7 +17,7 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from nc_sim.params.curves import curve_problems, modulo_problems
+from nc_sim.params.curves import curve_problems
 from nc_sim.params.definitions import registry
 from nc_sim.params.registry import (
     DTYPE_LIMITS,
@@ -26,6 +26,7 @@ from nc_sim.params.registry import (
     Registry,
     Scope,
 )
+from nc_sim.params.whole_list import modulo_problems, share_problems
 from nc_sim.units import AxisKind
 
 Value = float | int | str
@@ -309,7 +310,8 @@ def validate_values(
             e.line = (lines or {}).get(name)
             errors.append(ParamError(e.detail, name=name, line=e.line, limits=e.limits))
     if scope is Scope.AXIS and not errors:  # the list as a whole: curves, modulo range
-        for name, message in [*curve_problems(values, reg), *modulo_problems(values, reg)]:
+        checks = (curve_problems, modulo_problems, share_problems)
+        for name, message in [p for check in checks for p in check(values, reg)]:
             errors.append(ParamError(message, name=name, line=(lines or {}).get(name)))
     return errors
 

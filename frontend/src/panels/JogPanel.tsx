@@ -79,11 +79,13 @@ export function JogPanel() {
   // and with the gear's getriebe.dynamik.vb_max the default feed a jog without one takes
   const [feedMax, setFeedMax] = useState<number | null>(null);
   const [feedDefault, setFeedDefault] = useState<number | null>(null);
+  const [g201Max, setG201Max] = useState<number | null>(null); // the manual share under G201
   const axName = ax?.name;
   const gear = ax?.gear ?? 1;
   useEffect(() => {
     setFeedMax(null);
     setFeedDefault(null);
+    setG201Max(null);
     if (!machineId.value || !axName) return;
     void loadList("axis", axName).then((list) => {
       // list unit × eng_factor = mm/min | °/min (rpm for a spindle, which jogs as C in °/min)
@@ -97,6 +99,8 @@ export function JogPanel() {
       const dyn = perMin(`getriebe[${Math.max(0, gear - 1)}].dynamik.vb_max`);
       setFeedMax(hb);
       setFeedDefault(hb !== null && dyn !== null ? Math.min(hb, dyn) : hb);
+      const share = list.find((q) => q.name === "handbetrieb.ipo.hb_proz_v_max")?.value;
+      setG201Max(dyn !== null && typeof share === "number" ? (dyn * share) / 100 : null);
     }, () => undefined);
   }, [machineId.value, paramsVersion.value, axName, gear]);
   useEffect(() => void loadRotaryAxisName(), [machineId.value, paramsVersion.value]);
@@ -122,6 +126,12 @@ export function JogPanel() {
   const estopWhy = status.value?.emergency_stop ? "emergency stop: reset first" : "";
   const why = blocked || estopWhy || (feedError ? `jog feed: ${feedError}` : "");
   const pathOverride = (status.value?.channel_units.override ?? 1000) / 10;
+  // G201 while the program's path runs: a jog of a path axis rides on the path with the manual
+  // share of the axis' speed (hb_proz_v_max of vb_max) [002 §2.6.2]
+  const ch = status.value?.channel;
+  const pathAxis = ax.kind !== "spindle" || ax.spindle_mode === "rotary"; // C as a rotary axis
+  const onPath = !!ch && ["running", "held", "block_end"].includes(ch.state) && pathAxis;
+  const g201 = onPath && ch?.modal.manual_mode === "G201";
   return (
     <Panel title="Jog" id="jog">
       <div class="row" role="radiogroup" aria-label="axis">
@@ -149,7 +159,13 @@ export function JogPanel() {
             onInput={(e) => jogSettings.patch({ feed: (e.target as HTMLInputElement).value })} />{" "}
           {unit}/min
         </label>
-        {feed === null ? (
+        {g201 ? (
+          <span class="tag default-tag" data-testid="jog-g201"
+            title="G201: a jog rides on the running path with the manual share of the axis' speed (hb_proz_v_max, P-AXIS-00083, of vb_max)">
+            G201 on the path · up to {qty(g201Max, 1, `${unit}/min`)}
+          </span>
+        ) : null}
+        {g201 ? null : feed === null ? (
           <span class="tag default-tag" id="jog-feed-default" data-testid="jog-feed-default"
             title="the jog feed without one given: hb.vb_max (P-AXIS-00213), at most the gear's vb_max">
             G200 default

@@ -25,8 +25,11 @@ from nc_sim.commands import (
     ProgramLoad,
     Refused,
 )
+from nc_sim.config import apply_overrides, demo_machine
 from nc_sim.errors import Code
 from nc_sim.machine.machine import Machine
+from nc_sim.params import Scope
+from nc_sim.params.listfile import ParamListError
 from nc_sim.sim import Simulation
 from nc_sim.snapshot import AxisState
 from tests.nc_sim.sim_helpers import L, make, record
@@ -137,3 +140,12 @@ def test_a_new_program_starts_in_g200() -> None:
     assert not m.snapshot().channel.modal.parallel_manual
     outcome = m.submit(JogStep("Z", 1.0))
     assert isinstance(outcome, Refused) and outcome.code == Code.AXIS_BUSY
+
+
+def test_shares_above_the_whole_limit_are_refused_naming_them() -> None:
+    """Manual and path share split one limit: 60 % + 70 % of P-AXIS-00212 would exceed it."""
+    cfg = demo_machine()
+    with pytest.raises(ParamListError) as e:
+        apply_overrides(cfg, Scope.AXIS, "X", {"handbetrieb.ipo.hb_proz_v_max": 60})
+    assert "handbetrieb.ipo.hb_proz_v_max" in str(e.value) and "130 %" in str(e.value)
+    apply_overrides(cfg, Scope.AXIS, "X", {"handbetrieb.ipo.hb_proz_v_max": 30})  # 30 + 70
