@@ -15,7 +15,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from nc_sim.channel.state import ChannelState
 from nc_sim.commands import (
     Accepted,
     CycleStart,
@@ -31,7 +30,7 @@ from nc_sim.machine.machine import Machine
 from nc_sim.params import Scope
 from nc_sim.params.listfile import ParamListError
 from nc_sim.sim import Simulation
-from nc_sim.snapshot import AxisState
+from nc_sim.snapshot import AxisState, ChannelState
 from tests.nc_sim.sim_helpers import L, make, record
 
 # the manual's excerpt of the axis list for G201 (hb.tr 50000 µs)
@@ -113,7 +112,7 @@ def test_a_jog_that_outlasts_the_program_goes_on_as_a_jog_of_its_own() -> None:
     assert m.k.st[x.slot, L.S_V_CMD] == pytest.approx(-10.0)  # 600 mm/min, without a jump
     assert isinstance(m.submit(JogStop("X")), Accepted)
     record(sim, 0.5)
-    assert x.state is AxisState.STANDSTILL
+    assert m.axis("X").state is AxisState.STANDSTILL
     assert m.k.st[x.slot, L.S_V_CMD] == 0.0
 
 
