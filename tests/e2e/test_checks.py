@@ -241,3 +241,17 @@ def test_the_new_bars_and_messages_fit_a_tablet(browser: Browser, srv: Server, m
     expect(bar.get_by_test_id("param-trial")).to_be_hidden()
     page.get_by_test_id("reset").click()
     page.close()
+
+
+def test_a_search_the_open_list_cannot_answer_says_which_list_has_it(page: Page) -> None:
+    """P-CHAN-00008 (cax_face_id) is a channel parameter [000 §3.1]: searched in X's list the
+    editor says so and opens the channel list on a click."""
+    page.get_by_test_id("tab-Parameters").click()
+    params = panel(page, "parameters")
+    params.get_by_test_id("param-search").fill("P-CHAN-00008")
+    hint = params.get_by_test_id("param-no-match")
+    expect(hint).to_contain_text("P-CHAN-00008")
+    expect(hint.get_by_role("button")).to_have_count(1)  # the channel list only
+    hint.get_by_test_id("param-look-Channel").click()
+    expect(params.get_by_test_id("param-row-cax_face_id")).to_be_visible()
+    expect(params.get_by_test_id("param-no-match")).to_have_count(0)

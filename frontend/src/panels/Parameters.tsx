@@ -12,6 +12,7 @@ import {
   loadList,
   loadRegistry,
   paramListView,
+  registryDefs,
   paramsVersion,
   trial,
   trialMessage,
@@ -126,6 +127,13 @@ function ParameterList() {
   const shownGroups = groups
     .map((g) => ({ g, rows: shownFlat.filter((p) => groupOf(p.name, p.gear, spindle) === g) }))
     .filter((x) => x.rows.length);
+  // a search the open list cannot answer: the registry says in which scope it is (an axis
+  // parameter may belong to another kind of axis, e.g. a spindle's, so every other axis is offered)
+  const elsewhere = !shownFlat.length && q
+    ? registryDefs.value.filter((d) => d.id.toLowerCase().includes(q) || d.name.toLowerCase().includes(q) || d.title.toLowerCase().includes(q))
+    : [];
+  const scopes = new Set(elsewhere.map((d) => d.scope));
+  const otherLists = targets.filter((x) => x.label !== t?.label && scopes.has(x.scope));
   const byName = new Map(rows.map((p) => [p.name, p]));
   const invalid = Object.entries(edits).filter(([n, v]) => byName.has(n) && check(byName.get(n)!, v));
   const edited = Object.keys(edits).length;
@@ -354,7 +362,23 @@ function ParameterList() {
           </tbody>
           ))}
         </table>
-        {!shownFlat.length ? <p class="hint">No parameter matches.</p> : null}
+        {!shownFlat.length ? (
+          <p class="hint" data-testid="param-no-match">
+            No parameter matches in this list.
+            {elsewhere.length ? (
+              <>
+                {" "}Found in the registry for {elsewhere.map((d) => d.id).slice(0, 3).join(", ")}
+                {elsewhere.length > 3 ? ` and ${elsewhere.length - 3} more` : ""}: look in{" "}
+                {otherLists.map((x) => (
+                  <button key={x.label} type="button" class="link" data-testid={`param-look-${x.label}`}
+                    onClick={() => paramListView.patch({ list: x.label, group: "" })}>
+                    {x.label}
+                  </button>
+                ))}
+              </>
+            ) : null}
+          </p>
+        ) : null}
       </div>
     </Panel>
   );

@@ -43,10 +43,15 @@ export async function numbers(scope: Scope, target: string | null): Promise<Map<
 
 /** Data type (UNS32, REAL64, …) of every registry entry by its ID, loaded once. */
 export const dtypes = signal<Map<string, string>>(new Map());
+/** Every registered parameter (all scopes): where a search finds what the open list lacks. */
+export const registryDefs = signal<ParameterDef[]>([]);
 let registryLoad: Promise<void> | null = null;
 export function loadRegistry(): Promise<void> {
   registryLoad ??= http.get<ParameterDef[]>("/api/parameters").then(
-    (defs) => void (dtypes.value = new Map(defs.map((d) => [d.id, d.dtype]))),
+    (defs) => {
+      dtypes.value = new Map(defs.map((d) => [d.id, d.dtype]));
+      registryDefs.value = defs;
+    },
     () => void (registryLoad = null), // try again next time
   );
   return registryLoad;
