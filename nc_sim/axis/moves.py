@@ -291,14 +291,15 @@ class Moves:
 
     def jog_step(self, ax: Axis, distance: float, feed_mm_min: float | None = None) -> Event | None:
         """Incremental jog by `distance` (mm | °) with G200 dynamics (G201: on top of the path)."""
+        feed = per_second(feed_mm_min) if feed_mm_min else None
         if parallel_jog.on_path(self.motion, ax):
-            feed = per_second(feed_mm_min) if feed_mm_min else None
-            err = self._jog_feed_refused(ax, feed)
-            return err or self._jog_on_path(ax, distance, math.copysign(1.0, distance), feed)
+            direction = math.copysign(1.0, distance)
+            return self._jog_feed_refused(ax, feed) or self._jog_on_path(
+                ax, distance, direction, feed
+            )
         if ax.state is not AxisState.STANDSTILL:
             return self.motion.fail(ax, Code.AXIS_BUSY)
         target = self.motion.k.st[ax.slot, L.S_P_CMD] + distance
-        feed = per_second(feed_mm_min) if feed_mm_min else None
         return self._jog_feed_refused(ax, feed) or self.start_move(ax, target, Motion.MANUAL, feed)
 
     # --- reset --------------------------------------------------------------------------

@@ -432,8 +432,7 @@ class MachineChannelHost:
             if e.parallel_manual:  # G201: the path's share, the rest is the jog's
                 v_part, a_part = path_share(ax.cfg)
                 v_max = min(v_max, v_part * ax.cfg.eng("getriebe.dynamik.vb_max", g))
-                cols = _ACC_WEIGHTED[0]
-                lim[cols] = lim[cols] * a_part
+                lim[_ACCELERATIONS] = lim[_ACCELERATIONS] * a_part
             a = float(lim[LIM_A_ACC])
             tr = float(lim[LIM_TR_ACC_UP])
             w = float(ax.cfg.raw("getriebe.dynamik.a_trans_weight", g))
@@ -503,8 +502,9 @@ class MachineChannelHost:
 # those while it falls; G132/G133 by P-CHAN-00073: all ramp times, or one of T_R,accel,inc
 # (tr_beschl_zu), T_R,accel,red (tr_beschl_ab), T_R,decel,inc (tr_brems_zu), T_R,decel,red
 # (tr_brems_ab) [002 §3.2.1]
+_ACCELERATIONS = [LIM_A_ACC, LIM_A_DEC, LIM_A_ACC2, LIM_A_DEC2]
 _ACC_WEIGHTED = {
-    0: [LIM_A_ACC, LIM_A_DEC, LIM_A_ACC2, LIM_A_DEC2],
+    0: _ACCELERATIONS,
     1: [LIM_A_ACC, LIM_A_ACC2],
     2: [LIM_A_DEC, LIM_A_DEC2],
 }

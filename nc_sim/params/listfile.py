@@ -309,7 +309,7 @@ def validate_values(
         except ParamError as e:
             e.line = (lines or {}).get(name)
             errors.append(ParamError(e.detail, name=name, line=e.line, limits=e.limits))
-    if scope is Scope.AXIS and not errors:  # the list as a whole: curves, modulo range
+    if scope is Scope.AXIS and not errors:  # the list as a whole: curves, modulo, G201 shares
         checks = (curve_problems, modulo_problems, share_problems)
         for name, message in [p for check in checks for p in check(values, reg)]:
             errors.append(ParamError(message, name=name, line=(lines or {}).get(name)))

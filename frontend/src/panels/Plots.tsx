@@ -28,15 +28,15 @@ export function Plots(props: { single?: boolean }) {
             </select>
           </label>
           {props.single ? null : (
-            <button type="button" data-testid="plot-add"
-              onClick={() => update([...plots, { id: `p${Date.now()}`, signals: [], windowS: 10 }])}>
-              + Add plot
-            </button>
-          )}
-          {props.single ? null : (
-            <button type="button" class="link" onClick={() => update(defaultPlots(cat))}>
-              defaults
-            </button>
+            <>
+              <button type="button" data-testid="plot-add"
+                onClick={() => update([...plots, { id: `p${Date.now()}`, signals: [], windowS: 10 }])}>
+                + Add plot
+              </button>
+              <button type="button" class="link" onClick={() => update(defaultPlots(cat))}>
+                defaults
+              </button>
+            </>
           )}
         </span>
       }
