@@ -16,6 +16,14 @@ UI_SRC    := $(shell find frontend/src -type f ! -name schema.d.ts) frontend/ind
 
 .PHONY: run test lint bench bootstrap frontend clean
 
+# numba caches each compiled function by its own file's time stamp only: a kernel function
+# that calls one from another file (the plant's drive step) would keep the old callee's code.
+# Any change to nc_sim drops every compiled cache, so no run uses a stale kernel.
+NUMBA_STAMP := var/.numba-sources
+$(NUMBA_STAMP): $(shell find nc_sim -name '*.py')
+	find nc_sim -name '*.nbi' -delete -o -name '*.nbc' -delete
+	mkdir -p var && touch $(NUMBA_STAMP)
+
 bootstrap: $(DEV_STAMP) $(NPM_STAMP)
 
 # Serving needs only the runtime dependencies; tests, lint and benches add the dev extras
@@ -57,7 +65,7 @@ $(CHROMIUM):
 
 # The Python and the Node installs run side by side (-j2), then the UI build.
 run:
-	$(MAKE) --no-print-directory -j2 $(RUN_STAMP) $(DIST)
+	$(MAKE) --no-print-directory -j2 $(RUN_STAMP) $(DIST) $(NUMBA_STAMP)
 	$(PY) -m backend.cli serve --host 127.0.0.1 --port 8000
 
 lint: $(DEV_STAMP) $(SCHEMA_TS)
@@ -68,10 +76,10 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 	cd frontend && npx tsc --noEmit
 
 test:
-	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM)
+	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
 	$(PY) -m pytest -q
 
-bench: $(DEV_STAMP) $(DIST) $(CHROMIUM)
+bench: $(DEV_STAMP) $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
 	$(PY) bench/kernel.py
 	$(PY) bench/api.py
 	$(PY) bench/telemetry.py

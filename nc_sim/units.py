@@ -50,6 +50,11 @@ class Quantity(StrEnum):
     CURVE_B2 = "curve_b2"
     CURVE_B3 = "curve_b3"
     DA_DIGITS = "da_digits"
+    # the drive and the mechanics (nc_sim/plant), referred to the motor shaft, in SI units
+    TORQUE = "torque"  # Nm
+    INERTIA = "inertia"  # kg·m²
+    SPEED_GAIN = "speed_gain"  # Nm·s/rad: speed-loop gain, viscous friction
+    FREQUENCY = "frequency"  # Hz
 
 
 # factor raw -> kernel engineering unit (mm, °, s based)
@@ -68,6 +73,10 @@ _TO_ENG: dict[Quantity, float] = {
     Quantity.CURVE_B2: 1.0,
     Quantity.CURVE_B3: 1.0,
     Quantity.DA_DIGITS: 1.0,
+    Quantity.TORQUE: 1.0,
+    Quantity.INERTIA: 1.0,
+    Quantity.SPEED_GAIN: 1.0,
+    Quantity.FREQUENCY: 1.0,
 }
 
 
@@ -89,6 +98,10 @@ def raw_unit(q: Quantity, kind: AxisKind) -> str:
         Quantity.CURVE_B2: "1/°",
         Quantity.CURVE_B3: "s/°²",
         Quantity.DA_DIGITS: "digits",
+        Quantity.TORQUE: "Nm",
+        Quantity.INERTIA: "kg·m²",
+        Quantity.SPEED_GAIN: "Nm·s/rad",
+        Quantity.FREQUENCY: "Hz",
     }[q]
 
 

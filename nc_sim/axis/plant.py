@@ -1,6 +1,7 @@
 """The simulated plant behind an axis: motor, drive, mechanics and encoder as its `sim.*`
-parameters describe them, changed by the training faults injected into it (nc_sim/faults.py,
-nc_sim/machine/fault_injection.py).
+and `drive.*` parameters describe them, changed by the training faults injected into it
+(nc_sim/faults.py, nc_sim/machine/fault_injection.py). `sim.plant` chooses the ideal
+first-order drive (`sim.drive_t`) or the drive cascade and mechanics of nc_sim/plant.
 
 A fault changes the plant's kernel columns, never a parameter: `push_plant` writes them from
 the lists and then the faults, so every parameter refresh (`push_params`: gear change, list
@@ -13,8 +14,103 @@ import math
 
 from nc_sim.axis.faults import PlantFaults
 from nc_sim.axis.state import Axis
+from nc_sim.config import AxisConfig
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
+from nc_sim.params.plant import (
+    CURRENT_FILTERS,
+    FILTER_TYPES,
+    MEASURING_SYMBOLS,
+    PLANT_SYMBOLS,
+)
+from nc_sim.plant import layout as PL
+from nc_sim.plant.model import DriveModel, SecondOrderFilter
+
+RAD_PER_REV = 2.0 * math.pi
+RPM_TO_RAD_S = RAD_PER_REV / 60.0
+
+
+def _symbol(c: AxisConfig, name: str, symbols: dict[str, int]) -> int:
+    value = c.raw(name)
+    return symbols[value] if isinstance(value, str) else int(value)
+
+
+def cascade(c: AxisConfig) -> bool:
+    """The axis runs the drive cascade and mechanics (`sim.plant` DRIVE_CASCADE)."""
+    return _symbol(c, "sim.plant", PLANT_SYMBOLS) == PLANT_SYMBOLS["DRIVE_CASCADE"]
+
+
+def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None) -> DriveModel:
+    """The axis' drive and mechanics from its list, with the training faults in force: a
+    friction fault (a speed the ideal drive loses) becomes the Coulomb torque that costs a
+    P speed loop that speed, a backlash fault adds to the gap, a torque-limited acceleration
+    caps the torque. The drive's step is the NC cycle over the nearest whole number."""
+    f = faults or PlantFaults()
+    substeps = max(1, round(cycle_s / c.eng("drive.sampling_time")))
+    active = int(c.raw("drive.current_filter_active"))
+    filters = []
+    for i in range(CURRENT_FILTERS):
+        if not active >> i & 1:
+            continue
+        base = f"drive.current_filter_{i + 1}."
+        general = _symbol(c, base + "type", FILTER_TYPES) == FILTER_TYPES["GENERAL_2ND_ORDER"]
+        filters.append(
+            SecondOrderFilter(
+                c.eng(base + "denominator_frequency"),
+                c.eng(base + "denominator_damping"),
+                c.eng(base + "numerator_frequency") if general else 0.0,
+                c.eng(base + "numerator_damping") if general else 0.0,
+            )
+        )
+    unit_per_rad = c.eng("sim.mech.travel_per_rev") / RAD_PER_REV
+    kp = c.eng("drive.speed_kp")
+    j_total = c.eng("drive.motor_inertia") * c.eng("drive.inertia_ratio")
+    torque_limit = c.eng("drive.torque_limit")
+    if f.a_max > 0.0:
+        torque_limit = min(torque_limit, j_total * f.a_max / unit_per_rad)
+    return DriveModel(
+        sampling_s=cycle_s / substeps,
+        substeps=substeps,
+        kp=kp,
+        tn_s=c.eng("drive.speed_tn"),
+        torque_limit=torque_limit,
+        speed_filter_s=c.eng("drive.speed_setpoint_filter_t"),
+        current_t_s=c.eng("drive.current_loop_t"),
+        filters=tuple(filters),
+        motor_inertia=c.eng("drive.motor_inertia"),
+        inertia_ratio=c.eng("drive.inertia_ratio"),
+        anti_resonance_hz=c.eng("sim.mech.anti_resonance"),
+        damping=c.eng("sim.mech.damping"),
+        unit_per_rad=unit_per_rad,
+        coulomb=c.eng("sim.mech.coulomb_friction") + kp * f.friction / unit_per_rad,
+        breakaway=c.eng("sim.mech.breakaway_torque"),
+        stribeck_rad_s=c.eng("sim.mech.stribeck_speed") * RPM_TO_RAD_S,
+        viscous=c.eng("sim.mech.viscous_friction"),
+        backlash=c.eng("sim.mech.backlash") + f.backlash,
+        direct=_symbol(c, "sim.measuring_system", MEASURING_SYMBOLS) == MEASURING_SYMBOLS["DIRECT"],
+    )
+
+
+def _push_cascade(k: Kernel, ax: Axis) -> None:
+    """Write the drive cascade into the slot's plant row. Coming from the ideal drive, the
+    cascade starts turning as the load does; a changed set of filters starts them at rest."""
+    s = ax.slot
+    model = drive_model(ax.cfg, k.cycle_s, ax.plant)
+    row = model.kernel_row()
+    was = k.pl[s].copy()
+    k.pl[s] = row
+    ps = k.ps[s]
+    if was[PL.PL_MODEL] != PL.MODEL_CASCADE:
+        ps[:] = 0.0
+        w = k.st[s, L.S_V_MOTOR] / model.unit_per_rad
+        ps[PL.X_WM] = ps[PL.X_WL] = ps[PL.PS_W_REF] = w
+    elif was[PL.PL_NX] != row[PL.PL_NX]:
+        ps[PL.X_FILTERS : PL.NX_MAX] = 0.0
+    if not model.two_mass:
+        ps[PL.X_DEF] = ps[PL.X_WL] = 0.0
+    # the NC's lag model takes the closed speed loop as a first-order lag
+    t = model.speed_loop_time_constant_s()
+    k.pr[s, L.P_DRV_ALPHA] = 1.0 - math.exp(-k.cycle_s / t)
 
 
 def push_plant(k: Kernel, ax: Axis) -> None:
@@ -30,6 +126,10 @@ def push_plant(k: Kernel, ax: Axis) -> None:
     pr[s, L.P_ENC_SIGN] = -1.0 if c.flag("sim.encoder_inverted") != f.encoder_inverted else 1.0
     t_drive = c.eng("sim.drive_t")
     pr[s, L.P_DRV_ALPHA] = 1.0 - math.exp(-k.cycle_s / t_drive) if t_drive > 0 else 1.0
+    if cascade(c):
+        _push_cascade(k, ax)
+    else:
+        k.pl[s, PL.PL_MODEL] = PL.MODEL_IDEAL
     a_max = c.eng("sim.drive_a_max")  # 0: no limit of its own
     if f.a_max > 0.0:
         a_max = min(a_max, f.a_max) if a_max > 0.0 else f.a_max

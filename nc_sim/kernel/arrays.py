@@ -8,6 +8,7 @@ import numpy as np
 
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.step import run_cycles
+from nc_sim.plant import layout as PL
 from nc_sim.profiles.plan import MAX_SEGMENTS, SEG_COLS
 
 
@@ -21,6 +22,11 @@ class Kernel:
     pi: np.ndarray  # paths × PI_COLS: channel slot, axis slots, geometry ring head and count
     pel: np.ndarray  # paths × PATH_ELEMENTS × E_COLS: the geometry ring
     pplan: np.ndarray  # paths × PATH_SEGMENTS × SEG_COLS: the 1-D plan over path length
+    pl: np.ndarray  # the plant of each slot, slots × PL_COLS (nc_sim/plant/layout.py)
+    ps: np.ndarray  # its state, slots × PS_COLS
+    probe: np.ndarray  # the drive probe: slot, length, samples done, injection point
+    pexc: np.ndarray  # its excitation, one value per drive step
+    prec: np.ndarray  # its trace, drive steps × D_COLS
 
     def __init__(self, cycle_s: float = 0.001, capacity: int = 8) -> None:
         self.cycle_s = cycle_s
@@ -30,6 +36,7 @@ class Kernel:
         self.pi = np.zeros((0, L.PI_COLS), dtype=np.int64)
         self.pel = np.zeros((0, L.PATH_ELEMENTS, L.E_COLS))
         self.pplan = np.zeros((0, L.PATH_SEGMENTS, SEG_COLS))
+        self.stop_probe()
 
     def _alloc(self, capacity: int) -> None:
         old = self.st if hasattr(self, "st") else None
@@ -37,12 +44,17 @@ class Kernel:
         pr = np.zeros((capacity, L.P_COLS))
         ist = np.zeros((capacity, L.I_COLS), dtype=np.int64)
         seg = np.zeros((capacity, MAX_SEGMENTS, SEG_COLS))
+        pl = np.zeros((capacity, PL.PL_COLS))
+        ps = np.zeros((capacity, PL.PS_COLS))
         if old is not None:
             st[: self.n] = self.st[: self.n]
             pr[: self.n] = self.pr[: self.n]
             ist[: self.n] = self.ist[: self.n]
             seg[: self.n] = self.seg[: self.n]
+            pl[: self.n] = self.pl[: self.n]
+            ps[: self.n] = self.ps[: self.n]
         self.st, self.pr, self.ist, self.seg = st, pr, ist, seg
+        self.pl, self.ps = pl, ps
 
     def claim(self, count: int) -> range:
         """Reserve `count` slots; returns their indices."""
@@ -125,6 +137,24 @@ class Kernel:
             st[slot, col] = 0.0
         st[slot, L.S_MAN_TARGET] = math.nan
 
+    def start_probe(self, slot: int, excitation: np.ndarray, point: int) -> None:
+        """Probe a slot's drive: add `excitation` (one value per drive step, Nm or rad/s) at
+        `point` (PL.INJECT_*) and record the drive trace, one row per drive step, until the
+        excitation ends. One probe per kernel: starting one ends the one before."""
+        self.probe = np.array([slot, len(excitation), 0, point], dtype=np.int64)
+        self.pexc = np.ascontiguousarray(excitation, dtype=np.float64)
+        self.prec = np.zeros((len(excitation), PL.D_COLS))
+
+    def probe_trace(self) -> np.ndarray:
+        """The drive trace recorded so far (drive steps × PL.D_COLS)."""
+        return self.prec[: int(self.probe[PL.PR_POS])]
+
+    def stop_probe(self) -> None:
+        """No probe: no excitation, no drive trace."""
+        self.probe = np.array([-1, 0, 0, 0], dtype=np.int64)
+        self.pexc = np.zeros(0)
+        self.prec = np.zeros((0, PL.D_COLS))
+
     def load_curve(self, slot: int, v_target: float) -> None:
         """Start a curve-controlled speed change (pr P_CURVE_*) towards v_target."""
         self.ist[slot, L.I_PLAN_N] = 0
@@ -146,6 +176,11 @@ class Kernel:
                 self.pi,
                 self.pel,
                 self.pplan,
+                self.pl[:k],
+                self.ps[:k],
+                self.probe,
+                self.pexc,
+                self.prec,
                 rec,
                 n,
                 self.cycle_s,

@@ -12,6 +12,8 @@ One axis, one cycle [DOMAIN §2]:
     drive: v_motor -> da / (0.06 · true gain), less Coulomb friction, as a first-order lag
            with acceleration limit, moving the load x over the cycle (through any backlash)
 
+With `sim.plant` DRIVE_CASCADE the drive line is nc_sim/plant's cascade and mechanics at the
+drive's own rate instead, and the encoder reads the motor or the load (the measuring system).
 The encoder factor, noise, friction and backlash are the plant's training faults
 (nc_sim/axis/plant.py); a sound plant has 1, 0, 0, 0 and runs exactly as without them.
 """
@@ -177,6 +179,8 @@ from nc_sim.kernel.layout import (
     S_V_TARGET,
     S_X_MOTOR,
 )
+from nc_sim.plant.layout import MODEL_CASCADE, PL_DIRECT, PL_MODEL, PL_UNIT_PER_RAD
+from nc_sim.plant.step import drive_cycle, motor_offset
 from nc_sim.profiles.plan import SEG_A0, SEG_J, SEG_SHAPE, SEG_T, seg_eval
 
 V_ACT_FILTER_S = 0.005  # time constant of the actual-speed filter
@@ -443,14 +447,25 @@ def _gauss(ist: np.ndarray, s: int) -> float:
 
 
 @njit(cache=True)
-def _measure(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
+def _measure(
+    st: np.ndarray,
+    pr: np.ndarray,
+    ist: np.ndarray,
+    pl: np.ndarray,
+    ps: np.ndarray,
+    s: int,
+    dt: float,
+) -> None:
     """Read the encoder at the start of the cycle and form this cycle's lag.
 
     The actual position is the one the load reached at the end of the previous cycle; the
     controller acts on `lag = p_cmd - p_act` of this very sample, and the same pair is what
     the HLI, the traces and the scope show (one definition of the lag everywhere).
     """
-    x = pr[s, P_ENC_FACTOR] * st[s, S_X_MOTOR]
+    x = st[s, S_X_MOTOR]
+    if pl[s, PL_MODEL] == MODEL_CASCADE and pl[s, PL_DIRECT] == 0.0:  # encoder on the motor
+        x += motor_offset(pl, ps, s, st[s, S_PLAY])
+    x *= pr[s, P_ENC_FACTOR]
     if pr[s, P_ENC_NOISE] > 0.0:
         x += pr[s, P_ENC_NOISE] * _gauss(ist, s)
     inc = pr[s, P_ENC_INC]
@@ -487,9 +502,22 @@ def _measure(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float)
 
 
 @njit(cache=True)
-def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, dt: float) -> None:
-    """Position controller, D/A, drive and load of slot s for one cycle."""
+def _control_and_drive(
+    st: np.ndarray,
+    pr: np.ndarray,
+    ist: np.ndarray,
+    pl: np.ndarray,
+    ps: np.ndarray,
+    probe: np.ndarray,
+    pexc: np.ndarray,
+    prec: np.ndarray,
+    s: int,
+    dt: float,
+) -> None:
+    """Position controller, D/A, drive and load of slot s for one cycle: the ideal drive
+    here, or the drive cascade and mechanics of nc_sim/plant at the drive's own rate."""
     v_m = st[s, S_V_MOTOR]
+    v_target = 0.0
     if ist[s, I_ENABLED] == 1:
         if ist[s, I_OPEN_LOOP] != LOOP_CLOSED:  # speed control: the command speed goes out
             u = st[s, S_V_CMD]
@@ -511,6 +539,30 @@ def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, 
         lim = pr[s, P_DA_MAX]
         da = min(max(da, -lim), lim)
         v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
+        st[s, S_U] = u
+        st[s, S_DA] = da
+    else:
+        st[s, S_U] = 0.0
+        st[s, S_DA] = 0.0
+    if pl[s, PL_MODEL] == MODEL_CASCADE:
+        x, play, v = drive_cycle(
+            pl,
+            ps,
+            probe,
+            pexc,
+            prec,
+            s,
+            v_target / pl[s, PL_UNIT_PER_RAD],
+            ist[s, I_ENABLED] == 1,
+            st[s, S_X_MOTOR],
+            st[s, S_PLAY],
+            dt,
+        )
+        st[s, S_X_MOTOR] = x
+        st[s, S_PLAY] = play
+        st[s, S_V_MOTOR] = v
+        return
+    if ist[s, I_ENABLED] == 1:
         friction = pr[s, P_FRICTION]
         if friction > 0.0:  # Coulomb friction: a speed loss against the motion, or stuck
             if v_target > friction:
@@ -523,12 +575,8 @@ def _control_and_drive(st: np.ndarray, pr: np.ndarray, ist: np.ndarray, s: int, 
         a_lim = pr[s, P_DRV_A_MAX]
         if a_lim > 0.0:
             dv = min(max(dv, -a_lim * dt), a_lim * dt)
-        st[s, S_U] = u
-        st[s, S_DA] = da
     else:  # no enables: holding brake
         dv = -v_m
-        st[s, S_U] = 0.0
-        st[s, S_DA] = 0.0
     v_new = v_m + dv
     dx = 0.5 * (v_m + v_new) * dt
     half_play = 0.5 * pr[s, P_BACKLASH]
@@ -668,6 +716,11 @@ def run_cycles(
     pi: np.ndarray,
     pel: np.ndarray,
     pplan: np.ndarray,
+    pl: np.ndarray,
+    ps: np.ndarray,
+    probe: np.ndarray,
+    pexc: np.ndarray,
+    prec: np.ndarray,
     rec: np.ndarray,
     n: int,
     dt: float,
@@ -697,8 +750,8 @@ def run_cycles(
             else:
                 ev = _advance_setpoint(st, pr, ist, seg, s, dt) if role == ROLE_AXIS else 0
                 ev |= _loop_mode(st, pr, ist, s)
-                _measure(st, pr, ist, s, dt)
-                _control_and_drive(st, pr, ist, s, dt)
+                _measure(st, pr, ist, pl, ps, s, dt)
+                _control_and_drive(st, pr, ist, pl, ps, probe, pexc, prec, s, dt)
                 ev |= _monitors(st, pr, ist, s, dt)
             if ev != 0:
                 ist[s, I_EVENTS] |= ev

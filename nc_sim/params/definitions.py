@@ -9,6 +9,7 @@ sign inversion names without IDs, the simulated drive) but give no ID.
 
 from __future__ import annotations
 
+from nc_sim.params.plant import PLANT_DEFINITIONS
 from nc_sim.params.registry import DType, Effect, ParamDef, Registry, Scope
 from nc_sim.units import Quantity
 
@@ -2034,6 +2035,7 @@ DEFINITIONS: list[ParamDef] = [
         title="Maximum rotation speed",
     ),
     _p("P-TOOL-00015", "wz[i].a_max", T, R64, ACC, 1, 0, None, title="Maximum acceleration"),
+    *PLANT_DEFINITIONS,  # the drive cascade and the mechanics (nc_sim/params/plant.py)
 ]
 
 

@@ -1,0 +1,140 @@
+"""Frequency responses from measured signals: excitations, the H1 estimate and what an
+engineer reads off a Bode plot (margins, bandwidth, resonances).
+
+H1 = Pxy / Pxx (Welch: Hann window, half overlap) with the coherence Pxy² / (Pxx·Pyy): the
+estimate is unbiased by noise on the output, and the coherence says where it can be trusted.
+A PRBS excitation is a maximum-length sequence, one segment per period, so the averages
+span whole periods.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+
+def prbs(order: int, amplitude: float, periods: int, hold: int = 1) -> np.ndarray:
+    """`periods` periods of a ±amplitude maximum-length sequence of 2**order - 1 bits, each
+    bit held `hold` samples (a lower clock rate puts more power at low frequencies)."""
+    bits = signal.max_len_seq(order)[0].astype(np.float64)
+    one = np.repeat(amplitude * (2.0 * bits - 1.0), hold)
+    return np.tile(one, periods)
+
+
+def chirp(f0_hz: float, f1_hz: float, seconds: float, fs_hz: float, amplitude: float) -> np.ndarray:
+    """A logarithmic sweep from f0 to f1 over `seconds`, sampled at fs."""
+    t = np.arange(round(seconds * fs_hz)) / fs_hz
+    sweep: np.ndarray = signal.chirp(t, f0_hz, seconds, f1_hz, method="logarithmic")
+    return amplitude * sweep
+
+
+@dataclass(frozen=True)
+class Frf:
+    """A measured frequency response: frequencies (Hz), complex response, coherence."""
+
+    f_hz: np.ndarray
+    h: np.ndarray
+    coherence: np.ndarray
+
+    @property
+    def magnitude_db(self) -> np.ndarray:
+        return np.asarray(20.0 * np.log10(np.abs(self.h)))
+
+    @property
+    def phase_deg(self) -> np.ndarray:
+        """Phase unwrapped from the lowest frequency on (°)."""
+        return np.asarray(np.degrees(np.unwrap(np.angle(self.h))))
+
+    def band(self, lo_hz: float, hi_hz: float) -> Frf:
+        """The part between lo and hi (inclusive)."""
+        keep = (self.f_hz >= lo_hz) & (self.f_hz <= hi_hz)
+        return Frf(self.f_hz[keep], self.h[keep], self.coherence[keep])
+
+
+def h1(x: np.ndarray, y: np.ndarray, fs_hz: float, nperseg: int) -> Frf:
+    """H1 estimate of the response from x to y (Welch, Hann window, half overlap); the
+    zero frequency is left out."""
+    f, pxy = signal.csd(x, y, fs=fs_hz, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
+    _, pxx = signal.welch(x, fs=fs_hz, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
+    _, pyy = signal.welch(y, fs=fs_hz, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = pxy / pxx
+        coh = np.abs(pxy) ** 2 / (pxx * pyy)
+    keep = (f > 0.0) & (pxx > 0.0)
+    return Frf(f[keep], h[keep], np.nan_to_num(coh[keep]))
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Stability margins of an open loop: gain margin (dB) at the phase crossover, phase
+    margin (°) at the gain crossover; None where the curve does not cross."""
+
+    gain_margin_db: float | None
+    phase_crossover_hz: float | None
+    phase_margin_deg: float | None
+    crossover_hz: float | None
+
+
+def _crossing(f: np.ndarray, v: np.ndarray, level: float) -> int | None:
+    """Index i of the first downward crossing of `level` between i and i + 1."""
+    for i in range(len(v) - 1):
+        if v[i] >= level > v[i + 1]:
+            return i
+    return None
+
+
+def _at(
+    f: np.ndarray, v: np.ndarray, i: int, level: float, other: np.ndarray
+) -> tuple[float, float]:
+    """Frequency where v passes `level` between i and i + 1 (linear in log f), and `other`
+    interpolated there."""
+    s = (level - v[i]) / (v[i + 1] - v[i])
+    lf = math.log10(f[i]) + s * (math.log10(f[i + 1]) - math.log10(f[i]))
+    return 10.0**lf, float(other[i] + s * (other[i + 1] - other[i]))
+
+
+def margins(open_loop: Frf) -> Margins:
+    """Gain and phase margin of a measured open loop (first crossings from below)."""
+    f, mag, ph = open_loop.f_hz, open_loop.magnitude_db, open_loop.phase_deg
+    gm = pc = pm = wc = None
+    i = _crossing(f, mag, 0.0)
+    if i is not None:
+        wc, phase = _at(f, mag, i, 0.0, ph)
+        pm = 180.0 + phase
+    j = _crossing(f, ph, -180.0)
+    if j is not None:
+        pc, m = _at(f, ph, j, -180.0, mag)
+        gm = -m
+    return Margins(gm, pc, pm, wc)
+
+
+def bandwidth_hz(closed_loop: Frf) -> float | None:
+    """Where the closed loop's magnitude first falls 3 dB below its low-frequency value."""
+    mag = closed_loop.magnitude_db
+    i = _crossing(closed_loop.f_hz, mag, float(mag[0]) - 3.0)
+    if i is None:
+        return None
+    return _at(closed_loop.f_hz, mag, i, float(mag[0]) - 3.0, mag)[0]
+
+
+def _peak(f: np.ndarray, v: np.ndarray, i: int) -> float:
+    """A peak's frequency refined by a parabola through its three points (in log f)."""
+    if i == 0 or i == len(v) - 1:
+        return float(f[i])
+    lf = np.log10(f[i - 1 : i + 2])
+    a, b, _ = np.polyfit(lf, v[i - 1 : i + 2], 2)
+    return float(10.0 ** (-b / (2.0 * a))) if a != 0.0 else float(f[i])
+
+
+def resonances(mechanics: Frf, prominence_db: float = 6.0) -> tuple[list[float], list[float]]:
+    """(resonance, anti-resonance) frequencies of a mechanics response: its magnitude's
+    peaks and dips that stand out by `prominence_db` from the -20 dB/decade of a rigid body
+    (the magnitude times frequency is flat for a rigid one)."""
+    flat = mechanics.magnitude_db + 20.0 * np.log10(mechanics.f_hz)
+    peaks, _ = signal.find_peaks(flat, prominence=prominence_db)
+    dips, _ = signal.find_peaks(-flat, prominence=prominence_db)
+    f = mechanics.f_hz
+    return [_peak(f, flat, int(i)) for i in peaks], [_peak(f, -flat, int(i)) for i in dips]
