@@ -25,7 +25,7 @@ from nc_sim.sim import Simulation
 CYCLE_S = 0.001
 # X and Z on the drive cascade: two masses (a first resonance near 100 Hz), a current-setpoint
 # low pass, a little friction, Z with a few µm of backlash
-IRON = {
+IRON: dict[str, float | int | str] = {
     "sim.plant": "DRIVE_CASCADE",
     "drive.speed_kp": 0.4,
     "drive.speed_tn": 15000,
@@ -41,7 +41,8 @@ IRON = {
 def iron_machine() -> MachineConfig:
     """The demo lathe with X and Z on the drive cascade (IRON)."""
     cfg = demo_machine()
-    for axis, extra in (("X", {}), ("Z", {"sim.mech.backlash": 30})):
+    backlash: dict[str, dict[str, float | int | str]] = {"X": {}, "Z": {"sim.mech.backlash": 30}}
+    for axis, extra in backlash.items():
         apply_overrides(cfg, Scope.AXIS, axis, {**IRON, **extra})
     return cfg
 
