@@ -198,7 +198,10 @@ def _run_plot(run: AssistRun) -> str:
         x_title = "time" if x_unit == "s" else ""  # else the unit says (a speed: °/s)
         y_title = series[0].name if len(series) == 1 else ""
         lines = [svg.Line(s.name, s.x, s.y) for s in series]
-        plot = svg.Plot(lines, x_title, x_unit, y_title, y_unit, refs)
+        # a frequency response reads on a logarithmic frequency axis
+        log_x = x_unit == "Hz"
+        x_title = "frequency" if log_x else x_title
+        plot = svg.Plot(lines, x_title, x_unit, y_title, y_unit, refs, log_x=log_x)
         names = ", ".join(s.name for s in series)
         over = f" over {x_title}" if x_title else ""
         stored = sum(len(s.x) for s in series)

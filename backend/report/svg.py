@@ -2,8 +2,9 @@
 scripts): a frame, ticks at 1-2-5 steps with their units, one polyline per series, dashed
 horizontal reference lines.
 
-The plot area and the data range it shows are written on the frame (`data-*` attributes), so
-a reader can map a point back to its value.
+The plot area and the data range it shows are written on the frame (`data-*` attributes, with
+the x axis' scale: linear, or logarithmic for a frequency response), so a reader can map a
+point back to its value.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ class Plot:
     refs: list[tuple[str, float]] = field(default_factory=list)  # (label, y)
     width: int = 640
     height: int = 260
+    log_x: bool = False  # a logarithmic x axis (a frequency response); x must be > 0
 
 
 @dataclass(frozen=True)
@@ -55,8 +57,12 @@ class Frame:
     x1: float
     y0: float
     y1: float
+    log_x: bool = False
 
     def px(self, x: float) -> float:
+        if self.log_x:
+            span = math.log10(self.x1) - math.log10(self.x0)
+            return self.left + (math.log10(x) - math.log10(self.x0)) / span * self.width
         return self.left + (x - self.x0) / (self.x1 - self.x0) * self.width
 
     def py(self, y: float) -> float:
@@ -79,6 +85,14 @@ def nice_ticks(lo: float, hi: float, count: int = 5) -> list[float]:
         ticks.append(0.0 if abs(v) < step * 1e-9 else v)
         v += step
     return ticks
+
+
+def log_ticks(lo: float, hi: float) -> list[float]:
+    """Ticks at 1, 2 and 5 × 10^n within [lo, hi] (lo > 0)."""
+    out: list[float] = []
+    for n in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1):
+        out += [m * 10.0**n for m in (1.0, 2.0, 5.0) if lo <= m * 10.0**n <= hi]
+    return out
 
 
 def _fmt(v: float) -> str:
@@ -124,7 +138,7 @@ def _legend_rows(plot: Plot) -> int:
 def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | None:
     """The plot area and the range it shows: x tight to the data, y taking in the data and the
     reference levels near it, with a margin; None without a single finite point."""
-    xs = [p[0] for pts in points for p in pts]
+    xs = [p[0] for pts in points for p in pts if p[0] > 0.0 or not plot.log_x]
     ys = [p[1] for pts in points for p in pts]
     if not xs:
         return None
@@ -137,12 +151,13 @@ def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | Non
     pad = (y1 - y0) * Y_PAD  # the line clear of the frame
     y0, y1 = y0 - pad, y1 + pad
     left, right, top, bottom = 64.0, 16.0, 12.0, 44.0 + _legend_rows(plot) * LEGEND_ROW_PX
-    return Frame(left, top, plot.width - left - right, plot.height - top - bottom, x0, x1, y0, y1)
+    width, height = plot.width - left - right, plot.height - top - bottom
+    return Frame(left, top, width, height, x0, x1, y0, y1, plot.log_x and x0 < x1)
 
 
 def render(plot: Plot) -> str:
     """The plot as an <svg> element (sized in px, scaled to the column's width in print)."""
-    points = [_finite(line) for line in plot.lines]
+    points = [[p for p in _finite(line) if p[0] > 0.0 or not plot.log_x] for line in plot.lines]
     f = frame_of(plot, points)
     w, h = plot.width, plot.height
     head = (
@@ -156,10 +171,11 @@ def render(plot: Plot) -> str:
         head,
         f'<rect class="frame" x="{f.left}" y="{f.top}" width="{f.width}" height="{f.height}" '
         f'data-x0="{f.x0!r}" data-x1="{f.x1!r}" data-y0="{f.y0!r}" data-y1="{f.y1!r}" '
+        f'data-x-scale="{"log" if f.log_x else "linear"}" '
         'fill="none" stroke="#444" stroke-width="1"/>',
     ]
     bottom = f.top + f.height
-    for t in nice_ticks(f.x0, f.x1, 8):
+    for t in log_ticks(f.x0, f.x1) if f.log_x else nice_ticks(f.x0, f.x1, 8):
         x = f.px(t)
         out.append(
             f'<line x1="{x:.2f}" y1="{f.top}" x2="{x:.2f}" y2="{bottom}" stroke="#ddd"/>'

@@ -35,7 +35,7 @@ import { connection, frozen, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
 // "Exercise" only on a class seat (the first tab there, and the one it opens on)
-const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Service", "HLI / PLC", "Events", "Audit"] as const;
+const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Drive tuning", "Service", "HLI / PLC", "Events", "Audit"] as const;
 type Tab = (typeof TABS)[number];
 
 /** The CNC reset and, on a frozen seat, why the simulation stands (pacing, restart and the
@@ -136,7 +136,7 @@ function Hmi() {
         <TopBar />
         <ControlStrip />
         <PendingStrip />
-        <Banner liveRun={tab !== "Commissioning"} />
+        <Banner liveRun={tab !== "Commissioning" && tab !== "Drive tuning"} />
         <TrialBar />
       </div>
       <MachinesDialog />
@@ -168,6 +168,7 @@ function Hmi() {
                 <ReportPanel />
               </>
             ) : null}
+            {tab === "Drive tuning" ? <Commissioning drive /> : null}
             {tab === "Service" ? <ServicePanel /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
             {tab === "Events" ? <EventsPanel /> : null}

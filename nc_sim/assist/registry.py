@@ -399,6 +399,82 @@ ASSISTANTS: tuple[Assistant, ...] = (
         ("k", "deviation_ppm"),
         live="nc_sim.assist.resolution_check:resolution_check",
     ),
+    Assistant(
+        "frequency-response",
+        "Frequency response (Bode)",
+        "drive: speed loop",
+        "An excitation (PRBS or chirp) goes into the drive at its own rate while the NC holds "
+        "the axis or moves it at `offset_rpm`; from the drive trace H1 = Pxy/Pxx with Welch "
+        "averaging and the coherence: the mechanics (torque to motor speed) with its "
+        "resonances, the closed or open speed loop with margins and bandwidth, or the closed "
+        "position loop. The axis must run the drive cascade (sim.plant).",
+        Kind.EXPERIMENT,
+        "FrequencyResponseRequest",
+        (
+            AxisChoice(kinds=_AXES),
+            Choice(
+                "measurement",
+                "what is measured",
+                (
+                    (1, "mechanics"),
+                    (2, "closed speed loop"),
+                    (3, "open speed loop"),
+                    (4, "closed position loop"),
+                ),
+                1,
+            ),
+            Choice("excitation", "excitation", ((1, "PRBS"), (2, "chirp")), 1),
+            Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 5.0),
+            Number("speed_rpm", "amplitude at the speed setpoint, rpm", "rpm", 0, 3000, True, 20.0),
+            Number("position_mm", "amplitude at the position command, mm", "mm", 0, 10, True, 0.1),
+            Number(
+                "offset_rpm",
+                "offset speed of the motor, rpm (friction stays one-sided)",
+                "rpm",
+                -3000,
+                3000,
+                default=30.0,
+            ),
+            Number("f_min_hz", "lowest frequency, Hz", "Hz", 0.1, 1000, default=5.0, cli="f-min"),
+            Number(
+                "f_max_hz",
+                "highest frequency, Hz (null: half the sampling rate)",
+                "Hz",
+                0,
+                100000,
+                True,
+                None,
+                optional=True,
+                cli="f-max",
+            ),
+            Number("averages", "Welch averages", "", 1, 50, default=10, integer=True),
+            Number("window_mm", "position window, ± mm", "mm", 0, 1000, True, 50.0, cli="window"),
+        ),
+        "nc_sim.assist.frequency_response:frequency_response_experiment",
+        ("resonance_1_hz", "phase_margin_deg", "gain_margin_db", "bandwidth_hz"),
+        live="nc_sim.assist.frequency_response:frequency_response",
+    ),
+    Assistant(
+        "step-response",
+        "Step response",
+        "drive: speed and position loop",
+        "A small step from rest: of the speed setpoint at the drive (the NC's position loop "
+        "open meanwhile; the axis goes back afterwards) or of the position command. Rise "
+        "time, overshoot and settling time beside what the drive's own parameters expect on "
+        "a rigid axis. The axis must run the drive cascade (sim.plant).",
+        Kind.EXPERIMENT,
+        "StepResponseRequest",
+        (
+            AxisChoice(kinds=_AXES),
+            Choice("loop", "which loop", ((1, "speed loop"), (2, "position loop")), 1),
+            Number("speed_rpm", "speed step, rpm", "rpm", 0, 3000, True, 50.0),
+            Number("position_mm", "position step, mm", "mm", 0, 10, True, 0.05),
+            Number("duration_s", "recorded for, s", "s", 0.02, 10, default=0.5),
+        ),
+        "nc_sim.assist.step_response:step_response_experiment",
+        ("rise_ms", "overshoot_pct", "settling_ms"),
+        live="nc_sim.assist.step_response:step_response",
+    ),
 )
 """Every assistant, in the order the HMI offers them."""
 

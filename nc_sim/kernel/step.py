@@ -179,7 +179,20 @@ from nc_sim.kernel.layout import (
     S_V_TARGET,
     S_X_MOTOR,
 )
-from nc_sim.plant.layout import MODEL_CASCADE, PL_DIRECT, PL_MODEL, PL_UNIT_PER_RAD
+from nc_sim.plant.layout import (
+    D_P_ACT,
+    D_P_REF,
+    INJECT_POSITION,
+    INJECT_SPEED_OPEN,
+    MODEL_CASCADE,
+    PL_DIRECT,
+    PL_MODEL,
+    PL_UNIT_PER_RAD,
+    PR_LEN,
+    PR_POINT,
+    PR_POS,
+    PR_SLOT,
+)
 from nc_sim.plant.step import drive_cycle, motor_offset
 from nc_sim.profiles.plan import SEG_A0, SEG_J, SEG_SHAPE, SEG_T, seg_eval
 
@@ -453,6 +466,7 @@ def _measure(
     ist: np.ndarray,
     pl: np.ndarray,
     ps: np.ndarray,
+    probe: np.ndarray,
     s: int,
     dt: float,
 ) -> None:
@@ -494,7 +508,10 @@ def _measure(
         shift = p_act + st[s, S_LAG_MODEL] - st[s, S_P_CMD]
         st[s, S_P_CMD] += shift
         st[s, S_SEG_P0] += shift
-    if ist[s, I_ENABLED] == 0:  # no enables: the NC follows the actual position
+    # no enables, or a speed step of the drive probe with the position loop open: the NC
+    # follows the actual position
+    opened = probe[PR_SLOT] == s and probe[PR_POINT] == INJECT_SPEED_OPEN
+    if ist[s, I_ENABLED] == 0 or (opened and probe[PR_POS] < probe[PR_LEN]):
         st[s, S_P_CMD] = st[s, S_P_ACT]
         st[s, S_V_CMD] = 0.0
         st[s, S_A_CMD] = 0.0
@@ -518,6 +535,10 @@ def _control_and_drive(
     here, or the drive cascade and mechanics of nc_sim/plant at the drive's own rate."""
     v_m = st[s, S_V_MOTOR]
     v_target = 0.0
+    # a probe exciting the position loop: its value for this cycle goes onto the command
+    pos0 = probe[PR_POS]
+    excite = probe[PR_SLOT] == s and probe[PR_POINT] == INJECT_POSITION and pos0 < probe[PR_LEN]
+    p_exc = pexc[pos0] if excite else 0.0
     if ist[s, I_ENABLED] == 1:
         if ist[s, I_OPEN_LOOP] != LOOP_CLOSED:  # speed control: the command speed goes out
             u = st[s, S_V_CMD]
@@ -527,7 +548,7 @@ def _control_and_drive(
             # rests inside the increment of its command instead of hunting across an
             # increment edge it cannot resolve (the load coasts kv·T·inc after the last count,
             # far less than one increment).
-            lag = st[s, S_LAG]
+            lag = st[s, S_LAG] + p_exc
             inc = pr[s, P_ENC_INC]
             if inc > 0.0:
                 lag = math.floor(lag / inc + 0.5) * inc
@@ -561,6 +582,10 @@ def _control_and_drive(
         st[s, S_X_MOTOR] = x
         st[s, S_PLAY] = play
         st[s, S_V_MOTOR] = v
+        if probe[PR_SLOT] == s:
+            for i in range(pos0, probe[PR_POS]):
+                prec[i, D_P_REF] = st[s, S_P_CMD] + p_exc
+                prec[i, D_P_ACT] = st[s, S_P_ACT]
         return
     if ist[s, I_ENABLED] == 1:
         friction = pr[s, P_FRICTION]
@@ -750,7 +775,7 @@ def run_cycles(
             else:
                 ev = _advance_setpoint(st, pr, ist, seg, s, dt) if role == ROLE_AXIS else 0
                 ev |= _loop_mode(st, pr, ist, s)
-                _measure(st, pr, ist, pl, ps, s, dt)
+                _measure(st, pr, ist, pl, ps, probe, s, dt)
                 _control_and_drive(st, pr, ist, pl, ps, probe, pexc, prec, s, dt)
                 ev |= _monitors(st, pr, ist, s, dt)
             if ev != 0:

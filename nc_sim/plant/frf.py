@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+MAX_RESONANCES = 3  # of each kind, the most prominent
+
 
 def prbs(order: int, amplitude: float, periods: int, hold: int = 1) -> np.ndarray:
     """`periods` periods of a ±amplitude maximum-length sequence of 2**order - 1 bits, each
@@ -112,29 +114,60 @@ def margins(open_loop: Frf) -> Margins:
 
 
 def bandwidth_hz(closed_loop: Frf) -> float | None:
-    """Where the closed loop's magnitude first falls 3 dB below its low-frequency value."""
+    """Where the closed loop's magnitude first falls below -3 dB."""
     mag = closed_loop.magnitude_db
-    i = _crossing(closed_loop.f_hz, mag, float(mag[0]) - 3.0)
-    if i is None:
-        return None
-    return _at(closed_loop.f_hz, mag, i, float(mag[0]) - 3.0, mag)[0]
+    i = _crossing(closed_loop.f_hz, mag, -3.0)
+    return None if i is None else _at(closed_loop.f_hz, mag, i, -3.0, mag)[0]
 
 
-def _peak(f: np.ndarray, v: np.ndarray, i: int) -> float:
-    """A peak's frequency refined by a parabola through its three points (in log f)."""
-    if i == 0 or i == len(v) - 1:
-        return float(f[i])
-    lf = np.log10(f[i - 1 : i + 2])
-    a, b, _ = np.polyfit(lf, v[i - 1 : i + 2], 2)
-    return float(10.0 ** (-b / (2.0 * a))) if a != 0.0 else float(f[i])
+def _phase_zero(f: np.ndarray, phase: np.ndarray, i: int, rising: bool) -> float | None:
+    """The frequency near index i where the phase (wrapped, °) crosses 0° upwards (`rising`)
+    or downwards, interpolated in log f; None without one within ±15 % of f[i]."""
+    best: float | None = None
+    for j in range(len(f) - 1):
+        if not 0.85 * f[i] <= f[j] <= 1.15 * f[i]:
+            continue
+        a, b = phase[j], phase[j + 1]
+        if abs(b - a) > 180.0 or (a < 0.0 <= b) != rising or (a >= 0.0 > b) == rising:
+            continue
+        s = -a / (b - a)
+        at = float(10.0 ** (math.log10(f[j]) + s * (math.log10(f[j + 1]) - math.log10(f[j]))))
+        if best is None or abs(at - f[i]) < abs(best - f[i]):
+            best = at
+    return best
 
 
-def resonances(mechanics: Frf, prominence_db: float = 6.0) -> tuple[list[float], list[float]]:
-    """(resonance, anti-resonance) frequencies of a mechanics response: its magnitude's
-    peaks and dips that stand out by `prominence_db` from the -20 dB/decade of a rigid body
-    (the magnitude times frequency is flat for a rigid one)."""
-    flat = mechanics.magnitude_db + 20.0 * np.log10(mechanics.f_hz)
-    peaks, _ = signal.find_peaks(flat, prominence=prominence_db)
-    dips, _ = signal.find_peaks(-flat, prominence=prominence_db)
+def resonances(
+    mechanics: Frf, prominence_db: float = 6.0, min_coherence: float = 0.8
+) -> tuple[list[float], list[float]]:
+    """(resonance, anti-resonance) frequencies of a mechanics response (torque to motor
+    speed): its magnitude's peaks and dips that stand out by `prominence_db` from the
+    -20 dB/decade of a rigid body (the magnitude times frequency is flat for a rigid one),
+    where the coherence says the estimate holds and the phase turns. Each is placed where
+    the phase passes 0°
+    (-90° of a rigid body, +90° between anti-resonance and resonance): for a two-mass system
+    that is exactly the undamped frequency, which a damped magnitude peak is not."""
     f = mechanics.f_hz
-    return [_peak(f, flat, int(i)) for i in peaks], [_peak(f, -flat, int(i)) for i in dips]
+    flat = mechanics.magnitude_db + 20.0 * np.log10(f)
+    phase = np.degrees(np.angle(mechanics.h))
+    coh = mechanics.coherence
+    # an anti-resonance leaves little output, so its own bins cohere less: judge the
+    # neighbourhood (±5 %)
+    trusted = [
+        float(np.median(coh[(f >= 0.95 * fi) & (f <= 1.05 * fi)])) >= min_coherence for fi in f
+    ]
+    peaks, p_props = signal.find_peaks(flat, prominence=prominence_db)
+    dips, d_props = signal.find_peaks(-flat, prominence=prominence_db)
+
+    def place(found: np.ndarray, prominence: np.ndarray, rising: bool) -> list[float]:
+        # a peak without the phase's turn is no resonance (friction, a leak of the window);
+        # the three that stand out most, in frequency order
+        at = [
+            (float(p), _phase_zero(f, phase, int(i), rising))
+            for i, p in zip(found, prominence, strict=True)
+            if trusted[i]
+        ]
+        best = sorted((x for x in at if x[1] is not None), reverse=True)[:MAX_RESONANCES]
+        return sorted(float(x[1]) for x in best if x[1] is not None)
+
+    return place(peaks, p_props["prominences"], False), place(dips, d_props["prominences"], True)

@@ -64,11 +64,20 @@ D_TORQUE = 4  # motor torque, the current loop's output (Nm)
 D_X_MOTOR = 5  # motor position in load units (mm | °)
 D_X_LOAD = 6  # load position (mm | °)
 D_W_SET = 7  # speed setpoint from the NC, before the drive's setpoint filter (rad/s)
-D_COLS = 8
+# the NC's position loop, held over its cycle: the command the controller sees (excitation
+# included) and the actual position it compares it with (NC coordinates, mm | °)
+D_P_REF = 8
+D_P_ACT = 9
+D_COLS = 10
 
-# probe: where the excitation goes in (added to the torque or the speed setpoint)
+# probe: where the excitation goes in (added to the torque or the speed setpoint, or to the
+# NC's position command as its position controller sees it, held over the NC cycle)
 INJECT_TORQUE = 0
 INJECT_SPEED = 1
+INJECT_POSITION = 2
+# at the speed setpoint with the NC's position loop open: the NC follows the actual position
+# meanwhile (as in speed control), so a speed step is the speed loop's alone
+INJECT_SPEED_OPEN = 3
 # probe integer row
 PR_SLOT = 0  # probed slot, -1: none
 PR_LEN = 1  # samples of excitation and trace

@@ -36,6 +36,7 @@ from nc_sim.plant.layout import (
     D_X_LOAD,
     D_X_MOTOR,
     INJECT_SPEED,
+    INJECT_SPEED_OPEN,
     INJECT_TORQUE,
     NU,
     NX_MAX,
@@ -140,6 +141,7 @@ def drive_cycle(
     kp, inv_tn, lim = pl[s, PL_KP], pl[s, PL_INV_TN], pl[s, PL_T_MAX]
     wi = X_WL if two else X_WM
     probing = probe[PR_SLOT] == s
+    at_speed = probe[PR_POINT] == INJECT_SPEED or probe[PR_POINT] == INJECT_SPEED_OPEN
     for _ in range(n):
         exc = 0.0
         pos = probe[PR_POS]
@@ -159,7 +161,7 @@ def drive_cycle(
         else:
             ps[s, PS_W_REF] += (w_set - ps[s, PS_W_REF]) * pl[s, PL_SP_ALPHA]
             w_ref = ps[s, PS_W_REF]
-            if probing and probe[PR_POINT] == INJECT_SPEED:
+            if probing and at_speed:
                 w_ref += exc
             e = w_ref - ps[s, X_WM]
             integral = ps[s, PS_INTEGRAL] + e * ts

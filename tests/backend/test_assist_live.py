@@ -134,3 +134,28 @@ def test_an_assistant_from_its_descriptor_alone_runs_live_and_is_listed(
     assert runs[0]["assistant"] == "resolution-check" and runs[0]["summary"].startswith("k = 1.02")
     bad = _live(srv, lathe, "resolution-check", {"axis": "X", "distance": 5000})
     assert bad.status_code == 422 and "1000 mm" in bad.text
+
+
+def test_a_live_frequency_response_excites_the_drive_in_its_worker(srv: Server, lathe: str) -> None:
+    """X's mechanics measured on the machine itself, paced in real time by its worker: the
+    coupling's frequencies come out as physics has them (anti-resonance 80 Hz, J_L = 2·J_M:
+    resonance 80·√3 = 138.6 Hz); the offset speed moved the axis and the run put it at rest."""
+    values = {"sim.plant": "DRIVE_CASCADE", "drive.inertia_ratio": 3.0}
+    values["sim.mech.anti_resonance"] = 80.0
+    changes = [{"scope": "axis", "target": "X", "name": k, "value": v} for k, v in values.items()]
+    assert srv.http.patch(f"/api/machines/{lathe}/parameters", json={"changes": changes}).is_success
+    x0 = srv.axis("X", lathe)["pos_cmd"]
+    body = {"axis": "X", "f_min_hz": 20.0, "averages": 3, "offset_rpm": 30.0}
+    run = _Background(srv, lathe, "frequency-response", body)
+    seen = _progress(srv, lathe)
+    assert seen["name"] == "frequency-response" and seen["axis"] == "X"
+    r = run.result()
+    assert r.status_code == 200, r.text
+    fig = {f["name"]: f["value"] for f in r.json()["figures"]}
+    assert fig["anti_resonance_1_hz"] == pytest.approx(80.0, rel=0.02)
+    assert fig["resonance_1_hz"] == pytest.approx(80.0 * 3**0.5, rel=0.02)
+    moved = srv.axis("X", lathe)["pos_cmd"] - x0
+    assert moved > 30 / 60 * 10.0 * fig["measured_s"] * 0.9  # 30 rpm at 10 mm per revolution
+    assert srv.status(lathe)["assist"] is None
+    runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    assert runs[0]["assistant"] == "frequency-response" and runs[0]["live"] is True

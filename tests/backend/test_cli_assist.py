@@ -138,12 +138,13 @@ def test_the_sign_check_from_the_command_line() -> None:
 
 
 def test_the_loop_gain_sweep_from_the_command_line() -> None:
-    """X on a drive with T = 20 ms (`--set X.sim.drive_t=20000`): the second-order loop
+    """X on the ideal drive with T = 20 ms (`--set X.sim.drive_t=20000`): the second-order loop
     overshoots 0.09 % at kv 15/s and 7.0 % at 30/s (ζ = 1/(2√(kv·T))), so with 5 % allowed
     the highest of 10,15,30 is 15 (the axis has 20); at constant feed the lag is v/kv."""
     out = answer(
         "loop-gain", "--axis", "X", "--kv", "30,10,15", "--overshoot-pct", "5",
-        "--settle-ms", "300", "--feed", "600", "--set", "X.sim.drive_t=20000",
+        "--settle-ms", "300", "--feed", "600",
+        "--set", "X.sim.plant=IDEAL", "--set", "X.sim.drive_t=20000",
     )  # fmt: skip
     assert out["ok"] and figure(out, "kv_new") == 15.0
     assert after(out) == {"getriebe[0].kv": 1500}

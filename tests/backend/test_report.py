@@ -316,3 +316,34 @@ def test_a_curve_run_up_is_stored_and_plots_points_and_fit_together(
     (plot,) = [p for p in doc.plots if p["in"] == str(run["id"])]
     assert len(plot["points"]) == len(r.json()["series"]) == 2
     assert "Acceleration curve from a run-up [000 §2.8.4]" in "".join(doc.text)
+
+
+def test_a_frequency_response_is_plotted_on_a_logarithmic_frequency_axis(
+    srv: Server, lathe: str
+) -> None:
+    """X on the drive cascade, its mechanics measured on a copy: the report's magnitude plot
+    maps frequency logarithmically (the frame says so), each stored point in place."""
+    values = {"sim.plant": "DRIVE_CASCADE", "drive.inertia_ratio": 3.0}
+    values["sim.mech.anti_resonance"] = 60.0
+    changes = [{"scope": "axis", "target": "X", "name": k, "value": v} for k, v in values.items()]
+    assert srv.http.patch(f"/api/machines/{lathe}/parameters", json={"changes": changes}).is_success
+    r = srv.http.post(
+        f"/api/machines/{lathe}/assist/frequency-response", json={"axis": "X"}, timeout=120
+    )
+    assert r.status_code == 200, r.text
+    mag = next(s for s in r.json()["series"] if s["name"] == "magnitude_db")
+    (run,) = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    doc = _read(srv.http.get(f"/api/machines/{lathe}/report").text)
+    plots = [p for p in doc.plots if p["in"] == str(run["id"])]
+    assert len(plots) == 3  # magnitude, phase, coherence: one unit each
+    fr = plots[0]["frame"]
+    assert fr["data-x-scale"] == "log"
+    left, width = float(fr["x"]), float(fr["width"])
+    x0, x1 = float(fr["data-x0"]), float(fr["data-x1"])
+    assert (x0, x1) == (min(mag["x"]), max(mag["x"]))
+    (pts,) = plots[0]["points"]
+    span = math.log10(x1) - math.log10(x0)
+    for p, f in zip(pts, mag["x"], strict=True):
+        assert p[0] == pytest.approx(
+            left + (math.log10(f) - math.log10(x0)) / span * width, abs=0.006
+        )

@@ -29,6 +29,7 @@ WORKSPACES = [
     "Scope",
     "Parameters",
     "Commissioning",
+    "Drive tuning",
     "Service",
     "HLI / PLC",
     "Events",

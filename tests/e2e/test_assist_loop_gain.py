@@ -21,7 +21,7 @@ KV_RAW = 2000  # getriebe[0].kv of the demo's X, 0.01/s
 
 @pytest.fixture
 def slow_drive(srv: Server, mid: str) -> str:
-    set_up(srv, mid, "X", {"sim.drive_t": 20000})
+    set_up(srv, mid, "X", {"sim.plant": "IDEAL", "sim.drive_t": 20000})
     return mid
 
 

@@ -89,6 +89,7 @@ export type AssistResult = S["AssistResult"];
 export type AssistChange = S["AssistChange"];
 export type AssistSeries = S["AssistSeries"];
 export type AssistRunInfo = S["AssistRunInfo"];
+export type AssistRun = S["AssistRun"];
 export type SignOff = S["SignOff"];
 export type SignOffRequest = S["SignOffRequest"];
 export type ResolutionRequest = S["ResolutionRequest"];

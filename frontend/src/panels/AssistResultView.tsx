@@ -5,6 +5,7 @@ import type { AssistResult } from "../api/types";
 import { figure } from "../state/assist";
 import { fmt } from "../ui/format";
 import { AssistChart, type Level } from "./AssistChart";
+import { BodeView } from "./BodeChart";
 import { LoopGainView } from "./LoopGainResult";
 import { RPM_TO_DEG_S, perSecond } from "../ui/units";
 
@@ -38,6 +39,27 @@ const FIGURES: Record<string, { label: string; decimals: number; sig?: number }>
   max_error: { label: "max error", decimals: 0, sig: 3 },
   run_up_s: { label: "run-up time", decimals: 2 },
   "multi-gain-calc.f": { label: "f", decimals: 4 },
+  // the frequency response: what the Bode plot marks
+  resonance_1_hz: { label: "resonance f_r", decimals: 1 },
+  resonance_2_hz: { label: "resonance 2", decimals: 1 },
+  resonance_3_hz: { label: "resonance 3", decimals: 1 },
+  anti_resonance_1_hz: { label: "anti-resonance f_ar", decimals: 1 },
+  anti_resonance_2_hz: { label: "anti-resonance 2", decimals: 1 },
+  anti_resonance_3_hz: { label: "anti-resonance 3", decimals: 1 },
+  phase_margin_deg: { label: "phase margin", decimals: 1 },
+  gain_margin_db: { label: "gain margin", decimals: 1 },
+  crossover_hz: { label: "crossover f_c", decimals: 1 },
+  phase_crossover_hz: { label: "phase crossover f_180", decimals: 1 },
+  bandwidth_hz: { label: "bandwidth (−3 dB)", decimals: 1 },
+  peak_db: { label: "peak", decimals: 1, sig: 3 },
+  coherence_min: { label: "lowest coherence", decimals: 2, sig: 2 },
+  measured_s: { label: "measured for", decimals: 1, sig: 3 },
+  rise_ms: { label: "rise time", decimals: 1 },
+  rise_ms_expected: { label: "rise time (model)", decimals: 1 },
+  overshoot_pct: { label: "overshoot", decimals: 1 },
+  overshoot_pct_expected: { label: "overshoot (model)", decimals: 1 },
+  settling_ms: { label: "settling time", decimals: 1 },
+  settling_ms_expected: { label: "settling time (model)", decimals: 1 },
   "multi-gain-calc.multi_gain": { label: "multi_gain", decimals: 4 },
 };
 const HIDDEN = new Set(["runaway", "observed"]); // the sign check's verdict says them in words
@@ -97,6 +119,13 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
   return (
     <div class="assist-result" data-testid="assist-result">
       {r.assistant === "sign-check" ? <SignVerdict result={r} /> : null}
+      {r.assistant === "frequency-response" ? <BodeView result={r} /> : null}
+      {r.assistant === "step-response" && r.series.length === 2 ? (
+        <div class="assist-plot">
+          <AssistChart series={r.series[0]} more={[r.series[1]]} levels={[]} testid="step-chart"
+            label={(s) => s.name} xLabel={`time after the step [${r.series[0].x_unit}]`} yLabel={r.series[0].name} />
+        </div>
+      ) : null}
       {f !== null ? (
         settled(r) ? (
           <p class="assist-check ok" data-testid="assist-check" data-ok="1">

@@ -20,6 +20,7 @@ import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopG
 import { perSecond } from "../ui/units";
 import { codeSpans } from "../ui/codeSpans";
 import { SchemaFields, axesFor, formBody, formFields, startTexts } from "./SchemaForm";
+import { DrivePlan } from "./DrivePlan";
 
 // the assistants with a guided form of their own here; every other experiment of the
 // catalogue gets the form its request schema describes
@@ -60,10 +61,16 @@ function checked(inp: Inputs, unit: string) {
 
 const n1 = (v: number) => String(+v.toPrecision(3));
 
-export function Commissioning() {
+/** The assistants of the Drive tuning workspace: the drive's own measurements. */
+export const DRIVE_ASSISTANTS: readonly string[] = ["frequency-response", "step-response"];
+
+/** The assistants' panel: the NC's commissioning (by default), or the drive's measurements
+ * (`drive`: the Drive tuning workspace). */
+export function Commissioning(props: { drive?: boolean }) {
   const axes = status.value?.axes ?? [];
-  const [name, setName] = useState<string>("multi-gain");
-  const assistants = catalogue.value.filter((a) => a.kind === "experiment");
+  const drive = !!props.drive;
+  const assistants = catalogue.value.filter((a) => a.kind === "experiment" && DRIVE_ASSISTANTS.includes(a.name) === drive);
+  const [name, setName] = useState<string>(drive ? DRIVE_ASSISTANTS[0] : "multi-gain");
   const info = assistants.find((a) => a.name === name);
   const fields = info ? formFields(info.request) : [];
   const [texts, setTexts] = useState<Record<string, string>>({});
@@ -198,7 +205,7 @@ export function Commissioning() {
     (status.value?.emergency_stop ? "emergency stop: release it and reset first" : "") ||
     (live ? `${live.name} runs on the machine (${live.by})` : "");
   return (
-    <Panel title="Commissioning assistants" id="assist">
+    <Panel title={drive ? "Drive tuning: frequency response and steps" : "Commissioning assistants"} id={drive ? "drive" : "assist"}>
       <ol class="assist-steps" aria-label="steps">
         {["Choose", "Preview on a copy or run on the machine", "Read the result", "Apply on trial, run again"].map((s, i) => (
           <li key={s} class={i + 1 === step ? "active" : i + 1 < step ? "done" : ""}>
@@ -270,6 +277,7 @@ export function Commissioning() {
             </>
           )}
           {ax ? <p class="assist-what" data-testid="assist-what">{!guided ? codeSpans(info?.text ?? "") : name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name as Guided, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
+          {ax && drive ? <DrivePlan name={name} axis={ax} body={form.body} /> : null}
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
               title={mayAssist ? "a copy of the machine, in simulated time: nothing moves" : `a user in the role ${me.value?.role ?? ""} may not run assistants`}

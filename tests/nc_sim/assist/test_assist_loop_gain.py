@@ -6,9 +6,10 @@ closed loop T·s² + s + kv = 0: aperiodic for kv ≤ 1/(4T), else damped with
 ζ = 1/(2·√(kv·T)) and a step overshoot of exp(−π·ζ/√(1 − ζ²)). At constant speed the lag
 settles to v/kv (no feedforward).
 
-The test plant has T = 20 ms, so kv = 12.5/s is critical damping and the NC's 1 ms cycle (one
-cycle of dead time, 5 % of T) shifts the figures only a little; its G00 is made nearly a jump
-(acceleration 1000 m/s², 1 ms ramp), so the measured step is the loop's step response.
+The test plant is the IDEAL one (`sim.plant`) with T = 20 ms, so kv = 12.5/s is critical
+damping and the NC's 1 ms cycle (one cycle of dead time, 5 % of T) shifts the figures only a
+little; its G00 is made nearly a jump (acceleration 1000 m/s², 1 ms ramp), so the measured
+step is the loop's step response.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ INC_MM = 1e-4  # the demo X's encoder increment
 def plant(**x: Any) -> MachineConfig:
     cfg = demo_machine()
     values = {
+        "sim.plant": "IDEAL",  # the first-order drive the theory describes
         "sim.drive_t": round(T_S * 1e6),
         "getriebe[0].dynamik.a_max": 1_000_000,
         "getriebe[0].slope_profil.a_grenz": 1_000_000,

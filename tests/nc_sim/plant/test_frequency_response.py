@@ -21,11 +21,26 @@ J_M = 0.001  # p0341 default (kg·m²)
 
 
 def _x_axis(**extra: Any) -> dict[str, dict[str, Any]]:
+    """X on the drive cascade from a plain start (whatever the demo's own plant): rigid,
+    J_M 0.001 kg·m² (p0341) twice over (p0342), no filter, no friction, no backlash, 10 mm
+    per motor revolution, a PI speed loop; `extra` on top."""
     values: dict[str, Any] = {
         "sim.plant": "DRIVE_CASCADE",
         "getriebe[0].lag_max": 10_000_000,
         "drive.speed_kp": 0.3,
         "drive.speed_tn": 20000,
+        "drive.current_loop_t": 250,
+        "drive.current_filter_active": 0,
+        "drive.motor_inertia": J_M,
+        "drive.inertia_ratio": 2.0,
+        "sim.mech.anti_resonance": 0.0,
+        "sim.mech.damping": 0.05,
+        "sim.mech.travel_per_rev": 100000,
+        "sim.mech.coulomb_friction": 0.0,
+        "sim.mech.breakaway_torque": 0.0,
+        "sim.mech.viscous_friction": 0.0,
+        "sim.mech.backlash": 0,
+        "sim.measuring_system": "DIRECT",
     }
     values.update(extra)
     return {"X": values}

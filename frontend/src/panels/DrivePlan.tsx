@@ -1,0 +1,88 @@
+// What a drive measurement will do before it runs: how long the excitation lasts and how far
+// the axis travels meanwhile, from the form's values and the axis' drive parameters, and a
+// plain word when the axis runs the ideal plant (no drive to measure).
+import { useEffect, useState } from "preact/hooks";
+import type { AxisStatus } from "../api/types";
+import { loadList, paramsVersion } from "../state/params";
+import { machineId, status } from "../state/session";
+import { fmt } from "../ui/format";
+
+/** The measurement's length in simulated s, as nc_sim/assist/frequency_response.py plans it
+ * (`_segment`: a PRBS period of 2^order − 1 samples, or a sweep of 2^order, resolving f_min
+ * with four bins; `averages` half-overlapping segments; 0.2 s lead-in). */
+export function frfSeconds(fs: number, fMin: number, averages: number, prbs: boolean): number {
+  const need = Math.min(1 << 16, Math.max(256, Math.ceil((4 * fs) / fMin)));
+  const order = Math.max(8, Math.ceil(Math.log2(need + 1)));
+  const nseg = prbs ? 2 ** order - 1 : 2 ** order;
+  const count = nseg + (averages - 1) * Math.floor(nseg / 2);
+  return (count + Math.round(0.2 * fs)) / fs;
+}
+
+interface Drive {
+  cascade: boolean;
+  samplingS: number; // the drive's step
+  mmPerRev: number; // travel per motor revolution (mm | °)
+}
+
+function useDrive(axis: string): Drive | null {
+  const [d, setD] = useState<Drive | null>(null);
+  useEffect(() => {
+    if (!machineId.value) return;
+    loadList("axis", axis).then(
+      (list) => {
+        const value = new Map(list.map((p) => [p.name, p.value]));
+        const plant = value.get("sim.plant");
+        const n = (key: string, fallback: number) => (typeof value.get(key) === "number" ? (value.get(key) as number) : fallback);
+        setD({
+          cascade: plant === "DRIVE_CASCADE" || plant === 1,
+          samplingS: n("drive.sampling_time", 125) * 1e-6,
+          mmPerRev: n("sim.mech.travel_per_rev", 100000) * 1e-4,
+        });
+      },
+      () => setD(null),
+    );
+  }, [machineId.value, axis, paramsVersion.value]);
+  return d;
+}
+
+const num = (v: unknown, fallback: number): number => (typeof v === "number" && Number.isFinite(v) ? v : fallback);
+
+export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<string, unknown> }) {
+  const { name, axis, body } = props;
+  const drive = useDrive(axis.name);
+  const cycle = status.value?.simulation.cycle_s ?? 0.001;
+  if (!drive) return null;
+  if (!drive.cascade)
+    return (
+      <p class="assist-check off" data-testid="drive-plan" data-cascade="0">
+        {axis.name} runs the ideal plant (sim.plant IDEAL): there is no drive to measure. Set sim.plant to DRIVE_CASCADE in
+        Parameters.
+      </p>
+    );
+  const unit = axis.unit ?? "mm";
+  let text: string;
+  if (name === "frequency-response") {
+    const position = num(body.measurement, 1) === 4;
+    const ts = cycle / Math.max(1, Math.round(cycle / drive.samplingS));
+    const fs = position ? 1 / cycle : 1 / ts;
+    const seconds = frfSeconds(fs, num(body.f_min_hz, 5), num(body.averages, 10), num(body.excitation, 1) === 1);
+    const offset = num(body.offset_rpm, 0);
+    const travel = (Math.abs(offset) / 60) * drive.mmPerRev * seconds;
+    text =
+      `${axis.name} is excited for ${fmt(seconds, 1)} s of machine time` +
+      (offset ? `, turning at ${fmt(offset, 0)} rpm: it travels ${fmt(travel, 1)} ${unit}` : ", holding its position") +
+      ` within ±${fmt(num(body.window_mm, 50), 0)} ${unit}.`;
+  } else {
+    const speed = num(body.loop, 1) === 1;
+    const seconds = num(body.duration_s, 0.5);
+    text = speed
+      ? `${axis.name}'s motor steps to ${fmt(num(body.speed_rpm, 50), 0)} rpm for ${fmt(seconds, 2)} s ` +
+        `(about ${fmt(((num(body.speed_rpm, 50) / 60) * drive.mmPerRev * seconds), 1)} ${unit}), then goes back.`
+      : `${axis.name} steps ${fmt(num(body.position_mm, 0.05), 3)} ${unit} for ${fmt(seconds, 2)} s and returns.`;
+  }
+  return (
+    <p class="hint" data-testid="drive-plan" data-cascade="1">
+      {text} On a copy this takes a fraction of that; the machine itself moves only after you confirm.
+    </p>
+  );
+}

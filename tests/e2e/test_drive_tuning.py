@@ -1,0 +1,97 @@
+"""The Drive tuning workspace in the browser: an engineer measures X's mechanics and its closed
+speed loop on a copy, reads the resonance the Bode plot marks, and compares two runs before
+and after a change of the speed controller's gain.
+
+X runs the drive cascade with a coupling: anti-resonance 60 Hz, load twice the motor
+(p0342 = 3), so physics puts the resonance at 60·√3 = 103.9 Hz.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+from playwright.sync_api import Locator, Page, expect
+
+from tests.backend.server import Server
+from tests.e2e.browser import panel, shot
+from tests.e2e.plant import set_up
+
+RUN_TIMEOUT_MS = 60_000
+F_AR = 60.0
+F_R = F_AR * math.sqrt(3.0)
+
+
+def _marks(box: Locator) -> dict[str, float]:
+    text = box.get_by_test_id("bode").get_attribute("data-marks") or ""
+    return {k: float(v) for k, v in (m.split(":") for m in text.split())}
+
+
+def _figure(box: Locator, name: str) -> float:
+    return float(box.get_by_test_id(f"assist-fig-{name}").inner_text().replace("−", "-"))
+
+
+def _run(box: Locator) -> None:
+    box.get_by_test_id("assist-run").click()
+    expect(box.get_by_test_id("assist-result")).to_be_visible(timeout=RUN_TIMEOUT_MS)
+
+
+def test_measure_the_mechanics_and_the_speed_loop_and_compare_two_runs(
+    page: Page, srv: Server, mid: str
+) -> None:
+    set_up(
+        srv,
+        mid,
+        "X",
+        {
+            "sim.plant": "DRIVE_CASCADE",
+            "drive.inertia_ratio": 3.0,
+            "sim.mech.anti_resonance": F_AR,
+            "sim.mech.coulomb_friction": 0.1,
+        },
+    )
+    page.get_by_test_id("tab-Drive tuning").click()
+    box = panel(page, "drive")
+    box.get_by_test_id("assist-pick-frequency-response").check()
+    box.get_by_test_id("assist-axis").select_option("X")
+    plan = box.get_by_test_id("drive-plan")
+    expect(plan).to_have_attribute("data-cascade", "1")
+    expect(plan).to_contain_text("rpm")  # the offset speed and the travel it makes
+    planned = float(re.search(r"for ([\d.]+) s", plan.inner_text()).group(1))  # type: ignore[union-attr]
+
+    _run(box)  # the mechanics: a PRBS at the torque, at 30 rpm
+    assert _figure(box, "resonance_1_hz") == pytest.approx(F_R, rel=0.02)
+    assert _figure(box, "anti_resonance_1_hz") == pytest.approx(F_AR, rel=0.02)
+    assert _figure(box, "measured_s") == pytest.approx(planned, abs=0.05)  # as announced
+    marks = _marks(box)
+    assert marks["f_r"] == pytest.approx(F_R, rel=0.02)
+    assert marks["f_ar"] == pytest.approx(F_AR, rel=0.02)
+    expect(box.get_by_test_id("bode-magnitude").locator("canvas")).to_have_count(1)
+    expect(box.get_by_test_id("bode-phase").locator("canvas")).to_have_count(1)
+    shot(page, "drive-mechanics-desktop")
+
+    # the closed speed loop: its bandwidth, marked too
+    box.get_by_test_id("assist-in-measurement").select_option("2")
+    _run(box)
+    bandwidth = _figure(box, "bandwidth_hz")
+    assert 5.0 < bandwidth < F_R  # a loop below the resonance it must not excite
+    assert _marks(box)["f_bw"] == pytest.approx(bandwidth, abs=0.1)
+
+    # a stiffer speed controller, measured again and laid over the run before
+    set_up(srv, mid, "X", {"drive.speed_kp": 1.0})
+    _run(box)
+    stiffer = _figure(box, "bandwidth_hz")
+    assert stiffer > bandwidth
+    compare = box.get_by_test_id("bode-compare")
+    # newest first: this run, then the closed loop before the change
+    earlier = compare.locator("option", has_text="bandwidth_hz").nth(1)
+    compare.select_option(earlier.get_attribute("value") or "")
+    expect(box.get_by_test_id("bode")).to_have_attribute("data-runs", "2")
+    legend = box.get_by_test_id("bode-magnitude").locator(".u-legend .u-series")
+    expect(legend).to_have_count(3)  # the frequency, this run, the run before
+    expect(legend.nth(2)).to_contain_text(f"#{earlier.get_attribute('value')}")
+    shot(page, "drive-compare-desktop")
+    page.set_viewport_size({"width": 1024, "height": 768})
+    box.get_by_test_id("bode").scroll_into_view_if_needed()
+    shot(page, "drive-compare-tablet")
