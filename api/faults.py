@@ -88,12 +88,39 @@ class FrictionModel(_Fault):
 
 
 class BacklashModel(_Fault):
-    """Play between motor and load; the encoder reads the load."""
+    """Play between motor and load: a loose coupling."""
 
     model_config = ConfigDict(title="Backlash")
     kind: Literal["backlash"] = "backlash"
     axis: str = AXIS
     width: float = Field(gt=0, le=10.0, description="mm | °")
+
+
+class CouplingSoftModel(_Fault):
+    """The coupling's stiffness is `factor` times what it was: resonances sink by √factor."""
+
+    model_config = ConfigDict(title="Coupling gone soft")
+    kind: Literal["coupling_soft"] = "coupling_soft"
+    axis: str = AXIS
+    factor: float = Field(gt=0.01, lt=1.0, description="stiffness against the sound coupling")
+
+
+class FrictionRisingModel(_Fault):
+    """The guideways' friction torques are `factor` times what they were."""
+
+    model_config = ConfigDict(title="Friction rising")
+    kind: Literal["friction_rising"] = "friction_rising"
+    axis: str = AXIS
+    factor: float = Field(gt=1.0, le=100.0, description="friction against the sound guideways")
+
+
+class NotchMistunedModel(_Fault):
+    """The drive's current-setpoint filters act at `factor` times their set frequencies."""
+
+    model_config = ConfigDict(title="Notch mistuned")
+    kind: Literal["notch_mistuned"] = "notch_mistuned"
+    axis: str = AXIS
+    factor: float = FACTOR
 
 
 class DriveAccelLimitModel(_Fault):
@@ -146,6 +173,9 @@ FaultModel = Annotated[
     | GearRatioWrongModel
     | FrictionModel
     | BacklashModel
+    | CouplingSoftModel
+    | FrictionRisingModel
+    | NotchMistunedModel
     | DriveAccelLimitModel
     | PlcNoAckModel
     | PlcSlowAckModel

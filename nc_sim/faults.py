@@ -86,11 +86,45 @@ class Friction:
 
 @dataclass(frozen=True)
 class Backlash:
-    """Play of `width` (mm | °) between motor and load; the encoder reads the load."""
+    """Play of `width` (mm | °) between motor and load, a loose coupling; the ideal plant's
+    encoder reads the load, the drive cascade's measuring system is where its list says."""
 
     kind: ClassVar[str] = "backlash"
     axis: str
     width: float
+
+
+@dataclass(frozen=True)
+class CouplingSoft:
+    """The coupling between motor and load has gone soft: its stiffness is `factor` (< 1)
+    times what it was, so the anti-resonance and the resonance sink by √factor (the drive
+    cascade's two-mass mechanics; a rigid axis has no coupling to soften)."""
+
+    kind: ClassVar[str] = "coupling_soft"
+    axis: str
+    factor: float
+
+
+@dataclass(frozen=True)
+class FrictionRising:
+    """The guideways' friction (Coulomb and breakaway torque of the drive cascade's
+    mechanics) is `factor` times what it was: reversal spikes grow, a P speed loop loses
+    more speed."""
+
+    kind: ClassVar[str] = "friction_rising"
+    axis: str
+    factor: float
+
+
+@dataclass(frozen=True)
+class NotchMistuned:
+    """The drive's current-setpoint filters act at `factor` times the frequencies their
+    parameters give (as after a change of the drive's sampling the filters were not set up
+    for): a notch misses the resonance it was put on."""
+
+    kind: ClassVar[str] = "notch_mistuned"
+    axis: str
+    factor: float
 
 
 @dataclass(frozen=True)
@@ -145,6 +179,9 @@ Fault = (
     | GearRatioWrong
     | Friction
     | Backlash
+    | CouplingSoft
+    | FrictionRising
+    | NotchMistuned
     | DriveAccelLimit
     | PlcNoAck
     | PlcSlowAck
@@ -160,6 +197,9 @@ CATALOGUE: tuple[type[Fault], ...] = (
     GearRatioWrong,
     Friction,
     Backlash,
+    CouplingSoft,
+    FrictionRising,
+    NotchMistuned,
     DriveAccelLimit,
     PlcNoAck,
     PlcSlowAck,

@@ -68,6 +68,12 @@ def describe(fault: Fault) -> str:
             what = f"friction: loses {fault.v_loss:g}/s"  # type: ignore[union-attr]
         case "backlash":
             what = f"backlash {fault.width:g}"  # type: ignore[union-attr]
+        case "coupling_soft":
+            what = f"coupling stiffness × {fault.factor:g}"  # type: ignore[union-attr]
+        case "friction_rising":
+            what = f"friction × {fault.factor:g}"  # type: ignore[union-attr]
+        case "notch_mistuned":
+            what = f"current filters at × {fault.factor:g} their frequency"  # type: ignore[union-attr]
         case "drive_accel_limit":
             what = f"drive accelerates at most {fault.a_max:g}/s²"  # type: ignore[union-attr]
         case "plc_no_ack":

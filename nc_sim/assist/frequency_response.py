@@ -32,6 +32,7 @@ from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
 from nc_sim.plant import frf
 from nc_sim.plant import layout as PL
+from nc_sim.snapshot import AxisState
 from nc_sim.units import MM_MIN_PER_MM_S
 
 MECHANICS, CLOSED_SPEED, OPEN_SPEED, CLOSED_POSITION = 1, 2, 3, 4
@@ -184,8 +185,10 @@ def frequency_response(
     finally:
         if k.probe[PL.PR_SLOT] == ax.slot:
             k.stop_probe()
-    if v_offset != 0.0:
-        m.submit(Reset())  # the offset motion ends with the measurement
+    if v_offset != 0.0:  # the offset motion ends with the measurement (a reset brakes it)
+        m.submit(Reset())
+        while ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
+            yield Wait(10, f"{ax.name} comes to rest", total_s)
     result = _analyse(
         ax.name, measurement, trace, position, steps, lead, nseg, fs, (f_min_hz, f_hi), v_offset
     )

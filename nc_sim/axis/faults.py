@@ -19,3 +19,7 @@ class PlantFaults:
     friction: float = 0.0  # Coulomb friction: speed lost against the motion (unit/s)
     backlash: float = 0.0  # play between motor and load (mm | °)
     a_max: float = 0.0  # the drive accelerates no faster than this (unit/s²), 0 = its own
+    # the drive cascade's mechanics and filters (nc_sim/plant)
+    stiffness_factor: float = 1.0  # the coupling's stiffness × this
+    friction_factor: float = 1.0  # Coulomb and breakaway torque × this
+    filter_factor: float = 1.0  # the current-setpoint filters act at their frequencies × this

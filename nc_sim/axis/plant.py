@@ -44,7 +44,8 @@ def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None
     """The axis' drive and mechanics from its list, with the training faults in force: a
     friction fault (a speed the ideal drive loses) becomes the Coulomb torque that costs a
     P speed loop that speed, a backlash fault adds to the gap, a torque-limited acceleration
-    caps the torque. The drive's step is the NC cycle over the nearest whole number."""
+    caps the torque; the mechanical faults soften the coupling, raise the friction and
+    shift the filters. The drive's step is the NC cycle over the nearest whole number."""
     f = faults or PlantFaults()
     substeps = max(1, round(cycle_s / c.eng("drive.sampling_time")))
     active = int(c.raw("drive.current_filter_active"))
@@ -56,9 +57,9 @@ def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None
         general = _symbol(c, base + "type", FILTER_TYPES) == FILTER_TYPES["GENERAL_2ND_ORDER"]
         filters.append(
             SecondOrderFilter(
-                c.eng(base + "denominator_frequency"),
+                c.eng(base + "denominator_frequency") * f.filter_factor,
                 c.eng(base + "denominator_damping"),
-                c.eng(base + "numerator_frequency") if general else 0.0,
+                c.eng(base + "numerator_frequency") * f.filter_factor if general else 0.0,
                 c.eng(base + "numerator_damping") if general else 0.0,
             )
         )
@@ -79,11 +80,13 @@ def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None
         filters=tuple(filters),
         motor_inertia=c.eng("drive.motor_inertia"),
         inertia_ratio=c.eng("drive.inertia_ratio"),
-        anti_resonance_hz=c.eng("sim.mech.anti_resonance"),
+        # k ∝ f_ar²: a coupling `stiffness_factor` as stiff has its anti-resonance at √factor
+        anti_resonance_hz=c.eng("sim.mech.anti_resonance") * math.sqrt(f.stiffness_factor),
         damping=c.eng("sim.mech.damping"),
         unit_per_rad=unit_per_rad,
-        coulomb=c.eng("sim.mech.coulomb_friction") + kp * f.friction / unit_per_rad,
-        breakaway=c.eng("sim.mech.breakaway_torque"),
+        coulomb=c.eng("sim.mech.coulomb_friction") * f.friction_factor
+        + kp * f.friction / unit_per_rad,
+        breakaway=c.eng("sim.mech.breakaway_torque") * f.friction_factor,
         stribeck_rad_s=c.eng("sim.mech.stribeck_speed") * RPM_TO_RAD_S,
         viscous=c.eng("sim.mech.viscous_friction"),
         backlash=c.eng("sim.mech.backlash") + f.backlash,

@@ -22,6 +22,7 @@ from nc_sim.faults import (
     CATALOGUE,
     NOW,
     Backlash,
+    CouplingSoft,
     DriveAccelLimit,
     DriveGainWrong,
     DriveNotReady,
@@ -32,8 +33,10 @@ from nc_sim.faults import (
     Fault,
     FaultState,
     Friction,
+    FrictionRising,
     GearRatioWrong,
     MotorInverted,
+    NotchMistuned,
     PlcNoAck,
     PlcSlowAck,
     Trigger,
@@ -250,6 +253,12 @@ def _plant(faults: list[Fault]) -> PlantFaults:
                 p.friction += f.v_loss
             case Backlash():
                 p.backlash += f.width
+            case CouplingSoft():
+                p.stiffness_factor *= f.factor
+            case FrictionRising():
+                p.friction_factor *= f.factor
+            case NotchMistuned():
+                p.filter_factor *= f.factor
             case DriveAccelLimit():
                 p.a_max = min(p.a_max, f.a_max) if p.a_max > 0.0 else f.a_max
             case _:

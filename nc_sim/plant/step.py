@@ -85,14 +85,21 @@ def motor_offset(pl: np.ndarray, ps: np.ndarray, s: int, play: float) -> float:
 
 
 @njit(cache=True)
-def _brake(ps: np.ndarray, s: int) -> None:
-    """No enables: no torque, the holding brake stops motor and load where they are."""
+def _brake(pl: np.ndarray, ps: np.ndarray, s: int) -> float:
+    """No enables: no torque, the holding brake stops the motor, and the load comes to rest
+    where the coupling holds no torque (within the backlash gap). Returns how far the load
+    moved settling (load units)."""
     for i in range(NX_MAX):
         if i != X_DEF:
             ps[s, i] = 0.0
     ps[s, PS_INTEGRAL] = 0.0
     ps[s, PS_T_LATE] = 0.0
     ps[s, PS_W_REF] = 0.0
+    half = pl[s, PL_HALF_PLAY] if pl[s, PL_TWO_MASS] == 1.0 else 0.0
+    de = ps[s, X_DEF]
+    rest = min(max(de, -half), half)
+    ps[s, X_DEF] = rest
+    return float((de - rest) * pl[s, PL_UNIT_PER_RAD])
 
 
 @njit(cache=True)
@@ -157,7 +164,7 @@ def drive_cycle(
             prec[pos, D_X_LOAD] = x_load
             prec[pos, D_X_MOTOR] = x_load + motor_offset(pl, ps, s, play)
         if not enabled:
-            _brake(ps, s)
+            x_load += _brake(pl, ps, s)
         else:
             ps[s, PS_W_REF] += (w_set - ps[s, PS_W_REF]) * pl[s, PL_SP_ALPHA]
             w_ref = ps[s, PS_W_REF]

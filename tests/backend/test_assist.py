@@ -99,6 +99,9 @@ def test_the_frequency_response_of_a_two_mass_axis_over_http(srv: Server, lathe:
     """X on the drive cascade with a coupling: anti-resonance 70 Hz, J_L = 2·J_M (p0342 = 3),
     so the resonance sits at 70·√3 = 121.2 Hz; the Bode data come back thinned on a log
     frequency grid with the coherence; the IDEAL plant is refused with a 422 that says why."""
+    ideal = [{"scope": "axis", "target": "X", "name": "sim.plant", "value": "IDEAL"}]
+    r = srv.http.patch(f"/api/machines/{lathe}/parameters", json={"changes": ideal})
+    assert r.status_code == 200, r.text
     r = _assist(srv, lathe, "frequency-response", {"axis": "X"})
     assert r.status_code == 422 and "IDEAL" in r.text
     values = {"sim.plant": "DRIVE_CASCADE", "drive.inertia_ratio": 3.0}

@@ -32,6 +32,9 @@ from tests.nc_sim.sim_helpers import L, make, mdi, record
 
 KV_X = 20.0  # demo X: getriebe[0].kv 2000 = 20 /s [004 §3.6]
 NO_LAG_MONITOR = {"getriebe[0].lag_max": 10_000_000}  # 1000 mm: a wrong plant runs on
+# the friction and backlash faults as the ideal drive has them: a speed the drive loses, a
+# kinematic gap (the drive cascade's: tests/nc_sim/plant)
+IDEAL = {"sim.plant": "IDEAL"}
 
 
 def _errors(m: Machine) -> list[int]:
@@ -283,8 +286,8 @@ def test_gear_ratio_wrong_in_gear_2_scales_the_lag_in_gear_2_only() -> None:
 
 def test_friction_adds_v_loss_over_kv_to_the_steady_lag() -> None:
     """The drive loses v_loss against the motion: the loop needs kv·lag = v + v_loss."""
-    sound_lag, _ = _cruise(*make({"X": NO_LAG_MONITOR})[:2], 1200.0, 3.0)
-    sim, m, _ = make({"X": NO_LAG_MONITOR})
+    sound_lag, _ = _cruise(*make({"X": NO_LAG_MONITOR | IDEAL})[:2], 1200.0, 3.0)
+    sim, m, _ = make({"X": NO_LAG_MONITOR | IDEAL})
     m.inject(Friction("X", 4.0))
     lag, v = _cruise(sim, m, 1200.0, 3.0)
     assert v == pytest.approx(20.0, rel=1e-3)
@@ -292,7 +295,7 @@ def test_friction_adds_v_loss_over_kv_to_the_steady_lag() -> None:
 
 
 def test_friction_sticks_a_command_below_it() -> None:
-    sim, m, _ = make()
+    sim, m, _ = make({"X": IDEAL})
     x = m.axis("X")
     m.inject(Friction("X", 2.0))
     x0 = float(m.k.st[x.slot, L.S_X_MOTOR])
@@ -305,7 +308,7 @@ def test_backlash_leaves_the_motor_its_width_apart_after_a_reversal() -> None:
     """The encoder reads the load: reaching one NC position from below and from above, the
     load stands at the same place and the motor is the play's width apart."""
     b = 0.2
-    sim, m, _ = make()
+    sim, m, _ = make({"X": IDEAL})
     x = m.axis("X")
     m.inject(Backlash("X", b))
     p0 = float(m.k.st[x.slot, L.S_P_ACT])
