@@ -475,6 +475,26 @@ ASSISTANTS: tuple[Assistant, ...] = (
         ("rise_ms", "overshoot_pct", "settling_ms"),
         live="nc_sim.assist.step_response:step_response",
     ),
+    Assistant(
+        "drive-trace",
+        "Drive trace",
+        "drive: its oscilloscope",
+        "The drive's own signals at its sampling rate (8 kHz at 125 µs) from the start of a "
+        "short move: speed setpoint and actual, the load's speed, torque setpoint and torque, "
+        "and how far the motor is ahead of the load (the coupling's twist, backlash taken "
+        "up); the axis goes back afterwards. The axis must run the drive cascade (sim.plant).",
+        Kind.EXPERIMENT,
+        "DriveTraceRequest",
+        (
+            AxisChoice(kinds=_AXES),
+            Number("distance", "move, mm (° for rotary); 0: at rest", "mm", -100, 100, default=5.0),
+            Number("feed_mm_min", "feed, mm/min", "mm/min", 0, 1e5, True, 3000.0, cli="feed"),
+            Number("duration_s", "recorded for, s", "s", 0.001, 2, default=0.5),
+        ),
+        "nc_sim.assist.drive_trace:drive_trace_experiment",
+        ("torque_peak_nm", "twist_peak_um"),
+        live="nc_sim.assist.drive_trace:drive_trace",
+    ),
 )
 """Every assistant, in the order the HMI offers them."""
 

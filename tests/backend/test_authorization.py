@@ -111,6 +111,8 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/machines/{mid}/assist/live/frequency-response"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/assist/step-response"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/assist/live/step-response"): ("operator", HELD),
+    ("POST", "/api/machines/{mid}/assist/drive-trace"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/assist/live/drive-trace"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/assist/live/cancel"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),

@@ -95,3 +95,17 @@ def test_measure_the_mechanics_and_the_speed_loop_and_compare_two_runs(
     page.set_viewport_size({"width": 1024, "height": 768})
     box.get_by_test_id("bode").scroll_into_view_if_needed()
     shot(page, "drive-compare-tablet")
+
+
+def test_the_drive_trace_shows_speeds_torques_and_the_twist_at_the_drive_rate(
+    page: Page, srv: Server, mid: str
+) -> None:
+    page.get_by_test_id("tab-Drive tuning").click()
+    box = panel(page, "drive")
+    box.get_by_test_id("assist-pick-drive-trace").check()
+    expect(box.get_by_test_id("drive-plan")).to_contain_text("8000 Hz")
+    _run(box)
+    assert _figure(box, "rate_hz") == 8000
+    for unit in ("rpm", "Nm", "µm"):  # a chart per quantity, each with its lines
+        expect(box.get_by_test_id(f"drive-trace-{unit}").locator("canvas")).to_have_count(1)
+    shot(page, "drive-trace-desktop")

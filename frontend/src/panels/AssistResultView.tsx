@@ -60,6 +60,10 @@ const FIGURES: Record<string, { label: string; decimals: number; sig?: number }>
   overshoot_pct_expected: { label: "overshoot (model)", decimals: 1 },
   settling_ms: { label: "settling time", decimals: 1 },
   settling_ms_expected: { label: "settling time (model)", decimals: 1 },
+  rate_hz: { label: "sampling rate", decimals: 0 },
+  samples: { label: "samples", decimals: 0 },
+  torque_peak_nm: { label: "torque peak", decimals: 2 },
+  twist_peak_um: { label: "motor ahead of load, peak", decimals: 2 },
   "multi-gain-calc.multi_gain": { label: "multi_gain", decimals: 4 },
 };
 const HIDDEN = new Set(["runaway", "observed"]); // the sign check's verdict says them in words
@@ -120,6 +124,7 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
     <div class="assist-result" data-testid="assist-result">
       {r.assistant === "sign-check" ? <SignVerdict result={r} /> : null}
       {r.assistant === "frequency-response" ? <BodeView result={r} /> : null}
+      {r.assistant === "drive-trace" ? <DriveTraceCharts result={r} /> : null}
       {r.assistant === "step-response" && r.series.length === 2 ? (
         <div class="assist-plot">
           <AssistChart series={r.series[0]} more={[r.series[1]]} levels={[]} testid="step-chart"
@@ -214,6 +219,24 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
         </p>
       )}
     </div>
+  );
+}
+
+/** The drive's signals, one chart per unit (speeds, torques, the twist), over time. */
+function DriveTraceCharts(props: { result: AssistResult }) {
+  const units = [...new Set(props.result.series.map((s) => s.y_unit))];
+  return (
+    <>
+      {units.map((u) => {
+        const [first, ...more] = props.result.series.filter((s) => s.y_unit === u);
+        return (
+          <div class="assist-plot" key={u}>
+            <AssistChart series={first} more={more} levels={[]} testid={`drive-trace-${u}`}
+              label={(s) => s.name} xLabel="time [s]" yLabel={u === "µm" ? "motor ahead of load" : u === "Nm" ? "torque" : "speed"} />
+          </div>
+        );
+      })}
+    </>
   );
 }
 

@@ -60,10 +60,10 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
       </p>
     );
   const unit = axis.unit ?? "mm";
+  const ts = cycle / Math.max(1, Math.round(cycle / drive.samplingS)); // the drive's step
   let text: string;
   if (name === "frequency-response") {
     const position = num(body.measurement, 1) === 4;
-    const ts = cycle / Math.max(1, Math.round(cycle / drive.samplingS));
     const fs = position ? 1 / cycle : 1 / ts;
     const seconds = frfSeconds(fs, num(body.f_min_hz, 5), num(body.averages, 10), num(body.excitation, 1) === 1);
     const offset = num(body.offset_rpm, 0);
@@ -72,6 +72,11 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
       `${axis.name} is excited for ${fmt(seconds, 1)} s of machine time` +
       (offset ? `, turning at ${fmt(offset, 0)} rpm: it travels ${fmt(travel, 1)} ${unit}` : ", holding its position") +
       ` within ±${fmt(num(body.window_mm, 50), 0)} ${unit}.`;
+  } else if (name === "drive-trace") {
+    const distance = num(body.distance, 5);
+    text =
+      `${axis.name}'s drive is recorded for ${fmt(num(body.duration_s, 0.5), 3)} s at ${fmt(1 / ts, 0)} Hz` +
+      (distance ? ` while it moves ${fmt(distance, 2)} ${unit}; then it goes back.` : ", at rest.");
   } else {
     const speed = num(body.loop, 1) === 1;
     const seconds = num(body.duration_s, 0.5);
