@@ -54,7 +54,7 @@ def frequency_response_experiment(
     axis: str,
     measurement: int = MECHANICS,
     excitation: int = PRBS,
-    torque_pct: float = 5.0,
+    torque_pct: float = 2.0,
     speed_rpm: float = 20.0,
     position_mm: float = 0.1,
     offset_rpm: float = 30.0,
@@ -108,7 +108,7 @@ def frequency_response(
     axis: str,
     measurement: int = MECHANICS,
     excitation: int = PRBS,
-    torque_pct: float = 5.0,
+    torque_pct: float = 2.0,
     speed_rpm: float = 20.0,
     position_mm: float = 0.1,
     offset_rpm: float = 30.0,
@@ -192,7 +192,7 @@ def frequency_response(
     result = _analyse(
         ax.name, measurement, trace, position, steps, lead, nseg, fs, (f_min_hz, f_hi), v_offset
     )
-    took = Figure("measured_s", total_s, "s", "excitation on the axis (simulated time)")
+    took = Figure("measured_s", total_s, "s", "excitation on the axis (machine time)")
     return replace(result, figures=(*result.figures, took))
 
 
@@ -257,14 +257,35 @@ def _analyse(
             notes.append("no resonance stands out: the mechanics behave as one rigid mass")
     if measurement == OPEN_SPEED:
         mg = frf.margins(h)
-        for fig, value, unit, text in (
-            ("phase_margin_deg", mg.phase_margin_deg, "°", "phase margin at the crossover"),
-            ("crossover_hz", mg.crossover_hz, "Hz", "gain crossover (|L| = 1)"),
-            ("gain_margin_db", mg.gain_margin_db, "dB", "gain margin at -180°"),
-            ("phase_crossover_hz", mg.phase_crossover_hz, "Hz", "phase crossover (-180°)"),
+        for at, pairs in (
+            (
+                mg.crossover_hz,
+                (
+                    ("phase_margin_deg", mg.phase_margin_deg, "°", "phase margin at the crossover"),
+                    ("crossover_hz", mg.crossover_hz, "Hz", "gain crossover (|L| = 1)"),
+                ),
+            ),
+            (
+                mg.phase_crossover_hz,
+                (
+                    ("gain_margin_db", mg.gain_margin_db, "dB", "gain margin at -180°"),
+                    ("phase_crossover_hz", mg.phase_crossover_hz, "Hz", "phase crossover (-180°)"),
+                ),
+            ),
         ):
-            if value is not None:
-                figures.append(Figure(fig, float(value), unit, text))
+            if at is None:
+                continue
+            holds = frf.coherence_near(h, at)
+            if holds < 0.8:  # a margin read where the estimate does not hold is no margin
+                notes.append(
+                    f"{pairs[0][0].replace('_', ' ')} left out: at {at:.1f} Hz the coherence is "
+                    f"{holds:.2f} (backlash or friction make the axis nonlinear there: less "
+                    "amplitude, an offset speed)"
+                )
+                continue
+            for fig, value, unit, text in pairs:
+                if value is not None:
+                    figures.append(Figure(fig, float(value), unit, text))
     if measurement in (CLOSED_SPEED, CLOSED_POSITION):
         bw = frf.bandwidth_hz(h)
         if bw is not None:
@@ -280,12 +301,14 @@ def _analyse(
             f"reversal and distorts the low frequencies; {cure} keeps it constant"
         )
     coh = h.coherence
-    poor = float(np.mean(coh < 0.8)) if len(coh) else 1.0
+    poor = coh < 0.8
     figures.append(Figure("coherence_min", float(np.min(coh)), "", "lowest coherence"))
-    if poor > 0.1:
+    if np.mean(poor) > 0.02:
+        lo, hi = float(h.f_hz[poor][0]), float(h.f_hz[poor][-1])
         notes.append(
-            f"coherence below 0.8 over {poor:.0%} of the band: more amplitude, more averages "
-            "or an offset speed (friction at standstill)"
+            f"coherence below 0.8 over {np.mean(poor):.0%} of the band ({lo:.0f} to {hi:.0f} "
+            "Hz): read the curve there with care; less amplitude when backlash or friction "
+            "make the axis nonlinear, more averages, an offset speed"
         )
     keep = _log_thin(h.f_hz)
     fx = tuple(float(v) for v in h.f_hz[keep])

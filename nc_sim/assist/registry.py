@@ -424,7 +424,7 @@ ASSISTANTS: tuple[Assistant, ...] = (
                 1,
             ),
             Choice("excitation", "excitation", ((1, "PRBS"), (2, "chirp")), 1),
-            Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 5.0),
+            Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 2.0),
             Number("speed_rpm", "amplitude at the speed setpoint, rpm", "rpm", 0, 3000, True, 20.0),
             Number("position_mm", "amplitude at the position command, mm", "mm", 0, 10, True, 0.1),
             Number(

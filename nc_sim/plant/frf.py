@@ -120,6 +120,13 @@ def bandwidth_hz(closed_loop: Frf) -> float | None:
     return None if i is None else _at(closed_loop.f_hz, mag, i, -3.0, mag)[0]
 
 
+def coherence_near(response: Frf, f_hz: float) -> float:
+    """The median coherence within ±5 % of `f_hz`: how far the estimate holds there."""
+    f = response.f_hz
+    near = response.coherence[(f >= 0.95 * f_hz) & (f <= 1.05 * f_hz)]
+    return float(np.median(near)) if len(near) else 0.0
+
+
 def _phase_zero(f: np.ndarray, phase: np.ndarray, i: int, rising: bool) -> float | None:
     """The frequency near index i where the phase (wrapped, °) crosses 0° upwards (`rising`)
     or downwards, interpolated in log f; None without one within ±15 % of f[i]."""
@@ -150,24 +157,26 @@ def resonances(
     f = mechanics.f_hz
     flat = mechanics.magnitude_db + 20.0 * np.log10(f)
     phase = np.degrees(np.angle(mechanics.h))
-    coh = mechanics.coherence
     # an anti-resonance leaves little output, so its own bins cohere less: judge the
     # neighbourhood (±5 %)
-    trusted = [
-        float(np.median(coh[(f >= 0.95 * fi) & (f <= 1.05 * fi)])) >= min_coherence for fi in f
-    ]
+    trusted = [coherence_near(mechanics, fi) >= min_coherence for fi in f]
     peaks, p_props = signal.find_peaks(flat, prominence=prominence_db)
     dips, d_props = signal.find_peaks(-flat, prominence=prominence_db)
 
+    inner = (f >= 1.05 * f[0]) & (f <= f[-1] / 1.05)  # not at the band's edges
+
     def place(found: np.ndarray, prominence: np.ndarray, rising: bool) -> list[float]:
         # a peak without the phase's turn is no resonance (friction, a leak of the window);
-        # the three that stand out most, in frequency order
+        # the three that stand out most, one per 5 %, in frequency order
         at = [
             (float(p), _phase_zero(f, phase, int(i), rising))
             for i, p in zip(found, prominence, strict=True)
-            if trusted[i]
+            if trusted[i] and inner[i]
         ]
-        best = sorted((x for x in at if x[1] is not None), reverse=True)[:MAX_RESONANCES]
-        return sorted(float(x[1]) for x in best if x[1] is not None)
+        kept: list[float] = []
+        for _, hz in sorted((x for x in at if x[1] is not None), reverse=True):
+            if hz is not None and all(abs(hz - k) > 0.05 * k for k in kept):
+                kept.append(hz)
+        return sorted(kept[:MAX_RESONANCES])
 
     return place(peaks, p_props["prominences"], False), place(dips, d_props["prominences"], True)

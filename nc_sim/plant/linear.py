@@ -33,6 +33,7 @@ def step_figures(t: np.ndarray, y: np.ndarray, step: float, band: float = 0.02) 
     above90 = np.flatnonzero(r >= 0.9)
     rise = float(t[above90[0]] - t[above10[0]]) if len(above10) and len(above90) else None
     overshoot = max(0.0, float(np.max(r)) - 1.0) * 100.0
+    overshoot = 0.0 if overshoot < 1e-6 else overshoot  # round-off of a response that creeps in
     outside = np.flatnonzero(np.abs(r - 1.0) > band)
     if len(outside) == 0:
         settling: float | None = 0.0

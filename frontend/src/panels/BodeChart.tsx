@@ -46,6 +46,14 @@ const hzLabels = (splits: number[]) =>
     return [1, 2, 5].some((d) => Math.abs(lead - d) < 1e-6) ? (v >= 1000 ? `${v / 1000}k` : `${v}`) : "";
   });
 
+/** Phase ticks at multiples of 90° (180° or 360° over a wide span). */
+function phaseSplits(_u: uPlot, _axis: number, lo: number, hi: number): number[] {
+  const step = hi - lo > 1440 ? 360 : hi - lo > 720 ? 180 : 90;
+  const out: number[] = [];
+  for (let v = Math.ceil(lo / step) * step; v <= hi; v += step) out.push(v);
+  return out;
+}
+
 function drawMarks(marks: Mark[]) {
   return (u: uPlot) => {
     const ctx = u.ctx;
@@ -117,7 +125,9 @@ function BodePart(props: {
           label: `${name.replace(/_db$|_deg$/, "")}${unit ? ` [${unit}]` : ""}`,
           values: (_u, splits) => tickLabels(splits),
           size: 60,
-          ...(props.range ? { splits: () => [0, 0.5, 1] } : {}), // the coherence: 0 … 1
+          // the coherence on 0 … 1; the phase at multiples of 90° (180° when it spans more)
+          ...(props.range ? { splits: () => [0, 0.5, 1] } : {}),
+          ...(unit === "°" ? { splits: phaseSplits } : {}),
         },
       ],
       hooks: { draw: [drawMarks(marks)] },
@@ -171,7 +181,7 @@ export function BodeView(props: { result: AssistResult }) {
       <label class="assist-field bode-compare">
         <span>Compare with</span>
         <select data-testid="bode-compare" value={pick} onChange={(e) => setPick((e.target as HTMLSelectElement).value)}>
-          <option value="">(no earlier run)</option>
+          <option value="">— an earlier run to lay over this one —</option>
           {runs.map((x) => (
             <option key={x.id} value={String(x.id)}>
               #{x.id} {when(x.time_unix)} {x.live ? "on the machine" : "on a copy"}: {x.summary}

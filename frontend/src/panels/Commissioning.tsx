@@ -207,7 +207,7 @@ export function Commissioning(props: { drive?: boolean }) {
   return (
     <Panel title={drive ? "Drive tuning: frequency response and steps" : "Commissioning assistants"} id={drive ? "drive" : "assist"}>
       <ol class="assist-steps" aria-label="steps">
-        {["Choose", "Preview on a copy or run on the machine", "Read the result", "Apply on trial, run again"].map((s, i) => (
+        {["Choose", "Preview on a copy or run on the machine", "Read the result", drive ? "Change, measure again, compare" : "Apply on trial, run again"].map((s, i) => (
           <li key={s} class={i + 1 === step ? "active" : i + 1 < step ? "done" : ""}>
             {s}
           </li>
@@ -303,7 +303,11 @@ export function Commissioning(props: { drive?: boolean }) {
           {confirming && ax ? (
             <div class="assist-confirm" role="alertdialog" aria-labelledby="assist-confirm-title" data-testid="assist-confirm">
               <b id="assist-confirm-title">The machine will move</b>
-              <p>{guided ? describe(name as Guided, ax, inp, values, kv, "machine") : codeSpans(info?.text ?? "")}</p>
+              {drive ? (
+                <DrivePlan name={name} axis={ax} body={form.body} live />
+              ) : (
+                <p>{guided ? describe(name as Guided, ax, inp, values, kv, "machine") : codeSpans(info?.text ?? "")}</p>
+              )}
               <p class="hint">Keep clear of the machine. The E-stop and Cancel end the run at once.</p>
               <div class="row">
                 <button type="button" data-testid="assist-confirm-live" onClick={() => void run("machine")} disabled={!!liveBlocked}>

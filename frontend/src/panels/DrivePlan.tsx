@@ -47,7 +47,8 @@ function useDrive(axis: string): Drive | null {
 
 const num = (v: unknown, fallback: number): number => (typeof v === "number" && Number.isFinite(v) ? v : fallback);
 
-export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<string, unknown> }) {
+/** `live`: said in the confirmation of a run on the machine (no word about the copy). */
+export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<string, unknown>; live?: boolean }) {
   const { name, axis, body } = props;
   const drive = useDrive(axis.name);
   const cycle = status.value?.simulation.cycle_s ?? 0.001;
@@ -68,10 +69,22 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
     const seconds = frfSeconds(fs, num(body.f_min_hz, 5), num(body.averages, 10), num(body.excitation, 1) === 1);
     const offset = num(body.offset_rpm, 0);
     const travel = (Math.abs(offset) / 60) * drive.mmPerRev * seconds;
+    const window = num(body.window_mm, 50);
+    const where = offset > 0 ? "+" : "−";
+    if (travel >= window)
+      return (
+        <p class="assist-check off" data-testid="drive-plan" data-cascade="1" data-fits="0">
+          At {fmt(offset, 0)} rpm {axis.name} would travel {fmt(travel, 1)} {unit} in the {fmt(seconds, 1)} s of the
+          measurement: more than the position window of ±{window < 1 ? fmt(window, 3) : fmt(window, 0)} {unit}. A wider
+          window, a lower offset speed or fewer averages.
+        </p>
+      );
     text =
       `${axis.name} is excited for ${fmt(seconds, 1)} s of machine time` +
-      (offset ? `, turning at ${fmt(offset, 0)} rpm: it travels ${fmt(travel, 1)} ${unit}` : ", holding its position") +
-      ` within ±${fmt(num(body.window_mm, 50), 0)} ${unit}.`;
+      (offset
+        ? `, turning at ${fmt(offset, 0)} rpm: it travels about ${fmt(travel, 1)} ${unit} towards ${where} and stops there`
+        : ", holding its position") +
+      ` (position window ±${window < 1 ? fmt(window, 3) : fmt(window, 0)} ${unit}).`;
   } else if (name === "drive-trace") {
     const distance = num(body.distance, 5);
     text =
@@ -86,8 +99,9 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
       : `${axis.name} steps ${fmt(num(body.position_mm, 0.05), 3)} ${unit} for ${fmt(seconds, 2)} s and returns.`;
   }
   return (
-    <p class="hint" data-testid="drive-plan" data-cascade="1">
-      {text} On a copy this takes a fraction of that; the machine itself moves only after you confirm.
+    <p class="hint" data-testid="drive-plan" data-cascade="1" data-fits="1">
+      {text}
+      {props.live ? "" : " On a copy this takes a fraction of that; the machine itself moves only after you confirm."}
     </p>
   );
 }
