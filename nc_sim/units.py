@@ -8,9 +8,12 @@ The kernel computes in float64 mm, °, s. Each parameter names a `Quantity`; the
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
 
 RPM_TO_DEG_S = 6.0  # 1 rpm = 360°/60 s
+RAD_PER_REV = 2.0 * math.pi
+RPM_TO_RAD_S = RAD_PER_REV / 60.0  # a motor's rpm in rad/s
 MM_MIN_PER_MM_S = 60.0
 MS_PER_S = 1000.0
 

@@ -19,9 +19,9 @@ from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
 from nc_sim.plant import layout as PL
 from nc_sim.snapshot import AxisState
+from nc_sim.units import RPM_TO_RAD_S
 
 MAX_POINTS = 4000  # per signal; a longer record is decimated to this
-RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 UM_PER_MM = 1000.0
 
 
@@ -103,9 +103,9 @@ def _result(name: str, tr: np.ndarray, ts: float) -> Result:
         figures,
         (),
         (
-            series("speed setpoint", tr[:, PL.D_W_REF] * RPM_PER_RAD_S, "rpm"),
-            series("motor speed", tr[:, PL.D_W_MOTOR] * RPM_PER_RAD_S, "rpm"),
-            series("load speed", tr[:, PL.D_W_LOAD] * RPM_PER_RAD_S, "rpm"),
+            series("speed setpoint", tr[:, PL.D_W_REF] / RPM_TO_RAD_S, "rpm"),
+            series("motor speed", tr[:, PL.D_W_MOTOR] / RPM_TO_RAD_S, "rpm"),
+            series("load speed", tr[:, PL.D_W_LOAD] / RPM_TO_RAD_S, "rpm"),
             series("torque setpoint", tr[:, PL.D_T_SET], "Nm"),
             series("torque", torque, "Nm"),
             series("motor ahead of load", twist, "µm"),

@@ -33,7 +33,7 @@ from nc_sim.machine.machine import Machine
 from nc_sim.plant import frf
 from nc_sim.plant import layout as PL
 from nc_sim.snapshot import AxisState
-from nc_sim.units import MM_MIN_PER_MM_S
+from nc_sim.units import MM_MIN_PER_MM_S, RPM_TO_RAD_S
 
 MECHANICS, CLOSED_SPEED, OPEN_SPEED, CLOSED_POSITION = 1, 2, 3, 4
 MEASUREMENTS = {
@@ -135,7 +135,7 @@ def frequency_response(
     count = nseg + (averages - 1) * (nseg // 2)  # Welch: `averages` halves-overlapping segments
     lead = round(LEAD_IN_S * fs)
     total_s = (count + lead) / fs
-    v_offset = offset_rpm / 60.0 * model.unit_per_rad * 2.0 * math.pi  # mm/s (°/s)
+    v_offset = offset_rpm * RPM_TO_RAD_S * model.unit_per_rad  # mm/s (°/s)
     if abs(v_offset) * (total_s + 0.5) >= window_mm:
         raise ExperimentError(
             f"at {offset_rpm:g} rpm {ax.name} moves {abs(v_offset) * total_s:.1f} mm in the "
@@ -147,7 +147,7 @@ def frequency_response(
     elif position:
         point, amplitude = PL.INJECT_POSITION, position_mm
     else:
-        point, amplitude = PL.INJECT_SPEED, speed_rpm * 2.0 * math.pi / 60.0
+        point, amplitude = PL.INJECT_SPEED, speed_rpm * RPM_TO_RAD_S
     exc = amplitude * _excitation(excitation, order, nseg, count + lead, fs, f_min_hz, f_hi)
     if position:  # one value per NC cycle, held over its drive steps
         exc = np.repeat(exc, steps)
@@ -232,12 +232,6 @@ def _analyse(
     if position:
         x, y = x - np.mean(x), y - np.mean(y)
     h = frf.h1(x, y, fs, nperseg=nseg).band(f_lo, f_hi)
-    units = {
-        MECHANICS: "(rad/s)/Nm",
-        CLOSED_SPEED: "",
-        OPEN_SPEED: "",
-        CLOSED_POSITION: "",
-    }
     figures: list[Figure] = []
     notes: list[str] = []
     if measurement == MECHANICS:
@@ -312,7 +306,7 @@ def _analyse(
         )
     keep = _log_thin(h.f_hz)
     fx = tuple(float(v) for v in h.f_hz[keep])
-    unit = units[measurement]
+    unit = "(rad/s)/Nm" if measurement == MECHANICS else ""  # the loops: a ratio
     series = (
         Series("magnitude_db", fx, tuple(float(v) for v in h.magnitude_db[keep]), "Hz", "dB"),
         Series("phase_deg", fx, tuple(float(v) for v in h.phase_deg[keep]), "Hz", "°"),

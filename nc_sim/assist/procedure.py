@@ -52,7 +52,12 @@ def on_copy(cfg: MachineConfig, start: Callable[[Machine], Generator[Wait, np.nd
         power_on(sim, m)
     except NcUsageError as e:
         raise ExperimentError(str(e)) from None
-    proc = start(m)
+    return step_through(sim, start(m))
+
+
+def step_through(sim: Simulation, proc: Generator[Wait, np.ndarray, T]) -> T:
+    """Run a procedure on a machine of `sim` as it is (its faults in force), stepping `sim`
+    in simulated time as far as each wait asks."""
     try:
         wait = next(proc)
         while True:

@@ -10,8 +10,6 @@ p0341 · p0342, no friction): rise time (10-90 %), overshoot, settling time (±2
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from nc_sim.assist.drive_axis import drive_axis
@@ -25,11 +23,11 @@ from nc_sim.plant import layout as PL
 from nc_sim.plant.linear import nominal, position_step, speed_step, step_figures
 from nc_sim.plant.model import DriveModel
 from nc_sim.snapshot import AxisState
+from nc_sim.units import RPM_TO_RAD_S
 
 SPEED, POSITION = 1, 2
 LEAD_S = 0.05  # at rest before the step: the baseline
 MAX_PLOT_POINTS = 1500
-RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 
 
 def step_response_experiment(
@@ -64,7 +62,7 @@ def step_response(
     lead = round(LEAD_S / cycle_s)
     cycles = lead + round(duration_s / cycle_s)
     if speed:
-        step = speed_rpm / RPM_PER_RAD_S
+        step = speed_rpm * RPM_TO_RAD_S
         exc = np.zeros(cycles * steps)
         exc[lead * steps :] = step
         point = PL.INJECT_SPEED_OPEN
@@ -115,7 +113,7 @@ def _analyse(
         y = w[lead * steps :] - base
         dt = model.sampling_s
         expected = speed_step(drive, step, len(y) * dt)
-        scale, unit, label = RPM_PER_RAD_S, "rpm", "motor speed"
+        scale, unit, label = 1.0 / RPM_TO_RAD_S, "rpm", "motor speed"
     else:
         p = trace[::steps, PL.D_P_ACT]
         base = float(np.mean(p[:lead]))

@@ -25,9 +25,7 @@ from nc_sim.params.plant import (
 )
 from nc_sim.plant import layout as PL
 from nc_sim.plant.model import DriveModel, SecondOrderFilter
-
-RAD_PER_REV = 2.0 * math.pi
-RPM_TO_RAD_S = RAD_PER_REV / 60.0
+from nc_sim.units import RAD_PER_REV, RPM_TO_RAD_S
 
 
 def _symbol(c: AxisConfig, name: str, symbols: dict[str, int]) -> int:

@@ -98,11 +98,6 @@ class DriveModel:
     def coupling_damping(self) -> float:
         return 2.0 * self.damping * math.sqrt(self.stiffness * self.load_inertia)
 
-    @property
-    def resonance_hz(self) -> float:
-        """f_r = f_ar·√(1 + J_L/J_M) = f_ar·√ratio (0 for a rigid axis)."""
-        return self.anti_resonance_hz * math.sqrt(self.inertia_ratio) if self.two_mass else 0.0
-
     def speed_loop_time_constant_s(self) -> float:
         """What the NC's lag model takes for the closed speed loop: J/Kp of a PI loop on a
         rigid mass, plus the current loop, the computing time and the setpoint filter."""

@@ -5,14 +5,12 @@ sound plant back."""
 from __future__ import annotations
 
 import math
-from collections.abc import Generator
-from typing import Any
 
 import numpy as np
 import pytest
 
 from nc_sim.assist.frequency_response import CLOSED_SPEED, MECHANICS, frequency_response
-from nc_sim.assist.procedure import Wait
+from nc_sim.assist.procedure import step_through
 from nc_sim.assist.result import Result
 from nc_sim.faults import CouplingSoft, FrictionRising, NotchMistuned
 from nc_sim.machine.machine import Machine
@@ -22,21 +20,8 @@ from tests.nc_sim.plant.test_frequency_response import FS, _x_axis
 from tests.nc_sim.sim_helpers import make, mdi
 
 
-def _on(sim: Simulation, proc: Generator[Wait, Any, Result]) -> Result:
-    """A procedure on this very machine (its faults in force), stepped in simulated time."""
-    try:
-        wait = next(proc)
-        while True:
-            rec = sim.new_record(max(1, wait.cycles))
-            sim.run(rec.shape[0], rec)
-            wait = proc.send(rec)
-    except StopIteration as done:
-        result: Result = done.value
-        return result
-
-
 def _mechanics(m: Machine, sim: Simulation) -> Result:
-    return _on(sim, frequency_response(m, "X", MECHANICS, offset_rpm=30.0))
+    return step_through(sim, frequency_response(m, "X", MECHANICS, offset_rpm=30.0))
 
 
 def test_a_coupling_gone_soft_brings_both_frequencies_down_by_the_root_of_its_stiffness() -> None:
@@ -92,7 +77,7 @@ def test_a_mistuned_notch_lets_the_resonance_back_into_the_speed_loop() -> None:
         sim, m, _ = make(params)
         if factor != 1.0:
             m.inject(NotchMistuned("X", factor))
-        r = _on(sim, frequency_response(m, "X", CLOSED_SPEED, offset_rpm=0.0))
+        r = step_through(sim, frequency_response(m, "X", CLOSED_SPEED, offset_rpm=0.0))
         band = [
             y
             for f, y in zip(r.series[0].x, r.series[0].y, strict=True)
