@@ -66,7 +66,7 @@ def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) 
     logging.basicConfig(level=logging.WARNING, format="worker %(process)d: %(message)s")
     realtime_priority()
     warm_up()
-    wire = Wire(sock)
+    wire = Wire(sock, write_behind=True)
     worker = Worker(WireChannel(wire), period_s, Path(ring_dir), node)
     wire.send(("ready",))
     try:

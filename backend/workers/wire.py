@@ -19,6 +19,10 @@ import struct
 from collections import deque
 
 HEADER = struct.Struct("!I")  # payload length in bytes
+# a write-behind wire holds at most this much unwritten before a write waits for the reader:
+# a slow reader delays news by a tick or two, never the writer's loop, and a stuck one cannot
+# grow the writer's memory without bound
+MAX_UNSENT = 8 << 20
 CHUNK = 1 << 18  # bytes read per call at most (into a buffer kept: a fresh one costs more)
 
 log = logging.getLogger(__name__)
@@ -58,12 +62,17 @@ class Wire:
     """One end of a socket pair carrying framed messages.
 
     Reads never block (`take`, `pending`; `wait` waits with a timeout): the worker's loop
-    and the gateway's event loop both read only what is there. Writes block until written;
-    `queue` holds messages back until the next `flush`, so a tick's pushes go in one write.
+    and the gateway's event loop both read only what is there. `queue` holds messages back
+    until the next `flush`, so a tick's pushes go in one write. Writes block until written,
+    or with `write_behind` (the worker's end) write what the socket takes now and keep the
+    rest for the next `flush` or `wait` (up to MAX_UNSENT): a gateway busy for 20 ms must not
+    stall a real-time loop for 20 ms.
     """
 
-    def __init__(self, sock: socket.socket) -> None:
+    def __init__(self, sock: socket.socket, write_behind: bool = False) -> None:
         self.sock = sock
+        self.write_behind = write_behind
+        self._unsent = bytearray()
         self.closed = False  # the other end closed (or the socket failed)
         self._frames = Frames()
         self._inbox: deque[object] = deque()
@@ -77,11 +86,14 @@ class Wire:
         or the wire closed."""
         if self._inbox or self.closed:
             return True
+        writes = [self.sock] if self._unsent else []
         try:
-            readable, _, _ = select.select([self.sock], [], [], max(0.0, timeout_s))
+            readable, writable, _ = select.select([self.sock], writes, [], max(0.0, timeout_s))
         except (OSError, ValueError):
             self.closed = True
             return True
+        if writable:
+            self.flush()
         if readable:
             self._read(socket.MSG_DONTWAIT)
         return bool(self._inbox) or self.closed
@@ -129,9 +141,21 @@ class Wire:
         self._outbox.append(frame(message))
 
     def flush(self) -> None:
+        """Write what is held back (write-behind: what the socket takes without waiting)."""
         if self._outbox:
-            data, self._outbox = b"".join(self._outbox), []
-            self.sock.sendall(data)
+            self._unsent += b"".join(self._outbox)
+            self._outbox = []
+        if not self._unsent:
+            return
+        if self.write_behind and len(self._unsent) <= MAX_UNSENT:
+            try:
+                n = self.sock.send(self._unsent, socket.MSG_DONTWAIT)
+            except (BlockingIOError, InterruptedError):
+                n = 0
+            del self._unsent[:n]
+            return
+        self.sock.sendall(self._unsent)
+        self._unsent.clear()
 
     def shut(self) -> None:
         """Close this end (the other end reads its end)."""

@@ -138,6 +138,7 @@ class Worker:
         self.resting = False  # every machine rested after the last tick (the long period)
         # loop figures, read only by this thread
         self.ticks = self.overruns = self.missed = self.host_failures = 0
+        self.status_budget = 0  # statuses this tick may still build
         self.work_s: deque[float] = deque(maxlen=5000)  # per tick: stepping and serving
         self.served_s = 0.0  # serving since the last tick
         self.late_s: deque[float] = deque(maxlen=5000)
@@ -174,6 +175,7 @@ class Worker:
                         self.resting = False
                         deadline = time.monotonic()
             wake = checked = time.monotonic()
+            self.status_budget = self._statuses_per_tick(period)
             for host in list(self.hosts.values()):
                 self._tick(host, deadline, period)
                 # between machines, look for requests (an E-stop) every SERVE_CHECK_S
@@ -258,18 +260,28 @@ class Worker:
             log.exception("machine %s failed in the real-time loop; pausing it", host.id)
             host.set_mode("pause")
 
+    def _statuses_per_tick(self, period: float) -> int:
+        """Statuses one tick may build: the watched machines' share of a status period, and
+        one more. Viewers that subscribed together would otherwise have every status due in
+        the same tick (50 of them cost a tick ~10 ms); held over, they spread out."""
+        return math.ceil(len(self.hosts) * period / self.status_period()) + 1
+
     def _push_news(self, host: MachineHost, now: float) -> None:
         events = host.machine.events
         fresh = events.cursor != host.pushed_events
-        status_due = host.watched and now >= host.status_due
+        status_due = host.watched and now >= host.status_due and self.status_budget > 0
         if not (fresh or host.captures or status_due):
             return
         read = events.since(host.pushed_events)
         host.pushed_events = read.cursor
         status = None
         if status_due:
+            self.status_budget -= 1
             status = host.status_read()
-            host.status_due = max(host.status_due + self.status_period(), now)
+            sp = self.status_period()
+            # one held over keeps its new phase, so the next round is spread already
+            late = now - host.status_due > sp / 2
+            host.status_due = now + sp if late else host.status_due + sp
         caps, host.captures = host.captures, []
         self.channel.send(
             MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps)

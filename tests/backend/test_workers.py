@@ -13,6 +13,7 @@ import signal
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -230,3 +231,14 @@ def test_a_long_program_never_stalls_its_neighbours(srv: Server) -> None:
     refusal = r.json()["detail"]
     assert (refusal["line"], refusal["column"]) == (6, 1)  # L1 P200001
     assert "more than 100000 blocks" in refusal["message"]
+
+
+def test_worker_processes_run_one_blas_thread(srv: Server) -> None:
+    """OpenBLAS' helper threads spin while they wait; beside a SCHED_FIFO loop on two cores
+    they starved and one drive model's matrix exponential took a second of the loop."""
+    for w in service(srv)["workers"]:
+        raw = Path(f"/proc/{w['pid']}/environ").read_bytes()
+        env = dict(kv.split(b"=", 1) for kv in raw.split(b"\0") if b"=" in kv)
+        assert env.get(b"OPENBLAS_NUM_THREADS") == b"1", w
+        threads = os.listdir(f"/proc/{w['pid']}/task")
+        assert len(threads) < 8, threads  # the loop, the log and a few of Python's: no pool
