@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from nc_sim.axis.plant import push_plant
+from nc_sim.axis.plant import operation_mode, push_plant
 from nc_sim.axis.state import Axis
 from nc_sim.config import AxisConfig
 from nc_sim.kernel import layout as L
@@ -23,9 +23,7 @@ ENABLES_BY_DRIVE = {
 
 def open_position_loop(cfg: AxisConfig) -> bool:
     """A spindle in operation mode OPEN_POSITION_LOOP_MODE (P-AXIS-00320) [000 §2.2.4]."""
-    mode = cfg.raw("antr.operation_mode")
-    code = OPMODE_SYMBOLS[mode] if isinstance(mode, str) else int(mode)
-    return cfg.is_spindle and code == OPMODE_SYMBOLS["OPEN_POSITION_LOOP_MODE"]
+    return cfg.is_spindle and operation_mode(cfg) == OPMODE_SYMBOLS["OPEN_POSITION_LOOP_MODE"]
 
 
 def speed_controlled(cfg: AxisConfig) -> bool:

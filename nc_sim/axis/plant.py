@@ -17,6 +17,7 @@ from nc_sim.axis.state import Axis
 from nc_sim.config import AxisConfig
 from nc_sim.kernel import layout as L
 from nc_sim.kernel.arrays import Kernel
+from nc_sim.params.definitions import OPMODE_SYMBOLS
 from nc_sim.params.plant import (
     CURRENT_FILTERS,
     FILTER_TYPES,
@@ -33,13 +34,39 @@ def _symbol(c: AxisConfig, name: str, symbols: dict[str, int]) -> int:
     return symbols[value] if isinstance(value, str) else int(value)
 
 
+# drive types whose position loop can close in the drive, and does by default (DRIVE_DEFAULT):
+# SERCOS, ProfiDrive MC and CANopen; every other type's closes in the CNC [004 §2.1]
+POSITION_CONTROL_DRIVES = (2, 3, 8)
+
+
+def operation_mode(c: AxisConfig) -> int:
+    """P-AXIS-00320 as its code (OPMODE_SYMBOLS)."""
+    return _symbol(c, "antr.operation_mode", OPMODE_SYMBOLS)
+
+
+def position_control_in_drive(c: AxisConfig) -> bool:
+    """The position loop closes in the drive: DRIVE_POSITION_CONTROL, or DRIVE_DEFAULT on a
+    drive type whose default it is, for a type that can [004 §2.1]. Only the drive cascade
+    makes a difference: the ideal drive has no steps of its own (DOMAIN §2: one loop)."""
+    if int(c.raw("kenngr.antr_typ")) not in POSITION_CONTROL_DRIVES:
+        return False
+    return operation_mode(c) in (
+        OPMODE_SYMBOLS["DRIVE_POSITION_CONTROL"],
+        OPMODE_SYMBOLS["DRIVE_DEFAULT"],
+    )
+
+
 def cascade(c: AxisConfig) -> bool:
     """The axis runs the drive cascade and mechanics (`sim.plant` DRIVE_CASCADE)."""
     return _symbol(c, "sim.plant", PLANT_SYMBOLS) == PLANT_SYMBOLS["DRIVE_CASCADE"]
 
 
-def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None) -> DriveModel:
-    """The axis' drive and mechanics from its list, with the training faults in force: a
+def drive_model(
+    c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None, gear: int = 1
+) -> DriveModel:
+    """The axis' drive and mechanics from its list in gear stage `gear` (a spindle's stage
+    sets the travel per motor revolution and the inertia ratio where its list gives them),
+    with the training faults in force: a
     friction fault (a speed the ideal drive loses) becomes the Coulomb torque that costs a
     P speed loop that speed, a backlash fault adds to the gap, a torque-limited acceleration
     caps the torque; the mechanical faults soften the coupling, raise the friction and
@@ -61,9 +88,11 @@ def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None
                 c.eng(base + "numerator_damping") if general else 0.0,
             )
         )
-    unit_per_rad = c.eng("sim.mech.travel_per_rev") / RAD_PER_REV
+    per_rev = c.eng("sim.getriebe[i].travel_per_rev", gear) or c.eng("sim.mech.travel_per_rev")
+    unit_per_rad = per_rev / RAD_PER_REV
+    ratio = c.eng("sim.getriebe[i].inertia_ratio", gear) or c.eng("drive.inertia_ratio")
     kp = c.eng("drive.speed_kp")
-    j_total = c.eng("drive.motor_inertia") * c.eng("drive.inertia_ratio")
+    j_total = c.eng("drive.motor_inertia") * ratio
     torque_limit = c.eng("drive.torque_limit")
     if f.a_max > 0.0:
         torque_limit = min(torque_limit, j_total * f.a_max / unit_per_rad)
@@ -77,7 +106,7 @@ def drive_model(c: AxisConfig, cycle_s: float, faults: PlantFaults | None = None
         current_t_s=c.eng("drive.current_loop_t"),
         filters=tuple(filters),
         motor_inertia=c.eng("drive.motor_inertia"),
-        inertia_ratio=c.eng("drive.inertia_ratio"),
+        inertia_ratio=ratio,
         # k ∝ f_ar²: a coupling `stiffness_factor` as stiff has its anti-resonance at √factor
         anti_resonance_hz=c.eng("sim.mech.anti_resonance") * math.sqrt(f.stiffness_factor),
         damping=c.eng("sim.mech.damping"),
@@ -96,8 +125,9 @@ def _push_cascade(k: Kernel, ax: Axis) -> None:
     """Write the drive cascade into the slot's plant row. Coming from the ideal drive, the
     cascade starts turning as the load does; a changed set of filters starts them at rest."""
     s = ax.slot
-    model = drive_model(ax.cfg, k.cycle_s, ax.plant)
+    model = drive_model(ax.cfg, k.cycle_s, ax.plant, ax.gear)
     row = model.kernel_row()
+    row[PL.PL_POS_IN_DRIVE] = 1.0 if position_control_in_drive(ax.cfg) else 0.0
     was = k.pl[s].copy()
     k.pl[s] = row
     ps = k.ps[s]

@@ -187,13 +187,15 @@ from nc_sim.plant.layout import (
     MODEL_CASCADE,
     PL_DIRECT,
     PL_MODEL,
+    PL_POS_IN_DRIVE,
+    PL_SUBSTEPS,
     PL_UNIT_PER_RAD,
     PR_LEN,
     PR_POINT,
     PR_POS,
     PR_SLOT,
 )
-from nc_sim.plant.step import drive_cycle, motor_offset
+from nc_sim.plant.step import drive_step, load_speed, motor_offset
 from nc_sim.profiles.plan import SEG_A0, SEG_J, SEG_SHAPE, SEG_T, seg_eval
 
 V_ACT_FILTER_S = 0.005  # time constant of the actual-speed filter
@@ -460,6 +462,61 @@ def _gauss(ist: np.ndarray, s: int) -> float:
 
 
 @njit(cache=True)
+def _encoder(
+    st: np.ndarray,
+    pr: np.ndarray,
+    ist: np.ndarray,
+    pl: np.ndarray,
+    ps: np.ndarray,
+    s: int,
+    x_load: float,
+    play: float,
+) -> float:
+    """The actual position the measuring system gives for the load at `x_load` (and the
+    motor ahead of it where it reads the motor): factor, noise, one increment, sign and the
+    homing offset, in NC coordinates."""
+    x = x_load
+    if pl[s, PL_MODEL] == MODEL_CASCADE and pl[s, PL_DIRECT] == 0.0:  # encoder on the motor
+        x += motor_offset(pl, ps, s, play)
+    x *= pr[s, P_ENC_FACTOR]
+    if pr[s, P_ENC_NOISE] > 0.0:
+        x += pr[s, P_ENC_NOISE] * _gauss(ist, s)
+    inc = pr[s, P_ENC_INC]
+    counts = x if inc <= 0.0 else math.floor(x / inc + 0.5) * inc
+    return float(pr[s, P_ENC_SIGN] * pr[s, P_SIGN_FB] * counts + pr[s, P_ENC_OFFSET])
+
+
+@njit(cache=True)
+def _position_law(st: np.ndarray, pr: np.ndarray, s: int, lag: float) -> float:
+    """The position controller and D/A for this lag: the speed it commands the drive
+    (unit/s at the load, as the drive really turns for it). Writes S_U and S_DA.
+
+    The controller works in measuring-system increments: a lag below half an increment
+    cannot be measured, so it commands nothing. A settled P loop then rests inside the
+    increment of its command instead of hunting across an increment edge it cannot resolve
+    (the load coasts kv·T·inc after the last count, far less than one increment)."""
+    inc = pr[s, P_ENC_INC]
+    if inc > 0.0:
+        lag = math.floor(lag / inc + 0.5) * inc
+    u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
+    return _output(st, pr, s, u)
+
+
+@njit(cache=True)
+def _output(st: np.ndarray, pr: np.ndarray, s: int, u: float) -> float:
+    """The D/A for the velocity command u (unit/s) and the speed the drive turns for it."""
+    if pr[s, P_V_RESO] > 0.0:  # speed-controlled spindle: the v_reso scaling [000 §2.2.4]
+        da = u * pr[s, P_V_RESO] * pr[s, P_SIGN_CMD]
+    else:
+        da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
+    lim = pr[s, P_DA_MAX]
+    da = min(max(da, -lim), lim)
+    st[s, S_U] = u
+    st[s, S_DA] = da
+    return float(da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN])
+
+
+@njit(cache=True)
 def _measure(
     st: np.ndarray,
     pr: np.ndarray,
@@ -476,16 +533,8 @@ def _measure(
     controller acts on `lag = p_cmd - p_act` of this very sample, and the same pair is what
     the HLI, the traces and the scope show (one definition of the lag everywhere).
     """
-    x = st[s, S_X_MOTOR]
-    if pl[s, PL_MODEL] == MODEL_CASCADE and pl[s, PL_DIRECT] == 0.0:  # encoder on the motor
-        x += motor_offset(pl, ps, s, st[s, S_PLAY])
-    x *= pr[s, P_ENC_FACTOR]
-    if pr[s, P_ENC_NOISE] > 0.0:
-        x += pr[s, P_ENC_NOISE] * _gauss(ist, s)
-    inc = pr[s, P_ENC_INC]
-    counts = x if inc <= 0.0 else math.floor(x / inc + 0.5) * inc
     p_prev = st[s, S_P_ACT]
-    p_act = pr[s, P_ENC_SIGN] * pr[s, P_SIGN_FB] * counts + pr[s, P_ENC_OFFSET]
+    p_act = _encoder(st, pr, ist, pl, ps, s, st[s, S_X_MOTOR], st[s, S_PLAY])
     st[s, S_P_ACT] = p_act
     # actual speed from the encoder difference, smoothed as a drive's speed filter would be
     alpha = dt / (dt + V_ACT_FILTER_S)
@@ -519,6 +568,62 @@ def _measure(
 
 
 @njit(cache=True)
+def _cascade(
+    st: np.ndarray,
+    pr: np.ndarray,
+    ist: np.ndarray,
+    pl: np.ndarray,
+    ps: np.ndarray,
+    probe: np.ndarray,
+    pexc: np.ndarray,
+    prec: np.ndarray,
+    s: int,
+    dt: float,
+    v_target: float,
+    closed: bool,
+) -> None:
+    """The drive cascade and mechanics over the NC cycle, a drive step at a time, with the
+    speed `v_target` the NC's position controller commanded (unit/s).
+
+    Where the position loop closes in the drive (PL_POS_IN_DRIVE) it runs at every drive
+    step instead: the NC's command continued at its speed over the cycle (the drive's fine
+    interpolation) against the drive's own reading of the same measuring system. Its first
+    step is the NC's own sample, so the lag the NC shows is the one the drive acts on."""
+    n = int(pl[s, PL_SUBSTEPS])
+    ts = dt / n
+    upr = pl[s, PL_UNIT_PER_RAD]
+    enabled = ist[s, I_ENABLED] == 1
+    pos0 = probe[PR_POS]
+    probing = probe[PR_SLOT] == s
+    opened = probing and probe[PR_POINT] == INJECT_SPEED_OPEN and pos0 < probe[PR_LEN]
+    in_drive = closed and pl[s, PL_POS_IN_DRIVE] == 1.0 and not opened
+    at_position = probing and probe[PR_POINT] == INJECT_POSITION
+    x, play = st[s, S_X_MOTOR], st[s, S_PLAY]
+    u, da = st[s, S_U], st[s, S_DA]  # the cycle's sample, as the NC shows it
+    p_act = st[s, S_P_ACT]
+    for k in range(n):
+        pos = probe[PR_POS]
+        live = pos < probe[PR_LEN]
+        p_ref = st[s, S_P_CMD] + (pexc[pos] if at_position and live else 0.0)
+        if in_drive:
+            p_ref += st[s, S_V_CMD] * k * ts
+            if k > 0:
+                p_act = _encoder(st, pr, ist, pl, ps, s, x, play)
+                v_target = _position_law(st, pr, s, p_ref - p_act)
+        elif at_position and live:  # the NC's command, held over its cycle
+            p_ref = st[s, S_P_CMD] + pexc[pos0]
+        x, play = drive_step(pl, ps, probe, pexc, prec, s, v_target / upr, enabled, x, play, ts)
+        if probing and live:
+            prec[pos, D_P_REF] = p_ref
+            prec[pos, D_P_ACT] = p_act
+    st[s, S_X_MOTOR] = x
+    st[s, S_PLAY] = play
+    st[s, S_V_MOTOR] = load_speed(pl, ps, s)
+    st[s, S_U] = u
+    st[s, S_DA] = da
+
+
+@njit(cache=True)
 def _control_and_drive(
     st: np.ndarray,
     pr: np.ndarray,
@@ -533,61 +638,26 @@ def _control_and_drive(
 ) -> None:
     """Position controller, D/A, drive and load of slot s for one cycle: the ideal drive
     here, or the drive cascade and mechanics of nc_sim/plant at the drive's own rate."""
-    v_m = st[s, S_V_MOTOR]
     v_target = 0.0
     # a probe exciting the position loop: its value for this cycle goes onto the command
     pos0 = probe[PR_POS]
     excite = probe[PR_SLOT] == s and probe[PR_POINT] == INJECT_POSITION and pos0 < probe[PR_LEN]
     p_exc = pexc[pos0] if excite else 0.0
-    if ist[s, I_ENABLED] == 1:
-        if ist[s, I_OPEN_LOOP] != LOOP_CLOSED:  # speed control: the command speed goes out
-            u = st[s, S_V_CMD]
+    enabled = ist[s, I_ENABLED] == 1
+    closed = ist[s, I_OPEN_LOOP] == LOOP_CLOSED
+    if enabled:
+        if not closed:  # speed control: the command speed goes out
+            v_target = _output(st, pr, s, st[s, S_V_CMD])
         else:
-            # the controller works in measuring-system increments: a lag below half an
-            # increment cannot be measured, so it commands nothing. A settled P loop then
-            # rests inside the increment of its command instead of hunting across an
-            # increment edge it cannot resolve (the load coasts kv·T·inc after the last count,
-            # far less than one increment).
-            lag = st[s, S_LAG] + p_exc
-            inc = pr[s, P_ENC_INC]
-            if inc > 0.0:
-                lag = math.floor(lag / inc + 0.5) * inc
-            u = pr[s, P_KV] * lag + pr[s, P_FF] * st[s, S_V_CMD]
-        if pr[s, P_V_RESO] > 0.0:  # speed-controlled spindle: the v_reso scaling [000 §2.2.4]
-            da = u * pr[s, P_V_RESO] * pr[s, P_SIGN_CMD]
-        else:
-            da = u * PER_M_MIN * pr[s, P_MG] * pr[s, P_SIGN_CMD]
-        lim = pr[s, P_DA_MAX]
-        da = min(max(da, -lim), lim)
-        v_target = da / (PER_M_MIN * pr[s, P_DRV_GAIN]) * pr[s, P_MOTOR_SIGN]
-        st[s, S_U] = u
-        st[s, S_DA] = da
+            v_target = _position_law(st, pr, s, st[s, S_LAG] + p_exc)
     else:
         st[s, S_U] = 0.0
         st[s, S_DA] = 0.0
     if pl[s, PL_MODEL] == MODEL_CASCADE:
-        x, play, v = drive_cycle(
-            pl,
-            ps,
-            probe,
-            pexc,
-            prec,
-            s,
-            v_target / pl[s, PL_UNIT_PER_RAD],
-            ist[s, I_ENABLED] == 1,
-            st[s, S_X_MOTOR],
-            st[s, S_PLAY],
-            dt,
-        )
-        st[s, S_X_MOTOR] = x
-        st[s, S_PLAY] = play
-        st[s, S_V_MOTOR] = v
-        if probe[PR_SLOT] == s:
-            for i in range(pos0, probe[PR_POS]):
-                prec[i, D_P_REF] = st[s, S_P_CMD] + p_exc
-                prec[i, D_P_ACT] = st[s, S_P_ACT]
+        _cascade(st, pr, ist, pl, ps, probe, pexc, prec, s, dt, v_target, closed and enabled)
         return
-    if ist[s, I_ENABLED] == 1:
+    v_m = st[s, S_V_MOTOR]
+    if enabled:
         friction = pr[s, P_FRICTION]
         if friction > 0.0:  # Coulomb friction: a speed loss against the motion, or stuck
             if v_target > friction:

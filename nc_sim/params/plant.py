@@ -328,4 +328,28 @@ PLANT_DEFINITIONS: list[ParamDef] = [
         source="inbetrieb",
         symbols=MEASURING_SYMBOLS,
     ),
+    # a spindle's gear stage changes what the motor drives: the travel per motor revolution
+    # and the load inertia referred to the motor (SINAMICS keeps p0342 per drive data set)
+    _def(
+        "INB-SIM-0031",
+        "sim.getriebe[i].travel_per_rev",
+        R64,
+        Quantity.POSITION,
+        0.0,
+        0.0,
+        1e12,
+        "Load travel per motor revolution in this gear stage (0: sim.mech.travel_per_rev)",
+        source="inbetrieb",
+    ),
+    _def(
+        "INB-SIM-0032",
+        "sim.getriebe[i].inertia_ratio",
+        R64,
+        NONE,
+        0.0,
+        0.0,
+        10000.0,
+        "p0342 in this gear stage: total over motor moment of inertia (0: p0342)",
+        source="inbetrieb",
+    ),
 ]

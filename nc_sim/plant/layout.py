@@ -43,7 +43,10 @@ PL_HALF_PLAY = 12  # half the backlash: rigid in load units (mm | °), two-mass 
 PL_K = 13  # coupling stiffness (Nm/rad)
 PL_D = 14  # coupling damping (Nm·s/rad)
 PL_NX = 15  # states in use
-PL_AD = 16  # discretised state matrix, NX_MAX × NX_MAX, row-major
+# 1: the position loop closes in the drive, at its steps (antr.operation_mode); the NC
+# sends its position command and the drive interpolates it; 0: in the NC, at its cycle
+PL_POS_IN_DRIVE = 16
+PL_AD = 17  # discretised state matrix, NX_MAX × NX_MAX, row-major
 PL_BD = PL_AD + NX_MAX * NX_MAX  # discretised input matrix, NX_MAX × NU, row-major
 PL_COLS = PL_BD + NX_MAX * NU
 
@@ -64,14 +67,16 @@ D_TORQUE = 4  # motor torque, the current loop's output (Nm)
 D_X_MOTOR = 5  # motor position in load units (mm | °)
 D_X_LOAD = 6  # load position (mm | °)
 D_W_SET = 7  # speed setpoint from the NC, before the drive's setpoint filter (rad/s)
-# the NC's position loop, held over its cycle: the command the controller sees (excitation
-# included) and the actual position it compares it with (NC coordinates, mm | °)
+# the position loop: the command the controller sees (excitation included) and the actual
+# position it compares it with (NC coordinates, mm | °); held over the NC cycle when the
+# loop closes in the NC, the drive's own values per drive step when it closes in the drive
 D_P_REF = 8
 D_P_ACT = 9
 D_COLS = 10
 
 # probe: where the excitation goes in (added to the torque or the speed setpoint, or to the
-# NC's position command as its position controller sees it, held over the NC cycle)
+# position command as the position controller sees it: held over the NC cycle in the NC,
+# per drive step in the drive)
 INJECT_TORQUE = 0
 INJECT_SPEED = 1
 INJECT_POSITION = 2

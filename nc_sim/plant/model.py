@@ -99,16 +99,15 @@ class DriveModel:
         return 2.0 * self.damping * math.sqrt(self.stiffness * self.load_inertia)
 
     def speed_loop_time_constant_s(self) -> float:
-        """What the NC's lag model takes for the closed speed loop: J/Kp of a PI loop on a
-        rigid mass, plus the current loop, the computing time and the setpoint filter."""
+        """What the NC's lag model takes for the closed speed loop: its equivalent time
+        constant, the delay with which it follows a slow setpoint (the first moment of its
+        response). On a rigid mass a P loop lags by J/Kp; a PI loop follows a speed ramp
+        without error, so only the current loop, the computing time and the setpoint filter
+        remain. (Taking J/Kp for a PI loop made a spindle's ramp trip lag monitoring.)"""
         if self.kp <= 0.0:
             return math.inf
-        return (
-            self.total_inertia / self.kp
-            + self.current_t_s
-            + 1.5 * self.sampling_s
-            + self.speed_filter_s
-        )
+        delays = self.current_t_s + 1.5 * self.sampling_s + self.speed_filter_s
+        return delays if self.tn_s > 0.0 else self.total_inertia / self.kp + delays
 
     def continuous(self) -> tuple[np.ndarray, np.ndarray]:
         """(A, B) of the linear part, states as nc_sim/plant/layout.py's x, inputs u."""

@@ -1,4 +1,4 @@
-"""The drive cascade and mechanics over one NC cycle, in drive steps (compiled).
+"""The drive cascade and mechanics, one drive step (compiled; the NC cycle steps it).
 
 Per drive step Ts (model and matrices: nc_sim/plant/model.py):
 
@@ -52,7 +52,6 @@ from nc_sim.plant.layout import (
     PL_NX,
     PL_SP_ALPHA,
     PL_STRIBECK,
-    PL_SUBSTEPS,
     PL_T_MAX,
     PL_TWO_MASS,
     PL_UNIT_PER_RAD,
@@ -122,7 +121,7 @@ def _friction(pl: np.ndarray, ps: np.ndarray, s: int, wi: int) -> None:
 
 
 @njit(cache=True)
-def drive_cycle(
+def drive_step(
     pl: np.ndarray,
     ps: np.ndarray,
     probe: np.ndarray,
@@ -133,88 +132,90 @@ def drive_cycle(
     enabled: bool,
     x_load: float,
     play: float,
-    dt: float,
-) -> tuple[float, float, float]:
-    """Run slot s's drive and mechanics over one NC cycle dt with the speed setpoint w_set
+    ts: float,
+) -> tuple[float, float]:
+    """Run slot s's drive and mechanics over one drive step ts with the speed setpoint w_set
     (rad/s at the motor). `x_load` is the load's position and `play` where a rigid plant's
-    gap stands (load units). Returns the new load position, gap and load speed (unit/s).
-    A probe on this slot adds its excitation and records one trace row per drive step."""
-    n = int(pl[s, PL_SUBSTEPS])
-    ts = dt / n
+    gap stands (load units). Returns the new load position and gap. A probe on this slot
+    adds its excitation and records this step's trace row."""
     nx = int(pl[s, PL_NX])
     g = pl[s, PL_UNIT_PER_RAD]
     two = pl[s, PL_TWO_MASS] == 1.0
     half = pl[s, PL_HALF_PLAY]
     kp, inv_tn, lim = pl[s, PL_KP], pl[s, PL_INV_TN], pl[s, PL_T_MAX]
     wi = X_WL if two else X_WM
-    probing = probe[PR_SLOT] == s
+    pos = probe[PR_POS]
+    probing = probe[PR_SLOT] == s and pos < probe[PR_LEN]
+    exc = pexc[pos] if probing else 0.0
     at_speed = probe[PR_POINT] == INJECT_SPEED or probe[PR_POINT] == INJECT_SPEED_OPEN
-    for _ in range(n):
-        exc = 0.0
-        pos = probe[PR_POS]
-        if probing and pos < probe[PR_LEN]:
-            exc = pexc[pos]
-        t = 0.0
-        w_ref = 0.0
-        if probing and pos < probe[PR_LEN]:  # the samples of this instant
-            prec[pos, D_W_SET] = w_set
-            prec[pos, D_W_MOTOR] = ps[s, X_WM]
-            prec[pos, D_W_LOAD] = ps[s, wi]
-            prec[pos, D_TORQUE] = ps[s, X_TORQUE]
-            prec[pos, D_X_LOAD] = x_load
-            prec[pos, D_X_MOTOR] = x_load + motor_offset(pl, ps, s, play)
-        if not enabled:
-            x_load += _brake(pl, ps, s)
+    t = 0.0
+    w_ref = 0.0
+    if probing:  # the samples of this instant
+        prec[pos, D_W_SET] = w_set
+        prec[pos, D_W_MOTOR] = ps[s, X_WM]
+        prec[pos, D_W_LOAD] = ps[s, wi]
+        prec[pos, D_TORQUE] = ps[s, X_TORQUE]
+        prec[pos, D_X_LOAD] = x_load
+        prec[pos, D_X_MOTOR] = x_load + motor_offset(pl, ps, s, play)
+    if not enabled:
+        x_load += _brake(pl, ps, s)
+    else:
+        ps[s, PS_W_REF] += (w_set - ps[s, PS_W_REF]) * pl[s, PL_SP_ALPHA]
+        w_ref = ps[s, PS_W_REF]
+        if probing and at_speed:
+            w_ref += exc
+        e = w_ref - ps[s, X_WM]
+        integral = ps[s, PS_INTEGRAL] + e * ts
+        t = kp * (e + inv_tn * integral)
+        if probing and probe[PR_POINT] == INJECT_TORQUE:
+            t += exc
+        if t > lim:
+            t = lim
+        elif t < -lim:
+            t = -lim
         else:
-            ps[s, PS_W_REF] += (w_set - ps[s, PS_W_REF]) * pl[s, PL_SP_ALPHA]
-            w_ref = ps[s, PS_W_REF]
-            if probing and at_speed:
-                w_ref += exc
-            e = w_ref - ps[s, X_WM]
-            integral = ps[s, PS_INTEGRAL] + e * ts
-            t = kp * (e + inv_tn * integral)
-            if probing and probe[PR_POINT] == INJECT_TORQUE:
-                t += exc
-            if t > lim:
-                t = lim
-            elif t < -lim:
-                t = -lim
+            ps[s, PS_INTEGRAL] = integral
+        c = 0.0  # backlash correction
+        if two and half > 0.0:
+            de = ps[s, X_DEF]
+            if de > half:
+                c = pl[s, PL_K] * half
+            elif de < -half:
+                c = -pl[s, PL_K] * half
             else:
-                ps[s, PS_INTEGRAL] = integral
-            c = 0.0  # backlash correction
-            if two and half > 0.0:
-                de = ps[s, X_DEF]
-                if de > half:
-                    c = pl[s, PL_K] * half
-                elif de < -half:
-                    c = -pl[s, PL_K] * half
-                else:
-                    c = pl[s, PL_K] * de + pl[s, PL_D] * (ps[s, X_WM] - ps[s, X_WL])
-            t_late = ps[s, PS_T_LATE]
-            for r in range(nx):
-                acc = pl[s, PL_BD + r * NU + U_TORQUE] * t_late + pl[s, PL_BD + r * NU + U_PLAY] * c
-                row = PL_AD + r * NX_MAX
-                for q in range(nx):
-                    acc += pl[s, row + q] * ps[s, q]
-                ps[s, PS_NEXT + r] = acc
-            _friction(pl, ps, s, wi)
-            for r in range(nx):
-                ps[s, r] = ps[s, PS_NEXT + r]
-            ps[s, PS_T_LATE] = t
-        if probing and pos < probe[PR_LEN]:  # what the controller made of them
-            prec[pos, D_W_REF] = w_ref
-            prec[pos, D_T_SET] = t
-            probe[PR_POS] = pos + 1
-        dx = ps[s, X_TRAVEL] * g
-        ps[s, X_TRAVEL] = 0.0
-        if not two and half > 0.0:  # rigid: the load moves only at either end of the gap
-            play += dx
-            if play > half:
-                x_load += play - half
-                play = half
-            elif play < -half:
-                x_load += play + half
-                play = -half
-        else:
-            x_load += dx
-    return x_load, play, ps[s, wi] * g
+                c = pl[s, PL_K] * de + pl[s, PL_D] * (ps[s, X_WM] - ps[s, X_WL])
+        t_late = ps[s, PS_T_LATE]
+        for r in range(nx):
+            acc = pl[s, PL_BD + r * NU + U_TORQUE] * t_late + pl[s, PL_BD + r * NU + U_PLAY] * c
+            row = PL_AD + r * NX_MAX
+            for q in range(nx):
+                acc += pl[s, row + q] * ps[s, q]
+            ps[s, PS_NEXT + r] = acc
+        _friction(pl, ps, s, wi)
+        for r in range(nx):
+            ps[s, r] = ps[s, PS_NEXT + r]
+        ps[s, PS_T_LATE] = t
+    if probing:  # what the controller made of them
+        prec[pos, D_W_REF] = w_ref
+        prec[pos, D_T_SET] = t
+        probe[PR_POS] = pos + 1
+    dx = ps[s, X_TRAVEL] * g
+    ps[s, X_TRAVEL] = 0.0
+    if not two and half > 0.0:  # rigid: the load moves only at either end of the gap
+        play += dx
+        if play > half:
+            x_load += play - half
+            play = half
+        elif play < -half:
+            x_load += play + half
+            play = -half
+    else:
+        x_load += dx
+    return x_load, play
+
+
+@njit(cache=True)
+def load_speed(pl: np.ndarray, ps: np.ndarray, s: int) -> float:
+    """The load's speed (unit/s)."""
+    wi = X_WL if pl[s, PL_TWO_MASS] == 1.0 else X_WM
+    return float(ps[s, wi] * pl[s, PL_UNIT_PER_RAD])
