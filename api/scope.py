@@ -15,6 +15,7 @@ from api.common import JobErrorModel
 
 MAX_CHANNELS = 16
 MAX_LENGTH_S = 60.0
+MAX_DRIVE_LENGTH_S = 2.0  # a drive-rate capture: a drive's trace memory (16 000 samples)
 EventName = Literal["m_start", "m19_done", "gear_change", "job_error", "speed_reached"]
 
 
@@ -48,6 +49,15 @@ class ScopeSetupModel(BaseModel):
     pretrigger_pct: float = Field(20.0, ge=0, le=100, description="share before the trigger")
     mode: Literal["roll", "normal", "single"] = "single"
     trigger: TriggerModel | None = Field(None, description="required unless mode is roll")
+    rate: Literal["nc", "drive"] = Field(
+        "nc",
+        description=(
+            "nc: every NC cycle, any signals; drive: every drive step (e.g. 125 µs), the drive "
+            "signals of one axis on the drive cascade (`<axis>.drive.*`, see the status' "
+            f"drive_channels), single or normal mode, up to {MAX_DRIVE_LENGTH_S:g} s; the "
+            "trigger is the NC's as ever"
+        ),
+    )
 
 
 class ChannelInfo(BaseModel):
@@ -166,6 +176,9 @@ class ScopeStatus(BaseModel):
     trigger_cycle: int | None
     captures: list[TraceInfo] = Field(description="recent captures, newest first")
     recording: RecordingInfo | None
+    drive_channels: list[ChannelInfo] = Field(
+        description="the signals a drive-rate capture can record, every axis' drive"
+    )
 
 
 class RecordingStart(BaseModel):

@@ -116,10 +116,8 @@ def main() -> None:
                     mode="normal",
                     trigger=LevelTriggerModel(signal="S1.speed_cmd_rpm", level=900),
                 )
-                engine = scope.engine_setup(proxy, setup)
-                host.scope.arm(
-                    engine, host.cycle, host.history(engine.length_cycles), host.machine.events
-                )
+                engine, drive = scope.engine_setup(proxy, setup)
+                host.arm_scope(engine, drive)
             t0 = time.perf_counter()
             for _ in range(ticks):
                 programme(host, host.cycle)

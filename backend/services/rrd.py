@@ -22,9 +22,9 @@ APP_ID = "inbetrieb"
 
 
 def entity(machine: str, signal: str) -> str:
-    """`S1.speed_act_rpm` of machine `demo` -> `demo/S1/speed_act_rpm`."""
-    axis, _, name = signal.partition(".")
-    return f"{machine}/{axis}/{name}"
+    """`S1.speed_act_rpm` of machine `demo` -> `demo/S1/speed_act_rpm` (a drive signal
+    `X.drive.torque_nm` -> `demo/X/drive/torque_nm`)."""
+    return f"{machine}/{signal.replace('.', '/')}"
 
 
 def state_name(code: float) -> str:

@@ -7,7 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from api.scope import EventTriggerModel, LevelTriggerModel, ScopeSetupModel, ScopeStatus
+from api.scope import (
+    MAX_DRIVE_LENGTH_S,
+    ChannelInfo,
+    EventTriggerModel,
+    LevelTriggerModel,
+    ScopeSetupModel,
+    ScopeStatus,
+)
 from api.telemetry import FrameHeader, encode_frame
 from backend.errors import ApiError, Invalid
 from backend.services.machines import MachineProxy
@@ -22,6 +29,7 @@ from nc_sim.scope import (
     ScopeSetup,
     Trigger,
 )
+from nc_sim.signals import Signal
 
 
 def _unknown(m: MachineProxy, names: list[str], what: str) -> ApiError:
@@ -29,15 +37,21 @@ def _unknown(m: MachineProxy, names: list[str], what: str) -> ApiError:
     return Invalid(f"{what}: unknown signals {bad}")
 
 
-def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
-    """The kernel-side setup; 422 naming an unknown signal or axis or a length too long."""
-    if any(n not in m.link.signal_by_name for n in req.channels):
+def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> tuple[ScopeSetup, list[Signal]]:
+    """The kernel-side setup and the drive signals of a drive-rate capture (else none); 422
+    naming an unknown signal or axis, a length too long, or what a drive-rate capture
+    cannot do."""
+    drive: list[Signal] = []
+    if req.rate == "drive":
+        drive = _drive_channels(m, req)
+    elif any(n not in m.link.signal_by_name for n in req.channels):
         raise _unknown(m, req.channels, "channels")
     trigger: Trigger | None = None
     t = req.trigger
     if isinstance(t, LevelTriggerModel):
         if t.signal not in m.link.signal_by_name:
-            raise _unknown(m, [t.signal], "trigger")
+            why = " (a trigger is the NC's: a drive signal cannot trigger)" if drive else ""
+            raise Invalid(f"trigger: unknown signals {[t.signal]}{why}")
         sig = m.link.signal_by_name[t.signal]
         trigger = LevelTrigger(sig, t.level, t.edge == "rising", t.hysteresis)
     elif isinstance(t, EventTriggerModel):
@@ -45,24 +59,40 @@ def engine_setup(m: MachineProxy, req: ScopeSetupModel) -> ScopeSetup:
             raise Invalid(f"trigger: no axis {t.axis}")
         trigger = EventTrigger(EventKind(t.event), t.axis, t.m)
     length = round(req.length_s / m.link.cycle_s)
-    setup = ScopeSetup(
-        [m.link.signal_by_name[n] for n in req.channels],
-        length,
-        req.pretrigger_pct,
-        ScopeMode(req.mode),
-        trigger,
+    # a drive-rate capture's NC record only finds the trigger and the span: one signal
+    channels = (
+        [m.link.signal_by_name[n] for n in req.channels]
+        if not drive
+        else [next(s for s in m.link.signal_by_name.values() if s.axis == drive[0].axis)]
     )
+    setup = ScopeSetup(channels, length, req.pretrigger_pct, ScopeMode(req.mode), trigger)
     try:
         setup.check()
     except ValueError as e:
         raise Invalid(str(e)) from None
-    return setup
+    return setup, drive
+
+
+def _drive_channels(m: MachineProxy, req: ScopeSetupModel) -> list[Signal]:
+    known = m.link.drive_signal_by_name
+    if any(n not in known for n in req.channels):
+        bad = [n for n in req.channels if n not in known]
+        raise Invalid(f"channels: {bad} are no drive signals (`<axis>.drive.*`)")
+    drive = [known[n] for n in req.channels]
+    axes = sorted({s.axis for s in drive})
+    if len(axes) > 1:
+        raise Invalid(f"channels: a drive-rate capture records one axis' drive, got {axes}")
+    if req.mode == "roll":
+        raise Invalid("mode: a drive-rate capture is single or normal (a trace, not a roll)")
+    if req.length_s > MAX_DRIVE_LENGTH_S:
+        raise Invalid(f"length_s: a drive-rate capture is 0 … {MAX_DRIVE_LENGTH_S:g} s")
+    return drive
 
 
 def arm(m: MachineProxy, req: ScopeSetupModel) -> None:
     """(Re)arm the scope with a setup; a capture in progress is dropped."""
-    setup = engine_setup(m, req)
-    m.link.call(ScopeArm(m.id, setup))
+    setup, drive = engine_setup(m, req)
+    m.link.call(ScopeArm(m.id, setup, drive))
     m.captures.setup = req
 
 
@@ -92,6 +122,10 @@ def status(m: MachineProxy, traces: TraceService, recorders: Recorders) -> Scope
         trigger_cycle=st.trigger_cycle,
         captures=traces.recent(m),
         recording=recorders.info(m.id),
+        drive_channels=[
+            ChannelInfo(name=s.name, unit=s.unit, kind="float")
+            for s in m.link.drive_signal_by_name.values()
+        ],
     )
 
 

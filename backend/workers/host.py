@@ -8,6 +8,7 @@ see a half-written row and telemetry has no gaps unless a reader falls a whole r
 from __future__ import annotations
 
 import bisect
+import logging
 import time
 from collections import deque
 from collections.abc import Callable
@@ -30,15 +31,20 @@ from backend.workers.protocol import (
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
 from nc_sim.assist.procedure import LiveRun
 from nc_sim.assist.run import live
+from nc_sim.axis.plant import cascade
 from nc_sim.commands import JogStop
+from nc_sim.drive_scope import DriveScope, drive_signals
 from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
 from nc_sim.machine.service import history_cycles, service_view
-from nc_sim.scope import Record, Scope
+from nc_sim.plant import layout as PL
+from nc_sim.scope import Record, Scope, ScopeSetup
 from nc_sim.signals import Signal, machine_signals
 from nc_sim.sim import Simulation, restore
 from nc_sim.training.checks import ExerciseMonitor
 from nc_sim.training.exercise import Exercise
+
+log = logging.getLogger(__name__)
 
 assert R_COLS == L.R_COLS, "the ring's record width must follow the kernel layout"
 
@@ -84,8 +90,12 @@ class MachineHost:
             self.machine.axes, self.machine.channel_slot, self.machine.rotary_spindle
         )
         self.signal_by_name = {s.name: s for s in self.signals}
+        self.drive_signals = [
+            sig for ax in self.machine.axes for sig in drive_signals(ax.name, ax.kind, ax.slot)
+        ]
         self.ring = SampleRing.create(ring_path, self.sim.kernel.n)
         self.scope = Scope(self.sim.kernel.cycle_s)
+        self.drive_scope: DriveScope | None = None  # a drive-rate capture's ring
         self.captures: list[tuple[Record, ParamSnapshot]] = []  # completed, not yet pushed
         self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
         self.pacing = PacingState(anchor_mono=time.monotonic())
@@ -109,6 +119,7 @@ class MachineHost:
             self.sim.kernel.n,
             str(path) if path is not None else None,
             self.machine.faults(),
+            self.drive_signals,
         )
 
     @property
@@ -133,6 +144,8 @@ class MachineHost:
             part = min(n, self.ring.cycles - start, MAX_WRITE)
             if self.jog_leases:
                 part = min(part, max(1, min(self.jog_leases.values()) - self.sim.cycle))
+            if self.drive_scope is not None:  # its record must still be in the ring
+                part = min(part, DriveScope.FEED_CYCLES)
             live = self.live if self.live is not None and not self.live.done else None
             if live is not None:  # it sees each cycle it asked for before the next one runs
                 part = min(part, live.want())
@@ -157,11 +170,47 @@ class MachineHost:
             params[("axis", a.name)] = dict(a.values)
         return params
 
+    def arm_scope(self, setup: ScopeSetup, drive: list[Signal]) -> None:
+        """(Re)arm the scope; with `drive` channels (one axis' drive signals) its captures are
+        those at the drive's rate. ValueError naming why a drive-rate capture cannot run."""
+        self.stop_drive_scope()
+        history = self.history(setup.length_cycles)
+        if drive:
+            ax = self.machine.axis(drive[0].axis)
+            if not cascade(ax.cfg):
+                raise ValueError(
+                    f"{ax.name} runs the IDEAL plant (sim.plant): a drive-rate capture needs "
+                    "the drive cascade (DRIVE_CASCADE)"
+                )
+            probe = self.sim.kernel.probe
+            if probe[PL.PR_SLOT] >= 0 and probe[PL.PR_POS] < probe[PL.PR_LEN]:
+                raise ValueError("a drive measurement runs on this machine: try again after it")
+            self.drive_scope = DriveScope(
+                self.sim.kernel, self.sim.cycle, ax.slot, drive, setup.length_cycles
+            )
+            history = history[:0]  # the ring starts now: no pre-trigger before it
+        self.scope.arm(setup, self.cycle, history, self.machine.events)
+
+    def stop_drive_scope(self) -> None:
+        if self.drive_scope is not None:
+            self.drive_scope.stop()
+            self.drive_scope = None
+
     def _take_captures(self) -> None:
-        """Keep completed records with the parameter lists as written now."""
+        """Keep completed records with the parameter lists as written now (at the drive's
+        rate for a drive-rate capture: the span the NC record found, cut from the ring)."""
         params = self.params_now()
-        self.captures += [(rec, params) for rec in self.scope.completed]
+        for rec in self.scope.completed:
+            if self.drive_scope is not None:
+                drive_rec = self.drive_scope.record(rec)
+                if drive_rec is None:
+                    log.warning("%s: a drive-rate capture fell out of its ring", self.id)
+                    continue
+                rec = drive_rec
+            self.captures.append((rec, params))
         self.scope.completed.clear()
+        if not self.scope.active:  # a single capture done: the ring ends with it
+            self.stop_drive_scope()
 
     def start_assist(self, r: AssistStart) -> LiveRun:
         """Start a live assistant run (one at a time); ValueError (an ExperimentError) when

@@ -52,6 +52,7 @@ class MachineLink:
         self.pacing: Pacing | None = None
         self.events: EventLog[Event] = EventLog()
         self.signal_by_name: dict[str, Signal] = {}
+        self.drive_signal_by_name: dict[str, Signal] = {}
         # the faults injected (by id, as its worker last told): they go with every rebuild
         self.faults: dict[int, FaultState] = {}
         self.watchers = 0  # viewers and consoles that need its status pushed (see `watch`)
@@ -86,6 +87,7 @@ class MachineLink:
             self.worker, self.info, self.ring, self.epoch = worker, info, ring, info.epoch
             self.events = EventLog()
             self.signal_by_name = {s.name: s for s in info.signals}
+            self.drive_signal_by_name = {s.name: s for s in info.drive_signals}
             self.status, self.pacing = None, None
             # the build's faults with their ids, as the build answered: known from the
             # first moment (a first status may come much later, or never while unwatched)

@@ -108,8 +108,12 @@ class Watch:
 
 @dataclass(frozen=True)
 class ScopeArm:
+    """Arm the scope. With `drive` channels (one axis' drive signals) it captures those at
+    the drive's rate over the span the NC setup's trigger and length give."""
+
     mid: str
     setup: ScopeSetup
+    drive: list[Signal] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -220,6 +224,7 @@ class MachineInfo:
     slots: int  # kernel slots (axes) per sample row
     ring_path: str | None  # the shared sample ring, None when samples are pushed
     faults: list[FaultState] = field(default_factory=list)
+    drive_signals: list[Signal] = field(default_factory=list)  # at the drive's rate (scope)
 
 
 @dataclass(frozen=True)

@@ -429,8 +429,7 @@ class Worker:
                 return None
             case ScopeArm():
                 host = self._host(r.mid)
-                length = r.setup.length_cycles
-                host.scope.arm(r.setup, host.cycle, host.history(length), host.machine.events)
+                host.arm_scope(r.setup, r.drive)
                 return _scope_state(host)
             case ScopeAct():
                 host = self._host(r.mid)
@@ -438,6 +437,7 @@ class Worker:
                     host.scope.force()
                 elif r.action == "stop":
                     host.scope.stop()
+                    host.stop_drive_scope()
                 return _scope_state(host)
             case ScopeRoll():
                 return _roll(self._host(r.mid), r.max_points)

@@ -141,9 +141,23 @@ class Kernel:
         """Probe a slot's drive: add `excitation` (one value per drive step, Nm or rad/s) at
         `point` (PL.INJECT_*) and record the drive trace, one row per drive step, until the
         excitation ends. One probe per kernel: starting one ends the one before."""
-        self.probe = np.array([slot, len(excitation), 0, point], dtype=np.int64)
+        self.probe = np.array([slot, len(excitation), 0, point, 0, 0], dtype=np.int64)
         self.pexc = np.ascontiguousarray(excitation, dtype=np.float64)
         self.prec = np.zeros((len(excitation), PL.D_COLS))
+
+    def start_probe_ring(self, slot: int, steps: int) -> None:
+        """Record a slot's drive trace endlessly into a ring of `steps` drive steps, without
+        excitation (the scope's drive-rate capture): `probe_ring` reads it."""
+        self.start_probe(slot, np.zeros(steps), PL.INJECT_TORQUE)
+        self.probe[PL.PR_WRAP] = 1
+
+    def probe_ring(self, first: int, count: int) -> np.ndarray | None:
+        """Samples first … first + count - 1 (counted from the probe's start) of a ring
+        probe, oldest first; None when the ring no longer (or not yet) holds them all."""
+        total, size = int(self.probe[PL.PR_COUNT]), len(self.prec)
+        if first < 0 or first + count > total or total - first > size:
+            return None
+        return np.take(self.prec, np.arange(first, first + count) % size, axis=0)
 
     def probe_trace(self) -> np.ndarray:
         """The drive trace recorded so far (drive steps × PL.D_COLS)."""
@@ -151,7 +165,7 @@ class Kernel:
 
     def stop_probe(self) -> None:
         """No probe: no excitation, no drive trace."""
-        self.probe = np.array([-1, 0, 0, 0], dtype=np.int64)
+        self.probe = np.array([-1, 0, 0, 0, 0, 0], dtype=np.int64)
         self.pexc = np.zeros(0)
         self.prec = np.zeros((0, PL.D_COLS))
 

@@ -88,4 +88,6 @@ PR_SLOT = 0  # probed slot, -1: none
 PR_LEN = 1  # samples of excitation and trace
 PR_POS = 2  # samples done
 PR_POINT = 3  # INJECT_*
-PR_COLS = 4
+PR_WRAP = 4  # 1: a ring (the scope's drive-rate capture): samples wrap to 0 at PR_LEN, endless
+PR_COUNT = 5  # samples recorded since the probe started
+PR_COLS = 6

@@ -55,10 +55,12 @@ from nc_sim.plant.layout import (
     PL_T_MAX,
     PL_TWO_MASS,
     PL_UNIT_PER_RAD,
+    PR_COUNT,
     PR_LEN,
     PR_POINT,
     PR_POS,
     PR_SLOT,
+    PR_WRAP,
     PS_INTEGRAL,
     PS_NEXT,
     PS_T_LATE,
@@ -198,7 +200,9 @@ def drive_step(
     if probing:  # what the controller made of them
         prec[pos, D_W_REF] = w_ref
         prec[pos, D_T_SET] = t
-        probe[PR_POS] = pos + 1
+        nxt = pos + 1
+        probe[PR_POS] = 0 if nxt == probe[PR_LEN] and probe[PR_WRAP] == 1 else nxt
+        probe[PR_COUNT] += 1
     dx = ps[s, X_TRAVEL] * g
     ps[s, X_TRAVEL] = 0.0
     if not two and half > 0.0:  # rigid: the load moves only at either end of the gap

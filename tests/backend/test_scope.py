@@ -435,3 +435,63 @@ def test_recordings_stop_at_their_disk_quota(tmp_path: Path) -> None:
         assert re.search(r"use \d+\.\d MB of their 0\.2 MB", again.json()["detail"]["message"])
     finally:
         s.close()
+
+
+DRIVE_CH = ["X.drive.speed_motor_rpm", "X.drive.torque_nm", "X.drive.pos_load_mm"]
+
+
+def test_a_drive_rate_capture_samples_every_drive_step_around_the_ncs_trigger(
+    srv: Server, mid: str, tmp_path: Path
+) -> None:
+    """X (drive cascade, p0115 125 µs, 10 mm per motor revolution) jogs at 1000 mm/min: the
+    capture holds 8 samples per NC cycle, the pre-trigger at rest, then the motor at
+    100 rpm, the load 2.083 µm further each sample, and the torque the friction takes:
+    Coulomb 0.15 Nm + viscous 0.0005 Nm·s/rad × 10.47 rad/s."""
+    trig = {"type": "level", "signal": "X.vel_cmd_mm_min", "level": 50, "edge": "rising"}
+    st = arm(
+        srv, mid, channels=DRIVE_CH, length_s=0.5, pretrigger_pct=10, trigger=trig, rate="drive"
+    )
+    assert st["state"] == "armed"
+    assert {c["name"] for c in st["drive_channels"]} >= set(DRIVE_CH)
+    srv.step(mid, 100)  # the drive's ring fills the pre-trigger
+    jog = {"type": "jog", "axis": "X", "action": "start", "direction": 1, "feed_mm_min": 1000}
+    assert srv.command(mid, {**jog, "hold_s": 5}).status_code == 200
+    srv.step(mid, 700)
+    st = scope(srv, mid)
+    assert st["state"] == "done"
+    cap = st["captures"][0]
+    assert cap["cycle_s"] == pytest.approx(125e-6)
+    # 50 cycles of pre-trigger, and the steps of the first cycle before the NC's first
+    # sample (the state at its end)
+    assert cap["count"] == 4000 and cap["trigger_cycle"] - cap["first_cycle"] == 408
+    header, data = samples(srv, cap["id"])
+    assert header.signals == DRIVE_CH and header.cycle_s == pytest.approx(125e-6)
+    speed, torque, pos = data
+    assert np.max(np.abs(speed[:400])) < 0.1  # at rest before the trigger
+    steady = slice(-800, None)  # the last 100 ms
+    assert np.mean(speed[steady]) == pytest.approx(100.0, rel=0.005)
+    assert np.mean(np.diff(pos[steady])) == pytest.approx(1000 / 60 * 125e-6, rel=0.005)
+    assert np.mean(torque[steady]) == pytest.approx(0.15 + 0.0005 * 100 * 2 * np.pi / 60, rel=0.03)
+    r = srv.http.get(f"/api/traces/{cap['id']}/trace.rrd")
+    path = tmp_path / "drive.rrd"
+    path.write_bytes(r.content)
+    rows = rrd_chunks(path)
+    for name in DRIVE_CH:
+        assert rows[f"/{mid}/" + name.replace(".", "/")] == 4000  # one row per drive step
+
+
+def test_drive_rate_captures_refuse_what_a_drive_cannot_record(srv: Server, mid: str) -> None:
+    def put(**setup: Any) -> Any:
+        trig = {"type": "event", "event": "m_start"}
+        body = {"length_s": 0.2, "trigger": trig, "rate": "drive", **setup}
+        return srv.http.put(f"/api/machines/{mid}/scope", json=body)
+
+    r = put(channels=["S1.drive.speed_motor_rpm"])  # the demo's spindle: the ideal plant
+    assert r.status_code == 422 and "IDEAL" in r.text
+    r = put(channels=["X.drive.torque_nm", "Z.drive.torque_nm"])
+    assert r.status_code == 422 and "one axis" in r.text
+    r = put(channels=["X.lag_mm"])
+    assert r.status_code == 422 and "X.lag_mm" in r.text
+    r = put(channels=["X.drive.torque_nm"], length_s=3.0)
+    assert r.status_code == 422 and "2 s" in r.text
+    assert scope(srv, mid)["state"] == "idle"  # nothing armed by any of them

@@ -237,3 +237,40 @@ def test_one_y_axis_per_unit_booleans_as_lanes_and_commands_from_the_scope(
     assert overflow <= 0
     shot(page, "scope-axes-tablet")
     page.close()
+
+
+def test_a_drive_rate_capture_of_x_while_it_jogs(browser: Browser, srv: Server, mid: str) -> None:
+    """The Scope's drive rate: X's drive signals every 125 µs around a level trigger on the
+    NC's feed; X jogs at 1000 mm/min (10 mm per motor revolution: the motor ends at 100 rpm)."""
+    page = open_hmi(browser, srv.base, mid)
+    page.get_by_test_id("tab-Scope").click()
+    setup = panel(page, "scope-setup")
+    setup.get_by_test_id("scope-rate").select_option("drive")
+    setup.get_by_test_id("scope-channels").locator("summary").click()
+    setup.locator('[data-signal="X.drive.speed_motor_rpm"]').check(force=True)  # already chosen
+    expect(setup.locator('[data-signal="X.lag_mm"]')).to_have_count(0)  # NC signals not offered
+    setup.get_by_test_id("scope-channels").locator("summary").click()
+    setup.get_by_test_id("scope-length").fill("0.5")
+    setup.get_by_test_id("scope-pretrigger").fill("20")
+    setup.get_by_test_id("trigger-level").check()
+    setup.get_by_test_id("trigger-signal").select_option("X.vel_cmd_mm_min")
+    setup.get_by_test_id("trigger-value").fill("50")
+    setup.get_by_test_id("scope-arm").click()
+    expect(setup.get_by_test_id("scope-state")).to_contain_text("drive's rate")
+    expect(setup.get_by_test_id("scope-state")).to_contain_text("history 100 %", timeout=10_000)
+    jog = {"type": "jog", "axis": "X", "action": "start", "direction": 1, "feed_mm_min": 1000}
+    assert srv.command(mid, {**jog, "hold_s": 2}).status_code == 200
+    view = page.get_by_test_id("capture-view")
+    expect(view).to_be_visible(timeout=10_000)
+    tid = str(view.get_attribute("data-trace"))
+    detail = srv.http.get(f"/api/traces/{tid}").json()
+    assert detail["cycle_s"] == 125e-6 and detail["count"] == 4000
+    # 20 % of 0.5 s and the first NC cycle's steps before the NC's first sample
+    expect(page.get_by_test_id("capture-pre")).to_have_text("0.101 s")
+    page.get_by_test_id("meas-channel").select_option("X.drive.speed_motor_rpm")
+    final = float(page.get_by_test_id("meas-final").inner_text().split()[0].replace("−", "-"))
+    assert abs(final - 100.0) < 0.5
+    shot(page, "scope-drive-rate-desktop")
+    page.set_viewport_size({"width": 1024, "height": 768})
+    shot(page, "scope-drive-rate-1024")
+    page.close()

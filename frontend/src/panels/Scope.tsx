@@ -185,6 +185,8 @@ function CaptureView() {
     [overlay, trace],
   );
   const d = trace?.detail;
+  // a drive-rate capture: its samples are drive steps (their signals are `<axis>.drive.*`)
+  const drive = d?.channels.some((c) => c.name.split(".")[1] === "drive") ?? false;
 
   return (
     <Panel title="Capture" id="capture"
@@ -205,12 +207,13 @@ function CaptureView() {
       }>
       {error ? <p class="refusal">{error}</p> : null}
       {trace && d ? (
-        <div class="capture" data-testid="capture-view" data-trace={d.id}>
+        <div class="capture" data-testid="capture-view" data-trace={d.id} data-drive={drive ? "yes" : undefined}>
           <div class="capture-head">
             <b data-testid="capture-trigger">{d.name || d.trigger || "capture"}</b>
             <span>
-              {d.machine_name} · {when(d.created_unix)} · trigger at cycle {d.trigger_cycle ?? "—"}
-              {d.forced ? " (forced)" : ""} · {d.count} cycles of {fmt(d.cycle_s * 1000, 2)} ms ·{" "}
+              {d.machine_name} · {when(d.created_unix)} · trigger at {drive ? "drive step" : "cycle"} {d.trigger_cycle ?? "—"}
+              {d.forced ? " (forced)" : ""} · {d.count} {drive ? "samples" : "cycles"} of{" "}
+              {d.cycle_s < 0.001 ? `${fmt(d.cycle_s * 1e6, 0)} µs` : `${fmt(d.cycle_s * 1000, 2)} ms`} ·{" "}
               <span data-testid="capture-pre">{fmt(((d.trigger_cycle ?? d.first_cycle) - d.first_cycle) * d.cycle_s, 3)} s</span> before
             </span>
             <TraceLinks id={d.id} />

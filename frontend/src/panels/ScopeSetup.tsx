@@ -3,7 +3,19 @@
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { EventTrigger, LevelTrigger, RecordingInfo, ScopeSetup as Setup } from "../api/types";
-import { arm, force, MAX_CHANNELS, saveDraft, scopeDraft, scopeStatus, startRecording, stop, stopRecording } from "../state/scope";
+import {
+  arm,
+  DEFAULT_CHANNELS,
+  force,
+  MAX_CHANNELS,
+  MAX_DRIVE_S,
+  saveDraft,
+  scopeDraft,
+  scopeStatus,
+  startRecording,
+  stop,
+  stopRecording,
+} from "../state/scope";
 import { online, status } from "../state/session";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
@@ -41,6 +53,22 @@ export function ScopeSetup() {
     trig?.type === "level" ? trig : { type: "level", signal: draft.channels[0] ?? "", level: 0, edge: "rising", hysteresis: 0 };
   const event: EventTrigger = trig?.type === "event" ? trig : { type: "event", event: "m_start", axis: null, m: null };
   const axes = status.value?.axes.map((a) => a.name) ?? [];
+  const driveRate = draft.rate === "drive";
+  const driveSignals = (st?.drive_channels ?? []).map((c) => ({ name: c.name, axis: c.name.split(".")[0] }));
+
+  /** Switch the rate: a drive-rate capture records one axis' drive signals, single or
+   * normal, up to 2 s; back at the NC's rate the default channels come back. */
+  function setRate(rate: "nc" | "drive") {
+    if (rate === draft.rate) return;
+    if (rate === "drive") {
+      const axis = driveSignals[0]?.axis ?? "X";
+      const channels = ["speed_set_rpm", "speed_motor_rpm", "torque_nm"].map((n) => `${axis}.drive.${n}`);
+      const mode = draft.mode === "roll" ? "single" : draft.mode;
+      setDraft({ ...draft, rate, channels, mode, length_s: Math.min(draft.length_s, MAX_DRIVE_S), trigger: draft.trigger ?? event });
+    } else {
+      setDraft({ ...draft, rate, channels: DEFAULT_CHANNELS });
+    }
+  }
 
   async function run(f: () => Promise<unknown>) {
     setError("");
@@ -76,6 +104,7 @@ export function ScopeSetup() {
           {st?.setup && state !== "idle" ? (
             <span>
               {" "}· {st.length_cycles} cycles, {st.pre_cycles} before the trigger
+              {st.setup.rate === "drive" ? " · sampled at the drive's rate" : ""}
               {state === "armed" || state === "roll" ? ` · history ${Math.round(fill * 100)} %` : ""}
             </span>
           ) : null}
@@ -83,11 +112,20 @@ export function ScopeSetup() {
         {error ? (
           <p class="refusal" role="alert" data-testid="scope-error">{error}</p>
         ) : null}
+        <label>
+          Rate
+          <select value={draft.rate ?? "nc"} data-testid="scope-rate"
+            onChange={(e) => setRate((e.target as HTMLSelectElement).value as "nc" | "drive")}>
+            <option value="nc">every NC cycle</option>
+            <option value="drive">drive rate (one drive, ≤ {MAX_DRIVE_S} s)</option>
+          </select>
+        </label>
         <SignalPicker chosen={draft.channels} max={MAX_CHANNELS} testid="scope-channels"
+          signals={driveRate ? driveSignals : undefined}
           onChange={(channels) => setDraft({ ...draft, channels })} />
         <label>
           Record length
-          <input type="number" min={0.01} max={60} step={0.1} value={draft.length_s} data-testid="scope-length"
+          <input type="number" min={0.01} max={driveRate ? MAX_DRIVE_S : 60} step={0.1} value={draft.length_s} data-testid="scope-length"
             onInput={(e) => setDraft({ ...draft, length_s: num(e) })} /> s
         </label>
         <label>
@@ -101,7 +139,7 @@ export function ScopeSetup() {
             onChange={(e) => setDraft({ ...draft, mode: (e.target as HTMLSelectElement).value as Setup["mode"] })}>
             <option value="single">single</option>
             <option value="normal">normal (re-arms)</option>
-            <option value="roll">roll (free running)</option>
+            <option value="roll" disabled={driveRate}>roll (free running)</option>
           </select>
         </label>
         <fieldset class="trigger" disabled={draft.mode === "roll"}>
@@ -179,7 +217,7 @@ export function ScopeSetup() {
             </>
           ) : (
             <>
-              <button type="button" data-testid="recording-start" disabled={!online.value || !draft.channels.length}
+              <button type="button" data-testid="recording-start" disabled={!online.value || !draft.channels.length || driveRate}
                 onClick={() => void run(async () => setRecording(await startRecording(draft.channels)))}>
                 ● Record the channels
               </button>

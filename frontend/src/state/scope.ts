@@ -10,6 +10,8 @@ import { kept } from "./workspace";
 
 export const SCOPE_PERIOD_MS = 250;
 export const MAX_CHANNELS = 16;
+export const MAX_DRIVE_S = 2; // a drive-rate capture (the API's MAX_DRIVE_LENGTH_S)
+export const DEFAULT_CHANNELS = ["S1.speed_cmd_rpm", "S1.speed_act_rpm", "S1.pos_act_deg", "S1.lag_deg"];
 
 export const scopeStatus = signal<ScopeStatus | null>(null);
 export const library = signal<TraceInfo[]>([]);
@@ -25,7 +27,8 @@ export interface LoadedTrace {
 }
 
 const DEFAULT_SETUP: ScopeSetup = {
-  channels: ["S1.speed_cmd_rpm", "S1.speed_act_rpm", "S1.pos_act_deg", "S1.lag_deg"],
+  channels: DEFAULT_CHANNELS,
+  rate: "nc",
   length_s: 1,
   pretrigger_pct: 20,
   mode: "single",

@@ -1,9 +1,21 @@
-// A drop-down of every signal grouped by axis, with a checkbox each (plots and the scope).
+// A drop-down of every signal grouped by axis, with a checkbox each (plots and the scope);
+// the scope's drive-rate capture offers the drive signals instead.
 import { catalogue } from "../state/telemetry";
 
-export function SignalPicker(props: { chosen: string[]; onChange: (names: string[]) => void; max?: number; testid?: string }) {
+export interface PickableSignal {
+  name: string;
+  axis: string;
+}
+
+export function SignalPicker(props: {
+  chosen: string[];
+  onChange: (names: string[]) => void;
+  max?: number;
+  testid?: string;
+  signals?: PickableSignal[];
+}) {
   const { chosen, max } = props;
-  const names = catalogue.value;
+  const names = props.signals ?? catalogue.value;
   const axes = [...new Set(names.map((s) => s.axis))];
   const full = max !== undefined && chosen.length >= max;
   return (
