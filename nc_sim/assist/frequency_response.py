@@ -46,6 +46,7 @@ PRBS, CHIRP = 1, 2
 MAX_PLOT_POINTS = 600  # per curve, spaced evenly in log f
 LEAD_IN_S = 0.2  # excitation before the recording counts: the loops settle into it
 CHUNK_CYCLES = 50  # the position window is checked this often
+SETTLE_S = 2.0  # back at the start: how long the lag may take to come into the window
 MAX_SEGMENT = 1 << 16  # samples per average
 
 
@@ -120,8 +121,8 @@ def frequency_response(
     """Measure `measurement` on `axis` with a PRBS or a chirp (`excitation`) of
     `torque_pct` % of the torque limit, `speed_rpm` or `position_mm`, `averages` Welch
     averages from `f_min_hz` to `f_max_hz` (half the drive rate; the position loop: half the
-    NC's), the motor turning at `offset_rpm` meanwhile. The run ends (and the axis stops)
-    when the axis leaves ±`window_mm` around where it started."""
+    NC's), the motor turning at `offset_rpm` meanwhile, then back to where it started. The
+    run ends (and the axis stops) when the axis leaves ±`window_mm` around its start."""
     ax, model = drive_axis(m, axis, "a frequency response")
     k = m.k
     cycle_s = k.cycle_s
@@ -152,8 +153,8 @@ def frequency_response(
     if position:  # one value per NC cycle, held over its drive steps
         exc = np.repeat(exc, steps)
     p0 = float(k.st[ax.slot, L.S_P_ACT])
+    feed = abs(v_offset) * MM_MIN_PER_MM_S
     if v_offset != 0.0:
-        feed = abs(v_offset) * MM_MIN_PER_MM_S
         target = p0 + math.copysign(window_mm, v_offset)
         out = m.submit(Move(ax.name, target, rapid=False, feed_mm_min=feed))
         if not isinstance(out, Accepted):
@@ -189,6 +190,20 @@ def frequency_response(
         m.submit(Reset())
         while ax.state not in (AxisState.STANDSTILL, AxisState.ERROR):
             yield Wait(10, f"{ax.name} comes to rest", total_s)
+        # and the axis goes back to where it started, at the offset's feed
+        back = m.submit(Move(ax.name, p0, rapid=False, feed_mm_min=feed))
+        if isinstance(back, Accepted):
+            # until it is in its exact-stop window (the set-point ends before the lag has)
+            window = ax.cfg.eng("kenngr.exact_stop_window")
+            settle = round(SETTLE_S / cycle_s)
+            yield Wait(10, f"{ax.name} returns to {p0:g}", total_s)
+            while ax.state is not AxisState.ERROR and settle > 0:
+                lag = abs(float(k.st[ax.slot, L.S_P_CMD] - k.st[ax.slot, L.S_P_ACT]))
+                if ax.state is AxisState.STANDSTILL and lag <= window:
+                    break
+                if ax.state is AxisState.STANDSTILL:
+                    settle -= 10
+                yield Wait(10, f"{ax.name} returns to {p0:g}", total_s)
     result = _analyse(
         ax.name, measurement, trace, position, steps, lead, nseg, fs, (f_min_hz, f_hi), v_offset
     )

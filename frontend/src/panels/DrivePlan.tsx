@@ -82,7 +82,7 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
     text =
       `${axis.name} is excited for ${fmt(seconds, 1)} s of machine time` +
       (offset
-        ? `, turning at ${fmt(offset, 0)} rpm: it travels about ${fmt(travel, 1)} ${unit} towards ${where} and stops there`
+        ? `, turning at ${fmt(offset, 0)} rpm: it travels about ${fmt(travel, 1)} ${unit} towards ${where}, then goes back to where it started`
         : ", holding its position") +
       ` (position window ±${window < 1 ? fmt(window, 3) : fmt(window, 0)} ${unit}).`;
   } else if (name === "drive-trace") {

@@ -16,10 +16,14 @@ from nc_sim.assist.frequency_response import (
     CLOSED_SPEED,
     MECHANICS,
     OPEN_SPEED,
+    frequency_response,
     frequency_response_experiment,
 )
+from nc_sim.assist.procedure import step_through
 from nc_sim.assist.result import ExperimentError
+from nc_sim.axis.state import AxisState
 from nc_sim.config import MachineConfig, apply_overrides, demo_machine
+from nc_sim.kernel import layout as L
 from nc_sim.params import Scope
 from tests.nc_sim.plant.test_frequency_response import (
     FS,
@@ -27,6 +31,7 @@ from tests.nc_sim.plant.test_frequency_response import (
     _speed_loop_params,
     _x_axis,
 )
+from tests.nc_sim.sim_helpers import make
 
 
 def _machine(x: dict[str, Any]) -> MachineConfig:
@@ -85,3 +90,16 @@ def test_an_ideal_plant_or_a_window_too_small_is_refused_before_anything_moves()
     cfg = _machine({"sim.plant": "DRIVE_CASCADE"})
     with pytest.raises(ExperimentError, match="window"):
         frequency_response_experiment(cfg, "X", offset_rpm=300.0, window_mm=5.0)
+
+
+def test_the_axis_returns_to_where_it_started_after_the_offset_motion() -> None:
+    """At 30 rpm (10 mm per motor revolution: 5 mm/s) X moves about 17 mm in the 3.3 s of a
+    10-average measurement, then goes back: it ends in its exact-stop window."""
+    sim, m, _ = make({"X": {}})
+    x = m.axis("X")
+    start = float(sim.kernel.st[x.slot, L.S_P_ACT])
+    r = step_through(sim, frequency_response(m, "X", MECHANICS))
+    assert r.figure("measured_s") > 3.0
+    window = x.cfg.eng("kenngr.exact_stop_window")
+    assert float(sim.kernel.st[x.slot, L.S_P_ACT]) == pytest.approx(start, abs=window)
+    assert x.state is AxisState.STANDSTILL
