@@ -21,10 +21,10 @@ from nc_sim.assist.frequency_response import (
 )
 from nc_sim.assist.procedure import step_through
 from nc_sim.assist.result import ExperimentError
-from nc_sim.axis.state import AxisState
 from nc_sim.config import MachineConfig, apply_overrides, demo_machine
 from nc_sim.kernel import layout as L
 from nc_sim.params import Scope
+from nc_sim.snapshot import AxisState
 from tests.nc_sim.plant.test_frequency_response import (
     FS,
     _reference_open_loop,
