@@ -19,6 +19,11 @@ class AssistRunInfo(BaseModel):
     ok: bool
     axis: str = Field(description="the axis or spindle it ran on ('' when none)")
     summary: str = Field(description="the main figures in words, e.g. 'k = 8.75 1/s, f = 2.29'")
+    measurement: int | str | None = Field(
+        None,
+        description="what it measured, for an assistant that measures several things (its "
+        "`measurement` input, e.g. the frequency response's); null otherwise",
+    )
 
 
 class AssistRun(AssistRunInfo):

@@ -17,7 +17,12 @@ from backend.services.store import Row, Store
 from nc_sim.assist.registry import BY_NAME
 
 MAX_LIST = 200  # runs in one list (newest)
-_INFO = "id, machine, assistant, user, time, live, ok, axis, summary"
+# what it measured, for an assistant that measures several things (SQLite reads it out of
+# the stored JSON: a list needs no result parsed in Python)
+_INFO = (
+    "id, machine, assistant, user, time, live, ok, axis, summary, "
+    "json_extract(result, '$.inputs.measurement') AS measurement"
+)
 
 
 def summary(result: AssistResult) -> str:
@@ -45,6 +50,7 @@ def _info(r: Row) -> AssistRunInfo:
         ok=bool(r["ok"]),
         axis=r["axis"],
         summary=r["summary"],
+        measurement=r["measurement"],
     )
 
 

@@ -91,6 +91,15 @@ def test_measure_the_mechanics_and_the_speed_loop_and_compare_two_runs(
     legend = box.get_by_test_id("bode-magnitude").locator(".u-legend .u-series")
     expect(legend).to_have_count(3)  # the frequency, this run, the run before
     expect(legend.nth(2)).to_contain_text(f"#{earlier.get_attribute('value')}")
+    # only runs of the same measurement are offered: no mechanics run among them
+    expect(compare.locator("option", has_text="resonance_1_hz")).to_have_count(0)
+    # the figures side by side: the bandwidth rose by what the two runs measured
+    row = box.get_by_test_id("bode-deltas").locator('tr[data-figure="bandwidth_hz"]')
+    cells = [c.replace("−", "-") for c in row.locator("td").all_inner_texts()]
+    # (the figures above read in 3 significant digits)
+    assert float(cells[1].split()[0]) == pytest.approx(stiffer, rel=6e-3)
+    assert float(cells[2].split()[0]) == pytest.approx(bandwidth, rel=6e-3)
+    assert float(cells[3].split()[0]) == pytest.approx(stiffer - bandwidth, abs=0.01 * stiffer)
     shot(page, "drive-compare-desktop")
     page.set_viewport_size({"width": 1024, "height": 768})
     box.get_by_test_id("bode").scroll_into_view_if_needed()

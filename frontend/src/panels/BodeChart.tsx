@@ -164,7 +164,8 @@ export function BodeView(props: { result: AssistResult }) {
   const [earlier, setEarlier] = useState<AssistRun | null>(null);
   useEffect(() => {
     http.get<AssistRunInfo[]>(machineUrl("/assist/runs?limit=50")).then(
-      (all) => setRuns(all.filter((x) => x.assistant === r.assistant && x.axis === axis)),
+      (all) =>
+        setRuns(all.filter((x) => x.assistant === r.assistant && x.axis === axis && (x.measurement ?? null) === (measurement ?? null))),
       () => setRuns([]),
     );
   }, [r]);
@@ -194,6 +195,43 @@ export function BodeView(props: { result: AssistResult }) {
           Run #{earlier.id} measured something else: compare runs of the same measurement.
         </p>
       ) : null}
+      {same ? <FigureDeltas now={r} before={same.result} label={`#${same.id}`} /> : null}
     </div>
+  );
+}
+
+const NOT_COMPARED = new Set(["measured_s", "coherence_min"]);
+
+/** The figures both runs have, this run's beside the earlier one's with the change. */
+function FigureDeltas(props: { now: AssistResult; before: AssistResult; label: string }) {
+  const before = new Map(props.before.figures.map((f) => [f.name, f]));
+  const rows = props.now.figures.filter((f) => before.has(f.name) && !NOT_COMPARED.has(f.name));
+  if (!rows.length) return null;
+  return (
+    <table class="bode-deltas" data-testid="bode-deltas">
+      <thead>
+        <tr>
+          <th>figure</th>
+          <th>this run</th>
+          <th>{props.label}</th>
+          <th>change</th>
+        </tr>
+      </thead>
+      <tbody>
+        {rows.map((f) => {
+          const b = before.get(f.name)!;
+          const d = f.value - b.value;
+          const pct = b.value !== 0 ? ` (${d >= 0 ? "+" : "−"}${fmt(Math.abs((d / b.value) * 100), 1)} %)` : "";
+          return (
+            <tr key={f.name} data-figure={f.name}>
+              <td>{f.text || f.name}</td>
+              <td>{fmt(f.value, 3)} {f.unit}</td>
+              <td>{fmt(b.value, 3)} {b.unit}</td>
+              <td>{d >= 0 ? "+" : "−"}{fmt(Math.abs(d), 3)} {f.unit}{pct}</td>
+            </tr>
+          );
+        })}
+      </tbody>
+    </table>
   );
 }
