@@ -122,7 +122,7 @@ def _friction(pl: np.ndarray, ps: np.ndarray, s: int, wi: int) -> None:
         ps[s, PS_NEXT + r] += pl[s, PL_BD + r * NU + U_FRICTION] * tf
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def drive_step(
     pl: np.ndarray,
     ps: np.ndarray,
