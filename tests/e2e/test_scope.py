@@ -253,10 +253,12 @@ def test_a_drive_rate_capture_of_x_while_it_jogs(browser: Browser, srv: Server, 
     setup.get_by_test_id("scope-length").fill("0.5")
     setup.get_by_test_id("scope-pretrigger").fill("20")
     setup.get_by_test_id("trigger-level").check()
+    # a trigger is the NC's: the level trigger offers X's NC signals, the first by default
+    expect(setup.get_by_test_id("trigger-signal")).to_have_value("X.pos_cmd_mm")
     setup.get_by_test_id("trigger-signal").select_option("X.vel_cmd_mm_min")
     setup.get_by_test_id("trigger-value").fill("50")
     setup.get_by_test_id("scope-arm").click()
-    expect(setup.get_by_test_id("scope-state")).to_contain_text("drive's rate")
+    expect(setup.get_by_test_id("scope-state")).to_contain_text("every drive step")
     expect(setup.get_by_test_id("scope-state")).to_contain_text("history 100 %", timeout=10_000)
     jog = {"type": "jog", "axis": "X", "action": "start", "direction": 1, "feed_mm_min": 1000}
     assert srv.command(mid, {**jog, "hold_s": 2}).status_code == 200

@@ -49,8 +49,14 @@ export function ScopeSetup() {
   const rec = st?.recording ?? recording;
   const setDraft = saveDraft;
   const trig = draft.trigger ?? null;
+  // a trigger is the NC's: at the drive's rate the first NC signal of the captured axis
+  const ncNames = new Set(catalogue.value.map((c) => c.name));
+  const driveAxis = draft.rate === "drive" ? (draft.channels[0] ?? "").split(".")[0] : "";
+  const firstNc = driveAxis ? catalogue.value.find((c) => c.axis === driveAxis)?.name : draft.channels[0];
   const level: LevelTrigger =
-    trig?.type === "level" ? trig : { type: "level", signal: draft.channels[0] ?? "", level: 0, edge: "rising", hysteresis: 0 };
+    trig?.type === "level" && ncNames.has(trig.signal)
+      ? trig
+      : { type: "level", signal: firstNc ?? catalogue.value[0]?.name ?? "", level: 0, edge: "rising", hysteresis: 0 };
   const event: EventTrigger = trig?.type === "event" ? trig : { type: "event", event: "m_start", axis: null, m: null };
   const axes = status.value?.axes.map((a) => a.name) ?? [];
   const driveRate = draft.rate === "drive";
@@ -103,8 +109,8 @@ export function ScopeSetup() {
           <b>{STATE_TEXT[state]}</b>
           {st?.setup && state !== "idle" ? (
             <span>
-              {" "}· {st.length_cycles} cycles, {st.pre_cycles} before the trigger
-              {st.setup.rate === "drive" ? " · sampled at the drive's rate" : ""}
+              {" "}· {st.length_cycles} NC cycles, {st.pre_cycles} before the trigger
+              {st.setup.rate === "drive" ? ", every drive step of them sampled" : ""}
               {state === "armed" || state === "roll" ? ` · history ${Math.round(fill * 100)} %` : ""}
             </span>
           ) : null}
@@ -117,7 +123,7 @@ export function ScopeSetup() {
           <select value={draft.rate ?? "nc"} data-testid="scope-rate"
             onChange={(e) => setRate((e.target as HTMLSelectElement).value as "nc" | "drive")}>
             <option value="nc">every NC cycle</option>
-            <option value="drive">drive rate (one drive, ≤ {MAX_DRIVE_S} s)</option>
+            <option value="drive">drive rate, one axis (≤ {MAX_DRIVE_S} s)</option>
           </select>
         </label>
         <SignalPicker chosen={draft.channels} max={MAX_CHANNELS} testid="scope-channels"
@@ -139,7 +145,9 @@ export function ScopeSetup() {
             onChange={(e) => setDraft({ ...draft, mode: (e.target as HTMLSelectElement).value as Setup["mode"] })}>
             <option value="single">single</option>
             <option value="normal">normal (re-arms)</option>
-            <option value="roll" disabled={driveRate}>roll (free running)</option>
+            <option value="roll" disabled={driveRate} title={driveRate ? "a drive-rate capture is a trace of up to 2 s: single or normal" : undefined}>
+              roll (free running){driveRate ? " — not at the drive's rate" : ""}
+            </option>
           </select>
         </label>
         <fieldset class="trigger" disabled={draft.mode === "roll"}>
@@ -218,9 +226,11 @@ export function ScopeSetup() {
           ) : (
             <>
               <button type="button" data-testid="recording-start" disabled={!online.value || !draft.channels.length || driveRate}
+              title={driveRate ? "continuous recording is at the NC's rate: switch Rate to every NC cycle" : undefined}
                 onClick={() => void run(async () => setRecording(await startRecording(draft.channels)))}>
                 ● Record the channels
               </button>
+              {driveRate ? <span class="hint">records at the NC's rate only</span> : null}
               {rec ? (
                 <span>
                   last: {rec.cycles} cycles, {kib(rec.bytes)} ·{" "}

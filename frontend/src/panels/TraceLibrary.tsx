@@ -108,6 +108,7 @@ export function TraceLibrary() {
       }>
       {error ? <p class="refusal" role="alert">{error}</p> : null}
       {library.value.length ? (
+        <div class="trace-table-wrap">
         <table class="trace-table">
           <thead>
             <tr>
@@ -125,6 +126,7 @@ export function TraceLibrary() {
             ))}
           </tbody>
         </table>
+        </div>
       ) : (
         <p class="hint">No stored traces yet: save a capture, or import a CSV.</p>
       )}
