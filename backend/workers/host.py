@@ -29,15 +29,14 @@ from backend.workers.protocol import (
     StatusRead,
 )
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
+from nc_sim.assist.drive_axis import drive_axis
 from nc_sim.assist.procedure import LiveRun
 from nc_sim.assist.run import live
-from nc_sim.axis.plant import cascade
 from nc_sim.commands import JogStop
 from nc_sim.drive_scope import DriveScope, drive_signals
 from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
 from nc_sim.machine.service import history_cycles, service_view
-from nc_sim.plant import layout as PL
 from nc_sim.scope import Record, Scope, ScopeSetup
 from nc_sim.signals import Signal, machine_signals
 from nc_sim.sim import Simulation, restore
@@ -175,16 +174,8 @@ class MachineHost:
         those at the drive's rate. ValueError naming why a drive-rate capture cannot run."""
         self.stop_drive_scope()
         history = self.history(setup.length_cycles)
-        if drive:
-            ax = self.machine.axis(drive[0].axis)
-            if not cascade(ax.cfg):
-                raise ValueError(
-                    f"{ax.name} runs the IDEAL plant (sim.plant): a drive-rate capture needs "
-                    "the drive cascade (DRIVE_CASCADE)"
-                )
-            probe = self.sim.kernel.probe
-            if probe[PL.PR_SLOT] >= 0 and probe[PL.PR_POS] < probe[PL.PR_LEN]:
-                raise ValueError("a drive measurement runs on this machine: try again after it")
+        if drive:  # the axis on the drive cascade, its probe free (ExperimentError: why not)
+            ax, _ = drive_axis(self.machine, drive[0].axis, "a drive-rate capture")
             self.drive_scope = DriveScope(
                 self.sim.kernel, self.sim.cycle, ax.slot, drive, setup.length_cycles
             )

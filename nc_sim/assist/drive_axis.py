@@ -25,5 +25,5 @@ def drive_axis(m: Machine, axis: str, what: str) -> tuple[Axis, DriveModel]:
         )
     probe = m.k.probe
     if probe[PL.PR_SLOT] >= 0 and probe[PL.PR_POS] < probe[PL.PR_LEN]:
-        raise ExperimentError("another drive measurement runs on this worker: try again later")
+        raise ExperimentError("another drive measurement runs on this machine: try again after it")
     return ax, drive_model(ax.cfg, m.k.cycle_s, gear=ax.gear)

@@ -66,11 +66,11 @@ def drive_model(
 ) -> DriveModel:
     """The axis' drive and mechanics from its list in gear stage `gear` (a spindle's stage
     sets the travel per motor revolution and the inertia ratio where its list gives them),
-    with the training faults in force: a
-    friction fault (a speed the ideal drive loses) becomes the Coulomb torque that costs a
-    P speed loop that speed, a backlash fault adds to the gap, a torque-limited acceleration
-    caps the torque; the mechanical faults soften the coupling, raise the friction and
-    shift the filters. The drive's step is the NC cycle over the nearest whole number."""
+    with the training faults in force: a friction fault (a speed the ideal drive loses)
+    becomes the Coulomb torque that costs a P speed loop that speed, a backlash fault adds
+    to the gap, a torque-limited acceleration caps the torque; the mechanical faults soften
+    the coupling, raise the friction and shift the filters. The drive's step is the NC
+    cycle over the nearest whole number."""
     f = faults or PlantFaults()
     substeps = max(1, round(cycle_s / c.eng("drive.sampling_time")))
     active = int(c.raw("drive.current_filter_active"))
