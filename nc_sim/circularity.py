@@ -141,3 +141,39 @@ def reversal_spikes(
 def _within(theta_deg: np.ndarray, centre_deg: float, half_width_deg: float) -> np.ndarray:
     d = (theta_deg - centre_deg + 180.0) % 360.0 - 180.0
     return np.asarray(np.abs(d) <= half_width_deg)
+
+
+@dataclass(frozen=True)
+class LostMotion:
+    """The steps where the plane's first and second axis reverse (backlash, and the twist
+    friction puts into the drive train), and the ellipse fitted with them."""
+
+    step_a: float
+    step_b: float
+    ellipse: Ellipse
+
+
+def lost_motion(
+    theta_deg: np.ndarray,
+    dr: np.ndarray,
+    way_a: np.ndarray,
+    way_b: np.ndarray,
+    exclude_deg: float,
+) -> LostMotion:
+    """The lost motion of both axes from the radial deviation of the true path: behind a gap
+    b the load trails the motor by b/2 against the way it moves, so an axis' gap adds
+    -b/2 · way · (its direction's share of the radius: cos θ or sin θ), a step of b where it
+    reverses. Fitted by least squares with the centre and the ellipse (harmonics up to 2),
+    leaving out ±`exclude_deg` about the quadrant points where the reversals' transients
+    are; `way_a`, `way_b`: the sign of each axis' commanded velocity at each point."""
+    t = np.radians(theta_deg)
+    near = np.zeros(len(t), dtype=bool)
+    for q in QUADRANTS_DEG:
+        near |= _within(theta_deg, q, exclude_deg)
+    keep = ~near if np.count_nonzero(~near) >= 16 else np.ones(len(t), dtype=bool)
+    cols = [np.ones_like(t), np.cos(t), np.sin(t), np.cos(2 * t), np.sin(2 * t)]
+    cols += [-0.5 * way_a * np.cos(t), -0.5 * way_b * np.sin(t)]
+    coef = np.linalg.lstsq(np.column_stack(cols)[keep], dr[keep], rcond=None)[0]
+    a, b = coef[3], coef[4]
+    axis = (math.degrees(math.atan2(b, a)) / 2.0) % 180.0
+    return LostMotion(float(coef[5]), float(coef[6]), Ellipse(2.0 * math.hypot(a, b), axis))

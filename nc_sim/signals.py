@@ -46,6 +46,8 @@ def _axis_signals(name: str, kind: AxisKind, slot: int, rotary_capable: bool) ->
     ]
     if not spindle:
         rows += [
+            # the simulated machine's true position (a laser's, a ballbar's reading)
+            (f"pos_true_{u}", L.R_P_TRUE, 1.0, u, "float"),
             (f"vel_cmd_{u}_min", L.R_V_CMD, 60.0, f"{u}/min", "float"),
             (f"vel_act_{u}_min", L.R_V_ACT, 60.0, f"{u}/min", "float"),
         ]

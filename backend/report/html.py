@@ -14,7 +14,7 @@ from html import escape
 from api.assist import AssistSeries
 from api.audit import AuditRecord
 from api.report import AssistRun, SignOff
-from backend.report import svg
+from backend.report import polar, svg
 from nc_sim.assist.registry import BY_NAME
 
 MAX_LINES = 4  # series in one plot before they are split by name
@@ -187,6 +187,15 @@ def _run_plot(run: AssistRun) -> str:
             groups.setdefault((x_unit, y_unit, kind), []).append(s)
     out = []
     for (x_unit, y_unit, _), series in groups.items():
+        if run.assistant == "circle" and x_unit == "°":  # the circle's radial deviation
+            axes = str(run.result.inputs.get("axis", "  "))
+            lines = [svg.Line(s.name, s.x, s.y) for s in series]
+            out.append(
+                f'<figure class="plot">{polar.render(lines, axes[:1], axes[1:])}<figcaption>'
+                f"radial deviation about the least-squares centre, {y_unit} (run #{run.id})"
+                "</figcaption></figure>"
+            )
+            continue
         # a few figures in the series' own unit are levels worth seeing on it (the mean lag,
         # the lag monitoring limit); many would hide the data
         refs = [

@@ -22,7 +22,7 @@ from nc_sim.signals import Signal, signal_rows
 
 RING_CYCLES = 1 << 14  # 16.4 s at 1 kHz
 MAX_WRITE = 2000  # cycles a worker writes at most before publishing them
-R_COLS = 23  # kernel record columns (nc_sim.kernel.layout.R_COLS; checked by the worker)
+R_COLS = 24  # kernel record columns (nc_sim.kernel.layout.R_COLS; checked by the worker)
 _HEADER = 4  # int64: newest cycle, ring cycles, slots, columns
 
 

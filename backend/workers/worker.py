@@ -445,6 +445,9 @@ class Worker:
                 host = self._host(r.mid)
                 if host.live_of is not None:
                     return Failure("conflict", f"{host.live_of.name} runs: one run at a time")
+                if host.pacing.mode == "pause":  # it would hold the run before its first cycle
+                    why = "the machine is paused: run it (Simulation) before a run on it"
+                    return Failure("conflict", why)
                 run = host.start_assist(r)
                 if run.error is not None:  # refused before a cycle: nothing moved
                     host.end_assist()

@@ -495,6 +495,59 @@ ASSISTANTS: tuple[Assistant, ...] = (
         ("torque_peak_nm", "twist_peak_um"),
         live="nc_sim.assist.drive_trace:drive_trace",
     ),
+    Assistant(
+        "circle",
+        "Circularity test",
+        "ISO 230-4",
+        "The NC runs a G02/G03 circle about where the plane's axes stand, with overrun arcs "
+        "so the measured turn is at constant feed, counter-clockwise and clockwise, and "
+        "records commanded and actual positions: circular, radial and bidirectional "
+        "deviation about the least-squares centre, the radius change, the ellipse (servo "
+        "mismatch turns over with the direction, squareness and scale do not), reversal "
+        "spikes, lost motion and the effective kv of both axes, with kv matching proposed. "
+        "Measured on the NC's feedback (annex E) or on the true path (a ballbar's view, the "
+        "simulated machine's).",
+        Kind.EXPERIMENT,
+        "CircleRequest",
+        (
+            Choice("plane", "plane", ((17, "G17 XY"), (18, "G18 ZX"), (19, "G19 YZ")), 18),
+            Number("radius_mm", "radius, mm", "mm", 0, 500, True, 10.0, cli="radius"),
+            Number("feed_mm_min", "feed, mm/min", "mm/min", 0, 1e5, True, 1000.0, cli="feed"),
+            Choice(
+                "direction",
+                "direction",
+                ((0, "both: CCW, then CW"), (3, "CCW (G03)"), (2, "CW (G02)")),
+                0,
+            ),
+            Number(
+                "start_deg",
+                "start angle, ° from the plane's first axis",
+                "°",
+                -360,
+                360,
+                default=0.0,
+                cli="start",
+            ),
+            Number(
+                "overrun_deg",
+                "overrun arc before and after, °",
+                "°",
+                0,
+                180,
+                default=90.0,
+                cli="overrun",
+            ),
+            Choice(
+                "path",
+                "measured on",
+                ((1, "the NC's feedback (annex E)"), (2, "the true path (a ballbar)")),
+                1,
+            ),
+        ),
+        "nc_sim.assist.circle_test:circle_test_experiment",
+        ("circular_um", "bidirectional_um", "ellipse_ccw_um", "kv_mismatch_ms"),
+        live="nc_sim.assist.circle_test:circle_test",
+    ),
 )
 """Every assistant, in the order the HMI offers them."""
 

@@ -52,7 +52,8 @@ def run(name: str, cfg: MachineConfig, values: Mapping[str, object]) -> Result:
     a = assistant(name)
     inputs = _inputs(a, values)
     try:
-        cfg.axis(str(inputs.get("axis", "")))
+        if "axis" in inputs:
+            cfg.axis(str(inputs["axis"]))
         result: Result = resolve(a.run)(cfg, **inputs) if a.run else _live_on_copy(a, cfg, inputs)
     except NcUsageError as e:
         raise ExperimentError(str(e)) from None

@@ -34,7 +34,8 @@ S_MAN_P = 20  # manual offset added to the path's command position
 S_MAN_V = 21  # its velocity
 S_MAN_A = 22  # its acceleration
 S_MAN_TARGET = 23  # its target, NaN for a velocity plan (a jog braking to a hold)
-S_COLS = 24
+S_P_TRUE = 24  # the load's true position at the encoder's sample, in NC coordinates (R_P_TRUE)
+S_COLS = 25
 
 # --- pr: float parameters (engineering units) -----------------------------------------------
 P_KV = 0  # 1/s
@@ -150,7 +151,10 @@ R_ROTARY_MODE = 19
 R_MVPOS = 20  # actual speed above the noise of an axis at rest (P_INPOS_WIN per second)
 R_MVNEG = 21
 R_READY = 22  # the drive follows (I_ENABLED)
-R_COLS = 23
+# the load's true position in NC coordinates (sign and homing offset, no encoder error):
+# what a laser or a ballbar measures, which only the simulated machine knows
+R_P_TRUE = 23
+R_COLS = 24
 
 # --- the path of a channel (coupled path mode) ------------------------------------------------
 MAX_PATH_AXES = 6

@@ -144,6 +144,7 @@ from nc_sim.kernel.layout import (
     R_OVERRIDE,
     R_P_ACT,
     R_P_CMD,
+    R_P_TRUE,
     R_READY,
     R_ROTARY_MODE,
     R_SPEED_REACHED,
@@ -165,6 +166,7 @@ from nc_sim.kernel.layout import (
     S_OVERRIDE,
     S_P_ACT,
     S_P_CMD,
+    S_P_TRUE,
     S_PLAY,
     S_SEG_P0,
     S_SEG_TAU,
@@ -536,6 +538,9 @@ def _measure(
     p_prev = st[s, S_P_ACT]
     p_act = _encoder(st, pr, ist, pl, ps, s, st[s, S_X_MOTOR], st[s, S_PLAY])
     st[s, S_P_ACT] = p_act
+    # the same instant as a laser or ballbar would read it: no encoder error, no motor side
+    sign = pr[s, P_ENC_SIGN] * pr[s, P_SIGN_FB]
+    st[s, S_P_TRUE] = sign * st[s, S_X_MOTOR] + pr[s, P_ENC_OFFSET]
     # actual speed from the encoder difference, smoothed as a drive's speed filter would be
     alpha = dt / (dt + V_ACT_FILTER_S)
     st[s, S_V_ACT] += ((p_act - p_prev) / dt - st[s, S_V_ACT]) * alpha
@@ -876,6 +881,7 @@ def run_cycles(
                 rec[c, s, R_MVPOS] = 1.0 if way > 0 else 0.0
                 rec[c, s, R_MVNEG] = 1.0 if way < 0 else 0.0
                 rec[c, s, R_READY] = ist[s, I_ENABLED]
+                rec[c, s, R_P_TRUE] = st[s, S_P_TRUE]
         if any_event == 1:
             return c + 1
     return n

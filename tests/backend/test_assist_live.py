@@ -160,3 +160,35 @@ def test_a_live_frequency_response_excites_the_drive_in_its_worker(srv: Server, 
     assert srv.status(lathe)["assist"] is None
     runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
     assert runs[0]["assistant"] == "frequency-response" and runs[0]["live"] is True
+
+
+def test_a_live_circle_runs_the_ncs_own_program_and_comes_back(srv: Server, lathe: str) -> None:
+    """The circularity test on the machine itself: G03 then G02 about where Z and X stand,
+    paced in real time; the axes end where they started, the run is stored for the plane
+    (ZX) and audited. A P loop at kv 20/s shrinks R5 at F2000 by about
+    R(1 − 1/√(1 + (ω/kv)²)) = 34.5 µm (ω = F/R = 6.67/s)."""
+    z0, x0 = srv.axis("Z", lathe)["pos_cmd"], srv.axis("X", lathe)["pos_cmd"]
+    r = _live(srv, lathe, "circle", {"radius_mm": 5.0, "feed_mm_min": 2000.0, "overrun_deg": 45})
+    assert r.status_code == 200, r.text
+    fig = {f["name"]: f["value"] for f in r.json()["figures"]}
+    omega = 2000 / 60 / 5
+    shrink_um = 5 * (1 - 1 / (1 + (omega / 20) ** 2) ** 0.5) * 1000
+    assert -fig["radius_change_ccw_um"] == pytest.approx(shrink_um, rel=0.2)
+    assert [s["name"] for s in r.json()["series"]] == ["CCW", "CW"]
+    assert srv.axis("Z", lathe)["pos_cmd"] == pytest.approx(z0, abs=1e-4)
+    assert srv.axis("X", lathe)["pos_cmd"] == pytest.approx(x0, abs=1e-4)
+    runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    assert runs[0]["assistant"] == "circle" and runs[0]["axis"] == "ZX" and runs[0]["live"]
+    audit = srv.http.get(f"/api/machines/{lathe}/audit").json()["rows"]
+    assert any(a["action"] == "assist live circle" and a["outcome"] == "ok" for a in audit)
+
+
+def test_a_live_run_does_not_start_on_a_paused_machine(srv: Server, lathe: str) -> None:
+    """Paused, the machine would hold the run before its first cycle while the request
+    waits: it is refused at once instead, and nothing moves."""
+    srv.pace(lathe, mode="pause")
+    z0 = srv.axis("Z", lathe)["pos_cmd"]
+    r = _live(srv, lathe, "circle", {"radius_mm": 1.0})
+    assert r.status_code == 409 and "paused" in r.text
+    assert srv.axis("Z", lathe)["pos_cmd"] == z0
+    assert srv.status(lathe)["assist"] is None

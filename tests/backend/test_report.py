@@ -347,3 +347,33 @@ def test_a_frequency_response_is_plotted_on_a_logarithmic_frequency_axis(
         assert p[0] == pytest.approx(
             left + (math.log10(f) - math.log10(x0)) / span * width, abs=0.006
         )
+
+
+def test_a_circle_is_drawn_as_a_polar_plot_at_its_stated_magnification(
+    srv: Server, lathe: str
+) -> None:
+    """The circularity test on a copy (Z at kv 25/s against X's 20/s: an ellipse of about
+    167 µm): the report draws each direction about the nominal circle, every stored point at
+    the radius its deviation and the stated µm per division give."""
+    change = {"scope": "axis", "target": "Z", "name": "getriebe[0].kv", "value": 2500}
+    assert srv.http.patch(
+        f"/api/machines/{lathe}/parameters", json={"changes": [change]}
+    ).is_success
+    r = srv.http.post(f"/api/machines/{lathe}/assist/circle", json={}, timeout=120)
+    assert r.status_code == 200, r.text
+    series = {s["name"]: s for s in r.json()["series"]}
+    html = srv.http.get(f"/api/machines/{lathe}/report").text
+    svg_tag = re.search(r'<svg[^>]*class="polar"[^>]*data-um-per-division="([\d.]+)"', html)
+    assert svg_tag is not None
+    per_div = float(svg_tag.group(1))
+    assert 4 * per_div * 0.9 >= 167 / 2  # the ellipse's peak within the rings
+    for name in ("CCW", "CW"):
+        pts = re.search(rf'<polygon data-series="{name}"[^>]*points="([^"]*)"', html)
+        assert pts is not None
+        xy = [tuple(map(float, p.split(","))) for p in pts.group(1).split()]
+        assert len(xy) == len(series[name]["x"])
+        (px, py), deg, dr = xy[0], series[name]["x"][0], series[name]["y"][0]
+        radius = 90 + dr / per_div * 90 * 0.9 / 4  # BASE + dr · px per µm
+        assert math.hypot(px - 160, 160 - py) == pytest.approx(radius, abs=0.15)
+        angle = math.degrees(math.atan2(160 - py, px - 160))
+        assert abs((angle - deg + 180) % 360 - 180) < 0.5

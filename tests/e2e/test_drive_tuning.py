@@ -118,3 +118,43 @@ def test_the_drive_trace_shows_speeds_torques_and_the_twist_at_the_drive_rate(
     for unit in ("rpm", "Nm", "µm"):  # a chart per quantity, each with its lines
         expect(box.get_by_test_id(f"drive-trace-{unit}").locator("canvas")).to_have_count(1)
     shot(page, "drive-trace-desktop")
+
+
+def test_the_circle_shows_a_servo_mismatch_that_kv_matching_removes(
+    page: Page, srv: Server, mid: str
+) -> None:
+    """Z at kv 25/s, X at 20/s: an ellipse of F·|1/20 − 1/25| = 166.7 µm at F1000 on
+    crossing diagonals; the proposal brings Z to X's kv and the circle again is round."""
+    set_up(srv, mid, "Z", {"getriebe[0].kv": 2500})
+    page.get_by_test_id("tab-Drive tuning").click()
+    box = panel(page, "drive")
+    box.get_by_test_id("assist-pick-circle").check()
+    expect(box.get_by_test_id("assist-axis")).to_have_count(0)  # the plane names the axes
+    expect(box.get_by_test_id("drive-plan")).to_contain_text("Z and X run a circle of R10")
+    _run(box)
+    chart = box.get_by_test_id("circle-chart")
+    expect(chart.locator("path[data-series]")).to_have_count(2)  # CCW and CW
+    before = _figure(box, "ellipse_ccw_um")
+    assert before == pytest.approx(1000 / 60 * (1 / 20 - 1 / 25) * 1000, rel=0.05)
+    um_per_div = float(chart.get_attribute("data-um-per-division") or "0")
+    assert before / 2 <= 4 * um_per_div  # the ellipse fits within the rings
+    expect(box.get_by_test_id("assist-notes")).to_contain_text("servo mismatch")
+    change = box.get_by_test_id("assist-change-getriebe[0].kv")
+    expect(change).to_contain_text("2000")
+    shot(page, "circle-mismatch-desktop")
+
+    box.get_by_test_id("assist-apply").click()
+    expect(box.get_by_test_id("assist-applied")).to_be_visible()
+    _run(box)
+    after = _figure(box, "ellipse_ccw_um")
+    assert after < 0.1 * before
+    compare = box.get_by_test_id("circle-compare")
+    earlier = compare.locator("option").nth(2)  # newest first: this run, then the one before
+    compare.select_option(earlier.get_attribute("value") or "")
+    expect(chart.locator("path.earlier")).to_have_count(2)
+    row = box.get_by_test_id("bode-deltas").locator('tr[data-figure="ellipse_ccw_um"]')
+    expect(row).to_be_visible()
+    shot(page, "circle-after-desktop")
+    page.set_viewport_size({"width": 1024, "height": 768})
+    chart.scroll_into_view_if_needed()
+    shot(page, "circle-after-tablet")

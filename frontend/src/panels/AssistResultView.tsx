@@ -6,6 +6,7 @@ import { figure } from "../state/assist";
 import { fmt } from "../ui/format";
 import { AssistChart, type Level } from "./AssistChart";
 import { BodeView } from "./BodeChart";
+import { CircleView } from "./CircleChart";
 import { LoopGainView } from "./LoopGainResult";
 import { RPM_TO_DEG_S, perSecond } from "../ui/units";
 
@@ -65,6 +66,22 @@ const FIGURES: Record<string, { label: string; decimals: number; sig?: number }>
   torque_peak_nm: { label: "torque peak", decimals: 2, sig: 3 },
   twist_peak_um: { label: "motor ahead of load, peak", decimals: 2, sig: 3 },
   "multi-gain-calc.multi_gain": { label: "multi_gain", decimals: 4 },
+  // the circularity test (ISO 230-4)
+  circular_um: { label: "circular deviation G", decimals: 2, sig: 3 },
+  bidirectional_um: { label: "bidirectional G(b)", decimals: 2, sig: 3 },
+  circular_ccw_um: { label: "G, CCW", decimals: 2, sig: 3 },
+  circular_cw_um: { label: "G, CW", decimals: 2, sig: 3 },
+  radius_change_ccw_um: { label: "radius change, CCW", decimals: 2, sig: 3 },
+  radius_change_cw_um: { label: "radius change, CW", decimals: 2, sig: 3 },
+  ellipse_ccw_um: { label: "ellipse, CCW", decimals: 2, sig: 3 },
+  ellipse_cw_um: { label: "ellipse, CW", decimals: 2, sig: 3 },
+  ellipse_ccw_deg: { label: "its axis, CCW", decimals: 0, sig: 3 },
+  ellipse_cw_deg: { label: "its axis, CW", decimals: 0, sig: 3 },
+  spike_ccw_um: { label: "reversal spike, CCW", decimals: 2, sig: 3 },
+  spike_cw_um: { label: "reversal spike, CW", decimals: 2, sig: 3 },
+  spike_ccw_deg: { label: "at, CCW", decimals: 0, sig: 3 },
+  spike_cw_deg: { label: "at, CW", decimals: 0, sig: 3 },
+  kv_mismatch_ms: { label: "1/kv difference", decimals: 3, sig: 3 },
 };
 const HIDDEN = new Set(["runaway", "observed"]); // the sign check's verdict says them in words
 
@@ -85,7 +102,15 @@ const checkFactor = (r: AssistResult): number | null => (r.assistant === "multi-
 
 /** A figure's name and decimals: the assistant's own first (the calculator's f and multi_gain
  * are not the experiment's). */
-const figureSpec = (r: AssistResult, name: string) => FIGURES[`${r.assistant}.${name}`] ?? FIGURES[name];
+const figureSpec = (r: AssistResult, name: string) => FIGURES[`${r.assistant}.${name}`] ?? FIGURES[name] ?? perAxis(name);
+
+/** Figures named after an axis (the circle's kv_Z, lost_motion_X_um). */
+function perAxis(name: string): { label: string; decimals: number; sig?: number } | undefined {
+  const lost = /^lost_motion_(\w+)_um$/.exec(name);
+  if (lost) return { label: `lost motion ${lost[1]}`, decimals: 2, sig: 3 };
+  const kv = /^kv_([A-Z]\w*)$/.exec(name);
+  return kv ? { label: `kv ${kv[1]} (effective)`, decimals: 2, sig: 4 } : undefined;
+}
 
 /** The multi_gain run found k = kv already: its proposal is residue, not a correction. */
 export const settled = (r: AssistResult): boolean => {
@@ -125,6 +150,7 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
       {r.assistant === "sign-check" ? <SignVerdict result={r} /> : null}
       {r.assistant === "frequency-response" ? <BodeView result={r} /> : null}
       {r.assistant === "drive-trace" ? <DriveTraceCharts result={r} /> : null}
+      {r.assistant === "circle" ? <CircleView result={r} /> : null}
       {r.assistant === "step-response" && r.series.length === 2 ? (
         <div class="assist-plot">
           <AssistChart series={r.series[0]} more={[r.series[1]]} levels={[]} testid="step-chart"

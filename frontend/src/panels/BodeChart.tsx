@@ -4,11 +4,10 @@
 import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
-import { http } from "../api/http";
-import type { AssistResult, AssistRun, AssistRunInfo, AssistSeries } from "../api/types";
-import { machineUrl } from "../state/session";
+import type { AssistResult, AssistRun, AssistSeries } from "../api/types";
 import { fmt, tickLabels } from "../ui/format";
 import { followWidth } from "../ui/plot";
+import { CompareWith, FigureDeltas, runLabel } from "./CompareRun";
 import { COLOURS } from "./LivePlot";
 
 /** Figures drawn as vertical marks, with their short label. */
@@ -157,81 +156,22 @@ export function BodeChart(props: { result: AssistResult; earlier?: AssistResult[
  * overlay (before/after a change). */
 export function BodeView(props: { result: AssistResult }) {
   const r = props.result;
-  const axis = String(r.inputs.axis ?? "");
   const measurement = r.inputs.measurement;
-  const [runs, setRuns] = useState<AssistRunInfo[]>([]);
-  const [pick, setPick] = useState("");
   const [earlier, setEarlier] = useState<AssistRun | null>(null);
-  useEffect(() => {
-    http.get<AssistRunInfo[]>(machineUrl("/assist/runs?limit=50")).then(
-      (all) =>
-        setRuns(all.filter((x) => x.assistant === r.assistant && x.axis === axis && (x.measurement ?? null) === (measurement ?? null))),
-      () => setRuns([]),
-    );
-  }, [r]);
-  useEffect(() => {
-    if (!pick) return setEarlier(null);
-    http.get<AssistRun>(machineUrl(`/assist/runs/${pick}`)).then(setEarlier, () => setEarlier(null));
-  }, [pick]);
   const same = earlier && earlier.result.inputs.measurement === measurement ? earlier : null;
-  const when = (t: number) => new Date(t * 1000).toLocaleTimeString();
   return (
     <div class="bode-view">
-      <BodeChart result={r} earlier={same ? [same.result] : []}
-        labels={["this run", same ? `#${same.id} ${when(same.time_unix)}` : ""]} />
-      <label class="assist-field bode-compare">
-        <span>Compare with</span>
-        <select data-testid="bode-compare" value={pick} onChange={(e) => setPick((e.target as HTMLSelectElement).value)}>
-          <option value="">— an earlier run to lay over this one —</option>
-          {runs.map((x) => (
-            <option key={x.id} value={String(x.id)}>
-              #{x.id} {when(x.time_unix)} {x.live ? "on the machine" : "on a copy"}: {x.summary}
-            </option>
-          ))}
-        </select>
-      </label>
+      <BodeChart result={r} earlier={same ? [same.result] : []} labels={["this run", same ? runLabel(same) : ""]} />
+      <CompareWith result={r} testid="bode-compare" onPick={setEarlier}
+        matches={(x) => (x.measurement ?? null) === (measurement ?? null)} />
       {earlier && !same ? (
         <p class="hint" data-testid="bode-compare-other">
           Run #{earlier.id} measured something else: compare runs of the same measurement.
         </p>
       ) : null}
-      {same ? <FigureDeltas now={r} before={same.result} label={`#${same.id}`} /> : null}
+      {same ? <FigureDeltas now={r} before={same.result} label={`#${same.id}`} skip={NOT_COMPARED} /> : null}
     </div>
   );
 }
 
 const NOT_COMPARED = new Set(["measured_s", "coherence_min"]);
-
-/** The figures both runs have, this run's beside the earlier one's with the change. */
-function FigureDeltas(props: { now: AssistResult; before: AssistResult; label: string }) {
-  const before = new Map(props.before.figures.map((f) => [f.name, f]));
-  const rows = props.now.figures.filter((f) => before.has(f.name) && !NOT_COMPARED.has(f.name));
-  if (!rows.length) return null;
-  return (
-    <table class="bode-deltas" data-testid="bode-deltas">
-      <thead>
-        <tr>
-          <th>figure</th>
-          <th>this run</th>
-          <th>{props.label}</th>
-          <th>change</th>
-        </tr>
-      </thead>
-      <tbody>
-        {rows.map((f) => {
-          const b = before.get(f.name)!;
-          const d = f.value - b.value;
-          const pct = b.value !== 0 ? ` (${d >= 0 ? "+" : "−"}${fmt(Math.abs((d / b.value) * 100), 1)} %)` : "";
-          return (
-            <tr key={f.name} data-figure={f.name}>
-              <td>{f.text || f.name}</td>
-              <td>{fmt(f.value, 3)} {f.unit}</td>
-              <td>{fmt(b.value, 3)} {b.unit}</td>
-              <td>{d >= 0 ? "+" : "−"}{fmt(Math.abs(d), 3)} {f.unit}{pct}</td>
-            </tr>
-          );
-        })}
-      </tbody>
-    </table>
-  );
-}

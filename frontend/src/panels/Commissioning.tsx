@@ -62,7 +62,7 @@ function checked(inp: Inputs, unit: string) {
 const n1 = (v: number) => String(+v.toPrecision(3));
 
 /** The assistants of the Drive tuning workspace: the drive's own measurements. */
-export const DRIVE_ASSISTANTS: readonly string[] = ["frequency-response", "step-response", "drive-trace"];
+export const DRIVE_ASSISTANTS: readonly string[] = ["frequency-response", "step-response", "drive-trace", "circle"];
 
 /** The assistants' panel: the NC's commissioning (by default), or the drive's measurements
  * (`drive`: the Drive tuning workspace). */
@@ -203,6 +203,7 @@ export function Commissioning(props: { drive?: boolean }) {
   const liveBlocked =
     commandBlocked.value ||
     (status.value?.emergency_stop ? "emergency stop: release it and reset first" : "") ||
+    (status.value?.simulation.mode === "pause" ? "the machine is paused: run it (Simulation) first" : "") ||
     (live ? `${live.name} runs on the machine (${live.by})` : "");
   return (
     <Panel title={drive ? "Drive tuning: frequency response and steps" : "Commissioning assistants"} id={drive ? "drive" : "assist"}>
@@ -230,6 +231,7 @@ export function Commissioning(props: { drive?: boolean }) {
               </label>
             ))}
           </fieldset>
+          {fields.some((f) => f.kind === "axis") || guided ? (
           <label class="assist-field">
             <span>Axis</span>
             <select data-testid="assist-axis" value={ax?.name} disabled={busy}
@@ -241,6 +243,7 @@ export function Commissioning(props: { drive?: boolean }) {
               ))}
             </select>
           </label>
+          ) : null}
           {!guided ? (
             <SchemaFields fields={fields} texts={texts} errors={form.errors} disabled={busy} testid="assist-in"
               set={(k, v) => setTexts({ ...texts, [k]: v })} />
@@ -311,7 +314,7 @@ export function Commissioning(props: { drive?: boolean }) {
               <p class="hint">Keep clear of the machine. The E-stop and Cancel end the run at once.</p>
               <div class="row">
                 <button type="button" data-testid="assist-confirm-live" onClick={() => void run("machine")} disabled={!!liveBlocked}>
-                  Move {ax.name} now
+                  {name === "circle" ? "Run the circle now" : `Move ${ax.name} now`}
                 </button>
                 <button type="button" class="secondary" data-testid="assist-confirm-back" onClick={() => setConfirming(false)}>
                   Back
@@ -384,7 +387,7 @@ function describe(
   const copy =
     where === "copy"
       ? "on a copy of the machine, in simulated time; the live machine does not move."
-      : "on the machine itself, in its time (paused, it waits; fast, it runs fast).";
+      : "on the machine itself, in its time (paused meanwhile, it waits; fast, it runs fast).";
   if (name === "sign-check") {
     const d = typeof values.distance === "number" ? values.distance : null;
     const f = typeof values.signFeed === "number" ? values.signFeed : null;

@@ -52,6 +52,7 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
   const { name, axis, body } = props;
   const drive = useDrive(axis.name);
   const cycle = status.value?.simulation.cycle_s ?? 0.001;
+  if (name === "circle") return <CirclePlan body={body} live={props.live} />;
   if (!drive) return null;
   if (!drive.cascade)
     return (
@@ -101,6 +102,30 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
   return (
     <p class="hint" data-testid="drive-plan" data-cascade="1" data-fits="1">
       {text}
+      {props.live ? "" : " On a copy this takes a fraction of that; the machine itself moves only after you confirm."}
+    </p>
+  );
+}
+
+const PLANE_AXES: Record<number, [string, string]> = { 17: ["X", "Y"], 18: ["Z", "X"], 19: ["Y", "Z"] };
+
+/** The circle's motion: where, how far and how long (as nc_sim/assist/circle_test.py plans
+ * it: out to the overrun's start, the overrun, the turn, the overrun, back to the centre). */
+function CirclePlan(props: { body: Record<string, unknown>; live?: boolean }) {
+  const b = props.body;
+  const [a, c] = PLANE_AXES[num(b.plane, 18)] ?? ["?", "?"];
+  const r = num(b.radius_mm, 10);
+  const feed = num(b.feed_mm_min, 1000);
+  const overrun = num(b.overrun_deg, 90);
+  const both = num(b.direction, 0) === 0;
+  const turn = (2 * Math.PI * r) / (feed / 60);
+  const one = turn * (1 + (2 * overrun) / 360) + (2 * r) / (feed / 60);
+  const dirs = both ? "counter-clockwise (G03), then clockwise (G02)" : num(b.direction, 0) === 3 ? "counter-clockwise (G03)" : "clockwise (G02)";
+  return (
+    <p class="hint" data-testid="drive-plan" data-fits="1">
+      {a} and {c} run a circle of R{fmt(r, 3)} mm at F{fmt(feed, 0)} about where they stand (±{fmt(r, 3)} mm on both axes),
+      {" "}{dirs}, with {fmt(overrun, 0)}° of overrun arc before and after the measured turn: one turn takes {fmt(turn, 1)} s,
+      the whole run about {fmt((both ? 2 : 1) * one, 1)} s of machine time.
       {props.live ? "" : " On a copy this takes a fraction of that; the machine itself moves only after you confirm."}
     </p>
   );
