@@ -19,7 +19,8 @@ and its torque limit; never the simulated mechanics' hidden parameters.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from collections.abc import Generator
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -104,6 +105,18 @@ def _excitation(
     return np.tile(one, periods)[:count]
 
 
+@dataclass(frozen=True)
+class Measured:
+    """What one measurement found: the response over its band, how often the motor
+    reversed meanwhile (per s) and how long the excitation ran (machine time)."""
+
+    axis: str
+    measurement: int
+    h: frf.Frf
+    reversals_per_s: float
+    measured_s: float
+
+
 def frequency_response(
     m: Machine,
     axis: str,
@@ -118,6 +131,38 @@ def frequency_response(
     averages: int = 10,
     window_mm: float = 50.0,
 ) -> Procedure:
+    """`measure`, read as an engineer reads it: resonances, margins, bandwidth, the Bode plot."""
+    done = yield from measure(
+        m,
+        axis,
+        measurement,
+        excitation,
+        torque_pct,
+        speed_rpm,
+        position_mm,
+        offset_rpm,
+        f_min_hz,
+        f_max_hz,
+        averages,
+        window_mm,
+    )
+    return analyse(done, offset_rpm != 0.0)
+
+
+def measure(
+    m: Machine,
+    axis: str,
+    measurement: int = MECHANICS,
+    excitation: int = PRBS,
+    torque_pct: float = 2.0,
+    speed_rpm: float = 20.0,
+    position_mm: float = 0.1,
+    offset_rpm: float = 30.0,
+    f_min_hz: float = 5.0,
+    f_max_hz: float | None = None,
+    averages: int = 10,
+    window_mm: float = 50.0,
+) -> Generator[Wait, np.ndarray, Measured]:
     """Measure `measurement` on `axis` with a PRBS or a chirp (`excitation`) of
     `torque_pct` % of the torque limit, `speed_rpm` or `position_mm`, `averages` Welch
     averages from `f_min_hz` to `f_max_hz` (half the drive rate; the position loop: half the
@@ -204,11 +249,14 @@ def frequency_response(
                 if ax.state is AxisState.STANDSTILL:
                     settle -= 10
                 yield Wait(10, f"{ax.name} returns to {p0:g}", total_s)
-    result = _analyse(
-        ax.name, measurement, trace, position, steps, lead, nseg, fs, (f_min_hz, f_hi), v_offset
-    )
-    took = Figure("measured_s", total_s, "s", "excitation on the axis (machine time)")
-    return replace(result, figures=(*result.figures, took))
+    tr = trace[::steps] if position else trace
+    x, y = _signals(measurement, tr[lead:])
+    if position:
+        x, y = x - np.mean(x), y - np.mean(y)
+    h = frf.h1(x, y, fs, nperseg=nseg).band(f_min_hz, f_hi)
+    w = tr[lead:, PL.D_W_MOTOR]
+    per_s = np.count_nonzero(np.signbit(w[1:]) != np.signbit(w[:-1])) / (len(w) / fs)
+    return Measured(ax.name, measurement, h, 0.0 if position else float(per_s), total_s)
 
 
 def _signals(measurement: int, tr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -229,24 +277,10 @@ def _log_thin(f: np.ndarray) -> np.ndarray:
     return np.unique(np.searchsorted(f, at).clip(0, len(f) - 1))
 
 
-def _analyse(
-    name: str,
-    measurement: int,
-    trace: np.ndarray,
-    position: bool,
-    steps: int,
-    lead: int,
-    nseg: int,
-    fs: float,
-    band: tuple[float, float],
-    offset: float,
-) -> Result:
-    f_lo, f_hi = band
-    tr = trace[::steps] if position else trace
-    x, y = _signals(measurement, tr[lead:])
-    if position:
-        x, y = x - np.mean(x), y - np.mean(y)
-    h = frf.h1(x, y, fs, nperseg=nseg).band(f_lo, f_hi)
+def analyse(done: Measured, offset: bool) -> Result:
+    """The figures, notes and Bode series of a measurement (`offset`: it ran at an offset
+    speed)."""
+    name, measurement, h = done.axis, done.measurement, done.h
     figures: list[Figure] = []
     notes: list[str] = []
     if measurement == MECHANICS:
@@ -301,9 +335,8 @@ def _analyse(
             figures.append(Figure("bandwidth_hz", float(bw), "Hz", "-3 dB bandwidth"))
         peak = float(np.max(h.magnitude_db))
         figures.append(Figure("peak_db", peak, "dB", "highest magnitude (resonance peaking)"))
-    w = tr[lead:, PL.D_W_MOTOR]
-    per_s = np.count_nonzero(np.signbit(w[1:]) != np.signbit(w[:-1])) / (len(w) / fs)
-    if per_s >= 1.0 and not position:
+    per_s = done.reversals_per_s
+    if per_s >= 1.0:
         cure = "a higher offset speed" if offset else "an offset speed"
         notes.append(
             f"the motor reversed {per_s:.0f} times a second: friction changes sign at each "
@@ -329,4 +362,7 @@ def _analyse(
     )
     notes.insert(0, f"{name}: {MEASUREMENTS[measurement]}, H1 in {unit or 'the ratio of both'}")
     inputs: dict[str, float | int | str] = {"axis": name, "measurement": measurement}
+    figures.append(
+        Figure("measured_s", done.measured_s, "s", "excitation on the axis (machine time)")
+    )
     return Result("frequency-response", tuple(figures), (), series, tuple(notes), inputs=inputs)

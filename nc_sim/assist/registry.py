@@ -496,6 +496,45 @@ ASSISTANTS: tuple[Assistant, ...] = (
         live="nc_sim.assist.drive_trace:drive_trace",
     ),
     Assistant(
+        "autotune",
+        "Speed-loop autotune",
+        "drive: speed loop",
+        "Measures the mechanics (for the resonance) and the open speed loop as the drive runs "
+        "it, divides the drive's own PI out and searches gain, integral time and a notch on "
+        "the measured resonance for the highest bandwidth that keeps the template's phase "
+        "and gain margin (stiff 45°/8 dB, medium 55°/12 dB, soft 60°/20 dB); says what "
+        "stopped the gain. On a copy the new values are measured again (achieved margins "
+        "beside the target); kv for the tuned speed loop and the lag feedforward leaves. "
+        "The axis must run the drive cascade (sim.plant).",
+        Kind.EXPERIMENT,
+        "AutotuneRequest",
+        (
+            AxisChoice(kinds=_AXES),
+            Choice(
+                "template",
+                "stability template",
+                ((1, "stiff: 45°, 8 dB"), (2, "medium: 55°, 12 dB"), (3, "soft: 60°, 20 dB")),
+                1,
+            ),
+            Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 2.0),
+            Number("speed_rpm", "amplitude at the speed setpoint, rpm", "rpm", 0, 3000, True, 10.0),
+            Number(
+                "offset_rpm",
+                "offset speed of the motor, rpm (friction stays one-sided)",
+                "rpm",
+                -3000,
+                3000,
+                default=60.0,
+            ),
+            Number("f_min_hz", "lowest frequency, Hz", "Hz", 0.1, 1000, default=5.0, cli="f-min"),
+            Number("averages", "Welch averages", "", 1, 50, default=6, integer=True),
+            Number("window_mm", "position window, ± mm", "mm", 0, 1000, True, 50.0, cli="window"),
+        ),
+        "nc_sim.assist.autotune:autotune_experiment",
+        ("bandwidth_hz", "pm_achieved_deg", "gm_achieved_db", "kp"),
+        live="nc_sim.assist.autotune:autotune_live",
+    ),
+    Assistant(
         "circle",
         "Circularity test",
         "ISO 230-4",

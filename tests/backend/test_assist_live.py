@@ -192,3 +192,28 @@ def test_a_live_run_does_not_start_on_a_paused_machine(srv: Server, lathe: str) 
     assert r.status_code == 409 and "paused" in r.text
     assert srv.axis("Z", lathe)["pos_cmd"] == z0
     assert srv.status(lathe)["assist"] is None
+
+
+def test_a_live_autotune_measures_on_the_machine_and_leaves_its_values_alone(
+    srv: Server, lathe: str
+) -> None:
+    """The autotune on the machine itself (paced fast): measured and tuned there, the new
+    values proposed, not tried (no validation on the machine: apply on trial, measure
+    again); the drive's values as they were, X back where it started."""
+    change = {"scope": "axis", "target": "X", "name": "drive.speed_kp", "value": 0.125}
+    assert srv.http.patch(
+        f"/api/machines/{lathe}/parameters", json={"changes": [change]}
+    ).is_success
+    srv.pace(lathe, mode="fast")
+    x0 = srv.axis("X", lathe)["pos_act"]
+    r = _live(srv, lathe, "autotune", {"axis": "X", "template": 1})
+    assert r.status_code == 200, r.text
+    fig = {f["name"]: f["value"] for f in r.json()["figures"]}
+    assert fig["pm_deg"] >= 45.0 and fig["gm_db"] >= 8.0 and fig["kp"] > 0.125
+    assert "pm_achieved_deg" not in fig
+    assert any("apply on trial" in n for n in r.json()["notes"])
+    rows = srv.http.get(f"/api/machines/{lathe}/parameters?scope=axis&target=X").json()
+    assert next(p["value"] for p in rows if p["name"] == "drive.speed_kp") == 0.125
+    assert srv.axis("X", lathe)["pos_act"] == pytest.approx(x0, abs=0.01)
+    runs = srv.http.get(f"/api/machines/{lathe}/assist/runs").json()
+    assert runs[0]["assistant"] == "autotune" and runs[0]["live"] is True

@@ -5,6 +5,7 @@ import type { AssistResult } from "../api/types";
 import { figure } from "../state/assist";
 import { fmt } from "../ui/format";
 import { AssistChart, type Level } from "./AssistChart";
+import { AutotuneView } from "./AutotuneView";
 import { BodeView } from "./BodeChart";
 import { CircleView } from "./CircleChart";
 import { LoopGainView } from "./LoopGainResult";
@@ -82,6 +83,26 @@ const FIGURES: Record<string, { label: string; decimals: number; sig?: number }>
   spike_ccw_deg: { label: "at, CCW", decimals: 0, sig: 3 },
   spike_cw_deg: { label: "at, CW", decimals: 0, sig: 3 },
   kv_mismatch_ms: { label: "1/kv difference", decimals: 3, sig: 3 },
+  // the speed-loop autotune
+  kp: { label: "Kp (p1460)", decimals: 4, sig: 4 },
+  tn_ms: { label: "Tn (p1462)", decimals: 2, sig: 4 },
+  pm_deg: { label: "phase margin, predicted", decimals: 1, sig: 3 },
+  gm_db: { label: "gain margin, predicted", decimals: 1, sig: 3 },
+  pm_now_deg: { label: "phase margin, as it is", decimals: 1, sig: 3 },
+  bandwidth_now_hz: { label: "bandwidth, as it is", decimals: 1, sig: 3 },
+  pm_achieved_deg: { label: "phase margin, measured", decimals: 1, sig: 3 },
+  gm_achieved_db: { label: "gain margin, measured", decimals: 1, sig: 3 },
+  bandwidth_achieved_hz: { label: "bandwidth, measured", decimals: 1, sig: 3 },
+  target_pm_deg: { label: "phase margin, template", decimals: 0, sig: 3 },
+  target_gm_db: { label: "gain margin, template", decimals: 0, sig: 3 },
+  notch_hz: { label: "notch", decimals: 1, sig: 4 },
+  resonance_hz: { label: "resonance f_r", decimals: 1, sig: 4 },
+  crossover_db_measured: { label: "|L| at f_c, measured", decimals: 2, sig: 3 },
+  crossover_deg_measured: { label: "phase at f_c, measured", decimals: 1, sig: 4 },
+  prediction_error_db: { label: "prediction error", decimals: 2, sig: 2 },
+  prediction_error_deg: { label: "prediction error", decimals: 1, sig: 2 },
+  kv_max: { label: "kv max (no overshoot)", decimals: 1, sig: 3 },
+  lag_1m_min_mm: { label: "lag at 1 m/min", decimals: 4, sig: 3 },
 };
 const HIDDEN = new Set(["runaway", "observed"]); // the sign check's verdict says them in words
 
@@ -151,6 +172,7 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
       {r.assistant === "frequency-response" ? <BodeView result={r} /> : null}
       {r.assistant === "drive-trace" ? <DriveTraceCharts result={r} /> : null}
       {r.assistant === "circle" ? <CircleView result={r} /> : null}
+      {r.assistant === "autotune" ? <AutotuneView result={r} /> : null}
       {r.assistant === "step-response" && r.series.length === 2 ? (
         <div class="assist-plot">
           <AssistChart series={r.series[0]} more={[r.series[1]]} levels={[]} testid="step-chart"

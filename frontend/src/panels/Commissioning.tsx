@@ -62,7 +62,7 @@ function checked(inp: Inputs, unit: string) {
 const n1 = (v: number) => String(+v.toPrecision(3));
 
 /** The assistants of the Drive tuning workspace: the drive's own measurements. */
-export const DRIVE_ASSISTANTS: readonly string[] = ["frequency-response", "step-response", "drive-trace", "circle"];
+export const DRIVE_ASSISTANTS: readonly string[] = ["frequency-response", "autotune", "step-response", "drive-trace", "circle"];
 
 /** The assistants' panel: the NC's commissioning (by default), or the drive's measurements
  * (`drive`: the Drive tuning workspace). */

@@ -86,6 +86,15 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
         ? `, turning at ${fmt(offset, 0)} rpm: it travels about ${fmt(travel, 1)} ${unit} towards ${where}, then goes back to where it started`
         : ", holding its position") +
       ` (position window ±${window < 1 ? fmt(window, 3) : fmt(window, 0)} ${unit}).`;
+  } else if (name === "autotune") {
+    const fs = 1 / ts;
+    const one = frfSeconds(fs, num(body.f_min_hz, 5), num(body.averages, 6), true);
+    const offset = num(body.offset_rpm, 60);
+    const travel = (Math.abs(offset) / 60) * drive.mmPerRev * one;
+    text =
+      `${axis.name} is measured twice (the mechanics, then the open speed loop), ${fmt(one, 1)} s of machine time each` +
+      (offset ? `, turning at ${fmt(offset, 0)} rpm: about ${fmt(travel, 1)} ${unit} and back each time` : ", holding its position") +
+      `; on a copy the new values are measured a third time. Nothing changes on the machine until you apply them on trial.`;
   } else if (name === "drive-trace") {
     const distance = num(body.distance, 5);
     text =
