@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, create_model, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
 from api.commands import AxisName
 from api.common import unit
@@ -75,7 +75,10 @@ def request_model(a: Assistant) -> type[BaseModel]:
     """The API model of assistant `a`'s inputs (named as the descriptor says)."""
     fields: dict[str, Any] = {i.name: _field(i) for i in a.inputs}
     doc = f"{a.title} ({a.section}): {a.text}"
-    return create_model(a.request, __doc__=doc, **fields)
+    # an input the assistant does not have is refused, not dropped: a misspelt one would
+    # otherwise run it with its default (and a live one moves the machine)
+    config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    return create_model(a.request, __doc__=doc, __config__=config, **fields)
 
 
 REQUESTS: dict[str, type[BaseModel]] = {a.name: request_model(a) for a in ASSISTANTS}

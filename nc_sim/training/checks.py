@@ -45,11 +45,14 @@ V_SAME = 1e-9  # relative change of the commanded speed still counted as constan
 class GainCheck:
     """The measured loop gain k = v/lag of `axis` over a steady constant-speed stretch
     (position-controlled, settled) is within `within_pct` % of the active gear record's kv
-    [004 §3.6.2]."""
+    [004 §3.6.2] (of axis `against`'s first gear record when given)."""
 
     kind: ClassVar[str] = "gain"
     axis: str
     within_pct: float
+    # the kv of this axis instead of its own: both follow alike, e.g. the plane's axes of a
+    # circle without the servo mismatch's ellipse
+    against: str | None = None
 
 
 @dataclass(frozen=True)
@@ -171,6 +174,7 @@ class _Gain:
     def __init__(self, rule: GainCheck, m: Machine, slot: int) -> None:
         self.rule = rule
         self.ax = m.axis(rule.axis)
+        self.ref = m.axis(rule.against) if rule.against else None
         self.cycle_s = m.k.cycle_s
         self.inc = float(m.k.pr[slot, L.P_ENC_INC])
         self.passed = False
@@ -183,6 +187,8 @@ class _Gain:
         self.n = 0  # settled samples summed
 
     def _kv(self, gear: int) -> float:
+        if self.ref is not None:
+            return self.ref.cfg.eng("getriebe.kv", 1)
         return self.ax.cfg.eng("getriebe.kv", max(1, gear))
 
     def feed(self, rows: np.ndarray, first_cycle: int, events: list[Event], now: int) -> None:
@@ -241,8 +247,9 @@ class _Gain:
         k = v / lag
         dev_pct = (k / kv - 1.0) * 100.0
         _passed_at(self, abs(dev_pct) <= self.rule.within_pct, cycle)
+        whose = f" of {self.ref.name}" if self.ref is not None else ""
         self.detail = (
-            f"k = {k:.2f} 1/s against kv {kv:.2f} 1/s ({dev_pct:+.1f} %)"
+            f"k = {k:.2f} 1/s against kv{whose} {kv:.2f} 1/s ({dev_pct:+.1f} %)"
             f" at v = {v:.3f} {unit}/s, lag {lag:.4f} {unit}"
         )
 
@@ -423,6 +430,9 @@ class ExerciseMonitor:
             if axis:
                 try:
                     slot = machine.axis(axis).slot
+                    against = getattr(rule, "against", None)
+                    if against:
+                        machine.axis(against)
                 except ValueError as e:
                     raise ValueError(f"checks[{i}] ({c.id}): {e}") from None
             self._slots.append(slot)

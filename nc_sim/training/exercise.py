@@ -333,7 +333,7 @@ def _field(r: _Reader, name: str, typ: object, optional: bool) -> Any:
         if optional:
             return None
         raise r.fail(name, None, "missing")
-    if name == "axis":
+    if name in ("axis", "against"):
         return r.axis(name)
     if name == "gear":
         return r.integer(name, 1, 6)

@@ -34,7 +34,7 @@ from nc_sim.training.score import score, time_weight
 from nc_sim.training.seat import start_seat
 
 EXERCISES = Path(__file__).resolve().parents[3] / "exercises"
-NAMES = ("sign-error", "multi-gain", "gear-change-plc", "accel-curve", "c-axis")
+NAMES = ("sign-error", "multi-gain", "gear-change-plc", "accel-curve", "c-axis", "circle-ellipse")
 CHUNK = 100  # cycles per feed: the worker's 10 Hz at 1 ms
 
 
@@ -315,6 +315,35 @@ def test_multi_gain_with_kv_changed_instead_fails() -> None:
     seat.x_back_and_forth(12.0)
     assert not seat.passed("gain")
     assert "k = 3.83 1/s against kv 8.75 1/s" in seat.result("gain").detail
+
+
+def _z_back_and_forth(seat: Seat, seconds: float) -> None:
+    """G01 Z between -100 and -150 mm at 1 m/min (3 s per stroke)."""
+    for i in range(round(seconds / 4.0)):
+        seat.mdi(f"G01 Z{-150 if i % 2 == 0 else -100} F1000")
+        seat.run(4.0)
+
+
+def test_circle_ellipse_fixed_at_its_cause() -> None:
+    """Z's drive gives 0.8 of the speed per digit: k = 16 1/s against kv 20; multi_gain ·
+    1.25 (10000 -> 12500) brings Z to its kv, which is X's: round and fixed."""
+    seat = Seat("circle-ellipse")
+    _z_back_and_forth(seat, 8.0)
+    assert not seat.passed("round") and not seat.passed("cause")
+    assert "k = 16.00 1/s against kv of X 20.00 1/s" in seat.result("round").detail
+    seat.param(Scope.AXIS, "Z", {"getriebe[0].multi_gain_z": 12500})
+    _z_back_and_forth(seat, 8.0)
+    assert seat.passed("round") and seat.passed("cause"), seat.monitor.results()
+
+
+def test_circle_ellipse_matched_by_kv_is_round_but_leaves_the_cause() -> None:
+    """kv matching instead (X's kv down to Z's 16 1/s): the circle is round (Z follows with
+    X's kv), but Z still follows at 0.8 of its own kv: 60 of 100 points."""
+    seat = Seat("circle-ellipse")
+    seat.param(Scope.AXIS, "X", {"getriebe[0].kv": 1600})
+    _z_back_and_forth(seat, 8.0)
+    assert seat.passed("round") and not seat.passed("cause")
+    assert "k = 16.00 1/s against kv 20.00 1/s" in seat.result("cause").detail
 
 
 def test_gear_change_completes_once_the_plc_gets_its_time() -> None:
