@@ -51,7 +51,8 @@ def _field(i: Input) -> tuple[Any, Any]:
         case Choice():
             t = Literal[tuple(o for o, _ in i.options)]
             meaning = ", ".join(f"{o} {text}" for o, text in i.options)
-            labels = {"x-labels": {str(o): text for o, text in i.options}}  # the HMI's options
+            # the HMI's options, and its label without the codes the description lists
+            labels = {"x-labels": {str(o): text for o, text in i.options}, "x-title": i.text}
             bounds = {"description": f"{i.text}: {meaning}", "json_schema_extra": labels}
         case Flag():
             t, bounds = bool, {"description": i.text}
@@ -168,6 +169,9 @@ class AssistResult(BaseModel):
     changes: list[AssistChange]
     series: list[AssistSeries]
     notes: list[str]
+    run_id: int | None = Field(
+        None, description="the stored run this answer is (GET .../assist/runs/{run_id})"
+    )
 
 
 # --- the calculators (004 §3.4, §3.6.1, 000 §2.2.4, §2.8.4) and the gear ranges (000 §2.8.2):

@@ -12,19 +12,20 @@ from backend.report.svg import COLOURS, Line
 SIZE = 320  # px
 BASE = 90.0  # px: the nominal circle
 DIVISIONS = 4  # rings inside and outside it
+MARGIN = 14.0  # px between the outer ring and the edge
 STEPS = (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 
 
 def division(lines: list[Line]) -> float:
     """The smallest 1-2-5 step (µm per division) that keeps every point within the rings."""
     worst = max((abs(v) for line in lines for v in line.y if math.isfinite(v)), default=0.0)
-    return next((d for d in STEPS if d * DIVISIONS * 0.9 >= worst), STEPS[-1])
+    return next((d for d in STEPS if d * DIVISIONS >= worst), STEPS[-1])
 
 
 def render(lines: list[Line], first_axis: str, second_axis: str) -> str:
     """The polar plot of `lines` (x: angle in degrees, y: radial deviation in µm)."""
     per_div = division(lines)
-    ring = BASE * 0.9 / DIVISIONS
+    ring = (SIZE / 2 - MARGIN - BASE) / DIVISIONS
     c = SIZE / 2
     out = [
         f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {SIZE} {SIZE + 24}" '

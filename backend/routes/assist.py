@@ -67,8 +67,8 @@ def _on_copy(a: Assistant, model: type[BaseModel]) -> Callable[..., Awaitable[As
         if a.kind is Kind.CALCULATOR:
             return await asyncio.to_thread(calculate, machine.cfg, a.name, body)
         result = await services.assistants.run(machine.cfg, a.name, body)
-        await services.assist_runs.record(machine.id, actor.name, result, live=False)
-        return result
+        run_id = await services.assist_runs.record(machine.id, actor.name, result, live=False)
+        return result.model_copy(update={"run_id": run_id})
 
     route.__annotations__["body"] = model
     return route
@@ -81,8 +81,8 @@ def _live(a: Assistant, model: type[BaseModel]) -> Callable[..., Awaitable[Assis
         body: Any, machine: MachineDep, actor: ActorDep, services: ServicesDep
     ) -> AssistResult:
         result = await run_live(machine, a.name, body, actor, services.audit)
-        await services.assist_runs.record(machine.id, actor.name, result, live=True)
-        return result
+        run_id = await services.assist_runs.record(machine.id, actor.name, result, live=True)
+        return result.model_copy(update={"run_id": run_id})
 
     route.__annotations__["body"] = model
     return route

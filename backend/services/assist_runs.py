@@ -120,6 +120,5 @@ class AssistRuns:
 
 def _run(r: Row) -> AssistRun:
     info = _info(r)
-    return AssistRun(
-        **info.model_dump(), result=AssistResult.model_validate(json.loads(r["result"]))
-    )
+    result = AssistResult.model_validate(json.loads(r["result"]) | {"run_id": info.id})
+    return AssistRun(**info.model_dump(), result=result)

@@ -32,6 +32,7 @@ from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
 from nc_sim.assist.drive_axis import drive_axis
 from nc_sim.assist.procedure import LiveRun
 from nc_sim.assist.run import live
+from nc_sim.channel.modal import PLANES
 from nc_sim.commands import JogStop
 from nc_sim.drive_scope import DriveScope, drive_signals
 from nc_sim.kernel import layout as L
@@ -220,9 +221,10 @@ class MachineHost:
         if live is None or of is None or live.done:
             return None
         phase, elapsed_s, planned_s = live.progress()
-        return AssistRunning(
-            of.name, str(of.args.get("axis", "")), phase, elapsed_s, planned_s, of.by
-        )
+        axis = str(of.args.get("axis", ""))
+        if not axis and of.args.get("plane") in PLANES:  # the circle: the plane's two axes
+            axis = "".join(PLANES[int(str(of.args["plane"]))][:2])
+        return AssistRunning(of.name, axis, phase, elapsed_s, planned_s, of.by)
 
     def feed_monitor(self) -> None:
         """Hand the exercise's checks the records since they last saw them (in stretches:

@@ -198,7 +198,12 @@ def autotune(
             f"{found.notch.width:g}, −20 dB at its centre) lets the gain rise"
         )
     elif resonance is not None:
-        notes.append(f"the resonance at {resonance:.1f} Hz does not limit the gain: no notch")
+        notes.append(
+            f"the resonance at {resonance:.1f} Hz does not limit the gain (as the current "
+            "filters shape the loop): no new notch"
+        )
+    if not changes:
+        notes.append("the speed loop already is what the template allows: nothing to change")
     if validate and achieved is None:
         notes.append("measured again with the new values, the loop was not stable: keep the old")
     elif achieved is not None:
@@ -232,6 +237,7 @@ def _now_figures(now: LoopFigures | None) -> tuple[Figure, ...]:
         return ()
     return (
         Figure("pm_now_deg", now.phase_margin_deg, "°", "phase margin as it is"),
+        Figure("gm_now_db", now.gain_margin_db, "dB", "gain margin as it is"),
         Figure("bandwidth_now_hz", now.bandwidth_hz, "Hz", "bandwidth as it is"),
     )
 
@@ -252,14 +258,18 @@ def _changes(
     """The speed controller's new values, and the notch in the first free current filter."""
     value = cfg.raw
     out = [
-        Change(axis, "drive.speed_kp", _sig(kp_now), _sig(found.kp), "the template's gain"),
-        Change(
-            axis,
-            "drive.speed_tn",
-            round(tn_now_s * 1e6),
-            round(found.tn_s * 1e6),
-            "the template's integral time, µs",
-        ),
+        c
+        for c in (
+            Change(axis, "drive.speed_kp", _sig(kp_now), _sig(found.kp), "the template's gain"),
+            Change(
+                axis,
+                "drive.speed_tn",
+                round(tn_now_s * 1e6),
+                round(found.tn_s * 1e6),
+                "the template's integral time, µs",
+            ),
+        )
+        if c.before != c.after
     ]
     notch = found.notch
     if notch is None or resonance is None:

@@ -263,13 +263,17 @@ def _diagnosis(
             "speed loop (drive.speed_kp, drive.speed_tn) or friction compensation"
         )
     shrink = [s.radius_change for s in shapes]
-    shrink_expected = radius * (1.0 - 1.0 / math.sqrt(1.0 + (v / radius / min(kv)) ** 2))
+    # each axis' share by its own kv: the fitted radius is their mean
+    omega = v / radius
+    shrink_expected = float(
+        np.mean([radius * (1.0 - 1.0 / math.sqrt(1.0 + (omega / k) ** 2)) for k in kv])
+    )
     if max(abs(c) for c in shrink) * UM >= MIN_SHAPE_UM and min(shrink) < 0:
         notes.append(
             f"the radius shrinks by {-min(shrink) * UM:.1f} µm: the position loop's lag on the "
-            f"curve, R(1 − 1/√(1 + (ω/kv)²)) = {shrink_expected * UM:.1f} µm at kv "
-            f"{min(kv):.1f}/s, ω = F/R; feedforward (lr_param.ff_weight) or a higher kv makes "
-            "it smaller"
+            f"curve, R(1 − 1/√(1 + (ω/kv)²)) = {shrink_expected * UM:.1f} µm with ω = F/R and "
+            f"the axes' kv ({kv[0]:.1f}, {kv[1]:.1f}/s; a sampled loop a little less); "
+            "feedforward (lr_param.ff_weight) or a higher kv makes it smaller"
         )
     if len(notes) == 0:
         notes.append("round: no shape stands out")

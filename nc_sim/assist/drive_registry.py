@@ -115,7 +115,8 @@ DRIVE_ASSISTANTS: tuple[Assistant, ...] = (
         "the measured resonance for the highest bandwidth that keeps the template's phase "
         "and gain margin (stiff 45°/8 dB, medium 55°/12 dB, soft 60°/20 dB); says what "
         "stopped the gain. On a copy the new values are measured again (achieved margins "
-        "beside the target); kv for the tuned speed loop and the lag feedforward leaves. "
+        "beside the target); it proposes kv for the tuned speed loop and shows the lag the "
+        "feedforward leaves. "
         "The axis must run the drive cascade (sim.plant).",
         Kind.EXPERIMENT,
         "AutotuneRequest",

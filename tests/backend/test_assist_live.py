@@ -168,8 +168,12 @@ def test_a_live_circle_runs_the_ncs_own_program_and_comes_back(srv: Server, lath
     (ZX) and audited. A P loop at kv 20/s shrinks R5 at F2000 by about
     R(1 − 1/√(1 + (ω/kv)²)) = 34.5 µm (ω = F/R = 6.67/s)."""
     z0, x0 = srv.axis("Z", lathe)["pos_cmd"], srv.axis("X", lathe)["pos_cmd"]
-    r = _live(srv, lathe, "circle", {"radius_mm": 5.0, "feed_mm_min": 2000.0, "overrun_deg": 45})
+    body = {"radius_mm": 5.0, "feed_mm_min": 2000.0, "overrun_deg": 45}
+    run = _Background(srv, lathe, "circle", body)
+    assert _progress(srv, lathe)["axis"] == "ZX"  # everyone watching sees the plane
+    r = run.result()
     assert r.status_code == 200, r.text
+    assert r.json()["run_id"] == srv.http.get(f"/api/machines/{lathe}/assist/runs").json()[0]["id"]
     fig = {f["name"]: f["value"] for f in r.json()["figures"]}
     omega = 2000 / 60 / 5
     shrink_um = 5 * (1 - 1 / (1 + (omega / 20) ** 2) ** 0.5) * 1000

@@ -84,8 +84,8 @@ def test_measure_the_mechanics_and_the_speed_loop_and_compare_two_runs(
     stiffer = _figure(box, "bandwidth_hz")
     assert stiffer > bandwidth
     compare = box.get_by_test_id("bode-compare")
-    # newest first: this run, then the closed loop before the change
-    earlier = compare.locator("option", has_text="bandwidth_hz").nth(1)
+    # newest first, this run not among them: the closed loop before the change
+    earlier = compare.locator("option", has_text="bandwidth_hz").nth(0)
     compare.select_option(earlier.get_attribute("value") or "")
     expect(box.get_by_test_id("bode")).to_have_attribute("data-runs", "2")
     legend = box.get_by_test_id("bode-magnitude").locator(".u-legend .u-series")
@@ -138,6 +138,8 @@ def test_the_circle_shows_a_servo_mismatch_that_kv_matching_removes(
     assert before == pytest.approx(1000 / 60 * (1 / 20 - 1 / 25) * 1000, rel=0.05)
     um_per_div = float(chart.get_attribute("data-um-per-division") or "0")
     assert before / 2 <= 4 * um_per_div  # the ellipse fits within the rings
+    width = chart.locator("svg").bounding_box()
+    assert width is not None and width["width"] > 360  # it grows with the panel
     expect(box.get_by_test_id("assist-notes")).to_contain_text("servo mismatch")
     change = box.get_by_test_id("assist-change-getriebe[0].kv")
     expect(change).to_contain_text("2000")
@@ -149,7 +151,7 @@ def test_the_circle_shows_a_servo_mismatch_that_kv_matching_removes(
     after = _figure(box, "ellipse_ccw_um")
     assert after < 0.1 * before
     compare = box.get_by_test_id("circle-compare")
-    earlier = compare.locator("option").nth(2)  # newest first: this run, then the one before
+    earlier = compare.locator("option").nth(1)  # after the prompt: the run before this one
     compare.select_option(earlier.get_attribute("value") or "")
     expect(chart.locator("path.earlier")).to_have_count(2)
     row = box.get_by_test_id("bode-deltas").locator('tr[data-figure="ellipse_ccw_um"]')
@@ -201,7 +203,7 @@ def test_detuned_x_autotuned_then_the_circle_before_and_after_and_the_report(
     box.get_by_test_id("assist-pick-circle").check()
     _run(box)
     compare = box.get_by_test_id("circle-compare")
-    earlier = compare.locator("option").nth(2)  # newest first: this run, then the one before
+    earlier = compare.locator("option").nth(1)  # after the prompt: the run before this one
     compare.select_option(earlier.get_attribute("value") or "")
     expect(box.get_by_test_id("circle-chart").locator("path.earlier")).to_have_count(2)
     # X's slow speed loop put its lag out of step with Z's: the tuned one follows as Z does

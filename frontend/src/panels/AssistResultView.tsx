@@ -99,8 +99,9 @@ const FIGURES: Record<string, { label: string; decimals: number; sig?: number }>
   resonance_hz: { label: "resonance f_r", decimals: 1, sig: 4 },
   crossover_db_measured: { label: "|L| at f_c, measured", decimals: 2, sig: 3 },
   crossover_deg_measured: { label: "phase at f_c, measured", decimals: 1, sig: 4 },
-  prediction_error_db: { label: "prediction error", decimals: 2, sig: 2 },
-  prediction_error_deg: { label: "prediction error", decimals: 1, sig: 2 },
+  prediction_error_db: { label: "prediction error, |L|", decimals: 2 },
+  prediction_error_deg: { label: "prediction error, phase", decimals: 1 },
+  gm_now_db: { label: "gain margin, as it is", decimals: 1, sig: 3 },
   kv_max: { label: "kv max (no overshoot)", decimals: 1, sig: 3 },
   lag_1m_min_mm: { label: "lag at 1 m/min", decimals: 4, sig: 3 },
 };

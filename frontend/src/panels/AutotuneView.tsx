@@ -6,10 +6,11 @@ import { figure } from "../state/assist";
 import { fmt } from "../ui/format";
 import { BodeChart } from "./BodeChart";
 
+// the prediction last, dashed: drawn over the measurement it should match
 const CURVES: [string, string][] = [
   ["now", "as it is"],
-  ["predicted", "predicted"],
   ["measured again", "measured again"],
+  ["predicted", "predicted (dashed)"],
 ];
 
 /** One pseudo run per curve (magnitude_db@now … → magnitude_db), for the Bode plot. */
@@ -57,13 +58,15 @@ export function AutotuneView(props: { result: AssistResult }) {
         <tbody>
           <Row what="phase margin" target={figure(r, "target_pm_deg")} before={figure(r, "pm_now_deg")} predicted={figure(r, "pm_deg")}
             achieved={figure(r, "pm_achieved_deg")} unit="°" atLeast />
-          <Row what="gain margin" target={figure(r, "target_gm_db")} before={null} predicted={figure(r, "gm_db")}
+          <Row what="gain margin" target={figure(r, "target_gm_db")} before={figure(r, "gm_now_db")} predicted={figure(r, "gm_db")}
             achieved={figure(r, "gm_achieved_db")} unit="dB" atLeast />
           <Row what="bandwidth" target={null} before={figure(r, "bandwidth_now_hz")} predicted={figure(r, "bandwidth_hz")}
             achieved={figure(r, "bandwidth_achieved_hz")} unit="Hz" atLeast={false} />
         </tbody>
       </table>
-      {runs.length ? <BodeChart result={runs[0]} earlier={runs.slice(1)} labels={labels} /> : null}
+      {runs.length ? (
+        <BodeChart result={runs[0]} earlier={runs.slice(1)} labels={labels} dashed={labels.findIndex((l) => l.startsWith("predicted"))} />
+      ) : null}
     </div>
   );
 }

@@ -84,6 +84,7 @@ function BodePart(props: {
   labels: string[];
   testid: string;
   range?: [number, number];
+  dashed?: number; // index of the run drawn dashed (a prediction over the measurement)
 }) {
   const box = useRef<HTMLDivElement>(null);
   const { runs, name, unit, height, marks, labels } = props;
@@ -110,6 +111,7 @@ function BodePart(props: {
           label: `${labels[i] ?? `run ${i + 1}`}${unit ? ` [${unit}]` : ""}`,
           stroke: COLOURS[i % COLOURS.length],
           width: i === 0 ? 1.75 : 1.25,
+          ...(i === props.dashed ? { dash: [6, 4], width: 2 } : {}),
           spanGaps: true,
           value: (_u: uPlot, v: number | null) => fmt(v, 2),
         })),
@@ -138,15 +140,15 @@ function BodePart(props: {
 }
 
 /** The Bode plot of `result`, with `earlier` runs overlaid (labelled by `labels`). */
-export function BodeChart(props: { result: AssistResult; earlier?: AssistResult[]; labels?: string[] }) {
+export function BodeChart(props: { result: AssistResult; earlier?: AssistResult[]; labels?: string[]; dashed?: number }) {
   const runs = [props.result, ...(props.earlier ?? [])];
   const marks = bodeMarks(props.result);
   const labels = props.labels ?? runs.map((_r, i) => (i === 0 ? "this run" : `earlier ${i}`));
   return (
     <div class="bode" data-testid="bode" data-runs={runs.length}
       data-marks={marks.map((m) => `${m.label}:${m.hz.toFixed(1)}`).join(" ")}>
-      <BodePart runs={runs} name="magnitude_db" unit="dB" height={240} marks={marks} labels={labels} testid="bode-magnitude" />
-      <BodePart runs={runs} name="phase_deg" unit="°" height={200} marks={marks} labels={labels} testid="bode-phase" />
+      <BodePart runs={runs} name="magnitude_db" unit="dB" height={240} marks={marks} labels={labels} testid="bode-magnitude" dashed={props.dashed} />
+      <BodePart runs={runs} name="phase_deg" unit="°" height={220} marks={marks} labels={labels} testid="bode-phase" dashed={props.dashed} />
       <BodePart runs={runs} name="coherence" unit="" height={160} marks={[]} labels={labels} testid="bode-coherence" range={[0, 1.05]} />
     </div>
   );

@@ -6,16 +6,17 @@ import type { AssistResult, AssistRun, AssistSeries } from "../api/types";
 import { fmt } from "../ui/format";
 import { CompareWith, FigureDeltas, runLabel } from "./CompareRun";
 
-const SIZE = 360; // px, the plot's square
-const BASE = 100; // px, the radius the nominal circle is drawn at
+const SIZE = 360; // the plot's square (viewBox units; it scales with the panel)
+const BASE = 100; // the radius the nominal circle is drawn at
 const DIVISIONS = 4; // rings inside and outside the nominal circle
+const MARGIN = 16; // between the outer ring and the edge: the axes' names
 const COLOURS: Record<string, string> = { CCW: "#1565c0", CW: "#c62828" };
 const STEPS = [0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000];
 
 /** µm per division: the smallest step that keeps every point within the rings. */
 export function division(series: AssistSeries[]): number {
   const worst = Math.max(0, ...series.flatMap((s) => s.y.map((v) => Math.abs(v))));
-  return STEPS.find((d) => d * DIVISIONS * 0.9 >= worst) ?? STEPS[STEPS.length - 1];
+  return STEPS.find((d) => d * DIVISIONS >= worst) ?? STEPS[STEPS.length - 1];
 }
 
 function path(s: AssistSeries, perPx: number): string {
@@ -35,20 +36,20 @@ export function CircleChart(props: { result: AssistResult; earlier?: AssistResul
   const series = r.series.filter((s) => s.x_unit === "°");
   const before = (props.earlier?.series ?? []).filter((s) => s.x_unit === "°");
   const div = division([...series, ...before]);
-  const ring = (BASE * 0.9) / DIVISIONS; // px per division
+  const ring = (SIZE / 2 - MARGIN - BASE) / DIVISIONS; // per division
   const perPx = div / ring; // µm per px
   const c = SIZE / 2;
   return (
     <figure class="circle-chart" data-testid={props.testid ?? "circle-chart"} data-um-per-division={div}>
-      <svg viewBox={`0 0 ${SIZE} ${SIZE}`} width={SIZE} height={SIZE} role="img"
+      <svg viewBox={`0 0 ${SIZE} ${SIZE}`} role="img"
         aria-label={`polar plot of the radial deviation, ${fmt(div, 1)} µm per division`}>
         {Array.from({ length: 2 * DIVISIONS + 1 }, (_, i) => i - DIVISIONS).map((k) => (
           <circle key={k} cx={c} cy={c} r={BASE + k * ring} class={k === 0 ? "nominal" : "ring"} />
         ))}
         <line x1={c - BASE - DIVISIONS * ring} y1={c} x2={c + BASE + DIVISIONS * ring} y2={c} class="ring" />
         <line x1={c} y1={c - BASE - DIVISIONS * ring} x2={c} y2={c + BASE + DIVISIONS * ring} class="ring" />
-        <text x={SIZE - 4} y={c - 4} text-anchor="end" class="axis-name">+{first}</text>
-        <text x={c + 4} y={12} class="axis-name">+{second}</text>
+        <text x={SIZE - 2} y={c + 14} text-anchor="end" class="axis-name">+{first}</text>
+        <text x={c + 4} y={11} class="axis-name">+{second}</text>
         {before.map((s) => (
           <path key={`b-${s.name}`} d={path(s, perPx)} class="earlier" stroke={COLOURS[s.name] ?? "#666"} data-series={`before-${s.name}`} />
         ))}

@@ -20,7 +20,7 @@ import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopG
 import { perSecond } from "../ui/units";
 import { codeSpans } from "../ui/codeSpans";
 import { SchemaFields, axesFor, formBody, formFields, startTexts } from "./SchemaForm";
-import { DrivePlan } from "./DrivePlan";
+import { DrivePlan, circleProblem } from "./DrivePlan";
 
 // the assistants with a guided form of their own here; every other experiment of the
 // catalogue gets the form its request schema describes
@@ -100,7 +100,7 @@ export function Commissioning(props: { drive?: boolean }) {
   const axNow = useAxisNow(ax);
   const form = formBody(fields, texts, ax?.name ?? "");
   const errors = !guided
-    ? Object.values(form.errors)
+    ? [...Object.values(form.errors), ...(name === "circle" && circleProblem(form.body) ? [circleProblem(form.body)] : [])]
     : name === "loop-gain"
       ? loopGainErrors(lgValues)
       : used.filter((v): v is string => typeof v === "string");

@@ -25,7 +25,9 @@ export function CompareWith(props: {
   const [pick, setPick] = useState("");
   useEffect(() => {
     http.get<AssistRunInfo[]>(machineUrl("/assist/runs?limit=50")).then(
-      (all) => setRuns(all.filter((x) => x.assistant === r.assistant && x.axis === axis && (props.matches?.(x) ?? true))),
+      // earlier runs: not the one shown
+      (all) =>
+        setRuns(all.filter((x) => x.id !== r.run_id && x.assistant === r.assistant && x.axis === axis && (props.matches?.(x) ?? true))),
       () => setRuns([]),
     );
   }, [r]);
@@ -67,7 +69,9 @@ export function FigureDeltas(props: { now: AssistResult; before: AssistResult; l
         {rows.map((f) => {
           const b = before.get(f.name)!;
           const d = f.value - b.value;
-          const pct = b.value !== 0 ? ` (${d >= 0 ? "+" : "−"}${fmt(Math.abs((d / b.value) * 100), 1)} %)` : "";
+          // a share only of a magnitude (not of an angle, nor across a change of sign)
+          const share = f.unit !== "°" && b.value > 0 && f.value > 0;
+          const pct = share ? ` (${d >= 0 ? "+" : "−"}${fmt(Math.abs((d / b.value) * 100), 1)} %)` : "";
           return (
             <tr key={f.name} data-figure={f.name}>
               <td>{f.text || f.name}</td>

@@ -118,6 +118,14 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
 
 const PLANE_AXES: Record<number, [string, string]> = { 17: ["X", "Y"], 18: ["Z", "X"], 19: ["Y", "Z"] };
 
+/** Why the circle cannot run in the chosen plane on this machine ("" when it can). */
+export function circleProblem(body: Record<string, unknown>): string {
+  const plane = num(body.plane, 18);
+  const names = (status.value?.axes ?? []).filter((x) => x.kind === "linear").map((x) => x.name);
+  const missing = (PLANE_AXES[plane] ?? []).filter((n) => !names.includes(n));
+  return missing.length ? `G${plane} needs ${missing.join(" and ")}: this machine's linear axes are ${names.join(", ")}` : "";
+}
+
 /** The circle's motion: where, how far and how long (as nc_sim/assist/circle_test.py plans
  * it: out to the overrun's start, the overrun, the turn, the overrun, back to the centre). */
 function CirclePlan(props: { body: Record<string, unknown>; live?: boolean }) {
@@ -128,7 +136,16 @@ function CirclePlan(props: { body: Record<string, unknown>; live?: boolean }) {
   const overrun = num(b.overrun_deg, 90);
   const both = num(b.direction, 0) === 0;
   const turn = (2 * Math.PI * r) / (feed / 60);
-  const one = turn * (1 + (2 * overrun) / 360) + (2 * r) / (feed / 60);
+  // as the procedure plans it: the turn with its overruns, out and back, a second to settle
+  const one = turn * (1 + (2 * overrun) / 360) + (2 * r) / (feed / 60) + 1;
+  const unhomed = (status.value?.axes ?? []).filter((x) => (x.name === a || x.name === c) && !x.homed).map((x) => x.name);
+  const problem = circleProblem(b);
+  if (problem)
+    return (
+      <p class="assist-check off" data-testid="drive-plan" data-fits="0">
+        {problem}: choose another plane.
+      </p>
+    );
   const dirs = both ? "counter-clockwise (G03), then clockwise (G02)" : num(b.direction, 0) === 3 ? "counter-clockwise (G03)" : "clockwise (G02)";
   return (
     <p class="hint" data-testid="drive-plan" data-fits="1">
@@ -136,6 +153,12 @@ function CirclePlan(props: { body: Record<string, unknown>; live?: boolean }) {
       {" "}{dirs}, with {fmt(overrun, 0)}° of overrun arc before and after the measured turn: one turn takes {fmt(turn, 1)} s,
       the whole run about {fmt((both ? 2 : 1) * one, 1)} s of machine time.
       {props.live ? "" : " On a copy this takes a fraction of that; the machine itself moves only after you confirm."}
+      {props.live && unhomed.length ? (
+        <b class="warn" data-testid="circle-unhomed">
+          {" "}
+          {unhomed.join(" and ")} {unhomed.length > 1 ? "are" : "is"} not homed: no software limit guards the circle.
+        </b>
+      ) : null}
     </p>
   );
 }

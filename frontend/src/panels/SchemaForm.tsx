@@ -23,6 +23,7 @@ interface JsonSchema {
   $defs?: Record<string, JsonSchema>;
   "x-unit"?: string;
   "x-labels"?: Record<string, string>;
+  "x-title"?: string;
   "x-axis-kinds"?: string[];
 }
 
@@ -70,7 +71,7 @@ export function formFields(schema: Record<string, unknown>): FormField[] {
     const labels = p["x-labels"] ?? {};
     return {
       name,
-      label: p.description ?? nonNull.description ?? name,
+      label: p["x-title"] ?? p.description ?? nonNull.description ?? name,
       kind,
       unit: bounded["x-unit"] ?? p["x-unit"] ?? "",
       min: bounded.exclusiveMinimum ?? bounded.minimum,
