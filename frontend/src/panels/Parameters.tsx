@@ -113,7 +113,13 @@ function ParameterList() {
     setEdits({});
     setProblems([]);
     setConflict(null);
-    void reload();
+    // only the list still open takes its answer: a slow answer for the list open before
+    // (the axis list at mount, then Channel chosen) must not replace the one chosen since
+    let open = true;
+    if (t && machineId.value) loadList(t.scope, t.target).then((r) => open && setRows(r), () => undefined);
+    return () => {
+      open = false;
+    };
   }, [t?.label, machineId.value, paramsVersion.value]);
 
   const groups = useMemo(() => [...new Set(rows.map((p) => groupOf(p.name, p.gear, spindle)))], [rows, spindle]);
