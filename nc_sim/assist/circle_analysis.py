@@ -225,14 +225,14 @@ def _diagnosis(
         elif diagonal and turns_over is False:
             notes.append(
                 f"squareness: an ellipse of {pv:.1f} µm on a diagonal that stays with the "
-                f"direction: {a} and {b} are about {pv / radius:.0f} µm/m out of square "
+                f"direction: {a} and {b} are about {pv * 1000 / radius:.0f} µm/m out of square "
                 "(mechanical alignment; the NC's feedback cannot see it, a ballbar can)"
             )
         elif turns_over is False:
             longer = a if min(_near(s.ellipse_deg, 0) for s in big) < 45 else b
             notes.append(
                 f"scale mismatch: an ellipse of {pv:.1f} µm along {longer} in both directions: "
-                f"{longer} travels about {pv / (2 * radius):.0f} µm/m further than the other "
+                f"{longer} travels about {pv * 1000 / radius:.0f} µm/m further than the other "
                 "axis; check getriebe[i].wegaufz/wegaufn with the resolution check (the NC's "
                 "feedback shows its own scale: a ballbar or laser shows the true one)"
             )

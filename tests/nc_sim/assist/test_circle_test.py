@@ -10,6 +10,7 @@ with it."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import pytest
@@ -121,7 +122,10 @@ def test_a_scale_error_shrinks_the_true_path_along_its_axis_in_both_directions()
     for d in ("ccw", "cw"):
         assert f[f"ellipse_{d}_um"] == pytest.approx(R * delta / (1 + delta) * 1000, rel=0.05)
         assert min(f[f"ellipse_{d}_deg"], 180 - f[f"ellipse_{d}_deg"]) < 5.0  # along Z: X short
-    assert any(n.startswith("scale mismatch: an ellipse") and "along Z" in n for n in r.notes)
+    (note,) = [n for n in r.notes if n.startswith("scale mismatch: an ellipse")]
+    per_m = re.search(r"Z travels about (\d+) µm/m further", note)
+    assert "along Z" in note and per_m is not None
+    assert float(per_m.group(1)) == pytest.approx(delta / (1 + delta) * 1e6, rel=0.05)
 
 
 def test_reversal_spikes_sit_at_the_quadrant_points_and_grow_with_friction() -> None:
