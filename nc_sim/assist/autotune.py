@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Generator
+from functools import partial
 
 import numpy as np
 
@@ -52,24 +53,6 @@ def autotune_experiment(
         lambda m: autotune(
             m, axis, template, torque_pct, speed_rpm, offset_rpm, f_min_hz, averages, window_mm
         ),
-    )
-
-
-def autotune_live(
-    m: Machine,
-    axis: str,
-    template: int = 1,
-    torque_pct: float = 2.0,
-    speed_rpm: float = 10.0,
-    offset_rpm: float = 60.0,
-    f_min_hz: float = 5.0,
-    averages: int = 6,
-    window_mm: float = 50.0,
-) -> Procedure:
-    """`autotune` on the machine itself: measured and tuned there; the new values are not
-    tried on it (apply them on trial, then measure the open speed loop again)."""
-    return autotune(
-        m, axis, template, torque_pct, speed_rpm, offset_rpm, f_min_hz, averages, window_mm, False
     )
 
 
@@ -230,6 +213,11 @@ def autotune(
         achieved is not None or not validate,
         inputs,
     )
+
+
+# on the machine itself: measured and tuned there; the new values are not tried on it
+# (apply them on trial, then measure the open speed loop again)
+autotune_live = partial(autotune, validate=False)
 
 
 def _now_figures(now: LoopFigures | None) -> tuple[Figure, ...]:

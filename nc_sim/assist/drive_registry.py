@@ -8,6 +8,26 @@ from __future__ import annotations
 from nc_sim.assist.descriptor import Assistant, AxisChoice, AxisKind, Choice, Kind, Number
 
 _AXES: tuple[AxisKind, ...] = ("linear", "rotary")
+# the excitation of a frequency response, which the autotune measures with too
+TORQUE_PCT = Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 2.0)
+F_MIN = Number("f_min_hz", "lowest frequency, Hz", "Hz", 0.1, 1000, default=5.0, cli="f-min")
+WINDOW = Number("window_mm", "position window, ± mm", "mm", 0, 1000, True, 50.0, cli="window")
+
+
+def _speed(default: float) -> Number:
+    return Number(
+        "speed_rpm", "amplitude at the speed setpoint, rpm", "rpm", 0, 3000, True, default
+    )
+
+
+def _offset(default: float) -> Number:
+    text = "offset speed of the motor, rpm (friction stays one-sided)"
+    return Number("offset_rpm", text, "rpm", -3000, 3000, default=default)
+
+
+def _averages(default: int) -> Number:
+    return Number("averages", "Welch averages", "", 1, 50, default=default, integer=True)
+
 
 DRIVE_ASSISTANTS: tuple[Assistant, ...] = (
     Assistant(
@@ -35,18 +55,11 @@ DRIVE_ASSISTANTS: tuple[Assistant, ...] = (
                 1,
             ),
             Choice("excitation", "excitation", ((1, "PRBS"), (2, "chirp")), 1),
-            Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 2.0),
-            Number("speed_rpm", "amplitude at the speed setpoint, rpm", "rpm", 0, 3000, True, 20.0),
+            TORQUE_PCT,
+            _speed(20.0),
             Number("position_mm", "amplitude at the position command, mm", "mm", 0, 10, True, 0.1),
-            Number(
-                "offset_rpm",
-                "offset speed of the motor, rpm (friction stays one-sided)",
-                "rpm",
-                -3000,
-                3000,
-                default=30.0,
-            ),
-            Number("f_min_hz", "lowest frequency, Hz", "Hz", 0.1, 1000, default=5.0, cli="f-min"),
+            _offset(30.0),
+            F_MIN,
             Number(
                 "f_max_hz",
                 "highest frequency, Hz (null: half the sampling rate)",
@@ -58,8 +71,8 @@ DRIVE_ASSISTANTS: tuple[Assistant, ...] = (
                 optional=True,
                 cli="f-max",
             ),
-            Number("averages", "Welch averages", "", 1, 50, default=10, integer=True),
-            Number("window_mm", "position window, ± mm", "mm", 0, 1000, True, 50.0, cli="window"),
+            _averages(10),
+            WINDOW,
         ),
         "nc_sim.assist.frequency_response:frequency_response_experiment",
         ("resonance_1_hz", "phase_margin_deg", "gain_margin_db", "bandwidth_hz"),
@@ -128,19 +141,12 @@ DRIVE_ASSISTANTS: tuple[Assistant, ...] = (
                 ((1, "stiff: 45°, 8 dB"), (2, "medium: 55°, 12 dB"), (3, "soft: 60°, 20 dB")),
                 1,
             ),
-            Number("torque_pct", "amplitude at the torque, % of p1520", "%", 0, 100, True, 2.0),
-            Number("speed_rpm", "amplitude at the speed setpoint, rpm", "rpm", 0, 3000, True, 10.0),
-            Number(
-                "offset_rpm",
-                "offset speed of the motor, rpm (friction stays one-sided)",
-                "rpm",
-                -3000,
-                3000,
-                default=60.0,
-            ),
-            Number("f_min_hz", "lowest frequency, Hz", "Hz", 0.1, 1000, default=5.0, cli="f-min"),
-            Number("averages", "Welch averages", "", 1, 50, default=6, integer=True),
-            Number("window_mm", "position window, ± mm", "mm", 0, 1000, True, 50.0, cli="window"),
+            TORQUE_PCT,
+            _speed(10.0),
+            _offset(60.0),
+            F_MIN,
+            _averages(6),
+            WINDOW,
         ),
         "nc_sim.assist.autotune:autotune_experiment",
         ("bandwidth_hz", "pm_achieved_deg", "gm_achieved_db", "kp"),
