@@ -73,8 +73,27 @@ class ClassCreate(BaseModel):
     )
 
 
+class AnswerGiven(BaseModel):
+    """One answer to a finding, as it was graded."""
+
+    axis: str
+    value: float = Field(description="the size named, in the axis' unit (mm | °)")
+    passed: bool
+    detail: str
+
+
+class FindingState(BaseModel):
+    """What a finding check asks of the student, and the answers given so far."""
+
+    fault: str = Field(description="the kind of fault to find, e.g. 'backlash'")
+    axes: list[str] = Field(description="the axes to choose from, each with its unit")
+    units: list[str] = Field(description="the unit of each axis' size: mm or °")
+    attempts_left: int
+    answers: list[AnswerGiven]
+
+
 class CheckState(BaseModel):
-    """A check of one seat, evaluated on its live machine."""
+    """A check of one seat, evaluated on its live machine (a finding: graded on its answers)."""
 
     id: str
     text: str
@@ -82,6 +101,19 @@ class CheckState(BaseModel):
     passed: bool = Field(description="holds now")
     first_passed_s: float | None = Field(description="seat time it first held, s")
     detail: str = Field(description="the measured figure, e.g. 'k = 19.96 1/s (−0.2 %)'")
+    finding: FindingState | None = Field(
+        None, description="a check the student answers (which axis, how much): its state"
+    )
+
+
+class FindingAnswer(BaseModel):
+    """A student's answer to a finding check: the axis that carries the fault, and its size."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    check: str = Field(min_length=1, max_length=64, pattern=r"^[a-z0-9][a-z0-9-]*$")
+    axis: str = Field(min_length=1, max_length=16, pattern=r"^[A-Z][A-Z0-9]*$")
+    value: float = Field(gt=0.0, le=1e6, description="the size in the axis' unit (mm | °)")
 
 
 class SeatInfo(BaseModel):

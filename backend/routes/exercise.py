@@ -5,9 +5,9 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from api.auth import Action
-from api.classes import Exercise, HintInfo, HintTake
+from api.classes import AnswerGiven, Exercise, FindingAnswer, HintInfo, HintTake
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
-from backend.errors import Forbidden, NotFound, responses
+from backend.errors import Conflict, Forbidden, Invalid, NotFound, responses
 from backend.services.classes import Classes
 from backend.services.exercises import exercise_info, hint_infos
 
@@ -54,3 +54,36 @@ def take_hint(
         Classes.entry(actor, f"took hint {req.n} of exercise '{c.exercise.id}'", machine.id)
     )
     return HintInfo(n=req.n, cost=c.exercise.hints[req.n - 1].cost, text=text)
+
+
+@router.post(
+    "/findings",
+    dependencies=[permit(Action.EXERCISE)],
+    responses=responses(
+        Forbidden,
+        NotFound,
+        Conflict,
+        Invalid,
+        why={
+            Forbidden: "not the seat's own student",
+            Conflict: "the attempts are used, the finding is already right, or the class ended",
+            Invalid: "not a finding check, or an axis the machine lacks",
+        },
+    ),
+)
+def answer_finding(
+    req: FindingAnswer, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> AnswerGiven:
+    """Answer a finding check (which axis carries the hidden fault, and how large it is):
+    graded at once and kept with the seat; each answer uses one of the check's attempts."""
+    c, seat = services.classes.seat_by_machine(machine.id)
+    given = services.classes.answer(actor, seat, c, req)
+    services.audit.record(
+        Classes.entry(
+            actor,
+            f"answered finding '{req.check}' of exercise '{c.exercise.id}':"
+            f" {req.axis} {req.value:g} ({'right' if given.passed else 'wrong'})",
+            machine.id,
+        )
+    )
+    return given

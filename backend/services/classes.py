@@ -12,6 +12,7 @@ session that the end took away still names their seat, so their page can show th
 
 from __future__ import annotations
 
+import functools
 import json
 import threading
 import time
@@ -20,10 +21,12 @@ from dataclasses import dataclass, field
 
 from api.auth import Role
 from api.classes import (
+    AnswerGiven,
     CheckState,
     ClassCreate,
     ClassCreated,
     ClassInfo,
+    FindingAnswer,
     SeatFaults,
     SeatInfo,
     SeatLink,
@@ -32,7 +35,7 @@ from api.classes import (
 from api.faults import FaultInfo, FaultInject
 from api.machines import MachineCreate, MachineLists
 from backend.errors import ApiError, Conflict, Forbidden, Invalid, not_found
-from backend.services import training
+from backend.services import findings, training
 from backend.services.accounts import Accounts, digest
 from backend.services.audit import Audit
 from backend.services.audit_log import Entry
@@ -41,7 +44,7 @@ from backend.services.exercises import Exercises
 from backend.services.machines import MachineProxy, MachineService, lists_rejected
 from backend.services.store import Store, StoredChange, parameter_entry
 from backend.workers.protocol import Pace
-from nc_sim.config import machine_from_lists
+from nc_sim.config import MachineConfig, machine_from_lists
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 from nc_sim.training.checks import CheckResult
@@ -103,6 +106,7 @@ class Seat:
     last_t_s: float = 0.0
     frozen: bool = False
     faults: list[FaultInfo] = field(default_factory=list)  # as they stood at the class's end
+    answers: findings.Answers = field(default_factory=dict)  # to the finding checks
 
     @property
     def seat_time_s(self) -> float:
@@ -118,6 +122,10 @@ class Seat:
                 "seat_time_s": self.seat_time_s,
                 "frozen": self.frozen,
                 "faults": [f.model_dump(mode="json") for f in self.faults],
+                "answers": {
+                    k: [a.model_dump(mode="json") for a in given]
+                    for k, given in self.answers.items()
+                },
             }
         )
 
@@ -130,6 +138,10 @@ class Seat:
         self.time_base_s = float(p.get("seat_time_s", 0.0))
         self.frozen = bool(p.get("frozen", False))
         self.faults = [FaultInfo.model_validate(f) for f in p.get("faults", [])]
+        self.answers = {
+            k: [AnswerGiven.model_validate(a) for a in given]
+            for k, given in p.get("answers", {}).items()
+        }
 
 
 @dataclass
@@ -143,6 +155,11 @@ class Class:
     ended_unix: float | None
     seats: list[Seat]
     lists: MachineLists | None = None  # the seats' machine template; None: the demo lathe
+
+    @functools.cached_property
+    def seat_machine(self) -> MachineConfig:
+        """A seat's machine as the exercise starts it (what its findings are graded on)."""
+        return findings.seat_machine(self.exercise, self.lists)
 
 
 def seat_name(class_id: str, n: int) -> str:
@@ -277,17 +294,43 @@ class Classes:
 
     # --- progress -----------------------------------------------------------------------------
     def checks(self, c: Class, seat: Seat) -> list[CheckState]:
-        return [
-            CheckState(
-                id=k.id,
-                text=k.text,
-                points=k.points,
-                passed=seat.passed.get(k.id, False),
-                first_passed_s=seat.first_passed_s.get(k.id),
-                detail=seat.detail.get(k.id, "not evaluated yet"),
+        out = []
+        for k in c.exercise.checks:
+            rule = findings.finding_of(k)
+            given = seat.answers.get(k.id, [])
+            state = None if rule is None else findings.state(rule, c.seat_machine, given)
+            waiting = "not answered yet" if rule is not None else "not evaluated yet"
+            out.append(
+                CheckState(
+                    id=k.id,
+                    text=k.text,
+                    points=k.points,
+                    passed=seat.passed.get(k.id, False),
+                    first_passed_s=seat.first_passed_s.get(k.id),
+                    detail=seat.detail.get(k.id, waiting),
+                    finding=state,
+                )
             )
-            for k in c.exercise.checks
-        ]
+        return out
+
+    def answer(self, actor: Actor, seat: Seat, c: Class, req: FindingAnswer) -> AnswerGiven:
+        """A finding answered by the seat's own student (403 for anyone else: an answer uses
+        one of the student's attempts), graded and kept; a right one passes the check at the
+        seat time now."""
+        if actor.name != seat.user:
+            raise Forbidden(
+                f"only seat {seat.n}'s student ({seat.student}, login {seat.user}) answers its"
+                " findings: an answer uses one of the student's attempts"
+            )
+        if c.ended_unix is not None:
+            raise Conflict(f"class '{c.id}' has ended")
+        with self._lock:
+            given = findings.answer(c.exercise, c.seat_machine, seat.answers, req)
+            seat.passed[req.check], seat.detail[req.check] = given.passed, given.detail
+            if given.passed:
+                seat.first_passed_s.setdefault(req.check, seat.seat_time_s)
+        self.save(seat)
+        return given
 
     @staticmethod
     def score(c: Class, seat: Seat) -> tuple[float, float]:

@@ -165,6 +165,22 @@ class DriveModel:
         e = expm(m * self.sampling_s)
         return e[:nx, :nx], e[:nx, nx:]
 
+    def speed_open_loop(self, f_hz: np.ndarray) -> np.ndarray:
+        """The speed loop's open loop as the drive runs it, at frequencies `f_hz`: its PI,
+        the step of computing time, then filters, current loop and mechanics from torque
+        setpoint to measured motor speed, sampled exactly (zero-order hold over Ts). The
+        linear part only: what friction and backlash do is not in it."""
+        ad, bd = self.discrete()
+        z = np.exp(2j * np.pi * np.asarray(f_hz, dtype=float) * self.sampling_s)
+        eye = np.eye(ad.shape[0])
+        # (zI - Ad)⁻¹·Bd for every z at once, its motor-speed row
+        x = np.linalg.solve(
+            z[:, None, None] * eye - ad, np.broadcast_to(bd[:, :1], (z.size, *bd[:, :1].shape))
+        )
+        plant = x[:, PL.X_WM, 0]
+        integral = self.sampling_s / self.tn_s * z / (z - 1.0) if self.tn_s > 0.0 else 0.0
+        return np.asarray(self.kp * (1.0 + integral) * plant / z)
+
     def kernel_row(self) -> np.ndarray:
         """The slot's `pl` row for this model."""
         row = np.zeros(PL.PL_COLS)

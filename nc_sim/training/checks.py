@@ -113,9 +113,47 @@ class DirectionCheck:
     axis: str
 
 
-Rule = GainCheck | EventCheck | NoEventCheck | InPositionCheck | SpeedReachedCheck | DirectionCheck
+@dataclass(frozen=True)
+class MarginsCheck:
+    """`axis`' speed loop, on the plant it drives now (faults included), keeps stability
+    template `template` (1 stiff 45°/8 dB, 2 medium 55°/12 dB, 3 soft 60°/20 dB:
+    nc_sim/plant/tuning.py) and, when `bandwidth_pct` > 0, reaches that share of the highest
+    closed-loop bandwidth the template allows on that plant (nc_sim/training/margins.py)."""
+
+    kind: ClassVar[str] = "margins"
+    axis: str
+    template: int
+    bandwidth_pct: float = 0.0
+
+
+@dataclass(frozen=True)
+class FindingCheck:
+    """The student names the axis that carries the exercise's `fault` (its kind; "backlash")
+    and its size, within `within_pct` %, in at most `attempts` answers. What cannot be put
+    right with a parameter is found and reported: the NC of the manuals has no backlash
+    compensation. Answers are graded where they are kept (the gateway's seat, by
+    nc_sim/training/findings.py), not by the monitor."""
+
+    kind: ClassVar[str] = "finding"
+    fault: str
+    within_pct: float
+    attempts: int = 2
+
+
+Rule = (
+    GainCheck
+    | MarginsCheck
+    | FindingCheck
+    | EventCheck
+    | NoEventCheck
+    | InPositionCheck
+    | SpeedReachedCheck
+    | DirectionCheck
+)
 RULES: tuple[type[Rule], ...] = (
     GainCheck,
+    MarginsCheck,
+    FindingCheck,
     DirectionCheck,
     EventCheck,
     NoEventCheck,
@@ -423,8 +461,11 @@ class ExerciseMonitor:
         self.missed_events = 0
         self._slots: list[int | None] = []
         self._evals: list[_Evaluator] = []
+        self._judged: list[Check] = []  # the checks the monitor judges (not the findings)
         for i, c in enumerate(checks):
             rule = c.rule
+            if isinstance(rule, FindingCheck):
+                continue
             axis = getattr(rule, "axis", None)
             slot: int | None = None
             if axis:
@@ -437,6 +478,7 @@ class ExerciseMonitor:
                     raise ValueError(f"checks[{i}] ({c.id}): {e}") from None
             self._slots.append(slot)
             self._evals.append(_make(rule, machine, slot))
+            self._judged.append(c)
 
     def feed(self, machine: Machine, rows: np.ndarray, first_cycle: int) -> None:
         """The sample rows recorded since the last call (rows[0] is cycle `first_cycle`) and
@@ -449,10 +491,11 @@ class ExerciseMonitor:
             ev.feed(rows[:, slot if slot is not None else 0, :], first_cycle, read.entries, now)
 
     def results(self) -> list[CheckResult]:
-        """Each check's state now, in the exercise's order."""
+        """Each judged check's state now, in the exercise's order (a finding is not judged
+        here)."""
         return [
             CheckResult(c.id, ev.passed, ev.first_passed_cycle, ev.detail)
-            for c, ev in zip(self.checks, self._evals, strict=True)
+            for c, ev in zip(self._judged, self._evals, strict=True)
         ]
 
 
@@ -464,6 +507,10 @@ def _make(rule: Rule, m: Machine, slot: int | None) -> _Evaluator:
         case DirectionCheck():
             assert slot is not None
             return _Direction(rule, m, slot)
+        case MarginsCheck():
+            from nc_sim.training.margins import MarginsEvaluator  # the plant, only in workers
+
+            return MarginsEvaluator(rule.axis, rule.template, rule.bandwidth_pct, m)
         case EventCheck():
             return _Event(rule, m)
         case NoEventCheck():
@@ -471,6 +518,8 @@ def _make(rule: Rule, m: Machine, slot: int | None) -> _Evaluator:
         case InPositionCheck() | SpeedReachedCheck():
             assert slot is not None
             return _Standing(rule, m, slot)
+        case FindingCheck():
+            raise AssertionError("a finding is graded by the gateway, not the monitor")
 
 
 __all__ = ["RULES", "Check", "CheckResult", "ExerciseMonitor", "Rule"]

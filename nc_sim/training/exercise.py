@@ -48,7 +48,9 @@ from typing import Any
 from nc_sim.errors import Code
 from nc_sim.faults import CATALOGUE, NOW, Fault, Trigger
 from nc_sim.params import ParamError, Scope, Value, resolve
-from nc_sim.training.checks import RULES, Check, Rule
+from nc_sim.plant.tuning import TEMPLATES
+from nc_sim.training.checks import RULES, Check, FindingCheck, Rule
+from nc_sim.training.findings import FINDABLE
 
 MACHINES = ("demo",)  # machine templates a seat can start from
 MAX_FILE_CHARS = 200_000
@@ -232,6 +234,10 @@ def parse_exercise(text: str, source: str) -> Exercise:
         if c.id in seen:
             raise ExerciseError(source, f"checks[{i}].id", c.id, "unique among the checks")
         seen.add(c.id)
+    faults = tuple(_fault(f) for f in r.items("faults"))
+    for i, c in enumerate(checks):
+        if isinstance(c.rule, FindingCheck):
+            _findable(source, f"checks[{i}].fault", c.rule, faults)
     return Exercise(
         id=r.text("id", 64, ID_RE),
         title=r.text("title", MAX_TITLE),
@@ -240,7 +246,7 @@ def parse_exercise(text: str, source: str) -> Exercise:
         par_time_s=r.number("par_time_s", 0.0, MAX_PAR_TIME_S, lo_open=True),
         machine=machine,
         start=tuple(_start_value(s) for s in r.items("start")),
-        faults=tuple(_fault(f) for f in r.items("faults")),
+        faults=faults,
         hints=tuple(_hint(h) for h in r.items("hints")),
         checks=checks,
     )
@@ -290,6 +296,15 @@ def _fault(r: _Reader) -> FaultSpec:
             on_motion=t.flag("on_motion") if t.has("on_motion") else False,
         )
     return FaultSpec(cls(**args), trigger)
+
+
+def _findable(source: str, key: str, rule: FindingCheck, faults: tuple[FaultSpec, ...]) -> None:
+    """A finding names a kind of fault that can be found and that the exercise hides."""
+    if rule.fault not in FINDABLE:
+        raise ExerciseError(source, key, rule.fault, f"one of {', '.join(sorted(FINDABLE))}")
+    cls = FINDABLE[rule.fault][0]
+    if not any(isinstance(f.fault, cls) for f in faults):
+        raise ExerciseError(source, key, rule.fault, "a fault of this kind among the [[faults]]")
 
 
 def _hint(r: _Reader) -> Hint:
@@ -348,6 +363,12 @@ def _field(r: _Reader, name: str, typ: object, optional: bool) -> Any:
         return r.number(name, 0.0, MAX_WINDOW_S, lo_open=True)
     if name == "within_pct":
         return r.number(name, 0.0, 100.0, lo_open=True)
+    if name == "attempts":
+        return r.integer(name, 1, 10)
+    if name == "template":
+        return r.integer(name, min(TEMPLATES), max(TEMPLATES))
+    if name == "bandwidth_pct":
+        return r.number(name, 0.0, 100.0)
     if name in ("tolerance", "factor", "rms", "delay_s", "v_loss", "width", "speed_rpm"):
         return r.number(name, 0.0, 1e9, lo_open=True)
     base = typing.get_args(typ) or (typ,)

@@ -286,6 +286,62 @@ def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:
     assert [h["text"] is not None for h in hints] == [False, True]
 
 
+def test_the_margins_check_runs_on_the_seats_worker(srv: Server) -> None:
+    """soft-coupling starts with the old tuning on a coupling half as stiff: the seat's
+    worker judges its speed loop short of the stiff template (phase margin 11.5° by
+    python-control's model, tests/nc_sim/training/test_drive_exercises.py)."""
+    t = trainer(srv)
+    created = new_class(t, "soft", 1, "soft-coupling")
+    mid = created["info"]["seats"][0]["machine"]
+
+    def stable() -> dict[str, Any] | None:
+        checks = t.get(f"/api/machines/{mid}/exercise").json()["checks"]
+        found: dict[str, Any] = checks[0]
+        return found if "phase margin" in found["detail"] else None
+
+    check = wait_for(stable)
+    assert not check["passed"] and "short of the stiff template" in check["detail"]
+    margin = float(check["detail"].split("phase margin ")[1].split("°")[0])
+    assert margin == pytest.approx(11.5, abs=1.0)
+    assert t.post("/api/classes/soft/end").status_code == 200
+
+
+def test_a_finding_is_answered_graded_and_counted(srv: Server) -> None:
+    """find-backlash hides 25 µm of play on X (exercises/find-backlash.toml): the student
+    names Z first (wrong, X's size not given away), then X 0.024 mm (-4 %: right, within
+    20 %); the check passes with its points, a third answer is refused, the instructor
+    cannot answer for the student, an axis the machine lacks is a 422 naming the axes."""
+    t = trainer(srv)
+    created = new_class(t, "play", 1, "find-backlash")
+    mid = created["info"]["seats"][0]["machine"]
+    seat = student(srv, created["links"][0]["url"])
+    check = seat.get(f"/api/machines/{mid}/exercise").json()["checks"][0]
+    assert check["finding"]["fault"] == "backlash" and check["finding"]["attempts_left"] == 2
+    assert dict(zip(check["finding"]["axes"], check["finding"]["units"], strict=True))["X"] == "mm"
+    assert not check["passed"] and check["detail"] == "not answered yet"
+    url = f"/api/machines/{mid}/exercise/findings"
+    r = t.post(url, json={"check": "play", "axis": "X", "value": 0.025})
+    assert r.status_code == 403 and "student" in r.json()["detail"]["message"], r.text
+    r = seat.post(url, json={"check": "play", "axis": "Q", "value": 0.025})
+    assert r.status_code == 422 and "X, Z" in r.json()["detail"]["message"], r.text
+    r = seat.post(url, json={"check": "play", "axis": "Z", "value": 0.03})
+    assert r.status_code == 200 and not r.json()["passed"], r.text
+    assert "25" not in r.json()["detail"]
+    r = seat.post(url, json={"check": "play", "axis": "X", "value": 0.024})
+    assert r.status_code == 200 and r.json()["passed"], r.text
+    ex = seat.get(f"/api/machines/{mid}/exercise").json()
+    finding = ex["checks"][0]["finding"]
+    assert finding["attempts_left"] == 0 and [a["axis"] for a in finding["answers"]] == ["Z", "X"]
+    assert ex["checks"][0]["passed"] and ex["checks"][0]["first_passed_s"] is not None
+    assert ex["score"] == pytest.approx(100.0)  # in par time, no hint
+    r = seat.post(url, json={"check": "play", "axis": "X", "value": 0.025})
+    assert r.status_code == 409, r.text
+    detail = t.get("/api/classes/play/seats/1").json()
+    assert detail["checks"][0]["passed"] and detail["info"]["score"] == pytest.approx(100.0)
+    rows = t.get("/api/classes/play/seats/1/audit").json()["rows"]
+    assert any("answered finding 'play'" in r["action"] and "right" in r["action"] for r in rows)
+
+
 def test_the_student_sees_their_result_and_the_debrief_keeps_the_faults(srv: Server) -> None:
     """After the end the student's login is gone, but their browser's old session still
     shows the seat's result (until they log out); the seat's faults (the exercise's and the

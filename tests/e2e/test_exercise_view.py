@@ -174,3 +174,48 @@ def test_a_machine_that_is_no_seat_has_no_exercise_tab(
         expect(p.get_by_test_id("tab-Exercise")).to_have_count(0)
     finally:
         p.close()
+
+
+def test_the_student_answers_a_finding_in_the_panel(
+    browser: Browser, trainer: httpx.Client
+) -> None:
+    """find-backlash (25 µm of play on X): the answer is typed in µm; a wrong axis is graded
+    wrong at once with an attempt gone, the right axis and size passes the check with its
+    points, and the form goes."""
+    cid = f"ex{next(_classes)}"
+    r = trainer.post("/api/classes", json={"id": cid, "exercise": "find-backlash", "seats": 1})
+    assert r.status_code == 201, r.text
+    w, h = SIZES["desktop"]
+    context = browser.new_context(viewport={"width": w, "height": h})
+    p = context.new_page()
+    p.set_default_timeout(15_000)
+    try:
+        p.goto(r.json()["links"][0]["url"])
+        row = panel(p, "exercise-checks").get_by_test_id("check-play")
+        finding = row.get_by_test_id("finding")
+        submit = finding.get_by_test_id("finding-submit")
+        expect(submit).to_have_text("Answer (2 attempts left)")
+        expect(submit).to_be_disabled()  # nothing typed yet
+        finding.get_by_test_id("finding-axis").select_option("Z")
+        finding.get_by_test_id("finding-value").fill("30")
+        submit.click()
+        answers = finding.get_by_test_id("finding-answers")
+        expect(answers).to_contain_text("✗ Z 30.0 µm")
+        expect(submit).to_have_text("Answer (1 attempt left)")
+        expect(row).to_have_attribute("data-state", "open")
+        shot(p, "exercise-finding-desktop")
+        finding.get_by_test_id("finding-axis").select_option("X")
+        finding.get_by_test_id("finding-value").fill("24")
+        submit.click()
+        expect(answers).to_contain_text("✓ X 24.0 µm")
+        expect(answers).to_contain_text("X has 25.0 µm of backlash")
+        expect(row).to_have_attribute("data-state", "passed")
+        expect(finding.get_by_test_id("finding-submit")).to_have_count(0)
+        score = panel(p, "exercise-score")
+        expect(score.get_by_test_id("exercise-score")).to_have_text("100")
+        p.set_viewport_size({"width": SIZES["tablet"][0], "height": SIZES["tablet"][1]})
+        row.scroll_into_view_if_needed()
+        shot(p, "exercise-finding-tablet")
+    finally:
+        context.close()
+        trainer.post(f"/api/classes/{cid}/end")

@@ -3,10 +3,12 @@
 // Refreshed every 2 s while it shows. Faults are the instructor's: the service never sends them.
 // Only the seat's own student takes hints; an instructor watching the seat reads which were
 // taken (and their texts), with no button (a hint costs the student's points).
+// A finding check is answered, not measured: the student names the axis and the size (µm on
+// a linear axis) in a few attempts; the answers given stay listed with their grades.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
-import type { CheckState, Exercise, HintInfo } from "../api/types";
-import { exercise, refreshExercise, takeHint } from "../state/exercise";
+import type { CheckState, Exercise, FindingState, HintInfo } from "../api/types";
+import { answerFinding, exercise, refreshExercise, takeHint } from "../state/exercise";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 
@@ -58,7 +60,7 @@ export function ExercisePanel() {
         <Panel title="Checks" id="exercise-checks">
           <ul class="checklist" data-testid="check-list">
             {ex.checks.map((c) => (
-              <CheckRow key={c.id} check={c} />
+              <CheckRow key={c.id} check={c} mine={ex.takes_hints} />
             ))}
           </ul>
         </Panel>
@@ -113,7 +115,8 @@ function Stat(props: { label: string; id: string; value: string; unit: string })
   );
 }
 
-function CheckRow({ check: c }: { check: CheckState }) {
+/** `mine`: the seat's own student, who answers its findings. */
+function CheckRow({ check: c, mine }: { check: CheckState; mine: boolean }) {
   const state = c.passed ? "passed" : c.first_passed_s !== null ? "held" : "open";
   const label = { passed: "✓ passes now", held: "◐ held once", open: "○ not yet" }[state];
   return (
@@ -121,11 +124,96 @@ function CheckRow({ check: c }: { check: CheckState }) {
       <span class="check-state">{label}</span>
       <span class="check-text">{c.text}</span>
       <span class="check-points num">{fmt(c.points, 0)} points</span>
-      <span class="check-detail mono" data-testid="check-detail">{c.detail}</span>
+      {/* a finding's answers list their grades below: the newest is no second line here */}
+      <span class="check-detail mono" data-testid="check-detail">
+        {c.finding?.answers.length ? "" : c.detail}
+      </span>
       <span class="check-when">
         {c.first_passed_s !== null ? `first passed at ${clock(c.first_passed_s)} seat time` : ""}
       </span>
+      {c.finding ? <Finding check={c.id} finding={c.finding} mine={mine} passed={c.first_passed_s !== null} /> : null}
     </li>
+  );
+}
+
+/** A size as the engineer says it: µm on a linear axis (its unit mm), the axis' unit else. */
+function sizeOf(value: number, unit: string): string {
+  return unit === "mm" ? `${fmt(value * 1000, 1)} µm` : `${fmt(value, 4)} ${unit}`;
+}
+
+function Finding(props: { check: string; finding: FindingState; mine: boolean; passed: boolean }) {
+  const f = props.finding;
+  const [axis, setAxis] = useState(f.axes[0] ?? "");
+  const [text, setText] = useState("");
+  const [busy, setBusy] = useState(false);
+  const [error, setError] = useState("");
+  const unit = f.units[f.axes.indexOf(axis)] ?? "mm";
+  const shown = unit === "mm" ? "µm" : unit;
+  const value = Number(text.replace(",", "."));
+  const valid = text.trim() !== "" && Number.isFinite(value) && value > 0;
+  const open = props.mine && !props.passed && f.attempts_left > 0;
+  async function submit(e: Event): Promise<void> {
+    e.preventDefault();
+    if (!valid) return;
+    setBusy(true);
+    try {
+      await answerFinding(props.check, axis, unit === "mm" ? value / 1000 : value);
+      setText("");
+      setError("");
+    } catch (err) {
+      setError(err instanceof ApiError ? err.message : String(err));
+    } finally {
+      setBusy(false);
+    }
+  }
+  return (
+    <div class="finding" data-testid="finding">
+      {f.answers.length ? (
+        <ol class="finding-answers" data-testid="finding-answers">
+          {f.answers.map((a, i) => (
+            <li key={i} class={a.passed ? "ok" : "wrong"}>
+              <b>
+                {a.passed ? "✓" : "✗"} {a.axis} {sizeOf(a.value, f.units[f.axes.indexOf(a.axis)] ?? "mm")}
+              </b>{" "}
+              <span class="hint">{a.detail}</span>
+            </li>
+          ))}
+        </ol>
+      ) : null}
+      {open ? (
+        <form class="finding-form" onSubmit={(e) => void submit(e)} aria-label={`answer ${props.check}`}>
+          <label>
+            Axis{" "}
+            <select value={axis} onChange={(e) => setAxis((e.target as HTMLSelectElement).value)} data-testid="finding-axis">
+              {f.axes.map((a) => (
+                <option key={a} value={a}>
+                  {a}
+                </option>
+              ))}
+            </select>
+          </label>
+          <label>
+            {f.fault} ({shown}){" "}
+            <input
+              class="num"
+              inputMode="decimal"
+              size={7}
+              value={text}
+              onInput={(e) => setText((e.target as HTMLInputElement).value)}
+              data-testid="finding-value"
+            />
+          </label>
+          <button type="submit" disabled={busy || !valid} data-testid="finding-submit">
+            Answer ({f.attempts_left} {f.attempts_left === 1 ? "attempt" : "attempts"} left)
+          </button>
+        </form>
+      ) : !props.passed && props.mine ? (
+        <p class="hint">No attempts left.</p>
+      ) : !props.mine && !f.answers.length ? (
+        <p class="hint">Not answered yet: the student answers it ({f.attempts_left} attempts).</p>
+      ) : null}
+      {error ? <p class="inline-error" role="alert">{error}</p> : null}
+    </div>
   );
 }
 

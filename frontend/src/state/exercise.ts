@@ -3,7 +3,7 @@
 // hints are taken from here. The service hides the exercise's faults from the student.
 import { effect, signal, untracked } from "@preact/signals";
 import { ApiError, http } from "../api/http";
-import type { Exercise, HintInfo } from "../api/types";
+import type { AnswerGiven, Exercise, HintInfo } from "../api/types";
 import { freezeNoticeCount, machineId, machines, machineUrl, seatFrozen } from "./session";
 
 const SEAT_KEY = "inbetrieb.seat"; // this browser was a class seat's student's (the class id)
@@ -40,6 +40,14 @@ export async function takeHint(n: number): Promise<HintInfo> {
   const hint = await http.post<HintInfo>(machineUrl("/exercise/hints"), { n });
   await refreshExercise();
   return hint;
+}
+
+/** Answer finding `check`: `axis` carries the fault, `value` its size in the axis' unit
+ * (mm | °). Graded at once; each answer uses one of the check's attempts. */
+export async function answerFinding(check: string, axis: string, value: number): Promise<AnswerGiven> {
+  const given = await http.post<AnswerGiven>(machineUrl("/exercise/findings"), { check, axis, value });
+  await refreshExercise();
+  return given;
 }
 
 effect(() => {
