@@ -66,7 +66,9 @@ def _on_copy(a: Assistant, model: type[BaseModel]) -> Callable[..., Awaitable[As
     ) -> AssistResult:
         if a.kind is Kind.CALCULATOR:
             return await asyncio.to_thread(calculate, machine.cfg, a.name, body)
-        result = await services.assistants.run(machine.cfg, a.name, body)
+        # the copy carries the faults in force on the machine, as the machine's plant has them
+        faults = [f.fault for f in machine.link.faults.values() if f.active_since is not None]
+        result = await services.assistants.run(machine.cfg, a.name, body, faults)
         run_id = await services.assist_runs.record(machine.id, actor.name, result, live=False)
         return result.model_copy(update={"run_id": run_id})
 

@@ -26,6 +26,7 @@ from backend.workers.protocol import AssistCancel, AssistStart
 from nc_sim.assist.result import ExperimentError
 from nc_sim.assist.run import run
 from nc_sim.config import MachineConfig
+from nc_sim.faults import Fault
 
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 
@@ -35,12 +36,14 @@ class ExperimentRefused(Exception):
     here: an exception pickles across the process pool)."""
 
 
-def _run(name: str, cfg: MachineConfig, args: dict[str, Any]) -> dict[str, Any]:
-    """In the assistants' process: run one experiment; its answer (ExperimentRefused when it
-    cannot run). The kernel is imported here, in that process: the gateway itself never
-    loads it."""
+def _run(
+    name: str, cfg: MachineConfig, args: dict[str, Any], faults: list[Fault]
+) -> dict[str, Any]:
+    """In the assistants' process: run one experiment on a copy carrying `faults`; its
+    answer (ExperimentRefused when it cannot run). The kernel is imported here, in that
+    process: the gateway itself never loads it."""
     try:
-        return run(name, cfg, args).as_json()
+        return run(name, cfg, args, faults).as_json()
     except ExperimentError as e:
         raise ExperimentRefused(str(e)) from None
 
@@ -67,12 +70,16 @@ class Assistants:
             self._pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx)
         return self._pool
 
-    async def run(self, cfg: MachineConfig, name: str, req: BaseModel) -> AssistResult:
-        """Run experiment `name` with the arguments of `req` on a copy of `cfg`; 422 when it
-        cannot run."""
+    async def run(
+        self, cfg: MachineConfig, name: str, req: BaseModel, faults: list[Fault]
+    ) -> AssistResult:
+        """Run experiment `name` with the arguments of `req` on a copy of `cfg` with the
+        machine's training `faults` in force; 422 when it cannot run."""
         args = req.model_dump()
         loop = asyncio.get_running_loop()
-        fut = loop.run_in_executor(self._executor(), _run, name, copy.deepcopy(cfg), args)
+        fut = loop.run_in_executor(
+            self._executor(), _run, name, copy.deepcopy(cfg), args, list(faults)
+        )
         try:
             answer = await asyncio.wait_for(fut, RUN_TIMEOUT_S)
         except TimeoutError:

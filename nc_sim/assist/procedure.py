@@ -13,7 +13,9 @@ So one procedure runs either way, with the same cycles and the same answer:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator
+from collections.abc import Callable, Generator, Iterable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -22,6 +24,7 @@ import numpy as np
 from nc_sim.assist.result import ExperimentError, Result
 from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
+from nc_sim.faults import Fault
 from nc_sim.machine.machine import Machine
 from nc_sim.scenario import power_on
 from nc_sim.sim import Simulation
@@ -43,15 +46,35 @@ Start = Callable[[Machine], Procedure]
 T = TypeVar("T")  # what a procedure answers: a Result, or a part of one (a loop gain's step)
 
 
+# the faults in force on the machine a copy is made of (an experiment function builds its
+# copies from the configuration alone: what the plant hides comes this way, see copies_with)
+_copy_faults: ContextVar[tuple[Fault, ...]] = ContextVar("copy_faults", default=())
+
+
+@contextmanager
+def copies_with(faults: Iterable[Fault]) -> Iterator[None]:
+    """Every copy made within carries `faults`: a copy of a machine behaves as the machine
+    does, its training faults included (a preview that ignored them would tell a student
+    the opposite of the machine)."""
+    token = _copy_faults.set(tuple(faults))
+    try:
+        yield
+    finally:
+        _copy_faults.reset(token)
+
+
 def on_copy(cfg: MachineConfig, start: Callable[[Machine], Generator[Wait, np.ndarray, T]]) -> T:
-    """Run the procedure `start` makes on a fresh machine built from `cfg` and powered on as
-    a scenario is; the machine the configuration came from does not move."""
+    """Run the procedure `start` makes on a fresh machine built from `cfg`, powered on as a
+    scenario is, with the faults of `copies_with` in force; the machine the configuration
+    came from does not move."""
     sim = Simulation(cfg.cycle_s)
     m = sim.add(cfg)
     try:
         power_on(sim, m)
     except NcUsageError as e:
         raise ExperimentError(str(e)) from None
+    for fault in _copy_faults.get():
+        m.inject(fault)
     return step_through(sim, start(m))
 
 

@@ -5,7 +5,7 @@ caller (the service, its workers, the command line) does the same way.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -14,6 +14,7 @@ from nc_sim.assist.registry import assistant
 from nc_sim.assist.result import ExperimentError, Result
 from nc_sim.config import MachineConfig
 from nc_sim.errors import NcUsageError
+from nc_sim.faults import Fault
 from nc_sim.params import Scope
 from nc_sim.params import resolve as resolve_parameter
 
@@ -46,15 +47,23 @@ def _live_on_copy(a: Assistant, cfg: MachineConfig, inputs: dict[str, Any]) -> R
     return result
 
 
-def run(name: str, cfg: MachineConfig, values: Mapping[str, object]) -> Result:
-    """Assistant `name` with `values` on a copy of the machine `cfg` describes (a calculator:
-    on its parameters); ExperimentError when the inputs or the machine do not allow it."""
+def run(
+    name: str, cfg: MachineConfig, values: Mapping[str, object], faults: Sequence[Fault] = ()
+) -> Result:
+    """Assistant `name` with `values` on a copy of the machine `cfg` describes with the
+    training `faults` in force on it (a calculator: on its parameters); ExperimentError when
+    the inputs or the machine do not allow it."""
     a = assistant(name)
     inputs = _inputs(a, values)
     try:
         if "axis" in inputs:
             cfg.axis(str(inputs["axis"]))
-        result: Result = resolve(a.run)(cfg, **inputs) if a.run else _live_on_copy(a, cfg, inputs)
+        if a.kind is Kind.CALCULATOR:
+            result: Result = resolve(a.run)(cfg, **inputs)
+        else:  # the kernel loads here, where an experiment runs
+            copies_with = resolve("nc_sim.assist.procedure:copies_with")
+            with copies_with(faults):
+                result = resolve(a.run)(cfg, **inputs) if a.run else _live_on_copy(a, cfg, inputs)
     except NcUsageError as e:
         raise ExperimentError(str(e)) from None
     return _with_before(cfg, result) if a.kind is Kind.CALCULATOR else result

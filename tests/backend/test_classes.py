@@ -286,6 +286,25 @@ def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:
     assert [h["text"] is not None for h in hints] == [False, True]
 
 
+def test_a_preview_on_a_copy_carries_the_seats_fault(srv: Server) -> None:
+    """multi-gain hides a drive running 1/2.2857 as fast per digit: the experiment on a copy
+    of the seat's machine measures f = (kv/100)/k = 2.286 (DOMAIN §7), as the machine itself
+    does, not the 1.000 of a sound drive (issue 41, defect 1)."""
+    t = trainer(srv)
+    created = new_class(t, "copy", 1, "multi-gain")
+    mid = created["info"]["seats"][0]["machine"]
+    seat = student(srv, created["links"][0]["url"])
+    r = seat.post(
+        f"/api/machines/{mid}/assist/multi-gain",
+        json={"axis": "X", "feed_mm_min": 200},
+        timeout=120,
+    )
+    assert r.status_code == 200, r.text
+    f = {x["name"]: x["value"] for x in r.json()["figures"]}["f"]
+    assert f == pytest.approx(PLANT_F, rel=0.01)
+    assert t.post("/api/classes/copy/end").status_code == 200
+
+
 def test_the_margins_check_runs_on_the_seats_worker(srv: Server) -> None:
     """soft-coupling starts with the old tuning on a coupling half as stiff: the seat's
     worker judges its speed loop short of the stiff template (phase margin 11.5° by
