@@ -10,6 +10,7 @@ from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import Conflict, Forbidden, Invalid, NotFound, responses
 from backend.services.classes import Classes
 from backend.services.exercises import exercise_info, hint_infos
+from nc_sim.training.findings import say, unit_of
 
 router = APIRouter(prefix="/api/machines/{mid}/exercise", tags=["training"])
 
@@ -82,7 +83,8 @@ def answer_finding(
         Classes.entry(
             actor,
             f"answered finding '{req.check}' of exercise '{c.exercise.id}':"
-            f" {req.axis} {req.value:g} ({'right' if given.passed else 'wrong'})",
+            f" {req.axis} {say(req.value, unit_of(c.seat_machine, req.axis))}"
+            f" ({'right' if given.passed else 'wrong'})",
             machine.id,
         )
     )

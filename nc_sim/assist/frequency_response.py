@@ -33,6 +33,7 @@ from nc_sim.kernel import layout as L
 from nc_sim.machine.machine import Machine
 from nc_sim.plant import frf
 from nc_sim.plant import layout as PL
+from nc_sim.plant.tuning import loop_figures
 from nc_sim.snapshot import AxisState
 from nc_sim.units import MM_MIN_PER_MM_S, RPM_TO_RAD_S
 
@@ -277,6 +278,56 @@ def _log_thin(f: np.ndarray) -> np.ndarray:
     return np.unique(np.searchsorted(f, at).clip(0, len(f) - 1))
 
 
+def _margins(h: frf.Frf, figures: list[Figure]) -> list[str]:
+    """The open loop's margins read on its Nyquist curve (nc_sim/plant/tuning.py): the least
+    phase margin over every gain crossover (a resonance that lifts the loop above 0 dB again
+    has its own), the gain margin above the first crossover (a phase that wanders about
+    -180° below it, where |L| is large, is no margin); each left out where the coherence
+    says the estimate does not hold. Returns the notes."""
+    fig = loop_figures(h.f_hz, h.h)
+    if fig is None:
+        return [
+            "no margins: the measured loop has no gain crossover in the band, or it is not "
+            "stable by the Nyquist criterion (it encircles -1)"
+        ]
+    notes = []
+    for at, pairs in (
+        (
+            fig.crossover_hz,
+            (
+                (
+                    "phase_margin_deg",
+                    fig.phase_margin_deg,
+                    "°",
+                    "least phase margin at a crossover",
+                ),
+                ("crossover_hz", fig.crossover_hz, "Hz", "first gain crossover (|L| = 1)"),
+            ),
+        ),
+        (
+            fig.phase_crossover_hz,
+            (
+                ("gain_margin_db", fig.gain_margin_db, "dB", "gain margin at -180° above it"),
+                ("phase_crossover_hz", fig.phase_crossover_hz, "Hz", "phase crossover (-180°)"),
+            ),
+        ),
+    ):
+        if at is None:
+            continue
+        holds = frf.coherence_near(h, at)
+        if holds < 0.8:  # a margin read where the estimate does not hold is no margin
+            notes.append(
+                f"{pairs[0][0].replace('_', ' ')} left out: at {at:.1f} Hz the coherence is "
+                f"{holds:.2f} (backlash or friction make the axis nonlinear there: less "
+                "amplitude, an offset speed)"
+            )
+            continue
+        for name, value, unit, text in pairs:
+            if value is not None:
+                figures.append(Figure(name, float(value), unit, text))
+    return notes
+
+
 def analyse(done: Measured, offset: bool) -> Result:
     """The figures, notes and Bode series of a measurement (`offset`: it ran at an offset
     speed)."""
@@ -299,36 +350,7 @@ def analyse(done: Measured, offset: bool) -> Result:
         else:
             notes.append("no resonance stands out: the mechanics behave as one rigid mass")
     if measurement == OPEN_SPEED:
-        mg = frf.margins(h)
-        for at, pairs in (
-            (
-                mg.crossover_hz,
-                (
-                    ("phase_margin_deg", mg.phase_margin_deg, "°", "phase margin at the crossover"),
-                    ("crossover_hz", mg.crossover_hz, "Hz", "gain crossover (|L| = 1)"),
-                ),
-            ),
-            (
-                mg.phase_crossover_hz,
-                (
-                    ("gain_margin_db", mg.gain_margin_db, "dB", "gain margin at -180°"),
-                    ("phase_crossover_hz", mg.phase_crossover_hz, "Hz", "phase crossover (-180°)"),
-                ),
-            ),
-        ):
-            if at is None:
-                continue
-            holds = frf.coherence_near(h, at)
-            if holds < 0.8:  # a margin read where the estimate does not hold is no margin
-                notes.append(
-                    f"{pairs[0][0].replace('_', ' ')} left out: at {at:.1f} Hz the coherence is "
-                    f"{holds:.2f} (backlash or friction make the axis nonlinear there: less "
-                    "amplitude, an offset speed)"
-                )
-                continue
-            for fig, value, unit, text in pairs:
-                if value is not None:
-                    figures.append(Figure(fig, float(value), unit, text))
+        notes += _margins(h, figures)
     if measurement in (CLOSED_SPEED, CLOSED_POSITION):
         bw = frf.bandwidth_hz(h)
         if bw is not None:

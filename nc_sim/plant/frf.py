@@ -69,17 +69,6 @@ def h1(x: np.ndarray, y: np.ndarray, fs_hz: float, nperseg: int) -> Frf:
     return Frf(f[keep], h[keep], np.nan_to_num(coh[keep]))
 
 
-@dataclass(frozen=True)
-class Margins:
-    """Stability margins of an open loop: gain margin (dB) at the phase crossover, phase
-    margin (°) at the gain crossover; None where the curve does not cross."""
-
-    gain_margin_db: float | None
-    phase_crossover_hz: float | None
-    phase_margin_deg: float | None
-    crossover_hz: float | None
-
-
 def _crossing(f: np.ndarray, v: np.ndarray, level: float) -> int | None:
     """Index i of the first downward crossing of `level` between i and i + 1."""
     for i in range(len(v) - 1):
@@ -96,21 +85,6 @@ def _at(
     s = (level - v[i]) / (v[i + 1] - v[i])
     lf = math.log10(f[i]) + s * (math.log10(f[i + 1]) - math.log10(f[i]))
     return 10.0**lf, float(other[i] + s * (other[i + 1] - other[i]))
-
-
-def margins(open_loop: Frf) -> Margins:
-    """Gain and phase margin of a measured open loop (first crossings from below)."""
-    f, mag, ph = open_loop.f_hz, open_loop.magnitude_db, open_loop.phase_deg
-    gm = pc = pm = wc = None
-    i = _crossing(f, mag, 0.0)
-    if i is not None:
-        wc, phase = _at(f, mag, i, 0.0, ph)
-        pm = 180.0 + phase
-    j = _crossing(f, ph, -180.0)
-    if j is not None:
-        pc, m = _at(f, ph, j, -180.0, mag)
-        gm = -m
-    return Margins(gm, pc, pm, wc)
 
 
 def bandwidth_hz(closed_loop: Frf) -> float | None:

@@ -105,22 +105,19 @@ class MarginsEvaluator:
             short.append("phase margin")
         if fig.gain_margin_db < t.gain_margin_db:
             short.append("gain margin")
-        if short:
-            self._set(False, now, f"{said}: short of {name} in {' and '.join(short)}")
-            return
+        kept = f"short of {name} in {' and '.join(short)}" if short else f"keeps {name}"
         if self.bandwidth_pct <= 0.0:
-            self._set(True, now, f"{said}: keeps {name}")
+            self._set(not short, now, f"{said}: {kept}")
             return
         plant = _bare(model)
         if plant != self._plant:
             self._plant = plant
             self._best_hz = best_bandwidth_hz(model, self.template_id)
         share = fig.bandwidth_hz / self._best_hz * 100.0 if self._best_hz > 0.0 else 0.0
-        ok = share >= self.bandwidth_pct
         self._set(
-            ok,
+            not short and share >= self.bandwidth_pct,
             now,
-            f"{said}: keeps {name} at {share:.0f} % of the best bandwidth it allows"
+            f"{said}: {kept}; {share:.0f} % of the best bandwidth it allows"
             f" ({self._best_hz:.1f} Hz; {self.bandwidth_pct:g} % wanted)",
         )
 

@@ -208,6 +208,31 @@ def test_a_class_from_uploaded_parameter_lists(console: Page, srv: Server) -> No
     assert {p["name"]: p["value"] for p in r.json()}["getriebe[0].kv"] == 3300
 
 
+def test_a_second_class_shows_its_own_login_links(console: Page) -> None:
+    """Two classes made one after the other, the first's links not yet taken: the panel
+    shows the second class's seats and links (it kept the first's: Clara got Anna's link)."""
+    c = console
+
+    def make(cid: str, seats: int) -> list[str]:
+        c.get_by_test_id("class-new").click()
+        form = panel(c, "class-create")
+        form.get_by_test_id("class-exercise").select_option("sign-error")
+        form.get_by_test_id("class-id").fill(cid)
+        form.get_by_test_id("class-seats").fill(str(seats))
+        form.get_by_test_id("class-create").click()
+        links = panel(c, "seat-links")
+        expect(links).to_contain_text(f"class '{cid}'", timeout=60_000)
+        rows = links.get_by_test_id("link-url")
+        expect(rows).to_have_count(seats)
+        return [rows.nth(i).input_value() for i in range(seats)]
+
+    first = make("twice-a", 2)
+    second = make("twice-b", 1)
+    assert not set(second) & set(first)
+    panel(c, "seat-links").get_by_test_id("links-done").click()
+    expect(c.locator("ul.class-list").first).to_contain_text("1 seat ·")
+
+
 WIDER = """() => [...document.querySelectorAll('*')]
   .filter((e) => e.getBoundingClientRect().right > innerWidth + 1)
   .slice(0, 8)

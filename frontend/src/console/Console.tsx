@@ -65,7 +65,8 @@ export function Console() {
         {creating ? (
           <CreateClass onCancel={() => setCreating(false)} onCreated={(k) => { setCreating(false); setCreated(k); }} />
         ) : null}
-        {created ? <SeatLinks created={created} onDone={() => setCreated(null)} /> : null}
+        {/* keyed: a second class made before the first one's links were taken shows its own */}
+        {created ? <SeatLinks key={created.info.id} created={created} onDone={() => setCreated(null)} /> : null}
         {c ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
         {!c && !creating && !created ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
         {c && n !== null ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}

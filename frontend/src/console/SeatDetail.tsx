@@ -34,6 +34,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
   const [tick, setTick] = useState(0);
   const fail = (e: unknown) => setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] });
   useEffect(() => {
+    if (!seat) return; // another class was just opened: its seats are not this one's
     let live = true;
     const load = async () => {
       const [detail, traces, audit, snapshots] = await Promise.all([
@@ -53,6 +54,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
   }, [c.id, n, running, mid, tick]);
   const then = (p: Promise<unknown>) => void p.then(() => setTick((t) => t + 1), fail);
   const d = data?.detail;
+  if (!seat) return null;
   return (
     <Panel id="seat-detail" title={`Seat ${n}: ${seat?.student ?? ""}${running ? "" : " (debrief)"}`}
       actions={<button type="button" class="secondary" data-testid="detail-close" onClick={() => (detailSeat.value = null)}>Close</button>}>

@@ -1,13 +1,14 @@
 // A captured record in uPlot: time from the trigger, a trigger marker at t = 0, two cursors
 // (click sets A, shift-click sets B, drag a line to move it), drag or wheel to zoom, buttons
 // to pan, double-click for the whole record, and an overlay trace drawn dashed behind. One y
-// axis per unit, booleans as digital lanes below the analog area (ui/scopeAxes.ts).
-import { useEffect, useRef } from "preact/hooks";
+// axis per quantity (or per unit, shared), booleans as digital lanes below the analog area
+// (ui/scopeAxes.ts).
+import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { fmt, tickLabels } from "../ui/format";
 import { followWidth } from "../ui/plot";
-import { analogRange, type ChannelShape, DIGITAL, digitalRange, LANE_HIGH, laneBit, laneValue, scopeLayout } from "../ui/scopeAxes";
+import { analogRange, type ChannelShape, laneBit, laneValue, scopeLayout, yAxes } from "../ui/scopeAxes";
 import { COLOURS } from "./LivePlot";
 
 export interface Series extends ChannelShape {
@@ -22,6 +23,7 @@ export interface Overlay {
 
 export type Cursors = [number | null, number | null];
 const CHART_HEIGHT = 330;
+const SHARE_KEY = "inbetrieb.scope.shareY";
 
 /** Overlay samples on the main time grid (nearest sample; null outside the overlay). */
 function onGrid(t: Float64Array, ot: Float64Array, oy: Float64Array): (number | null)[] {
@@ -45,6 +47,8 @@ export function CaptureChart(props: {
   onRange: (r: [number, number]) => void;
   testid?: string;
 }) {
+  // one y axis per unit instead of one per quantity (kept in this browser)
+  const [shareY, setShareY] = useState(() => localStorage.getItem(SHARE_KEY) === "1");
   const box = useRef<HTMLDivElement>(null);
   const plot = useRef<uPlot | null>(null);
   const cursorsRef = useRef(props.cursors);
@@ -53,7 +57,7 @@ export function CaptureChart(props: {
   cb.current = props;
 
   const overlaid = props.overlay ? props.series.filter((s) => props.overlay?.channels.has(s.name)) : [];
-  const layout = scopeLayout(props.series);
+  const layout = scopeLayout(props.series, shareY);
   // a boolean sample becomes its lane's level; analog samples stay as they are
   const drawn = (i: number, y: ArrayLike<number | null>): (number | null)[] | number[] => {
     const lane = layout.laneOf[i];
@@ -68,7 +72,7 @@ export function CaptureChart(props: {
       ...overlaid.map((s) => drawn(series.indexOf(s), onGrid(t, overlay!.t, overlay!.channels.get(s.name)!))),
     ];
   };
-  const structure = `${props.series.map((s) => `${s.name}:${s.unit}:${s.kind}`).join(",")}|${overlaid.length}`;
+  const structure = `${props.series.map((s) => `${s.name}:${s.unit}:${s.kind}`).join(",")}|${overlaid.length}|${shareY}`;
 
   // (re)build the chart when its series change; new samples of the same series only replace
   // the data (a rolling scope, the next capture of a normal-mode scope)
@@ -103,13 +107,11 @@ export function CaptureChart(props: {
       put(cbx, cursorsRef.current[1]);
     };
 
-    const { scales, scaleOf, laneOf, lanes, digitalShare } = layout;
+    const { laneOf, digitalShare } = layout;
     const stepped = uPlot.paths.stepped!({ align: 1 });
     const valueOf = (i: number) => (_u: uPlot, v: number | null) => (laneOf[i] === null ? fmt(v, 4) : String(laneBit(v) ?? "—"));
-    const uScales: uPlot.Scales = { x: { time: false } };
-    for (const sc of scales) uScales[sc.key] = { range: (_u, min, max) => analogRange(min, max, digitalShare).slice(0, 2) as [number, number] };
-    if (lanes) uScales[DIGITAL] = { auto: false, range: () => digitalRange(lanes, digitalShare) };
     const bools = series.filter((_s, i) => laneOf[i] !== null);
+    const y = yAxes(layout, bools, (_key, min, max) => analogRange(min, max, digitalShare).slice(0, 2) as [number, number]);
     const opts: uPlot.Options = {
       width: Math.max(300, el.clientWidth),
       height: CHART_HEIGHT, // the legend (cursor values) goes below, outside this height
@@ -119,7 +121,7 @@ export function CaptureChart(props: {
           label: s.unit ? `${s.name} [${s.unit}]` : s.name,
           stroke: COLOURS[i % COLOURS.length],
           width: 1.25,
-          scale: scaleOf[i],
+          ...y.series[i],
           ...(laneOf[i] !== null ? { paths: stepped } : {}),
           value: valueOf(i),
         })),
@@ -130,46 +132,14 @@ export function CaptureChart(props: {
             stroke: COLOURS[i % COLOURS.length] + "99",
             width: 1.25,
             dash: [6, 4],
-            scale: scaleOf[i],
+            ...y.series[i],
             ...(laneOf[i] !== null ? { paths: stepped } : {}),
             value: valueOf(i),
           };
         }),
       ],
-      scales: uScales,
-      axes: [
-        { label: "time from trigger [s]", values: (_u, splits) => tickLabels(splits) },
-        ...scales.map((sc, k) => ({
-          scale: sc.key,
-          side: sc.side,
-          label: sc.unit,
-          labelSize: 18,
-          size: 56,
-          grid: { show: k === 0 },
-          // ticks only where the analog data is, not down in the digital lanes
-          filter: (u: uPlot, splits: number[]) => {
-            const { min, max } = u.scales[sc.key];
-            const floor = min == null || max == null ? -Infinity : min + (max - min) * digitalShare;
-            return splits.map((v) => (v >= floor - 1e-9 * Math.abs(max ?? 1) ? v : null));
-          },
-          values: (u: uPlot, splits: number[]) => {
-            const labels = tickLabels(splits);
-            if (k === 0) u.root.dataset.yTicks = labels.join(" | "); // what the axis reads, for tests
-            return labels;
-          },
-        })),
-        ...(lanes
-          ? [{
-              scale: DIGITAL,
-              side: 3 as const,
-              size: Math.min(170, 16 + 6.5 * Math.max(...bools.map((b) => b.name.length))),
-              grid: { show: false },
-              ticks: { show: false },
-              splits: () => bools.map((_b, j) => lanes - 1 - j + LANE_HIGH / 2),
-              values: () => bools.map((b) => b.name),
-            }]
-          : []),
-      ],
+      scales: { x: { time: false }, ...y.scales },
+      axes: [{ label: "time from trigger [s]", values: (_u, splits) => tickLabels(splits) }, ...y.axes],
       cursor: { drag: { x: true, y: false } },
       legend: { live: true },
       hooks: {
@@ -249,6 +219,7 @@ export function CaptureChart(props: {
 
   return (
     <div class="capture-chart" data-testid={props.testid} data-y-units={layout.scales.map((sc) => sc.unit).join("|")}
+      data-y-scales={layout.scales.map((sc) => sc.label).join("|")}
       data-lanes={props.series.filter((_s, i) => layout.laneOf[i] !== null).map((s) => s.name).join("|")}>
       <div class="plot-tools">
         <button type="button" title="pan left" onClick={() => span((a, b) => [a - (b - a) / 2, b - (b - a) / 2])}>◀</button>
@@ -256,6 +227,14 @@ export function CaptureChart(props: {
         <button type="button" title="zoom in" onClick={() => span((a, b) => [a + (b - a) / 4, b - (b - a) / 4])}>+</button>
         <button type="button" title="zoom out" onClick={() => span((a, b) => [a - (b - a) / 2, b + (b - a) / 2])}>−</button>
         <button type="button" data-testid="chart-whole" onClick={whole}>whole record</button>
+        <label title="one y axis for each unit instead of one for each quantity (position, lag, speed …)">
+          <input type="checkbox" data-testid="chart-share-y" checked={shareY}
+            onChange={(e) => {
+              const on = (e.target as HTMLInputElement).checked;
+              localStorage.setItem(SHARE_KEY, on ? "1" : "0");
+              setShareY(on);
+            }} /> one axis per unit
+        </label>
         <span class="hint">drag or wheel: zoom · click: cursor A · shift-click: cursor B</span>
       </div>
       <div class="capture-box" ref={box} />

@@ -19,7 +19,7 @@ export function frfSeconds(fs: number, fMin: number, averages: number, prbs: boo
 }
 
 interface Drive {
-  cascade: boolean;
+  cascade: boolean | null; // null: the list hides the plant (a class seat's student)
   samplingS: number; // the drive's step
   mmPerRev: number; // travel per motor revolution (mm | °)
 }
@@ -34,7 +34,7 @@ function useDrive(axis: string): Drive | null {
         const plant = value.get("sim.plant");
         const n = (key: string, fallback: number) => (typeof value.get(key) === "number" ? (value.get(key) as number) : fallback);
         setD({
-          cascade: plant === "DRIVE_CASCADE" || plant === 1,
+          cascade: plant === undefined ? null : plant === "DRIVE_CASCADE" || plant === 1,
           samplingS: n("drive.sampling_time", 125) * 1e-6,
           mmPerRev: n("sim.mech.travel_per_rev", 100000) * 1e-4,
         });
@@ -53,7 +53,8 @@ export function DrivePlan(props: { name: string; axis: AxisStatus; body: Record<
   const drive = useDrive(axis.name);
   const cycle = status.value?.simulation.cycle_s ?? 0.001;
   if (name === "circle") return <CirclePlan body={body} live={props.live} />;
-  if (!drive) return null;
+  // a seat's student sees no sim.* list: neither the plant nor its travel per revolution
+  if (!drive || drive.cascade === null) return null;
   if (!drive.cascade)
     return (
       <p class="assist-check off" data-testid="drive-plan" data-cascade="0">

@@ -1,8 +1,10 @@
 // One live plot: chosen signals (subscribed by state/plots.ts, on screen or not) over a 1–30 s
 // window, drawn with uPlot at most as often as the refresh rate says (state/plots.ts) and only
-// when new samples arrived;
-// pause, drag-zoom (pauses), autoscale, cursor readout in the legend, and the newest value of
-// every trace under the chart.
+// when new samples arrived; a y axis per quantity (or per unit, shared), booleans as lanes
+// (ui/scopeAxes.ts); pause, drag-zoom (pauses), autoscale, cursor readout in the legend, and
+// the newest value of every trace under the chart. A signal added keeps the others' history
+// and starts empty: the samples it has no history for are gaps, not NaN (uPlot's range of a
+// series that starts with NaN is NaN, and the whole chart went blank until the window filled).
 import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
@@ -10,6 +12,7 @@ import { type PlotConfig, plotRate } from "../state/plots";
 import { catalogue, frameListeners, rings } from "../state/telemetry";
 import { fmt, tickLabels } from "../ui/format";
 import { drawLoop } from "../ui/drawLoop";
+import { analogRange, type ChannelShape, laneBit, laneValue, scopeLayout, yAxes } from "../ui/scopeAxes";
 import { SignalPicker } from "../ui/SignalPicker";
 
 export const COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
@@ -19,12 +22,30 @@ function unitOf(name: string): string {
   return catalogue.value.find((s) => s.name === name)?.unit ?? "";
 }
 
+function shapeOf(name: string): ChannelShape {
+  const s = catalogue.value.find((x) => x.name === name);
+  return { name, unit: s?.unit ?? "", kind: s?.kind ?? "float" };
+}
+
+/** A ring column as uPlot draws it: the samples before its first one (a signal added to the
+ * plot has no history) as gaps. */
+function gapsForMissing(col: Float64Array): ArrayLike<number | null> {
+  if (!col.length || !Number.isNaN(col[0])) return col;
+  let k = 0;
+  while (k < col.length && Number.isNaN(col[k])) k++;
+  const out: (number | null)[] = new Array(col.length);
+  for (let i = 0; i < col.length; i++) out[i] = i < k ? null : col[i];
+  return out;
+}
+
+type Ranges = Record<string, [number, number]>; // frozen y ranges by scale key
+
 export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) => void; onRemove?: () => void }) {
   const { config } = props;
   const box = useRef<HTMLDivElement>(null);
   const plot = useRef<uPlot | null>(null);
   const [paused, setPaused] = useState(false);
-  const [yRange, setYRange] = useState<[number, number] | null>(null); // null: autoscale
+  const [frozen, setFrozen] = useState<Ranges | null>(null); // null: autoscale
   const [latest, setLatest] = useState<number[]>([]);
   const pausedRef = useRef(paused);
   pausedRef.current = paused;
@@ -33,30 +54,44 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
   useEffect(() => {
     const el = box.current;
     if (!el) return;
+    const shapes = config.signals.map(shapeOf);
+    const layout = scopeLayout(shapes, config.shareY);
+    const { laneOf, lanes, digitalShare } = layout;
+    const bools = shapes.filter((_s, i) => laneOf[i] !== null);
+    const range = (key: string, min: number, max: number): [number, number] =>
+      frozen?.[key] ?? (analogRange(min, max, digitalShare).slice(0, 2) as [number, number]);
+    const y = yAxes(layout, bools, range);
+    const stepped = uPlot.paths.stepped!({ align: 1 });
     const opts: uPlot.Options = {
       width: Math.max(200, el.clientWidth),
       height: Math.max(160, el.clientHeight),
       series: [
         { label: "t [s]", value: (_u, v) => fmt(v, 3) },
         ...config.signals.map((s, i) => ({
-          label: `${s} [${unitOf(s)}]`,
+          label: unitOf(s) ? `${s} [${unitOf(s)}]` : s,
           stroke: COLOURS[i % COLOURS.length],
           width: 1.25,
           dash: i >= COLOURS.length ? [6, 3] : undefined, // colour is not the only difference
-          value: (_u: uPlot, v: number | null) => fmt(v, 4),
+          ...y.series[i],
+          ...(laneOf[i] !== null ? { paths: stepped } : {}),
+          value: (_u: uPlot, v: number | null) => (laneOf[i] === null ? fmt(v, 4) : String(laneBit(v) ?? "—")),
         })),
       ],
-      scales: { x: { time: false }, y: yRange ? { auto: false, range: yRange } : { auto: true } },
-      axes: [
-        { label: "simulated time [s]", values: (_u, splits) => tickLabels(splits) },
-        { size: 60, values: (_u, splits) => tickLabels(splits) },
-      ],
+      scales: { x: { time: false }, ...y.scales },
+      axes: [{ label: "simulated time [s]", values: (_u, splits) => tickLabels(splits) }, ...y.axes],
       cursor: { drag: { x: true, y: false } },
       legend: { live: true },
       hooks: {
         setSelect: [(u) => u.select.width > 0 && setPaused(true)], // zooming freezes the view
       },
     };
+    const drawn = (cols: Float64Array[]): uPlot.AlignedData => [
+      cols[0] as unknown as number[],
+      ...cols.slice(1).map((c, i) => {
+        const lane = laneOf[i];
+        return lane === null ? (gapsForMissing(c) as number[]) : Array.from(c, (v) => laneValue(Number.isNaN(v) ? null : v, lane, lanes));
+      }),
+    ];
     const u = new uPlot(opts, [[], ...config.signals.map(() => [])], el);
     plot.current = u;
     const ro = new ResizeObserver(() => u.setSize({ width: Math.max(200, el.clientWidth), height: Math.max(160, el.clientHeight) }));
@@ -66,7 +101,7 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
       if (pausedRef.current) return;
       fps.frames++;
       const r = rings.value;
-      u.setData(r.window(config.windowS, config.signals) as uPlot.AlignedData);
+      u.setData(drawn(r.window(config.windowS, config.signals)));
       fps.draws++;
       if (now - lastLatest > 200) {
         lastLatest = now;
@@ -83,15 +118,20 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
       u.destroy();
       plot.current = null;
     };
-  }, [config.signals.join(","), config.windowS, yRange, catalogue.value.length, plotRate.value]);
+  }, [config.signals.join(","), config.windowS, config.shareY, frozen, catalogue.value.length, plotRate.value]);
 
   function toggleAutoscale() {
-    const y = plot.current?.scales.y;
-    setYRange(yRange || !y || y.min == null || y.max == null ? null : [y.min, y.max]); // freeze as shown
+    const u = plot.current;
+    if (frozen || !u) return setFrozen(null);
+    const shown: Ranges = {}; // freeze every scale as shown
+    for (const [key, sc] of Object.entries(u.scales)) {
+      if (key !== "x" && sc.min != null && sc.max != null) shown[key] = [sc.min, sc.max];
+    }
+    setFrozen(shown);
   }
 
   return (
-    <div class="liveplot" data-testid={`plot-${config.id}`}>
+    <div class="liveplot" data-testid={`plot-${config.id}`} data-y-scales={scopeLayout(config.signals.map(shapeOf), config.shareY).scales.map((sc) => sc.label).join("|")}>
       <div class="plot-tools">
         <SignalPicker chosen={config.signals} onChange={(signals) => props.onChange({ ...config, signals })} />
         <label>
@@ -104,7 +144,11 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
           {paused ? "▶ Resume" : "❚❚ Pause"}
         </button>
         <label>
-          <input type="checkbox" checked={!yRange} onChange={toggleAutoscale} /> autoscale
+          <input type="checkbox" checked={!frozen} onChange={toggleAutoscale} /> autoscale
+        </label>
+        <label title="one y axis for each unit instead of one for each quantity (position, lag, speed …)">
+          <input type="checkbox" data-testid="plot-share-y" checked={!!config.shareY}
+            onChange={(e) => props.onChange({ ...config, shareY: (e.target as HTMLInputElement).checked })} /> one axis per unit
         </label>
         {props.onRemove ? (
           <button type="button" class="link" onClick={props.onRemove} aria-label="remove plot">

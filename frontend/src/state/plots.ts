@@ -11,6 +11,8 @@ export interface PlotConfig {
   id: string;
   signals: string[];
   windowS: number;
+  /** one y axis per unit instead of one per quantity */
+  shareY?: boolean;
 }
 
 /** Spindle speed command vs actual, and the lag of the linear axes. */

@@ -1,6 +1,11 @@
-// How a scope chart lays out its channels: one y scale and axis per unit (rpm, deg, mm …) for
-// the analog channels, the boolean channels as digital lanes (0/1 steps, each in its own band)
-// below the analog area. Pure: CaptureChart builds the uPlot options from it.
+// How a chart (the scope's capture, a live plot) lays out its channels: one y scale and axis
+// per quantity for the analog channels (a position, a lag, a speed: commanded, actual and true
+// values of one quantity share theirs, so a spindle's 73 000° position does not flatten its
+// 0.01° lag), or per unit when the user shares them; the boolean channels as digital lanes
+// (0/1 steps, each in its own band) below the analog area. `yAxes` makes the uPlot scales,
+// axes and series settings of a layout.
+import type uPlot from "uplot";
+import { tickLabels } from "./format";
 
 /** A channel as the chart needs it: its unit and kind (api ChannelInfo / SignalInfo). */
 export interface ChannelShape {
@@ -9,10 +14,12 @@ export interface ChannelShape {
   kind: "float" | "bool" | "enum";
 }
 
-/** One y scale: its uPlot key, the unit it reads in, the axis side (3 left, 1 right). */
+/** One y scale: its uPlot key, the unit it reads in, its axis' label and side (3 left,
+ * 1 right). */
 export interface UnitScale {
   key: string;
   unit: string;
+  label: string;
   side: 1 | 3;
 }
 
@@ -36,8 +43,20 @@ export const LANE_HIGH = 0.7;
 /** The unit text of an analog channel's scale: enums (state, gear, code) have none. */
 export const scaleUnit = (c: ChannelShape) => c.unit || (c.kind === "enum" ? "code" : "—");
 
-/** Scales, lanes and the digital share for these channels. */
-export function scopeLayout(channels: ChannelShape[]): ScopeLayout {
+// a signal name's unit ending (X.lag_mm, S1.accel_cmd_deg_s2) and its command/actual/true part
+const UNIT_END = /_(mm_min|mm_s2|deg_s2|mm|deg|rpm|pct|um|nm|s)$/;
+const ROLE = /_(cmd|act|true)(?=_|$)/;
+
+/** The quantity a channel measures, from its name: `X.pos_act_mm` and `X.pos_cmd_mm` →
+ * "pos", `S1.lag_deg` → "lag"; an axis' quantity is the same quantity on another axis. */
+export function quantityOf(name: string): string {
+  const stem = name.slice(name.lastIndexOf(".") + 1);
+  return stem.replace(UNIT_END, "").replace(ROLE, "") || stem;
+}
+
+/** Scales, lanes and the digital share for these channels: a scale per quantity (and unit),
+ * or per unit only when `share`. */
+export function scopeLayout(channels: ChannelShape[], share = false): ScopeLayout {
   const scales: UnitScale[] = [];
   const scaleOf: string[] = [];
   const laneOf: (number | null)[] = [];
@@ -49,10 +68,13 @@ export function scopeLayout(channels: ChannelShape[]): ScopeLayout {
       continue;
     }
     const unit = scaleUnit(c);
-    let s = scales.find((x) => x.unit === unit);
+    const quantity = share ? "" : quantityOf(c.name);
+    const key = quantity ? `y:${quantity}:${unit}` : `y:${unit}`;
+    let s = scales.find((x) => x.key === key);
     if (!s) {
-      // alternate the sides so two units each get a clear axis: left, right, left …
-      s = { key: `y:${unit}`, unit, side: scales.length % 2 === 0 ? 3 : 1 };
+      // alternate the sides so two scales each get a clear axis: left, right, left …
+      const label = quantity ? `${quantity} [${unit}]` : unit;
+      s = { key, unit, label, side: scales.length % 2 === 0 ? 3 : 1 };
       scales.push(s);
     }
     scaleOf.push(s.key);
@@ -90,4 +112,75 @@ export function analogRange(min: number, max: number, digitalShare: number): [nu
 export function digitalRange(lanes: number, digitalShare: number): [number, number] {
   const lo = -0.15; // a little air below the lowest lane
   return [lo, lo + (lanes - lo) / Math.max(digitalShare, 1e-6)];
+}
+
+// the axes' fonts, set on every axis so their labels are measured as drawn
+const AXIS_FONT = "12px system-ui, sans-serif";
+const LABEL_FONT = "bold 12px system-ui, sans-serif";
+const TICK_AND_GAP = 10 + 5 + 6; // tick length, gap to the text, air at the edge (px)
+const LABEL_SIZE = 18;
+let measurer: CanvasRenderingContext2D | null = null;
+
+/** The width of the widest tick label in the axis font (px). */
+export function labelWidth(labels: (string | null)[]): number {
+  measurer ??= document.createElement("canvas").getContext("2d");
+  if (!measurer) return 8 * Math.max(0, ...labels.map((l) => l?.length ?? 0));
+  measurer.font = AXIS_FONT;
+  return Math.max(0, ...labels.map((l) => (l ? measurer!.measureText(l).width : 0)));
+}
+
+/** An axis as wide as its widest label (a minus sign or an exponent never clipped); its
+ * label (the unit) takes its own labelSize beside. */
+const fitSize = (_u: uPlot, values: string[] | null): number =>
+  Math.ceil(labelWidth(values ?? []) + TICK_AND_GAP);
+
+/** A layout's uPlot y scales and axes (after the x axis), and each channel's series settings.
+ * `range`: an analog scale's range from its data's min and max (autoscale), or a fixed one;
+ * `bools`: the boolean channels, lane by lane. Each axis' tick labels go to the chart root's
+ * `data-y-ticks` (axes joined by " ‖ ") for tests. */
+export function yAxes(
+  layout: ScopeLayout,
+  bools: ChannelShape[],
+  range: (key: string, min: number, max: number) => [number, number],
+): { scales: uPlot.Scales; axes: uPlot.Axis[]; series: Partial<uPlot.Series>[] } {
+  const { scales, scaleOf, lanes, digitalShare } = layout;
+  const uScales: uPlot.Scales = {};
+  for (const sc of scales) uScales[sc.key] = { range: (_u, min, max) => range(sc.key, min, max) };
+  if (lanes) uScales[DIGITAL] = { auto: false, range: () => digitalRange(lanes, digitalShare) };
+  const ticks: string[] = scales.map(() => "");
+  const axes: uPlot.Axis[] = scales.map((sc, k) => ({
+    scale: sc.key,
+    side: sc.side,
+    label: sc.label,
+    labelSize: LABEL_SIZE,
+    font: AXIS_FONT,
+    labelFont: LABEL_FONT,
+    size: fitSize,
+    grid: { show: k === 0 },
+    // ticks only where the analog data is, not down in the digital lanes
+    filter: (u: uPlot, splits: number[]) => {
+      const { min, max } = u.scales[sc.key];
+      const floor = min == null || max == null ? -Infinity : min + (max - min) * digitalShare;
+      return splits.map((v) => (v >= floor - 1e-9 * Math.abs(max ?? 1) ? v : null));
+    },
+    values: (u: uPlot, splits: number[]) => {
+      const labels = tickLabels(splits);
+      ticks[k] = labels.join(" | ");
+      u.root.dataset.yTicks = ticks.join(" ‖ ");
+      return labels;
+    },
+  }));
+  if (lanes) {
+    axes.push({
+      scale: DIGITAL,
+      side: 3,
+      size: Math.min(170, 16 + 6.5 * Math.max(...bools.map((b) => b.name.length))),
+      grid: { show: false },
+      ticks: { show: false },
+      splits: () => bools.map((_b, j) => lanes - 1 - j + LANE_HIGH / 2),
+      values: () => bools.map((b) => b.name),
+    });
+  }
+  const series = scaleOf.map((key) => ({ scale: key }));
+  return { scales: uScales, axes, series };
 }

@@ -31,7 +31,9 @@ from tests.nc_sim.plant.test_frequency_response import (
     _speed_loop_params,
     _x_axis,
 )
+from tests.nc_sim.plant.x_speed_loop import F_AR, Knobs, margins, open_loop
 from tests.nc_sim.sim_helpers import make
+from tests.nc_sim.training.seats import Seat
 
 
 def _machine(x: dict[str, Any]) -> MachineConfig:
@@ -72,6 +74,19 @@ def test_open_speed_loop_margins_agree_with_python_control() -> None:
     assert r.figure("phase_margin_deg") == pytest.approx(pm, abs=3.0)
     assert r.figure("gain_margin_db") == pytest.approx(20 * math.log10(gm), abs=1.0)
     assert r.figure("crossover_hz") == pytest.approx(wcp / (2 * np.pi), rel=0.03)
+
+
+def test_a_loop_that_crosses_0_db_again_reports_its_worst_phase_margin() -> None:
+    """The soft-coupling exercise's start (exercises/soft-coupling.toml): the old notch on
+    103 Hz, the resonance moved to 73 Hz. The loop crosses 0 dB several times; the margin
+    that counts is the least, as python-control's model has it (11.5°), not the first
+    crossover's (about 47°) the Bode panel showed a student."""
+    seat = Seat("soft-coupling")
+    r = step_through(seat.sim, frequency_response(seat.m, "X", OPEN_SPEED, f_min_hz=5.0))
+    knobs = Knobs(1.37, 6.3e-3, ((102.8, 0.15, 0.015),))
+    pm, gm = margins(open_loop(knobs, F_AR * math.sqrt(0.5)))
+    assert r.figure("phase_margin_deg") == pytest.approx(pm, abs=3.0)
+    assert r.figure("gain_margin_db") == pytest.approx(gm, abs=1.0)
 
 
 def test_closed_loops_bandwidths_order_as_the_cascade_says() -> None:
