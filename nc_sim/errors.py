@@ -132,7 +132,7 @@ MESSAGES: dict[Code, str] = {
     Code.EV_SPEED_REACHED: "speed reached",
     Code.EV_HLI: "HLI control unit written",
     Code.EV_PLC_MODE: "PLC mode changed",
-    Code.EV_MOTION_DONE: "motion done",
+    Code.EV_MOTION_DONE: "motion done: the set-point is at its target",
     Code.EV_LOOP_OPENED: "position loop opened",
     Code.EV_LOOP_CLOSED: "position loop closed",
     Code.EV_REFERENCE_LOST: "reference lost above the control limit: the spindle is homed "
@@ -140,7 +140,7 @@ MESSAGES: dict[Code, str] = {
     Code.EV_GEAR_CHANGED: "gear stage changed",
     Code.EV_IN_POSITION: "in position",
     Code.EV_TOOL_DYNAMICS: "tool dynamics",
-    Code.EV_PROGRAM_END: "program end",
+    Code.EV_PROGRAM_END: "program end: the last block's set-point has ended",
     Code.EV_M_START: "spindle M function started",
     Code.EV_POWERED: "machine ready: the PLC has switched every drive on",
     Code.EV_GEAR_CHANGE_START: "gear change started",

@@ -33,6 +33,11 @@ class AxisState(IntEnum):
     CHANGEOVER = 10  # spindle <-> rotary axis C [003 Fig. 4-1]: braking, waiting for the PLC
 
 
+# the shown state of an axis whose set-point is at rest while the axis itself still moves into
+# its exact-stop window (nc_sim/machine/readout.py): not an NC state of its own
+SETTLING = "SETTLING"
+
+
 class LoopMode(StrEnum):
     """The position loop as the drive runs it."""
 

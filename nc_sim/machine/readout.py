@@ -14,7 +14,9 @@ from nc_sim.kernel.step import moving_direction
 from nc_sim.machine.channel_ops import PROGRAM_ACTIVE
 from nc_sim.machine.core import MachineCore
 from nc_sim.snapshot import (
+    SETTLING,
     AxisSnapshot,
+    AxisState,
     ChannelSnapshot,
     HomingSnapshot,
     InterfaceSignals,
@@ -69,7 +71,7 @@ def axis_snapshot(m: MachineCore, ax: Axis) -> AxisSnapshot:
     return AxisSnapshot(
         name=ax.name,
         kind=ax.kind,
-        state=ax.state.name,
+        state=_shown_state(m, ax, to_go),
         pos_unit="mm" if ax.kind is AxisKind.LINEAR else "deg",
         vel_unit=vel_unit,
         pos_cmd=pos_cmd,
@@ -97,6 +99,32 @@ def axis_snapshot(m: MachineCore, ax: Axis) -> AxisSnapshot:
         signals=_signals(m, ax, spindle is not None, cax),
         homing=_homing(ax),
     )
+
+
+def _shown_state(m: MachineCore, ax: Axis, to_go: float | None) -> str:
+    """The state as the axis itself is, not only its set-point: a set-point at rest with the
+    axis still moving into its window is SETTLING (its lag outside the exact-stop window,
+    kenngr.exact_stop_window, the NC's in-position criterion; a spindle until it
+    reports stopped), and a path axis
+    the current block does not move (no distance to go, no speed commanded) stands still
+    (the path drives every path axis, so the NC counts it as moving)."""
+    st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
+    state = ax.state
+    if (
+        state is AxisState.MOVING
+        and m.ch_host.block_target(ax) is not None
+        and float(st[L.S_V_CMD]) == 0.0
+        and to_go is not None
+        and abs(to_go) <= 1e-9
+    ):
+        state = AxisState.STANDSTILL
+    if state is not AxisState.STANDSTILL or not ist[L.I_ENABLED]:
+        return state.name  # without its enables the drive does not follow: nothing settles
+    if ax.kind is AxisKind.SPINDLE and (m.cax is None or m.cax.ax is not ax or not m.cax.rotary):
+        settled = bool(ist[L.I_STOPPED])
+    else:
+        settled = abs(float(st[L.S_LAG])) <= float(m.k.pr[ax.slot, L.P_INPOS_WIN])
+    return state.name if settled else SETTLING
 
 
 def _homing(ax: Axis) -> HomingSnapshot | None:

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from nc_sim.axis.dynamics import Dynamics, Motion, Sourced
+from nc_sim.axis.dynamics import Dynamics, Motion, Sourced, param
 from nc_sim.axis.state import Axis
 from nc_sim.kernel import layout as L
 from nc_sim.snapshot import AxisServiceSnapshot, GainReading, LimitInForce
@@ -107,9 +107,19 @@ def _limits(
         motion = ax.motion or Motion.FEED
         v, ovr = m.moves.speed_in_force(ax, motion)
         feed = m.channel.modal[3]  # F of the block the path is in, mm/min
-        if m.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS and feed:
-            ovr = m.moves.override(ax)  # the path's F × channel override
-            v = Sourced(per_second(feed) * ovr, "F (path)", None, "programmed")
+        block = m.channel.path.current
+        on_path = m.k.ist[ax.slot, L.I_ROLE] == L.ROLE_PATH_AXIS and block is not None
+        if on_path and block is not None and feed and ax in m.ch_host.path_axes:
+            # the axis' share of the path's F × channel override: the most of the path speed
+            # this block asks of it (a line's direction component, an arc's radius share)
+            ovr = m.moves.override(ax)
+            share = float(block.weights()[m.ch_host.path_axes.index(ax)])
+            v = Sourced(
+                per_second(feed) * ovr * share, f"F (path) × {share:.3g}", None, "programmed"
+            )
+        elif ax.motion is None and not on_path:
+            # at rest: no F or jog feed in force, only the most any motion of it may have
+            v, ovr = param(ax.cfg, "getriebe.dynamik.vb_max", ax.gear), 1.0
         dyn: Dynamics = m.motion.dynamics(ax, motion)
         kind: AxisKind = AxisKind.ROTARY if ax.kind is AxisKind.SPINDLE else ax.kind
     else:

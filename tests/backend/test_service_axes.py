@@ -47,7 +47,8 @@ def test_demo_x_at_constant_feed(srv: Server) -> None:
     assert x["kv_per_s"] == pytest.approx(KV_X)
     assert x["lag_expected"] == pytest.approx(v / KV_X)
     assert x["k_measured_per_s"] == pytest.approx(KV_X, rel=0.01)
-    assert x["velocity"]["source"] == "F (path)" and x["velocity"]["unit"] == "mm/min"
+    assert x["velocity"]["source"] == "F (path) × 1" and x["velocity"]["unit"] == "mm/min"
+    assert x["velocity"]["value"] == pytest.approx(1000.0)  # X alone: all of F
     assert x["acceleration"]["param_id"] == "P-AXIS-00001"  # a_beschl below a_max
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 from playwright.sync_api import Locator, Page, expect
 
+from tests.backend.server import Server
 from tests.e2e.browser import panel, shot
 
 # ui/scopeAxes.ts: the axes' tick font, and tick length plus the gap to the text
@@ -116,3 +117,114 @@ def test_the_scope_gives_a_spindles_lag_an_axis_apart_from_its_position(page: Pa
     expect(chart).to_have_attribute("data-y-scales", "deg")
     expect(chart.locator(".u-axis")).to_have_count(2)
     chart.get_by_test_id("chart-share-y").uncheck()  # this browser keeps the choice
+
+
+def test_the_trace_librarys_delete_reads_as_red_text_not_blue_on_red(
+    page: Page, tmp_path: Path
+) -> None:
+    csv = tmp_path / "any-trace.csv"
+    csv.write_text("cycle,t_s,X.lag_mm [mm]\n0,0.000,0.0\n1,0.001,0.0\n")
+    page.get_by_test_id("tab-Scope").click()
+    library = panel(page, "trace-library")
+    library.get_by_test_id("trace-import").set_input_files(str(csv))
+    delete = library.locator("tr", has_text="any-trace").get_by_role("button", name="delete")
+    style = delete.evaluate(
+        "e => { const s = getComputedStyle(e); return [s.color, s.backgroundColor]; }"
+    )
+    assert style == ["rgb(192, 32, 42)", "rgba(0, 0, 0, 0)"], style  # --bad on the page
+
+
+def test_states_follow_the_axes_and_the_service_view_its_limits(
+    page: Page, srv: Server, mid: str
+) -> None:
+    """X with kv 2/s (getriebe[0].kv 200) at 300 mm/min: lag v/kv = 2.5 mm, settling into
+    the 10 µm window takes ln(250)/2 = 2.8 s after the set-point arrived. During the X-only
+    block Z stands still; after it X is SETTLING (not STANDSTILL) until its lag is in. The
+    service view's velocity limit at rest is the axis' vb_max, not the last F."""
+    r = srv.http.patch(
+        f"/api/machines/{mid}/parameters",
+        json={
+            "changes": [{"scope": "axis", "target": "X", "name": "getriebe[0].kv", "value": 200}]
+        },
+    )
+    assert r.status_code == 200, r.text
+    machine = panel(page, "machine")
+    page.get_by_test_id("tab-Service").click()
+    svc = panel(page, "service").get_by_test_id("svc-X")
+    expect(svc.get_by_test_id("svc-X-v-limit-source")).to_contain_text("vb_max")
+    expect(svc.get_by_test_id("svc-X-da")).to_contain_text("digital: no D/A range")  # SERCOS
+    r = srv.command(mid, {"type": "mdi", "block": "G01 X60 F300"})
+    assert r.status_code in (200, 202), r.text
+    expect(machine.get_by_test_id("state-X")).to_have_text("MOVING")
+    expect(machine.get_by_test_id("state-Z")).to_have_text("STANDSTILL")
+    expect(machine.get_by_test_id("state-X")).to_have_text("SETTLING", timeout=10_000)
+    lag = float(machine.get_by_test_id("lag-X").inner_text().replace("−", "-"))
+    assert abs(lag) > 0.01
+    shot(page, "state-settling-desktop")
+    expect(machine.get_by_test_id("state-X")).to_have_text("STANDSTILL", timeout=10_000)
+    assert abs(srv.axis("X", mid)["lag"]) <= 0.010
+
+
+def test_the_spindle_s_field_follows_an_mdi_s(page: Page, srv: Server, mid: str) -> None:
+    s_input = panel(page, "spindle").get_by_test_id("s-input")
+    expect(s_input).to_have_value("1000")
+    r = srv.command(mid, {"type": "mdi", "block": "M3 S600"})
+    assert r.status_code in (200, 202), r.text
+    expect(s_input).to_have_value("600")
+    s_input.fill("750")  # typed: it stays until sent
+    srv.command(mid, {"type": "mdi", "block": "S650"})
+    expect(panel(page, "machine").get_by_test_id("vcmd-S1")).to_have_text("650.0", timeout=10_000)
+    expect(s_input).to_have_value("750")
+
+
+def test_jog_defaults_to_a_safe_feed_and_warns_while_unhomed(
+    page: Page, srv: Server, mid: str
+) -> None:
+    """A 1 s press with nothing typed moves X about 300 mm/min · 1 s = 5 mm, not the G200
+    rapid's 10 000 mm/min (167 mm); the panel says X is not homed, and 'homing…' while G74
+    runs."""
+    jog = panel(page, "jog")
+    jog.get_by_test_id("jog-axis-X").check()
+    expect(jog.get_by_test_id("jog-feed")).to_have_value("300")
+    expect(jog.get_by_test_id("jog-feed-default")).to_contain_text("safe default")
+    expect(jog.get_by_test_id("jog-unhomed")).to_contain_text("X is not homed")
+    shot(page, "jog-safe-default-desktop")
+    x0 = srv.axis("X", mid)["pos_cmd"]
+    jog.get_by_test_id("jog-plus").hover()
+    page.mouse.down()
+    expect(panel(page, "machine").get_by_test_id("state-X")).to_have_text("JOG")
+    page.wait_for_timeout(1000)
+    page.mouse.up()
+    expect(panel(page, "machine").get_by_test_id("state-X")).to_have_text("STANDSTILL")
+    moved = srv.axis("X", mid)["pos_cmd"] - x0
+    assert 2.0 < moved < 12.0, moved
+    jog.get_by_test_id("jog-home").click()
+    expect(jog.get_by_test_id("jog-homed")).to_have_text("homing…")
+    expect(jog.get_by_test_id("jog-unhomed")).to_have_count(0)
+
+
+def test_a_live_run_confirmation_does_not_also_say_on_a_copy(page: Page) -> None:
+    page.get_by_test_id("tab-Commissioning").click()
+    assist = panel(page, "assist")
+    assist.get_by_test_id("assist-run-live").click()
+    expect(assist.get_by_test_id("assist-confirm")).to_contain_text("The machine will move")
+    expect(assist.get_by_test_id("assist-what")).to_contain_text("on the machine itself")
+    expect(assist.get_by_test_id("assist-what")).not_to_contain_text("on a copy")
+
+
+def test_the_trial_bar_drops_at_reset_once_someone_else_resets(
+    page: Page, srv: Server, mid: str
+) -> None:
+    page.get_by_test_id("tab-Parameters").click()
+    params = panel(page, "parameters")
+    params.get_by_test_id("param-search").fill("P-AXIS-00178")  # swe_pos: takes effect at reset
+    params.get_by_test_id("param-input-kenngr.swe_pos").fill("5000000")
+    params.get_by_test_id("param-apply").click()
+    trial = page.get_by_test_id("trial-bar").get_by_test_id("param-trial")
+    expect(trial).to_contain_text("(at reset)")
+    page.get_by_test_id("control-release").click()  # someone else takes over and resets
+    expect(page.get_by_test_id("control-release")).to_have_count(0)
+    r = srv.command(mid, {"type": "reset"})
+    assert r.status_code in (200, 202), r.text
+    expect(trial).to_contain_text("in force since the reset")
+    expect(trial).not_to_contain_text("(at reset)")

@@ -25,7 +25,8 @@ def test_an_event_without_detail_reads_as_its_meaning() -> None:
     assert isinstance(m.submit(Mdi("G91 G01 X1 F600")), Accepted)
     record(sim, 1.0)
     done = [e for e in m.events if e.code == Code.EV_MOTION_DONE]
-    assert [e.message for e in done] == ["motion done"] and done[0].axis == "X"
+    assert [e.message for e in done] == [MESSAGES[Code.EV_MOTION_DONE]] and done[0].axis == "X"
+    assert done[0].message.startswith("motion done")
 
 
 def test_a_gear_change_is_not_logged_as_an_hli_write() -> None:

@@ -279,7 +279,7 @@ export function Commissioning(props: { drive?: boolean }) {
               </label>
             </>
           )}
-          {ax ? <p class="assist-what" data-testid="assist-what">{!guided ? codeSpans(info?.text ?? "") : name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name as Guided, ax, inp, values, kv, busy ? where : "copy")}</p> : null}
+          {ax ? <p class="assist-what" data-testid="assist-what">{!guided ? codeSpans(info?.text ?? "") : name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name as Guided, ax, inp, values, kv, busy ? where : confirming ? "machine" : "copy")}</p> : null}
           {ax && drive ? <DrivePlan name={name} axis={ax} body={form.body} /> : null}
           <div class="row">
             <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}

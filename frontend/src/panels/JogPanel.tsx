@@ -62,6 +62,10 @@ function JogKey(props: {
   );
 }
 
+// the jog feed without one typed (the NC's own G200 default is the axis' rapid jog)
+const SAFE_JOG_MM_MIN = 300;
+const SAFE_JOG_DEG_MIN = 3600; // 10 rpm
+
 export function JogPanel() {
   const axes = status.value?.axes ?? [];
   const { axis: name, feed, step } = jogSettings.value;
@@ -110,12 +114,16 @@ export function JogPanel() {
   const cName = ax.spindle_mode != null ? (rotaryAxisName.value ?? (ax.spindle_mode === "rotary" ? ax.display_name : null)) : null;
   const jogName = cName ?? ax.name;
   const unit = ax.unit === "deg" ? "°" : "mm";
-  const feedNum = feed === null || feed.trim() === "" ? null : Number(feed);
-  const feedPositive = feedNum === null || (Number.isFinite(feedNum) && feedNum > 0);
-  const feedInLimit = feedNum === null || feedMax === null || feedNum <= feedMax * (1 + 1e-12);
+  // no feed typed: the HMI's safe jog feed, not the G200 default (10 000 mm/min took an
+  // unhomed X 350 mm in a 2 s press); the engineer raises it consciously, up to G200's
+  const safe = Math.min(ax.unit === "deg" ? SAFE_JOG_DEG_MIN : SAFE_JOG_MM_MIN, feedDefault ?? Infinity);
+  const typed = feed === null || feed.trim() === "" ? null : Number(feed);
+  const feedNum = typed ?? safe;
+  const feedPositive = Number.isFinite(feedNum) && feedNum > 0;
+  const feedInLimit = feedMax === null || feedNum <= feedMax * (1 + 1e-12);
   const feedOk = feedPositive && feedInLimit;
   const feedError = !feedPositive
-    ? "a feed > 0 is needed (empty: the G200 default)"
+    ? "a feed > 0 is needed (empty: the safe jog feed)"
     : !feedInLimit
       ? `at most ${qty(feedMax, 2, `${unit}/min`)}: the G200 maximum of ${ax.display_name} (P-AXIS-00213)`
       : "";
@@ -154,7 +162,7 @@ export function JogPanel() {
         <label>
           Jog feed{" "}
           <input data-testid="jog-feed" inputMode="decimal" size={9} class={feed === null ? "is-default" : ""}
-            value={feed ?? (feedDefault === null ? "" : fmt(feedDefault, 1))} aria-invalid={!feedOk}
+            value={feed ?? fmt(safe, 0)} aria-invalid={!feedOk}
             aria-describedby="jog-feed-default"
             onInput={(e) => jogSettings.patch({ feed: (e.target as HTMLInputElement).value })} />{" "}
           {unit}/min
@@ -167,8 +175,8 @@ export function JogPanel() {
         ) : null}
         {g201 ? null : feed === null ? (
           <span class="tag default-tag" id="jog-feed-default" data-testid="jog-feed-default"
-            title="the jog feed without one given: hb.vb_max (P-AXIS-00213), at most the gear's vb_max">
-            G200 default
+            title={`the HMI's safe jog feed; type a higher one to go faster, up to ${qty(feedDefault, 0, `${unit}/min`)} (G200: hb.vb_max, P-AXIS-00213, at most the gear's vb_max)`}>
+            safe default · G200 up to {qty(feedDefault, 0, `${unit}/min`)}
           </span>
         ) : (
           <button type="button" class="link" data-testid="jog-feed-reset" onClick={() => jogSettings.patch({ feed: null })}>
@@ -179,6 +187,11 @@ export function JogPanel() {
       {cName && ax.spindle_mode !== "rotary" ? (
         <p class="hint" data-testid="jog-changeover-hint">
           A jog of {cName} changes {ax.name} over to the rotary axis {cName} first (M5 before, if it turns).
+        </p>
+      ) : null}
+      {!ax.homed && ax.kind !== "spindle" && ax.state !== "HOMING" ? (
+        <p class="warn-line" data-testid="jog-unhomed" role="note">
+          {ax.display_name} is not homed: no software limits guard it. Jog at a low feed and watch the slide.
         </p>
       ) : null}
       <div class="field-note">
@@ -221,7 +234,7 @@ export function JogPanel() {
           onClick={() => void cmd.run({ type: "home", axis: ax.name })}>
           G74 home {ax.name}
         </button>
-        <span class="hint">{ax.homed ? "homed" : "not homed"}</span>
+        <span class="hint" data-testid="jog-homed">{ax.state === "HOMING" ? "homing…" : ax.homed ? "homed" : "not homed"}</span>
       </div>
       <RefusalLine refusal={cmd.refusal ?? jogRefusal} id="jog-refusal" />
     </Panel>

@@ -9,6 +9,7 @@ import { useEffect, useRef, useState } from "preact/hooks";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { type PlotConfig, plotRate } from "../state/plots";
+import { status } from "../state/session";
 import { catalogue, frameListeners, rings } from "../state/telemetry";
 import { fmt, tickLabels } from "../ui/format";
 import { drawLoop } from "../ui/drawLoop";
@@ -36,6 +37,16 @@ function gapsForMissing(col: Float64Array): ArrayLike<number | null> {
   const out: (number | null)[] = new Array(col.length);
   for (let i = 0; i < col.length; i++) out[i] = i < k ? null : col[i];
   return out;
+}
+
+/** The newest value as read: a spindle's position within 0…360° with its whole revolutions
+ * apart (537 242° reads 122.000 (1492 rev)), as the machine view and the C axis show it. */
+function latestText(name: string, v: number): string {
+  const spindle = catalogue.value.find((x) => x.name === name)?.axis;
+  const turning = spindle && status.value?.axes.find((a) => a.name === spindle)?.kind === "spindle";
+  if (!turning || !/\.pos_(cmd|act|true)_deg$/.test(name) || !Number.isFinite(v)) return fmt(v, 3);
+  const revs = Math.floor(v / 360);
+  return `${fmt(v - 360 * revs, 3)} (${revs} rev)`;
 }
 
 type Ranges = Record<string, [number, number]>; // frozen y ranges by scale key
@@ -160,7 +171,7 @@ export function LivePlot(props: { config: PlotConfig; onChange: (c: PlotConfig) 
       <div class="latest">
         {config.signals.map((s, i) => (
           <span key={s} style={{ borderColor: COLOURS[i % COLOURS.length] }}>
-            {s} = <b data-testid={`latest-${s}`}>{fmt(latest[i], 3)}</b> {unitOf(s)}
+            {s} = <b data-testid={`latest-${s}`}>{latestText(s, latest[i])}</b> {unitOf(s)}
           </span>
         ))}
       </div>

@@ -86,6 +86,9 @@ function LimitRow(props: { label: string; limit: LimitInForce | null | undefined
   );
 }
 
+// lr_hw[i].da_max at its default, the whole 32-bit range: a digital interface, no D/A
+const NO_DA_LIMIT = 2147483647;
+
 function AxisCard({ a, s }: { a: AxisStatus; s: AxisService | undefined }) {
   const unit = a.unit === "deg" ? "°" : a.unit;
   const vu = velUnit(a.unit, a.kind, a.spindle_mode);
@@ -117,9 +120,16 @@ function AxisCard({ a, s }: { a: AxisStatus; s: AxisService | undefined }) {
             {qty(s?.k_measured_per_s, 2, "1/s")}
           </Row>
           {s && s.ff_weight > 0 ? <Row label="Feedforward" id={id("ff")}>{qty(100 * s.ff_weight, 0, "%")}</Row> : null}
-          <Row label="D/A output" id={id("da")} title={`lr_hw.da_max ${fmt(s?.da_max_digits, 0)} digits`}>
-            {fmt(s?.da_digits, 0)} / {fmt(s?.da_max_digits, 0)} <span class="svc-src">{qty(daPct, 1, "%")}</span>
-          </Row>
+          {s && s.da_max_digits >= NO_DA_LIMIT ? (
+            // a digital drive (SERCOS …) takes the command as a number: no D/A range to fill
+            <Row label="Command value" id={id("da")} title="a digital drive interface: lr_hw.da_max gives no D/A range (2³¹ − 1)">
+              {fmt(s.da_digits, 0)} digits <span class="svc-src">digital: no D/A range</span>
+            </Row>
+          ) : (
+            <Row label="D/A output" id={id("da")} title={`lr_hw.da_max ${fmt(s?.da_max_digits, 0)} digits`}>
+              {fmt(s?.da_digits, 0)} / {fmt(s?.da_max_digits, 0)} <span class="svc-src">{qty(daPct, 1, "%")}</span>
+            </Row>
+          )}
           <Row label="Override" id={id("override")}>{qty(a.override_pct, 0, "%")}</Row>
           <LimitRow label="Velocity limit" limit={s?.velocity} id={id("v-limit")} decimals={1} />
           <LimitRow label="Acceleration" limit={s?.acceleration} id={id("a-limit")} decimals={0} />

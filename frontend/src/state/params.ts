@@ -7,6 +7,7 @@ import { http } from "../api/http";
 import type { ParameterChange, ParameterDef, ParameterValue, ParameterWriteResult, Scope } from "../api/types";
 import { me } from "./auth";
 import { holderKey, standing } from "./control";
+import { events } from "./events";
 import { machineId, machineUrl, status } from "./session";
 import { kept, keptSignal } from "./workspace";
 
@@ -210,4 +211,19 @@ effect(() => {
     revertWaitsForRestart.value = false; // the restart took them in
   }
   lastBuild = b;
+});
+
+// A CNC reset (by anyone, on any screen) takes in the values that waited for it: every view
+// reloads, so the trial bar no longer says "(at reset)" of a value in force since.
+const EV_RESET = 14; // nc_sim/errors.py Code.EV_RESET
+const newestReset = computed(() => {
+  const resets = events.value.filter((e) => e.code === EV_RESET);
+  return resets.length ? `${machineId.value}/${resets[resets.length - 1].cycle}` : `${machineId.value}/none`;
+});
+let lastReset: string | null = null;
+effect(() => {
+  const r = newestReset.value;
+  const same = lastReset !== null && r.split("/")[0] === lastReset.split("/")[0];
+  if (same && r !== lastReset) paramsVersion.value = paramsVersion.peek() + 1;
+  lastReset = r;
 });

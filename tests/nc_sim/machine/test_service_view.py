@@ -12,7 +12,7 @@ import pytest
 
 from nc_sim.commands import Accepted, HliWrite, JogStart
 from nc_sim.machine.machine import Machine
-from nc_sim.machine.service import axis_service
+from nc_sim.machine.service import axis_service, service_view
 from nc_sim.sim import Simulation
 from nc_sim.snapshot import AxisServiceSnapshot
 from tests.nc_sim.sim_helpers import make, mdi, record
@@ -84,12 +84,29 @@ def test_jog_limits_come_from_the_manual_mode_parameters() -> None:
     assert x.jerk is not None and x.jerk.value == pytest.approx(1000.0 / 0.020)
 
 
+def test_a_path_axis_limit_is_its_share_of_the_path_feed_and_at_rest_its_vb_max() -> None:
+    """G01 U30 W40 (G91 X30 Z-40 here): a 3-4-5 line at F 1000: X may carry 3/5 of the path
+    speed (600 mm/min), Z 4/5 (800); at rest, before any F, the most a motion of X may
+    have: getriebe[0].dynamik.vb_max, not a feed of 0."""
+    sim, m, cfg = make()
+    x = _x(m, _run(sim, 0.05))
+    vb_max = cfg.axis("X").eng("getriebe.dynamik.vb_max") * 60.0  # mm/min
+    assert x.velocity.source == "getriebe[0].dynamik.vb_max"
+    assert x.velocity.value == pytest.approx(vb_max) and x.velocity.override_pct is None
+    mdi(m, "G01 G91 X30 Z-40 F1000")
+    rec = _run(sim, 0.1)
+    views = {a.name: a for a in service_view(m, rec)}
+    assert views["X"].velocity.value == pytest.approx(600.0)
+    assert views["Z"].velocity.value == pytest.approx(800.0)
+    assert views["X"].velocity.source == "F (path) × 0.6"
+
+
 def test_override_and_reduced_speed_as_sources() -> None:
     sim, m, _ = make({"X": {"getriebe[0].vb_max_red": 5000}})  # µm/s: 5 mm/s = 300 mm/min
     assert isinstance(m.submit(HliWrite("override", 500)), Accepted)  # 50 %
     mdi(m, "G01 G91 X150 F1000")
     x = _x(m, _run(sim, 0.1))
-    assert x.velocity.source == "F (path)"
+    assert x.velocity.source == "F (path) × 1"  # the block moves X alone
     assert x.velocity.value == pytest.approx(500.0)  # F 1000 × 50 %
     assert x.velocity.override_pct == pytest.approx(50.0)
     # a_beschl 2000 mm/s² below a_max 5000 mm/s²

@@ -3,6 +3,7 @@ physics and the geometry of a move; the event behind each active job error."""
 
 from __future__ import annotations
 
+import math
 import pickle
 
 import pytest
@@ -161,3 +162,30 @@ def test_homing_reports_its_phases_distance_and_speed() -> None:
     assert m.axis("X").homed
     # where it will end (the cam's edge) is 230 mm from where it began
     assert moved_and_to_go == pytest.approx(280.0 - 50.0, abs=1e-3)
+
+
+def test_the_shown_state_follows_the_axis_not_only_its_set_point() -> None:
+    """G01 X50 → X100 at 1 m/min on the demo X (kv 20/s, no feedforward): the lag at
+    constant speed is v/kv = 16.67/20 = 0.833 mm. While X moves, Z (not in the block) stands
+    still. When the set-point arrives the NC's motion is done, but X still closes its lag:
+    SETTLING, until its lag is inside the exact-stop window (kenngr.exact_stop_window 100:
+    10 µm), ln(lag/0.010)/kv later (a first-order decay)."""
+    sim, m, cfg = make()
+    window = cfg.axis("X").eng("kenngr.exact_stop_window")
+    assert window == pytest.approx(0.010)
+    mdi(m, "G01 X100 F1000")
+    record(sim, 1.0)
+    snap = m.snapshot()
+    assert _axis(snap, "X").state == "MOVING"
+    assert _axis(snap, "Z").state == "STANDSTILL"  # the path's, but not moved by this block
+    assert _axis(snap, "X").lag == pytest.approx(1000.0 / 60.0 / 20.0, rel=0.02)
+    while not any(e.code == Code.EV_MOTION_DONE and e.axis == "X" for e in m.events):
+        record(sim, 0.001)
+    x = _axis(m.snapshot(), "X")
+    assert x.state == "SETTLING" and abs(x.lag) > window
+    settle_s = math.log(abs(x.lag) / window) / 20.0
+    record(sim, 0.8 * settle_s)
+    assert _axis(m.snapshot(), "X").state == "SETTLING"
+    record(sim, 0.4 * settle_s + 0.05)
+    x = _axis(m.snapshot(), "X")
+    assert x.state == "STANDSTILL" and abs(x.lag) <= window
