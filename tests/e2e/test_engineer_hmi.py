@@ -228,3 +228,16 @@ def test_the_trial_bar_drops_at_reset_once_someone_else_resets(
     assert r.status_code in (200, 202), r.text
     expect(trial).to_contain_text("in force since the reset")
     expect(trial).not_to_contain_text("(at reset)")
+
+
+def test_the_machine_view_stays_on_screen_on_a_wide_screen(page: Page) -> None:
+    """A wide screen (1920 px, here 700 px high so Operate surely scrolls), the Operate
+    workspace scrolled to its live plot: the machine view beside it is still in the window
+    (it scrolled away and left an empty column)."""
+    page.set_viewport_size({"width": 1920, "height": 700})
+    expect(panel(page, "jog")).to_be_visible()
+    page.evaluate("window.scrollTo(0, document.documentElement.scrollHeight)")
+    assert page.evaluate("window.scrollY") > 300
+    box = panel(page, "machine").bounding_box()
+    assert box is not None and 0 <= box["y"] < 300, box
+    shot(page, "wide-scrolled-desktop")

@@ -127,12 +127,12 @@ def test_releasing_or_granting_control_is_no_news_and_clears_old_news(
         params.get_by_test_id("param-apply").click()  # takes the free machine
         bar = a.get_by_test_id("trial-bar")
         bar.get_by_test_id("param-keep").click()
-        expect(bar.get_by_test_id("trial-message")).to_have_text("Kept.")
+        expect(bar.get_by_test_id("trial-message")).to_contain_text("✓ Kept 1 value")
         expect(strip_b.get_by_test_id("control-holder")).to_have_text("ana (operator) has control")
         strip_b.get_by_test_id("control-request").click()
         strip_a.get_by_test_id("control-incoming").get_by_test_id("control-grant").click()
         expect(strip_b.get_by_test_id("control-holder")).to_have_text("You have control")
-        expect(bar).to_have_count(0)  # "Kept." was news to the holder before
+        expect(bar).to_have_count(0)  # "Kept" was news to the holder before
         strip_b.get_by_test_id("control-release").click()
         expect(strip_a.get_by_test_id("control-holder")).to_have_text("Free")
         expect(strip_b.get_by_test_id("control-holder")).to_have_text("Free")

@@ -80,7 +80,7 @@ def test_take_change_compare_roll_back_keep(page: Page, srv: Server, mid: str) -
     shot(page, "versions-defaults-tablet")
     bar.get_by_test_id("param-keep").click()
     expect(bar.get_by_test_id("param-trial")).to_be_hidden()
-    expect(bar.get_by_test_id("trial-message")).to_have_text("Kept.")
+    expect(bar.get_by_test_id("trial-message")).to_contain_text("✓ Kept")
     assert kv(srv, mid) == KV_RAW
     page.set_viewport_size({"width": 1920, "height": 1080})
 

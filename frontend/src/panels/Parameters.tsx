@@ -228,6 +228,12 @@ function ParameterList() {
     return multiGainText(z, n, axes.find((a) => a.name === t?.target)?.kind === "linear");
   };
   const problemOf = (name: string) => problems.find((p) => p.parameter === name);
+  // the gear record the axis uses now (getriebe[gear − 1]; an axis without gears: [0])
+  const gearNow = axes.find((a) => a.name === t?.target)?.gear ?? 1;
+  const activeRecord = (name: string): boolean => {
+    const m = /^getriebe\[(\d+)\]\./.exec(name);
+    return !!m && Number(m[1]) === gearNow - 1;
+  };
   return (
     <Panel title="Parameters" id="parameters">
       <div class="row param-tools">
@@ -321,7 +327,14 @@ function ParameterList() {
                 <tr key={p.name} data-testid={`param-row-${p.name}`} class={text !== undefined ? "edited" : ""}>
                   <td class="mono">{p.id}</td>
                   <td>
-                    <div class="mono">{p.name}</div>
+                    <div class="mono">
+                      {p.name}
+                      {activeRecord(p.name) ? (
+                        <span class="tag in-force-tag" data-testid={`param-active-${p.name}`} title="the gear record in force now">
+                          in force
+                        </span>
+                      ) : null}
+                    </div>
                     <div class="hint">{p.title}</div>
                     {p.without_effect ? (
                       <div class="hint no-effect" data-testid={`param-no-effect-${p.name}`}>

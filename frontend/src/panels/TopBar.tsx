@@ -14,6 +14,20 @@ import { Lamp } from "../ui/Lamp";
 import { fmt, qty } from "../ui/format";
 import { RefusalLine, useCommand } from "../ui/useCommand";
 
+// (wall time ms, overruns so far) of the last minute's statuses: the rate the bar shows
+const overrunSeen: [number, number][] = [];
+
+/** Overruns in the last minute (the count since the worker started is in the title). */
+function overrunRate(total: number | undefined): string {
+  if (total === undefined) return "—";
+  const now = Date.now();
+  const last = overrunSeen[overrunSeen.length - 1];
+  if (last && total < last[1]) overrunSeen.length = 0; // another worker or machine: start again
+  if (!last || last[1] !== total || now - last[0] > 1000) overrunSeen.push([now, total]);
+  while (overrunSeen.length > 1 && now - overrunSeen[0][0] > 60_000) overrunSeen.shift();
+  return String(total - overrunSeen[0][1]);
+}
+
 export function TopBar({ machine = true }: { machine?: boolean }) {
   const s = status.value;
   const sim = s?.simulation;
@@ -48,10 +62,16 @@ export function TopBar({ machine = true }: { machine?: boolean }) {
             </span>
             <span
               class="h-loop"
-              title={`real-time loop of worker ${sim?.worker ?? "—"}: ticks whose work ran past the next deadline; work per tick, 99th percentile ${qty(sim?.loop_work_p99_ms, 2, "ms")}`}
+              title={
+                `real-time loop of worker ${sim?.worker ?? "—"}: an overrun is a tick whose work ran past the next ` +
+                "deadline (the machine's time waited a moment; the simulation itself stays exact). A few a minute are " +
+                `harmless; many mean the computer is too busy. ${sim?.loop_overruns ?? 0} since the worker started; ` +
+                `work per tick, 99th percentile ${qty(sim?.loop_work_p99_ms, 2, "ms")}`
+              }
               data-testid="loop-health"
             >
-              <span class="wide-only">loop </span>{sim?.worker ?? "—"} · overruns {sim?.loop_overruns ?? "—"}
+              <span class="wide-only">loop </span>{sim?.worker ?? "—"} · overruns{" "}
+              <span data-testid="overrun-rate">{overrunRate(sim?.loop_overruns)}/min</span>
               <span class="wide-only"> · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}</span>
             </span>
           </span>

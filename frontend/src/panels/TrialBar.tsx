@@ -4,6 +4,7 @@
 import { configureBlocked, may } from "../state/control";
 import { changeKey, keepTrial, revertTrial, revertWaitsForRestart, shownTrial, type Trial, trialMessage, trialNow } from "../state/params";
 import { online } from "../state/session";
+import { engQty } from "../ui/format";
 import { RestartMachine } from "./RestartMachine";
 
 const SHOWN = 6; // changes listed; a rollback may bring many
@@ -16,6 +17,17 @@ function waits(c: Applied): boolean {
   if (!c.pending) return false;
   const p = trialNow.value.get(changeKey(c));
   return p ? p.pending != null && p.version === c.version : true;
+}
+
+/** " (20 → 30 1/s)": the change in the HMI's unit beside the list's raw values, where they
+ * differ (a kv in 0.01/s, a position in 0.1 µm). */
+function inHmiUnit(c: Applied): string {
+  const p = trialNow.value.get(changeKey(c));
+  const f = p?.eng_factor;
+  if (!p || f == null || f === 1) return "";
+  const eng = (v: unknown) => (typeof v === "number" ? engQty(v * f, p.eng_unit) : null);
+  const after = eng(c.new);
+  return after === null ? "" : ` (${eng(c.old ?? p.default) ?? "—"} → ${after})`;
 }
 
 export function TrialBar() {
@@ -33,6 +45,7 @@ export function TrialBar() {
             .map(
               (c) =>
                 `${t.label && c.target ? `${c.target}: ` : ""}${c.name} ${c.old ?? "default"} → ${c.new}` +
+                inHmiUnit(c) +
                 (waits(c) ? ` (at ${c.effect})` : c.pending ? ` (in force since the ${c.effect})` : ""),
             )
             .join(", ")}
@@ -47,7 +60,11 @@ export function TrialBar() {
           </button>
         </span>
       ) : null}
-      {msg ? <span class="hint" data-testid="trial-message">{msg}</span> : null}
+      {msg ? (
+        <span class={msg.includes("refused") ? "done-note refused" : "done-note"} data-testid="trial-message" role="status">
+          {msg}
+        </span>
+      ) : null}
       {restartWaits && may("command") ? (
         <RestartMachine label="⟳ Restart now…" refusalId="trial-restart-refusal" onDone={(text) => (trialMessage.value = text)} />
       ) : null}

@@ -193,7 +193,7 @@ export function Versions() {
           title={notAllowed || "take the live parameters as the machine's baseline"} onClick={() => void take(true)}>
           Take as baseline
         </button>
-        {message ? <span class="hint" data-testid="version-message" role="status">{message}</span> : null}
+        {message ? <span class="done-note" data-testid="version-message" role="status">{message}</span> : null}
       </div>
       {confirming ? (
         <div class="param-conflict" data-testid="rollback-confirm" role="alertdialog" aria-label="confirm rollback">

@@ -122,8 +122,10 @@ export async function writeAll(changes: ParameterChange[], comment: string): Pro
 }
 
 export function keepTrial(): void {
+  const t = trial.peek();
   trial.value = null;
-  trialMessage.value = "Kept.";
+  const n = t?.applied.length ?? 0;
+  trialMessage.value = `✓ Kept ${n} value${n === 1 ? "" : "s"}: they stay as the machine's parameters.`;
 }
 
 /** Write the old values back, unless someone wrote over the trial's values meanwhile (their
