@@ -241,3 +241,37 @@ def test_the_machine_view_stays_on_screen_on_a_wide_screen(page: Page) -> None:
     box = panel(page, "machine").bounding_box()
     assert box is not None and 0 <= box["y"] < 300, box
     shot(page, "wide-scrolled-desktop")
+
+
+def test_the_program_view_warns_when_the_path_axes_kv_differ(
+    page: Page, srv: Server, mid: str
+) -> None:
+    """X at kv 8.75 1/s (as multi_gain's full proposal leaves it), Z at 20: the program view
+    says so; both at 20 again, the warning goes."""
+    page.get_by_test_id("tab-Program").click()
+    prog = panel(page, "program")
+    expect(prog.get_by_test_id("program-ok")).to_be_visible()
+    expect(prog.get_by_test_id("kv-mismatch")).to_have_count(0)
+
+    def kv_x(raw: int) -> None:
+        r = srv.http.patch(
+            f"/api/machines/{mid}/parameters",
+            json={
+                "changes": [
+                    {"scope": "axis", "target": "X", "name": "getriebe[0].kv", "value": raw}
+                ]
+            },
+        )
+        assert r.status_code == 200, r.text
+
+    kv_x(875)
+    page.reload()
+    page.get_by_test_id("tab-Program").click()
+    warning = prog.get_by_test_id("kv-mismatch")
+    expect(warning).to_contain_text("X kv 8.75 1/s, Z kv 20.00 1/s")
+    shot(page, "program-kv-mismatch-desktop")
+    kv_x(2000)
+    page.reload()
+    page.get_by_test_id("tab-Program").click()
+    expect(prog.get_by_test_id("program-ok")).to_be_visible()
+    expect(prog.get_by_test_id("kv-mismatch")).to_have_count(0)

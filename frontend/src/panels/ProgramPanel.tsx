@@ -16,7 +16,9 @@ import {
   writeProgram,
 } from "../state/programs";
 import { type Draft, NEW_NAME, NEW_PROGRAM, readDraft, writeDraft } from "../state/programDraft";
+import { numbers, paramsVersion } from "../state/params";
 import { machineId, send, status } from "../state/session";
+import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { ChannelControls } from "./ChannelControls";
@@ -190,8 +192,42 @@ export function ProgramPanel() {
           <RefusalLine refusal={refusal} id="program-store-refusal" />
           <ChannelControls load={badName ? null : load} canLoad={badName} />
         </div>
-        <ToolpathPlot preview={preview} blockLine={loaded ? (ch?.block_line ?? null) : null} />
+        <div>
+          <KvMismatch />
+          <ToolpathPlot preview={preview} blockLine={loaded ? (ch?.block_line ?? null) : null} />
+        </div>
       </div>
     </Panel>
+  );
+}
+
+const KV_APART = 1.02; // kv of the path axes further apart than this: the contour distorts
+
+/** A warning where the path's linear axes have different kv (getriebe[0].kv): each lags by
+ * v/kv of its own, so a line between them bows and a circle turns into an ellipse [004 §3.6];
+ * the circularity test measures the effective gains and proposes matching them. */
+function KvMismatch() {
+  const [kv, setKv] = useState<[string, number][]>([]);
+  const linear = (status.value?.axes ?? []).filter((a) => a.kind === "linear").map((a) => a.name);
+  const key = linear.join(",");
+  useEffect(() => {
+    let live = true;
+    void Promise.all(linear.map((n) => numbers("axis", n).then((v): [string, number] => [n, (v.get("getriebe[0].kv") ?? 0) / 100]))).then(
+      (rows) => live && setKv(rows),
+      () => undefined,
+    );
+    return () => void (live = false);
+  }, [machineId.value, paramsVersion.value, key]);
+  const gains = kv.filter(([, v]) => v > 0);
+  if (gains.length < 2) return null;
+  const lo = Math.min(...gains.map(([, v]) => v));
+  const hi = Math.max(...gains.map(([, v]) => v));
+  if (hi <= lo * KV_APART) return null;
+  return (
+    <p class="warn-line" data-testid="kv-mismatch" role="note">
+      The path axes follow with different gains: {gains.map(([n, v]) => `${n} kv ${fmt(v, 2)} 1/s`).join(", ")}. Each lags
+      by v/kv of its own, so a line between them bows off the programmed one and a circle becomes an ellipse. Match kv
+      (Drive tuning → Circularity test measures the effective gains and proposes it).
+    </p>
   );
 }
