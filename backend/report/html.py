@@ -5,20 +5,15 @@ the store is escaped, every plot is inline SVG drawn from the stored data (backe
 
 from __future__ import annotations
 
-import math
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from html import escape
 
-from api.assist import AssistSeries
 from api.audit import AuditRecord
 from api.report import AssistRun, SignOff
-from backend.report import polar, svg
-from nc_sim.assist.registry import BY_NAME
+from backend.report import svg
+from backend.report.runs import runs_section
+from backend.report.text import e, number, table, when
 
-MAX_LINES = 4  # series in one plot before they are split by name
-MAX_LEVELS = 3  # reference levels drawn on one plot
 AXIS_KINDS = {"linear": "linear axis", "rotary": "rotary axis", "spindle": "spindle"}
 
 
@@ -56,19 +51,23 @@ class BaselineRow:
 
 
 @dataclass(frozen=True)
+class TraceChannel:
+    name: str
+    unit: str
+    values: Sequence[float]
+
+
+@dataclass(frozen=True)
 class TracePlot:
-    """A stored trace's main series (its first channel) and what identifies it."""
+    """A stored trace's channels and what identifies it."""
 
     id: str
     name: str
     notes: str
     created_unix: float
     trigger: str
-    channel: str
-    unit: str
-    others: list[str]  # the trace's other channels (named, not drawn)
     t_s: Sequence[float]
-    values: Sequence[float]
+    channels: list[TraceChannel]
 
 
 @dataclass(frozen=True)
@@ -85,44 +84,14 @@ class ReportData:
     audit_total: int  # matching rows in all
     audit_commands: int  # command rows left out (in the Audit workspace and audit.csv)
     sign_offs: list[SignOff]
-
-
-def when(t: float) -> str:
-    """A time as the report prints it (UTC, to the second)."""
-    return time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(t))
-
-
-def number(v: object) -> str:
-    """A figure or parameter value: numbers to 6 significant digits, the rest as text."""
-    if isinstance(v, bool):
-        return str(v)
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return f"{v:.6g}" if math.isfinite(v) else str(v)
-    return str(v)
+    # the list values now of the parameters the runs proposed: (target, parameter) -> value
+    in_force: dict[tuple[str, str], object]
 
 
 def css_string(text: str) -> str:
     """`text` as a CSS string literal that cannot end the string or the <style> element."""
     safe = (c if c.isalnum() or c in " _.-()" else f"\\{ord(c):x} " for c in text)
     return '"' + "".join(safe) + '"'
-
-
-def e(v: object) -> str:
-    return escape(str(v))
-
-
-def _table(head: Sequence[str], rows: list[str], cls: str = "") -> str:
-    th = "".join(f"<th>{e(h)}</th>" for h in head)
-    body = "".join(rows)
-    return f'<table class="{cls}"><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>'
-
-
-def _assistant(name: str) -> str:
-    """The manual's name and section of an assistant (one no longer known: its name)."""
-    a = BY_NAME.get(name)
-    return f"{a.title} [{a.section}]" if a else name
 
 
 def _cover(d: ReportData) -> str:
@@ -174,145 +143,83 @@ def _cover(d: ReportData) -> str:
     )
 
 
-def _run_plot(run: AssistRun) -> str:
-    """One plot per pair of units: series over the same quantities share it (measured
-    points and their fit); a crowd of them is split by name (step@10 … and ramp_lag@10 …)."""
-    groups: dict[tuple[str, str, str], list[AssistSeries]] = {}
-    by_units: dict[tuple[str, str], list[AssistSeries]] = {}
-    for s in run.result.series:
-        by_units.setdefault((s.x_unit, s.y_unit), []).append(s)
-    for (x_unit, y_unit), series in by_units.items():
-        for s in series:
-            kind = s.name.split("@")[0] if len(series) > MAX_LINES else ""
-            groups.setdefault((x_unit, y_unit, kind), []).append(s)
-    out = []
-    for (x_unit, y_unit, _), series in groups.items():
-        if run.assistant == "circle" and x_unit == "°":  # the circle's radial deviation
-            axes = str(run.result.inputs.get("axis", "  "))
-            lines = [svg.Line(s.name, s.x, s.y) for s in series]
-            out.append(
-                f'<figure class="plot">{polar.render(lines, axes[:1], axes[1:])}<figcaption>'
-                f"radial deviation about the least-squares centre, {y_unit} (run #{run.id})"
-                "</figcaption></figure>"
-            )
-            continue
-        # a few figures in the series' own unit are levels worth seeing on it (the mean lag,
-        # the lag monitoring limit); many would hide the data
-        refs = [
-            (f"{f.name} = {number(f.value)} {f.unit}", f.value)
-            for f in run.result.figures
-            if y_unit and f.unit == y_unit
-        ]
-        refs = refs if len(refs) <= MAX_LEVELS else []
-        x_title = "time" if x_unit == "s" else ""  # else the unit says (a speed: °/s)
-        y_title = series[0].name if len(series) == 1 else ""
-        lines = [svg.Line(s.name, s.x, s.y) for s in series]
-        # a frequency response reads on a logarithmic frequency axis
-        log_x = x_unit == "Hz"
-        x_title = "frequency" if log_x else x_title
-        plot = svg.Plot(lines, x_title, x_unit, y_title, y_unit, refs, log_x=log_x)
-        names = ", ".join(s.name for s in series)
-        over = f" over {x_title}" if x_title else ""
-        stored = sum(len(s.x) for s in series)
-        out.append(
-            f'<figure class="plot">{svg.render(plot)}<figcaption>{e(names)}{over}'
-            f" (run #{run.id}, {stored} stored points)</figcaption></figure>"
-        )
-    return "".join(out)
+PLANT = "sim."  # the simulated plant's parameters: not the NC's, not commissioning
 
 
-def _run(run: AssistRun) -> str:
-    r = run.result
-    where = "on the live machine" if run.live else "on a copy of the machine (simulated time)"
-    inputs = ", ".join(f"{e(k)} = {e(number(v))}" for k, v in r.inputs.items()) or "—"
-    verdict = "" if r.ok else ' <span class="open">(found a fault the changes do not cure)</span>'
-    figures = [
-        f'<tr data-figure="{e(f.name)}"><td><code>{e(f.name)}</code></td>'
-        f'<td class="num">{e(number(f.value))}</td><td>{e(f.unit)}</td><td>{e(f.text)}</td></tr>'
-        for f in r.figures
+def _diff_table(rows: list[BaselineRow]) -> str:
+    body = [
+        f'<tr data-parameter="{e(b.target)}.{e(b.parameter)}"><td>{e(b.target)}</td>'
+        f'<td><code>{e(b.parameter)}</code><div class="id">{e(b.id)}</div></td>'
+        f'<td class="num">{e(number(b.before))}</td>'
+        f'<td class="num">{e(number(b.after))}</td><td>{e(b.unit)}</td>'
+        f"<td>{e(b.engineering)}</td></tr>"
+        for b in rows
     ]
-    changes = [
-        f"<tr><td>{e(c.target)}</td><td><code>{e(c.parameter)}</code></td>"
-        f'<td class="num">{e(number(c.before))}</td><td class="num">{e(number(c.after))}</td>'
-        f"<td>{e(c.why)}</td></tr>"
-        for c in r.changes
-    ]
-    notes = "".join(f"<li>{e(n)}</li>" for n in r.notes)
-    return (
-        f'<article class="run" id="run-{run.id}" data-run="{run.id}">'
-        f"<h3>#{run.id} {e(_assistant(run.assistant))}"
-        f"{' — ' + e(run.axis) if run.axis else ''}{verdict}</h3>"
-        f'<p class="meta">Run by <b>{e(run.user)}</b> on {e(when(run.time_unix))}, {where}. '
-        f"Inputs: {inputs}.</p>"
-        + _table(["Figure", "Value", "Unit", "Meaning"], figures, "figures")
-        + (
-            _table(["Target", "Parameter", "Before", "Proposed", "Why"], changes, "changes")
-            if changes
-            else '<p class="meta">No parameter change proposed.</p>'
-        )
-        + _run_plot(run)
-        + (f'<ul class="notes">{notes}</ul>' if notes else "")
-        + "</article>"
-    )
-
-
-def _runs(d: ReportData) -> str:
-    if not d.runs:
-        body = '<p class="empty">No assistant has run on this machine.</p>'
-    else:
-        body = "".join(_run(r) for r in d.runs)
-        if d.runs_left_out:
-            body += f'<p class="meta">{d.runs_left_out} older runs are not in this report.</p>'
-    return f'<section id="runs"><h2>1 Assistant runs</h2>{body}</section>'
+    head = ["Target", "Parameter", "Baseline", "Now", "Unit", "Engineering"]
+    return table(head, body, "diff")
 
 
 def _baseline(d: ReportData) -> str:
+    """The NC's parameters that differ from the baseline; the simulated plant's (sim.*: a
+    training fault's drive gain, a softer coupling) apart, as no commissioning change."""
     if d.baseline is None:
         body = (
             '<p class="empty" data-testid="no-baseline">No baseline set: set one at the start '
             "of commissioning to see what changed since.</p>"
         )
-    elif not d.baseline:
-        body = '<p class="empty">No parameter differs from the baseline.</p>'
     else:
-        rows = [
-            f'<tr data-parameter="{e(b.target)}.{e(b.parameter)}"><td>{e(b.target)}</td>'
-            f'<td><code>{e(b.parameter)}</code><div class="id">{e(b.id)}</div></td>'
-            f'<td class="num">{e(number(b.before))}</td>'
-            f'<td class="num">{e(number(b.after))}</td><td>{e(b.unit)}</td>'
-            f"<td>{e(b.engineering)}</td></tr>"
-            for b in d.baseline
-        ]
-        head = ["Target", "Parameter", "Baseline", "Now", "Unit", "Engineering"]
-        body = (
-            f'<p class="meta">{len(d.baseline)} parameters differ from the baseline '
-            "(list values; a value not written counts as the manual's default).</p>"
-            + _table(head, rows, "diff")
-        )
+        nc = [b for b in d.baseline if not b.parameter.startswith(PLANT)]
+        plant = [b for b in d.baseline if b.parameter.startswith(PLANT)]
+        if not nc:
+            body = '<p class="empty">No parameter of the NC differs from the baseline.</p>'
+        else:
+            body = (
+                f'<p class="meta">{len(nc)} parameters differ from the baseline '
+                "(list values; a value not written counts as the manual's default).</p>"
+                + _diff_table(nc)
+            )
+        if plant:
+            body += (
+                f'<h3 id="plant-changes">The simulated plant ({len(plant)} changed)</h3>'
+                '<p class="meta">Not the NC\'s parameters and no commissioning change: the '
+                "simulated motor, drive and mechanics (sim.*) as someone set them.</p>"
+                + _diff_table(plant)
+            )
     title = "2 Parameter differences against the baseline"
     return f'<section id="baseline"><h2>{title}</h2>{body}</section>'
 
 
 def _traces(d: ReportData) -> str:
+    """Each chosen trace: every channel, one plot per unit (a lag in mm beside a speed in
+    mm/min would flatten to nothing on one axis)."""
     if not d.traces:
         body = '<p class="empty">No trace chosen for this report.</p>'
     else:
         parts = []
         for t in d.traces:
-            plot = svg.Plot(
-                [svg.Line(t.channel, t.t_s, t.values)],
-                "time from the trigger",
-                "s",
-                t.channel,
-                t.unit,
+            by_unit: dict[str, list[TraceChannel]] = {}
+            for c in t.channels:
+                by_unit.setdefault(c.unit, []).append(c)
+            figures = "".join(
+                '<figure class="plot">'
+                + svg.render(
+                    svg.Plot(
+                        [svg.Line(c.name, t.t_s, c.values) for c in group],
+                        "time from the trigger",
+                        "s",
+                        group[0].name if len(group) == 1 else "",
+                        unit,
+                    )
+                )
+                + f"<figcaption>{e(', '.join(c.name for c in group))}</figcaption></figure>"
+                for unit, group in by_unit.items()
             )
-            others = f" Also recorded: {e(', '.join(t.others))}." if t.others else ""
             notes = f'<p class="meta">{e(t.notes)}</p>' if t.notes else ""
+            names = ", ".join(c.name for c in t.channels)
             parts.append(
                 f'<article class="trace" data-trace="{e(t.id)}"><h3>{e(t.name or t.id)}</h3>'
                 f'<p class="meta">Captured {e(when(t.created_unix))}, trigger: {e(t.trigger)}, '
-                f"{len(t.t_s)} samples; plotted: {e(t.channel)}.{others}</p>{notes}"
-                f'<figure class="plot">{svg.render(plot)}</figure></article>'
+                f"{len(t.t_s)} samples; channels: {e(names)}.</p>{notes}{figures}</article>"
             )
         body = "".join(parts)
     return f'<section id="traces"><h2>3 Traces</h2>{body}</section>'
@@ -337,7 +244,7 @@ def _audit(d: ReportData) -> str:
     body = (
         f'<p class="meta">{shown} of this machine, newest first{left}. The whole trail: '
         f"the Audit workspace or <code>GET /api/machines/{e(d.machine.id)}/audit.csv</code>.</p>"
-        + (_table(["Time", "User", "Kind", "Action", "Outcome"], rows, "audit") if rows else "")
+        + (table(["Time", "User", "Kind", "Action", "Outcome"], rows, "audit") if rows else "")
     )
     return f'<section id="audit"><h2>4 Audit excerpt</h2>{body}</section>'
 
@@ -349,7 +256,7 @@ def _sign_off(d: ReportData) -> str:
             f"<td>{e(s.remark)}</td><td>{e(when(s.time_unix))}</td><td>{e(s.user)}</td></tr>"
             for s in d.sign_offs
         ]
-        body = _table(["Name", "Function", "Remark", "Signed", "Recorded by"], rows, "signoff")
+        body = table(["Name", "Function", "Remark", "Signed", "Recorded by"], rows, "signoff")
     else:
         body = '<p class="empty">Not signed off yet.</p>'
     lines = "".join(
@@ -395,6 +302,7 @@ ul.who { margin: 0 0 1mm; padding-left: 5mm; }
 .meta { color: #333; margin: 1mm 0; }
 .empty { color: #555; font-style: italic; }
 .open { color: #9a3412; font-weight: bold; }
+.in-force { color: #0d5a26; font-weight: bold; }
 ul.notes { margin: 1mm 0 2mm; padding-left: 5mm; color: #333; }
 figure.plot { margin: 2mm 0; }
 figure.plot svg { width: 100%; height: auto; max-width: 170mm; display: block; }
@@ -418,7 +326,7 @@ def render(d: ReportData) -> str:
         f"<title>{e(title)}</title>"
         f"<style>{CSS}{machine_css}</style></head><body>"
         + _cover(d)
-        + _runs(d)
+        + runs_section(d.runs, d.runs_left_out, d.in_force)
         + _baseline(d)
         + _traces(d)
         + _audit(d)

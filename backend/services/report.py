@@ -10,9 +10,10 @@ import asyncio
 import time
 from typing import Any
 
-from api.report import SignOff, SignOffRequest
+from api.report import AssistRun, SignOff, SignOffRequest
 from backend.errors import Invalid
 from backend.report import html
+from backend.report.text import number
 from backend.services.assist_runs import AssistRuns
 from backend.services.audit import Audit, AuditFilter
 from backend.services.audit_log import Entry, append
@@ -21,6 +22,8 @@ from backend.services.machines import MachineProxy
 from backend.services.store import Store
 from backend.services.traces import TraceService
 from backend.services.versions import Versions
+from nc_sim.errors import NcUsageError
+from nc_sim.params import ParamError, Scope, resolve
 
 MAX_RUNS = 50  # the newest runs in a report
 MAX_TRACES = 8  # traces chosen for one report
@@ -161,6 +164,7 @@ class Reports:
             audit_total=page.total,
             audit_commands=commands,
             sign_offs=self.sign_offs(m.id),
+            in_force=_in_force(m, runs),
         )
 
     def _trace(self, mid: str, tid: str) -> html.TracePlot:
@@ -170,18 +174,17 @@ class Reports:
             raise Invalid(f"trace: {tid} was recorded on machine {d.machine}, not {mid}")
         if not d.channels or t.data.shape[-1] == 0:
             raise Invalid(f"trace: {tid} holds no samples")
-        main = d.channels[0]
         return html.TracePlot(
             id=d.id,
             name=d.name,
             notes=d.notes,
             created_unix=d.created_unix,
             trigger=f"{d.trigger} (forced)" if d.forced else d.trigger,
-            channel=main.name,
-            unit=main.unit,
-            others=[c.name for c in d.channels[1:]],
             t_s=t.times_s().tolist(),
-            values=t.data[0].tolist(),
+            channels=[
+                html.TraceChannel(c.name, c.unit, t.data[i].tolist())
+                for i, c in enumerate(d.channels)
+            ],
         )
 
     def _commissioners(self, mid: str) -> list[html.Commissioner]:
@@ -211,4 +214,20 @@ def _eng(before: float | None, after: float | None, unit: str) -> str:
     """Baseline → now in engineering units ('20 → 25 1/s'), '' when not numbers."""
     if before is None or after is None:
         return ""
-    return f"{html.number(before)} → {html.number(after)} {unit}".strip()
+    return f"{number(before)} → {number(after)} {unit}".strip()
+
+
+def _in_force(m: MachineProxy, runs: list[AssistRun]) -> dict[tuple[str, str], object]:
+    """The list value now of every parameter the runs proposed (its default where unset)."""
+    out: dict[tuple[str, str], object] = {}
+    for run in runs:
+        for c in run.result.changes:
+            scope = Scope.CHANNEL if c.target == "channel" else Scope.AXIS
+            try:
+                values = m.cfg.list_values(scope, c.target)
+                out[(c.target, c.parameter)] = values.get(
+                    c.parameter, resolve(scope, c.parameter).default
+                )
+            except (NcUsageError, ParamError):  # an axis or parameter the machine lost
+                continue
+    return out

@@ -279,7 +279,7 @@ def test_the_report_lists_the_parameters_changed_since_the_baseline(
     )
     assert r.status_code == 201, r.text
     doc = _read(srv.http.get(f"/api/machines/{lathe}/report").text)
-    assert "No parameter differs from the baseline" in "".join(doc.text)
+    assert "No parameter of the NC differs from the baseline" in "".join(doc.text)
     body = {"changes": [{"scope": "axis", "target": "X", "name": "getriebe[0].kv", "value": 2500}]}
     assert srv.http.patch(f"/api/machines/{lathe}/parameters", json=body).status_code == 200
     text = srv.http.get(f"/api/machines/{lathe}/report").text
