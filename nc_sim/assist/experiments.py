@@ -32,6 +32,7 @@ from nc_sim.units import MM_MIN_PER_MM_S, RPM_TO_DEG_S, AxisKind
 
 MAX_PLOT_POINTS = 2000
 MIN_WINDOW_S = 0.2  # the averaging window at constant speed must be at least this long
+F_MATCHES = 0.01  # f within this of 1: k equals kv as the experiment can tell, no change
 SPINDLE_UP_S = 60.0  # a spindle not at speed by then has a fault of its own
 
 
@@ -162,7 +163,9 @@ def multi_gain(
     if notes:
         return Result("multi-gain", tuple(figures), (), tuple(series), tuple(notes), False)
     t0 = t[steady[0]] + settle_s
-    window = steady[t[steady] >= t0]
+    # the window asked for, not all the constant speed there was (a live run's axis may
+    # keep its speed for longer than the window)
+    window = steady[(t[steady] >= t0) & (t[steady] < t0 + max(window_s, MIN_WINDOW_S))]
     s = float(np.mean(lag[window]))
     k = v / s if s != 0.0 else math.inf
     f = kv / k
@@ -195,7 +198,15 @@ def multi_gain(
             f"f = {f:.3f} > 1: the new multi_gain raises the loop gain by f; kv/f keeps it "
             "(004 §3.6.2 NOTICE). Optimise the loop with kv afterwards."
         )
-    notes.append("after applying, run it again: k must equal kv (004 §3.6.2 equation 1)")
+    if abs(f - 1.0) <= F_MATCHES:
+        # k equals kv: a residue of f would only churn the lists (and read as a correction)
+        changes = []
+        notes.append(
+            f"f = {f:.4f}: within {F_MATCHES * 100:g} % of 1, multi_gain matches the drive "
+            "(004 §3.6.2 equation 1): nothing to apply"
+        )
+    else:
+        notes.append("after applying, run it again: k must equal kv (004 §3.6.2 equation 1)")
     return Result(
         "multi-gain",
         tuple(figures),

@@ -77,6 +77,8 @@ def test_multi_gain_by_experiment_end_to_end(page: Page, srv: Server, wrong_driv
     check = box.get_by_test_id("assist-check")
     expect(check).to_have_attribute("data-ok", "1", timeout=RUN_TIMEOUT_MS)
     assert read(box, "assist-fig-f") == pytest.approx(1.0, abs=0.01)
+    # nothing left to apply: no residual proposal beside "matches" (nor "3 changes proposed")
+    expect(box.get_by_test_id("assist-no-changes")).to_be_visible()
     # k equals the kv now in force (004 §3.6.2 equation 1)
     assert read(box, "assist-fig-k") == pytest.approx(after["getriebe[0].kv"] / 100, rel=0.01)
     box.get_by_test_id("assist-result").scroll_into_view_if_needed()

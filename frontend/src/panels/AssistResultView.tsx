@@ -134,7 +134,7 @@ function perAxis(name: string): { label: string; decimals: number; sig?: number 
   return kv ? { label: `kv ${kv[1]} (effective)`, decimals: 2, sig: 4 } : undefined;
 }
 
-/** The multi_gain run found k = kv already: its proposal is residue, not a correction. */
+/** The multi_gain run found k = kv already (f within 1 %: it proposes nothing then). */
 export const settled = (r: AssistResult): boolean => {
   const f = checkFactor(r);
   return f !== null && Math.abs(f - 1) <= F_TOLERANCE;
@@ -235,7 +235,7 @@ export function AssistResultView(props: { result: AssistResult; spindle: boolean
       {r.changes.length ? (
         <table class="meas-table assist-changes" data-testid="assist-changes">
           <caption>
-            {settled(r) ? "Residual proposal: f is within 1 % of 1, nothing needs applying" : "Proposed parameter changes (list units)"}
+            Proposed parameter changes (list units)
           </caption>
           <thead>
             <tr>

@@ -14,7 +14,7 @@ import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { AssistField } from "./AssistField";
-import { AssistResultView, settled } from "./AssistResultView";
+import { AssistResultView } from "./AssistResultView";
 import { LiveProgress } from "./LiveProgress";
 import { LOOP_GAIN_START, LoopGainFields, checkLoopGain, describeLoopGain, loopGainErrors, loopGainRequest, useAxisNow } from "./LoopGainSetup";
 import { perSecond } from "../ui/units";
@@ -333,7 +333,7 @@ export function Commissioning(props: { drive?: boolean }) {
               </p>
               <AssistResultView result={result} spindle={spindle} live={where === "machine"} />
               <div class="row apply-bar">
-                <button type="button" data-testid="assist-apply" class={settled(result) ? "secondary" : ""}
+                <button type="button" data-testid="assist-apply"
                   disabled={!online.value || !result.changes.length || onTrial || !!blocked || busy}
                   title={blocked || (onTrial ? "Keep or Revert the values on trial first" : "")} onClick={() => void apply()}>
                   Apply on trial

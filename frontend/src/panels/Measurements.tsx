@@ -65,7 +65,8 @@ export function Measurements(props: {
     ["window", "window", (r) => `${fmt(r.t0_s, 3)} … ${fmt(r.t1_s, 3)} s (${r.samples} samples)`],
     ["max |value|", "max-abs", (r) => `${fmt(r.max_abs, 4)} ${r.unit} at ${fmt(r.t_max_abs_s, 3)} s`, "e.g. the maximum lag"],
     ["overshoot", "overshoot", (r) => (r.overshoot_pct === null ? "—" : `${fmt(r.overshoot_pct, 2)} %`), "beyond the final value, in % of the step"],
-    ["rise time 10–90 %", "rise", (r) => (r.rise_time_s === null ? "—" : `${fmt(r.rise_time_s * 1000, 1)} ms`)],
+    // a step down falls: the same 10 %/90 % of the step, named as it goes
+    [m && m.final < m.initial ? "fall time 90–10 %" : "rise time 10–90 %", "rise", (r) => (r.rise_time_s === null ? "—" : `${fmt(r.rise_time_s * 1000, 1)} ms`)],
     ["noise σ", "noise", (r) => `${fmt(r.noise, 6)} ${r.unit}`, "from neighbouring samples; a step must exceed 10 σ"],
     [`settling (±${fmt(m?.band, 4)} ${m?.unit ?? ""})`, "settling", (r) => (r.settling_time_s === null ? "not settled" : `${fmt(r.settling_time_s * 1000, 1)} ms`), "from the trigger until it stays in the band"],
     ["steady mean", "final", (r) => `${fmt(r.final, 4)} ${r.unit}`, "mean of the last 10 % of the window"],

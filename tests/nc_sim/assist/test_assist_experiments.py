@@ -51,6 +51,7 @@ def test_the_manuals_example_gives_the_manuals_numbers() -> None:
     assert after["getriebe[0].multi_gain_n"] == 1000
     assert after["getriebe[0].multi_gain_z"] == pytest.approx(2286, rel=0.01)
     assert after["getriebe[0].kv"] == pytest.approx(175, abs=1)
+    assert r.figure("averaged_s") == pytest.approx(1.0, abs=0.002)  # the 1 s asked for
 
 
 def test_a_wrong_drive_gain_is_corrected_and_then_k_equals_kv() -> None:
