@@ -61,6 +61,7 @@ MAX_BUFFERED = 20_000  # pushes an actor keeps for a gateway that stopped pollin
 SAMPLE_CHUNKS = 4  # rows per machine and poll: at most this many chunks of MAX_WRITE
 START_TIMEOUT_S = 120.0  # the actor's process starts and loads the compiled kernel
 NODE_CHARS = 8  # node ids are shown shortened, like Ray's own tools do
+CONNECT_TRIES = 3  # joining through a Ray Client server, which may fail to start a client's
 
 _connect_lock = threading.Lock()
 _homes: dict[int, str] = {}  # id(RayWorker) -> node id, live workers of this gateway
@@ -80,12 +81,24 @@ def connect(address: str) -> None:
         # ray.init takes over SIGTERM (sys.exit); the server's own shutdown must keep it
         main = threading.current_thread() is threading.main_thread()
         kept = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)} if main else {}
-        ray.init(
-            address=address,
-            runtime_env=runtime_env,
-            log_to_driver=False,
-            logging_level=logging.WARNING,
-        )
+        for attempt in range(1, CONNECT_TRIES + 1):
+            try:
+                ray.init(
+                    address=address,
+                    runtime_env=runtime_env,
+                    log_to_driver=False,
+                    logging_level=logging.WARNING,
+                )
+                break
+            except ConnectionAbortedError as e:
+                # the Ray Client server could not start this client's own server: it reuses
+                # the port of a client that just left, whose server may still be ending (a
+                # busy machine); a moment later the port is free
+                if attempt == CONNECT_TRIES:
+                    raise
+                log.warning("joining %s failed (%s): again in %g s", address, e, attempt * 2.0)
+                ray.shutdown()
+                time.sleep(attempt * 2.0)
         for sig, handler in kept.items():
             signal.signal(sig, handler)
 
