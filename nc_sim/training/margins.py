@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
 F_MIN_HZ = 1.0
 POINTS = 1500  # log-spaced frequencies up to the drive's Nyquist frequency
+KP_REF_CROSSOVER_HZ = 50.0
 
 
 def open_loop_figures(model: DriveModel) -> LoopFigures | None:
@@ -44,9 +45,11 @@ def best_bandwidth_hz(model: DriveModel, template: int) -> float:
     bare = _bare(model)
     f = _grid(model)
     resonance = model.anti_resonance_hz * math.sqrt(model.inertia_ratio) if model.two_mass else None
-    kp_now = model.kp if model.kp > 0.0 else 1.0
+    # the search spans KP_RANGE about a gain of the plant's own scale (a 50 Hz crossover on
+    # its whole inertia), not the student's gain: the best must not depend on what they set
+    kp_ref = model.total_inertia * 2.0 * math.pi * KP_REF_CROSSOVER_HZ
     best = tune(
-        f, bare.speed_open_loop(f), model.sampling_s, TEMPLATES[template], kp_now, resonance
+        f, bare.speed_open_loop(f), model.sampling_s, TEMPLATES[template], kp_ref, resonance
     )
     return best.figures.bandwidth_hz if best is not None else 0.0
 
