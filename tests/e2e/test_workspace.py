@@ -62,16 +62,19 @@ def test_workspace_state_is_kept_across_tabs_and_the_plots_keep_recording(
 
 
 def test_the_jog_feed_default_is_shown_as_a_value(page: Page) -> None:
-    """Demo X: hb.vb_max 166666 µm/s = 10 m/min, getriebe[0].dynamik.vb_max 30 m/min: a jog
-    without a feed goes at 10000 mm/min [002 §2.6.1]."""
+    """Demo X: a jog without a typed feed goes at the HMI's safe 300 mm/min, not the G200
+    default the tag names: hb.vb_max 166666 µm/s = 10 m/min, below getriebe[0].dynamik.vb_max
+    30 m/min [002 §2.6.1] (issue 39: a 2 s press at 10 m/min took X 350 mm)."""
     jog = panel(page, "jog")
     jog.get_by_test_id("jog-axis-X").check()
-    expect(jog.get_by_test_id("jog-feed")).to_have_value("10000.0")
-    expect(jog.get_by_test_id("jog-feed-default")).to_have_text("G200 default")
+    expect(jog.get_by_test_id("jog-feed")).to_have_value("300")
+    expect(jog.get_by_test_id("jog-feed-default")).to_have_text(
+        re.compile(r"^safe default · G200 up to 10000\s+mm/min$")
+    )
     jog.get_by_test_id("jog-feed").fill("3000")
     expect(jog.get_by_test_id("jog-feed-default")).to_have_count(0)
     jog.get_by_test_id("jog-feed-reset").click()
-    expect(jog.get_by_test_id("jog-feed")).to_have_value("10000.0")
+    expect(jog.get_by_test_id("jog-feed")).to_have_value("300")
 
 
 def test_homing_shows_its_phase_distance_and_speed(page: Page, srv: Server, mid: str) -> None:
