@@ -5,6 +5,7 @@ the store is escaped, every plot is inline SVG drawn from the stored data (backe
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -189,17 +190,28 @@ def _baseline(d: ReportData) -> str:
     return f'<section id="baseline"><h2>{title}</h2>{body}</section>'
 
 
+_UNIT_END = re.compile(r"_(mm_min|mm_s2|deg_s2|mm|deg|rpm|pct|um|nm|s)$")
+_ROLE = re.compile(r"_(cmd|act|true)(?=_|$)")
+
+
+def quantity(name: str) -> str:
+    """What a channel measures, from its name, as the HMI's charts group it
+    (frontend/src/ui/scopeAxes.ts): X.pos_act_mm and X.pos_cmd_mm → "pos", S1.lag_deg → "lag"."""
+    stem = name.rsplit(".", 1)[-1]
+    return _ROLE.sub("", _UNIT_END.sub("", stem), count=1) or stem
+
+
 def _traces(d: ReportData) -> str:
-    """Each chosen trace: every channel, one plot per unit (a lag in mm beside a speed in
-    mm/min would flatten to nothing on one axis)."""
+    """Each chosen trace: every channel, one plot per quantity (a spindle's 600 000° position
+    would flatten its lag, a speed its lag; commanded and actual of one quantity share)."""
     if not d.traces:
         body = '<p class="empty">No trace chosen for this report.</p>'
     else:
         parts = []
         for t in d.traces:
-            by_unit: dict[str, list[TraceChannel]] = {}
+            by_unit: dict[tuple[str, str], list[TraceChannel]] = {}
             for c in t.channels:
-                by_unit.setdefault(c.unit, []).append(c)
+                by_unit.setdefault((quantity(c.name), c.unit), []).append(c)
             figures = "".join(
                 '<figure class="plot">'
                 + svg.render(
@@ -207,12 +219,12 @@ def _traces(d: ReportData) -> str:
                         [svg.Line(c.name, t.t_s, c.values) for c in group],
                         "time from the trigger",
                         "s",
-                        group[0].name if len(group) == 1 else "",
+                        group[0].name if len(group) == 1 else what,
                         unit,
                     )
                 )
                 + f"<figcaption>{e(', '.join(c.name for c in group))}</figcaption></figure>"
-                for unit, group in by_unit.items()
+                for (what, unit), group in by_unit.items()
             )
             notes = f'<p class="meta">{e(t.notes)}</p>' if t.notes else ""
             names = ", ".join(c.name for c in t.channels)

@@ -17,7 +17,8 @@ from html import escape
 MAX_POINTS = 2000  # per polyline; longer series are thinned to min/max per column
 Y_PAD = 0.05  # of the data's span, above and below
 COLOURS = ("#1f5fa8", "#c2410c", "#15803d", "#7e22ce", "#b45309", "#0e7490", "#be185d", "#4d7c0f")
-LEGEND_PER_ROW = 5  # legend entries under the plot, per row
+LEGEND_PER_ROW = 5  # legend entries under the plot, per row at most
+LEGEND_CHAR_PX = 6.6  # the legend's 11 px text: an average character's width
 LEGEND_ROW_PX = 16
 
 
@@ -131,8 +132,16 @@ def _range(values: list[float]) -> tuple[float, float]:
     return lo, hi
 
 
+def _per_row(plot: Plot) -> int:
+    """Legend entries per row: as many of the longest as fit the plot's width (at most
+    LEGEND_PER_ROW; 'S1.speed_cmd_rpm' ran into its neighbour at a fifth of the width)."""
+    longest = max((len(line.label) for line in plot.lines), default=0)
+    entry = longest * LEGEND_CHAR_PX + 28.0  # the line sample, its gap, the text, air
+    return max(1, min(LEGEND_PER_ROW, int((plot.width - 80.0) // entry)))
+
+
 def _legend_rows(plot: Plot) -> int:
-    return 0 if len(plot.lines) < 2 else -(-len(plot.lines) // LEGEND_PER_ROW)
+    return 0 if len(plot.lines) < 2 else -(-len(plot.lines) // _per_row(plot))
 
 
 def frame_of(plot: Plot, points: list[list[tuple[float, float]]]) -> Frame | None:
@@ -224,11 +233,12 @@ def render(plot: Plot) -> str:
             f'stroke-width="1.5" points="{coords}"/>'
         )
     if len(plot.lines) > 1:  # the legend in rows under the x axis' title
-        column = f.width / LEGEND_PER_ROW
+        per_row = _per_row(plot)
+        column = f.width / per_row
         for i, line in enumerate(plot.lines):
             colour = COLOURS[i % len(COLOURS)]
-            x = f.left + (i % LEGEND_PER_ROW) * column
-            y = bottom + 50 + (i // LEGEND_PER_ROW) * LEGEND_ROW_PX
+            x = f.left + (i % per_row) * column
+            y = bottom + 50 + (i // per_row) * LEGEND_ROW_PX
             out.append(
                 f'<line x1="{x:.1f}" y1="{y - 4}" x2="{x + 16:.1f}" y2="{y - 4}" '
                 f'stroke="{colour}" stroke-width="2"/>'

@@ -99,7 +99,7 @@ def test_the_simulated_plant_is_listed_apart_from_the_ncs_parameters() -> None:
     assert "1 parameters differ" in nc
 
 
-def test_every_channel_of_a_trace_is_plotted_one_plot_per_unit() -> None:
+def test_every_channel_of_a_trace_is_plotted_one_plot_per_quantity() -> None:
     t = [i * 0.001 for i in range(50)]
     trace = html.TracePlot(
         id="tr",
@@ -111,11 +111,13 @@ def test_every_channel_of_a_trace_is_plotted_one_plot_per_unit() -> None:
         channels=[
             html.TraceChannel("X.lag_mm", "mm", [0.8] * 50),
             html.TraceChannel("X.pos_act_mm", "mm", t),
+            html.TraceChannel("X.pos_cmd_mm", "mm", t),
             html.TraceChannel("X.vel_cmd_mm_min", "mm/min", [1000.0] * 50),
         ],
     )
     text = html.render(_data(traces=[trace]))
     article = text.split('data-trace="tr"')[1]
-    assert article.count("<svg") == 2  # mm, mm/min
-    assert article.count("<polyline") == 3
-    assert "X.lag_mm, X.pos_act_mm</figcaption>" in article
+    assert article.count("<svg") == 3  # the lag, the positions, the speed: each its own axis
+    assert article.count("<polyline") == 4
+    assert "X.pos_act_mm, X.pos_cmd_mm</figcaption>" in article
+    assert ">X.lag_mm</figcaption>" in article

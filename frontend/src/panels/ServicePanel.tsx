@@ -148,7 +148,8 @@ function AxisCard({ a, s }: { a: AxisStatus; s: AxisService | undefined }) {
         ) : null}
         <Lamp id={id("homed")} on={a.homed} label="homed" tone="info" />
         <Lamp id={id("inpos")} on={a.in_position} label="in position" tone="info" />
-        <Lamp id={id("error")} on={a.job_error !== 0} label={a.job_error ? `job error ${a.job_error}` : "no job error"} tone="bad" />
+        {/* lit on an error; unlit it reads "job error" (a lamp off labelled "no job error" read as the opposite) */}
+        <Lamp id={id("error")} on={a.job_error !== 0} label={a.job_error ? `job error ${a.job_error}` : "job error"} tone="bad" />
       </div>
     </section>
   );

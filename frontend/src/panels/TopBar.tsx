@@ -70,8 +70,9 @@ export function TopBar({ machine = true }: { machine?: boolean }) {
               }
               data-testid="loop-health"
             >
-              <span class="wide-only">loop </span>{sim?.worker ?? "—"} · overruns{" "}
-              <span data-testid="overrun-rate">{overrunRate(sim?.loop_overruns)}/min</span>
+              <span class="wide-only">loop </span>{sim?.worker ?? "—"} ·{" "}
+              <span data-testid="overrun-rate">{overrunRate(sim?.loop_overruns)}</span>
+              <span class="wide-only"> overruns</span>/min
               <span class="wide-only"> · p99 {qty(sim?.loop_work_p99_ms, 2, "ms")}</span>
             </span>
           </span>

@@ -7,6 +7,17 @@ export interface PickableSignal {
   axis: string;
 }
 
+/** An open picker that would run past the window's right edge moves left until it fits (the
+ * right-hand plot's picker was cut off, and the page does not scroll sideways). */
+function keepInWindow(e: Event): void {
+  const d = e.currentTarget as HTMLDetailsElement;
+  const body = d.querySelector<HTMLElement>(".picker-body");
+  if (!body || !d.open) return;
+  body.style.left = "";
+  const over = body.getBoundingClientRect().right - (document.documentElement.clientWidth - 8);
+  if (over > 0) body.style.left = `${-over}px`;
+}
+
 export function SignalPicker(props: {
   chosen: string[];
   onChange: (names: string[]) => void;
@@ -19,7 +30,7 @@ export function SignalPicker(props: {
   const axes = [...new Set(names.map((s) => s.axis))];
   const full = max !== undefined && chosen.length >= max;
   return (
-    <details class="signal-picker" data-testid={props.testid}>
+    <details class="signal-picker" data-testid={props.testid} onToggle={keepInWindow}>
       <summary>
         Signals ({chosen.length}
         {max !== undefined ? ` of ≤ ${max}` : ""})

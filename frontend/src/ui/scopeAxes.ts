@@ -101,7 +101,9 @@ export function analogRange(min: number, max: number, digitalShare: number): [nu
   let lo = min;
   let hi = max;
   if (!Number.isFinite(lo) || !Number.isFinite(hi)) [lo, hi] = [0, 1];
-  const pad = hi > lo ? (hi - lo) * 0.05 : Math.max(Math.abs(hi) * 0.05, 1);
+  // a spread of round-off (a lag of ±4e−14 mm at rest) is no spread: read it as constant
+  const flat = hi - lo <= 1e-12 * Math.max(1, Math.abs(lo), Math.abs(hi));
+  const pad = !flat ? (hi - lo) * 0.05 : Math.max(Math.abs(hi) * 0.05, 1);
   lo -= pad;
   hi += pad;
   const below = digitalShare >= 1 ? 0 : ((hi - lo) * digitalShare) / (1 - digitalShare);
