@@ -8,6 +8,8 @@ after the proposed correction the measured gain k equals kv, f = 1 [004 §3.6.2 
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from playwright.sync_api import Browser, Locator, Page, expect
 
@@ -67,6 +69,8 @@ def test_multi_gain_by_experiment_end_to_end(page: Page, srv: Server, wrong_driv
     trial = page.get_by_test_id("param-trial")
     expect(trial).to_contain_text("getriebe[0].multi_gain_z")
     expect(trial).to_contain_text("getriebe[0].kv")
+    # z and n read as their ratio, not as a 2285-fold change of z: 10000 × f (2.2857)
+    expect(trial).to_contain_text(re.compile(r"\(multi_gain 10000 → 228[4-6]\d\)"))
     after = x_list(srv, wrong_drive)
     assert after["getriebe[0].multi_gain_z"] / after["getriebe[0].multi_gain_n"] == pytest.approx(
         DRIVE_GAIN, rel=0.01

@@ -107,7 +107,9 @@ export function MdiState() {
   const words = [md.motion, md.plane, md.distance, md.feed_mm_min != null ? `F${md.feed_mm_min}` : "no F"]
     .concat(md.manual_mode === "G201" ? ["G201"] : [])
     .join(" ");
-  const running = ch.mdi ? `running, ${s.queued_blocks} block${s.queued_blocks === 1 ? "" : "s"} queued` : "idle";
+  // queued_blocks counts the running block too: "1 block queued" beside the only one read wrong
+  const waiting = Math.max(0, s.queued_blocks - 1);
+  const running = ch.mdi ? `running${waiting ? `, ${waiting} more block${waiting === 1 ? "" : "s"} waiting` : ""}` : "idle";
   const held = ch.mdi && ch.state === "held" ? " (feedhold)" : "";
   return (
     <p class="mdi-state muted" data-testid="mdi-state" data-mdi={ch.mdi ? "1" : "0"}

@@ -21,13 +21,28 @@ function waits(c: Applied): boolean {
 
 /** " (20 → 30 1/s)": the change in the HMI's unit beside the list's raw values, where they
  * differ (a kv in 0.01/s, a position in 0.1 µm). */
-function inHmiUnit(c: Applied): string {
+function inHmiUnit(c: Applied, all: Applied[]): string {
+  const mg = /^(.*multi_gain_)([zn])$/.exec(c.name);
+  if (mg) return mg[2] === "z" ? multiGainRatio(c, mg[1], all) : "";
   const p = trialNow.value.get(changeKey(c));
   const f = p?.eng_factor;
   if (!p || f == null || f === 1) return "";
   const eng = (v: unknown) => (typeof v === "number" ? engQty(v * f, p.eng_unit) : null);
   const after = eng(c.new);
   return after === null ? "" : ` (${eng(c.old ?? p.default) ?? "—"} → ${after})`;
+}
+
+/** multi_gain_z and _n read as their ratio, once beside _z (22857/1 → 22853561/1000 read as a
+ * 2285-fold change): " (multi_gain 2.2857 → 2.2854)". */
+function multiGainRatio(z: Applied, base: string, all: Applied[]): string {
+  const n = all.find((c) => c.name === `${base}n` && c.target === z.target);
+  const nNow = trialNow.value.get(changeKey({ ...z, name: `${base}n` }));
+  const nOld = n ? n.old : nNow?.value;
+  const nNew = n ? n.new : nNow?.value;
+  const ratio = (a: unknown, b: unknown) => (typeof a === "number" && typeof b === "number" && b !== 0 ? String(+(a / b).toPrecision(5)) : null);
+  const before = ratio(z.old, nOld);
+  const after = ratio(z.new, nNew);
+  return after === null ? "" : ` (multi_gain ${before ?? "—"} → ${after})`;
 }
 
 export function TrialBar() {
@@ -45,7 +60,7 @@ export function TrialBar() {
             .map(
               (c) =>
                 `${t.label && c.target ? `${c.target}: ` : ""}${c.name} ${c.old ?? "default"} → ${c.new}` +
-                inHmiUnit(c) +
+                inHmiUnit(c, t.applied) +
                 (waits(c) ? ` (at ${c.effect})` : c.pending ? ` (in force since the ${c.effect})` : ""),
             )
             .join(", ")}
