@@ -65,6 +65,34 @@ ALLOWED: dict[Role, frozenset[Action]] = {
     Role.INSTRUCTOR: _INSTRUCTOR,
     Role.ADMIN: frozenset(Action),
 }
+# each action in words, for the refusals people read (never the internal name)
+ACTION_WORDS: dict[Action, str] = {
+    Action.OBSERVE: "watch machines",
+    Action.CAPTURE: "use the scope",
+    Action.RECORD: "record channels to disk",
+    Action.DELETE_TRACE: "delete traces",
+    Action.PROGRAMS: "write or delete NC programs",
+    Action.CONTROL: "take or hand over control",
+    Action.STOP: "press the emergency stop",
+    Action.COMMAND: "command the machine",
+    Action.CONFIGURE: "write parameters",
+    Action.VERSIONS: "take or delete parameter versions",
+    Action.ASSIST: "run commissioning assistants",
+    Action.SIGN_OFF: "sign a report off",
+    Action.EXERCISE: "work on an exercise",
+    Action.TAKE_CONTROL: "take control from its holder",
+    Action.SIMULATE: "pace or snapshot the simulation",
+    Action.TEACH: "run classes",
+    Action.MACHINES: "create or delete machines",
+    Action.USERS: "manage users",
+}
+
+
+def lowest_role(action: Action) -> Role:
+    """The first role (observer … admin) that may do `action`."""
+    return next(r for r in Role if action in ALLOWED[r])
+
+
 HELD: frozenset[Action] = frozenset({Action.COMMAND, Action.CONFIGURE})
 """Actions on a machine that only its control holder may do (a free machine is taken by the
 first of them)."""

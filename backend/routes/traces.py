@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+import time
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, Query, Request, Response
@@ -110,11 +112,14 @@ def data(tid: str, services: ServicesDep) -> Response:
     responses=text_answer("text/csv", "CSV text") | responses(NotFound),
 )
 def csv(tid: str, services: ServicesDep) -> Response:
+    """Every sample as CSV, its description in a first comment line; named for what it is."""
     trace = services.traces.get(tid)
     return Response(
         to_csv(trace),
         media_type="text/csv",
-        headers={"Content-Disposition": f'attachment; filename="{tid}.csv"'},
+        headers={
+            "Content-Disposition": f'attachment; filename="{download_name(trace.detail)}.csv"'
+        },
     )
 
 
@@ -127,7 +132,18 @@ def csv(tid: str, services: ServicesDep) -> Response:
 def rrd(tid: str, services: ServicesDep) -> FileResponse:
     """The trace as a Rerun recording."""
     path = services.traces.rrd_path(tid)
-    return FileResponse(path, media_type="application/octet-stream", filename=f"{tid}.rrd")
+    name = download_name(services.traces.get(tid).detail)
+    return FileResponse(path, media_type="application/octet-stream", filename=f"{name}.rrd")
+
+
+def download_name(d: TraceDetail) -> str:
+    """What a downloaded trace is, in its file name (a ticket's attachment, a folder of them):
+    machine, the trace's name (or its first channels), when it was captured (UTC), its id:
+    `demo_X-lag-at-1-m-min_20261129-051203_40d351329495` instead of `40d351329495`."""
+    what = d.name or "+".join(c.name for c in d.channels[:3]) or "trace"
+    when = time.strftime("%Y%m%d-%H%M%S", time.gmtime(d.created_unix))
+    safe = re.sub(r"[^A-Za-z0-9._+-]+", "-", f"{d.machine}_{what}").strip("-")[:80]
+    return f"{safe}_{when}_{d.id}"
 
 
 @router.get(

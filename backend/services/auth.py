@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from api.auth import ALLOWED, Action, Me, Role
+from api.auth import ACTION_WORDS, ALLOWED, Action, Me, Role, lowest_role
 from backend.errors import Forbidden, not_found
 
 
@@ -46,4 +46,8 @@ def authorize(actor: Actor, action: Action, machine: str | None = None) -> None:
         raise not_found(f"machine '{machine}'")
     if action not in ALLOWED[actor.role]:
         where = f" on {machine}" if machine else ""
-        raise Forbidden(f"{actor.name} ({actor.role.value}) may not {action.value}{where}")
+        need = lowest_role(action).value
+        raise Forbidden(
+            f"{actor.name} ({actor.role.value}) may not {ACTION_WORDS[action]}{where}:"
+            f" that takes the role {need} or above"
+        )

@@ -336,6 +336,19 @@ def test_an_observer_cannot_take_request_or_grant_control(
         assert r.status_code == 403
 
 
+def test_a_refusal_says_the_action_in_words_and_the_role_it_takes(
+    srv: tuple[Server, dict[str, str]],
+) -> None:
+    """An observer deleting a trace: 'may not delete traces: that takes the role operator or
+    above', never the internal action name (it read 'may not delete_trace')."""
+    s, tokens = srv
+    r = s.http.delete("/api/traces/nope", headers={"Authorization": f"Bearer {tokens['olga']}"})
+    assert r.status_code == 403
+    message = r.json()["detail"]["message"]
+    assert "may not delete traces: that takes the role operator or above" in message
+    assert "delete_trace" not in message
+
+
 def test_a_student_reaches_their_seats_recordings_only(
     srv: tuple[Server, dict[str, str]],
 ) -> None:

@@ -130,3 +130,35 @@ def test_a_big_import_leaves_the_service_responsive(srv: Server) -> None:
     assert done["status"] == 201
     # parsing on the event loop held every other request for the whole import
     assert worst < done["s"] / 3, (worst, done)
+
+
+def test_a_downloaded_trace_is_named_for_what_it_is(srv: Server) -> None:
+    """machine, name and time (UTC) in the file name, not only the id: a CSV with a
+    description of machine 'demo', named 'X lag / 1 m/min' (stored at its import)."""
+    meta = {
+        "id": "x",
+        "machine": "demo",
+        "machine_name": "demo",
+        "name": "X lag / 1 m/min",
+        "notes": "",
+        "source": "capture",
+        "stored": True,
+        "trigger": "forced",
+        "forced": True,
+        "created_unix": 1_800_000_000,
+        "first_cycle": 0,
+        "trigger_cycle": None,
+        "count": 2,
+        "cycle_s": 0.001,
+        "channels": [{"name": "X.lag_mm", "unit": "mm", "kind": "float"}],
+        "params_changed": 0,
+        "params": [],
+        "events": [],
+    }
+    r = post_csv(srv, f"# meta: {json.dumps(meta)}\ncycle,X.lag_mm [mm]\n0,0.1\n1,0.2\n")
+    assert r.status_code == 201, r.text
+    tid = r.json()["id"]
+    created = srv.http.get(f"/api/traces/{tid}").json()["created_unix"]
+    stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime(created))
+    got = srv.http.get(f"/api/traces/{tid}/csv").headers["content-disposition"]
+    assert got == f'attachment; filename="demo_X-lag-1-m-min_{stamp}_{tid}.csv"'

@@ -87,6 +87,11 @@ def test_an_observer_never_gets_a_command_button(browser: Browser, srv: Server, 
         )
         expect(p.get_by_test_id("estop")).to_be_disabled()  # observers only watch
         expect(strip.get_by_role("button")).to_have_count(0)  # nothing to take or request
+        # the scope's recording is an operator's: disabled with the reason, before it is tried
+        p.get_by_test_id("tab-Scope").click()
+        record = panel(p, "scope-setup").get_by_test_id("recording-start")
+        expect(record).to_be_disabled()
+        expect(record).to_have_attribute("title", re.compile("takes the role operator"))
     finally:
         p.close()
 

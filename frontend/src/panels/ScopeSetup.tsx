@@ -19,6 +19,7 @@ import {
 import { online, status } from "../state/session";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
+import { may } from "../state/control";
 import { SignalPicker } from "../ui/SignalPicker";
 
 const EVENTS: [EventTrigger["event"], string][] = [
@@ -225,8 +226,8 @@ export function ScopeSetup() {
             </>
           ) : (
             <>
-              <button type="button" data-testid="recording-start" disabled={!online.value || !draft.channels.length || driveRate}
-              title={driveRate ? "continuous recording is at the NC's rate: switch Rate to every NC cycle" : undefined}
+              <button type="button" data-testid="recording-start" disabled={!online.value || !draft.channels.length || driveRate || !may("record")}
+              title={!may("record") ? "recording to disk takes the role operator or above" : driveRate ? "continuous recording is at the NC's rate: switch Rate to every NC cycle" : undefined}
                 onClick={() => void run(async () => setRecording(await startRecording(draft.channels)))}>
                 ● Record the channels
               </button>

@@ -2,6 +2,7 @@
 // rename, annotate, delete, download (CSV, .rrd), open in the Rerun viewer; import a CSV.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
+import { may } from "../state/control";
 import type { TraceInfo } from "../api/types";
 import { library, overlayId, refreshLibrary, shownId, followNewest } from "../state/scope";
 import { Panel } from "../ui/Panel";
@@ -67,6 +68,7 @@ function Row(props: { t: TraceInfo; onError: (m: string) => void }) {
         <button type="button" onClick={() => setEditing(!editing)}>rename</button>
         <TraceLinks id={t.id} />
         <button type="button" class="link danger" data-testid={`delete-${t.id}`}
+          disabled={!may("delete_trace")} title={may("delete_trace") ? undefined : "deleting traces takes the role operator or above"}
           onClick={() => confirm(`Delete "${t.name}"?`) && void act(async () => {
             await http.del(`/api/traces/${t.id}`);
             if (overlayId.value === t.id) overlayId.value = "";
