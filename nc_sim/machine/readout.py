@@ -104,10 +104,10 @@ def axis_snapshot(m: MachineCore, ax: Axis) -> AxisSnapshot:
 def _shown_state(m: MachineCore, ax: Axis, to_go: float | None) -> str:
     """The state as the axis itself is, not only its set-point: a set-point at rest with the
     axis still moving into its window is SETTLING (its lag outside the exact-stop window,
-    kenngr.exact_stop_window, the NC's in-position criterion; a spindle until it
-    reports stopped), and a path axis
-    the current block does not move (no distance to go, no speed commanded) stands still
-    (the path drives every path axis, so the NC counts it as moving)."""
+    kenngr.exact_stop_window, the NC's in-position criterion; a spindle until it reports
+    stopped), and a path axis the current block does not move (no distance to go, no speed
+    commanded) stands still (the path drives every path axis, so the NC counts it as
+    moving)."""
     st, ist = m.k.st[ax.slot], m.k.ist[ax.slot]
     state = ax.state
     if (
