@@ -24,6 +24,7 @@ class Action(StrEnum):
     """What a request does, as the authorization matrix sees it."""
 
     OBSERVE = "observe"  # status, telemetry, parameters, traces, programs, a machine's audit
+    NOTE = "note"  # write in a machine's logbook (its history), acknowledge its job errors
     CAPTURE = "capture"  # scope set-up, arm, force, stop; save, annotate, view traces
     RECORD = "record"  # long recordings to disk (within the recordings quota)
     DELETE_TRACE = "delete_trace"
@@ -43,7 +44,7 @@ class Action(StrEnum):
     USERS = "users"  # users, everyone's tokens, the service-wide audit
 
 
-_OBSERVER = frozenset({Action.OBSERVE, Action.CAPTURE})
+_OBSERVER = frozenset({Action.OBSERVE, Action.NOTE, Action.CAPTURE})
 _OPERATOR = _OBSERVER | {
     Action.RECORD,
     Action.DELETE_TRACE,
@@ -68,6 +69,7 @@ ALLOWED: dict[Role, frozenset[Action]] = {
 # each action in words, for the refusals people read (never the internal name)
 ACTION_WORDS: dict[Action, str] = {
     Action.OBSERVE: "watch machines",
+    Action.NOTE: "write in a machine's logbook",
     Action.CAPTURE: "use the scope",
     Action.RECORD: "record channels to disk",
     Action.DELETE_TRACE: "delete traces",

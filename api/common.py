@@ -58,7 +58,13 @@ class JobErrorModel(BaseModel):
     value: float | None = Field(
         None,
         description="the value it concerns: the position reached (in position, mm | °), the "
-        "value written (an HLI unit, a signal 0/1); null for none",
+        "value written (an HLI unit, a signal 0/1), the seq of the job error that dropped an "
+        "MDI block; null for none",
+    )
+    block: int | None = Field(
+        None,
+        description="the MDI block it concerns (the block_id its command's answer gave): block "
+        "done, block dropped by a job error; null for none",
     )
 
 

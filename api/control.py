@@ -15,6 +15,7 @@ from api.auth import Role
 
 GRACE_S = 20.0  # control outlives the holder's last connection (a reload, a blip), by default
 REQUEST_S = 60.0  # an unanswered request lapses after this long
+MAX_REQUEST_MESSAGE = 300  # characters a requester may write with a request
 
 
 class ControlParty(BaseModel):
@@ -25,6 +26,7 @@ class ControlParty(BaseModel):
     session: str = Field(description="public id of the session or API token")
     client: str = Field(description="the browser tab's id ('' for a script)")
     since_unix: float
+    message: str = Field("", description="what a requester wrote with the request")
 
 
 class ControlState(BaseModel):
@@ -50,9 +52,15 @@ ControlVerb = Literal["take", "request", "cancel", "grant", "refuse", "release"]
 
 class ControlAction(BaseModel):
     """`take` a free machine (an instructor or admin: a held one too), `request` it from its
-    holder or `cancel` the request; the holder may `grant` it to a requester (`session` and
+    holder (with a `message`; observers too, to ask for the holder's attention) or `cancel`
+    the request; the holder may `grant` it to a requester who may command (`session` and
     `client` name whom), `refuse` a request, or `release` it."""
 
     action: ControlVerb
     session: str | None = Field(None, max_length=64, description="grant or refuse: whose request")
     client: str | None = Field(None, max_length=64)
+    message: str | None = Field(
+        None,
+        max_length=MAX_REQUEST_MESSAGE,
+        description="request: a word to the holder (why, for how long), shown with the request",
+    )

@@ -49,6 +49,11 @@ class ScopeSetupModel(BaseModel):
     pretrigger_pct: float = Field(20.0, ge=0, le=100, description="share before the trigger")
     mode: Literal["roll", "normal", "single"] = "single"
     trigger: TriggerModel | None = Field(None, description="required unless mode is roll")
+    take_over: bool = Field(
+        False,
+        description="re-arm a scope another person armed and is still using (its holder of "
+        "control, instructors and admins may; they are told): without it that is refused",
+    )
     rate: Literal["nc", "drive"] = Field(
         "nc",
         description=(
@@ -76,7 +81,9 @@ class TraceInfo(BaseModel):
     machine_name: str
     name: str
     notes: str
-    source: Literal["capture", "import"]
+    source: Literal["capture", "import", "flight"] = Field(
+        description="a scope capture, an imported file, or the flight recorder's"
+    )
     stored: bool = Field(description="saved in the library (else one of the recent captures)")
     trigger: str = Field(description="what triggered it, e.g. 'M19 start on S1'")
     forced: bool
@@ -179,6 +186,10 @@ class ScopeStatus(BaseModel):
     drive_channels: list[ChannelInfo] = Field(
         description="the signals a drive-rate capture can record, every axis' drive"
     )
+    armed_by: str | None = Field(
+        None, description="who armed it, 'NAME (role)' (null while idle): it is theirs"
+    )
+    armed_unix: float | None = Field(None, description="when they armed it")
 
 
 class RecordingStart(BaseModel):

@@ -16,6 +16,7 @@ import numpy as np
 from pydantic import BaseModel, Field
 
 from api.common import JobErrorModel
+from api.history import HistoryEntry
 from api.status import MachineStatus
 
 MAGIC = b"INBT"
@@ -84,7 +85,7 @@ class StatusMessage(BaseModel):
     status: MachineStatus
 
 
-NoticeKind = Literal["rebuilt", "restored", "message", "frozen", "resumed"]
+NoticeKind = Literal["rebuilt", "restored", "restarted", "message", "frozen", "resumed"]
 
 
 class NoticeMessage(BaseModel):
@@ -94,11 +95,20 @@ class NoticeMessage(BaseModel):
     type: Literal["notice"] = "notice"
     seq: int = Field(description="numbered per machine; a reconnecting client sees it again")
     kind: NoticeKind = Field(
-        description="rebuilt after its worker died; restored from a snapshot; a message from "
-        "the instructor; frozen or resumed by the instructor"
+        description="rebuilt after its worker died; restored from a snapshot; the service "
+        "restarted (the machine powered on again); a message from the instructor; frozen or "
+        "resumed by the instructor"
     )
     message: str
     time_unix: float
+
+
+class HistoryMessage(BaseModel):
+    """Server → client: new entries of the machine's history (as `GET .../history` reads
+    them), oldest first, as they are written; a client loads the older ones by REST."""
+
+    type: Literal["history"] = "history"
+    entries: list[HistoryEntry]
 
 
 class ErrorMessage(BaseModel):

@@ -21,10 +21,13 @@ from backend.services.assist_runs import AssistRuns
 from backend.services.audit import Audit
 from backend.services.audit_log import Entry
 from backend.services.auth import Actor, authorize
+from backend.services.bundle import Bundles
 from backend.services.classes import Classes
 from backend.services.console import ConsoleHub
 from backend.services.control import Control
 from backend.services.exercises import Exercises
+from backend.services.flight import FlightRecorder
+from backend.services.history import History
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.report import Reports
@@ -66,6 +69,9 @@ class Services:
     classes: Classes
     console: ConsoleHub
     snapshots: Snapshots
+    history: History
+    flight: FlightRecorder
+    bundles: Bundles
 
     @classmethod
     async def start(cls, settings: Settings) -> Services:
@@ -78,6 +84,8 @@ class Services:
         loop = asyncio.get_running_loop()  # reads the local workers' replies and pushes
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
+        history = History(store, settings.history_days, settings.history_rows)
+        history.attach(machines)
         audit = Audit(store)
         control = Control(machines, audit, settings.control_grace_s)
         exercises = Exercises(store)
@@ -86,12 +94,26 @@ class Services:
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
         await asyncio.to_thread(classes.refreeze)
-        hub = TelemetryHub(settings.frame_s, settings.max_frame_samples, settings.client_stall_s)
+        history.service_started(machines.proxies())
+        hub = TelemetryHub(
+            settings.frame_s, settings.max_frame_samples, settings.client_stall_s, history
+        )
         tdir = settings.traces_path
         traces = TraceService(
             store, tdir, machines, settings.library_quota_mb, settings.library_user_quota_mb
         )
         recorders = Recorders(tdir / "recordings", settings.recordings_quota_mb)
+        flight = FlightRecorder(
+            machines,
+            traces,
+            history,
+            settings.flight_before_s,
+            settings.flight_after_s,
+            settings.flight_minutes,
+            settings.flight_decimation,
+            settings.flight_keep,
+        )
+        flight.start()
         viewer = RerunViewer(tdir / "rerun-viewer.log")
         hub.start()
         recorders.start()
@@ -125,6 +147,9 @@ class Services:
             classes,
             console,
             Snapshots(store, machines),
+            history,
+            flight,
+            Bundles(store, tdir / "bundles", traces),
         )
         services.print_login_link()
         return services
@@ -149,6 +174,9 @@ class Services:
         self.recorders.stop()
         self.viewer.stop()
         self.assistants.stop()
+        self.flight.stop()
+        self.history.service_stopping(self.machines.proxies())
+        self.history.stop()
         self.pool.stop()
         self.audit.stop()
         self.store.close()
@@ -171,6 +199,7 @@ async def get_actor(conn: HTTPConnection) -> Actor:
 
 _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is recorded as
     Action.OBSERVE: "command",  # never refused by role (every role observes): for the type
+    Action.NOTE: "machine",
     Action.CAPTURE: "trace",
     Action.RECORD: "recording",
     Action.DELETE_TRACE: "trace",

@@ -54,6 +54,35 @@ class Settings(BaseSettings):
     library_user_quota_mb: float = Field(
         1024.0, gt=0, description="of that, what one user's saved and imported traces may take"
     )
+    history_days: float = Field(
+        90.0,
+        gt=0,
+        le=36500,
+        description="the machine log (job errors, events, power-ons, notes) keeps rows this "
+        "many days; the audit trail (commands, parameters, control) keeps its own for ever",
+    )
+    history_rows: int = Field(
+        200_000,
+        ge=1000,
+        le=100_000_000,
+        description="... and at most this many rows per machine (about 200 bytes each on disk)",
+    )
+    flight_before_s: float = Field(
+        8.0, gt=0, le=15, description="the flight recorder saves this much before a job error"
+    )
+    flight_after_s: float = Field(2.0, gt=0, le=5, description="... and this much after it")
+    flight_minutes: float = Field(
+        5.0,
+        gt=0,
+        le=60,
+        description="the flight recorder's long tier holds the main signals this long, one "
+        "sample in `flight_decimation` cycles: about 17 channels × 8 B per sample, 4.1 MB per "
+        "machine at 5 min and 100 Hz",
+    )
+    flight_decimation: int = Field(10, ge=1, le=1000, description="... one sample in this many")
+    flight_keep: int = Field(
+        20, ge=1, le=10_000, description="the newest job-error traces kept per machine"
+    )
     ws_ticket_s: float = Field(
         30.0, gt=0, le=300, description="a websocket ticket is good this long (once)"
     )

@@ -77,6 +77,7 @@ class Code(IntEnum):
     EV_SPINDLE_MODE = 39  # (5)+(6) the main spindle is a spindle again
     EV_CHANGEOVER_INTERRUPTED = 40  # [003 §2.3] immediate stop: the changeover stays pending
     EV_CHANGEOVER_ABORTED = 41  # reset, or a jog/M3/M4/M5/M19 key, ends it
+    EV_BLOCK_DROPPED = 42  # a job error ended an MDI block before it was done (value: its seq)
 
 
 MESSAGES: dict[Code, str] = {
@@ -157,6 +158,7 @@ MESSAGES: dict[Code, str] = {
     Code.EV_SPINDLE_MODE: "spindle mode",
     Code.EV_CHANGEOVER_INTERRUPTED: "changeover interrupted",
     Code.EV_CHANGEOVER_ABORTED: "changeover aborted",
+    Code.EV_BLOCK_DROPPED: "MDI block dropped by a job error",
 }
 """What each code means, in the operator's words; every code has one (the event log shows it
 when an event carries no detail of its own)."""

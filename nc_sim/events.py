@@ -43,6 +43,7 @@ class Event:
     column: int | None = None  # the column (from 1) of a program error
     signal: str | None = None  # the PLC signal or HLI unit it concerns (ROTMOD, feedhold, ...)
     value: float | None = None  # the position reached (in position), the value written
+    block: int | None = None  # the MDI block it concerns (Accepted.block_id): done, dropped
 
     @property
     def error(self) -> bool:
@@ -66,6 +67,7 @@ class Log(Protocol):
         column: int | None = None,
         signal: str | None = None,
         value: float | None = None,
+        block: int | None = None,
     ) -> Event: ...
 
 

@@ -39,7 +39,12 @@ async def command(
     (only while holding control of the machine: the first command takes a free one)."""
     store = services.store
     return await execute(
-        actor, machine, cmd, services.audit, lambda name: programs.stored_text(store, actor, name)
+        actor,
+        machine,
+        cmd,
+        services.audit,
+        services.history,
+        lambda name: programs.stored_text(store, actor, name),
     )
 
 
@@ -53,4 +58,4 @@ async def emergency_stop(
 ) -> CommandResult:
     """Every axis brakes at a_emergency, the drives lose their enables; whoever may command
     may stop, holding control or not. A reset (by the holder) ends it."""
-    return await execute(actor, machine, EmergencyStopCommand(), services.audit)
+    return await execute(actor, machine, EmergencyStopCommand(), services.audit, services.history)

@@ -8,6 +8,7 @@ from api.auth import Action
 from api.control import ControlAction, ControlState
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import Conflict, Forbidden, NotFound, responses
+from backend.services.audit_log import Entry
 
 router = APIRouter(prefix="/api/machines", tags=["control"])
 
@@ -20,7 +21,7 @@ def control_state(machine: MachineDep) -> ControlState:
 
 @router.post(
     "/{mid}/control",
-    dependencies=[permit(Action.CONTROL)],
+    dependencies=[permit(Action.OBSERVE)],  # observers request; the rest needs CONTROL
     responses=responses(
         Forbidden,
         NotFound,
@@ -34,6 +35,9 @@ def control(
     req: ControlAction, machine: MachineDep, services: ServicesDep, actor: ActorDep
 ) -> ControlState:
     """Take a free machine (an instructor or admin: a held one too), request it from its
-    holder or withdraw the request; the holder grants or refuses a request, or releases it.
+    holder with a message (observers too: to be heard; they are never granted it) or withdraw
+    the request; the holder grants or refuses a request, or releases it.
     A new holder's jogs are their own: the old holder's stop."""
-    return services.control.act(actor, machine, req)
+    attempt = Entry(actor.name, actor.session, "control", req.action, machine.id, req.model_dump())
+    with services.audit.refusals(attempt):  # a refused attempt is recorded too
+        return services.control.act(actor, machine, req)

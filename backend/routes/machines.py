@@ -99,7 +99,7 @@ def signals(machine: MachineDep) -> list[SignalInfo]:
 def restart(mid: str, services: ServicesDep, actor: ActorDep) -> MachineSummary:
     """Power off and on (only while holding control): cycle 0, every stored value (pending
     ones too) in force."""
-    machine = services.machines.restart(mid)
+    machine = services.machines.restart(mid, actor.name)
     services.audit.record(Entry(actor.name, actor.session, "machine", "power cycle", mid))
     return machine_summary(machine)
 

@@ -47,32 +47,49 @@ def scope_status(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
 @router.put(
     "/machines/{mid}/scope",
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(Forbidden, NotFound, why={Invalid: "bad setup"} | WORKER_GONE),
+    responses=responses(
+        Forbidden,
+        NotFound,
+        why={Invalid: "bad setup", Conflict: "another person's scope still records"} | WORKER_GONE,
+    ),
 )
-def scope_arm(req: ScopeSetupModel, machine: MachineDep, services: ServicesDep) -> ScopeStatus:
-    """Arm (or start rolling) with this setup; the pre-trigger fills from recent history."""
-    scope.arm(machine, req)
+def scope_arm(
+    req: ScopeSetupModel, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> ScopeStatus:
+    """Arm (or start rolling) with this setup; the pre-trigger fills from recent history.
+    The scope is then the actor's: another person's scope that still records is refused
+    (409) unless taken over (`take_over`: the control holder, instructors, admins; its
+    viewers are told)."""
+    taken = scope.arm(machine, req, actor)
+    if taken is not None:
+        what = f"took over the scope from {taken}"
+        services.audit.record_later(Entry(actor.name, actor.session, "trace", what, machine.id))
     return scope.status(machine, services.traces, services.recorders)
 
 
 @router.post(
     "/machines/{mid}/scope/force",
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
+    responses=responses(
+        Forbidden, NotFound, why={Conflict: "another person's scope"} | WORKER_GONE
+    ),
 )
-def scope_force(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
-    """Trigger now (an armed scope only)."""
-    scope.force(machine)
+def scope_force(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+    """Trigger now (an armed scope only; another person's as for arming)."""
+    scope.force(machine, actor)
     return scope.status(machine, services.traces, services.recorders)
 
 
 @router.post(
     "/machines/{mid}/scope/stop",
     dependencies=[permit(Action.CAPTURE)],
-    responses=responses(Forbidden, NotFound, why=WORKER_GONE),
+    responses=responses(
+        Forbidden, NotFound, why={Conflict: "another person's scope"} | WORKER_GONE
+    ),
 )
-def scope_stop(machine: MachineDep, services: ServicesDep) -> ScopeStatus:
-    scope.stop(machine)
+def scope_stop(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> ScopeStatus:
+    """Stop recording (one's own scope; another person's as for arming)."""
+    scope.stop(machine, actor)
     return scope.status(machine, services.traces, services.recorders)
 
 

@@ -15,7 +15,6 @@ import io
 import json
 import logging
 import queue
-import sqlite3
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -25,7 +24,7 @@ from typing import TYPE_CHECKING
 
 from api.audit import AuditPage, AuditRecord, AuditVerification
 from backend.errors import ApiError
-from backend.services.audit_log import COLUMNS, Entry, append, row_hash
+from backend.services.audit_log import COLUMNS, Entry, row_hash
 
 if TYPE_CHECKING:
     from backend.services.store import Row, Store
@@ -39,10 +38,6 @@ CSV_ROWS = 100_000  # an export holds at most this many rows (newest)
 # (audit_log.append: all but prev and hash)
 _CSV_FIELDS = ("actor", "session", "address", "machine", "kind", "action", "detail", "outcome")
 _HASHED = ("seq", "time", *_CSV_FIELDS)
-
-
-def _append_all(entries: list[Entry], db: sqlite3.Connection) -> list[int]:
-    return append(db, entries)
 
 
 _Written = Callable[[int | BaseException], None]  # told a row's seq once it is committed
@@ -125,7 +120,7 @@ class Audit:
     def record(self, entry: Entry) -> int:
         """Append one row now (after those waiting); its seq."""
         self.flush()
-        return self.store.transaction(lambda db: append(db, [entry]))[0]
+        return self.store.transaction(lambda db: self.store.append_audit(db, [entry]))[0]
 
     @contextmanager
     def refusals(self, entry: Entry) -> Iterator[None]:
@@ -179,7 +174,9 @@ class Audit:
             try:
                 if items:
                     entries = [entry for entry, _ in items]
-                    outcome = self.store.transaction(functools.partial(_append_all, entries))
+                    outcome = self.store.transaction(
+                        functools.partial(self.store.append_audit, entries=entries)
+                    )
             except Exception as e:  # the store is closed or failing: say so, keep serving
                 log.exception("audit rows lost: %d", len(items))
                 outcome = e

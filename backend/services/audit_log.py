@@ -7,6 +7,7 @@ import hashlib
 import json
 import sqlite3
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,7 +26,9 @@ CREATE TABLE IF NOT EXISTS audit_log (
     detail TEXT NOT NULL,          -- JSON, keys sorted
     outcome TEXT NOT NULL,
     prev TEXT NOT NULL,            -- the row before's hash ('' before the first)
-    hash TEXT NOT NULL
+    hash TEXT NOT NULL,
+    sim_t_s REAL,                  -- the machine's simulated time then (not hashed: a stamp)
+    epoch INTEGER                  -- the machine's build then
 );
 CREATE INDEX IF NOT EXISTS audit_log_machine ON audit_log (machine, kind);
 CREATE TRIGGER IF NOT EXISTS audit_log_no_update BEFORE UPDATE ON audit_log
@@ -34,6 +37,8 @@ CREATE TRIGGER IF NOT EXISTS audit_log_no_delete BEFORE DELETE ON audit_log
 BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
 """
 COLUMNS = "seq, time, actor, session, address, machine, kind, action, detail, outcome, prev, hash"
+# a machine's build and simulated time now (None: no such machine): stamps its rows
+Clock = Callable[[str], tuple[int, float] | None]
 
 
 @dataclass(frozen=True)
@@ -57,8 +62,9 @@ def row_hash(prev: str, fields: tuple[object, ...]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def append(db: sqlite3.Connection, entries: list[Entry]) -> list[int]:
-    """Chain the entries onto the trail (inside the caller's transaction); their seqs."""
+def append(db: sqlite3.Connection, entries: list[Entry], clock: Clock | None = None) -> list[int]:
+    """Chain the entries onto the trail (inside the caller's transaction); their seqs. A
+    machine's rows are stamped with its build and simulated time by `clock`."""
     last = db.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
     seq, prev = (last["seq"], last["hash"]) if last else (0, "")
     now = time.time()
@@ -78,9 +84,10 @@ def append(db: sqlite3.Connection, entries: list[Entry]) -> list[int]:
             e.outcome,
         )
         digest = row_hash(prev, fields)
+        stamp = clock(e.machine) if clock is not None and e.machine else None
         db.execute(
-            f"INSERT INTO audit_log ({COLUMNS}) VALUES ({', '.join('?' * 12)})",
-            (*fields, prev, digest),
+            f"INSERT INTO audit_log ({COLUMNS}, epoch, sim_t_s) VALUES ({', '.join('?' * 14)})",
+            (*fields, prev, digest, *(stamp or (None, None))),
         )
         prev = digest
         seqs.append(seq)

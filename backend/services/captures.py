@@ -30,6 +30,9 @@ class Captures:
 
     def __init__(self) -> None:
         self.setup: object | None = None  # the ScopeSetupModel as the client asked
+        # whose it is while armed: (user, role, session) and when they armed it
+        self.owner: tuple[str, str, str] | None = None
+        self.armed_unix: float | None = None
         self._recent: deque[Capture] = deque(maxlen=RECENT_CAPTURES)
         self._lock = threading.Lock()
 

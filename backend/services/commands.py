@@ -41,6 +41,7 @@ from backend.errors import ApiError
 from backend.services.audit import Audit
 from backend.services.audit_log import Entry
 from backend.services.auth import Actor
+from backend.services.history import History
 from backend.services.machines import MachineProxy
 from backend.services.parameters import pending_values, took_pending
 from backend.workers.protocol import Submit, Submitted, Values
@@ -66,6 +67,7 @@ def job_error_model(e: Event) -> JobErrorModel:
         column=e.column,
         signal=e.signal,
         value=e.value,
+        block=e.block,
     )
 
 
@@ -138,6 +140,13 @@ def _describe(cmd: Command | EmergencyStopCommand) -> str:
     return " ".join([cmd.type, *(f"{k}={v}" for k, v in fields.items())])
 
 
+def _axis_name(m: MachineProxy, name: str) -> str:
+    """An axis as its events name it: `S` is the (first) spindle's own name (S1)."""
+    if name == "S":
+        return next((s.axis for s in m.link.signals if s.name.endswith(".speed_act_rpm")), name)
+    return name
+
+
 def _renewal(m: MachineProxy, actor: Actor, cmd: Command | EmergencyStopCommand) -> bool:
     """A held jog's renewal (the same start again within a second): audited once."""
     if not isinstance(cmd, JogCommand) or cmd.action == "step":
@@ -154,15 +163,23 @@ async def execute(
     m: MachineProxy,
     cmd: Command | EmergencyStopCommand,
     audit: Audit,
+    history: History,
     stored: StoredText = _no_store,
 ) -> CommandResult:
-    """Carry out one command on the machine's worker and audit it; raises ApiError with the
-    refusal. The route checked who may send it (backend/deps.py `permit`). Runs on the event
-    loop: nothing here blocks but reading a stored program (`stored`, for program_load), the
-    worker's answer wakes it."""
+    """Carry out one command on the machine's worker and audit it (the history remembers
+    who sent what runs now); raises ApiError with the refusal. The route checked who may
+    send it (backend/deps.py `permit`). Runs on the event loop: nothing here blocks but
+    reading a stored program (`stored`, for program_load), the worker's answer wakes it."""
     outcome = "ok"
+    text = cmd.block if isinstance(cmd, MdiCommand) else _describe(cmd)
+    axis = str(getattr(cmd, "axis", None) or getattr(cmd, "spindle", None) or "")
+    # who sent what runs now, for the job errors it raises (at once, or later)
+    history.sending(m.id, m.link.epoch, text, actor.name, _axis_name(m, axis))
     try:
-        return await _execute(m, cmd, stored)
+        done = await _execute(m, cmd, stored)
+        if done.block_id is not None:
+            history.sent(m.id, m.link.epoch, text, actor.name, done.block_id)
+        return done
     except ApiError as e:
         outcome = f"refused ({e.status}): {e}"
         raise

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from api.auth import Action
+from api.auth import ALLOWED, Action
 from api.control import REQUEST_S, ControlAction, ControlParty, ControlState
 from backend.errors import ApiError, Conflict, Forbidden, NotFound
 from backend.services.audit import Audit
@@ -150,6 +150,8 @@ class Control:
         mine = c.holder is not None and _key(c.holder) == _key(actor)
         if req.action in ("take", "request"):
             self._not_frozen(actor, m)
+        if req.action not in ("request", "cancel"):  # observers ask, they never hold
+            authorize(actor, Action.CONTROL, m.id)
         match req.action:
             case "take":
                 if mine:
@@ -165,6 +167,8 @@ class Control:
                 was = f" from {_who(c.holder)}" if c.holder else ""
                 self._change(m, _party(actor), actor, f"took control{was}")
             case "request":
+                if c.holder is None and Action.CONTROL not in ALLOWED[actor.role]:
+                    raise Conflict("nobody holds the machine: there is nobody to ask")
                 if mine or c.holder is None:
                     raise Conflict(
                         "nothing to request: take the free machine"
@@ -172,8 +176,10 @@ class Control:
                         else "you hold control already"
                     )
                 if all(_key(r) != _key(actor) for r in c.requests):
-                    c.requests.append(_party(actor))
-                    self._changed(m, actor, f"requested control from {_who(c.holder)}")
+                    text = (req.message or "").strip()
+                    c.requests.append(_party(actor).model_copy(update={"message": text}))
+                    said = f": “{text}”" if text else ""
+                    self._changed(m, actor, f"requested control from {_who(c.holder)}{said}")
             case "cancel":
                 before = len(c.requests)
                 c.requests = [r for r in c.requests if _key(r) != _key(actor)]
@@ -190,6 +196,12 @@ class Control:
                 c.requests.remove(asked[0])
                 if req.action == "refuse":
                     self._changed(m, actor, f"refused control to {_who(asked[0])}")
+                elif Action.COMMAND not in ALLOWED[asked[0].role]:
+                    c.requests.append(asked[0])  # still asking: the holder may refuse it
+                    raise Conflict(
+                        f"{_who(asked[0])} may watch only: control would not let them command "
+                        "(an admin can make them an operator)"
+                    )
                 else:
                     to = asked[0].model_copy(update={"since_unix": time.time()})
                     self._change(m, to, actor, f"granted control to {_who(to)}")

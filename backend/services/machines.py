@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
+from collections.abc import Callable
 
 from api.machines import MachineCreate
 from backend.errors import ApiError, Conflict, Invalid, Unavailable, not_found
@@ -22,7 +23,7 @@ from backend.services.notices import Notices
 from backend.services.pending import PendingValues
 from backend.services.store import Store, StoredMachine
 from backend.workers.client import WorkerClient, WorkerGone, WorkerRefused
-from backend.workers.link import MachineLink
+from backend.workers.link import EventsTaken, MachineLink
 from backend.workers.pool import NoLiveWorker, WorkerPool
 from backend.workers.protocol import (
     AddMachine,
@@ -39,10 +40,15 @@ from backend.workers.protocol import (
 )
 from nc_sim.config import MachineConfig, apply_values, demo_machine, machine_from_lists
 from nc_sim.errors import NcUsageError
+from nc_sim.events import Event
 from nc_sim.faults import NOW, Fault, Trigger
 from nc_sim.params import ParamListError, Scope
 
 log = logging.getLogger(__name__)
+
+# a machine was powered on: (machine, its new epoch, why, a failure did it); the history
+# marks it
+PoweredOn = Callable[["MachineProxy", int, str, bool], None]
 
 
 class MachineProxy:
@@ -82,6 +88,9 @@ class MachineService:
         self.rebuilt = 0  # machines rebuilt after their worker died
         # class seats' exercises and starting faults, by machine: `load` builds them so
         self.seats: dict[str, tuple[object, list[tuple[Fault, Trigger]]]] = {}
+        self.on_power: PoweredOn | None = None  # the history: every build is a power-on
+        # the history, the flight recorder: every machine's new events (a push thread's)
+        self.event_takers: list[EventsTaken] = []
 
     def proxies(self) -> list[MachineProxy]:
         with self._lock:
@@ -92,6 +101,21 @@ class MachineService:
         if proxy is None:
             raise not_found(f"machine '{mid}'")
         return proxy
+
+    def _took_events(self, mid: str, epoch: int, events: list[Event]) -> None:
+        for take in self.event_takers:
+            take(mid, epoch, events)
+
+    def find(self, mid: str) -> MachineProxy | None:
+        """The machine, or None (deleted, or never there)."""
+        return self._proxies.get(mid)
+
+    def stamp(self, mid: str) -> tuple[int, float] | None:
+        """A machine's build and simulated time now (None: no such machine)."""
+        proxy = self._proxies.get(mid)
+        if proxy is None:
+            return None
+        return proxy.link.epoch, proxy.link.cycle * proxy.link.cycle_s
 
     def on_machine(self, worker: WorkerClient) -> list[MachineProxy]:
         return [p for p in self.proxies() if p.link.worker is worker]
@@ -112,14 +136,17 @@ class MachineService:
     def _place(
         self,
         proxy: MachineProxy,
+        why: str,
         worker: WorkerClient | None = None,
         state: bytes | None = None,
         faults: list[tuple[Fault, Trigger]] | None = None,
         mode: Mode = "run",
+        failure: bool = False,
     ) -> None:
         """Build the machine on a worker (the least loaded live one unless given): powered on
         with its training faults as they stand (an armed one armed again, an active one at
-        once), or restored from a snapshot's `state` (faults and all)."""
+        once), or restored from a snapshot's `state` (faults and all); `why` goes into its
+        history."""
         with self._placing:
             try:
                 worker = worker or self.pool.choose(self._load)
@@ -150,6 +177,9 @@ class MachineService:
             self._built(proxy.id)
             raise
         assert isinstance(info, MachineInfo)
+        if self.on_power is not None:  # first: the build's own first events come after it
+            self.on_power(proxy, info.epoch, why, failure)
+        proxy.link.on_events = self._took_events
         proxy.link.attach(worker, info)
         if proxy.id in self._proxies:  # a new machine counts as building until it is listed
             self._built(proxy.id)
@@ -170,7 +200,7 @@ class MachineService:
         for sm in stored:
             proxy = MachineProxy(sm, self._config(sm))
             proxy.exercise, faults = self.seats.get(sm.id, (None, None))
-            self._place(proxy, faults=faults)
+            self._place(proxy, "the service started", faults=faults)
             self._proxies[sm.id] = proxy
             self._built(sm.id)
 
@@ -204,7 +234,7 @@ class MachineService:
         proxy = MachineProxy(sm, cfg)
         proxy.exercise = exercise
         try:
-            self._place(proxy, faults=faults)
+            self._place(proxy, "created", faults=faults)
         except (WorkerGone, WorkerRefused) as e:
             raise Unavailable(f"no worker could build the machine: {e}") from None
         self.store.add_machine(sm)
@@ -213,7 +243,7 @@ class MachineService:
         self._built(sm.id)
         return proxy
 
-    def restart(self, mid: str) -> MachineProxy:
+    def restart(self, mid: str, by: str) -> MachineProxy:
         """Power the machine off and on: all stored values apply, pending ones included."""
         proxy = self.get(mid)
         sm = next(s for s in self.store.machines() if s.id == mid)
@@ -221,12 +251,12 @@ class MachineService:
             proxy.cfg = self._config(sm)
             proxy.pending.clear()
             try:
-                self._place(proxy, proxy.link.live_worker)
+                self._place(proxy, f"power cycle by {by}", proxy.link.live_worker)
             except (WorkerGone, WorkerRefused) as e:
                 raise Unavailable(f"machine '{mid}': {e}") from None
         return proxy
 
-    def restore(self, mid: str, state: bytes, params: ParamSnapshot) -> MachineProxy:
+    def restore(self, mid: str, state: bytes, params: ParamSnapshot, by: str) -> MachineProxy:
         """Rebuild the machine from a snapshot (a new epoch continuing at the snapshot's
         cycle); `params` are its lists then, which the gateway's copy takes over."""
         proxy = self.get(mid)
@@ -238,7 +268,8 @@ class MachineService:
             proxy.pending.clear()
             mode = proxy.link.pacing.mode if proxy.link.pacing is not None else "run"
             try:
-                self._place(proxy, proxy.link.live_worker, state, mode=mode)
+                why = f"restored from a snapshot by {by}"
+                self._place(proxy, why, proxy.link.live_worker, state, mode=mode)
             except (WorkerGone, WorkerRefused) as e:
                 raise Unavailable(f"machine '{mid}': {e}") from None
         return proxy
@@ -289,7 +320,7 @@ class MachineService:
                 with proxy.lock:
                     proxy.cfg = self._config(sm)
                     proxy.pending.clear()
-                    self._place(proxy)
+                    self._place(proxy, f"rebuilt: {why}", failure=True)
             except Exception:
                 log.exception("machine %s could not be rebuilt", proxy.id)
                 continue

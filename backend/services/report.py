@@ -16,7 +16,7 @@ from backend.report import html
 from backend.report.text import number
 from backend.services.assist_runs import AssistRuns
 from backend.services.audit import Audit, AuditFilter
-from backend.services.audit_log import Entry, append
+from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.services.store import Store
@@ -67,7 +67,7 @@ class Reports:
                 "VALUES (?, ?, ?, ?, ?, ?)",
                 (mid, req.name, req.role, req.remark, actor.name, now),
             )
-            append(db, [entry])
+            self.store.append_audit(db, [entry])
             return int(cur.lastrowid)
 
         self.audit.flush()  # rows waiting to be written go first: the trail stays in order

@@ -5,8 +5,11 @@ to the gateway with the machine's news."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
+from api.auth import ALLOWED, Action
 from api.scope import (
     MAX_DRIVE_LENGTH_S,
     ChannelInfo,
@@ -16,7 +19,8 @@ from api.scope import (
     ScopeStatus,
 )
 from api.telemetry import FrameHeader, encode_frame
-from backend.errors import ApiError, Invalid
+from backend.errors import ApiError, Conflict, Forbidden, Invalid
+from backend.services.auth import Actor
 from backend.services.machines import MachineProxy
 from backend.services.recorder import Recorders
 from backend.services.traces import TraceService
@@ -89,20 +93,61 @@ def _drive_channels(m: MachineProxy, req: ScopeSetupModel) -> list[Signal]:
     return drive
 
 
-def arm(m: MachineProxy, req: ScopeSetupModel) -> None:
-    """(Re)arm the scope with a setup; a capture in progress is dropped."""
+def _busy(m: MachineProxy) -> bool:
+    """The scope records for someone (armed, triggered, rolling)."""
+    st = m.link.call(ScopeAct(m.id, "state"))
+    assert isinstance(st, ScopeState)
+    return st.state in ("roll", "armed", "triggered")
+
+
+def _theirs(m: MachineProxy, actor: Actor, take_over: bool, what: str) -> str | None:
+    """Pass when the scope is idle, done or the actor's own; 409 when another person's
+    (unless `take_over` by one who may: the control holder, an instructor or admin, 403 for
+    others). The owner it is taken from, in words, or None."""
+    owner = m.captures.owner
+    if owner is None or owner[2] == actor.session or not _busy(m):
+        return None
+    who = f"{owner[0]} ({owner[1]})"
+    since = time.strftime("%H:%M:%S", time.localtime(m.captures.armed_unix or 0))
+    if not take_over:
+        raise Conflict(
+            f"the scope is {who}'s (armed at {since}) and still records: {what} would end "
+            "their capture; ask them, or take it over"
+        )
+    holder = m.control.holder
+    if Action.TAKE_CONTROL not in ALLOWED[actor.role] and (
+        holder is None or holder.session != actor.session
+    ):
+        raise Forbidden(
+            f"the scope is {who}'s: only the machine's control holder, an instructor or an "
+            "admin may take it over"
+        )
+    return who
+
+
+def arm(m: MachineProxy, req: ScopeSetupModel, actor: Actor) -> str | None:
+    """(Re)arm the scope with a setup; a capture in progress is dropped. Another person's
+    scope only with `take_over` (see `_theirs`); whose it was then, else None."""
     setup, drive = engine_setup(m, req)
+    taken = _theirs(m, actor, req.take_over, "arming it")
     m.link.call(ScopeArm(m.id, setup, drive))
-    m.captures.setup = req
+    m.captures.setup = req.model_copy(update={"take_over": False})
+    m.captures.owner = (actor.name, actor.role.value, actor.session)
+    m.captures.armed_unix = time.time()
+    if taken is not None:
+        m.notices.add("message", f"{actor.name}: took over the scope from {taken}")
+    return taken
 
 
-def force(m: MachineProxy) -> None:
-    """Trigger an armed scope now."""
+def force(m: MachineProxy, actor: Actor) -> None:
+    """Trigger an armed scope now (one's own, or taken over as for arming)."""
+    _theirs(m, actor, True, "triggering it")
     m.link.call(ScopeAct(m.id, "force"))
 
 
-def stop(m: MachineProxy) -> None:
-    """Stop recording; a capture in progress is dropped."""
+def stop(m: MachineProxy, actor: Actor) -> None:
+    """Stop recording; a capture in progress is dropped (one's own, or as for arming)."""
+    _theirs(m, actor, True, "stopping it")
     m.link.call(ScopeAct(m.id, "stop"))
 
 
@@ -110,6 +155,7 @@ def status(m: MachineProxy, traces: TraceService, recorders: Recorders) -> Scope
     st = m.link.call(ScopeAct(m.id, "state"))
     assert isinstance(st, ScopeState)
     idle = st.length_cycles == 0
+    owner = m.captures.owner
     setup = m.captures.setup if not idle else None
     assert setup is None or isinstance(setup, ScopeSetupModel)
     return ScopeStatus(
@@ -126,6 +172,8 @@ def status(m: MachineProxy, traces: TraceService, recorders: Recorders) -> Scope
             ChannelInfo(name=s.name, unit=s.unit, kind="float")
             for s in m.link.drive_signal_by_name.values()
         ],
+        armed_by=f"{owner[0]} ({owner[1]})" if owner is not None and not idle else None,
+        armed_unix=m.captures.armed_unix if owner is not None and not idle else None,
     )
 
 

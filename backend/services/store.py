@@ -185,6 +185,11 @@ class Store:
         self._db.execute(_PROGRAMS)
         self._db.executescript(audit_log.SCHEMA)
         self._lock = threading.Lock()
+        # stamps a machine's audit rows with its build and simulated time (the history's)
+        self.clock: audit_log.Clock | None = None
+        # told each transaction's new audit rows once committed (the history's live view)
+        self.on_audited: Callable[[list[tuple[int, audit_log.Entry]]], None] | None = None
+        self._audited: list[tuple[int, audit_log.Entry]] = []  # in the running transaction
         self._migrate()
 
     def _migrate(self) -> None:
@@ -195,6 +200,13 @@ class Store:
             self._db.execute(
                 "ALTER TABLE param_values ADD COLUMN version INTEGER NOT NULL DEFAULT 0"
             )
+        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(audit_log)")]
+        if "epoch" not in columns:  # rows of earlier versions have no simulated time
+            self._db.execute("ALTER TABLE audit_log ADD COLUMN sim_t_s REAL")
+            self._db.execute("ALTER TABLE audit_log ADD COLUMN epoch INTEGER")
+        self._db.execute(
+            "CREATE INDEX IF NOT EXISTS audit_log_machine_time ON audit_log (machine, time)"
+        )
         columns = [r["name"] for r in self._db.execute("PRAGMA table_info(traces)")]
         if "created_by" not in columns:  # traces of earlier versions count for nobody
             self._db.execute("ALTER TABLE traces ADD COLUMN created_by TEXT NOT NULL DEFAULT ''")
@@ -239,9 +251,22 @@ class Store:
 
     def transaction(self, work: Callable[[sqlite3.Connection], T]) -> T:
         """Run `work` on the connection in one transaction (the audit trail's chain)."""
-        with self._lock, self._db:
-            self._db.execute("BEGIN")
-            return work(self._db)
+        with self._lock:
+            try:
+                with self._db:
+                    self._db.execute("BEGIN")
+                    out = work(self._db)
+            finally:
+                audited, self._audited = self._audited, []
+        if audited and self.on_audited is not None:
+            self.on_audited(audited)
+        return out
+
+    def append_audit(self, db: sqlite3.Connection, entries: list[audit_log.Entry]) -> list[int]:
+        """Chain audit rows onto the trail inside a transaction's `work`; their seqs."""
+        seqs = audit_log.append(db, entries, self.clock)
+        self._audited += zip(seqs, entries, strict=True)
+        return seqs
 
     def close(self) -> None:
         with self._lock:
@@ -321,7 +346,7 @@ class Store:
         value's version is its audit row's seq. The versions, in the order of `changes`."""
 
         def work(db: sqlite3.Connection) -> list[int]:
-            seqs = audit_log.append(db, entries)
+            seqs = self.append_audit(db, entries)
             for c, seq in zip(changes, seqs, strict=True):
                 db.execute(
                     "INSERT OR REPLACE INTO param_values VALUES (?, ?, ?, ?, ?, ?)",

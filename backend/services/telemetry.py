@@ -37,6 +37,7 @@ from api.telemetry import (
     EventMessage,
     FrameHeader,
     Hello,
+    HistoryMessage,
     NoticeMessage,
     StatusMessage,
     Subscribe,
@@ -45,6 +46,7 @@ from api.telemetry import (
 )
 from backend.services.auth import Actor
 from backend.services.commands import job_error_model
+from backend.services.history import History
 from backend.services.machines import MachineProxy
 from backend.services.status import RECENT_EVENTS, status_of
 from backend.tasks import cancel
@@ -81,6 +83,7 @@ class Subscriber:
     status_seq: int = 0  # the newest pushed status sent
     control_seq: int = -1  # the machine's control state sent with it
     notice_seq: int = 0  # the newest notice sent
+    history_cursor: int = 0  # the machine's live history entries sent
     control: list[str] = field(default_factory=list)  # JSON replies, sent before the next frame
     sending: asyncio.Task[None] | None = None
     send_started: float = 0.0  # event-loop time the send in flight began
@@ -118,8 +121,15 @@ class Subscriber:
 class TelemetryHub:
     """Builds and sends frames for every subscriber."""
 
-    def __init__(self, frame_s: float, max_frame_samples: int, stall_s: float = 10.0) -> None:
+    def __init__(
+        self,
+        frame_s: float,
+        max_frame_samples: int,
+        stall_s: float = 10.0,
+        history: History | None = None,
+    ) -> None:
         self.frame_s = frame_s
+        self.history = history
         self.max_frame_samples = max_frame_samples
         self.stall_s = stall_s
         self.subscribers: set[Subscriber] = set()
@@ -140,6 +150,8 @@ class TelemetryHub:
         )
         self.on_connect(actor, m)
         sub.notice_seq = max(0, m.notices.newest_seq - 1)  # the newest notice again
+        if self.history is not None:  # the older ones the viewer reads by REST
+            sub.history_cursor = self.history.newest(m.id)
         self.subscribers.add(sub)
         m.link.watch(True)
         return sub
@@ -288,6 +300,10 @@ class TelemetryHub:
                 msg = EventMessage(seq=seq, missed=missed, event=job_error_model(e))
                 texts[ekey] = msg.model_dump_json()
             out.append(texts[ekey])
+        if self.history is not None:
+            entries, sub.history_cursor = self.history.since(m.id, sub.history_cursor)
+            if entries:
+                out.append(HistoryMessage(entries=entries).model_dump_json())
         return out
 
     def _frame(self, sub: Subscriber, head: int, cache: dict[tuple[object, ...], Built]) -> bytes:

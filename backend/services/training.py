@@ -186,7 +186,7 @@ class Snapshots:
         if changes:
             why = f"restored snapshot {sid} ({kept.info.label or 'no label'})"
             params.write(actor, m, self.store, changes, why)
-        self.machines.restore(m.id, kept.snap.data, kept.snap.params)
+        self.machines.restore(m.id, kept.snap.data, kept.snap.params, actor.name)
         return kept.info
 
     def forget(self, mid: str) -> None:

@@ -239,7 +239,7 @@ class Versions:
                 (mid, name, note, now, actor.name, int(baseline), json.dumps(rows)),
             )
             vid = int(cur.lastrowid or 0)
-            audit_log.append(db, [replace(entry, detail={**entry.detail, "id": vid})])
+            self.store.append_audit(db, [replace(entry, detail={**entry.detail, "id": vid})])
             return vid
 
         try:
@@ -264,7 +264,7 @@ class Versions:
         def work(db: sqlite3.Connection) -> None:
             db.execute("UPDATE param_versions SET baseline = 0 WHERE machine = ?", (mid,))
             db.execute("UPDATE param_versions SET baseline = 1 WHERE id = ?", (vid,))
-            audit_log.append(db, [entry])
+            self.store.append_audit(db, [entry])
 
         self.store.transaction(work)
         return _info(self._row(mid, vid))
@@ -289,7 +289,7 @@ class Versions:
 
         def work(db: sqlite3.Connection) -> None:
             db.execute("DELETE FROM param_versions WHERE id = ?", (vid,))
-            audit_log.append(db, [entry])
+            self.store.append_audit(db, [entry])
 
         self.store.transaction(work)
 
@@ -323,5 +323,5 @@ class Versions:
                 "comment": comment,
             },
         )
-        self.store.transaction(lambda db: audit_log.append(db, [entry]))
+        self.store.transaction(lambda db: self.store.append_audit(db, [entry]))
         return result

@@ -27,6 +27,7 @@ from backend.workers.protocol import (
     ParamSnapshot,
     ServiceAxesRead,
     StatusRead,
+    param_snapshot,
 )
 from backend.workers.ring import MAX_WRITE, R_COLS, SampleRing
 from nc_sim.assist.drive_axis import drive_axis
@@ -164,11 +165,7 @@ class MachineHost:
 
     def params_now(self) -> ParamSnapshot:
         """The parameter lists as written now (cheap copies)."""
-        cfg = self.machine.cfg
-        params: ParamSnapshot = {("channel", ""): dict(cfg.channel), ("tool", ""): dict(cfg.tools)}
-        for a in cfg.axes:
-            params[("axis", a.name)] = dict(a.values)
-        return params
+        return param_snapshot(self.machine.cfg)
 
     def arm_scope(self, setup: ScopeSetup, drive: list[Signal]) -> None:
         """(Re)arm the scope; with `drive` channels (one axis' drive signals) its captures are

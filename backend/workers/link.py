@@ -35,6 +35,8 @@ from nc_sim.signals import Signal
 EARLY_PUSHES = 64  # pushes of a build kept until its AddMachine reply is through
 
 Captured = Callable[[list[tuple[Record, ParamSnapshot]]], None]
+# a machine's new events as its worker pushed them: (machine, epoch, events)
+EventsTaken = Callable[[str, int, list[Event]], None]
 
 
 class MachineLink:
@@ -63,6 +65,7 @@ class MachineLink:
         self._serials = itertools.count(1)  # commands to this machine, numbered
         self._cycle_s = cycle_s  # until a build says its own
         self._captured = captured
+        self.on_events: EventsTaken | None = None  # the machine's history takes them too
 
     def watch(self, on: bool) -> None:
         """One more (or one fewer) watcher: the worker pushes the status while there is any.
@@ -187,6 +190,8 @@ class MachineLink:
                 self.status = n.status
                 self.status_seq += 1
                 self.faults = {f.id: f for f in n.status.faults}
+        if n.events and self.on_events is not None:
+            self.on_events(self.mid, n.epoch, list(n.events))
         if n.captures:
             self._captured(list(n.captures))
 

@@ -27,6 +27,14 @@ Values = list[ValueWrite]
 ParamSnapshot = dict[tuple[str, str], dict[str, Value]]
 
 
+def param_snapshot(cfg: MachineConfig) -> ParamSnapshot:
+    """A machine's parameter lists as written now (cheap copies)."""
+    params: ParamSnapshot = {("channel", ""): dict(cfg.channel), ("tool", ""): dict(cfg.tools)}
+    for a in cfg.axes:
+        params[("axis", a.name)] = dict(a.values)
+    return params
+
+
 # --- requests ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class AddMachine:

@@ -1,13 +1,13 @@
 // Layout: the login screen while nobody is logged in; then the top bar (machine, health,
 // connection, user, emergency stop) and banners always, the machine view beside the workspaces (tabs).
-import { useEffect, useRef, useState } from "preact/hooks";
+import { useEffect, useRef } from "preact/hooks";
 import { AuditPanel } from "./panels/AuditPanel";
+import { HistoryPanel } from "./panels/HistoryPanel";
 import { Banner } from "./panels/Banner";
 import { Calculators } from "./panels/Calculators";
 import { Commissioning } from "./panels/Commissioning";
 import { ControlStrip } from "./panels/ControlStrip";
 import { EstopHint } from "./panels/EstopHint";
-import { EventsPanel } from "./panels/EventsPanel";
 import { ExercisePanel } from "./panels/ExercisePanel";
 import { HliPanel } from "./panels/HliPanel";
 import { JogPanel } from "./panels/JogPanel";
@@ -31,12 +31,11 @@ import { me } from "./state/auth";
 import { commandBlocked, may } from "./state/control";
 import { exercise } from "./state/exercise";
 import { machinesOpen } from "./state/machines";
+import { TABS, type Tab, tab as routeTab } from "./state/route";
 import { connection, frozen, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
 // "Exercise" only on a class seat (the first tab there, and the one it opens on)
-const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Drive tuning", "Service", "HLI / PLC", "Events", "Audit"] as const;
-type Tab = (typeof TABS)[number];
 
 /** The CNC reset and, on a frozen seat, why the simulation stands (pacing, restart and the
  * machines themselves: the Machines dialog). */
@@ -108,9 +107,13 @@ function ConsoleScreen() {
 }
 
 function Hmi() {
-  const [tab, setTab] = useState<Tab>("Operate");
+  const tab = routeTab.value;
+  const setTab = (t: Tab) => (routeTab.value = t);
   const seat = !!exercise.value;
-  useEffect(() => setTab((t) => (seat ? "Exercise" : t === "Exercise" ? "Operate" : t)), [seat]);
+  useEffect(() => {
+    const t = routeTab.value;
+    routeTab.value = seat ? "Exercise" : t === "Exercise" ? "Operate" : t;
+  }, [seat]);
   const head = useRef<HTMLDivElement>(null);
   const side = useRef<HTMLElement>(null);
   useEffect(() => {
@@ -171,8 +174,12 @@ function Hmi() {
             {tab === "Drive tuning" ? <Commissioning drive /> : null}
             {tab === "Service" ? <ServicePanel /> : null}
             {tab === "HLI / PLC" ? <HliPanel /> : null}
-            {tab === "Events" ? <EventsPanel /> : null}
-            {tab === "Audit" ? <AuditPanel /> : null}
+            {tab === "History" ? (
+              <>
+                <HistoryPanel />
+                {may("users") ? <AuditPanel /> : null}
+              </>
+            ) : null}
           </div>
         </main>
       </div>

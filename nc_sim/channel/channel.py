@@ -65,6 +65,7 @@ class Channel:
         self.mdi = MdiQueue()
         self.feedhold = False  # the channel's HLI feedhold (the machine sets it)
         self.aborted_with: Event | None = None  # the job error of the last abort
+        self._submitting: int | None = None  # the MDI block `run_mdi` is starting
 
     # --- commands -------------------------------------------------------------------------
     def load(self, name: str, text: str) -> None:
@@ -144,7 +145,11 @@ class Channel:
         self.ex.mdi_blocks.append((block_id, calls))
         self.mdi.add(block_id, text)
         self.aborted_with = None
-        self.pump()
+        self._submitting = block_id  # failing now, it is refused to its sender, not dropped
+        try:
+            self.pump()
+        finally:
+            self._submitting = None
         return self.aborted_with
 
     def resume(self) -> None:
@@ -201,6 +206,7 @@ class Channel:
         self.host.path_left()
         self.aborted_with = error
         if error is not None and self.progress.mdi:
+            self._dropped(list(self.mdi.blocks), error)
             self._rewind(ChannelState.READY)  # MDI leaves no program in error
             return
         line = self.progress.block_line
@@ -432,7 +438,14 @@ class Channel:
         self.ex.mdi_blocks.clear()
         self.ex.pc = len(self.ex.calls)
         self.ex.late.clear()
-        self.mdi.drop_from(block)
+        self._dropped(self.mdi.drop_from(block), err)
+
+    def _dropped(self, blocks: list[MdiBlock], err: Event) -> None:
+        """Tell which MDI blocks a job error ended (not the one being submitted: its sender
+        gets the error as the refusal)."""
+        for b in blocks:
+            if b.id != self._submitting:
+                self.host.block_dropped(b.id, b.text, err)
 
     def _wait_over(self) -> bool:
         w = self.wait

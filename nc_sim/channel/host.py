@@ -67,6 +67,11 @@ class ChannelHost(Protocol):
     def block_done(self, block_id: int, text: str) -> None:
         """An MDI block has run completely."""
 
+    def block_dropped(self, block_id: int, text: str, cause: Event) -> None:
+        """A job error (`cause`) ended an MDI block before it was done: the block that raised
+        it and each queued behind it, so the error can be put down to the command that sent
+        the block."""
+
     def path_left(self) -> None:
         """The path was abandoned mid-way (job error, reset, E-stop, a stopped thread): its
         axes, and a tapping spindle, brake on their own."""

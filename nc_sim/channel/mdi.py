@@ -53,10 +53,13 @@ class MdiQueue:
             done.append(self.blocks.popleft())
         return done
 
-    def drop_from(self, block_id: int) -> None:
-        """Drop block `block_id` and those queued behind it (a job error of that block)."""
+    def drop_from(self, block_id: int) -> list[MdiBlock]:
+        """Drop block `block_id` and those queued behind it (a job error of that block); the
+        dropped ones, in order."""
+        dropped: list[MdiBlock] = []
         while self.blocks and self.blocks[-1].id >= block_id:
-            self.blocks.pop()
+            dropped.insert(0, self.blocks.pop())
+        return dropped
 
     def clear(self) -> None:
         """Drop every block (stop, reset, job error)."""

@@ -82,7 +82,16 @@ class MachineChannelHost:
         return (self.m.main_spindle or name) if name == "S" else name
 
     def block_done(self, block_id: int, text: str) -> None:
-        self.m.log(Code.EV_BLOCK_DONE, "", text)
+        self.m.log(Code.EV_BLOCK_DONE, "", text, block=block_id)
+
+    def block_dropped(self, block_id: int, text: str, cause: Event) -> None:
+        self.m.log(
+            Code.EV_BLOCK_DROPPED,
+            "",
+            f"{text} (by {cause.code})",
+            block=block_id,
+            value=float(cause.seq),
+        )
 
     def channel_error(self, ev: Event | None) -> None:
         """A job error stops the program or the MDI blocks (nc_sim/channel `abort`)."""

@@ -114,4 +114,5 @@ class MachineCore(Protocol):
         column: int | None = None,
         signal: str | None = None,
         value: float | None = None,
+        block: int | None = None,
     ) -> Event: ...

@@ -371,6 +371,7 @@ class Machine:
         column: int | None = None,
         signal: str | None = None,
         value: float | None = None,
+        block: int | None = None,
     ) -> Event:
         """Record an error (its meaning, then the detail) or an event (its detail, which
         reads as a message of its own, else the meaning), numbered by the event log, with
@@ -391,6 +392,7 @@ class Machine:
             column=column,
             signal=signal,
             value=value,
+            block=block,
         )
         self.events.append(ev)
         return ev

@@ -45,7 +45,8 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/machines/{mid}/commands"): ("operator", HELD),
     ("POST", "/api/machines/{mid}/emergency-stop"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/control"): ("observer", FREE),
-    ("POST", "/api/machines/{mid}/control"): ("operator", FREE),
+    # observers may ask for control (with a message); taking, granting, releasing: operators
+    ("POST", "/api/machines/{mid}/control"): ("observer", FREE),
     ("GET", "/api/parameters"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/parameters"): ("observer", FREE),
     ("PATCH", "/api/machines/{mid}/parameters"): ("operator", HELD),
@@ -120,6 +121,21 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/machines/{mid}/assist/live/cancel"): ("operator", FREE),
     ("GET", "/api/machines/{mid}/audit"): ("observer", FREE),
     ("GET", "/api/machines/{mid}/audit.csv"): ("observer", FREE),
+    # the history: everyone who watches reads it, writes in its logbook, acknowledges errors
+    ("GET", "/api/machines/{mid}/history"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/history/export"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/history/notes"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/history/acknowledge"): ("observer", FREE),
+    # the flight recorder and bundles: read-only data; saving traces is the scope's right
+    ("GET", "/api/machines/{mid}/flight-recorder"): ("observer", FREE),
+    ("POST", "/api/machines/{mid}/flight-recorder/save"): ("observer", FREE),
+    ("GET", "/api/machines/{mid}/bundle"): ("observer", FREE),
+    ("POST", "/api/bundles"): ("observer", FREE),
+    ("GET", "/api/bundles"): ("observer", FREE),
+    ("GET", "/api/bundles/{bid}"): ("observer", FREE),
+    ("GET", "/api/bundles/{bid}/history"): ("observer", FREE),
+    ("GET", "/api/bundles/{bid}/lists/{name}"): ("observer", FREE),
+    ("DELETE", "/api/bundles/{bid}"): ("operator", FREE),
     ("GET", "/api/audit"): ("admin", FREE),
     ("GET", "/api/audit.csv"): ("admin", FREE),
     ("GET", "/api/audit/verify"): ("admin", FREE),
@@ -323,17 +339,21 @@ def test_the_viewer_proxy_needs_a_role_that_may_capture(
     assert r.status_code == 307  # an observer may open the viewer (watching traces)
 
 
-def test_an_observer_cannot_take_request_or_grant_control(
+def test_an_observer_cannot_take_grant_or_release_control(
     srv: tuple[Server, dict[str, str]],
 ) -> None:
+    """... but may ask its holder (test_control.py); a free machine has nobody to ask."""
     s, tokens = srv
-    for action in ("take", "request", "release"):
+    for action in ("take", "grant", "refuse", "release", "request"):
         r = s.http.post(
             f"/api/machines/{MACHINE}/control",
             json={"action": action},
             headers={"Authorization": f"Bearer {tokens['olga']}"},
         )
-        assert r.status_code == 403
+        if action == "request":
+            assert r.status_code == 409 and "nobody holds" in r.text
+        else:
+            assert r.status_code == 403 and "may not take or hand over control" in r.text
 
 
 def test_a_refusal_says_the_action_in_words_and_the_role_it_takes(

@@ -45,12 +45,12 @@ def test_created_restarted_and_restored_machines_know_their_faults_at_once(
         faults: list[tuple[Fault, Trigger]] = [(MotorInverted("X"), NOW), (PlcSlowAck(8.0), ARMED)]
         service.create(MachineCreate(id="m", name="m", demo=True), faults=faults)
         assert kinds(service, "m") == [(1, "motor_inverted", True), (2, "plc_slow_ack", False)]
-        service.restart("m")  # a power cycle: injected again, the armed one armed again
+        service.restart("m", "test")  # a power cycle: injected again, the armed one armed again
         assert kinds(service, "m") == [(1, "motor_inverted", True), (2, "plc_slow_ack", False)]
         m = service.get("m")
         worker: WorkerClient = m.link.worker  # type: ignore[assignment]
         snap = worker.call(TakeSnapshot("m"))
         service.create(MachineCreate(id="n", name="n", demo=True))
         assert kinds(service, "n") == []
-        service.restore("n", snap.data, snap.params)  # type: ignore[attr-defined]
+        service.restore("n", snap.data, snap.params, "test")  # type: ignore[attr-defined]
         assert kinds(service, "n") == [(1, "motor_inverted", True), (2, "plc_slow_ack", False)]

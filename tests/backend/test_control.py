@@ -93,6 +93,33 @@ def test_a_request_granted_moves_control_and_a_refused_one_does_not(
     assert command(srv, otto, mid, {"type": "reset"}).status_code == 403
 
 
+def test_an_observer_asks_with_a_message_but_is_never_granted_control(
+    srv: Server, mid: str, tokens: dict[str, str]
+) -> None:
+    """A remote observer may ask for the holder's attention with a word; the holder sees it,
+    can only answer it (granting would not let an observer command: 409, the request kept);
+    taking or releasing stays refused to observers, and the refusal is audited."""
+    otto, olga = tokens["otto"], tokens["olga"]
+    act(srv, otto, mid, "take").raise_for_status()
+    taken = act(srv, olga, mid, "take")
+    assert taken.status_code == 403 and "may not take or hand over control" in taken.text
+    asked = act(srv, olga, mid, "request", message="  may I watch S1 at 3000 rpm?  ").json()
+    party = asked["requests"][0]
+    assert (party["user"], party["message"]) == ("olga", "may I watch S1 at 3000 rpm?")
+    too_long = act(srv, olga, mid, "request", message="x" * 301)
+    assert too_long.status_code == 422
+    who = {"session": party["session"], "client": party["client"]}
+    granted = act(srv, otto, mid, "grant", **who)
+    assert granted.status_code == 409 and "may watch only" in granted.text
+    assert [r["user"] for r in state(srv, mid)["requests"]] == ["olga"]
+    assert act(srv, otto, mid, "refuse", **who).json()["requests"] == []
+    rows = srv.http.get(f"/api/machines/{mid}/history", params={"kind": "control"}).json()
+    texts = [(r["actor"], r["text"], r["outcome"]) for r in rows["rows"]]
+    assert ("olga", "requested control from otto (operator): “may I watch S1 at 3000 rpm?”",
+            "ok") in texts  # fmt: skip
+    assert any(a == "olga" and t == "take" and o.startswith("refused (403)") for a, t, o in texts)
+
+
 def test_an_instructor_takes_control_and_the_old_holders_jog_stops(
     srv: Server, mid: str, tokens: dict[str, str]
 ) -> None:

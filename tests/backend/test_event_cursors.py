@@ -17,6 +17,7 @@ from fastapi import WebSocket
 from api.commands import EmergencyStopCommand
 from backend.services.audit import Audit
 from backend.services.commands import execute
+from backend.services.history import History
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.status import RECENT_EVENTS, machine_status
 from backend.services.telemetry import TelemetryHub
@@ -44,7 +45,15 @@ def test_an_active_job_error_keeps_its_event_after_the_log_dropped_it(
     service: MachineService,
 ) -> None:
     host = paused_demo(service, "m")
-    stop = asyncio.run(execute(INSTRUCTOR, host, EmergencyStopCommand(), Audit(service.store)))
+    stop = asyncio.run(
+        execute(
+            INSTRUCTOR,
+            host,
+            EmergencyStopCommand(),
+            Audit(service.store),
+            History(service.store, 1.0, 1000),
+        )
+    )
     step(host, 10)
     _flood(host, EVENT_LOG_LEN + 100)
     step(host, 10)

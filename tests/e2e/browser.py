@@ -32,8 +32,7 @@ WORKSPACES = [
     "Drive tuning",
     "Service",
     "HLI / PLC",
-    "Events",
-    "Audit",
+    "History",
 ]
 SHOTS = Path(__file__).resolve().parent / "screenshots"
 # The tests' pages redraw their live plots 10 times a second (the HMI's "Refresh" choice, kept in

@@ -22,7 +22,7 @@ def test_no_request_ever_goes_to_an_empty_machine_id(browser: Browser, srv: Serv
     page.on("request", lambda r: urls.append(r.url))
     page.goto(srv.base + "/")
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
-    for tab in ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "Events", "Operate"]:
+    for tab in ["Operate", "Plots", "Scope", "Parameters", "HLI / PLC", "History", "Operate"]:
         page.get_by_test_id(f"tab-{tab}").click()
         page.wait_for_timeout(200)
     empty = [u for u in urls if re.search(r"/api/machines/(/|\?|$)", u)]
@@ -91,7 +91,7 @@ def test_trial_survives_a_visit_to_operate_and_reverts(page: Page, srv: Server, 
     shot(page, "parameters-trial-operate-desktop")
     page.get_by_test_id("tab-Parameters").click()
     expect(bar.get_by_test_id("param-trial")).to_be_visible()
-    page.get_by_test_id("tab-Events").click()
+    page.get_by_test_id("tab-History").click()
     bar.get_by_test_id("param-revert").click()  # from any workspace
     expect(bar.get_by_test_id("param-trial")).to_be_hidden()
     expect(bar.get_by_test_id("trial-message")).to_contain_text("Reverted 1 value")
@@ -140,8 +140,8 @@ def test_events_read_as_words(page: Page) -> None:
     jog = panel(page, "jog")
     jog.get_by_test_id("jog-axis-X").check()
     jog.get_by_test_id("jog-step-plus").click()
-    page.get_by_test_id("tab-Events").click()
-    table = panel(page, "events").get_by_test_id("event-table")
+    page.get_by_test_id("tab-History").click()
+    table = panel(page, "history").get_by_test_id("history-table")
     done = table.locator("tr", has_text="motion done")
     expect(done.first).to_contain_text("18")
     messages = table.locator("tbody td:nth-child(5)").all_inner_texts()

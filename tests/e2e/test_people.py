@@ -58,9 +58,14 @@ def test_control_passes_from_one_operator_to_another_on_request(
     expect(strip_b.get_by_test_id("control-take")).to_have_count(0)  # operators ask
 
     strip_b.get_by_test_id("control-request").click()
+    strip_b.get_by_test_id("control-request-message").fill("to check the X feed, 5 min")
+    strip_b.get_by_test_id("control-request-send").click()
     expect(strip_b.get_by_test_id("control-requested")).to_be_visible()
     incoming = strip_a.get_by_test_id("control-incoming")
     expect(incoming).to_contain_text("ben (operator) asks for control")
+    expect(incoming.get_by_test_id("control-request-said")).to_have_text(
+        "to check the X feed, 5 min"
+    )
     incoming.get_by_test_id("control-grant").click()
 
     expect(strip_b.get_by_test_id("control-holder")).to_have_text("You have control")
@@ -86,7 +91,7 @@ def test_an_observer_never_gets_a_command_button(browser: Browser, srv: Server, 
             "title", re.compile("observer may not command")
         )
         expect(p.get_by_test_id("estop")).to_be_disabled()  # observers only watch
-        expect(strip.get_by_role("button")).to_have_count(0)  # nothing to take or request
+        expect(strip.get_by_role("button")).to_have_count(0)  # nothing to take
         # the scope's recording is an operator's: disabled with the reason, before it is tried
         p.get_by_test_id("tab-Scope").click()
         record = panel(p, "scope-setup").get_by_test_id("recording-start")
@@ -94,6 +99,46 @@ def test_an_observer_never_gets_a_command_button(browser: Browser, srv: Server, 
         expect(record).to_have_attribute("title", re.compile("takes the role operator"))
     finally:
         p.close()
+
+
+def test_a_remote_observer_asks_for_control_and_writes_in_the_logbook(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    """Ole watches from afar while Ana works: his request with a message reaches her (she can
+    only answer it: an observer is never granted control), and his logbook entry appears in
+    her history as he writes it, under his name."""
+    a = open_hmi(browser, srv.base, mid, user=ANA, password=PASSWORD)
+    o = open_hmi(browser, srv.base, mid, user=OLE, password=PASSWORD)
+    try:
+        a.get_by_test_id("control-strip").get_by_test_id("control-take").click()
+        a.get_by_test_id("tab-History").click()
+        strip_o = o.get_by_test_id("control-strip")
+        expect(strip_o.get_by_test_id("control-holder")).to_have_text("ana (operator) has control")
+        strip_o.get_by_test_id("control-request").click()
+        strip_o.get_by_test_id("control-request-message").fill("may I see S1 at 3000 rpm?")
+        strip_o.get_by_test_id("control-request-send").click()
+        expect(strip_o.get_by_test_id("control-requested")).to_be_visible()
+        incoming = a.get_by_test_id("control-strip").get_by_test_id("control-incoming")
+        expect(incoming).to_contain_text("ole (observer) asks for control")
+        expect(incoming.get_by_test_id("control-request-said")).to_have_text(
+            "may I see S1 at 3000 rpm?"
+        )
+        expect(incoming.get_by_test_id("control-grant")).to_have_count(0)
+        incoming.get_by_test_id("control-refuse").click()  # "Answered"
+        expect(incoming).to_have_count(0)
+
+        o.get_by_test_id("tab-History").click()
+        logbook = panel(o, "history")
+        logbook.get_by_test_id("history-note-input").fill("replaced the encoder cable of X")
+        logbook.get_by_test_id("history-note-add").click()
+        rows = panel(a, "history").get_by_test_id("history-row")
+        note = rows.filter(has_text="replaced the encoder cable of X")
+        expect(note.get_by_test_id("history-actor-cell")).to_have_text(OLE)  # live, no reload
+        asked = rows.filter(has_text="may I see S1 at 3000 rpm?")
+        expect(asked.get_by_test_id("history-actor-cell")).to_have_text(OLE)
+    finally:
+        a.close()
+        o.close()
 
 
 def open_kv(p: Page) -> None:
@@ -164,35 +209,41 @@ def test_the_audit_panel_shows_who_commanded_filters_and_exports(
     mdi.get_by_test_id("mdi-input").fill("M3 S20000")  # above the spindle's maximum: 90017
     mdi.get_by_test_id("mdi-send").click()
     expect(mdi.get_by_test_id("mdi-refusal")).to_contain_text("90017")
-    a.get_by_test_id("tab-Audit").click()
-    audit = panel(a, "audit")
-    step = audit.get_by_test_id("audit-row").filter(has_text="jog axis=X action=step")
+    a.get_by_test_id("tab-History").click()
+    history = panel(a, "history")
+    step = history.get_by_test_id("history-row").filter(has_text="jog axis=X action=step")
     expect(step).to_have_count(1)
-    expect(step.get_by_test_id("audit-actor-cell")).to_have_text(ANA)
-    expect(step.get_by_test_id("audit-kind-cell")).to_have_text("command")
-    expect(step.get_by_test_id("audit-outcome-cell")).to_have_text("ok")
-    refused = audit.get_by_test_id("audit-row").filter(has_text="mdi block=M3 S20000")
-    expect(refused).to_have_class("refused")  # marked, with the reason
-    expect(refused.get_by_test_id("audit-outcome-cell")).to_contain_text("✗ refused (409)")
-    took = audit.get_by_test_id("audit-row").filter(has_text="took control")
+    expect(step.get_by_test_id("history-actor-cell")).to_have_text(ANA)
+    expect(step.get_by_test_id("history-kind-cell")).to_have_text("command")
+    expect(step.get_by_test_id("history-outcome-cell")).to_have_text("ok")
+    refused = history.get_by_test_id("history-row").filter(has_text="mdi block=M3 S20000")
+    expect(refused).to_have_class(re.compile(r"\bwarning\b"))  # marked, with the reason
+    expect(refused.get_by_test_id("history-outcome-cell")).to_contain_text("✗ refused (409)")
+    # the NC's own entry of the same moment: the job error the refused block raised
+    raised = history.get_by_test_id("history-row").filter(has_text="90017")
+    expect(raised.filter(has_text="spindle speed out of reach").first).to_have_class(
+        re.compile(r"\berror\b")
+    )
+    took = history.get_by_test_id("history-row").filter(has_text="took control")
     expect(took).to_have_count(1)  # the step took the free machine first
 
-    audit.get_by_test_id("audit-kind").select_option("control")
+    history.get_by_test_id("history-kind").select_option("control")
     expect(step).to_have_count(0)
     expect(took).to_have_count(1)
-    kinds = audit.get_by_test_id("audit-kind-cell").all_inner_texts()
+    kinds = history.get_by_test_id("history-kind-cell").all_inner_texts()
     assert kinds and set(kinds) == {"control"}
 
-    audit.get_by_test_id("audit-kind").select_option("command")
+    history.get_by_test_id("history-kind").select_option("commands")
     expect(step).to_have_count(1)
-    href = audit.get_by_test_id("audit-csv").get_attribute("href")
+    href = history.get_by_test_id("history-csv").get_attribute("href")
     assert href and "kind=command" in href
     r = a.request.get(srv.base + href)  # with Ana's session, as the link would be followed
     assert r.ok and r.headers["content-type"].startswith("text/csv")
+    assert f'filename="{mid}_history_' in r.headers["content-disposition"]
     rows = list(csv.DictReader(io.StringIO(r.text())))
     assert {row["kind"] for row in rows} == {"command"}
-    mine = [row for row in rows if row["action"].startswith("jog axis=X action=step")]
-    assert len(mine) == 1 and mine[0]["actor"] == ANA and mine[0]["machine"] == mid
+    mine = [row for row in rows if row["text"].startswith("jog axis=X action=step")]
+    assert len(mine) == 1 and mine[0]["actor"] == ANA and mine[0]["outcome"] == "ok"
 
 
 def test_the_same_user_in_another_tab_takes_over_here(

@@ -52,14 +52,14 @@ def test_a_reset_emergency_stop_leaves_no_banner_now_or_for_the_next_login(
         a.get_by_test_id("reset").click()  # Ana holds control: she resets
         expect(banner).to_be_hidden()
         both_sizes(a, "estop-reset-no-banner")
-        a.get_by_test_id("tab-Events").click()  # the history stays
-        expect(panel(a, "events").get_by_test_id("event-table")).to_contain_text("90005")
+        a.get_by_test_id("tab-History").click()  # the history stays
+        expect(panel(a, "history").get_by_test_id("history-table")).to_contain_text("90005")
     finally:
         a.close()
     b = as_user(browser, srv, mid, BEN)  # a login afterwards gets the newest events ...
     try:
-        b.get_by_test_id("tab-Events").click()
-        expect(panel(b, "events").get_by_test_id("event-table")).to_contain_text("90005")
+        b.get_by_test_id("tab-History").click()
+        expect(panel(b, "history").get_by_test_id("history-table")).to_contain_text("90005")
         expect(b.get_by_test_id("banner-error")).to_have_count(0)  # ... but no banner
     finally:
         b.close()
@@ -91,6 +91,7 @@ def test_a_refused_request_and_control_taken_away_are_told(
         strip_a.get_by_test_id("control-take").click()
         expect(strip_b.get_by_test_id("control-holder")).to_have_text("ana (operator) has control")
         strip_b.get_by_test_id("control-request").click()
+        strip_b.get_by_test_id("control-request-send").click()
         strip_a.get_by_test_id("control-incoming").get_by_test_id("control-refuse").click()
         note_b = strip_b.get_by_test_id("control-note")
         expect(note_b).to_contain_text("ana (operator) refused your request, or it lapsed")
@@ -130,6 +131,7 @@ def test_releasing_or_granting_control_is_no_news_and_clears_old_news(
         expect(bar.get_by_test_id("trial-message")).to_contain_text("✓ Kept 1 value")
         expect(strip_b.get_by_test_id("control-holder")).to_have_text("ana (operator) has control")
         strip_b.get_by_test_id("control-request").click()
+        strip_b.get_by_test_id("control-request-send").click()
         strip_a.get_by_test_id("control-incoming").get_by_test_id("control-grant").click()
         expect(strip_b.get_by_test_id("control-holder")).to_have_text("You have control")
         expect(bar).to_have_count(0)  # "Kept" was news to the holder before
@@ -167,14 +169,14 @@ def test_the_audit_user_filter_applies_while_typing(
     a = as_user(browser, srv, mid, ANA)
     try:
         a.get_by_test_id("control-strip").get_by_test_id("control-take").click()
-        a.get_by_test_id("tab-Audit").click()
-        audit = panel(a, "audit")
-        actors = audit.get_by_test_id("audit-actor-cell")
+        a.get_by_test_id("tab-History").click()
+        history = panel(a, "history")
+        actors = history.get_by_test_id("history-actor-cell")
         expect(actors.filter(has_text=USER).first).to_be_visible()  # the machine's creation
-        audit.get_by_test_id("audit-actor").press_sequentially("an", delay=50)  # part of "ana"
+        history.get_by_test_id("history-actor").press_sequentially("an", delay=50)  # of "ana"
         poll(lambda: set(actors.all_inner_texts()) == {ANA}, "only Ana's rows")
-        audit.get_by_test_id("audit-text").press_sequentially("took", delay=50)
-        expect(audit.get_by_test_id("audit-row")).to_have_count(1)
-        expect(audit.get_by_test_id("audit-action-cell")).to_contain_text("took control")
+        history.get_by_test_id("history-text").press_sequentially("took", delay=50)
+        expect(history.get_by_test_id("history-row")).to_have_count(1)
+        expect(history.get_by_test_id("history-text-cell")).to_contain_text("took control")
     finally:
         a.close()

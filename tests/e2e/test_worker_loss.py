@@ -47,7 +47,7 @@ def test_a_killed_worker_shows_a_rebuilt_banner_and_the_machine_goes_on(
     shot(page, "worker-lost-desktop")
     banner.get_by_role("button", name="Dismiss").click()
     expect(banner).to_have_count(0)
-    # the event log starts again with the machine's new life, the rebuild its oldest entry
-    page.get_by_test_id("tab-Events").click()
-    rows = panel(page, "events").locator("tbody tr")
-    expect(rows.last).to_contain_text("rebuilt from its stored parameters")
+    # the history marks the machine's new life: powered on again, rebuilt, and why
+    page.get_by_test_id("tab-History").click()
+    power = panel(page, "history").get_by_test_id("history-row").filter(has_text="powered on")
+    expect(power.first).to_contain_text("rebuilt: its worker")

@@ -1,11 +1,9 @@
-// The audit trail: who did what to this machine (or, for admins, to the whole service: logins
-// and failed logins too), newest first, filtered; older pages on demand; the same filter as
-// CSV; the hash chain's check.
+// The whole service's audit trail, for admins: who did what to any machine, and logins,
+// failed logins, users and tokens, newest first, filtered; older pages on demand; the same
+// filter as CSV; the hash chain's check. (A machine's own rows are in its History.)
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { AuditKind, AuditPage, AuditRecord, AuditVerification } from "../api/types";
-import { may } from "../state/control";
-import { machineId } from "../state/session";
 import { Panel } from "../ui/Panel";
 
 const PAGE = 100;
@@ -42,7 +40,6 @@ interface Filter {
   actor: string;
   text: string;
   back_s: number;
-  service: boolean; // the whole service's trail (admins)
 }
 
 /** The query of a filter (since is counted back from now, when the query is made). */
@@ -55,7 +52,6 @@ function query(f: Filter): URLSearchParams {
   return q;
 }
 
-const base = (f: Filter) => (f.service ? "/api/audit" : `/api/machines/${encodeURIComponent(machineId.value)}/audit`);
 
 const when = (t: number) => {
   const d = new Date(t * 1000);
@@ -63,12 +59,11 @@ const when = (t: number) => {
 };
 
 export function AuditPanel() {
-  const [f, setF] = useState<Filter>({ kind: "", actor: "", text: "", back_s: 0, service: false });
+  const [f, setF] = useState<Filter>({ kind: "", actor: "", text: "", back_s: 0 });
   const [rows, setRows] = useState<AuditRecord[]>([]);
   const [total, setTotal] = useState(0);
   const [error, setError] = useState("");
   const [verified, setVerified] = useState<AuditVerification | null>(null);
-  const admin = may("users");
   // the user and text fields as typed; the filter follows them once typing pauses
   const [typed, setTyped] = useState({ actor: "", text: "" });
   useEffect(() => {
@@ -77,12 +72,11 @@ export function AuditPanel() {
   }, [typed.actor, typed.text]);
 
   async function load(older: boolean) {
-    if (!machineId.value) return;
     const q = query(f);
     q.set("limit", String(PAGE));
     if (older && rows.length) q.set("before_seq", String(rows[rows.length - 1].seq));
     try {
-      const page = await http.get<AuditPage>(`${base(f)}?${q}`);
+      const page = await http.get<AuditPage>(`/api/audit?${q}`);
       setRows(older ? [...rows, ...page.rows] : page.rows);
       setTotal(page.total);
       setError("");
@@ -91,7 +85,7 @@ export function AuditPanel() {
     }
   }
 
-  useEffect(() => void load(false), [f, machineId.value]);
+  useEffect(() => void load(false), [f]);
 
   async function verify() {
     try {
@@ -102,15 +96,14 @@ export function AuditPanel() {
   }
 
   const set = (patch: Partial<Filter>) => setF({ ...f, ...patch });
-  const csv = machineId.value ? `${base(f)}.csv?${query(f)}` : "#";
   return (
-    <Panel title={f.service ? "Audit: whole service" : `Audit: machine ${machineId.value}`} id="audit">
+    <Panel title="Audit trail: whole service" id="audit">
       <div class="row audit-filters">
         <label>
           Kind{" "}
           <select data-testid="audit-kind" value={f.kind} onChange={(e) => set({ kind: (e.target as HTMLSelectElement).value as AuditKind })}>
             <option value="">all</option>
-            {KINDS.filter((k) => f.service || !k.startsWith("log")).map((k) => (
+            {KINDS.map((k) => (
               <option key={k} value={k}>
                 {k}
               </option>
@@ -138,25 +131,15 @@ export function AuditPanel() {
             ))}
           </select>
         </label>
-        {admin ? (
-          <label title="every machine, and logins, failed logins, users and tokens">
-            <input type="checkbox" data-testid="audit-service" checked={f.service}
-              onChange={(e) => set({ service: (e.target as HTMLInputElement).checked, kind: "" })} />{" "}
-            whole service
-          </label>
-        ) : null}
         <button type="button" class="secondary" data-testid="audit-refresh" onClick={() => void load(false)}>
           Refresh
         </button>
-        <a class="button secondary" data-testid="audit-csv" href={csv}
-          download={f.service ? "audit.csv" : `audit-${machineId.value}.csv`}>
+        <a class="button secondary" data-testid="audit-csv" href={`/api/audit.csv?${query(f)}`} download="audit.csv">
           Export CSV
         </a>
-        {admin ? (
-          <button type="button" class="secondary" data-testid="audit-verify" onClick={() => void verify()}>
-            Verify chain
-          </button>
-        ) : null}
+        <button type="button" class="secondary" data-testid="audit-verify" onClick={() => void verify()}>
+          Verify chain
+        </button>
       </div>
       {verified ? (
         <p class={verified.ok ? "audit-verified ok" : "audit-verified bad"} data-testid="audit-verification" role="status">
@@ -174,7 +157,7 @@ export function AuditPanel() {
             <tr>
               <th>Time</th>
               <th>User</th>
-              {f.service ? <th>Machine</th> : null}
+              <th>Machine</th>
               <th>Kind</th>
               <th>Action</th>
               <th>Outcome</th>
@@ -187,7 +170,7 @@ export function AuditPanel() {
                 <tr key={r.seq} data-testid="audit-row" data-seq={r.seq} data-kind={r.kind} class={refused ? "refused" : ""}>
                   <td class="num">{when(r.time_unix)}</td>
                   <td data-testid="audit-actor-cell">{r.actor}</td>
-                  {f.service ? <td>{r.machine || "—"}</td> : null}
+                  <td>{r.machine || "—"}</td>
                   <td data-testid="audit-kind-cell">{r.kind}</td>
                   <td class="wrap" data-testid="audit-action-cell">{r.action}</td>
                   <td class="wrap" data-testid="audit-outcome-cell">{refused ? <b>✗ {r.outcome}</b> : "ok"}</td>

@@ -4,7 +4,9 @@
 // newest job error still active, until dismissed (hidden only) or cleared by a reset.
 import type { NoticeMessage } from "../api/types";
 import { dismissBanner, bannerErrors } from "../state/events";
-import { connection, dismissNotice, frozen, notices } from "../state/session";
+import { http } from "../api/http";
+import { may } from "../state/control";
+import { connection, dismissNotice, frozen, machineId, notices } from "../state/session";
 import { qty } from "../ui/format";
 import { LiveProgress } from "./LiveProgress";
 
@@ -39,11 +41,20 @@ export function Banner({ liveRun }: { liveRun: boolean }) {
             {more.length ? ` (+${more.length} more active)` : ""}
           </span>
           <span class="banner-detail"> Reset clears it.</span>
-          <button onClick={dismissBanner} title="Hide this banner: the error stays active until Reset">Dismiss</button>
+          <button onClick={acknowledge} title="Hide this banner; the machine's history records that you saw it. The error stays active until Reset">
+            Dismiss
+          </button>
         </div>
       ) : null}
     </div>
   );
+}
+
+/** Hide the banner's errors and, for whoever may write in the logbook, put down in the
+ * history who saw them (nothing is lost if that fails: the banner hides all the same). */
+function acknowledge(): void {
+  dismissBanner();
+  if (may("note")) void http.post(`/api/machines/${encodeURIComponent(machineId.value)}/history/acknowledge`, {}).catch(() => undefined);
 }
 
 function noticeText(n: NoticeMessage): string {

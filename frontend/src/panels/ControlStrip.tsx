@@ -1,8 +1,9 @@
 // Who holds the machine on screen, under the top bar: free, this tab, this session in another
 // tab, or someone else; the way to ask for it, take it, hand it over or give it back; a
 // holder without a live connection (a closed tab, a script) counting down to the release; what
-// happened to this tab's control or request meanwhile (refused, taken, lapsed). A student
-// of a frozen class seat is offered nothing: the strip says why.
+// happened to this tab's control or request meanwhile (refused, taken, lapsed). A request
+// carries a word to the holder; observers may ask too (to be heard: they cannot be granted
+// control). A student of a frozen class seat is offered nothing: the strip says why.
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ControlParty, Refusal } from "../api/types";
@@ -14,13 +15,17 @@ import { RefusalLine } from "../ui/useCommand";
 export function ControlStrip() {
   const c = control.value;
   const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const [asking, setAsking] = useState<string | null>(null); // the request's message, as typed
   if (!c) return null;
   const h = c.holder;
   const st = standing.value;
   const dis = !online.value;
-  const run = (action: Parameters<typeof act>[0], party?: ControlParty) =>
-    act(action, party).then(
-      () => setRefusal(null),
+  const run = (action: Parameters<typeof act>[0], party?: ControlParty, message?: string) =>
+    act(action, party, message).then(
+      () => {
+        setRefusal(null);
+        if (action === "request") setAsking(null);
+      },
       (e: unknown) => setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
     );
   const button = (id: string, label: string, action: Parameters<typeof act>[0], party?: ControlParty, title = "") => (
@@ -66,25 +71,43 @@ export function ControlStrip() {
           {st === "other" && may("take_control")
             ? button("control-take", "Take control", "take", undefined, `take it from ${who(h!)} without asking`)
             : null}
-          {st === "other" && !may("take_control") && !requested.value
-            ? button("control-request", "Request control", "request", undefined, `ask ${who(h!)} to hand it over`)
-            : null}
-          {st === "other" && requested.value ? (
-            <>
-              <span class="hint" data-testid="control-requested">
-                requested…
-              </span>
-              {button("control-cancel", "Cancel request", "cancel")}
-            </>
-          ) : null}
+        </span>
+      ) : null}
+      {st === "other" && !waiting && !may("take_control") && !requested.value ? (
+        asking === null ? (
+          <button type="button" class="secondary" data-testid="control-request" disabled={dis}
+            title={may("control") ? `ask ${who(h!)} to hand it over` : `ask ${who(h!)} for their attention (you may watch only)`}
+            onClick={() => setAsking("")}>
+            {may("control") ? "Request control…" : "Ask for control…"}
+          </button>
+        ) : (
+          <form class="control-ask" onSubmit={(e) => { e.preventDefault(); void run("request", undefined, asking); }}>
+            <input data-testid="control-request-message" maxLength={300} size={32} value={asking} aria-label={`a word to ${who(h!)}`}
+              placeholder="why, for how long (optional)" onInput={(e) => setAsking((e.target as HTMLInputElement).value)} />
+            <button type="submit" data-testid="control-request-send" disabled={dis}>
+              Send request
+            </button>
+            <button type="button" class="secondary" onClick={() => setAsking(null)}>
+              Cancel
+            </button>
+          </form>
+        )
+      ) : null}
+      {st === "other" && requested.value ? (
+        <span class="control-actions">
+          <span class="hint" data-testid="control-requested">
+            requested…
+          </span>
+          {button("control-cancel", "Cancel request", "cancel")}
         </span>
       ) : null}
       {st === "mine"
         ? (c.requests ?? []).map((r) => (
             <span class="control-request" data-testid="control-incoming" key={`${r.session}/${r.client}`}>
-              <b>{who(r)}</b> asks for control
-              {button("control-grant", "Grant", "grant", r)}
-              {button("control-refuse", "Refuse", "refuse", r)}
+              <b>{who(r)}</b> asks for control{r.message ? <q data-testid="control-request-said">{r.message}</q> : null}
+              {r.role === "observer" ? null : button("control-grant", "Grant", "grant", r)}
+              {button("control-refuse", r.role === "observer" ? "Answered" : "Refuse", "refuse", r,
+                r.role === "observer" ? "an observer may watch only: this closes the request" : "")}
             </span>
           ))
         : null}

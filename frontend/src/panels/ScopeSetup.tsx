@@ -19,7 +19,8 @@ import {
 import { online, status } from "../state/session";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
-import { may } from "../state/control";
+import { may, standing } from "../state/control";
+import { me } from "../state/auth";
 import { SignalPicker } from "../ui/SignalPicker";
 
 const EVENTS: [EventTrigger["event"], string][] = [
@@ -89,20 +90,27 @@ export function ScopeSetup() {
   const num = (e: Event) => Number((e.target as HTMLInputElement).value);
   const state = st?.state ?? "idle";
   const fill = st && st.length_cycles ? Math.min(1, st.filled_cycles / st.length_cycles) : 0;
+  // the scope is whoever armed it while it records: another's is never silently replaced
+  const owner = st?.armed_by ?? null;
+  const busy = state === "armed" || state === "triggered" || state === "roll";
+  const others = busy && owner !== null && !owner.startsWith(`${me.value?.name ?? ""} (`);
+  const mayTakeOver = may("take_control") || standing.value === "mine";
+  const notYours = others ? `the scope is ${owner}'s and still records${mayTakeOver ? "" : ": ask them (the control holder, an instructor or an admin may take it over)"}` : "";
 
   return (
     <Panel title="Scope" id="scope-setup">
       <div class="scope-form">
         {/* the keys first: the signal picker opens downward over what follows it */}
         <div class="scope-buttons">
-          <button type="button" class="primary" data-testid="scope-arm" disabled={!online.value || !draft.channels.length}
-            onClick={() => void run(() => arm(draft.mode === "roll" ? { ...draft, trigger: null } : draft))}>
-            {draft.mode === "roll" ? "▶ Roll" : "◉ Arm"}
+          <button type="button" class="primary" data-testid="scope-arm" disabled={!online.value || !draft.channels.length || (others && !mayTakeOver)}
+            title={notYours} onClick={() => void run(() => arm(draft.mode === "roll" ? { ...draft, trigger: null } : draft, others))}>
+            {others ? "Take over and arm" : draft.mode === "roll" ? "▶ Roll" : "◉ Arm"}
           </button>
-          <button type="button" data-testid="scope-force" disabled={state !== "armed"} onClick={() => void run(force)}>
+          <button type="button" data-testid="scope-force" disabled={state !== "armed" || (others && !mayTakeOver)} title={notYours} onClick={() => void run(force)}>
             ⚡ Force
           </button>
-          <button type="button" data-testid="scope-stop" disabled={state === "idle" || state === "done"} onClick={() => void run(stop)}>
+          <button type="button" data-testid="scope-stop" disabled={state === "idle" || state === "done" || (others && !mayTakeOver)} title={notYours}
+            onClick={() => void run(stop)}>
             ■ Stop
           </button>
         </div>
@@ -113,6 +121,13 @@ export function ScopeSetup() {
               {" "}· {st.length_cycles} NC cycles, {st.pre_cycles} before the trigger
               {st.setup.rate === "drive" ? ", every drive step of them sampled" : ""}
               {state === "armed" || state === "roll" ? ` · history ${Math.round(fill * 100)} %` : ""}
+            </span>
+          ) : null}
+          {owner && state !== "idle" ? (
+            <span data-testid="scope-owner" class={others ? "scope-others" : ""}>
+              {" "}· armed by {others ? owner : "you"}
+              {st?.armed_unix ? ` at ${new Date(st.armed_unix * 1000).toLocaleTimeString()}` : ""}
+              {others ? ` (their setup: ${st?.setup?.channels.join(", ") ?? ""})` : ""}
             </span>
           ) : null}
         </div>

@@ -53,9 +53,9 @@ export const configureBlocked = computed(() => blockedWhy("configure"));
 
 /** Take, request, cancel, grant, refuse or release; rejects with the refusal (ApiError). The
  * answer is shown at once; the pushed status confirms it. */
-export async function act(action: ControlAction["action"], party?: ControlParty): Promise<void> {
+export async function act(action: ControlAction["action"], party?: ControlParty, message?: string): Promise<void> {
   ownVerb = action; // what follows from it is no news to this tab
-  const body: ControlAction = { action, session: party?.session ?? null, client: party?.client ?? null };
+  const body: ControlAction = { action, session: party?.session ?? null, client: party?.client ?? null, message: message ?? null };
   const state = await http.post<ControlState>(machineUrl("/control"), body);
   const st = status.value;
   if (st && state.seq >= (st.control?.seq ?? 0)) status.value = { ...st, control: state };

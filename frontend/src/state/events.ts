@@ -12,15 +12,12 @@ export const dismissed = signal<ReadonlySet<string>>(new Set());
 
 export const keyOf = (e: JobError) => `${e.cycle}:${e.code}:${e.axis}`;
 
-/** The machine was rebuilt (its worker died) or restored from a snapshot: its time starts
- * again or goes back, so the log starts again too, with the notice as its first entry. */
-export function restartLog(message: string): void {
+/** The machine was powered on again (rebuilt, the service restarted) or restored from a
+ * snapshot: its time starts again or goes back, so the log starts again too. */
+export function restartLog(): void {
   events.value = [];
   seen.clear();
   dismissed.value = new Set();
-  addEvents([
-    { cycle: 0, t_s: 0, axis: "", code: 0, message, error: false, seq: null, m: null, gear: null, line: null, column: null, signal: null, value: null },
-  ]);
 }
 
 export function addEvents(list: JobError[]): void {

@@ -33,6 +33,7 @@ const DEFAULT_SETUP: ScopeSetup = {
   pretrigger_pct: 20,
   mode: "single",
   trigger: { type: "event", event: "m_start", axis: "S1", m: 19 },
+  take_over: false,
 };
 
 const key = () => `inbetrieb.scope.${machineId.value}`;
@@ -79,9 +80,11 @@ export async function pollScope(): Promise<void> {
   }
 }
 
-export async function arm(setup: ScopeSetup): Promise<void> {
-  saveDraft(setup);
-  scopeStatus.value = await http.put<ScopeStatus>(machineUrl("/scope"), setup);
+/** Arm with this setup; `takeOver` another person's scope that still records (the holder
+ * of control, instructors and admins may: the service refuses it otherwise). */
+export async function arm(setup: ScopeSetup, takeOver = false): Promise<void> {
+  saveDraft({ ...setup, take_over: false });
+  scopeStatus.value = await http.put<ScopeStatus>(machineUrl("/scope"), { ...setup, take_over: takeOver });
 }
 
 export async function force(): Promise<void> {

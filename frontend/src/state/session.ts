@@ -142,7 +142,7 @@ export async function startSession(): Promise<void> {
       const list = await http.get<MachineSummary[]>("/api/machines");
       if (!loggedIn.value) return; // logged out while the list was on its way
       machines.value = list;
-      const wanted = location.hash.slice(1);
+      const wanted = decodeURIComponent(location.hash.slice(1)).split("/")[0];
       machineId.value = machines.value.find((m) => m.id === wanted)?.id ?? machines.value[0]?.id ?? "";
       return;
     } catch {
@@ -168,7 +168,7 @@ export function selectMachine(id: string): void {
   status.value = null;
   forgetNotices();
   lastStatusMs = 0;
-  location.hash = id;
+  location.hash = encodeURIComponent(id); // the workspace is added again (state/route.ts)
 }
 
 /** Emergency stop: needs no control, whoever may stop stops (api/auth.py STOP). */

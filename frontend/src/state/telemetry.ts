@@ -11,6 +11,7 @@ import type {
   EventMessage,
   FrameHeader,
   Hello,
+  HistoryMessage,
   NoticeMessage,
   SignalInfo,
   StatusMessage,
@@ -20,6 +21,7 @@ import type {
 import { clientId, http } from "../api/http";
 import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
+import { addHistory } from "./history";
 import { Rings } from "./rings";
 import { machineId, noticeArrived, socket, statusArrived } from "./session";
 
@@ -96,7 +98,7 @@ function onFrame(buf: ArrayBuffer): void {
 }
 
 function onMessage(text: string): void {
-  const msg = JSON.parse(text) as Hello | Subscribed | EventMessage | StatusMessage | NoticeMessage | ErrorMessage;
+  const msg = JSON.parse(text) as Hello | Subscribed | EventMessage | StatusMessage | NoticeMessage | HistoryMessage | ErrorMessage;
   switch (msg.type) {
     case "hello":
       cycleS = msg.cycle_s;
@@ -108,12 +110,16 @@ function onMessage(text: string): void {
     case "event":
       addEvents([msg.event]);
       break;
+    case "history":
+      addHistory(msg.entries);
+      break;
     case "status":
       statusArrived(msg.status);
       break;
     case "notice":
-      // the machine's time starts again (rebuilt) or goes back (restored): so does the log
-      if (noticeArrived(msg) && (msg.kind === "rebuilt" || msg.kind === "restored")) restartLog(msg.message);
+      // the machine's time starts again (rebuilt, the service restarted) or goes back
+      // (restored): so does the event log (the history keeps what came before)
+      if (noticeArrived(msg) && msg.kind !== "message" && msg.kind !== "frozen" && msg.kind !== "resumed") restartLog();
       break;
     case "error":
       console.warn("telemetry:", msg.message);

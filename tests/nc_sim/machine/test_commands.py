@@ -130,6 +130,28 @@ def test_a_block_queued_behind_a_running_one_is_refused_and_the_one_before_runs_
     assert m.queued_blocks == 0 and m.k.st[m.axis("X").slot, L.S_P_CMD] == 60.0
 
 
+def test_a_queued_block_that_fails_later_names_itself_and_what_follows_it() -> None:
+    """A block accepted into the queue can still fail when it starts: M3 S20000 behind M3 S1500
+    is beyond the demo's top gear stage (M45 up to 7000 rpm), so it raises 90017 once S1500
+    is reached. The log says which blocks that error dropped (the failing one and the one
+    queued behind it, by the block ids their commands were answered with, the error's seq as
+    value), so the job error can be put down to the command that sent the block; the block
+    before them runs to its end."""
+    sim, m, _ = make()
+    ran, failing, behind = (m.submit(Mdi(b)) for b in ("M3 S1500", "M3 S20000", "G01 X60 F1000"))
+    assert all(isinstance(o, Accepted) for o in (ran, failing, behind))
+    record(sim, 3.0)
+    error = next(e for e in m.events if e.error)
+    assert error.code == Code.GEAR_NO_RANGE
+    dropped = [e for e in m.events if e.code == Code.EV_BLOCK_DROPPED]
+    assert [(e.block, e.value) for e in dropped] == [
+        (failing.block_id, error.seq),  # type: ignore[union-attr]
+        (behind.block_id, error.seq),  # type: ignore[union-attr]
+    ]
+    done = [e.block for e in m.events if e.code == Code.EV_BLOCK_DONE]
+    assert done == [ran.block_id]  # type: ignore[union-attr]
+
+
 def test_a_command_refused_by_its_precondition_is_refused() -> None:
     sim, m, _ = make()
     assert isinstance(m.submit(JogStart("X", 1)), Accepted)

@@ -1,0 +1,554 @@
+"""A machine's history: one timeline, kept in the store, of what happened to it and who did it.
+
+Two tables make it. The machine log (`machine_log`, here) holds what the NC and the service
+report: job errors (each put down to the command whose block raised it, where one did), the
+blocks a job error dropped, resets clearing errors, information events, power-ons (built,
+restarted, rebuilt after a worker died, restored), service starts and stops, notes and
+acknowledgements. The audit trail (audit.py) holds what people did: commands with their
+outcome, parameter, version and control changes. A page of the history reads both, merged by
+wall clock; every row has its wall clock, the machine's simulated time and build, and actor.
+
+The machine log is written by a thread of its own in batches (events come in bursts from the
+workers' push threads, which never wait for the disk) and pruned to its retention, days and
+rows per machine; the audit trail keeps its rows for ever. Viewers get the new entries of
+both live from a bounded tail per machine (the telemetry hub reads it by cursor).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import logging
+import queue
+import sqlite3
+import threading
+import time
+from collections import OrderedDict, deque
+from dataclasses import dataclass, field, replace
+from typing import cast
+
+from api.history import HistoryEntry, HistoryKind, Severity
+from backend import VERSION
+from backend.errors import Conflict
+from backend.services.audit_log import Entry
+from backend.services.machines import MachineProxy, MachineService
+from backend.services.store import Row, Store
+from nc_sim.errors import Code
+from nc_sim.events import Event
+
+log = logging.getLogger(__name__)
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS machine_log (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    machine TEXT NOT NULL,
+    time REAL NOT NULL,            -- wall clock, Unix time
+    sim_t_s REAL,                  -- the machine's simulated time (NULL: not running then)
+    epoch INTEGER,                 -- the machine's build
+    kind TEXT NOT NULL,            -- api/history.py LogKind, or 'command' for a dropped block
+    severity TEXT NOT NULL,        -- error | warning | info
+    actor TEXT NOT NULL,           -- '' for the NC itself
+    text TEXT NOT NULL,
+    outcome TEXT NOT NULL DEFAULT '',
+    code INTEGER,
+    axis TEXT NOT NULL DEFAULT '',
+    trace TEXT,                    -- a trace saved with it (flight recorder)
+    cause TEXT                     -- a job error: the command that raised it
+);
+CREATE INDEX IF NOT EXISTS machine_log_time ON machine_log (machine, time);
+"""
+_LOG_COLUMNS = (
+    "machine, time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis, trace, cause"
+)
+_ENTRY_COLUMNS = (
+    "time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis, trace, cause"
+)
+# both tables in the columns of a history entry (a machine's rows; `?` twice: the machine)
+_MERGED = """
+SELECT 'a' || seq AS id, 0 AS src, seq AS n, time, sim_t_s, epoch, kind,
+       CASE WHEN outcome = 'ok' THEN 'info' ELSE 'warning' END AS severity,
+       actor, action AS text, outcome, NULL AS code, '' AS axis, NULL AS trace, NULL AS cause
+FROM audit_log WHERE machine = ?
+UNION ALL
+SELECT 'h' || id, 1, id, time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis,
+       trace, cause
+FROM machine_log WHERE machine = ?
+"""
+MAX_PAGE = 1000
+EXPORT_ROWS = 100_000  # an export holds at most this many entries (the newest)
+TAIL = 256  # live entries kept per machine for viewers that fall behind
+BATCH_S = 0.1  # the writer gathers a burst this long
+PRUNE_EVERY_S = 60.0
+SENT_KEPT = 256  # MDI blocks per machine whose sender is remembered (to attribute errors)
+ROW_BYTES = 200  # about what a row takes on disk (measured in bench/history.py)
+
+
+@dataclass(frozen=True)
+class LogRow:
+    """A row for the machine log."""
+
+    machine: str
+    kind: HistoryKind
+    severity: Severity
+    text: str
+    actor: str = ""
+    sim_t_s: float | None = None
+    epoch: int | None = None
+    outcome: str = ""
+    code: int | None = None
+    axis: str = ""
+    trace: str | None = None
+    cause: str | None = None
+    time: float = field(default_factory=time.time)
+
+
+@dataclass(frozen=True)
+class HistoryFilter:
+    """Which entries: all given conditions hold."""
+
+    kinds: tuple[str, ...] = ()
+    severities: tuple[str, ...] = ()
+    actor: str | None = None  # part of the name, any case
+    since_unix: float | None = None
+    until_unix: float | None = None
+    text: str | None = None  # in the text, outcome or cause
+
+    def where(self) -> tuple[str, tuple[object, ...]]:
+        conds: list[str] = []
+        args: list[object] = []
+        for column, values in (("kind", self.kinds), ("severity", self.severities)):
+            if values:
+                conds.append(f"{column} IN ({', '.join('?' * len(values))})")
+                args += values
+        if self.actor:
+            conds.append("instr(lower(actor), ?) > 0")
+            args.append(self.actor.lower())
+        if self.since_unix is not None:
+            conds.append("time >= ?")
+            args.append(self.since_unix)
+        if self.until_unix is not None:
+            conds.append("time < ?")
+            args.append(self.until_unix)
+        if self.text:
+            conds.append("instr(lower(text || ' ' || outcome || ' ' || ifnull(cause, '')), ?) > 0")
+            args.append(self.text.lower())
+        return (" WHERE " + " AND ".join(conds) if conds else ""), tuple(args)
+
+
+def _entry(r: Row) -> HistoryEntry:
+    return HistoryEntry(
+        id=r["id"],
+        time_unix=r["time"],
+        sim_t_s=r["sim_t_s"],
+        epoch=r["epoch"],
+        kind=r["kind"],
+        severity=r["severity"],
+        actor=r["actor"],
+        text=r["text"],
+        outcome=r["outcome"],
+        code=r["code"],
+        axis=r["axis"],
+        trace=r["trace"],
+        cause=r["cause"],
+    )
+
+
+def _audit_entry(seq: int, e: Entry, stamp: tuple[int, float] | None) -> HistoryEntry:
+    return HistoryEntry(
+        id=f"a{seq}",
+        time_unix=e.time if e.time is not None else time.time(),
+        sim_t_s=stamp[1] if stamp else None,
+        epoch=stamp[0] if stamp else None,
+        kind=e.kind,
+        severity="info" if e.outcome == "ok" else "warning",
+        actor=e.actor,
+        text=e.action,
+        outcome=e.outcome,
+    )
+
+
+@dataclass
+class _Machine:
+    """What the history remembers of one machine to write its rows."""
+
+    tail: deque[tuple[int, HistoryEntry]] = field(default_factory=lambda: deque(maxlen=TAIL))
+    tail_seq: int = 0
+    sent: OrderedDict[tuple[int, int], tuple[str, str]] = field(default_factory=OrderedDict)
+    # the newest command per axis ('' the channel's): (epoch, text, actor)
+    last_command: dict[str, tuple[int, str, str]] = field(default_factory=dict)
+    last_actor: str = ""  # who sent the newest channel command (a reset clears errors)
+    active: list[str] = field(default_factory=list)  # job errors in force, as "90017 S1"
+    errors: OrderedDict[int, int] = field(default_factory=OrderedDict)  # seq → code, newest
+
+
+class History:
+    """Writing, reading and exporting machines' histories."""
+
+    def __init__(self, store: Store, days: float, rows_per_machine: int) -> None:
+        self.store = store
+        self.days, self.rows_per_machine = days, rows_per_machine
+        store.script(SCHEMA)
+        store.on_audited = self._audited
+        self._machines: dict[str, _Machine] = {}
+        self._lock = threading.Lock()
+        self._queue: queue.Queue[LogRow | None] = queue.Queue()
+        self._pruned = 0.0
+        self._writer = threading.Thread(target=self._write, name="history-writer", daemon=True)
+        self._writer.start()
+
+    def attach(self, machines: MachineService) -> None:
+        """Take every machine's events and power-ons, and stamp its audit rows with its
+        simulated time."""
+        machines.event_takers.append(self.events)
+        machines.on_power = self._powered
+        self.store.clock = machines.stamp
+
+    def _powered(self, proxy: MachineProxy, epoch: int, why: str, failure: bool) -> None:
+        self.power_on(proxy.id, epoch, why, "warning" if failure else "info")
+
+    def service_started(self, proxies: list[MachineProxy]) -> None:
+        """Mark the start in every machine's history, and tell its viewers that reconnect."""
+        when = time.strftime("%H:%M:%S UTC", time.gmtime())
+        ran = {r["machine"] for r in self.store.query("SELECT DISTINCT machine FROM machine_log")}
+        for p in proxies:
+            self.add(LogRow(p.id, "service", "warning", f"service started (Inbetrieb {VERSION})"))
+            if p.id not in ran:  # its first start: nothing to announce
+                continue
+            p.notices.add(
+                "restarted",
+                f"the service restarted at {when}: machine {p.name} was powered on again "
+                "(simulated time from 0, axes at their start positions, spindle stopped); its "
+                "history kept everything before",
+            )
+
+    def service_stopping(self, proxies: list[MachineProxy]) -> None:
+        """Mark the stop in every machine's history (written before the store closes)."""
+        for p in proxies:
+            self.add(_now_on(p, "service", "warning", "service stopping"))
+        self.flush()
+
+    def _of(self, mid: str) -> _Machine:
+        m = self._machines.get(mid)
+        if m is None:
+            m = self._machines[mid] = _Machine()
+        return m
+
+    # --- what happened --------------------------------------------------------------------
+    def add(self, row: LogRow) -> None:
+        """Write a row soon (in order, without waiting for the disk)."""
+        self._queue.put(row)
+
+    def sending(self, mid: str, epoch: int, text: str, actor: str, axis: str) -> None:
+        """A command goes to the machine (before its answer: a job error it raises may come
+        first): job errors of that axis ('' the channel's) are put down to it until the next."""
+        with self._lock:
+            m = self._of(mid)
+            m.last_command[axis] = (epoch, text, actor)
+            if axis == "":
+                m.last_actor = actor
+
+    def sent(self, mid: str, epoch: int, text: str, actor: str, block: int) -> None:
+        """An MDI block was accepted: its sender is remembered for the job errors the block
+        may raise later."""
+        with self._lock:
+            m = self._of(mid)
+            m.sent[(epoch, block)] = (text, actor)
+            while len(m.sent) > SENT_KEPT:
+                m.sent.popitem(last=False)
+
+    def events(self, mid: str, epoch: int, events: list[Event]) -> None:
+        """New events of a machine as its worker pushed them (any thread)."""
+        dropped: dict[int, Event] = {}  # a job error's seq → the block it dropped first
+        for e in events:
+            if e.code == Code.EV_BLOCK_DROPPED and e.value is not None:
+                dropped.setdefault(int(e.value), e)
+        with self._lock:
+            m = self._of(mid)
+            rows = [self._row(mid, epoch, m, e, dropped) for e in events]
+        for row in rows:
+            self._queue.put(row)
+
+    def _row(
+        self, mid: str, epoch: int, m: _Machine, e: Event, dropped: dict[int, Event]
+    ) -> LogRow:
+        row = LogRow(
+            mid, "event", "info", e.message, sim_t_s=e.t_s, epoch=epoch, code=e.code, axis=e.axis
+        )
+        if e.error:
+            m.active.append(f"{e.code} {e.axis}".strip())
+            m.errors[e.seq] = e.code
+            while len(m.errors) > SENT_KEPT:
+                m.errors.popitem(last=False)
+            block = dropped.get(e.seq)
+            sender = m.sent.get((epoch, block.block)) if block and block.block else None
+            cause = None
+            if sender is not None:
+                cause = f"raised by MDI block '{sender[0]}' sent by {sender[1]}"
+            elif (last := m.last_command.get(e.axis)) is not None and last[0] == epoch:
+                cause = f"after '{last[1]}' sent by {last[2]}"
+            return replace(row, kind="job_error", severity="error", cause=cause)
+        if e.code == Code.EV_BLOCK_DROPPED:
+            text, actor = m.sent.get((epoch, e.block or 0), (e.message, ""))
+            code = m.errors.get(int(e.value)) if e.value is not None else None
+            why = f"dropped by job error {code}" if code else "dropped by a job error"
+            return replace(
+                row,
+                kind="command",
+                severity="error",
+                text=f"MDI {text}",
+                actor=actor,
+                outcome=why,
+                code=None,  # the event's own number says nothing here: the outcome does
+            )
+        if e.code == Code.EV_RESET and m.active:
+            cleared, m.active = ", ".join(m.active), []
+            actor = m.last_actor
+            return replace(row, kind="cleared", text=f"reset cleared {cleared}", actor=actor)
+        return row
+
+    def power_on(self, mid: str, epoch: int, why: str, severity: Severity = "info") -> None:
+        """The machine was built (a power-on): time starts at 0, errors are gone."""
+        with self._lock:
+            m = self._of(mid)
+            m.active, m.last_actor = [], ""
+            m.last_command.clear()
+            m.sent.clear()
+            m.errors.clear()
+        self.add(LogRow(mid, "power", severity, f"powered on: {why}", sim_t_s=0.0, epoch=epoch))
+
+    def note(self, machine: MachineProxy, actor: str, text: str) -> HistoryEntry:
+        """A logbook entry, written now (at the machine's time now)."""
+        return self._now(_now_on(machine, "note", "info", text, actor))
+
+    def acknowledge(self, machine: MachineProxy, actor: str) -> HistoryEntry:
+        """`actor` saw the job errors in force (they stay in force until a reset)."""
+        with self._lock:
+            active = list(self._of(machine.id).active)
+        if not active:
+            raise Conflict("no job error is in force")
+        text = f"acknowledged {', '.join(active)}"
+        return self._now(_now_on(machine, "acknowledged", "info", text, actor))
+
+    def _now(self, row: LogRow) -> HistoryEntry:
+        self.flush()  # what came before it is written first
+        return self._insert([row])[0]
+
+    def link_trace(self, mid: str, epoch: int, errors: list[Event], trace: str) -> None:
+        """The flight recorder saved `trace` around these job errors: their entries link to
+        it (viewers get them again, with the link)."""
+        self.flush()
+
+        def work(db: sqlite3.Connection) -> list[Row]:
+            rows: list[Row] = []
+            for e in errors:
+                where = (
+                    "machine = ? AND epoch = ? AND kind = 'job_error' AND code = ? AND sim_t_s = ?"
+                )
+                args = (mid, epoch, e.code, e.t_s)
+                db.execute(f"UPDATE machine_log SET trace = ? WHERE {where}", (trace, *args))
+                rows += db.execute(
+                    f"SELECT 'h' || id AS id, {_ENTRY_COLUMNS} FROM machine_log WHERE {where}",
+                    args,
+                ).fetchall()
+            return rows
+
+        rows = self.store.transaction(work)
+        with self._lock:
+            for r in rows:
+                self._push(mid, _entry(r))
+
+    def flight_failed(self, machine: MachineProxy, error: Event, why: str) -> None:
+        """The flight recorder could not save the window of a job error."""
+        text = f"flight recorder: the seconds around job error {error.code} were not saved: {why}"
+        self.add(_now_on(machine, "service", "warning", text))
+
+    def forget(self, mid: str) -> None:
+        """A deleted machine: nothing more is remembered about it (its rows stay until the
+        retention ends them)."""
+        with self._lock:
+            self._machines.pop(mid, None)
+
+    # --- live ------------------------------------------------------------------------------
+    def _audited(self, written: list[tuple[int, Entry]]) -> None:
+        clock = self.store.clock
+        with self._lock:
+            for seq, e in written:
+                if e.machine:
+                    stamp = clock(e.machine) if clock is not None else None
+                    self._push(e.machine, _audit_entry(seq, e, stamp))
+
+    def _push(self, mid: str, entry: HistoryEntry) -> None:
+        m = self._of(mid)
+        m.tail_seq += 1
+        m.tail.append((m.tail_seq, entry))
+
+    def newest(self, mid: str) -> int:
+        """The live cursor now (a viewer that connects sees what comes after)."""
+        with self._lock:
+            return self._of(mid).tail_seq
+
+    def since(self, mid: str, cursor: int) -> tuple[list[HistoryEntry], int]:
+        """The live entries after `cursor`, oldest first, and the next cursor."""
+        with self._lock:
+            m = self._of(mid)
+            return [e for s, e in m.tail if s > cursor], m.tail_seq
+
+    # --- reading ---------------------------------------------------------------------------
+    def page(
+        self,
+        mid: str,
+        f: HistoryFilter,
+        limit: int = 200,
+        before: tuple[float, str] | None = None,
+    ) -> tuple[list[HistoryEntry], int]:
+        """Matching entries, newest first (older ones: `before` = (time, id) of the last
+        one seen), and how many match in all."""
+        self.flush()
+        where, args = f.where()
+        merged = f"SELECT * FROM ({_MERGED}){where}"
+        total = self.store.query(f"SELECT count(*) AS n FROM ({merged})", (mid, mid, *args))
+        page_where, page_args = "", cast(tuple[object, ...], ())
+        if before is not None:
+            src, n = (0 if before[1].startswith("a") else 1), int(before[1][1:])
+            page_where, page_args = " WHERE (time, src, n) < (?, ?, ?)", (before[0], src, n)
+        rows = self.store.query(
+            f"SELECT * FROM ({merged}){page_where} ORDER BY time DESC, src DESC, n DESC LIMIT ?",
+            (mid, mid, *args, *page_args, min(limit, EXPORT_ROWS)),
+        )
+        return [_entry(r) for r in rows], int(total[0]["n"])
+
+    # --- writing ---------------------------------------------------------------------------
+    def flush(self) -> None:
+        """Wait until every row given so far is written."""
+        self._queue.join()
+
+    def stop(self) -> None:
+        self._queue.put(None)
+        self._writer.join(timeout=5.0)
+
+    def _write(self) -> None:
+        while True:
+            batch = [self._queue.get()]
+            if batch[0] is not None:
+                time.sleep(BATCH_S)
+            while not self._queue.empty() and len(batch) < 2000:
+                batch.append(self._queue.get_nowait())
+            rows = [r for r in batch if r is not None]
+            try:
+                if rows:
+                    self._insert(rows)
+                if time.monotonic() - self._pruned > PRUNE_EVERY_S:
+                    self.prune()
+            except Exception:  # the store is closed or failing: say so, keep serving
+                log.exception("history rows lost: %d", len(rows))
+            finally:
+                for _ in batch:
+                    self._queue.task_done()
+            if None in batch:
+                return
+
+    def _insert(self, rows: list[LogRow]) -> list[HistoryEntry]:
+        def work(db: sqlite3.Connection) -> list[int]:
+            ids = []
+            for r in rows:
+                cur = db.execute(
+                    f"INSERT INTO machine_log ({_LOG_COLUMNS}) VALUES ({', '.join('?' * 13)})",
+                    (
+                        r.machine,
+                        r.time,
+                        r.sim_t_s,
+                        r.epoch,
+                        r.kind,
+                        r.severity,
+                        r.actor,
+                        r.text,
+                        r.outcome,
+                        r.code,
+                        r.axis,
+                        r.trace,
+                        r.cause,
+                    ),
+                )
+                ids.append(int(cur.lastrowid or 0))
+            return ids
+
+        ids = self.store.transaction(work)
+        entries = [_log_entry(rid, r) for rid, r in zip(ids, rows, strict=True)]
+        with self._lock:
+            for e, r in zip(entries, rows, strict=True):
+                self._push(r.machine, e)
+        return entries
+
+    def prune(self) -> int:
+        """End rows past the retention: older than `days`, beyond `rows_per_machine` per
+        machine (the oldest first); how many."""
+        self._pruned = time.monotonic()
+        cutoff = time.time() - self.days * 86400.0
+
+        def work(db: sqlite3.Connection) -> int:
+            gone = db.execute("DELETE FROM machine_log WHERE time < ?", (cutoff,)).rowcount
+            full = db.execute(
+                "SELECT machine FROM machine_log GROUP BY machine HAVING count(*) > ?",
+                (self.rows_per_machine,),
+            ).fetchall()
+            for r in full:
+                gone += db.execute(
+                    "DELETE FROM machine_log WHERE machine = ? AND id <= (SELECT id FROM "
+                    "machine_log WHERE machine = ? ORDER BY id DESC LIMIT 1 OFFSET ?)",
+                    (r["machine"], r["machine"], self.rows_per_machine),
+                ).rowcount
+            return int(gone)
+
+        return self.store.transaction(work)
+
+
+def _now_on(
+    machine: MachineProxy, kind: HistoryKind, severity: Severity, text: str, actor: str = ""
+) -> LogRow:
+    """A row stamped with the machine's simulated time and build now."""
+    sim_t_s = machine.link.cycle * machine.link.cycle_s
+    return LogRow(machine.id, kind, severity, text, actor, sim_t_s, machine.link.epoch)
+
+
+def _log_entry(rid: int, r: LogRow) -> HistoryEntry:
+    return HistoryEntry(
+        id=f"h{rid}",
+        time_unix=r.time,
+        sim_t_s=r.sim_t_s,
+        epoch=r.epoch,
+        kind=r.kind,
+        severity=r.severity,
+        actor=r.actor,
+        text=r.text,
+        outcome=r.outcome,
+        code=r.code,
+        axis=r.axis,
+        trace=r.trace,
+        cause=r.cause,
+    )
+
+
+CSV_HEADER = (
+    "time_utc", "sim_t_s", "epoch", "kind", "severity", "actor", "text", "outcome", "code",
+    "axis", "cause", "trace", "id",
+)  # fmt: skip
+
+
+def utc(t: float) -> str:
+    """A Unix time as ISO 8601 UTC with milliseconds."""
+    return time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(t)) + f".{int(t % 1 * 1000):03d}Z"
+
+
+def csv_text(entries: list[HistoryEntry]) -> str:
+    """Entries as CSV, in the order given, for a spreadsheet."""
+    out = io.StringIO()
+    w = csv.writer(out)
+    w.writerow(CSV_HEADER)
+    for e in entries:
+        w.writerow(
+            [utc(e.time_unix), "" if e.sim_t_s is None else f"{e.sim_t_s:.3f}",
+             "" if e.epoch is None else e.epoch, e.kind, e.severity, e.actor, e.text,
+             e.outcome, "" if e.code is None else e.code, e.axis, e.cause or "", e.trace or "",
+             e.id]
+        )  # fmt: skip
+    return out.getvalue()

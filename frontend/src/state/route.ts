@@ -1,0 +1,47 @@
+// Deep links: the URL names the machine, the workspace and a trace, so a moment can be pasted
+// into a ticket: `#<machine>/<workspace>` (`#demo/history`), `#<machine>/scope/<trace>` (that
+// trace open in the scope). The address follows what is on screen without adding to the
+// browser's history at each tab.
+import { effect, signal } from "@preact/signals";
+import { followNewest, shownId } from "./scope";
+import { machineId } from "./session";
+
+export const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Drive tuning", "Service", "HLI / PLC", "History"] as const;
+export type Tab = (typeof TABS)[number];
+
+const slug = (t: Tab) => t.toLowerCase().replace(/[^a-z0-9]+/g, "-");
+const bySlug = new Map(TABS.map((t) => [slug(t), t]));
+
+/** The parts of the address: machine, workspace, trace ("" where it names none). */
+export function parseHash(hash: string): { machine: string; tab: Tab | null; trace: string } {
+  const [machine = "", ws = "", trace = ""] = decodeURIComponent(hash.replace(/^#/, "")).split("/");
+  return { machine, tab: bySlug.get(ws) ?? null, trace: bySlug.get(ws) === "Scope" ? trace : "" };
+}
+
+const first = parseHash(location.hash);
+/** The workspace on screen. */
+export const tab = signal<Tab>(first.tab ?? "Operate");
+if (first.trace) {
+  shownId.value = first.trace; // the linked trace, not the newest capture
+  followNewest.value = false;
+}
+
+/** The address of what is on screen, for a ticket. */
+export function hereUrl(): string {
+  return `${location.origin}${location.pathname}${location.search}${location.hash}`;
+}
+
+/** Show a trace of the library in the scope. */
+export function openTrace(id: string): void {
+  followNewest.value = false;
+  shownId.value = id;
+  tab.value = "Scope";
+}
+
+effect(() => {
+  const mid = machineId.value;
+  if (!mid || location.hash.startsWith("#classes")) return;
+  const trace = tab.value === "Scope" && !followNewest.value && shownId.value ? `/${shownId.value}` : "";
+  const next = `#${encodeURIComponent(mid)}/${slug(tab.value)}${trace}`;
+  if (location.hash !== next) history.replaceState(null, "", next);
+});
