@@ -25,6 +25,9 @@ class Action(StrEnum):
 
     OBSERVE = "observe"  # status, telemetry, parameters, traces, programs, a machine's audit
     NOTE = "note"  # write in a machine's logbook (its history), acknowledge its job errors
+    ASK = "ask"  # ask the holder of a machine for control, with a message (or withdraw it)
+    TOKENS = "tokens"  # make and revoke one's own API tokens
+    SHARE = "share"  # make and revoke a machine's read-only share links for guests
     CAPTURE = "capture"  # scope set-up, arm, force, stop; save, annotate, view traces
     RECORD = "record"  # long recordings to disk (within the recordings quota)
     DELETE_TRACE = "delete_trace"
@@ -44,8 +47,9 @@ class Action(StrEnum):
     USERS = "users"  # users, everyone's tokens, the service-wide audit
 
 
-_OBSERVER = frozenset({Action.OBSERVE, Action.NOTE, Action.CAPTURE})
+_OBSERVER = frozenset({Action.OBSERVE, Action.NOTE, Action.ASK, Action.TOKENS, Action.CAPTURE})
 _OPERATOR = _OBSERVER | {
+    Action.SHARE,
     Action.RECORD,
     Action.DELETE_TRACE,
     Action.PROGRAMS,
@@ -70,6 +74,9 @@ ALLOWED: dict[Role, frozenset[Action]] = {
 ACTION_WORDS: dict[Action, str] = {
     Action.OBSERVE: "watch machines",
     Action.NOTE: "write in a machine's logbook",
+    Action.ASK: "ask for control",
+    Action.TOKENS: "make or revoke API tokens",
+    Action.SHARE: "share a machine by link",
     Action.CAPTURE: "use the scope",
     Action.RECORD: "record channels to disk",
     Action.DELETE_TRACE: "delete traces",
@@ -121,6 +128,7 @@ class Me(BaseModel):
         description="public id of this login session or API token (who holds control)"
     )
     actions: list[Action] = Field(description="what this user may do (api/auth.py ALLOWED)")
+    guest: bool = Field(False, description="through a share link: watching one machine only")
 
 
 MIN_PASSWORD = 8  # characters (the CLI asks the same)

@@ -27,6 +27,7 @@ class ControlParty(BaseModel):
     client: str = Field(description="the browser tab's id ('' for a script)")
     since_unix: float
     message: str = Field("", description="what a requester wrote with the request")
+    guest: bool = Field(False, description="a share link's guest")
 
 
 class ControlState(BaseModel):
@@ -44,6 +45,11 @@ class ControlState(BaseModel):
         0,
         ge=0,
         description="changes so far: of two states (an answer, a push) the higher is the newer",
+    )
+    viewers: list[ControlParty] = Field(
+        default_factory=list,
+        description="who watches the machine live now (one per browser tab or script), "
+        "share links' guests included",
     )
 
 

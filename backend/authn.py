@@ -26,6 +26,7 @@ from backend.errors import Forbidden, NotLoggedIn, answer
 from backend.security import SAFE_METHODS
 from backend.services.accounts import Accounts, public_id
 from backend.services.auth import Actor
+from backend.services.shares import PREFIX as GUEST_PREFIX
 
 # an ended class's seat result: its login has gone, the old session cookie names the seat
 OPEN_PATHS = frozenset(
@@ -84,6 +85,12 @@ class Authentication:
         conn = HTTPConnection(scope)
         services = scope["app"].state.services
         found = identify(services.accounts, conn)
+        if isinstance(found, Actor):
+            guest = services.shares.guest(found.name)
+            if guest is not None:  # a share link's: its machine only, watching
+                found = replace(found, seat=guest.machine, guest=True)
+            elif found.name.startswith(GUEST_PREFIX):  # its link expired or was revoked
+                found = NotLoggedIn("the share link has expired or was revoked")
         if isinstance(found, Actor):
             seat = services.classes.seat_of(found.name)  # a student sees their seat only
             scope.setdefault("state", {})["actor"] = replace(found, seat=seat) if seat else found

@@ -32,6 +32,7 @@ from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.report import Reports
 from backend.services.sessions import SessionWatch
+from backend.services.shares import Shares
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
@@ -72,6 +73,7 @@ class Services:
     history: History
     flight: FlightRecorder
     bundles: Bundles
+    shares: Shares
 
     @classmethod
     async def start(cls, settings: Settings) -> Services:
@@ -81,6 +83,8 @@ class Services:
         store = Store(settings.db_path)
         accounts = Accounts(store)
         accounts.ensure_admin()
+        shares = Shares(store, accounts)
+        shares.start()
         loop = asyncio.get_running_loop()  # reads the local workers' replies and pushes
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
         machines = MachineService(store, pool)
@@ -150,6 +154,7 @@ class Services:
             history,
             flight,
             Bundles(store, tdir / "bundles", traces),
+            shares,
         )
         services.print_login_link()
         return services
@@ -175,6 +180,7 @@ class Services:
         self.viewer.stop()
         self.assistants.stop()
         self.flight.stop()
+        self.shares.stop()
         self.history.service_stopping(self.machines.proxies())
         self.history.stop()
         self.pool.stop()
@@ -200,6 +206,9 @@ async def get_actor(conn: HTTPConnection) -> Actor:
 _KIND: dict[Action, AuditKind] = {  # what a refused attempt of each action is recorded as
     Action.OBSERVE: "command",  # never refused by role (every role observes): for the type
     Action.NOTE: "machine",
+    Action.ASK: "control",
+    Action.TOKENS: "token",
+    Action.SHARE: "machine",
     Action.CAPTURE: "trace",
     Action.RECORD: "recording",
     Action.DELETE_TRACE: "trace",

@@ -1,12 +1,15 @@
 """Soak: the real service under steady load for a while (10 minutes by default), watched for
 growth. Telemetry viewers (a separate client process) stream the demo lathe; a client sends
-about 10 commands a second (MDI blocks, overrides, now and then one the NC refuses with a job
-error) and reads the machine's status and audit as a page would.
+about 10 commands a second (MDI blocks, overrides, and every 10 s one the NC refuses with a
+job error) and reads the machine's status and history as a page would.
 
 Prints the resident memory (RSS) of the gateway and of every worker at the start (after a
 warm-up minute) and at the end, the gateway's RSS each minute, and the store's growth (the
-SQLite file and its write-ahead log) per hour; then the commands sent, refused and failed.
-Bar: no steady growth of the gateway beyond a few MB per hour, no failed request.
+SQLite file and its write-ahead log) per hour; then the commands sent, refused and failed;
+then the flight recorder (its memory at the start and the end, the job errors of the history
+with a trace linked, those traces in the library) and the history's rows and bytes per row.
+Bar: no steady growth of the gateway beyond a few MB per hour, the recorder's memory flat,
+every job error with its trace, no failed request.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ REFUSED: dict[str, Any] = {
     "block": "M3 S20000",
 }  # beyond every gear range: job error 90017
 RATE_HZ = 10.0
+ERROR_EVERY = 100  # commands: a job error every 10 s
 
 
 def rss_mb(pid: int) -> float:
@@ -59,7 +63,8 @@ def main() -> None:
     extra = ["--workers", str(args.workers)] if args.workers else []
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(tmp) / "soak.sqlite"
-        srv = Server(db, *extra).start()
+        # every trace of the soak's errors kept, to count them
+        srv = Server(db, *extra, env={"INBETRIEB_FLIGHT_KEEP": "1000"}).start()
         assert srv.proc is not None
         gateway = srv.proc.pid
         try:
@@ -82,6 +87,8 @@ def main() -> None:
                         store_mb(db),
                         now,
                     )
+                    flight0 = srv.http.get("/api/machines/demo/flight-recorder").json()["bytes"]
+                    rows0 = history_rows(srv)
                     print(
                         f"after {args.warmup_s:.0f} s warm-up: gateway {start[0]:.1f} MB, "
                         + ", ".join(f"{w} {m:.1f} MB" for w, m in start[1].items())
@@ -95,7 +102,7 @@ def main() -> None:
                         flush=True,
                     )
                     minute += 60
-                body = REFUSED if k % 300 == 299 else next(commands)  # a job error each 30 s
+                body = REFUSED if k % ERROR_EVERY == ERROR_EVERY - 1 else next(commands)
                 r = srv.command("demo", body)
                 sent += 1
                 job_errors += body is REFUSED
@@ -103,7 +110,7 @@ def main() -> None:
                 failed += r.status_code not in (200, 409)
                 if k % 10 == 0:  # what an open page reads now and then
                     failed += srv.http.get("/api/machines/demo/status").status_code != 200
-                    page = srv.http.get("/api/machines/demo/audit", params={"limit": 50})
+                    page = srv.http.get("/api/machines/demo/history", params={"limit": 50})
                     failed += page.status_code != 200
                 k += 1
                 time.sleep(max(0.0, t0 + k / RATE_HZ - time.monotonic()))
@@ -135,8 +142,33 @@ def main() -> None:
                 f"refused at once with 409, the others while queued, as an event), failed "
                 f"{failed}; viewers: {frames} frames, {len(viewer_errors)} failed"
             )
+            time.sleep(3.0)  # the last error's window (2 s after it) saved
+            flight1 = srv.http.get("/api/machines/demo/flight-recorder").json()["bytes"]
+            errors = srv.http.get(
+                "/api/machines/demo/history", params={"kind": "job_error", "limit": 1000}
+            ).json()["rows"]
+            traced = [e for e in errors if e["trace"]]
+            library = {t["id"] for t in srv.http.get("/api/traces").json()}
+            print(
+                f"  flight recorder: {flight0 / 1e6:.2f} -> {flight1 / 1e6:.2f} MB; "
+                f"{len(errors)} job errors, {len(traced)} with a trace, "
+                f"{sum(e['trace'] in library for e in traced)} of those in the library"
+            )
+            rows1 = history_rows(srv)
+            grown = (store_mb(db) - start[2]) * 1e6
+            print(
+                f"  history: {rows0} -> {rows1} entries (+{(rows1 - rows0) / hours:.0f}/h), "
+                f"store growth {grown / max(1, rows1 - rows0):.0f} B per entry (traces' files "
+                "apart)"
+            )
         finally:
             srv.close()
+
+
+def history_rows(srv: Server) -> int:
+    """The demo lathe's history entries (machine log and audit rows)."""
+    total: int = srv.http.get("/api/machines/demo/history", params={"limit": 1}).json()["total"]
+    return total
 
 
 if __name__ == "__main__":

@@ -3,6 +3,8 @@ and the telemetry websocket tickets (with one)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from fastapi import APIRouter, Request, Response
 from fastapi.responses import HTMLResponse, RedirectResponse
 
@@ -26,6 +28,29 @@ router = APIRouter(tags=["auth"])
 _LINK_USED = """<!doctype html><meta charset="utf-8"><title>Inbetrieb</title>
 <p>This login link was used already or has expired. A class seat's link: ask your
 instructor for a new one. Otherwise <a href="/">log in</a> with your name and password.</p>"""
+
+
+_SHARE_ENDED = """<!doctype html><meta charset="utf-8"><title>Inbetrieb</title>
+<p>This share link has expired or was revoked. Ask whoever sent it for a new one.</p>"""
+
+
+@router.get("/share/{token}", include_in_schema=False)
+def share_link(token: str, request: Request, services: ServicesDep) -> Response:
+    """A share link: a guest session watching its machine, then the HMI on that machine."""
+    found = services.shares.redeem(token[:200])
+    address = request.client.host if request.client else "?"
+    if found is None:
+        failed = Entry("", "", "login_failed", "share link", outcome="expired or revoked")
+        services.audit.record_later(replace(failed, address=address))
+        return HTMLResponse(_SHARE_ENDED, status_code=http_status(NotLoggedIn))
+    link, guest = found
+    response = RedirectResponse(f"/#{link.machine}/operate", status_code=SEE_OTHER)
+    actor = _start_session(response, request, services, User(guest, Role.OBSERVER))
+    what = f"opened share link {link.id} ({link.label or 'no label'}) of {link.machine}"
+    services.audit.record_later(
+        Entry(actor.name, actor.session, "login", what, link.machine, address=address)
+    )
+    return response
 
 
 @router.get("/api/health")

@@ -6,8 +6,9 @@ import re
 import time
 from typing import Annotated
 
-from fastapi import APIRouter, Path, Request, Response
+from fastapi import APIRouter, Depends, Path, Request, Response
 from fastapi.concurrency import run_in_threadpool
+from fastapi.requests import HTTPConnection
 from fastapi.responses import PlainTextResponse
 
 from api.auth import Action
@@ -15,7 +16,7 @@ from api.bundle import BundleDetail, BundleInfo
 from api.history import HistoryPage
 from api.versions import VersionDiff
 from backend.bodies import text_answer
-from backend.deps import ActorDep, MachineDep, ServicesDep, permit
+from backend.deps import ActorDep, MachineDep, ServicesDep, get_actor, permit
 from backend.errors import (
     CREATED,
     NO_CONTENT,
@@ -37,7 +38,14 @@ from backend.services.status import status_of
 from backend.workers.protocol import ReadStatus, StatusRead
 from nc_sim.params import Scope
 
-router = APIRouter(prefix="/api", tags=["bundles"])
+
+async def unseated(conn: HTTPConnection) -> None:
+    """Offline machines are no class student's or share link's guest's to see (404)."""
+    if (await get_actor(conn)).seat is not None:
+        raise NotFound("no such bundle")
+
+
+router = APIRouter(prefix="/api", tags=["bundles"], dependencies=[Depends(unseated)])
 BUNDLE_BODY_BYTES = 256 * 1024 * 1024  # a bundle to open
 ZIP: dict[int | str, dict[str, object]] = {
     OK: {"content": {"application/zip": {}}, "description": "the bundle (zip)"}

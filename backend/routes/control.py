@@ -21,7 +21,7 @@ def control_state(machine: MachineDep) -> ControlState:
 
 @router.post(
     "/{mid}/control",
-    dependencies=[permit(Action.OBSERVE)],  # observers request; the rest needs CONTROL
+    dependencies=[permit(Action.ASK)],  # observers ask; the rest needs CONTROL (`act`)
     responses=responses(
         Forbidden,
         NotFound,

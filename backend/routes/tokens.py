@@ -29,7 +29,7 @@ def list_tokens(services: ServicesDep, actor: ActorDep, all: bool = False) -> li
     return [token_info(t) for t in services.accounts.tokens(None if all else actor.name)]
 
 
-@router.post("", status_code=CREATED, dependencies=[permit(Action.OBSERVE)])
+@router.post("", status_code=CREATED, dependencies=[permit(Action.TOKENS)])
 def create_token(req: TokenCreate, services: ServicesDep, actor: ActorDep) -> TokenCreated:
     """A new API token of the requesting user, shown this once."""
     token = services.accounts.new_token(actor.name, req.label)
@@ -50,7 +50,7 @@ def create_token(req: TokenCreate, services: ServicesDep, actor: ActorDep) -> To
     "/{tid}",
     status_code=NO_CONTENT,
     response_class=Response,
-    dependencies=[permit(Action.OBSERVE)],
+    dependencies=[permit(Action.TOKENS)],
     responses=responses(Forbidden, NotFound),
 )
 def revoke_token(tid: str, services: ServicesDep, actor: ActorDep) -> Response:

@@ -24,6 +24,7 @@ class Actor:
     session: str
     client: str = ""
     seat: str | None = None
+    guest: bool = False  # through a share link: watching `seat` only (OBSERVE)
 
     def sees(self, machine: str) -> bool:
         """Whether this actor may know the machine exists (a student: only their seat's)."""
@@ -35,7 +36,8 @@ class Actor:
             name=self.name,
             role=self.role,
             session=self.session,
-            actions=sorted(ALLOWED[self.role]),
+            actions=[Action.OBSERVE] if self.guest else sorted(ALLOWED[self.role]),
+            guest=self.guest,
         )
 
 
@@ -44,6 +46,8 @@ def authorize(actor: Actor, action: Action, machine: str | None = None) -> None:
     machine a student may not see (as if it did not exist)."""
     if machine is not None and not actor.sees(machine):
         raise not_found(f"machine '{machine}'")
+    if actor.guest and action is not Action.OBSERVE:
+        raise Forbidden(f"a share link only watches: it may not {ACTION_WORDS[action]}")
     if action not in ALLOWED[actor.role]:
         where = f" on {machine}" if machine else ""
         need = lowest_role(action).value

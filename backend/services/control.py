@@ -37,6 +37,7 @@ class MachineControl:
     holder: ControlParty | None = None
     requests: list[ControlParty] = field(default_factory=list)
     connections: Counter[Key] = field(default_factory=Counter)  # live websockets per client
+    watching: dict[Key, ControlParty] = field(default_factory=dict)  # who those clients are
     release_at: float | None = None  # wall time: the holder has no connection since
     seq: int = 0  # changes, for the pushed status
     frozen_by: str | None = None  # a class seat frozen by this instructor: students wait
@@ -49,6 +50,7 @@ class MachineControl:
             connected=not lost,
             release_at_unix=self.release_at if lost else None,
             seq=self.seq,
+            viewers=list(self.watching.values()),
         )
 
 
@@ -63,6 +65,7 @@ def _party(actor: Actor) -> ControlParty:
         session=actor.session,
         client=actor.client,
         since_unix=time.time(),
+        guest=actor.guest,
     )
 
 
@@ -150,7 +153,7 @@ class Control:
         mine = c.holder is not None and _key(c.holder) == _key(actor)
         if req.action in ("take", "request"):
             self._not_frozen(actor, m)
-        if req.action not in ("request", "cancel"):  # observers ask, they never hold
+        if req.action not in ("request", "cancel") or actor.guest:  # observers ask, never hold
             authorize(actor, Action.CONTROL, m.id)
         match req.action:
             case "take":
@@ -215,6 +218,9 @@ class Control:
         with self._lock:
             c = m.control
             c.connections[_key(actor)] += 1
+            if _key(actor) not in c.watching:
+                c.watching[_key(actor)] = _party(actor)
+                c.seq += 1
             if c.holder is not None and _key(c.holder) == _key(actor) and c.release_at:
                 c.release_at = None
                 c.seq += 1
@@ -226,6 +232,8 @@ class Control:
             c.connections[_key(actor)] -= 1
             if c.connections[_key(actor)] <= 0:
                 del c.connections[_key(actor)]
+                c.watching.pop(_key(actor), None)
+                c.seq += 1
                 if c.holder is not None and _key(c.holder) == _key(actor):
                     c.release_at = time.time() + self.grace_s
                     c.seq += 1

@@ -56,6 +56,7 @@ CREATE TABLE IF NOT EXISTS machine_log (
     cause TEXT                     -- a job error: the command that raised it
 );
 CREATE INDEX IF NOT EXISTS machine_log_time ON machine_log (machine, time);
+CREATE INDEX IF NOT EXISTS machine_log_kind ON machine_log (kind, time);
 """
 _LOG_COLUMNS = (
     "machine, time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis, trace, cause"
@@ -394,6 +395,24 @@ class History:
             return [e for s, e in m.tail if s > cursor], m.tail_seq
 
     # --- reading ---------------------------------------------------------------------------
+    def active(self, mid: str) -> list[str]:
+        """The machine's job errors in force (since its last reset or power-on)."""
+        with self._lock:
+            return list(self._of(mid).active)
+
+    def alarms(self, machines: list[str], limit: int) -> list[tuple[str, HistoryEntry]]:
+        """The newest job errors of these machines, newest first, with their machine."""
+        self.flush()
+        if not machines:
+            return []
+        rows = self.store.query(
+            f"SELECT 'h' || id AS id, machine, {_ENTRY_COLUMNS} FROM machine_log "
+            f"WHERE kind = 'job_error' AND machine IN ({', '.join('?' * len(machines))}) "
+            "ORDER BY time DESC LIMIT ?",
+            (*machines, limit),
+        )
+        return [(str(r["machine"]), _entry(r)) for r in rows]
+
     def page(
         self,
         mid: str,

@@ -106,6 +106,10 @@ class MachineService:
         for take in self.event_takers:
             take(mid, epoch, events)
 
+    def building(self, mid: str) -> bool:
+        """The machine is being built (placed, or rebuilt after its worker died)."""
+        return mid in self._building
+
     def find(self, mid: str) -> MachineProxy | None:
         """The machine, or None (deleted, or never there)."""
         return self._proxies.get(mid)

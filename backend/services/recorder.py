@@ -174,7 +174,7 @@ class Recorders:
         about = f"# continuous recording of {m.name} ({m.id})\n- signals: " + ", ".join(signals)
         from backend.services import rrd
 
-        stream = rrd.open_stream(path, rid, m.id, about)
+        stream = rrd.open_stream(path, rid, m.id, about, signals)
         first = m.link.cycle + 1
         rec = Recording(
             rid,

@@ -2,7 +2,10 @@
 // connection, user, emergency stop) and banners always, the machine view beside the workspaces (tabs).
 import { useEffect, useRef } from "preact/hooks";
 import { AuditPanel } from "./panels/AuditPanel";
+import { BundlesPanel } from "./panels/BundlesPanel";
+import { FleetPanel } from "./panels/FleetPanel";
 import { HistoryPanel } from "./panels/HistoryPanel";
+import { SharePanel } from "./panels/SharePanel";
 import { Banner } from "./panels/Banner";
 import { Calculators } from "./panels/Calculators";
 import { Commissioning } from "./panels/Commissioning";
@@ -177,9 +180,12 @@ function Hmi() {
             {tab === "History" ? (
               <>
                 <HistoryPanel />
+                {may("share") ? <SharePanel /> : null}
+                {me.value?.guest ? null : <BundlesPanel />}
                 {may("users") ? <AuditPanel /> : null}
               </>
             ) : null}
+            {tab === "Fleet" ? <FleetPanel /> : null}
           </div>
         </main>
       </div>

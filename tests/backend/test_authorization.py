@@ -136,6 +136,11 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/bundles/{bid}/history"): ("observer", FREE),
     ("GET", "/api/bundles/{bid}/lists/{name}"): ("observer", FREE),
     ("DELETE", "/api/bundles/{bid}"): ("operator", FREE),
+    # share links for guests: an operator's to make, list and revoke (no control needed)
+    ("POST", "/api/machines/{mid}/share"): ("operator", FREE),
+    ("GET", "/api/machines/{mid}/share"): ("operator", FREE),
+    ("DELETE", "/api/machines/{mid}/share/{lid}"): ("operator", FREE),
+    ("GET", "/api/fleet"): ("observer", FREE),
     ("GET", "/api/audit"): ("admin", FREE),
     ("GET", "/api/audit.csv"): ("admin", FREE),
     ("GET", "/api/audit/verify"): ("admin", FREE),
@@ -209,10 +214,8 @@ def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Server, dict
 USER_OF = {"observer": "olga", "operator": "otto", "instructor": "ida", "admin": "ada"}
 
 
-def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Response:
-    """The route with placeholders filled and a body that fails validation (nothing is
-    changed by an allowed call: it stops at 422, or at 404 for an unknown id)."""
-    url = (
+def _filled(path: str, mid: str) -> str:
+    return (
         path.replace("{mid}", mid)
         .replace("{tid}", "nope")
         .replace("{rid}", "nope")
@@ -224,7 +227,15 @@ def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Respo
         .replace("{n}", "1")
         .replace("{fid}", "1")
         .replace("{sid}", "1")
+        .replace("{bid}", "0123456789ab")
+        .replace("{lid}", "0123456789ab")
     )
+
+
+def call(s: Server, token: str, method: str, path: str, mid: str) -> httpx.Response:
+    """The route with placeholders filled and a body that fails validation (nothing is
+    changed by an allowed call: it stops at 422, or at 404 for an unknown id)."""
+    url = _filled(path, mid)
     kw: dict[str, Any] = {"headers": {"Authorization": f"Bearer {token}"}}
     if method in ("POST", "PUT", "PATCH"):
         kw["json"] = {"bad": True}
@@ -287,6 +298,55 @@ def _check_held(s: Server, tokens: dict[str, str], method: str, path: str, least
     state = s.http.get(f"/api/machines/{MACHINE}/control").json()
     assert state["holder"]["user"] == "ida"  # the free machine went to who acted
     control(s, tokens["ida"], "release")
+
+
+# observer-level routes a share link's guest may not use: it only watches (api/auth.py),
+# and offline machines are nobody's through a link
+GUEST_REFUSED = {
+    ("PUT", "/api/machines/{mid}/scope"),
+    ("POST", "/api/machines/{mid}/scope/force"),
+    ("POST", "/api/machines/{mid}/scope/stop"),
+    ("POST", "/api/machines/{mid}/control"),
+    ("POST", "/api/machines/{mid}/history/notes"),
+    ("POST", "/api/machines/{mid}/history/acknowledge"),
+    ("POST", "/api/machines/{mid}/flight-recorder/save"),
+    ("GET", "/api/machines/{mid}/bundle"),
+    ("GET", "/api/recordings/{rid}/viewer"),
+    ("POST", "/api/traces/import"),
+    ("PATCH", "/api/traces/{tid}"),
+    ("POST", "/api/traces/{tid}/save"),
+    ("GET", "/api/traces/{tid}/viewer"),
+    ("POST", "/api/auth/tokens"),
+    ("DELETE", "/api/auth/tokens/{tid}"),
+    ("POST", "/api/bundles"),
+    ("GET", "/api/bundles"),
+    ("GET", "/api/bundles/{bid}"),
+    ("GET", "/api/bundles/{bid}/history"),
+    ("GET", "/api/bundles/{bid}/lists/{name}"),
+}
+
+
+def test_a_share_link_guest_only_watches_its_machine(srv: tuple[Server, dict[str, str]]) -> None:
+    """Through a share link: what an observer may, minus every change (and offline
+    machines); the machine of the link only; everything above observer refused."""
+    s, _ = srv
+    made = s.http.post(f"/api/machines/{MACHINE}/share", json={"hours": 1}).json()
+    with httpx.Client(base_url=s.base, timeout=10) as guest:
+        assert guest.get(made["url"].removeprefix(s.base)).status_code == 303
+        csrf = {CSRF_HEADER: guest.cookies[CSRF_COOKIE]}
+        for (method, path), (least, _) in sorted(RULES.items()):
+            url = _filled(path, MACHINE)
+            kw: dict[str, Any] = {"headers": csrf}
+            if method in ("POST", "PUT", "PATCH"):
+                kw["json"] = {"bad": True}
+            r = guest.request(method, url, **kw)
+            refused = least != "observer" or (method, path) in GUEST_REFUSED
+            if refused:
+                assert r.status_code in (403, 404), f"{method} {path}: {r.status_code} {r.text}"
+            else:
+                assert r.status_code not in (401, 403), f"{method} {path}: {r.text}"
+        other = guest.get("/api/machines/demo-elsewhere/status")
+        assert other.status_code == 404
 
 
 def test_a_stranger_gets_401_on_every_route(srv: tuple[Server, dict[str, str]]) -> None:

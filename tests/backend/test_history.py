@@ -15,11 +15,14 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import httpx
 import pytest
 from websockets.asyncio.client import connect
 
-from api.auth import Role
+from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
+from backend.services.accounts import Accounts
 from backend.services.history import History, LogRow
+from backend.services.shares import Shares
 from backend.services.store import Store
 from tests.backend.server import Server, add_users, bearer
 from tests.backend.test_scope import rrd_chunks
@@ -253,7 +256,7 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     rrd = tmp_path / "flight.rrd"
     rrd.write_bytes(srv.http.get(f"/api/traces/{error['trace']}/trace.rrd").content)
     chunks = rrd_chunks(rrd)
-    assert chunks[f"/{lathe}/events"] >= 1 and chunks[f"/{lathe}/X/lag_mm"] == 10_001
+    assert chunks[f"/{lathe}/events"] >= 1 and chunks[f"/{lathe}/X"] == 10_001
 
     url = f"/api/machines/{lathe}/flight-recorder"
     status = srv.http.get(url).json()
@@ -353,3 +356,89 @@ def test_a_bundle_opens_on_another_service_as_the_same_offline_machine(
         assert [b["id"] for b in other.http.get("/api/bundles").json()] == [bundle["id"]]
     finally:
         other.close()
+
+
+def test_a_share_link_shows_one_machine_read_only_until_it_is_revoked(
+    srv: Server, lathe: str
+) -> None:
+    """A guest without an account opens the link: a session that sees the lathe only and
+    may only watch (its viewers list names the guest); revoked, the session ends at once and
+    the link opens nothing any more. Making, opening and revoking are audited."""
+    made = srv.http.post(f"/api/machines/{lathe}/share", json={"hours": 1, "label": "Acme"})
+    assert made.status_code == 201, made.text
+    link, url = made.json()["link"], made.json()["url"]
+    assert url.startswith(f"{srv.base}/share/") and link["active"] and link["uses"] == 0
+    guest = httpx.Client(base_url=srv.base, timeout=10)
+    try:
+        opened = guest.get(url.removeprefix(srv.base))
+        assert opened.status_code == 303 and opened.headers["location"] == f"/#{lathe}/operate"
+        csrf = {CSRF_HEADER: guest.cookies[CSRF_COOKIE]}
+        me = guest.get("/api/auth/me").json()
+        assert me["guest"] is True and me["actions"] == ["observe"]
+        assert [m["id"] for m in guest.get("/api/machines").json()] == [lathe]
+        assert guest.get(f"/api/machines/{lathe}/history").status_code == 200
+        assert guest.get("/api/machines/demo/status").status_code == 404
+        for path, body in ((f"/api/machines/{lathe}/history/notes", {"text": "hi"}),
+                           (f"/api/machines/{lathe}/control", {"action": "request"}),
+                           (f"/api/machines/{lathe}/scope/stop", {})):  # fmt: skip
+            r = guest.post(path, json=body, headers=csrf)
+            assert r.status_code == 403 and "share link only watches" in r.text, path
+        ticket = guest.post("/api/auth/ws-ticket", json={}, headers=csrf).json()["ticket"]
+
+        async def viewers() -> list[dict[str, Any]]:
+            url = f"{srv.ws_base}/api/machines/{lathe}/telemetry?ticket={ticket}"
+            async with connect(url) as ws:
+                while True:
+                    msg = json.loads(await ws.recv())
+                    if msg["type"] == "status" and msg["status"]["control"]["viewers"]:
+                        watching = srv.http.get(f"/api/machines/{lathe}/share").json()
+                        assert watching[0]["watching"] == 1
+                        return list(msg["status"]["control"]["viewers"])
+
+        seen = asyncio.run(asyncio.wait_for(viewers(), 10))
+        assert [(v["user"], v["guest"]) for v in seen] == [(link["guest"], True)]
+        revoked = srv.http.delete(f"/api/machines/{lathe}/share/{link['id']}")
+        assert revoked.status_code == 200 and revoked.json()["active"] is False
+        after = guest.get(f"/api/machines/{lathe}/status")
+        assert after.status_code == 401
+        assert guest.get(url.removeprefix(srv.base)).status_code == 401
+    finally:
+        guest.close()
+    rows = srv.http.get("/api/audit", params={"text": link["id"]}).json()["rows"]
+    assert {r["action"].split(" ")[0] for r in rows} >= {"shared", "opened", "revoked"}
+
+
+def test_a_share_link_ends_when_it_expires(tmp_path: Path) -> None:
+    """On a real store: a link valid 0.5 s opens at first, then not; the sweep removes its
+    guest's login, which ends every session of it."""
+    store = Store(tmp_path / "db.sqlite")
+    try:
+        accounts = Accounts(store)
+        shares = Shares(store, accounts)
+        link, token = shares.create("m1", 0.5 / 3600, "", "tester")
+        assert shares.redeem(token) is not None and shares.guest(link.guest) is not None
+        sid, _ = accounts.new_session(link.guest)
+        time.sleep(0.6)
+        assert shares.redeem(token) is None
+        shares.sweep()
+        assert shares.guest(link.guest) is None and accounts.session(sid) is None
+    finally:
+        store.close()
+
+
+def test_the_fleet_shows_each_machine_with_its_alarms(srv: Server, lathe: str) -> None:
+    """An emergency stop on one lathe: the fleet lists it running, in emergency stop, with
+    90005 in force and as its last alarm, and the alarm across the machines names it; a
+    reset clears what is in force (the last alarm stays)."""
+    assert srv.emergency_stop(lathe).status_code == 200
+    _until(srv, lathe, "emergency stop", kind=["job_error"])
+    fleet = srv.http.get("/api/fleet").json()
+    row = next(m for m in fleet["machines"] if m["id"] == lathe)
+    assert row["reachable"] == "running" and row["state"] == "emergency stop"
+    assert row["active_errors"] == ["90005"] and row["last_alarm"]["code"] == 90005
+    mine = [a for a in fleet["alarms"] if fleet["machine_of"][a["id"]] == lathe]
+    assert mine and mine[0]["code"] == 90005
+    srv.command(lathe, {"type": "reset"}).raise_for_status()
+    _until(srv, lathe, "reset cleared", kind=["cleared"])
+    row = next(m for m in srv.http.get("/api/fleet").json()["machines"] if m["id"] == lathe)
+    assert row["active_errors"] == [] and row["last_alarm"]["code"] == 90005

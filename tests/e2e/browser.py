@@ -33,6 +33,7 @@ WORKSPACES = [
     "Service",
     "HLI / PLC",
     "History",
+    "Fleet",
 ]
 SHOTS = Path(__file__).resolve().parent / "screenshots"
 # The tests' pages redraw their live plots 10 times a second (the HMI's "Refresh" choice, kept in

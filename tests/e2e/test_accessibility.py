@@ -148,7 +148,7 @@ def test_the_operate_workspace_by_keyboard(operate: Page) -> None:
     expect(page.get_by_test_id("tab-Program")).to_have_attribute("aria-selected", "true")
     expect(panel(page, "program")).to_be_visible()
     page.keyboard.press("End")
-    expect(page.get_by_test_id("tab-History")).to_be_focused()
+    expect(page.get_by_test_id("tab-Fleet")).to_be_focused()
     page.keyboard.press("ArrowRight")  # wraps round to the first
     expect(page.get_by_test_id("tab-Operate")).to_be_focused()
     expect(page.get_by_test_id("tab-Operate")).to_have_attribute("aria-selected", "true")

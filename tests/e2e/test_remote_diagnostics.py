@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 import time
+from pathlib import Path
 from typing import Any
 
 from playwright.sync_api import Browser, expect
@@ -98,3 +99,70 @@ def test_an_observer_finds_the_errors_of_before_a_restart_and_their_traces(
         assert rrd.ok and len(rrd.body()) > 10_000
     finally:
         o.close()
+
+
+def test_a_guest_link_shows_the_live_machine_until_it_is_revoked(
+    browser: Browser, srv: Server, mid: str
+) -> None:
+    """The operator makes a link in the HMI; a guest with no account opens it and watches the
+    live machine (the operator sees one guest watching); revoked, the guest's page loses the
+    machine and the link opens nothing any more."""
+    a = open_hmi(browser, srv.base, f"{mid}/history")
+    guest = browser.new_page(viewport={"width": 1024, "height": 768})
+    try:
+        share = panel(a, "share")
+        share.get_by_test_id("share-label").fill("drive maker")
+        share.get_by_test_id("share-create").click()
+        url = share.get_by_test_id("share-url").input_value()
+        assert url.startswith(f"{srv.base}/share/")
+        guest.goto(url)
+        expect(guest.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+        expect(guest.get_by_test_id("control-strip")).to_contain_text("view only")
+        assert guest.evaluate("location.hash").startswith(f"#{mid}/")
+        expect(panel(guest, "jog").get_by_test_id("jog-plus")).to_be_disabled()
+        viewers = a.get_by_test_id("control-strip").get_by_test_id("control-viewers")
+        expect(viewers).to_contain_text("1 by share link")
+        expect(share.get_by_test_id("share-watching")).to_have_text("1")
+        shot(guest, "guest-link-tablet")
+        share.get_by_test_id("share-revoke").click()
+        expect(guest.get_by_role("heading", name="Log in")).to_be_visible()  # nothing to watch
+        ended = guest.request.get(url)
+        assert ended.status == 401 and "expired or was revoked" in ended.text()
+    finally:
+        a.close()
+        guest.close()
+
+
+def test_a_bundle_opens_on_another_service_as_the_offline_machine(
+    browser: Browser, srv: Server, mid: str, tmp_path: Path
+) -> None:
+    """The bundle downloads from the machine's History; on a second service the expert opens
+    it and sees the same difference to the baseline and the same history, read-only."""
+    srv.http.post(f"/api/machines/{mid}/versions", json={"name": "delivered", "baseline": True})
+    change = {"scope": "axis", "target": "X", "name": "getriebe[0].kv", "value": 1500}
+    srv.http.patch(f"/api/machines/{mid}/parameters", json={"changes": [change]})
+    note = {"text": "replaced the encoder cable of X"}
+    srv.http.post(f"/api/machines/{mid}/history/notes", json=note).raise_for_status()
+    a = open_hmi(browser, srv.base, f"{mid}/history")
+    try:
+        with a.expect_download() as got:
+            panel(a, "history").get_by_test_id("history-bundle").click()
+        zip_path = tmp_path / got.value.suggested_filename
+        got.value.save_as(zip_path)
+        assert zip_path.name.startswith(f"{mid}_bundle_")
+    finally:
+        a.close()
+    other = Server(tmp_path / "other.sqlite").start()
+    e = open_hmi(browser, other.base, "demo/history")
+    try:
+        panel(e, "bundles").get_by_test_id("bundle-file").set_input_files(str(zip_path))
+        offline = panel(e, "bundle")
+        expect(offline).to_contain_text(f"Offline: {mid}")
+        expect(offline.get_by_test_id("diff-row-X-getriebe[0].kv")).to_contain_text("1500")
+        rows = panel(e, "bundle-history").get_by_test_id("history-row")
+        expect(rows.filter(has_text=note["text"])).to_have_count(1)
+        expect(panel(e, "bundle-history").get_by_test_id("history-note-input")).to_have_count(0)
+        shot(e, "bundle-offline-desktop")
+    finally:
+        e.close()
+        other.close()

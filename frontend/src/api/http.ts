@@ -56,7 +56,7 @@ async function request<T>(method: string, url: string, body?: unknown, opts: Opt
     res = await fetch(url, {
       method,
       headers,
-      body: body === undefined ? undefined : opts.contentType ? String(body) : JSON.stringify(body),
+      body: body === undefined ? undefined : body instanceof Blob ? body : opts.contentType ? String(body) : JSON.stringify(body),
     });
   } catch {
     reachListeners.forEach((f) => f(false));
@@ -92,6 +92,8 @@ export const http = {
   post: <T>(url: string, body: unknown) => request<T>("POST", url, body),
   /** A file's text as is: `text/plain` (parameter import) or e.g. `text/csv` (trace import). */
   postText: <T>(url: string, text: string, contentType = "text/plain") => request<T>("POST", url, text, { contentType }),
+  /** A file as the body, as it is (a bundle's zip). */
+  postFile: <T>(url: string, file: Blob, contentType: string) => request<T>("POST", url, file, { contentType }),
   put: <T>(url: string, body: unknown) => request<T>("PUT", url, body),
   patch: <T>(url: string, body: unknown) => request<T>("PATCH", url, body),
   del: <T>(url: string) => request<T>("DELETE", url),

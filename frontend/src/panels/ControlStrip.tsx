@@ -58,6 +58,13 @@ export function ControlStrip() {
       ) : !h ? (
         <span class="hint">the first command takes control</span>
       ) : null}
+      {(c.viewers ?? []).length ? (
+        <span class="viewers" data-testid="control-viewers"
+          title={(c.viewers ?? []).map((v) => (v.guest ? `${v.user} (share link)` : who(v))).join(", ")}>
+          ⊙ {(c.viewers ?? []).length} watching
+          {(c.viewers ?? []).some((v) => v.guest) ? ` · ${(c.viewers ?? []).filter((v) => v.guest).length} by share link` : ""}
+        </span>
+      ) : null}
       {h && lapseS !== null ? (
         <span class="control-lost" data-testid="control-lost">
           no live connection: released in {lapseS} s

@@ -44,7 +44,7 @@ const RANGES: { label: string; back_s: number }[] = [
 const KIND_WORDS: Partial<Record<HistoryKind, string>> = {
   job_error: "✖ job error",
   cleared: "✓ cleared",
-  acknowledged: "👁 acknowledged",
+  acknowledged: "☑ acknowledged",
   event: "ℹ event",
   power: "↻ power-on",
   service: "⚙ service",
@@ -90,9 +90,12 @@ function when(t: number): string {
   return `${d.toLocaleDateString()} ${d.toLocaleTimeString()}`;
 }
 
-const base = () => `/api/machines/${encodeURIComponent(machineId.value)}/history`;
+const machineBase = () => `/api/machines/${encodeURIComponent(machineId.value)}/history`;
 
-export function HistoryPanel() {
+/** The machine's history, or (`bundle`) an opened bundle's: read-only, as it was then. */
+export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
+  const offline = props.bundle;
+  const base = () => (offline ? `/api/bundles/${offline.id}/history` : machineBase());
   const [f, setF] = useState<Filter>({ group: 0, severity: 0, back_s: 0, actor: "", text: "" });
   const [rows, setRows] = useState<HistoryEntry[]>([]);
   const [total, setTotal] = useState(0);
@@ -103,7 +106,7 @@ export function HistoryPanel() {
   const [lastS, setLastS] = useState(60);
   const [flight, setFlight] = useState<FlightRecorderStatus | null>(null);
   useEffect(() => {
-    if (machineId.value) void http.get<FlightRecorderStatus>(`/api/machines/${encodeURIComponent(machineId.value)}/flight-recorder`).then(setFlight, () => setFlight(null));
+    if (machineId.value && !offline) void http.get<FlightRecorderStatus>(`/api/machines/${encodeURIComponent(machineId.value)}/flight-recorder`).then(setFlight, () => setFlight(null));
   }, [machineId.value, saved]);
   useEffect(() => {
     const t = setTimeout(() => setF((old) => (old.actor === typed.actor && old.text === typed.text ? old : { ...old, ...typed })), TYPING_MS);
@@ -111,7 +114,7 @@ export function HistoryPanel() {
   }, [typed.actor, typed.text]);
 
   async function load(older: boolean) {
-    if (!machineId.value) return;
+    if (!machineId.value && !offline) return;
     const q = query(f);
     q.set("limit", String(PAGE));
     const last = rows[rows.length - 1];
@@ -128,11 +131,12 @@ export function HistoryPanel() {
       setError(e instanceof ApiError ? e.refusal.message : String(e));
     }
   }
-  useEffect(() => void load(false), [f, machineId.value]);
+  useEffect(() => void load(false), [f, machineId.value, offline?.id]);
 
   // entries written while the panel is open arrive over the socket
   const live = liveHistory.value;
   useEffect(() => {
+    if (offline) return;
     const fresh = live.filter((e) => matches(e, f));
     if (!fresh.length) return;
     setRows((now) => {
@@ -173,7 +177,7 @@ export function HistoryPanel() {
     return `${base()}/export?${q}`;
   };
   return (
-    <Panel title={`History: machine ${machineId.value}`} id="history">
+    <Panel title={offline ? `History of ${offline.name} (offline, read-only)` : `History: machine ${machineId.value}`} id={offline ? "bundle-history" : "history"}>
       <div class="row history-filters">
         <label>
           Show{" "}
@@ -218,14 +222,23 @@ export function HistoryPanel() {
         <button type="button" class="secondary" data-testid="history-refresh" onClick={() => void load(false)}>
           Refresh
         </button>
-        <a class="button secondary" data-testid="history-csv" href={exportUrl("csv")} download>
-          Export CSV
-        </a>
-        <a class="button secondary" data-testid="history-json" href={exportUrl("json")} download>
-          JSON
-        </a>
+        {offline ? null : (
+          <>
+            <a class="button secondary" data-testid="history-csv" href={exportUrl("csv")} download>
+              Export CSV
+            </a>
+            <a class="button secondary" data-testid="history-json" href={exportUrl("json")} download>
+              JSON
+            </a>
+            <a class="button secondary" data-testid="history-bundle" download
+              href={`/api/machines/${encodeURIComponent(machineId.value)}/bundle`}
+              title="one zip for an expert elsewhere: lists, versions and the diff against the baseline, this history, the alarms' flight-recorder traces (.rrd and CSV), the status">
+              Diagnostic bundle
+            </a>
+          </>
+        )}
       </div>
-      {may("note") ? (
+      {may("note") && !offline ? (
         <form class="row history-note" onSubmit={(e) => void addNote(e)}>
           <input data-testid="history-note-input" maxLength={2000} value={note} aria-label="logbook entry"
             placeholder="Logbook entry, e.g. replaced the encoder cable of X"
@@ -235,7 +248,7 @@ export function HistoryPanel() {
           </button>
         </form>
       ) : null}
-      {may("capture") ? (
+      {may("capture") && !offline ? (
         <div class="row history-flight">
           <span class="hint" data-testid="flight-status"
             title={flight ? `full rate for the last ${fmt(flight.full_rate_s, 0)} s, one sample in ${flight.decimation} cycles beyond; ${fmt(flight.bytes / 1e6, 1)} MB` : ""}>

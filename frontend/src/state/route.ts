@@ -6,7 +6,7 @@ import { effect, signal } from "@preact/signals";
 import { followNewest, shownId } from "./scope";
 import { machineId } from "./session";
 
-export const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Drive tuning", "Service", "HLI / PLC", "History"] as const;
+export const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Drive tuning", "Service", "HLI / PLC", "History", "Fleet"] as const;
 export type Tab = (typeof TABS)[number];
 
 const slug = (t: Tab) => t.toLowerCase().replace(/[^a-z0-9]+/g, "-");
