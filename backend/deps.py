@@ -118,6 +118,7 @@ class Services:
             settings.flight_keep,
         )
         flight.start()
+        traces.notes_of = history.notes_in
         viewer = RerunViewer(tdir / "rerun-viewer.log")
         hub.start()
         recorders.start()

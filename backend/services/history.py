@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 from typing import cast
 
 from api.history import HistoryEntry, HistoryKind, Severity
+from api.scope import TraceDetail
 from backend import VERSION
 from backend.errors import Conflict
 from backend.services.audit_log import Entry
@@ -399,6 +400,18 @@ class History:
         """The machine's job errors in force (since its last reset or power-on)."""
         with self._lock:
             return list(self._of(mid).active)
+
+    def notes_in(self, d: TraceDetail) -> list[tuple[float, str]]:
+        """The notes written on the trace's machine while it was recorded, at their
+        simulated time (sim_time s, 'who: text'), for its timeline."""
+        t0, t1 = d.first_cycle * d.cycle_s, (d.first_cycle + d.count) * d.cycle_s
+        span = t1 - t0
+        rows = self.store.query(
+            "SELECT sim_t_s, actor, text FROM machine_log WHERE machine = ? AND kind = 'note' "
+            "AND time BETWEEN ? AND ? AND sim_t_s BETWEEN ? AND ? ORDER BY time",
+            (d.machine, d.created_unix - span - 60.0, d.created_unix + 1.0, t0, t1),
+        )
+        return [(float(r["sim_t_s"]), f"{r['actor']}: {r['text']}") for r in rows]
 
     def alarms(self, machines: list[str], limit: int) -> list[tuple[str, HistoryEntry]]:
         """The newest job errors of these machines, newest first, with their machine."""

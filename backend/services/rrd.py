@@ -84,7 +84,11 @@ def blueprint(machine: str, signals: Sequence[str]) -> rrb.Blueprint:
                     )
                 )
     side = rrb.Vertical(
-        rrb.TextLogView(origin=f"{machine}/events", name="events"),
+        rrb.TextLogView(
+            origin=machine,
+            contents=[f"{machine}/events", f"{machine}/notes"],
+            name="events and notes",
+        ),
         rrb.TextDocumentView(origin=machine, contents=[machine], name="about"),
     )
     return rrb.Blueprint(rrb.Horizontal(rrb.Grid(*views), side, column_shares=[3, 1]))
@@ -149,6 +153,16 @@ class RrdWriter:
         )
 
 
+def notes(stream: rr.RecordingStream, machine: str, at: Sequence[tuple[float, str]]) -> None:
+    """Logbook entries (sim_time s, text) as text logs at `<machine>/notes`."""
+    if at:
+        stream.send_columns(
+            f"{machine}/notes",
+            indexes=[rr.TimeColumn("sim_time", duration=np.array([t for t, _ in at]))],
+            columns=rr.TextLog.columns(text=[text for _, text in at], level=["INFO"] * len(at)),
+        )
+
+
 def open_stream(
     path: Path, recording_id: str, machine: str, about: str, signals: Sequence[str]
 ) -> rr.RecordingStream:
@@ -176,12 +190,14 @@ def write_capture(
     cycle_s: float,
     data: np.ndarray,
     events: Sequence[Event],
+    logbook: Sequence[tuple[float, str]] = (),
 ) -> None:
-    """One capture as an .rrd file."""
+    """One capture as an .rrd file (with the logbook's notes of its time: sim_time, text)."""
     tmp = path.with_suffix(".part")
     stream = open_stream(tmp, recording_id, machine, about, signals)
     w = RrdWriter(stream, machine, signals, cycle_s)
     w.block(first_cycle, data)
     w.events(events)
+    notes(stream, machine, logbook)
     close_stream(stream)
     tmp.replace(path)

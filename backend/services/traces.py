@@ -11,6 +11,7 @@ import contextlib
 import logging
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -117,6 +118,8 @@ class TraceService:
         self.user_quota_mb = user_quota_mb  # one user's saved and imported traces
         self._lock = threading.Lock()
         self._cache: dict[str, Trace] = {}  # recent captures, converted once
+        # the logbook's notes in a trace's time (sim_time s, text): set by the history
+        self.notes_of: Callable[[TraceDetail], list[tuple[float, str]]] = lambda d: []
 
     # --- finding ----------------------------------------------------------------------------
     def _from_capture(self, m: MachineProxy, cap: Capture) -> Trace:
@@ -356,6 +359,7 @@ class TraceService:
                 d.cycle_s,
                 trace.data,
                 trace.events(),
+                self.notes_of(d),
             )
         return path
 

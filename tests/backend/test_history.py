@@ -229,8 +229,8 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     srv: Server, lathe: str, tmp_path: Path
 ) -> None:
     """An emergency stop (90005) after more than 8 s of running: the recorder saves 8 s before
-    and 2 s after it at full rate, the error as trigger and on the timeline (also in Rerun),
-    and the history entry links to it. On demand it saves the last 5 s at full rate and the
+    and 2 s after it at full rate, the error as trigger and on the timeline (also in Rerun,
+    with the logbook entry written just before), and the history entry links to it. On demand it saves the last 5 s at full rate and the
     last 60 s one cycle in ten from its long tier."""
     srv.pace(lathe, mode="fast")
     deadline = time.monotonic() + 30
@@ -238,6 +238,8 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
         assert time.monotonic() < deadline
         time.sleep(0.05)
     srv.pace(lathe, mode="run")
+    note = {"text": "checking the X slide"}  # a logbook entry just before: on the timeline
+    srv.http.post(f"/api/machines/{lathe}/history/notes", json=note).raise_for_status()
     assert srv.emergency_stop(lathe).status_code == 200
     deadline = time.monotonic() + 30
     while not (rows := _history(srv, lathe, kind=["job_error"])) or rows[0]["trace"] is None:
@@ -257,6 +259,7 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     rrd.write_bytes(srv.http.get(f"/api/traces/{error['trace']}/trace.rrd").content)
     chunks = rrd_chunks(rrd)
     assert chunks[f"/{lathe}/events"] >= 1 and chunks[f"/{lathe}/X"] == 10_001
+    assert chunks[f"/{lathe}/notes"] == 1
 
     url = f"/api/machines/{lathe}/flight-recorder"
     status = srv.http.get(url).json()
