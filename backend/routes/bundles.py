@@ -32,7 +32,7 @@ from backend.routes.service import service_status
 from backend.services import parameters as params
 from backend.services.audit_log import Entry
 from backend.services.bundle import Contents, build, lists_of
-from backend.services.history import EXPORT_ROWS, HistoryFilter
+from backend.services.machine_log import EXPORT_ROWS, HistoryFilter
 from backend.services.machines import MachineProxy
 from backend.services.status import status_of
 from backend.workers.protocol import ReadStatus, StatusRead

@@ -12,7 +12,7 @@ from api.auth import Action
 from api.history import HistoryEntry, HistoryKind, HistoryPage, NoteCreate, Severity
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import CREATED, OK, Conflict, NotFound, responses
-from backend.services.history import EXPORT_ROWS, MAX_PAGE, HistoryFilter, csv_text
+from backend.services.machine_log import EXPORT_ROWS, MAX_PAGE, HistoryFilter, csv_text
 
 router = APIRouter(prefix="/api/machines", tags=["history"])
 

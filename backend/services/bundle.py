@@ -32,7 +32,7 @@ from api.history import HistoryEntry
 from api.versions import VersionDiff, VersionInfo
 from backend import VERSION
 from backend.errors import ApiError, Invalid, not_found
-from backend.services.history import EXPORT_ROWS, HistoryFilter, csv_text
+from backend.services.machine_log import EXPORT_ROWS, HistoryFilter, csv_text
 from backend.services.store import Store
 from backend.services.trace_csv import from_csv, to_csv
 from backend.services.traces import TraceService

@@ -166,7 +166,14 @@ class FlightRecorder:
     # --- the thread --------------------------------------------------------------------------
     def _run(self) -> None:
         while not self._stop.wait(PERIOD_S):
-            for proxy in self.machines.proxies():
+            proxies = self.machines.proxies()
+            with self._lock:  # a deleted machine's tier goes with it
+                live = {p.id for p in proxies}
+                for mid in [mid for mid in self._tapes if mid not in live]:
+                    del self._tapes[mid]
+                for mid in [mid for mid in self._pending if mid not in live]:
+                    del self._pending[mid]
+            for proxy in proxies:
                 try:
                     self._feed(proxy)
                     self._due(proxy)

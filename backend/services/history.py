@@ -1,6 +1,6 @@
 """A machine's history: one timeline, kept in the store, of what happened to it and who did it.
 
-Two tables make it. The machine log (`machine_log`, here) holds what the NC and the service
+Two tables make it. The machine log (machine_log.py) holds what the NC and the service
 report: job errors (each put down to the command whose block raised it, where one did), the
 blocks a job error dropped, resets clearing errors, information events, power-ons (built,
 restarted, rebuilt after a worker died, restored), service starts and stops, notes and
@@ -16,157 +16,31 @@ both live from a bounded tail per machine (the telemetry hub reads it by cursor)
 
 from __future__ import annotations
 
-import csv
-import io
 import logging
 import queue
-import sqlite3
 import threading
 import time
 from collections import OrderedDict, deque
 from dataclasses import dataclass, field, replace
-from typing import cast
 
 from api.history import HistoryEntry, HistoryKind, Severity
 from api.scope import TraceDetail
 from backend import VERSION
 from backend.errors import Conflict
+from backend.services import machine_log
 from backend.services.audit_log import Entry
+from backend.services.machine_log import HistoryFilter, LogRow, audit_entry
 from backend.services.machines import MachineProxy, MachineService
-from backend.services.store import Row, Store
+from backend.services.store import Store
 from nc_sim.errors import Code
 from nc_sim.events import Event
 
 log = logging.getLogger(__name__)
 
-SCHEMA = """
-CREATE TABLE IF NOT EXISTS machine_log (
-    id INTEGER PRIMARY KEY AUTOINCREMENT,
-    machine TEXT NOT NULL,
-    time REAL NOT NULL,            -- wall clock, Unix time
-    sim_t_s REAL,                  -- the machine's simulated time (NULL: not running then)
-    epoch INTEGER,                 -- the machine's build
-    kind TEXT NOT NULL,            -- api/history.py LogKind, or 'command' for a dropped block
-    severity TEXT NOT NULL,        -- error | warning | info
-    actor TEXT NOT NULL,           -- '' for the NC itself
-    text TEXT NOT NULL,
-    outcome TEXT NOT NULL DEFAULT '',
-    code INTEGER,
-    axis TEXT NOT NULL DEFAULT '',
-    trace TEXT,                    -- a trace saved with it (flight recorder)
-    cause TEXT                     -- a job error: the command that raised it
-);
-CREATE INDEX IF NOT EXISTS machine_log_time ON machine_log (machine, time);
-CREATE INDEX IF NOT EXISTS machine_log_kind ON machine_log (kind, time);
-"""
-_LOG_COLUMNS = (
-    "machine, time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis, trace, cause"
-)
-_ENTRY_COLUMNS = (
-    "time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis, trace, cause"
-)
-# both tables in the columns of a history entry (a machine's rows; `?` twice: the machine)
-_MERGED = """
-SELECT 'a' || seq AS id, 0 AS src, seq AS n, time, sim_t_s, epoch, kind,
-       CASE WHEN outcome = 'ok' THEN 'info' ELSE 'warning' END AS severity,
-       actor, action AS text, outcome, NULL AS code, '' AS axis, NULL AS trace, NULL AS cause
-FROM audit_log WHERE machine = ?
-UNION ALL
-SELECT 'h' || id, 1, id, time, sim_t_s, epoch, kind, severity, actor, text, outcome, code, axis,
-       trace, cause
-FROM machine_log WHERE machine = ?
-"""
-MAX_PAGE = 1000
-EXPORT_ROWS = 100_000  # an export holds at most this many entries (the newest)
 TAIL = 256  # live entries kept per machine for viewers that fall behind
 BATCH_S = 0.1  # the writer gathers a burst this long
 PRUNE_EVERY_S = 60.0
 SENT_KEPT = 256  # MDI blocks per machine whose sender is remembered (to attribute errors)
-ROW_BYTES = 200  # about what a row takes on disk (measured in bench/history.py)
-
-
-@dataclass(frozen=True)
-class LogRow:
-    """A row for the machine log."""
-
-    machine: str
-    kind: HistoryKind
-    severity: Severity
-    text: str
-    actor: str = ""
-    sim_t_s: float | None = None
-    epoch: int | None = None
-    outcome: str = ""
-    code: int | None = None
-    axis: str = ""
-    trace: str | None = None
-    cause: str | None = None
-    time: float = field(default_factory=time.time)
-
-
-@dataclass(frozen=True)
-class HistoryFilter:
-    """Which entries: all given conditions hold."""
-
-    kinds: tuple[str, ...] = ()
-    severities: tuple[str, ...] = ()
-    actor: str | None = None  # part of the name, any case
-    since_unix: float | None = None
-    until_unix: float | None = None
-    text: str | None = None  # in the text, outcome or cause
-
-    def where(self) -> tuple[str, tuple[object, ...]]:
-        conds: list[str] = []
-        args: list[object] = []
-        for column, values in (("kind", self.kinds), ("severity", self.severities)):
-            if values:
-                conds.append(f"{column} IN ({', '.join('?' * len(values))})")
-                args += values
-        if self.actor:
-            conds.append("instr(lower(actor), ?) > 0")
-            args.append(self.actor.lower())
-        if self.since_unix is not None:
-            conds.append("time >= ?")
-            args.append(self.since_unix)
-        if self.until_unix is not None:
-            conds.append("time < ?")
-            args.append(self.until_unix)
-        if self.text:
-            conds.append("instr(lower(text || ' ' || outcome || ' ' || ifnull(cause, '')), ?) > 0")
-            args.append(self.text.lower())
-        return (" WHERE " + " AND ".join(conds) if conds else ""), tuple(args)
-
-
-def _entry(r: Row) -> HistoryEntry:
-    return HistoryEntry(
-        id=r["id"],
-        time_unix=r["time"],
-        sim_t_s=r["sim_t_s"],
-        epoch=r["epoch"],
-        kind=r["kind"],
-        severity=r["severity"],
-        actor=r["actor"],
-        text=r["text"],
-        outcome=r["outcome"],
-        code=r["code"],
-        axis=r["axis"],
-        trace=r["trace"],
-        cause=r["cause"],
-    )
-
-
-def _audit_entry(seq: int, e: Entry, stamp: tuple[int, float] | None) -> HistoryEntry:
-    return HistoryEntry(
-        id=f"a{seq}",
-        time_unix=e.time if e.time is not None else time.time(),
-        sim_t_s=stamp[1] if stamp else None,
-        epoch=stamp[0] if stamp else None,
-        kind=e.kind,
-        severity="info" if e.outcome == "ok" else "warning",
-        actor=e.actor,
-        text=e.action,
-        outcome=e.outcome,
-    )
 
 
 @dataclass
@@ -189,7 +63,7 @@ class History:
     def __init__(self, store: Store, days: float, rows_per_machine: int) -> None:
         self.store = store
         self.days, self.rows_per_machine = days, rows_per_machine
-        store.script(SCHEMA)
+        store.script(machine_log.SCHEMA)
         store.on_audited = self._audited
         self._machines: dict[str, _Machine] = {}
         self._lock = threading.Lock()
@@ -202,6 +76,7 @@ class History:
         """Take every machine's events and power-ons, and stamp its audit rows with its
         simulated time."""
         machines.event_takers.append(self.events)
+        machines.on_deleted.append(self.forget)
         machines.on_power = self._powered
         self.store.clock = machines.stamp
 
@@ -335,29 +210,26 @@ class History:
         self.flush()  # what came before it is written first
         return self._insert([row])[0]
 
+    def _insert(self, rows: list[LogRow]) -> list[HistoryEntry]:
+        entries = machine_log.insert(self.store, rows)
+        with self._lock:
+            for e, r in zip(entries, rows, strict=True):
+                self._push(r.machine, e)
+        return entries
+
+    def prune(self) -> int:
+        """End rows past the retention (days, rows per machine); how many."""
+        self._pruned = time.monotonic()
+        return machine_log.prune(self.store, self.days, self.rows_per_machine)
+
     def link_trace(self, mid: str, epoch: int, errors: list[Event], trace: str) -> None:
         """The flight recorder saved `trace` around these job errors: their entries link to
         it (viewers get them again, with the link)."""
         self.flush()
-
-        def work(db: sqlite3.Connection) -> list[Row]:
-            rows: list[Row] = []
-            for e in errors:
-                where = (
-                    "machine = ? AND epoch = ? AND kind = 'job_error' AND code = ? AND sim_t_s = ?"
-                )
-                args = (mid, epoch, e.code, e.t_s)
-                db.execute(f"UPDATE machine_log SET trace = ? WHERE {where}", (trace, *args))
-                rows += db.execute(
-                    f"SELECT 'h' || id AS id, {_ENTRY_COLUMNS} FROM machine_log WHERE {where}",
-                    args,
-                ).fetchall()
-            return rows
-
-        rows = self.store.transaction(work)
+        entries = machine_log.link_trace(self.store, mid, epoch, errors, trace)
         with self._lock:
-            for r in rows:
-                self._push(mid, _entry(r))
+            for e in entries:
+                self._push(mid, e)
 
     def flight_failed(self, machine: MachineProxy, error: Event, why: str) -> None:
         """The flight recorder could not save the window of a job error."""
@@ -377,7 +249,7 @@ class History:
             for seq, e in written:
                 if e.machine:
                     stamp = clock(e.machine) if clock is not None else None
-                    self._push(e.machine, _audit_entry(seq, e, stamp))
+                    self._push(e.machine, audit_entry(seq, e, stamp))
 
     def _push(self, mid: str, entry: HistoryEntry) -> None:
         m = self._of(mid)
@@ -396,58 +268,28 @@ class History:
             return [e for s, e in m.tail if s > cursor], m.tail_seq
 
     # --- reading ---------------------------------------------------------------------------
-    def active(self, mid: str) -> list[str]:
-        """The machine's job errors in force (since its last reset or power-on)."""
-        with self._lock:
-            return list(self._of(mid).active)
-
-    def notes_in(self, d: TraceDetail) -> list[tuple[float, str]]:
-        """The notes written on the trace's machine while it was recorded, at their
-        simulated time (sim_time s, 'who: text'), for its timeline."""
-        t0, t1 = d.first_cycle * d.cycle_s, (d.first_cycle + d.count) * d.cycle_s
-        span = t1 - t0
-        rows = self.store.query(
-            "SELECT sim_t_s, actor, text FROM machine_log WHERE machine = ? AND kind = 'note' "
-            "AND time BETWEEN ? AND ? AND sim_t_s BETWEEN ? AND ? ORDER BY time",
-            (d.machine, d.created_unix - span - 60.0, d.created_unix + 1.0, t0, t1),
-        )
-        return [(float(r["sim_t_s"]), f"{r['actor']}: {r['text']}") for r in rows]
+    # --- reading ---------------------------------------------------------------------------
+    def page(
+        self, mid: str, f: HistoryFilter, limit: int = 200, before: tuple[float, str] | None = None
+    ) -> tuple[list[HistoryEntry], int]:
+        """Matching entries of the machine's whole history, newest first (older ones:
+        `before` = (time, id) of the last one seen), and how many match in all."""
+        self.flush()
+        return machine_log.page(self.store, mid, f, limit, before)
 
     def alarms(self, machines: list[str], limit: int) -> list[tuple[str, HistoryEntry]]:
         """The newest job errors of these machines, newest first, with their machine."""
         self.flush()
-        if not machines:
-            return []
-        rows = self.store.query(
-            f"SELECT 'h' || id AS id, machine, {_ENTRY_COLUMNS} FROM machine_log "
-            f"WHERE kind = 'job_error' AND machine IN ({', '.join('?' * len(machines))}) "
-            "ORDER BY time DESC LIMIT ?",
-            (*machines, limit),
-        )
-        return [(str(r["machine"]), _entry(r)) for r in rows]
+        return machine_log.alarms(self.store, machines, limit)
 
-    def page(
-        self,
-        mid: str,
-        f: HistoryFilter,
-        limit: int = 200,
-        before: tuple[float, str] | None = None,
-    ) -> tuple[list[HistoryEntry], int]:
-        """Matching entries, newest first (older ones: `before` = (time, id) of the last
-        one seen), and how many match in all."""
-        self.flush()
-        where, args = f.where()
-        merged = f"SELECT * FROM ({_MERGED}){where}"
-        total = self.store.query(f"SELECT count(*) AS n FROM ({merged})", (mid, mid, *args))
-        page_where, page_args = "", cast(tuple[object, ...], ())
-        if before is not None:
-            src, n = (0 if before[1].startswith("a") else 1), int(before[1][1:])
-            page_where, page_args = " WHERE (time, src, n) < (?, ?, ?)", (before[0], src, n)
-        rows = self.store.query(
-            f"SELECT * FROM ({merged}){page_where} ORDER BY time DESC, src DESC, n DESC LIMIT ?",
-            (mid, mid, *args, *page_args, min(limit, EXPORT_ROWS)),
-        )
-        return [_entry(r) for r in rows], int(total[0]["n"])
+    def notes_in(self, d: TraceDetail) -> list[tuple[float, str]]:
+        """The notes written on a trace's machine while it was recorded (sim_time, text)."""
+        return machine_log.notes_in(self.store, d)
+
+    def active(self, mid: str) -> list[str]:
+        """The machine's job errors in force (since its last reset or power-on)."""
+        with self._lock:
+            return list(self._of(mid).active)
 
     # --- writing ---------------------------------------------------------------------------
     def flush(self) -> None:
@@ -479,60 +321,6 @@ class History:
             if None in batch:
                 return
 
-    def _insert(self, rows: list[LogRow]) -> list[HistoryEntry]:
-        def work(db: sqlite3.Connection) -> list[int]:
-            ids = []
-            for r in rows:
-                cur = db.execute(
-                    f"INSERT INTO machine_log ({_LOG_COLUMNS}) VALUES ({', '.join('?' * 13)})",
-                    (
-                        r.machine,
-                        r.time,
-                        r.sim_t_s,
-                        r.epoch,
-                        r.kind,
-                        r.severity,
-                        r.actor,
-                        r.text,
-                        r.outcome,
-                        r.code,
-                        r.axis,
-                        r.trace,
-                        r.cause,
-                    ),
-                )
-                ids.append(int(cur.lastrowid or 0))
-            return ids
-
-        ids = self.store.transaction(work)
-        entries = [_log_entry(rid, r) for rid, r in zip(ids, rows, strict=True)]
-        with self._lock:
-            for e, r in zip(entries, rows, strict=True):
-                self._push(r.machine, e)
-        return entries
-
-    def prune(self) -> int:
-        """End rows past the retention: older than `days`, beyond `rows_per_machine` per
-        machine (the oldest first); how many."""
-        self._pruned = time.monotonic()
-        cutoff = time.time() - self.days * 86400.0
-
-        def work(db: sqlite3.Connection) -> int:
-            gone = db.execute("DELETE FROM machine_log WHERE time < ?", (cutoff,)).rowcount
-            full = db.execute(
-                "SELECT machine FROM machine_log GROUP BY machine HAVING count(*) > ?",
-                (self.rows_per_machine,),
-            ).fetchall()
-            for r in full:
-                gone += db.execute(
-                    "DELETE FROM machine_log WHERE machine = ? AND id <= (SELECT id FROM "
-                    "machine_log WHERE machine = ? ORDER BY id DESC LIMIT 1 OFFSET ?)",
-                    (r["machine"], r["machine"], self.rows_per_machine),
-                ).rowcount
-            return int(gone)
-
-        return self.store.transaction(work)
-
 
 def _now_on(
     machine: MachineProxy, kind: HistoryKind, severity: Severity, text: str, actor: str = ""
@@ -540,47 +328,3 @@ def _now_on(
     """A row stamped with the machine's simulated time and build now."""
     sim_t_s = machine.link.cycle * machine.link.cycle_s
     return LogRow(machine.id, kind, severity, text, actor, sim_t_s, machine.link.epoch)
-
-
-def _log_entry(rid: int, r: LogRow) -> HistoryEntry:
-    return HistoryEntry(
-        id=f"h{rid}",
-        time_unix=r.time,
-        sim_t_s=r.sim_t_s,
-        epoch=r.epoch,
-        kind=r.kind,
-        severity=r.severity,
-        actor=r.actor,
-        text=r.text,
-        outcome=r.outcome,
-        code=r.code,
-        axis=r.axis,
-        trace=r.trace,
-        cause=r.cause,
-    )
-
-
-CSV_HEADER = (
-    "time_utc", "sim_t_s", "epoch", "kind", "severity", "actor", "text", "outcome", "code",
-    "axis", "cause", "trace", "id",
-)  # fmt: skip
-
-
-def utc(t: float) -> str:
-    """A Unix time as ISO 8601 UTC with milliseconds."""
-    return time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(t)) + f".{int(t % 1 * 1000):03d}Z"
-
-
-def csv_text(entries: list[HistoryEntry]) -> str:
-    """Entries as CSV, in the order given, for a spreadsheet."""
-    out = io.StringIO()
-    w = csv.writer(out)
-    w.writerow(CSV_HEADER)
-    for e in entries:
-        w.writerow(
-            [utc(e.time_unix), "" if e.sim_t_s is None else f"{e.sim_t_s:.3f}",
-             "" if e.epoch is None else e.epoch, e.kind, e.severity, e.actor, e.text,
-             e.outcome, "" if e.code is None else e.code, e.axis, e.cause or "", e.trace or "",
-             e.id]
-        )  # fmt: skip
-    return out.getvalue()

@@ -91,6 +91,7 @@ class MachineService:
         self.on_power: PoweredOn | None = None  # the history: every build is a power-on
         # the history, the flight recorder: every machine's new events (a push thread's)
         self.event_takers: list[EventsTaken] = []
+        self.on_deleted: list[Callable[[str], None]] = []  # what keeps something per machine
 
     def proxies(self) -> list[MachineProxy]:
         with self._lock:
@@ -283,6 +284,8 @@ class MachineService:
         with self._lock:
             del self._proxies[mid]
         proxy.deleted = True
+        for forget in self.on_deleted:
+            forget(mid)
         worker = proxy.link.live_worker
         if worker is not None:
             with contextlib.suppress(WorkerGone, WorkerRefused):  # gone with its worker

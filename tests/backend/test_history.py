@@ -21,7 +21,8 @@ from websockets.asyncio.client import connect
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
 from backend.services.accounts import Accounts
-from backend.services.history import History, LogRow
+from backend.services.history import History
+from backend.services.machine_log import LogRow
 from backend.services.shares import Shares
 from backend.services.store import Store
 from tests.backend.server import Server, add_users, bearer
@@ -230,8 +231,9 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
 ) -> None:
     """An emergency stop (90005) after more than 8 s of running: the recorder saves 8 s before
     and 2 s after it at full rate, the error as trigger and on the timeline (also in Rerun,
-    with the logbook entry written just before), and the history entry links to it. On demand it saves the last 5 s at full rate and the
-    last 60 s one cycle in ten from its long tier."""
+    with the logbook entry written just before), and the history entry links to it. On
+    demand it saves the last 5 s at full rate and the last 60 s one cycle in ten from its
+    long tier."""
     srv.pace(lathe, mode="fast")
     deadline = time.monotonic() + 30
     while srv.status(lathe)["simulation"]["cycle"] < 9000:
