@@ -7,6 +7,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
+from api.scope import TraceInfo
 from api.versions import VersionDiff, VersionInfo
 
 
@@ -44,3 +45,4 @@ class BundleDetail(BundleInfo):
     )
     versions: list[VersionInfo]
     diff: VersionDiff | None = Field(description="the live lists against the baseline, then")
+    trace_infos: list[TraceInfo] = Field(description="its alarm traces in this library")

@@ -44,7 +44,8 @@ class ControlState(BaseModel):
     seq: int = Field(
         0,
         ge=0,
-        description="changes so far: of two states (an answer, a push) the higher is the newer",
+        description="grows with every change, across restarts of the service too: of two "
+        "states (an answer, a push) the higher is the newer",
     )
     viewers: list[ControlParty] = Field(
         default_factory=list,

@@ -29,11 +29,12 @@ from pydantic import ValidationError
 
 from api.bundle import BundleDetail, BundleInfo, BundleManifest
 from api.history import HistoryEntry
+from api.scope import TraceDetail, TraceInfo
 from api.versions import VersionDiff, VersionInfo
 from backend import VERSION
 from backend.errors import ApiError, Invalid, not_found
 from backend.services.machine_log import EXPORT_ROWS, HistoryFilter, csv_text
-from backend.services.store import Store
+from backend.services.store import Row, Store
 from backend.services.trace_csv import from_csv, to_csv
 from backend.services.traces import TraceService
 from nc_sim.params import Scope
@@ -48,7 +49,7 @@ CREATE TABLE IF NOT EXISTS bundles (
     created REAL NOT NULL,          -- when it was opened here
     opened_by TEXT NOT NULL,
     manifest TEXT NOT NULL,         -- JSON BundleManifest
-    traces TEXT NOT NULL            -- JSON [library trace id, ...]
+    traces TEXT NOT NULL            -- JSON {id in the bundle: id in this library}
 );
 """
 
@@ -76,7 +77,9 @@ def lists_of(scopes: Sequence[tuple[Scope, str | None]], export: Any) -> dict[st
 
 def build(c: Contents, traces: TraceService, mid: str, by: str) -> tuple[bytes, BundleManifest]:
     """The bundle as zip bytes, and its manifest."""
-    flight = [t for t in traces.library(mid) if t.source == "flight"][:ALARM_TRACES]
+    flight = [
+        t for t in traces.library(mid) if t.source == "flight" and t.trigger.startswith("job error")
+    ][:ALARM_TRACES]
     manifest = BundleManifest(
         format=FORMAT,
         format_version=FORMAT_VERSION,
@@ -129,12 +132,16 @@ class Bundles:
             manifest = _manifest(z)
             bid = uuid.uuid4().hex[:12]
             offline = f"offline-{bid}"
-            ids = []
+            ids: dict[str, str] = {}
             for tid in manifest.traces:
                 trace = from_csv(_text(z, f"traces/{tid}.csv"), "")
                 trace.detail.machine = offline
                 trace.detail.machine_name = f"{manifest.machine_name} (offline, {bid})"
-                ids.append(self.traces.add(trace, by).id)
+                trace.detail.created_unix = manifest.created_unix  # not the opening's time
+                if f"traces/{tid}.json" in z.namelist():  # when it was captured
+                    was = json.loads(_text(z, f"traces/{tid}.json"))
+                    trace.detail.created_unix = float(was.get("created_unix", 0.0))
+                ids[tid] = self.traces.add(trace, by).id
         (self.dir / f"{bid}.zip").write_bytes(data)
         self.store.run(
             "INSERT INTO bundles VALUES (?, ?, ?, ?, ?)",
@@ -157,8 +164,14 @@ class Bundles:
             opened_unix=r["created"],
             opened_by=r["opened_by"],
             manifest=BundleManifest.model_validate_json(r["manifest"]),
-            traces=json.loads(r["traces"]),
+            traces=list(self._ids(bid, r).values()),
         )
+
+    @staticmethod
+    def _ids(bid: str, r: Row) -> dict[str, str]:
+        """Its traces' ids in the bundle → in this library."""
+        ids: dict[str, str] = json.loads(r["traces"])
+        return ids
 
     def _zip(self, bid: str) -> zipfile.ZipFile:
         self._info(bid)  # 404 for an unknown bundle
@@ -177,12 +190,16 @@ class Bundles:
                     VersionInfo.model_validate(v) for v in json.loads(_text(z, "versions.json"))
                 ],
                 diff=VersionDiff.model_validate(diff) if diff is not None else None,
+                trace_infos=[_trace_info(self.traces.get(tid).detail) for tid in info.traces],
             )
 
     def history(self, bid: str, f: HistoryFilter) -> list[HistoryEntry]:
         """The bundle's history, newest first, filtered as a live machine's is."""
+        ids = self._ids(bid, self.store.query("SELECT traces FROM bundles WHERE id = ?", (bid,))[0])
         with self._zip(bid) as z:
             rows = [HistoryEntry.model_validate(e) for e in json.loads(_text(z, "history.json"))]
+        for e in rows:  # a trace it carries, as it is in this library; else none
+            e.trace = ids.get(e.trace) if e.trace else None
         return [e for e in reversed(rows) if _matches(e, f)][:EXPORT_ROWS]
 
     def list_text(self, bid: str, name: str) -> str:
@@ -200,6 +217,10 @@ class Bundles:
                 self.traces.delete(tid)
         self.store.run("DELETE FROM bundles WHERE id = ?", (bid,))
         (self.dir / f"{bid}.zip").unlink(missing_ok=True)
+
+
+def _trace_info(d: TraceDetail) -> TraceInfo:
+    return TraceInfo.model_validate(d.model_dump(exclude={"params", "events"}))
 
 
 def _text(z: zipfile.ZipFile, name: str) -> str:

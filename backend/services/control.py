@@ -39,7 +39,9 @@ class MachineControl:
     connections: Counter[Key] = field(default_factory=Counter)  # live websockets per client
     watching: dict[Key, ControlParty] = field(default_factory=dict)  # who those clients are
     release_at: float | None = None  # wall time: the holder has no connection since
-    seq: int = 0  # changes, for the pushed status
+    # changes, for the pushed status; from the wall clock in ms, so that a page left open
+    # across a restart of the service takes the new state as newer
+    seq: int = field(default_factory=lambda: int(time.time() * 1000))
     frozen_by: str | None = None  # a class seat frozen by this instructor: students wait
 
     def state(self) -> ControlState:
@@ -198,7 +200,9 @@ class Control:
                     raise NotFound("no such request (withdrawn or lapsed)")
                 c.requests.remove(asked[0])
                 if req.action == "refuse":
-                    self._changed(m, actor, f"refused control to {_who(asked[0])}")
+                    watcher = Action.COMMAND not in ALLOWED[asked[0].role]
+                    what = "answered the request of" if watcher else "refused control to"
+                    self._changed(m, actor, f"{what} {_who(asked[0])}")
                 elif Action.COMMAND not in ALLOWED[asked[0].role]:
                     c.requests.append(asked[0])  # still asking: the holder may refuse it
                     raise Conflict(

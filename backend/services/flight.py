@@ -225,7 +225,8 @@ class FlightRecorder:
         signals = main_signals(m.link.signals)
         data, first = m.link.samples(signals, p.first, p.last, 1)
         what = f"job error {e.code}{' ' + e.axis if e.axis else ''}"
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime())
+        at = time.time() - (m.link.cycle - e.cycle) * m.link.cycle_s  # the error's wall clock
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(at))
         trace = self._trace(m, signals, data, first, m.link.cycle_s, e.cycle, what)
         trace.detail.name = f"{what} at {stamp}"
         trace.detail.notes = f"saved by the flight recorder: {e.message}"

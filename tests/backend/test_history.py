@@ -352,6 +352,9 @@ def test_a_bundle_opens_on_another_service_as_the_same_offline_machine(
         assert [(e["id"], e["text"]) for e in there] == [
             (e["id"], e["text"]) for e in history_here[-made:]
         ]
+        error_there = next(e for e in there if e["kind"] == "job_error")
+        assert error_there["trace"] == bundle["traces"][0]  # the trace as it is here
+        assert bundle["trace_infos"][0]["created_unix"] < opened.json()["opened_unix"]
         x_list = other.http.get(f"/api/bundles/{bundle['id']}/lists/axis_X.txt")
         here = srv.http.get(f"/api/machines/{lathe}/parameters/export", params={"target": "X"})
         assert x_list.text == here.text

@@ -88,14 +88,14 @@ export function BundlesPanel() {
               ))}
             </p>
             <h3>Alarm traces</h3>
-            {shown.traces.length ? null : <p class="hint">None: no job error had a flight-recorder trace.</p>}
+            {shown.trace_infos.length ? null : <p class="hint">None: no job error had a flight-recorder trace.</p>}
             <ul data-testid="bundle-traces">
-              {shown.traces.map((tid) => (
-                <li key={tid}>
-                  <button type="button" class="link" data-testid="bundle-trace-open" onClick={() => openTrace(tid)}>
-                    ▶ {tid} in the scope
+              {shown.trace_infos.map((t) => (
+                <li key={t.id}>
+                  <button type="button" class="link" data-testid="bundle-trace-open" onClick={() => openTrace(t.id)}>
+                    ▶ {t.name} (captured {at(t.created_unix)})
                   </button>{" "}
-                  <a href={`/api/traces/${tid}/viewer`} target="_blank" rel="noopener">
+                  <a href={`/api/traces/${t.id}/viewer`} target="_blank" rel="noopener">
                     Rerun
                   </a>
                 </li>

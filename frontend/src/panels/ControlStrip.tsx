@@ -80,7 +80,7 @@ export function ControlStrip() {
             : null}
         </span>
       ) : null}
-      {st === "other" && !waiting && !may("take_control") && !requested.value ? (
+      {st === "other" && !waiting && may("ask") && !may("take_control") && !requested.value ? (
         asking === null ? (
           <button type="button" class="secondary" data-testid="control-request" disabled={dis}
             title={may("control") ? `ask ${who(h!)} to hand it over` : `ask ${who(h!)} for their attention (you may watch only)`}
@@ -113,8 +113,8 @@ export function ControlStrip() {
             <span class="control-request" data-testid="control-incoming" key={`${r.session}/${r.client}`}>
               <b>{who(r)}</b> asks for control{r.message ? <q data-testid="control-request-said">{r.message}</q> : null}
               {r.role === "observer" ? null : button("control-grant", "Grant", "grant", r)}
-              {button("control-refuse", r.role === "observer" ? "Answered" : "Refuse", "refuse", r,
-                r.role === "observer" ? "an observer may watch only: this closes the request" : "")}
+              {button("control-refuse", r.role === "observer" ? "Seen" : "Refuse", "refuse", r,
+                r.role === "observer" ? "an observer may watch only: this tells them you saw it and closes the request" : "")}
             </span>
           ))
         : null}

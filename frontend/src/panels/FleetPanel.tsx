@@ -103,7 +103,7 @@ export function FleetPanel() {
                       {names.get(fleet.machine_of[a.id]) ?? fleet.machine_of[a.id]}
                     </button>
                   </td>
-                  <td>
+                  <td class="wrap">
                     <b>{a.code}</b> {a.axis ? `[${a.axis}] ` : ""}
                     {a.text}
                     {a.cause ? <div class="hint">{a.cause}</div> : null}

@@ -7,6 +7,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { FlightRecorderStatus, HistoryEntry, HistoryKind, HistoryPage, TraceInfo } from "../api/types";
+import { me } from "../state/auth";
 import { may } from "../state/control";
 import { liveHistory } from "../state/history";
 import { openTrace } from "../state/route";
@@ -106,7 +107,12 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
   const [lastS, setLastS] = useState(60);
   const [flight, setFlight] = useState<FlightRecorderStatus | null>(null);
   useEffect(() => {
-    if (machineId.value && !offline) void http.get<FlightRecorderStatus>(`/api/machines/${encodeURIComponent(machineId.value)}/flight-recorder`).then(setFlight, () => setFlight(null));
+    if (!machineId.value || offline) return;
+    const load = () =>
+      http.get<FlightRecorderStatus>(`/api/machines/${encodeURIComponent(machineId.value)}/flight-recorder`).then(setFlight, () => setFlight(null));
+    void load();
+    const t = setInterval(() => void load(), 5000); // how far back it reaches grows
+    return () => clearInterval(t);
   }, [machineId.value, saved]);
   useEffect(() => {
     const t = setTimeout(() => setF((old) => (old.actor === typed.actor && old.text === typed.text ? old : { ...old, ...typed })), TYPING_MS);
@@ -230,11 +236,11 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
             <a class="button secondary" data-testid="history-json" href={exportUrl("json")} download>
               JSON
             </a>
-            <a class="button secondary" data-testid="history-bundle" download
+            {me.value?.guest ? null : <a class="button secondary" data-testid="history-bundle" download
               href={`/api/machines/${encodeURIComponent(machineId.value)}/bundle`}
               title="one zip for an expert elsewhere: lists, versions and the diff against the baseline, this history, the alarms' flight-recorder traces (.rrd and CSV), the status">
               Diagnostic bundle
-            </a>
+            </a>}
           </>
         )}
       </div>
@@ -282,7 +288,7 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
         <table class="audit history" data-testid="history-table">
           <thead>
             <tr>
-              <th>Time</th>
+              <th title={Intl.DateTimeFormat().resolvedOptions().timeZone}>Time (local)</th>
               <th class="num" title="the machine's simulated time (from 0 at each power-on) and its build">Machine t [s]</th>
               <th>Kind</th>
               <th>Who</th>
@@ -313,9 +319,15 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
                         onClick={() => openTrace(r.trace!)}>
                         ▶ trace in the scope
                       </button>{" "}
-                      <a href={`/api/traces/${r.trace}/viewer`} target="_blank" rel="noopener" data-testid="history-trace-rerun">
-                        Rerun
-                      </a>
+                      {may("capture") ? (
+                        <a href={`/api/traces/${r.trace}/viewer`} target="_blank" rel="noopener" data-testid="history-trace-rerun">
+                          Rerun
+                        </a>
+                      ) : (
+                        <a href={`/api/traces/${r.trace}/trace.rrd`} download data-testid="history-trace-rrd">
+                          .rrd
+                        </a>
+                      )}
                     </span>
                   ) : null}
                 </td>

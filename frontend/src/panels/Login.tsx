@@ -5,7 +5,7 @@ import type { ComponentChildren } from "preact";
 import { useEffect, useRef, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { Refusal, SeatResult } from "../api/types";
-import { login } from "../state/auth";
+import { login, shareEnded } from "../state/auth";
 import { forgetSeat, wasSeat } from "../state/exercise";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
@@ -27,7 +27,16 @@ export function Login() {
   }, []);
   if (result === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
   if (result) return <ClassEnded result={result} onDone={() => setResult(null)} />;
-  return <LoginForm />;
+  return (
+    <>
+      {shareEnded.value ? (
+        <p class="refusal share-ended" role="alert" data-testid="share-ended">
+          The share link you were watching through has ended (it expired or was revoked). Ask whoever sent it for a new one.
+        </p>
+      ) : null}
+      <LoginForm />
+    </>
+  );
 }
 
 /** The end of a class for its student: the seat's final result; "Done" ends the old session

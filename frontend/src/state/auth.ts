@@ -11,7 +11,12 @@ export const me = signal<Me | null | undefined>(undefined);
 /** Someone is logged in: the machines, their socket and any polling run only then. */
 export const loggedIn = computed(() => !!me.value);
 
-unauthorizedListeners.add(() => void (me.value = null));
+/** This page watched through a share link that has ended (expired or revoked). */
+export const shareEnded = signal(false);
+unauthorizedListeners.add(() => {
+  if (me.value?.guest) shareEnded.value = true;
+  me.value = null;
+});
 
 /** Ask the service who the session belongs to. At start, until it answers; later (the
  * telemetry socket was refused) once, as the socket asks again when it reconnects. */

@@ -88,7 +88,8 @@ function lossNote(was: NonNullable<typeof before>, now: NonNullable<typeof befor
     return h.session === me.value?.session ? "you took control over in another tab" : `${who(h)} took control from you`;
   }
   if (was.requested && !now.requested && !(h && isMe(h)) && verb !== "cancel") {
-    if (partyKey(was.holder) === partyKey(h) && h) return `${who(h)} refused your request, or it lapsed`;
+    if (partyKey(was.holder) === partyKey(h) && h)
+      return may("control") ? `${who(h)} refused your request, or it lapsed` : `${who(h)} has seen your request (you may watch only), or it lapsed`;
   }
   return "";
 }

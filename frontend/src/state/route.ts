@@ -3,8 +3,8 @@
 // trace open in the scope). The address follows what is on screen without adding to the
 // browser's history at each tab.
 import { effect, signal } from "@preact/signals";
-import { followNewest, shownId } from "./scope";
-import { machineId } from "./session";
+import { followNewest, linkedTrace, shownId } from "./scope";
+import { machineId, selectMachine } from "./session";
 
 export const TABS = ["Exercise", "Operate", "Program", "Plots", "Scope", "Parameters", "Commissioning", "Drive tuning", "Service", "HLI / PLC", "History", "Fleet"] as const;
 export type Tab = (typeof TABS)[number];
@@ -21,10 +21,21 @@ export function parseHash(hash: string): { machine: string; tab: Tab | null; tra
 const first = parseHash(location.hash);
 /** The workspace on screen. */
 export const tab = signal<Tab>(first.tab ?? "Operate");
-if (first.trace) {
-  shownId.value = first.trace; // the linked trace, not the newest capture
-  followNewest.value = false;
-}
+linkedTrace.id = first.trace; // shown once the machine is (state/scope.ts)
+
+/** An address pasted into this tab: its machine, workspace and trace. */
+window.addEventListener("hashchange", () => {
+  const to = parseHash(location.hash);
+  if (!to.machine || location.hash.startsWith("#classes")) return;
+  if (to.machine !== machineId.value) {
+    linkedTrace.id = to.trace;
+    selectMachine(to.machine);
+  } else if (to.trace && to.trace !== shownId.value) {
+    followNewest.value = false;
+    shownId.value = to.trace;
+  }
+  if (to.tab) tab.value = to.tab;
+});
 
 /** The address of what is on screen, for a ticket. */
 export function hereUrl(): string {

@@ -154,13 +154,19 @@ export async function loadRoll(maxPoints: number): Promise<RollData | null> {
   return { t, channels, lastCycle: last, stride: h.stride };
 }
 
+/** A trace the address names (`#machine/scope/<trace>`): shown once its machine is. */
+export const linkedTrace = { id: "" };
+
 effect(() => {
   // another machine: its own scope and captures (another's stay in the trace library, named
-  // by their machine); back on this one, its newest capture shows again
-  void machineId.value;
+  // by their machine); back on this one, its newest capture shows again, unless the address
+  // names a trace
+  const mid = machineId.value;
+  const linked = mid ? linkedTrace.id : "";
+  if (linked) linkedTrace.id = "";
   scopeStatus.value = null;
-  shownId.value = "";
+  shownId.value = linked;
   overlayId.value = "";
-  followNewest.value = true;
+  followNewest.value = !linked;
   lastNewest = "";
 });
