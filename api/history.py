@@ -37,7 +37,9 @@ class HistoryEntry(BaseModel):
         None, description="the machine's simulated time then (s; from 0 at each power-on)"
     )
     epoch: int | None = Field(
-        None, description="the machine's build then (each power-on counts one up)"
+        None,
+        description="the machine's build then (each power-on counts one up, across restarts "
+        "of the service too)",
     )
     kind: HistoryKind
     severity: Severity

@@ -195,9 +195,9 @@ class Bundles:
 
     def history(self, bid: str, f: HistoryFilter) -> list[HistoryEntry]:
         """The bundle's history, newest first, filtered as a live machine's is."""
-        ids = self._ids(bid, self.store.query("SELECT traces FROM bundles WHERE id = ?", (bid,))[0])
-        with self._zip(bid) as z:
+        with self._zip(bid) as z:  # 404 for an unknown bundle
             rows = [HistoryEntry.model_validate(e) for e in json.loads(_text(z, "history.json"))]
+        ids = self._ids(bid, self.store.query("SELECT traces FROM bundles WHERE id = ?", (bid,))[0])
         for e in rows:  # a trace it carries, as it is in this library; else none
             e.trace = ids.get(e.trace) if e.trace else None
         return [e for e in reversed(rows) if _matches(e, f)][:EXPORT_ROWS]

@@ -77,6 +77,7 @@ class History:
         simulated time."""
         machines.event_takers.append(self.events)
         machines.on_deleted.append(self.forget)
+        machines.last_epoch = self.last_epoch
         machines.on_power = self._powered
         self.store.clock = machines.stamp
 
@@ -285,6 +286,10 @@ class History:
     def notes_in(self, d: TraceDetail) -> list[tuple[float, str]]:
         """The notes written on a trace's machine while it was recorded (sim_time, text)."""
         return machine_log.notes_in(self.store, d)
+
+    def last_epoch(self, mid: str) -> int:
+        """The machine's newest build in its history (0 for none)."""
+        return machine_log.last_epoch(self.store, mid)
 
     def active(self, mid: str) -> list[str]:
         """The machine's job errors in force (since its last reset or power-on)."""

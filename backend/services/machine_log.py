@@ -263,6 +263,12 @@ def prune(store: Store, days: float, rows_per_machine: int) -> int:
     return store.transaction(work)
 
 
+def last_epoch(store: Store, mid: str) -> int:
+    """The newest build of the machine its log names (0 for none)."""
+    rows = store.query("SELECT max(epoch) AS e FROM machine_log WHERE machine = ?", (mid,))
+    return int(rows[0]["e"] or 0)
+
+
 def link_trace(
     store: Store, mid: str, epoch: int, errors: list[Event], trace: str
 ) -> list[HistoryEntry]:

@@ -92,6 +92,8 @@ class MachineService:
         # the history, the flight recorder: every machine's new events (a push thread's)
         self.event_takers: list[EventsTaken] = []
         self.on_deleted: list[Callable[[str], None]] = []  # what keeps something per machine
+        # the newest build of a machine before this start (the history knows it)
+        self.last_epoch: Callable[[str], int] = lambda mid: 0
 
     def proxies(self) -> list[MachineProxy]:
         with self._lock:
@@ -204,6 +206,7 @@ class MachineService:
             stored = [sm]
         for sm in stored:
             proxy = MachineProxy(sm, self._config(sm))
+            proxy.link.epoch = self.last_epoch(sm.id)  # its builds count on across restarts
             proxy.exercise, faults = self.seats.get(sm.id, (None, None))
             self._place(proxy, "the service started", faults=faults)
             self._proxies[sm.id] = proxy

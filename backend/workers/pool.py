@@ -74,6 +74,8 @@ class WorkerPool:
         self._on_push: PushHandler = lambda _c, _p: None
         self._on_death: DeathHandler = lambda _c: None
         self.replaced = 0
+        self._replacing: list[threading.Thread] = []  # replacements being started
+        self._stopping = False
 
     @property
     def _on_cluster(self) -> bool:
@@ -130,8 +132,12 @@ class WorkerPool:
             w = self._new()
             try:
                 w.start(self._on_push, self._on_death)
-            except Exception:
-                log.exception("the replacement for worker %s did not start", dead.id)
+            except BaseException:  # Ray ends a call with SystemExit when it shuts down
+                if not self._stopping:
+                    log.exception("the replacement for worker %s did not start", dead.id)
+                return
+            if self._stopping:  # came up while the service stops: it goes too
+                w.stop()
                 return
             with self._lock:
                 self.workers = [x for x in self.workers if x is not dead] + [w]
@@ -140,10 +146,13 @@ class WorkerPool:
         if not self.alive():
             start()  # nothing left to rebuild on: wait for the new one
             return
-        threading.Thread(target=start, name="worker-replace", daemon=True).start()
+        t = threading.Thread(target=start, name="worker-replace", daemon=True)
+        self._replacing = [r for r in self._replacing if r.is_alive()] + [t]
+        t.start()
         up.wait(REPLACEMENT_WAIT_S)
 
     def stop(self) -> None:
+        self._stopping = True  # a replacement starting now stops once it is up
         for w in self.workers:
             try:
                 w.stop()
@@ -154,3 +163,5 @@ class WorkerPool:
             from backend.workers.ray_transport import disconnect
 
             disconnect()
+        for t in self._replacing:  # none outlives the pool
+            t.join(timeout=REPLACEMENT_WAIT_S)

@@ -124,6 +124,8 @@ def test_a_job_error_names_the_block_that_raised_it_and_survives_a_restart(
         "service started (Inbetrieb 0.2.0)",
     ]
     assert told["kind"] == "restarted" and "powered on again" in told["message"]
+    powered = [r["epoch"] for r in after if r["kind"] == "power"]
+    assert powered[:2] == [2, 1]  # its builds count on across the restart
 
 
 def test_notes_acknowledgements_and_resets_go_into_the_history(srv: Server, lathe: str) -> None:

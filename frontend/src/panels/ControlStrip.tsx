@@ -89,7 +89,7 @@ export function ControlStrip() {
           </button>
         ) : (
           <form class="control-ask" onSubmit={(e) => { e.preventDefault(); void run("request", undefined, asking); }}>
-            <input data-testid="control-request-message" maxLength={300} size={32} value={asking} aria-label={`a word to ${who(h!)}`}
+            <input data-testid="control-request-message" maxLength={300} size={48} value={asking} aria-label={`a word to ${who(h!)}`}
               placeholder="why, for how long (optional)" onInput={(e) => setAsking((e.target as HTMLInputElement).value)} />
             <button type="submit" data-testid="control-request-send" disabled={dis}>
               Send request
