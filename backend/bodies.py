@@ -9,9 +9,11 @@ after at most the limit was held. The routes open without credentials take a sma
 
 from __future__ import annotations
 
+import re
+import time
 from typing import Any, TypeVar
 
-from fastapi import Request
+from fastapi import Request, Response
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ValidationError
 from starlette.middleware.body_limit import MAX_BODY_SIZE_SCOPE_KEY
@@ -117,3 +119,14 @@ def text_answer(media_type: str, description: str) -> dict[int | str, Any]:
     """`responses=` entry documenting a 200 answer of text in this media type."""
     content = {media_type: {"schema": {"type": "string"}}}
     return {OK: {"content": content, "description": description}}
+
+
+def dated_download(
+    body: str | bytes, media_type: str, machine: str, what: str, ext: str
+) -> Response:
+    """A file to download named after the machine, what it is and when (UTC):
+    `Demo-lathe_history_20261129-081203.csv`."""
+    safe = re.sub(r"[^A-Za-z0-9._-]+", "-", machine).strip("-") or "machine"
+    name = f"{safe}_{what}_{time.strftime('%Y%m%d-%H%M%S', time.gmtime())}.{ext}"
+    disposition = {"Content-Disposition": f'attachment; filename="{name}"'}
+    return Response(body, media_type=media_type, headers=disposition)

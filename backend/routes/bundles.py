@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import re
-import time
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, Path, Request, Response
@@ -15,7 +13,7 @@ from api.auth import Action
 from api.bundle import BundleDetail, BundleInfo
 from api.history import HistoryPage
 from api.versions import VersionDiff
-from backend.bodies import text_answer
+from backend.bodies import dated_download, text_answer
 from backend.deps import ActorDep, MachineDep, ServicesDep, get_actor, permit
 from backend.errors import (
     CREATED,
@@ -91,10 +89,7 @@ def bundle(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Respo
                            actor.name)  # fmt: skip
     what = f"made a diagnostic bundle ({len(manifest.traces)} traces)"
     services.audit.record_later(Entry(actor.name, actor.session, "trace", what, machine.id))
-    safe = re.sub(r"[^A-Za-z0-9._-]+", "-", machine.name).strip("-") or machine.id
-    name = f"{safe}_bundle_{time.strftime('%Y%m%d-%H%M%S', time.gmtime())}.zip"
-    return Response(data, media_type="application/zip",
-                    headers={"Content-Disposition": f'attachment; filename="{name}"'})  # fmt: skip
+    return dated_download(data, "application/zip", machine.name or machine.id, "bundle", "zip")
 
 
 @router.post(

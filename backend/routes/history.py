@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import re
-import time
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, Query, Response
 
 from api.auth import Action
 from api.history import HistoryEntry, HistoryKind, HistoryPage, NoteCreate, Severity
+from backend.bodies import dated_download
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import CREATED, OK, Conflict, NotFound, responses
 from backend.services.machine_log import EXPORT_ROWS, MAX_PAGE, HistoryFilter, csv_text
@@ -83,16 +82,12 @@ def export(
     after the machine and the time of the export."""
     rows, _ = services.history.page(machine.id, f, EXPORT_ROWS)
     rows.reverse()
-    safe = re.sub(r"[^A-Za-z0-9._-]+", "-", machine.name).strip("-") or machine.id
-    name = f"{safe}_history_{time.strftime('%Y%m%d-%H%M%S', time.gmtime())}.{format}"
     if format == "csv":
         body, media = csv_text(rows), "text/csv"
     else:
         body = "[" + ",\n".join(r.model_dump_json() for r in rows) + "]\n"
         media = "application/json"
-    return Response(
-        body, media_type=media, headers={"Content-Disposition": f'attachment; filename="{name}"'}
-    )
+    return dated_download(body, media, machine.name or machine.id, "history", format)
 
 
 @router.post(

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 from api.audit import AuditPage, AuditRecord, AuditVerification
 from backend.errors import ApiError
-from backend.services.audit_log import COLUMNS, Entry, row_hash
+from backend.services.audit_log import COLUMNS, Entry, row_hash, who_and_when
 
 if TYPE_CHECKING:
     from backend.services.store import Row, Store
@@ -74,15 +74,9 @@ class AuditFilter:
         if self.kinds_left_out:
             conds.append(f"kind NOT IN ({', '.join('?' * len(self.kinds_left_out))})")
             args += self.kinds_left_out
-        if self.actor:  # part of a name, in any case: "be" finds ben and Bert
-            conds.append("instr(lower(actor), ?) > 0")
-            args.append(self.actor.lower())
-        if self.since_unix is not None:
-            conds.append("time >= ?")
-            args.append(self.since_unix)
-        if self.until_unix is not None:
-            conds.append("time < ?")
-            args.append(self.until_unix)
+        who, when = who_and_when(self.actor, self.since_unix, self.until_unix)
+        conds += who
+        args += when
         if self.text:
             conds.append("(instr(lower(action), ?) > 0 OR instr(lower(outcome), ?) > 0)")
             args += [self.text.lower(), self.text.lower()]

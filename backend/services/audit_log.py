@@ -56,6 +56,25 @@ class Entry:
     time: float | None = None
 
 
+def who_and_when(
+    actor: str | None, since_unix: float | None, until_unix: float | None
+) -> tuple[list[str], list[object]]:
+    """SQL conditions (and their arguments) on a row's `actor` (part of the name, any case:
+    "be" finds ben and Bert) and its `time` (since ≤ time < until)."""
+    conds: list[str] = []
+    args: list[object] = []
+    if actor:
+        conds.append("instr(lower(actor), ?) > 0")
+        args.append(actor.lower())
+    if since_unix is not None:
+        conds.append("time >= ?")
+        args.append(since_unix)
+    if until_unix is not None:
+        conds.append("time < ?")
+        args.append(until_unix)
+    return conds, args
+
+
 def row_hash(prev: str, fields: tuple[object, ...]) -> str:
     """A row's link in the chain: the hash of the row before and this row's fields."""
     text = "\x1f".join([prev, *(repr(f) if isinstance(f, float) else str(f) for f in fields)])

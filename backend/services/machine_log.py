@@ -14,7 +14,7 @@ from typing import cast
 
 from api.history import HistoryEntry, HistoryKind, Severity
 from api.scope import TraceDetail
-from backend.services.audit_log import Entry
+from backend.services.audit_log import Entry, who_and_when
 from backend.services.store import Row, Store
 from nc_sim.events import Event
 
@@ -96,15 +96,9 @@ class HistoryFilter:
             if values:
                 conds.append(f"{column} IN ({', '.join('?' * len(values))})")
                 args += values
-        if self.actor:
-            conds.append("instr(lower(actor), ?) > 0")
-            args.append(self.actor.lower())
-        if self.since_unix is not None:
-            conds.append("time >= ?")
-            args.append(self.since_unix)
-        if self.until_unix is not None:
-            conds.append("time < ?")
-            args.append(self.until_unix)
+        who, when = who_and_when(self.actor, self.since_unix, self.until_unix)
+        conds += who
+        args += when
         if self.text:
             conds.append("instr(lower(text || ' ' || outcome || ' ' || ifnull(cause, '')), ?) > 0")
             args.append(self.text.lower())

@@ -4,10 +4,10 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
 import type { AuditKind, AuditPage, AuditRecord, AuditVerification } from "../api/types";
+import { TIME_RANGES, TYPING_MS, wallTime } from "../ui/logFilters";
 import { Panel } from "../ui/Panel";
 
 const PAGE = 100;
-const TYPING_MS = 300; // the user and text filters apply once typing pauses this long
 const KINDS: AuditKind[] = [
   "command",
   "assist",
@@ -25,14 +25,6 @@ const KINDS: AuditKind[] = [
   "logout",
   "user",
   "token",
-];
-/** Time range presets: how far back, in seconds (0: everything). */
-const RANGES: { label: string; back_s: number }[] = [
-  { label: "all time", back_s: 0 },
-  { label: "last 15 min", back_s: 15 * 60 },
-  { label: "last hour", back_s: 3600 },
-  { label: "last 24 h", back_s: 24 * 3600 },
-  { label: "last 7 days", back_s: 7 * 24 * 3600 },
 ];
 
 interface Filter {
@@ -53,10 +45,6 @@ function query(f: Filter): URLSearchParams {
 }
 
 
-const when = (t: number) => {
-  const d = new Date(t * 1000);
-  return `${d.toLocaleDateString()} ${d.toLocaleTimeString()}`;
-};
 
 export function AuditPanel() {
   const [f, setF] = useState<Filter>({ kind: "", actor: "", text: "", back_s: 0 });
@@ -124,7 +112,7 @@ export function AuditPanel() {
           Time{" "}
           <select data-testid="audit-range" value={String(f.back_s)}
             onChange={(e) => set({ back_s: Number((e.target as HTMLSelectElement).value) })}>
-            {RANGES.map((r) => (
+            {TIME_RANGES.map((r) => (
               <option key={r.back_s} value={String(r.back_s)}>
                 {r.label}
               </option>
@@ -168,7 +156,7 @@ export function AuditPanel() {
               const refused = r.outcome !== "ok";
               return (
                 <tr key={r.seq} data-testid="audit-row" data-seq={r.seq} data-kind={r.kind} class={refused ? "refused" : ""}>
-                  <td class="num">{when(r.time_unix)}</td>
+                  <td class="num">{wallTime(r.time_unix)}</td>
                   <td data-testid="audit-actor-cell">{r.actor}</td>
                   <td>{r.machine || "—"}</td>
                   <td data-testid="audit-kind-cell">{r.kind}</td>

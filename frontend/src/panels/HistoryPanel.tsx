@@ -12,11 +12,11 @@ import { may } from "../state/control";
 import { liveHistory } from "../state/history";
 import { openTrace } from "../state/route";
 import { machineId } from "../state/session";
+import { TIME_RANGES, TYPING_MS, wallTime } from "../ui/logFilters";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 
 const PAGE = 100;
-const TYPING_MS = 300; // the user and text filters apply once typing pauses this long
 /** What to look at: groups of kinds (none: everything). */
 const GROUPS: { label: string; kinds: HistoryKind[] }[] = [
   { label: "everything", kinds: [] },
@@ -33,14 +33,6 @@ const SEVERITIES: { label: string; values: HistoryEntry["severity"][] }[] = [
   { label: "any", values: [] },
   { label: "warnings and errors", values: ["warning", "error"] },
   { label: "errors", values: ["error"] },
-];
-/** Time range presets: how far back, in seconds (0: everything). */
-const RANGES: { label: string; back_s: number }[] = [
-  { label: "all time", back_s: 0 },
-  { label: "last 15 min", back_s: 15 * 60 },
-  { label: "last hour", back_s: 3600 },
-  { label: "last 24 h", back_s: 24 * 3600 },
-  { label: "last 7 days", back_s: 7 * 24 * 3600 },
 ];
 const KIND_WORDS: Partial<Record<HistoryKind, string>> = {
   job_error: "✖ job error",
@@ -86,10 +78,6 @@ function matches(e: HistoryEntry, f: Filter): boolean {
 
 const newestFirst = (a: HistoryEntry, b: HistoryEntry) => b.time_unix - a.time_unix;
 
-function when(t: number): string {
-  const d = new Date(t * 1000);
-  return `${d.toLocaleDateString()} ${d.toLocaleTimeString()}`;
-}
 
 const machineBase = () => `/api/machines/${encodeURIComponent(machineId.value)}/history`;
 
@@ -208,7 +196,7 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
         <label>
           Time{" "}
           <select data-testid="history-range" value={String(f.back_s)} onChange={(e) => set({ back_s: Number((e.target as HTMLSelectElement).value) })}>
-            {RANGES.map((r) => (
+            {TIME_RANGES.map((r) => (
               <option key={r.back_s} value={String(r.back_s)}>
                 {r.label}
               </option>
@@ -299,7 +287,7 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
           <tbody>
             {rows.map((r) => (
               <tr key={r.id} data-testid="history-row" data-id={r.id} data-kind={r.kind} class={`${r.severity} ${r.kind}`}>
-                <td class="num">{when(r.time_unix)}</td>
+                <td class="num">{wallTime(r.time_unix)}</td>
                 <td class="num" title={r.epoch !== null ? `build ${r.epoch}` : ""}>
                   {r.sim_t_s !== null ? fmt(r.sim_t_s, 3) : "—"}
                 </td>
