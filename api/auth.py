@@ -119,6 +119,14 @@ class LoginRequest(BaseModel):
     password: str = Field(min_length=1, max_length=256)
 
 
+class SharedMachine(BaseModel):
+    """The share link a guest came through: what they watch and until when."""
+
+    machine: str
+    label: str = Field(description="what the link's maker called it")
+    expires_unix: float
+
+
 class Me(BaseModel):
     """Who the request's session or token belongs to."""
 
@@ -129,6 +137,7 @@ class Me(BaseModel):
     )
     actions: list[Action] = Field(description="what this user may do (api/auth.py ALLOWED)")
     guest: bool = Field(False, description="through a share link: watching one machine only")
+    share: SharedMachine | None = Field(None, description="a guest's link (None: no guest)")
 
 
 MIN_PASSWORD = 8  # characters (the CLI asks the same)

@@ -8,7 +8,16 @@ from dataclasses import replace
 from fastapi import APIRouter, Request, Response
 from fastapi.responses import HTMLResponse, RedirectResponse
 
-from api.auth import CSRF_COOKIE, SESSION_COOKIE, Action, LoginRequest, Me, Role, WsTicket
+from api.auth import (
+    CSRF_COOKIE,
+    SESSION_COOKIE,
+    Action,
+    LoginRequest,
+    Me,
+    Role,
+    SharedMachine,
+    WsTicket,
+)
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import (
     NO_CONTENT,
@@ -120,9 +129,15 @@ def logout(request: Request, services: ServicesDep) -> Response:
 
 
 @router.get("/api/auth/me", dependencies=[permit(Action.OBSERVE)], responses=responses(NotLoggedIn))
-async def me(actor: ActorDep) -> Me:
-    """Who this session (or API token) is."""
-    return actor.me
+async def me(actor: ActorDep, services: ServicesDep) -> Me:
+    """Who this session (or API token) is; a guest also what link they came through."""
+    found = actor.me
+    guest = services.shares.guest(actor.name) if actor.guest else None
+    if guest is not None:
+        found.share = SharedMachine(
+            machine=guest.machine, label=guest.label, expires_unix=guest.expires
+        )
+    return found
 
 
 @router.post(

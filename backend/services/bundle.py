@@ -111,6 +111,31 @@ def build(c: Contents, traces: TraceService, mid: str, by: str) -> tuple[bytes, 
     return buf.getvalue(), manifest
 
 
+def _described(d: TraceDetail, text: str) -> TraceDetail:
+    """A trace read from its CSV as the bundle describes it: what the CSV cannot say (its
+    name, source, trigger, events, parameters, channel kinds, capture time); 422 when the
+    description is malformed."""
+    try:
+        was = TraceDetail.model_validate_json(text)
+    except ValidationError as e:
+        raise Invalid(f"bundle: a trace's description: {e.errors()[0]['msg']}") from None
+    kinds = {c.name: c for c in was.channels}
+    return d.model_copy(
+        update={
+            "name": was.name,
+            "notes": was.notes,
+            "source": was.source,
+            "trigger": was.trigger,
+            "forced": was.forced,
+            "created_unix": was.created_unix,
+            "params": was.params,
+            "params_changed": was.params_changed,
+            "events": was.events,
+            "channels": [kinds.get(c.name, c) for c in d.channels],
+        }
+    )
+
+
 class Bundles:
     """Bundles opened here: each an offline machine, read-only."""
 
@@ -138,9 +163,8 @@ class Bundles:
                 trace.detail.machine = offline
                 trace.detail.machine_name = f"{manifest.machine_name} (offline, {bid})"
                 trace.detail.created_unix = manifest.created_unix  # not the opening's time
-                if f"traces/{tid}.json" in z.namelist():  # when it was captured
-                    was = json.loads(_text(z, f"traces/{tid}.json"))
-                    trace.detail.created_unix = float(was.get("created_unix", 0.0))
+                if f"traces/{tid}.json" in z.namelist():  # as it was captured
+                    trace.detail = _described(trace.detail, _text(z, f"traces/{tid}.json"))
                 ids[tid] = self.traces.add(trace, by).id
         (self.dir / f"{bid}.zip").write_bytes(data)
         self.store.run(

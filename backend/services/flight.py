@@ -33,6 +33,7 @@ from backend.services.commands import job_error_model
 from backend.services.history import History
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.traces import Trace, TraceService, param_diff
+from backend.workers.link import MachineLink
 from backend.workers.protocol import param_snapshot
 from backend.workers.ring import RING_CYCLES
 from nc_sim.events import EVENT_LOG_LEN, Event
@@ -41,6 +42,8 @@ from nc_sim.signals import CHANNEL, Signal
 log = logging.getLogger(__name__)
 
 PERIOD_S = 0.25  # how often the long tier is fed and pending saves are looked at
+# while a window is open: a fast simulation runs through the ring's 16 s in a quarter second
+PENDING_PERIOD_S = 0.02
 BY = "flight recorder"  # whom its traces count for in the library
 RING_MARGIN = 500  # cycles of the ring left alone: the worker may be writing them
 _MAIN = ("speed_cmd_rpm", "speed_act_rpm", "pos_cmd_", "pos_act_", "lag_", "vel_cmd_", "vel_act_")
@@ -82,13 +85,35 @@ class _Tape:
 
 @dataclass
 class _Pending:
-    """A window to save once the machine has run past its end."""
+    """A window to save once the machine has run past its end, and what of it is copied
+    already: a fast simulation runs through the ring in seconds, so the window is copied
+    as it comes (when the error is heard, then at each look), not only at its end."""
 
     epoch: int
     trigger: Event
     first: int
     last: int
     errors: list[Event] = field(default_factory=list)
+    seen_unix: float = 0.0  # when the error was heard: its wall clock
+    parts: list[np.ndarray] = field(default_factory=list)  # copied samples, in order
+    got_first: int = 0  # the cycle of the first copied sample
+    next_cycle: int = 0  # the next cycle to copy (0: none copied yet)
+
+    def gather(self, link: MachineLink, signals: list[Signal]) -> None:
+        """Copy what the ring holds of the window and was not copied yet. Samples the ring
+        lost before they were copied leave the trace starting after them (never a gap)."""
+        head = link.cycle
+        lo = max(self.next_cycle or self.first, head - RING_CYCLES + RING_MARGIN)
+        hi = min(self.last, head)
+        if hi < lo:
+            return
+        block, got = link.samples(signals, lo, hi, 1)
+        if not block.shape[1]:
+            return
+        if got != self.next_cycle:  # the first copy, or older samples were lost: start here
+            self.parts, self.got_first = [], got
+        self.parts.append(block.copy())
+        self.next_cycle = got + block.shape[1]
 
 
 class FlightRecorder:
@@ -113,6 +138,7 @@ class FlightRecorder:
         self._pending: dict[str, list[_Pending]] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
+        self._wake = threading.Event()  # a window opened (or the recorder stops): look now
         self._thread = threading.Thread(target=self._run, name="flight-recorder", daemon=True)
         machines.event_takers.append(self.events)
 
@@ -121,6 +147,7 @@ class FlightRecorder:
 
     def stop(self) -> None:
         self._stop.set()
+        self._wake.set()
         self._thread.join(timeout=5.0)
 
     def status(self, m: MachineProxy) -> FlightRecorderStatus:
@@ -153,19 +180,30 @@ class FlightRecorder:
             return
         before = round(self.before_s / proxy.link.cycle_s)
         after = round(self.after_s / proxy.link.cycle_s)
+        now = time.time()
         with self._lock:
             pending = self._pending.setdefault(mid, [])
             for e in errors:
                 open_ = next((p for p in pending if p.epoch == epoch and e.cycle <= p.last), None)
                 if open_ is None:
                     first = max(1, e.cycle - before)
-                    pending.append(_Pending(epoch, e, first, e.cycle + after, [e]))
+                    pending.append(_Pending(epoch, e, first, e.cycle + after, [e], now))
                 else:
                     open_.errors.append(e)
+            if proxy.link.epoch == epoch and proxy.link.ring is not None:
+                signals = main_signals(proxy.link.signals)
+                for p in pending:  # the seconds before, while the ring still holds them
+                    if p.epoch == epoch:
+                        p.gather(proxy.link, signals)
+        self._wake.set()
 
     # --- the thread --------------------------------------------------------------------------
     def _run(self) -> None:
-        while not self._stop.wait(PERIOD_S):
+        while True:
+            self._wake.wait(PENDING_PERIOD_S if any(self._pending.values()) else PERIOD_S)
+            self._wake.clear()
+            if self._stop.is_set():
+                return
             proxies = self.machines.proxies()
             with self._lock:  # a deleted machine's tier goes with it
                 live = {p.id for p in proxies}
@@ -205,6 +243,11 @@ class FlightRecorder:
         head, epoch = m.link.cycle, m.link.epoch
         with self._lock:
             pending = self._pending.get(m.id, [])
+            if m.link.ring is not None:
+                signals = main_signals(m.link.signals)
+                for p in pending:
+                    if p.epoch == epoch:
+                        p.gather(m.link, signals)
             due = [p for p in pending if p.epoch != epoch or p.last <= head]
             self._pending[m.id] = [p for p in pending if p not in due]
         for p in due:
@@ -223,11 +266,12 @@ class FlightRecorder:
     def _save(self, m: MachineProxy, p: _Pending) -> TraceInfo:
         e = p.trigger
         signals = main_signals(m.link.signals)
-        data, first = m.link.samples(signals, p.first, p.last, 1)
+        if not p.parts:
+            raise Invalid("the sample ring had run past the error before it could be copied")
+        data = np.concatenate(p.parts, axis=1)
         what = f"job error {e.code}{' ' + e.axis if e.axis else ''}"
-        at = time.time() - (m.link.cycle - e.cycle) * m.link.cycle_s  # the error's wall clock
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(at))
-        trace = self._trace(m, signals, data, first, m.link.cycle_s, e.cycle, what)
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(p.seen_unix))
+        trace = self._trace(m, signals, data, p.got_first, m.link.cycle_s, e.cycle, what)
         trace.detail.name = f"{what} at {stamp}"
         trace.detail.notes = f"saved by the flight recorder: {e.message}"
         return self.traces.add(trace, BY)

@@ -47,6 +47,7 @@ class Guest:
     link: str
     machine: str
     expires: float
+    label: str = ""
 
 
 def _link(r: Row, watching: int = 0) -> ShareLink:
@@ -76,7 +77,7 @@ class Shares:
         self._guests: dict[str, Guest] = {}  # guest login → what it may see
         self._lock = threading.Lock()
         for r in store.query("SELECT * FROM share_links WHERE revoked IS NULL"):
-            self._guests[PREFIX + r["id"]] = Guest(r["id"], r["machine"], r["expires"])
+            self._guests[PREFIX + r["id"]] = Guest(r["id"], r["machine"], r["expires"], r["label"])
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="share-links", daemon=True)
 
@@ -100,7 +101,7 @@ class Shares:
             (lid, digest(token), mid, label, now, by, expires),
         )
         with self._lock:
-            self._guests[PREFIX + lid] = Guest(lid, mid, expires)
+            self._guests[PREFIX + lid] = Guest(lid, mid, expires, label)
         return self.get(mid, lid), token
 
     def of(self, mid: str, watching: dict[str, int]) -> list[ShareLink]:

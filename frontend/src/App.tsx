@@ -2,6 +2,7 @@
 // connection, user, emergency stop) and banners always, the machine view beside the workspaces (tabs).
 import { useEffect, useRef } from "preact/hooks";
 import { AuditPanel } from "./panels/AuditPanel";
+import { BundlePage } from "./panels/BundlePage";
 import { BundlesPanel } from "./panels/BundlesPanel";
 import { FleetPanel } from "./panels/FleetPanel";
 import { HistoryPanel } from "./panels/HistoryPanel";
@@ -34,7 +35,7 @@ import { me } from "./state/auth";
 import { commandBlocked, may } from "./state/control";
 import { exercise } from "./state/exercise";
 import { machinesOpen } from "./state/machines";
-import { TABS, type Tab, tab as routeTab } from "./state/route";
+import { bundlePage, TABS, type Tab, tab as routeTab } from "./state/route";
 import { connection, frozen, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
@@ -91,6 +92,7 @@ function Tabs({ tabs, tab, setTab }: { tabs: readonly Tab[]; tab: Tab; setTab: (
 export function App() {
   if (me.value === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
   if (!me.value) return <Login />;
+  if (bundlePage.value && !me.value.guest) return <BundlePage />;
   if (view.value === "classes" && may("teach")) return <ConsoleScreen />;
   return <Hmi />;
 }

@@ -118,7 +118,8 @@ def test_a_guest_link_shows_the_live_machine_until_it_is_revoked(
         assert url.startswith(f"{srv.base}/share/")
         guest.goto(url)
         expect(guest.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
-        expect(guest.get_by_test_id("control-strip")).to_contain_text("view only")
+        expect(guest.get_by_test_id("control-strip")).to_contain_text("view only (share link)")
+        expect(guest.get_by_test_id("guest-link")).to_contain_text("drive maker")  # and until when
         assert guest.evaluate("location.hash").startswith(f"#{mid}/")
         expect(panel(guest, "jog").get_by_test_id("jog-plus")).to_be_disabled()
         viewers = a.get_by_test_id("control-strip").get_by_test_id("control-viewers")
@@ -138,12 +139,18 @@ def test_a_bundle_opens_on_another_service_as_the_offline_machine(
     browser: Browser, srv: Server, mid: str, tmp_path: Path
 ) -> None:
     """The bundle downloads from the machine's History; on a second service the expert opens
-    it and sees the same difference to the baseline and the same history, read-only."""
+    it on a page of its own and sees the same difference to the baseline, the same history,
+    read-only, and the alarm's trace drawn for the axis that raised it."""
     srv.http.post(f"/api/machines/{mid}/versions", json={"name": "delivered", "baseline": True})
     change = {"scope": "axis", "target": "X", "name": "getriebe[0].kv", "value": 1500}
     srv.http.patch(f"/api/machines/{mid}/parameters", json={"changes": [change]})
     note = {"text": "replaced the encoder cable of X"}
     srv.http.post(f"/api/machines/{mid}/history/notes", json=note).raise_for_status()
+    srv.pace(mid, mode="pause")  # queued behind M3 S1500, M3 S20000 raises 90017 on S1
+    for block in ("M3 S1500", "M3 S20000"):
+        srv.http.post(f"/api/machines/{mid}/commands", json={"type": "mdi", "block": block})
+    srv.pace(mid, mode="fast")
+    _until_traced(srv, mid, {90017})
     a = open_hmi(browser, srv.base, f"{mid}/history")
     try:
         with a.expect_download() as got:
@@ -157,13 +164,25 @@ def test_a_bundle_opens_on_another_service_as_the_offline_machine(
     e = open_hmi(browser, other.base, "demo/history")
     try:
         panel(e, "bundles").get_by_test_id("bundle-file").set_input_files(str(zip_path))
-        offline = panel(e, "bundle")
-        expect(offline).to_contain_text(f"Offline: {mid}")
-        expect(offline.get_by_test_id("diff-row-X-getriebe[0].kv")).to_contain_text("1500")
+        expect(e.get_by_test_id("offline-strip")).to_contain_text("read-only")
+        assert re.fullmatch(r"#bundle/[0-9a-f]{12}", e.evaluate("location.hash"))
+        expect(panel(e, "bundle")).to_contain_text(mid)
+        diff = panel(e, "bundle-diff-panel")
+        expect(diff.get_by_test_id("diff-row-X-getriebe[0].kv")).to_contain_text("1500")
         rows = panel(e, "bundle-history").get_by_test_id("history-row")
         expect(rows.filter(has_text=note["text"])).to_have_count(1)
         expect(panel(e, "bundle-history").get_by_test_id("history-note-input")).to_have_count(0)
+        alarm = panel(e, "bundle-alarm-traces").get_by_test_id("capture-view")
+        expect(alarm.get_by_test_id("capture-trigger")).to_contain_text("job error 90017 S1")
+        drawn = alarm.locator('[data-testid="channel-toggle"][aria-pressed="true"]')
+        expect(drawn.first).to_be_visible()
+        names = drawn.evaluate_all("l => l.map(b => b.dataset.channel)")
+        assert {n.split(".")[0] for n in names} == {"S1"}  # of every axis kept, the one 90017 names
         shot(e, "bundle-offline-desktop")
+        e.set_viewport_size({"width": 1024, "height": 768})
+        shot(e, "bundle-offline-tablet")
+        e.get_by_test_id("bundle-back").click()
+        expect(e.get_by_test_id("tab-History")).to_be_visible()
     finally:
         e.close()
         other.close()

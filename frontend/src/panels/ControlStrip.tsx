@@ -49,7 +49,8 @@ export function ControlStrip() {
       </span>
       {!may("command") ? (
         <span class="hint" data-testid="control-view-only">
-          view only ({me.value?.role})
+          view only ({me.value?.guest ? "share link" : me.value?.role})
+          {!h && may("ask") ? " · nobody has control to ask for: a note in the History reaches whoever comes" : ""}
         </span>
       ) : waiting ? (
         <span class="hint" data-testid="control-frozen">

@@ -82,7 +82,7 @@ const newestFirst = (a: HistoryEntry, b: HistoryEntry) => b.time_unix - a.time_u
 const machineBase = () => `/api/machines/${encodeURIComponent(machineId.value)}/history`;
 
 /** The machine's history, or (`bundle`) an opened bundle's: read-only, as it was then. */
-export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
+export function HistoryPanel(props: { bundle?: { id: string; name: string; openTrace: (id: string) => void } }) {
   const offline = props.bundle;
   const base = () => (offline ? `/api/bundles/${offline.id}/history` : machineBase());
   const [f, setF] = useState<Filter>({ group: 0, severity: 0, back_s: 0, actor: "", text: "" });
@@ -304,8 +304,8 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string } }) {
                   {r.trace ? (
                     <span class="history-trace">
                       <button type="button" class="link" data-testid="history-trace-open" title="the flight recorder's trace of the seconds around it"
-                        onClick={() => openTrace(r.trace!)}>
-                        ▶ trace in the scope
+                        onClick={() => (offline ? offline.openTrace(r.trace!) : openTrace(r.trace!))}>
+                        {offline ? "▶ trace" : "▶ trace in the scope"}
                       </button>{" "}
                       {may("capture") ? (
                         <a href={`/api/traces/${r.trace}/viewer`} target="_blank" rel="noopener" data-testid="history-trace-rerun">

@@ -123,6 +123,21 @@ function UserBox() {
     logout().catch((e: unknown) =>
       setRefusal(e instanceof ApiError ? e.refusal : { message: String(e), problems: [] }),
     );
+  const share = user.share;
+  if (share) {
+    // a guest has no account: what they watch, through which link, until when
+    return (
+      <span class="user guest" data-testid="guest-box">
+        <span data-testid="guest-link" title={`watching ${share.machine} through a share link`}>
+          shared{share.label ? <> · <b>{share.label}</b></> : null} · until {new Date(share.expires_unix * 1000).toLocaleString([], { dateStyle: "short", timeStyle: "short" })}
+        </span>
+        <RefusalLine refusal={refusal} id="logout-error" />
+        <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
+          Leave
+        </button>
+      </span>
+    );
+  }
   return (
     <span class="user" title="logged in as">
       <RefusalLine refusal={refusal} id="logout-error" />
