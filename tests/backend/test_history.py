@@ -232,10 +232,10 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     srv: Server, lathe: str, tmp_path: Path
 ) -> None:
     """An emergency stop (90005) after more than 8 s of running, the simulation running fast
-    (it laps the sample ring's 16 s in well under a second): the recorder saves 8 s before
-    and 2 s after it at full rate, all of them, the error as trigger and on the timeline (also in Rerun,
-    with the logbook entry written just before), and the history entry links to it. On
-    demand it saves the last 5 s at full rate and the last 60 s one cycle in ten from its
+    (it laps the sample ring's 16 s in well under a second): the recorder saves all of the
+    8 s before and 2 s after it at full rate, the error as trigger and on the timeline (also
+    in Rerun, with the logbook entry written just before), and the history entry links to
+    it. On demand it saves the last 5 s at full rate and the last 60 s one cycle in ten from its
     long tier."""
     srv.pace(lathe, mode="fast")
     deadline = time.monotonic() + 30
