@@ -24,6 +24,7 @@ import numpy as np
 from nc_sim.errors import Code
 from nc_sim.events import Event
 from nc_sim.kernel import layout as L
+from nc_sim.params.curves import GEARS
 from nc_sim.units import RPM_TO_DEG_S
 
 if TYPE_CHECKING:  # the gateway imports the checks without the kernel
@@ -53,6 +54,9 @@ class GainCheck:
     # the kv of this axis instead of its own: both follow alike, e.g. the plane's axes of a
     # circle without the servo mismatch's ellipse
     against: str | None = None
+    # the kv the exercise started with is the reference, and a changed kv fails: a task that
+    # says "keep kv" is not solved by lowering kv to the gain the faulty drive delivers
+    keep_kv: bool = False
 
 
 @dataclass(frozen=True)
@@ -69,13 +73,15 @@ class EventCheck:
 @dataclass(frozen=True)
 class NoEventCheck:
     """`axis` has been in use for `window_s` without any of `codes` (of it): its first motion
-    since the last such event (or the start) lies `window_s` back, and it moved again within
-    that window. A student who does nothing, or moved once a moment ago, does not pass."""
+    since the last such event (or the start) lies `window_s` back, and it moved in at least
+    `busy_pct` % of that window's seconds. A student who does nothing, moved once a moment
+    ago, or moved a few seconds and then waited, does not pass."""
 
     kind: ClassVar[str] = "no_event"
     codes: tuple[Code, ...]
     axis: str
     window_s: float
+    busy_pct: float = 50.0
 
 
 @dataclass(frozen=True)
@@ -164,12 +170,15 @@ RULES: tuple[type[Rule], ...] = (
 
 @dataclass(frozen=True)
 class Check:
-    """One check of an exercise: its id, the text the student sees, its points, its rule."""
+    """One check of an exercise: its id, the text the student sees, its points, its rule, and
+    the checks that must hold with it for it to pass (`requires`): a gain measured while the
+    slide runs the wrong way is no solution."""
 
     id: str
     text: str
     points: float
     rule: Rule
+    requires: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -218,6 +227,8 @@ class _Gain:
         self.passed = False
         self.first_passed_cycle: int | None = None
         self.detail = f"no steady constant-speed stretch of {rule.axis} measured yet"
+        # each gear record's kv as the exercise started (keep_kv: the reference)
+        self.kv_start = {g: self.ax.cfg.eng("getriebe.kv", g) for g in range(1, GEARS + 1)}
         self.run_len = 0  # samples in the current stretch (0: none)
         self.run_v = 0.0
         self.run_gear = 0
@@ -227,7 +238,18 @@ class _Gain:
     def _kv(self, gear: int) -> float:
         if self.ref is not None:
             return self.ref.cfg.eng("getriebe.kv", 1)
+        if self.rule.keep_kv:
+            return self.kv_start.get(max(1, gear), self.ax.cfg.eng("getriebe.kv", max(1, gear)))
         return self.ax.cfg.eng("getriebe.kv", max(1, gear))
+
+    def _kv_changed(self, gear: int) -> str:
+        """The gear record's kv changed since the start, for a rule that keeps it ("" when
+        not)."""
+        kv0, kv = self.kv_start[gear], self.ax.cfg.eng("getriebe.kv", gear)
+        if abs(kv - kv0) <= 1e-9 * kv0:
+            return ""
+        name = self.ax.cfg.ref("getriebe.kv", gear)[0]
+        return f"{name} changed from {kv0:.2f} to {kv:.2f} 1/s: the task keeps kv"
 
     def feed(self, rows: np.ndarray, first_cycle: int, events: list[Event], now: int) -> None:
         v = rows[:, L.R_V_CMD]
@@ -263,18 +285,21 @@ class _Gain:
                 continue
             g = int(gear[lo:hi][live][0])
             kv = self._kv(g)
-            settle = round(SETTLE_TAU / kv / self.cycle_s)
+            # settled by the slower of the reference and the gain set (they differ when the
+            # task keeps kv and the student changed it)
+            slow = min(kv, self.ax.cfg.eng("getriebe.kv", max(1, g)))
+            settle = round(SETTLE_TAU / slow / self.cycle_s)
             use = seg_pos > settle
             self.sum_v += float(np.sum(v[lo:hi][use]))
             self.sum_lag += float(np.sum(rows[lo:hi, L.R_LAG][use]))
             self.n += int(np.count_nonzero(use))
-            self._measure(kv, first_cycle + hi - 1)
+            self._measure(kv, slow, max(1, g), first_cycle + hi - 1)
         self.run_len = int(pos[-1]) if v.size else self.run_len
         if v.size:
             self.run_v, self.run_gear = float(v[-1]), int(gear[-1])
 
-    def _measure(self, kv: float, cycle: int) -> None:
-        need = max(MIN_AVERAGE_S, AVERAGE_TAU / kv) / self.cycle_s
+    def _measure(self, kv: float, slow: float, gear: int, cycle: int) -> None:
+        need = max(MIN_AVERAGE_S, AVERAGE_TAU / slow) / self.cycle_s
         if self.n < need:
             return
         v, lag = self.sum_v / self.n, self.sum_lag / self.n
@@ -284,11 +309,12 @@ class _Gain:
             return
         k = v / lag
         dev_pct = (k / kv - 1.0) * 100.0
-        _passed_at(self, abs(dev_pct) <= self.rule.within_pct, cycle)
+        changed = self._kv_changed(gear) if self.rule.keep_kv else ""
+        _passed_at(self, abs(dev_pct) <= self.rule.within_pct and not changed, cycle)
         whose = f" of {self.ref.name}" if self.ref is not None else ""
         self.detail = (
             f"k = {k:.2f} 1/s against kv{whose} {kv:.2f} 1/s ({dev_pct:+.1f} %)"
-            f" at v = {v:.3f} {unit}/s, lag {lag:.4f} {unit}"
+            f" at v = {v:.3f} {unit}/s, lag {lag:.4f} {unit}" + (f"; {changed}" if changed else "")
         )
 
 
@@ -356,6 +382,8 @@ class _NoEvent:
         self.codes = frozenset(int(c) for c in rule.codes)
         self.window = round(rule.window_s / m.k.cycle_s)
         self.cycle_s = m.k.cycle_s
+        self.per_s = max(1, round(1.0 / m.k.cycle_s))  # cycles a second
+        self.busy: set[int] = set()  # the seconds (cycle // per_s) in which the axis moved
         self.last_event: Event | None = None
         self.first_moved: int | None = None  # first motion since the last event (or start)
         self.last_moved: int | None = None
@@ -377,12 +405,18 @@ class _NoEvent:
             if self.first_moved is None:
                 later = cycles[cycles > after]
                 self.first_moved = int(later[0]) if later.size else None
+            self.busy.update(np.unique(cycles // self.per_s).tolist())
         since = now - self.window
+        self.busy = {b for b in self.busy if (b + 1) * self.per_s > since}
+        # the seconds of the window it moved in, of those after the last such event
+        busy_s = sum(1 for b in self.busy if (b + 1) * self.per_s > max(since, after))
+        need_s = int(np.ceil(self.rule.busy_pct / 100.0 * self.rule.window_s - 1e-9))
         names = "/".join(Code(c).name for c in sorted(self.codes))
         quiet = self.last_event is None or self.last_event.cycle <= since
         long_enough = self.first_moved is not None and self.first_moved <= since
         moved_now = self.last_moved is not None and self.last_moved > since
-        _passed_at(self, quiet and long_enough and moved_now, now)
+        busy = busy_s >= need_s
+        _passed_at(self, quiet and long_enough and moved_now and busy, now)
         ax, w = self.rule.axis, self.rule.window_s
         if self.first_moved is None:
             ago = ""
@@ -395,8 +429,13 @@ class _NoEvent:
             self.detail = f"{ax} in use without {names}: {w - left:.0f} of {w:g} s"
         elif not moved_now:
             self.detail = f"{ax} has not moved in the last {w:g} s"
+        elif not busy:
+            self.detail = (
+                f"{ax} moved in {busy_s} of the last {w:g} s without {names}:"
+                f" in use means moving in {need_s} of them"
+            )
         else:
-            self.detail = f"{ax} in use for {w:g} s without {names}"
+            self.detail = f"{ax} in use for {w:g} s without {names} (moving in {busy_s} s of them)"
 
 
 class _Standing:
@@ -462,6 +501,8 @@ class ExerciseMonitor:
         self._slots: list[int | None] = []
         self._evals: list[_Evaluator] = []
         self._judged: list[Check] = []  # the checks the monitor judges (not the findings)
+        # a check with requirements: the first cycle it held with them all (None: not yet)
+        self._joint: dict[str, int | None] = {c.id: None for c in checks if c.requires}
         for i, c in enumerate(checks):
             rule = c.rule
             if isinstance(rule, FindingCheck):
@@ -489,14 +530,31 @@ class ExerciseMonitor:
         now = first_cycle + rows.shape[0] - 1 if rows.shape[0] else machine.cycle
         for slot, ev in zip(self._slots, self._evals, strict=True):
             ev.feed(rows[:, slot if slot is not None else 0, :], first_cycle, read.entries, now)
+        for cid, joint in self._joint.items():
+            if joint is None and self._holds(cid):
+                self._joint[cid] = now
+
+    def _holds(self, cid: str) -> bool:
+        """The check passes now, and every check it requires too."""
+        by_id = {c.id: ev for c, ev in zip(self._judged, self._evals, strict=True)}
+        c = next(c for c in self._judged if c.id == cid)
+        return by_id[cid].passed and all(by_id[r].passed for r in c.requires)
 
     def results(self) -> list[CheckResult]:
         """Each judged check's state now, in the exercise's order (a finding is not judged
         here)."""
-        return [
-            CheckResult(c.id, ev.passed, ev.first_passed_cycle, ev.detail)
-            for c, ev in zip(self._judged, self._evals, strict=True)
-        ]
+        out = []
+        by_id = {c.id: ev for c, ev in zip(self._judged, self._evals, strict=True)}
+        for c, ev in zip(self._judged, self._evals, strict=True):
+            if not c.requires:
+                out.append(CheckResult(c.id, ev.passed, ev.first_passed_cycle, ev.detail))
+                continue
+            failing = [r for r in c.requires if not by_id[r].passed]
+            detail = ev.detail
+            if failing and ev.passed:
+                detail += f" — not counted while {', '.join(failing)} fails"
+            out.append(CheckResult(c.id, self._holds(c.id), self._joint[c.id], detail))
+        return out
 
 
 def _make(rule: Rule, m: Machine, slot: int | None) -> _Evaluator:

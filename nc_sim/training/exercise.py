@@ -234,6 +234,7 @@ def parse_exercise(text: str, source: str) -> Exercise:
         if c.id in seen:
             raise ExerciseError(source, f"checks[{i}].id", c.id, "unique among the checks")
         seen.add(c.id)
+    _requirements(source, checks)
     faults = tuple(_fault(f) for f in r.items("faults"))
     for i, c in enumerate(checks):
         if isinstance(c.rule, FindingCheck):
@@ -321,15 +322,39 @@ def _check(r: _Reader) -> Check:
     if cls is None:
         raise r.fail("kind", kind, f"one of {', '.join(sorted(_RULES))}")
     fields = _fields(cls)
-    r.only(("id", "text", "points", "kind", *fields))
+    r.only(("id", "text", "points", "kind", "requires", *fields))
     args = {name: _field(r, name, typ, opt) for name, (typ, opt) in fields.items()}
     rule = cls(**{k: v for k, v in args.items() if v is not None})
+    requires: tuple[str, ...] = ()
+    if r.has("requires"):
+        v = r.raw("requires")
+        if not isinstance(v, list) or not all(isinstance(x, str) and ID_RE.match(x) for x in v):
+            raise r.fail("requires", v, "a list of the ids of other checks")
+        requires = tuple(v)
     return Check(
         id=r.text("id", 64, ID_RE),
         text=r.text("text", MAX_TEXT),
         points=r.number("points", 0.0, MAX_POINTS, lo_open=True),
         rule=rule,
+        requires=requires,
     )
+
+
+def _requirements(source: str, checks: tuple[Check, ...]) -> None:
+    """What a check requires are other checks the monitor judges, themselves requiring
+    nothing (one level: no cycles, and what counts is plain to the student)."""
+    by_id = {c.id: c for c in checks}
+    for i, c in enumerate(checks):
+        for r in c.requires:
+            other = by_id.get(r)
+            key = f"checks[{i}].requires"
+            if other is None or other is c:
+                raise ExerciseError(source, key, r, "the id of another check of the exercise")
+            if other.requires or isinstance(other.rule, FindingCheck):
+                raise ExerciseError(source, key, r, "a check that requires nothing, not a finding")
+        if c.requires and isinstance(c.rule, FindingCheck):
+            key = f"checks[{i}].requires"
+            raise ExerciseError(source, key, list(c.requires), "none for a finding")
 
 
 def _fields(cls: type) -> dict[str, tuple[object, bool]]:
@@ -363,6 +388,8 @@ def _field(r: _Reader, name: str, typ: object, optional: bool) -> Any:
         return r.number(name, 0.0, MAX_WINDOW_S, lo_open=True)
     if name == "within_pct":
         return r.number(name, 0.0, 100.0, lo_open=True)
+    if name == "busy_pct":
+        return r.number(name, 0.0, 100.0)
     if name == "attempts":
         return r.integer(name, 1, 10)
     if name == "template":
@@ -372,6 +399,8 @@ def _field(r: _Reader, name: str, typ: object, optional: bool) -> Any:
     if name in ("tolerance", "factor", "rms", "delay_s", "v_loss", "width", "speed_rpm"):
         return r.number(name, 0.0, 1e9, lo_open=True)
     base = typing.get_args(typ) or (typ,)
+    if bool in base:
+        return r.flag(name)
     if float in base:
         return r.number(name, -1e9, 1e9)
     if int in base:

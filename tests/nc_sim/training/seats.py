@@ -59,6 +59,17 @@ class Seat:
         r = self.result(check_id)
         return r.passed and r.first_passed_cycle is not None
 
+    def first_passes(self) -> dict[str, float]:
+        """Check id -> seconds after the start of the checks passing now, as the gateway
+        records them for the score."""
+        dt = self.sim.kernel.cycle_s
+        start = self.monitor.start_cycle
+        return {
+            r.id: (r.first_passed_cycle - start) * dt
+            for r in self.monitor.results()
+            if r.passed and r.first_passed_cycle is not None
+        }
+
     def recover(self, axis: str) -> None:
         """After a trip: the CNC reset (which gives the servo back)."""
         self.do(Reset())

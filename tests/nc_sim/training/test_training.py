@@ -101,6 +101,10 @@ def test_a_good_file_parses_to_its_values() -> None:
         ('machine = "demo"', 'machine = "mill"', "machine", "mill"),
         ("par_time_s = 600", "par_time_s = -1", "par_time_s", -1),
         ('id = "b"', 'id = "a"', "checks[1].id", "a"),
+        ("window_s = 60", 'window_s = 60\nrequires = ["c"]', "checks[1].requires", "c"),
+        ("window_s = 60", 'window_s = 60\nrequires = ["b"]', "checks[1].requires", "b"),
+        ("within_pct = 1.0", "within_pct = 1.0\nkeep_kv = 1", "checks[0].keep_kv", 1),
+        ("window_s = 60", "window_s = 60\nbusy_pct = 120", "checks[1].busy_pct", 120),
     ],
 )
 def test_each_error_names_the_file_the_key_and_the_value(
@@ -189,15 +193,20 @@ def test_sign_error_fixed_by_the_command_value_sign() -> None:
 def test_sign_error_fixed_on_the_actual_value_drives_the_slide_backwards() -> None:
     """Inverting the actual value (lr_hw[0].vz_istw) instead of the command value closes the
     loop too: no trip and k = kv in the NC's view. But the slide moves against the command
-    (motor inverted, its encoder counting true), which the direction check sees."""
+    (motor inverted, its encoder counting true), which the direction check sees; the gain
+    and the quiet minute require it, so the wrong parameter scores nothing."""
     seat = Seat("sign-error")
     seat.param(Scope.AXIS, "X", {"lr_hw[0].vz_istw": 1})
     seat.run(0.1)
     seat.recover("X")  # the actual value jumped to -x: lag monitoring trips at once
     seat.x_back_and_forth(68.0)
-    assert seat.passed("gain") and seat.passed("no-trip")
     assert not seat.passed("direction")
     assert "the wrong way" in seat.result("direction").detail
+    for check in ("gain", "no-trip"):  # as the NC sees it they hold, but not counted
+        assert not seat.passed(check)
+        assert "not counted while direction fails" in seat.result(check).detail
+    assert "k = 20.00 1/s against kv 20.00 1/s" in seat.result("gain").detail
+    assert score(seat.exercise, seat.first_passes()).points == 0.0
 
 
 def test_sign_error_not_fixed_fails_both_checks() -> None:
@@ -237,6 +246,23 @@ def test_sign_error_fixed_but_x_moved_only_a_moment_ago_is_not_a_minute_of_use()
     assert seat.passed("no-trip"), seat.result("no-trip")
 
 
+def test_sign_error_a_short_move_then_a_wait_is_not_a_minute_of_use() -> None:
+    """One 3 s stroke, then a minute of waiting and a nudge: its first motion lies a minute
+    back and it moved within that minute, but in 3 of its 60 seconds, not in the 30 that
+    "in use" asks (busy_pct 50)."""
+    seat = Seat("sign-error")
+    seat.param(Scope.AXIS, "X", {"lr_hw[0].vz_stellgr": 1})
+    seat.mdi("G01 X100 F1000")  # 50 mm at 16.7 mm/s: 3 s and the ramps
+    seat.run(58.0)
+    seat.mdi("G01 X99 F1000")  # a nudge just inside the window's last seconds
+    seat.run(4.0)
+    assert not seat.passed("no-trip")
+    # the stroke took seconds 0..3, of which 2 and 3 lie in the last 60 s; the nudge one more
+    assert "moved in 3 of the last 60 s" in seat.result("no-trip").detail
+    seat.x_back_and_forth(60.0)  # strokes of 3 s every 4 s: 45 of 60 s
+    assert seat.passed("no-trip"), seat.result("no-trip")
+
+
 def test_sign_error_doing_nothing_fails_both_checks() -> None:
     seat = Seat("sign-error")
     seat.run(70.0)
@@ -256,12 +282,25 @@ def test_multi_gain_by_experiment() -> None:
 
 
 def test_multi_gain_with_kv_changed_instead_fails() -> None:
-    """Setting kv to the measured k leaves the loop gain at 0.4375 · kv: still 56 % off."""
+    """Setting kv to the measured k leaves the loop gain at 0.4375 · 8.75 = 3.83 1/s,
+    against the kv of 20 1/s the task keeps."""
     seat = Seat("multi-gain")
     seat.param(Scope.AXIS, "X", {"getriebe[0].kv": 875})
     seat.x_back_and_forth(12.0)
     assert not seat.passed("gain")
-    assert "k = 3.83 1/s against kv 8.75 1/s" in seat.result("gain").detail
+    detail = seat.result("gain").detail
+    assert "k = 3.83 1/s against kv 20.00 1/s" in detail
+    assert "getriebe[0].kv changed from 20.00 to 8.75 1/s: the task keeps kv" in detail
+
+
+def test_multi_gain_with_the_whole_proposal_applied_fails() -> None:
+    """multi_gain × 2.2857 and kv lowered to the measured 8.75 1/s: the drive is right
+    again, so k = 8.75 1/s, the new kv, but not the 20 1/s the task says to keep."""
+    seat = Seat("multi-gain")
+    seat.param(Scope.AXIS, "X", {"getriebe[0].multi_gain_z": 22857, "getriebe[0].kv": 875})
+    seat.x_back_and_forth(12.0)
+    assert not seat.passed("gain")
+    assert "k = 8.75 1/s against kv 20.00 1/s (-56." in seat.result("gain").detail  # 8.75/20 - 1
 
 
 def _z_back_and_forth(seat: Seat, seconds: float) -> None:
