@@ -131,6 +131,15 @@ class SeatInfo(BaseModel):
     seat_time_s: float = Field(description="simulated time the seat has run, s")
 
 
+class ClassResumed(BaseModel):
+    """A running class the service built again when it restarted: what it kept."""
+
+    at_unix: float = Field(description="when the service started again")
+    seats: int
+    faults: int = Field(description="training faults in force again, over all its seats")
+    snapshots: int = Field(description="its seats' snapshots, each restorable")
+
+
 class ClassInfo(BaseModel):
     id: str
     title: str
@@ -142,6 +151,9 @@ class ClassInfo(BaseModel):
     created_unix: float
     ended_unix: float | None
     seats: list[SeatInfo]
+    resumed: ClassResumed | None = Field(
+        None, description="the service restarted while it ran, and what the class kept"
+    )
 
 
 class SeatLink(BaseModel):

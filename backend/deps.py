@@ -36,7 +36,7 @@ from backend.services.shares import Shares
 from backend.services.store import Store
 from backend.services.telemetry import TelemetryHub
 from backend.services.traces import TraceService
-from backend.services.training import Snapshots
+from backend.services.training import Snapshots, StandingFaults
 from backend.services.versions import Versions
 from backend.services.viewer import RerunViewer
 from backend.settings import Settings
@@ -70,6 +70,7 @@ class Services:
     classes: Classes
     console: ConsoleHub
     snapshots: Snapshots
+    faults: StandingFaults
     history: History
     flight: FlightRecorder
     bundles: Bundles
@@ -93,7 +94,10 @@ class Services:
         audit = Audit(store)
         control = Control(machines, audit, settings.control_grace_s)
         exercises = Exercises(store)
-        classes = Classes(store, accounts, machines, exercises, audit)  # before the machines load
+        faults = StandingFaults(store, machines)
+        snapshots = Snapshots(store, machines, faults)
+        # before the machines load: the seats' exercises
+        classes = Classes(store, accounts, machines, exercises, audit, faults, snapshots)
         # both wait for workers' replies, which this loop reads: off it
         await asyncio.to_thread(pool.start, machines.on_push, machines.on_death)
         await asyncio.to_thread(machines.load, create_demo=settings.demo)
@@ -151,7 +155,8 @@ class Services:
             exercises,
             classes,
             console,
-            Snapshots(store, machines),
+            snapshots,
+            faults,
             history,
             flight,
             Bundles(store, tdir / "bundles", traces),

@@ -39,6 +39,7 @@ def inject(
     entry = Entry(actor.name, actor.session, "training", what, machine.id, req.model_dump())
     with services.audit.refusals(entry):
         info = training.inject(machine, req)
+    services.faults.keep(machine)
     services.audit.record(entry)
     return info
 
@@ -52,6 +53,7 @@ def inject(
 def remove(fid: FaultId, machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Response:
     """Take a fault out: the plant is as its parameters say again."""
     training.remove(machine, fid)
+    services.faults.keep(machine)
     services.audit.record(
         Entry(actor.name, actor.session, "training", f"removed fault {fid}", machine.id)
     )

@@ -26,6 +26,7 @@ from api.classes import (
     ClassCreate,
     ClassCreated,
     ClassInfo,
+    ClassResumed,
     FindingAnswer,
     SeatFaults,
     SeatInfo,
@@ -155,6 +156,7 @@ class Class:
     ended_unix: float | None
     seats: list[Seat]
     lists: MachineLists | None = None  # the seats' machine template; None: the demo lathe
+    resumed: ClassResumed | None = None  # built again by a restart of the service
 
     @functools.cached_property
     def seat_machine(self) -> MachineConfig:
@@ -177,8 +179,12 @@ class Classes:
         machines: MachineService,
         exercises: Exercises,
         audit: Audit,
+        faults: training.StandingFaults,
+        snapshots: training.Snapshots,
     ) -> None:
         self.store = store
+        self.faults = faults
+        self.snapshots = snapshots
         self.audit = audit
         self.accounts = accounts
         self.machines = machines
@@ -231,10 +237,19 @@ class Classes:
             if r["ended"] is None:
                 self._index(c)
                 # the machines are built after this (MachineService.load): with the checks
-                # and the exercise's faults (an instructor's own are gone with the service)
+                # and the exercise's faults, unless faults were kept as they stood
                 faults = [(f.fault, f.trigger) for f in ex.faults]
+                in_force = 0
                 for seat in seats:
                     self.machines.seats[seat.machine] = (ex, faults)
+                    kept = self.faults.kept(seat.machine)
+                    in_force += len(faults if kept is None else kept)
+                c.resumed = ClassResumed(
+                    at_unix=time.time(),
+                    seats=len(seats),
+                    faults=in_force,
+                    snapshots=sum(self.snapshots.count(seat.machine) for seat in seats),
+                )
 
     def _index(self, c: Class) -> None:
         for seat in c.seats:
@@ -377,6 +392,7 @@ class Classes:
             created_unix=c.created_unix,
             ended_unix=c.ended_unix,
             seats=[self.seat_info(c, s) for s in c.seats],
+            resumed=c.resumed if c.ended_unix is None else None,
         )
 
     def seat_info(self, c: Class, seat: Seat) -> SeatInfo:
@@ -649,7 +665,7 @@ class Classes:
             m = self.machines.get(seat.machine)
             training.inject(m, req)
             self.audit.record(self.entry(actor, f"inject fault: {what}", m.id, **req.model_dump()))
-            out.append(SeatFaults(n=seat.n, faults=training.faults_of(m)))
+            out.append(SeatFaults(n=seat.n, faults=self.faults.keep(m)))
         return out
 
     def take_hint(self, actor: Actor, seat: Seat, c: Class, n: int) -> str:

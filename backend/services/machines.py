@@ -92,6 +92,9 @@ class MachineService:
         # the history, the flight recorder: every machine's new events (a push thread's)
         self.event_takers: list[EventsTaken] = []
         self.on_deleted: list[Callable[[str], None]] = []  # what keeps something per machine
+        # a machine's training faults as they stood before the service stopped (None: none
+        # kept, a seat starts with its exercise's)
+        self.kept_faults: Callable[[str], list[tuple[Fault, Trigger]] | None] = lambda mid: None
         # the newest build of a machine before this start (the history knows it)
         self.last_epoch: Callable[[str], int] = lambda mid: 0
 
@@ -208,7 +211,8 @@ class MachineService:
             proxy = MachineProxy(sm, self._config(sm))
             proxy.link.epoch = self.last_epoch(sm.id)  # its builds count on across restarts
             proxy.exercise, faults = self.seats.get(sm.id, (None, None))
-            self._place(proxy, "the service started", faults=faults)
+            kept = self.kept_faults(sm.id)
+            self._place(proxy, "the service started", faults=faults if kept is None else kept)
             self._proxies[sm.id] = proxy
             self._built(sm.id)
 

@@ -1,12 +1,12 @@
 """Faults and snapshots of a machine, as the gateway handles them for instructors: the API's
-fault models to nc_sim's and back, the snapshots kept per machine."""
+fault models to nc_sim's and back, the faults as they stand and the snapshots kept per
+machine in the store (a restart of the service loses neither)."""
 
 from __future__ import annotations
 
-import itertools
+import json
 import threading
 import time
-from collections import deque
 from dataclasses import dataclass
 
 from pydantic import TypeAdapter
@@ -21,16 +21,17 @@ from backend.services.machines import MachineProxy, MachineService
 from backend.services.store import Store
 from backend.workers.protocol import (
     InjectFault,
+    ParamSnapshot,
     ReadStatus,
     RemoveFault,
     Snapshot,
     StatusRead,
     TakeSnapshot,
 )
-from nc_sim.faults import CATALOGUE, Fault, FaultState, Trigger
+from nc_sim.faults import CATALOGUE, NOW, Fault, FaultState, Trigger
 from nc_sim.params import Scope
 
-SNAPSHOTS_PER_MACHINE = 8  # the oldest goes (a snapshot is a few hundred kB in memory)
+SNAPSHOTS_PER_MACHINE = 8  # the oldest goes (a snapshot is a few hundred kB)
 _BY_KIND = {cls.kind: cls for cls in CATALOGUE}
 _MODEL: TypeAdapter[FaultModel] = TypeAdapter(FaultModel)
 
@@ -125,55 +126,149 @@ def remove(m: MachineProxy, fid: int) -> None:
     m.link.faults.pop(fid, None)
 
 
+# --- kept in the store: a restart loses neither ----------------------------------------------
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS machine_faults (
+    machine TEXT PRIMARY KEY,
+    faults TEXT NOT NULL,  -- JSON: the FaultInfos as they stood after the last change
+    saved REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS snapshots (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    machine TEXT NOT NULL,
+    info TEXT NOT NULL,    -- JSON: SnapshotInfo
+    cycle INTEGER NOT NULL,
+    t_s REAL NOT NULL,
+    data BLOB NOT NULL,    -- the machine's state as nc_sim pickled it
+    params TEXT NOT NULL   -- JSON: [[scope, target, {name: value}], ...]
+);
+CREATE INDEX IF NOT EXISTS snapshots_machine ON snapshots (machine, id);
+"""
+
+
+class StandingFaults:
+    """Every machine's training faults as they stood after their last change (injected,
+    removed, a snapshot restored), in the store: a restart builds the machine with them
+    again (an active one at once, an armed one armed again), not with the exercise's alone."""
+
+    def __init__(self, store: Store, machines: MachineService) -> None:
+        self.store = store
+        store.script(SCHEMA)
+        machines.kept_faults = self.kept
+        machines.on_deleted.append(self.forget)
+
+    def keep(self, m: MachineProxy) -> list[FaultInfo]:
+        """Read the machine's faults from its worker and keep them; the faults."""
+        infos = faults_of(m)
+        text = json.dumps([f.model_dump(mode="json") for f in infos])
+        self.store.run(
+            "INSERT OR REPLACE INTO machine_faults (machine, faults, saved) VALUES (?, ?, ?)",
+            (m.id, text, time.time()),
+        )
+        return infos
+
+    def kept(self, mid: str) -> list[tuple[Fault, Trigger]] | None:
+        """The machine's faults to build it with (None: none kept, the machine's own apply)."""
+        rows = self.store.query("SELECT faults FROM machine_faults WHERE machine = ?", (mid,))
+        if not rows:
+            return None
+        infos = [FaultInfo.model_validate(f) for f in json.loads(rows[0]["faults"])]
+        return [
+            (
+                to_fault(f.fault),
+                NOW if f.active else Trigger(f.trigger.after_s, f.trigger.on_motion),
+            )
+            for f in infos
+        ]
+
+    def count(self, mid: str) -> int:
+        """How many faults are kept for the machine."""
+        faults = self.kept(mid)
+        return len(faults) if faults is not None else 0
+
+    def forget(self, mid: str) -> None:
+        self.store.run("DELETE FROM machine_faults WHERE machine = ?", (mid,))
+
+
 @dataclass(frozen=True)
 class Kept:
     info: SnapshotInfo
     snap: Snapshot
 
 
-class Snapshots:
-    """Snapshots of machines, in memory (the newest SNAPSHOTS_PER_MACHINE of each)."""
+def _params_json(params: ParamSnapshot) -> str:
+    return json.dumps([[scope, target, values] for (scope, target), values in params.items()])
 
-    def __init__(self, store: Store, machines: MachineService) -> None:
+
+def _params_of(text: str) -> ParamSnapshot:
+    return {(scope, target): values for scope, target, values in json.loads(text)}
+
+
+class Snapshots:
+    """Snapshots of machines in the store (the newest SNAPSHOTS_PER_MACHINE of each): a
+    class's saved states outlive a restart of the service."""
+
+    def __init__(self, store: Store, machines: MachineService, faults: StandingFaults) -> None:
         self.store = store
+        store.script(SCHEMA)
         self.machines = machines
-        self._kept: dict[str, deque[Kept]] = {}
-        self._ids = itertools.count(1)
+        self.faults = faults
         self._lock = threading.Lock()
+        machines.on_deleted.append(self.forget)
 
     def list(self, mid: str) -> list[SnapshotInfo]:
-        with self._lock:
-            return [k.info for k in self._kept.get(mid, ())]
+        rows = self.store.query("SELECT info FROM snapshots WHERE machine = ? ORDER BY id", (mid,))
+        return [SnapshotInfo.model_validate_json(r["info"]) for r in rows]
+
+    def count(self, mid: str) -> int:
+        """How many snapshots the machine has."""
+        return len(self.list(mid))
 
     def take(self, actor: Actor, m: MachineProxy, label: str) -> SnapshotInfo:
         snap = m.link.call(TakeSnapshot(m.id))
         assert isinstance(snap, Snapshot)
-        info = SnapshotInfo(
-            id=next(self._ids),
-            machine=m.id,
-            label=label,
-            cycle=snap.cycle,
-            t_s=snap.t_s,
-            created_unix=time.time(),
-            by=actor.name,
-            size_bytes=len(snap.data),
-        )
-        with self._lock:
-            self._kept.setdefault(m.id, deque(maxlen=SNAPSHOTS_PER_MACHINE)).append(
-                Kept(info, snap)
+        with self._lock:  # its id is the row's: one insert at a time
+            self.store.run(
+                "INSERT INTO snapshots (machine, info, cycle, t_s, data, params) "
+                "VALUES (?, '', ?, ?, ?, ?)",
+                (m.id, snap.cycle, snap.t_s, snap.data, _params_json(snap.params)),
+            )
+            sid = int(self.store.query("SELECT max(id) AS id FROM snapshots")[0]["id"])
+            info = SnapshotInfo(
+                id=sid,
+                machine=m.id,
+                label=label,
+                cycle=snap.cycle,
+                t_s=snap.t_s,
+                created_unix=time.time(),
+                by=actor.name,
+                size_bytes=len(snap.data),
+            )
+            self.store.run(
+                "UPDATE snapshots SET info = ? WHERE id = ?", (info.model_dump_json(), sid)
+            )
+            self.store.run(
+                "DELETE FROM snapshots WHERE machine = ? AND id NOT IN "
+                "(SELECT id FROM snapshots WHERE machine = ? ORDER BY id DESC LIMIT ?)",
+                (m.id, m.id, SNAPSHOTS_PER_MACHINE),
             )
         return info
 
     def get(self, mid: str, sid: int) -> Kept:
-        with self._lock:
-            for k in self._kept.get(mid, ()):
-                if k.info.id == sid:
-                    return k
-        raise not_found(f"snapshot {sid} of machine '{mid}'")
+        rows = self.store.query(
+            "SELECT info, cycle, t_s, data, params FROM snapshots WHERE machine = ? AND id = ?",
+            (mid, sid),
+        )
+        if not rows:
+            raise not_found(f"snapshot {sid} of machine '{mid}'")
+        r = rows[0]
+        snap = Snapshot(r["cycle"], r["t_s"], bytes(r["data"]), _params_of(r["params"]))
+        return Kept(SnapshotInfo.model_validate_json(r["info"]), snap)
 
     def restore(self, actor: Actor, m: MachineProxy, sid: int) -> SnapshotInfo:
         """The machine as it was: its lists written back as they were (audited, the
-        gateway's store agreeing with the machine), then its whole state."""
+        gateway's store agreeing with the machine), then its whole state, faults and all
+        (kept as they stand now)."""
         kept = self.get(m.id, sid)
         changes = []
         for (scope, target), values in kept.snap.params.items():
@@ -187,8 +282,8 @@ class Snapshots:
             why = f"restored snapshot {sid} ({kept.info.label or 'no label'})"
             params.write(actor, m, self.store, changes, why)
         self.machines.restore(m.id, kept.snap.data, kept.snap.params, actor.name)
+        self.faults.keep(m)
         return kept.info
 
     def forget(self, mid: str) -> None:
-        with self._lock:
-            self._kept.pop(mid, None)
+        self.store.run("DELETE FROM snapshots WHERE machine = ?", (mid,))

@@ -19,6 +19,7 @@ from backend.services.auth import Actor
 from backend.services.classes import Classes
 from backend.services.exercises import Exercises
 from backend.services.store import Store
+from backend.services.training import Snapshots, StandingFaults
 
 TRAINER = Actor("trainer", Role.INSTRUCTOR, "s1")
 
@@ -32,6 +33,7 @@ class Machines:
         self.workers = workers
         self.fail = fail
         self.seats: dict[str, Any] = {}
+        self.on_deleted: list[Any] = []
         self.made: dict[str, object] = {}
         self.lock = threading.Lock()
         self.building = self.most_at_once = 0
@@ -69,7 +71,10 @@ def classes(tmp_path: Path, machines: Machines) -> tuple[Classes, Accounts]:
     store = Store(tmp_path / "c.sqlite")
     accounts = Accounts(store)
     audit = Audit(store)
-    return Classes(store, accounts, machines, Exercises(store), audit), accounts  # type: ignore[arg-type]
+    faults = StandingFaults(store, machines)  # type: ignore[arg-type]
+    snapshots = Snapshots(store, machines, faults)  # type: ignore[arg-type]
+    built = Classes(store, accounts, machines, Exercises(store), audit, faults, snapshots)  # type: ignore[arg-type]
+    return built, accounts
 
 
 def test_seats_are_built_one_per_worker_at_a_time_in_seat_order(tmp_path: Path) -> None:

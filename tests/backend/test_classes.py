@@ -562,7 +562,8 @@ def lists_with(axis_x: str | None = None, channel: str | None = None) -> dict[st
 def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
     """Every seat is built from the class's lists: X's kv is the uploaded 33.00 1/s
     (getriebe[0].kv 3300, in 0.01/s), not the demo's 20 1/s; a restart of the service
-    builds the seat from the same lists again (a frozen seat frozen)."""
+    builds the seat from the same lists again (a frozen seat frozen), with its faults as
+    they stood (given during the class, taken out) and its snapshots."""
     db = tmp_path / "lists.sqlite"
     s = Server(db)
     s.tokens = add_users(db, {"trainer": Role.INSTRUCTOR})  # type: ignore[attr-defined]
@@ -586,6 +587,16 @@ def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
             assert {p["name"]: p["value"] for p in kv}["getriebe[0].kv"] == 3300
         r = t.post("/api/classes/lis/freeze", json={"seats": [2], "frozen": True})
         assert r.status_code == 200, r.text
+        # faults given during the class, one taken out, and a snapshot: all kept
+        backlash = {"fault": {"kind": "backlash", "axis": "X", "width": 0.02}}
+        slow = {"fault": {"kind": "plc_slow_ack", "delay_s": 8}, "trigger": {"after_s": 300}}
+        for inject in (backlash, slow):
+            r = t.post("/api/classes/lis/faults", json={"seats": [1], "inject": inject})
+            assert r.status_code == 201, r.text
+        inverted = t.get("/api/machines/lis-s02/faults").json()[0]["id"]
+        assert t.delete(f"/api/machines/lis-s02/faults/{inverted}").status_code == 204
+        snap = t.post("/api/machines/lis-s01/snapshots", json={"label": "before the fix"})
+        assert snap.status_code == 201, snap.text
         s.stop()
         s.start()
         t = trainer(s)
@@ -597,12 +608,28 @@ def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
         assert r.status_code == 409, r.text
         kv = t.get("/api/machines/lis-s01/parameters", params={"scope": "axis", "target": "X"})
         assert {p["name"]: p["value"] for p in kv.json()}["getriebe[0].kv"] == 3300
-        assert t.get("/api/classes/lis").json()["template"] == "lists"
-        # the exercise's fault is in the rebuilt seat as well
+        info = t.get("/api/classes/lis").json()
+        assert info["template"] == "lists"
+        # the instructor is told the class went on with what it had: 3 + 0 faults, 1 snapshot
+        resumed = {k: info["resumed"][k] for k in ("seats", "faults", "snapshots")}
+        assert resumed == {"seats": 2, "faults": 3, "snapshots": 1}
+        # the exercise's fault is in the rebuilt seat, with the instructor's (the armed one
+        # armed again), and the one taken out stays out
         faults = t.get("/api/machines/lis-s01/faults").json()
-        assert [(f["fault"]["kind"], f["fault"]["axis"]) for f in faults] == [
-            ("motor_inverted", "X")
+        assert [(f["fault"]["kind"], f["active"]) for f in faults] == [
+            ("motor_inverted", True),
+            ("backlash", True),
+            ("plc_slow_ack", False),
         ]
+        assert t.get("/api/machines/lis-s02/faults").json() == []
+        snaps = t.get("/api/machines/lis-s01/snapshots").json()
+        assert [(x["id"], x["label"]) for x in snaps] == [(snap.json()["id"], "before the fix")]
+        pause = t.post("/api/machines/lis-s01/simulation", json={"mode": "pause"})
+        assert pause.status_code == 200, pause.text
+        r = t.post(f"/api/machines/lis-s01/snapshots/{snap.json()['id']}/restore")
+        assert r.status_code == 200, r.text
+        restored = t.get("/api/machines/lis-s01/status").json()["simulation"]["cycle"]
+        assert restored == snap.json()["cycle"]
     finally:
         s.close()
 

@@ -46,6 +46,7 @@ export function Console() {
   const [creating, setCreating] = useState(false);
   const [created, setCreated] = useState<ClassCreated | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
+  const [dismissed, setDismissed] = useState(""); // the restart notice seen (class@time)
   useEffect(() => {
     void faultCatalogue().catch(() => undefined); // read ahead: the fault form opens filled (it says a failure)
     Promise.all([loadClasses(), loadExercises()]).catch((e: unknown) =>
@@ -67,6 +68,16 @@ export function Console() {
         ) : null}
         {/* keyed: a second class made before the first one's links were taken shows its own */}
         {created ? <SeatLinks key={created.info.id} created={created} onDone={() => setCreated(null)} /> : null}
+        {c?.resumed && c.ended_unix === null && dismissed !== `${c.id}@${c.resumed.at_unix}` ? (
+          <p class="notice" role="status" data-testid="class-resumed">
+            The service restarted at {new Date(c.resumed.at_unix * 1000).toLocaleTimeString()}; the class went on where it was:{" "}
+            {c.resumed.seats} seats built again with their {c.resumed.faults} faults and {c.resumed.snapshots} snapshots, seat times,
+            scores and hints kept.{" "}
+            <button type="button" class="secondary" data-testid="class-resumed-dismiss" onClick={() => setDismissed(`${c.id}@${c.resumed!.at_unix}`)}>
+              OK
+            </button>
+          </p>
+        ) : null}
         {c ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
         {!c && !creating && !created ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
         {c && n !== null ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}

@@ -178,8 +178,13 @@ async function connect(cid: string): Promise<void> {
   const sock = new WebSocket(`${proto}://${location.host}/api/classes/${cid}/grid?ticket=${encodeURIComponent(ticket.ticket)}`);
   ws = sock;
   sock.onmessage = (ev) => {
+    const back = gridLink.peek() === "lost"; // the service may have restarted meanwhile
     gridLink.value = "online";
-    take(JSON.parse(ev.data as string) as GridFrame);
+    const frame = JSON.parse(ev.data as string) as GridFrame;
+    // ended elsewhere, or back after a restart: the class list says what changed (an ended
+    // class closes its grid and shows its debrief)
+    if (frame.ended || back) void loadClasses().catch(() => undefined);
+    if (!frame.ended) take(frame);
   };
   sock.onclose = (ev) => {
     if (ws !== sock) return; // replaced on purpose
