@@ -27,6 +27,7 @@ class ControlParty(BaseModel):
     client: str = Field(description="the browser tab's id ('' for a script)")
     since_unix: float
     message: str = Field("", description="what a requester wrote with the request")
+    lapses_unix: float | None = Field(None, description="when an unanswered request lapses")
     guest: bool = Field(False, description="a share link's guest")
 
 

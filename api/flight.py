@@ -15,6 +15,7 @@ class FlightRecorderStatus(BaseModel):
     after_s: float = Field(description="saved after it")
     full_rate_s: float = Field(description="the last seconds held at full rate (every cycle)")
     held_s: float = Field(description="the last seconds held in all (decimated beyond)")
+    reach_s: float = Field(description="what it holds once the machine has run that long")
     decimation: int = Field(description="one sample in this many cycles beyond the full rate")
     bytes: int = Field(description="memory of this machine's long tier")
     keep: int = Field(description="job-error traces kept per machine (newest)")

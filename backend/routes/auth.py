@@ -34,13 +34,31 @@ from backend.services.auth import Actor
 
 router = APIRouter(tags=["auth"])
 
-_LINK_USED = """<!doctype html><meta charset="utf-8"><title>Inbetrieb</title>
-<p>This login link was used already or has expired. A class seat's link: ask your
-instructor for a new one. Otherwise <a href="/">log in</a> with your name and password.</p>"""
+
+def _page(title: str, body: str) -> str:
+    """A page of its own for a link that no longer opens anything: the HMI's look, what
+    happened and the way on (the HMI itself needs a session)."""
+    return f"""<!doctype html><html lang="en"><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1"><title>Inbetrieb</title>
+<style>body{{margin:0;font:15px/1.45 system-ui,sans-serif;background:#f3f5f8;color:#1b2430}}
+header{{background:#1b2430;color:#fff;padding:10px 16px;font-weight:700;font-size:18px}}
+main{{max-width:560px;margin:48px auto;background:#fff;border:1px solid #cfd6de;
+border-radius:6px;padding:18px 22px}}h1{{font-size:18px;margin:0 0 10px}}a{{color:#0b63b6}}
+</style><header>Inbetrieb</header><main><h1>{title}</h1>{body}</main></html>"""
 
 
-_SHARE_ENDED = """<!doctype html><meta charset="utf-8"><title>Inbetrieb</title>
-<p>This share link has expired or was revoked. Ask whoever sent it for a new one.</p>"""
+_LINK_USED = _page(
+    "This login link was used already or has expired",
+    "<p>A class seat's link logs in once. If your class is still running, ask your "
+    "instructor for a new link to your seat. Otherwise <a href='/'>log in</a> with your "
+    "name and password.</p>",
+)
+
+_SHARE_ENDED = _page(
+    "This share link has ended",
+    "<p>It expired or was revoked. Ask whoever sent it for a new one.</p>"
+    "<p>Have an account on this service? <a href='/'>Log in</a>.</p>",
+)
 
 
 @router.get("/share/{token}", include_in_schema=False)

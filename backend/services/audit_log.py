@@ -54,6 +54,8 @@ class Entry:
     outcome: str = "ok"
     address: str = ""
     time: float | None = None
+    # the machine's build and simulated time it happened at (None: when it is written)
+    stamp: tuple[int, float] | None = None
 
 
 def who_and_when(
@@ -103,7 +105,7 @@ def append(db: sqlite3.Connection, entries: list[Entry], clock: Clock | None = N
             e.outcome,
         )
         digest = row_hash(prev, fields)
-        stamp = clock(e.machine) if clock is not None and e.machine else None
+        stamp = e.stamp or (clock(e.machine) if clock is not None and e.machine else None)
         db.execute(
             f"INSERT INTO audit_log ({COLUMNS}, epoch, sim_t_s) VALUES ({', '.join('?' * 14)})",
             (*fields, prev, digest, *(stamp or (None, None))),

@@ -9,6 +9,7 @@ the column of a bad NC block.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -171,6 +172,8 @@ async def execute(
     send it (backend/deps.py `permit`). Runs on the event loop: nothing here blocks but
     reading a stored program (`stored`, for program_load), the worker's answer wakes it."""
     outcome = "ok"
+    # when it was sent: a job error it raises at once is logged at the cycle it runs in, after
+    sent_unix, sent_at = time.time(), (m.link.epoch, m.link.cycle * m.link.cycle_s)
     text = cmd.block if isinstance(cmd, MdiCommand) else _describe(cmd)
     axis = str(getattr(cmd, "axis", None) or getattr(cmd, "spindle", None) or "")
     # who sent what runs now, for the job errors it raises (at once, or later)
@@ -196,6 +199,8 @@ async def execute(
                     machine=m.id,
                     detail=cmd.model_dump(mode="json"),
                     outcome=outcome,
+                    time=sent_unix,
+                    stamp=sent_at,
                 )
             )
 

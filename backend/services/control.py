@@ -182,7 +182,11 @@ class Control:
                     )
                 if all(_key(r) != _key(actor) for r in c.requests):
                     text = (req.message or "").strip()
-                    c.requests.append(_party(actor).model_copy(update={"message": text}))
+                    asker = _party(actor)
+                    lapses = asker.since_unix + REQUEST_S
+                    c.requests.append(
+                        asker.model_copy(update={"message": text, "lapses_unix": lapses})
+                    )
                     said = f": “{text}”" if text else ""
                     self._changed(m, actor, f"requested control from {_who(c.holder)}{said}")
             case "cancel":

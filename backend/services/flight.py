@@ -163,6 +163,7 @@ class FlightRecorder:
             after_s=self.after_s,
             full_rate_s=full,
             held_s=max(full, held * self.decimation * cycle_s),
+            reach_s=self.minutes * 60.0,
             decimation=self.decimation,
             bytes=nbytes,
             keep=self.keep,
@@ -270,7 +271,7 @@ class FlightRecorder:
             raise Invalid("the sample ring had run past the error before it could be copied")
         data = np.concatenate(p.parts, axis=1)
         what = f"job error {e.code}{' ' + e.axis if e.axis else ''}"
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(p.seen_unix))
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(p.seen_unix))
         trace = self._trace(m, signals, data, p.got_first, m.link.cycle_s, e.cycle, what)
         trace.detail.name = f"{what} at {stamp}"
         trace.detail.notes = f"saved by the flight recorder: {e.message}"
@@ -282,7 +283,7 @@ class FlightRecorder:
         link = m.link
         head, cycle_s = link.cycle, link.cycle_s
         span = round(seconds / cycle_s)
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime())
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
         name = f"last {seconds:g} s at {stamp}"
         if span <= RING_CYCLES - RING_MARGIN:
             signals = main_signals(link.signals)

@@ -162,7 +162,9 @@ class History:
             cause = None
             if sender is not None:
                 cause = f"raised by MDI block '{sender[0]}' sent by {sender[1]}"
-            elif (last := m.last_command.get(e.axis)) is not None and last[0] == epoch:
+            elif (last := m.last_command.get(e.axis) or m.last_command.get("")) and (
+                last[0] == epoch
+            ):  # the axis's last command, else the channel's (an MDI block, a program)
                 cause = f"after '{last[1]}' sent by {last[2]}"
             return replace(row, kind="job_error", severity="error", cause=cause)
         if e.code == Code.EV_BLOCK_DROPPED:
@@ -249,7 +251,7 @@ class History:
         with self._lock:
             for seq, e in written:
                 if e.machine:
-                    stamp = clock(e.machine) if clock is not None else None
+                    stamp = e.stamp or (clock(e.machine) if clock is not None else None)
                     self._push(e.machine, audit_entry(seq, e, stamp))
 
     def _push(self, mid: str, entry: HistoryEntry) -> None:

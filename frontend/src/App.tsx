@@ -39,7 +39,9 @@ import { bundlePage, TABS, type Tab, tab as routeTab } from "./state/route";
 import { connection, frozen, online, status } from "./state/session";
 import { RefusalLine, useCommand } from "./ui/useCommand";
 
-// "Exercise" only on a class seat (the first tab there, and the one it opens on)
+// "Exercise" only on a class seat (the first tab there, and the one it opens on); a share
+// link's guest watches: the live machine, its parameters, traces and history
+const GUEST_TABS = new Set<Tab>(["Operate", "Plots", "Scope", "Parameters", "History"]);
 
 /** The CNC reset and, on a frozen seat, why the simulation stands (pacing, restart and the
  * machines themselves: the Machines dialog). */
@@ -53,10 +55,12 @@ function MachineControls() {
         ⟲ Reset
       </button>
       <EstopHint />
-      <button type="button" class="secondary" data-testid="open-machines-side" onClick={() => (machinesOpen.value = true)}
-        title="run, pause, step, fast; restart; machines">
-        Simulation: {status.value?.simulation.mode ?? "—"} …
-      </button>
+      {me.value?.guest ? null : (
+        <button type="button" class="secondary" data-testid="open-machines-side" onClick={() => (machinesOpen.value = true)}
+          title="run, pause, step, fast; restart; machines">
+          Simulation: {status.value?.simulation.mode ?? "—"} …
+        </button>
+      )}
       {frozen.value !== null ? <span class="pace-reason" data-testid="pace-reason">Frozen by the instructor</span> : null}
       <RefusalLine refusal={cmd.refusal} />
     </div>
@@ -112,7 +116,8 @@ function ConsoleScreen() {
 }
 
 function Hmi() {
-  const tab = routeTab.value;
+  const guest = !!me.value?.guest;
+  const tab = guest && !GUEST_TABS.has(routeTab.value) ? "Operate" : routeTab.value;
   const setTab = (t: Tab) => (routeTab.value = t);
   const seat = !!exercise.value;
   useEffect(() => {
@@ -154,7 +159,7 @@ function Hmi() {
           <MachineControls />
         </aside>
         <main class="main">
-          <Tabs tabs={TABS.filter((t) => seat || t !== "Exercise")} tab={tab} setTab={setTab} />
+          <Tabs tabs={TABS.filter((t) => (seat || t !== "Exercise") && (!guest || GUEST_TABS.has(t)))} tab={tab} setTab={setTab} />
           <div class="workspace" role="tabpanel" id="workspace" aria-labelledby={tabId(tab)}>
             {tab === "Exercise" ? <ExercisePanel /> : null}
             {tab === "Operate" ? (

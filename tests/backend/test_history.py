@@ -115,6 +115,12 @@ def test_a_job_error_names_the_block_that_raised_it_and_survives_a_restart(
         srv.close()
     codes = {r["code"] for r in after if r["kind"] == "job_error"}
     assert {90017, 90026} <= codes
+    # refused at once, the arc's error is put down to it, and the command comes first: it is
+    # stamped when it was sent, the error in the cycle that ran it
+    bad_arc = next(r for r in after if r["code"] == 90026)
+    assert bad_arc["cause"] == "after 'G18 G03 X0 Z12 I-10 F100' sent by tester"
+    sent = next(r for r in after if r["kind"] == "command" and "G03" in r["text"])
+    assert sent["sim_t_s"] <= bad_arc["sim_t_s"] and sent["time_unix"] <= bad_arc["time_unix"]
     assert all(before <= r["time_unix"] <= time.time() for r in after)
     newest_first = [r["text"] for r in after if r["kind"] in ("service", "power")]
     assert newest_first[:4] == [
@@ -126,6 +132,19 @@ def test_a_job_error_names_the_block_that_raised_it_and_survives_a_restart(
     assert told["kind"] == "restarted" and "powered on again" in told["message"]
     powered = [r["epoch"] for r in after if r["kind"] == "power"]
     assert powered[:2] == [2, 1]  # its builds count on across the restart
+
+
+def test_a_block_that_fails_at_once_is_named_as_the_cause(srv: Server, lathe: str) -> None:
+    """M3 S20000 sent on its own to a lathe at rest: above the top gear stage, it raises
+    90017 on S1 as it runs. The error is put down to the block (an MDI block names no axis:
+    the channel's last command), and the command is listed before its error."""
+    srv.command(lathe, {"type": "mdi", "block": f"M3 S{3 * TOP_STAGE_RPM - 1000}"})
+    rows = _until(srv, lathe, "out of reach", kind=["job_error"])
+    error = next(r for r in rows if r["code"] == 90017)
+    assert error["axis"] == "S1"
+    assert error["cause"] == f"after 'M3 S{3 * TOP_STAGE_RPM - 1000}' sent by tester"
+    sent = next(r for r in _history(srv, lathe, kind=["command"]) if "S20000" in r["text"])
+    assert sent["sim_t_s"] <= error["sim_t_s"] and sent["time_unix"] <= error["time_unix"]
 
 
 def test_notes_acknowledgements_and_resets_go_into_the_history(srv: Server, lathe: str) -> None:

@@ -122,12 +122,19 @@ def test_a_guest_link_shows_the_live_machine_until_it_is_revoked(
         expect(guest.get_by_test_id("guest-link")).to_contain_text("drive maker")  # and until when
         assert guest.evaluate("location.hash").startswith(f"#{mid}/")
         expect(panel(guest, "jog").get_by_test_id("jog-plus")).to_be_disabled()
+        # a guest watches: the live machine, parameters, traces, history; nothing to set up
+        for hidden in ("tab-Service", "tab-Commissioning", "open-machines"):
+            expect(guest.get_by_test_id(hidden)).to_have_count(0)
+        guest.get_by_test_id("tab-Scope").click()
+        expect(panel(guest, "scope-setup").get_by_test_id("scope-arm")).to_be_disabled()
+        guest.get_by_test_id("tab-Operate").click()
         viewers = a.get_by_test_id("control-strip").get_by_test_id("control-viewers")
         expect(viewers).to_contain_text("1 by share link")
         expect(share.get_by_test_id("share-watching")).to_have_text("1")
         shot(guest, "guest-link-tablet")
         share.get_by_test_id("share-revoke").click()
-        expect(guest.get_by_test_id("share-ended")).to_contain_text("has ended")  # and why
+        expect(guest.get_by_test_id("share-ended")).to_contain_text("expired or was revoked")
+        expect(guest.get_by_test_id("login-name")).to_have_count(0)  # a guest has no account
         ended = guest.request.get(url)
         assert ended.status == 401 and "expired or was revoked" in ended.text()
     finally:

@@ -41,7 +41,8 @@ export function Banner({ liveRun }: { liveRun: boolean }) {
             {more.length ? ` (+${more.length} more active)` : ""}
           </span>
           <span class="banner-detail"> Reset clears it.</span>
-          <button onClick={acknowledge} title="Hide this banner; the machine's history records that you saw it. The error stays active until Reset">
+          <button onClick={acknowledge}
+            title={may("note") ? "Hide this banner; the machine's history records that you saw it. The error stays active until Reset" : "Hide this banner on this page. The error stays active until Reset"}>
             Dismiss
           </button>
         </div>

@@ -48,10 +48,16 @@ export function ControlStrip() {
               : `${who(h)} has control`}
       </span>
       {!may("command") ? (
-        <span class="hint" data-testid="control-view-only">
-          view only ({me.value?.guest ? "share link" : me.value?.role})
-          {!h && may("ask") ? " · nobody has control to ask for: a note in the History reaches whoever comes" : ""}
-        </span>
+        <>
+          <span class="hint" data-testid="control-view-only">
+            view only ({me.value?.guest ? "share link" : me.value?.role})
+          </span>
+          {!h && may("ask") ? (
+            <span class="hint" data-testid="control-nobody">
+              nobody has control to ask for: a note in the History reaches whoever comes
+            </span>
+          ) : null}
+        </>
       ) : waiting ? (
         <span class="hint" data-testid="control-frozen">
           frozen by the instructor: you can take control once they resume the machine

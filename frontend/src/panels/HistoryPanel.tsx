@@ -81,6 +81,9 @@ const newestFirst = (a: HistoryEntry, b: HistoryEntry) => b.time_unix - a.time_u
 
 const machineBase = () => `/api/machines/${encodeURIComponent(machineId.value)}/history`;
 
+/** A stretch of time as the recorder's hint says it: seconds, minutes from two. */
+const span = (s: number) => (s < 120 ? `${fmt(s, 0)} s` : `${fmt(s / 60, 1)} min`);
+
 /** The machine's history, or (`bundle`) an opened bundle's: read-only, as it was then. */
 export function HistoryPanel(props: { bundle?: { id: string; name: string; openTrace: (id: string) => void } }) {
   const offline = props.bundle;
@@ -246,7 +249,7 @@ export function HistoryPanel(props: { bundle?: { id: string; name: string; openT
         <div class="row history-flight">
           <span class="hint" data-testid="flight-status"
             title={flight ? `full rate for the last ${fmt(flight.full_rate_s, 0)} s, one sample in ${flight.decimation} cycles beyond; ${fmt(flight.bytes / 1e6, 1)} MB` : ""}>
-            Flight recorder{flight ? `: holds the last ${flight.held_s < 120 ? `${fmt(flight.held_s, 0)} s` : `${fmt(flight.held_s / 60, 1)} min`}, saves ${fmt(flight.before_s, 0)} s before and ${fmt(flight.after_s, 0)} s after each job error` : ""}
+            Flight recorder{flight ? `: holds the last ${span(flight.held_s)}${flight.held_s < flight.reach_s - 1 ? ` (up to ${span(flight.reach_s)} once the machine has run that long)` : ""}, saves ${fmt(flight.before_s, 0)} s before and ${fmt(flight.after_s, 0)} s after each job error` : ""}
           </span>
           <label>
             Save the last{" "}

@@ -27,15 +27,24 @@ export function Login() {
   }, []);
   if (result === undefined) return <p class="hint login-wait">Connecting to the service…</p>;
   if (result) return <ClassEnded result={result} onDone={() => setResult(null)} />;
+  if (shareEnded.value) return <ShareEnded />;
+  return <LoginForm />;
+}
+
+/** A guest whose share link ended: what happened, and no login form (a guest has no
+ * account); someone with one can still log in. */
+function ShareEnded() {
   return (
-    <>
-      {shareEnded.value ? (
-        <p class="refusal share-ended" role="alert" data-testid="share-ended">
-          The share link you were watching through has ended (it expired or was revoked). Ask whoever sent it for a new one.
+    <LoginFrame>
+      <Panel title="The share link has ended" id="share-ended-panel">
+        <p role="alert" data-testid="share-ended">
+          The share link you were watching through has ended: it expired or was revoked. Ask whoever sent it for a new one.
         </p>
-      ) : null}
-      <LoginForm />
-    </>
+        <p class="hint">
+          Have an account on this service? <button type="button" class="link" onClick={() => (shareEnded.value = false)}>Log in</button>
+        </p>
+      </Panel>
+    </LoginFrame>
   );
 }
 

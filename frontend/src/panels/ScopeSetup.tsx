@@ -95,21 +95,26 @@ export function ScopeSetup() {
   const busy = state === "armed" || state === "triggered" || state === "roll";
   const others = busy && owner !== null && !owner.startsWith(`${me.value?.name ?? ""} (`);
   const mayTakeOver = may("take_control") || standing.value === "mine";
-  const notYours = others ? `the scope is ${owner}'s and still records${mayTakeOver ? "" : ": ask them (the control holder, an instructor or an admin may take it over)"}` : "";
+  const watchOnly = !may("capture"); // a share link's guest: the scope is for the people at the machine
+  const notYours = watchOnly
+    ? "a share link only watches: it shows the traces, it does not record"
+    : others
+      ? `the scope is ${owner}'s and still records${mayTakeOver ? "" : ": ask them (the control holder, an instructor or an admin may take it over)"}`
+      : "";
 
   return (
     <Panel title="Scope" id="scope-setup">
       <div class="scope-form">
         {/* the keys first: the signal picker opens downward over what follows it */}
         <div class="scope-buttons">
-          <button type="button" class="primary" data-testid="scope-arm" disabled={!online.value || !draft.channels.length || (others && !mayTakeOver)}
+          <button type="button" class="primary" data-testid="scope-arm" disabled={watchOnly || !online.value || !draft.channels.length || (others && !mayTakeOver)}
             title={notYours} onClick={() => void run(() => arm(draft.mode === "roll" ? { ...draft, trigger: null } : draft, others))}>
             {others ? "Take over and arm" : draft.mode === "roll" ? "▶ Roll" : "◉ Arm"}
           </button>
-          <button type="button" data-testid="scope-force" disabled={state !== "armed" || (others && !mayTakeOver)} title={notYours} onClick={() => void run(force)}>
+          <button type="button" data-testid="scope-force" disabled={watchOnly || state !== "armed" || (others && !mayTakeOver)} title={notYours} onClick={() => void run(force)}>
             ⚡ Force
           </button>
-          <button type="button" data-testid="scope-stop" disabled={state === "idle" || state === "done" || (others && !mayTakeOver)} title={notYours}
+          <button type="button" data-testid="scope-stop" disabled={watchOnly || state === "idle" || state === "done" || (others && !mayTakeOver)} title={notYours}
             onClick={() => void run(stop)}>
             ■ Stop
           </button>

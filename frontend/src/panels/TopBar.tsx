@@ -49,10 +49,12 @@ export function TopBar({ machine = true }: { machine?: boolean }) {
               ))}
             </select>
           </label>
-          <button type="button" class="secondary" data-testid="open-machines" title="pacing, restart, new and deleted machines"
-            onClick={() => (machinesOpen.value = true)}>
-            Machines…
-          </button>
+          {me.value?.guest ? null : (
+            <button type="button" class="secondary" data-testid="open-machines" title="pacing, restart, new and deleted machines"
+              onClick={() => (machinesOpen.value = true)}>
+              Machines…
+            </button>
+          )}
           <span class="health" data-testid="health">
             {/* fixed-width cells (styles.css .health): growing numbers do not move the bar;
                 on a small screen the loop's p99 is in the title only */}

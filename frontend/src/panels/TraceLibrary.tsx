@@ -65,7 +65,7 @@ function Row(props: { t: TraceInfo; onError: (m: string) => void }) {
           onClick={() => (overlayId.value = overlayId.value === t.id ? "" : t.id)}>
           overlay
         </button>
-        <button type="button" onClick={() => setEditing(!editing)}>rename</button>
+        {may("capture") ? <button type="button" onClick={() => setEditing(!editing)}>rename</button> : null}
         <TraceLinks id={t.id} />
         <button type="button" class="link danger" data-testid={`delete-${t.id}`}
           disabled={!may("delete_trace")} title={may("delete_trace") ? undefined : "deleting traces takes the role operator or above"}
@@ -103,10 +103,12 @@ export function TraceLibrary() {
   return (
     <Panel title="Trace library" id="trace-library"
       actions={
-        <label class="file-button">
-          Import CSV…
-          <input type="file" accept=".csv,text/csv" data-testid="trace-import" onChange={(e) => void importFile(e)} />
-        </label>
+        may("capture") ? (
+          <label class="file-button">
+            Import CSV…
+            <input type="file" accept=".csv,text/csv" data-testid="trace-import" onChange={(e) => void importFile(e)} />
+          </label>
+        ) : null
       }>
       {error ? <p class="refusal" role="alert">{error}</p> : null}
       {library.value.length ? (

@@ -77,7 +77,7 @@ function note(text: string): void {
 export const dismissControlNote = () => note("");
 
 let ownVerb: ControlAction["action"] | null = null; // this tab's last control action
-let before: { holder: ControlParty | null; requested: boolean } | null = null;
+let before: { holder: ControlParty | null; requested: boolean; lapses: number } | null = null;
 
 /** Why this tab lost control or its request between two states, or "" (nothing it should hear of). */
 function lossNote(was: NonNullable<typeof before>, now: NonNullable<typeof before>, verb: typeof ownVerb): string {
@@ -88,8 +88,11 @@ function lossNote(was: NonNullable<typeof before>, now: NonNullable<typeof befor
     return h.session === me.value?.session ? "you took control over in another tab" : `${who(h)} took control from you`;
   }
   if (was.requested && !now.requested && !(h && isMe(h)) && verb !== "cancel") {
-    if (partyKey(was.holder) === partyKey(h) && h)
-      return may("control") ? `${who(h)} refused your request, or it lapsed` : `${who(h)} has seen your request (you may watch only), or it lapsed`;
+    if (partyKey(was.holder) === partyKey(h) && h) {
+      // gone before its time: answered; at its time: nobody answered
+      if (Date.now() / 1000 >= was.lapses - 1) return `your request lapsed: ${who(h)} did not answer within a minute`;
+      return may("control") ? `${who(h)} refused your request` : `${who(h)} has seen your request (you may watch only)`;
+    }
   }
   return "";
 }
@@ -101,7 +104,8 @@ effect(() => {
     note("");
     return;
   }
-  const now = { holder: c.holder ?? null, requested: !!c.requests?.some(isMe) };
+  const mine = c.requests?.find(isMe);
+  const now = { holder: c.holder ?? null, requested: !!mine, lapses: mine?.lapses_unix ?? 0 };
   const was = before;
   before = now;
   if (!was || (partyKey(was.holder) === partyKey(now.holder) && was.requested === now.requested)) return;
