@@ -116,6 +116,15 @@ function ViewSwitch() {
   );
 }
 
+/** A link's expiry, short: the time today, else the day and time. */
+function until(t_unix: number): string {
+  const d = new Date(t_unix * 1000);
+  const today = d.toDateString() === new Date().toDateString();
+  return today
+    ? d.toLocaleTimeString([], { hour: "2-digit", minute: "2-digit" })
+    : d.toLocaleString([], { month: "short", day: "numeric", hour: "2-digit", minute: "2-digit" });
+}
+
 /** Who is logged in, in which role, and the way out. */
 function UserBox() {
   const [refusal, setRefusal] = useState<Refusal | null>(null);
@@ -130,8 +139,8 @@ function UserBox() {
     // a guest has no account: what they watch, through which link, until when
     return (
       <span class="user guest" data-testid="guest-box">
-        <span data-testid="guest-link" title={`watching ${share.machine} through a share link`}>
-          shared{share.label ? <> · <b>{share.label}</b></> : null} · until {new Date(share.expires_unix * 1000).toLocaleString([], { dateStyle: "short", timeStyle: "short" })}
+        <span data-testid="guest-link" title={`watching ${share.machine} through a share link${share.label ? ` (${share.label})` : ""} until ${new Date(share.expires_unix * 1000).toLocaleString()}`}>
+          shared{share.label ? <> · <b>{share.label}</b></> : null} · until {until(share.expires_unix)}
         </span>
         <RefusalLine refusal={refusal} id="logout-error" />
         <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
