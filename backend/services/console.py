@@ -75,9 +75,9 @@ def seat_frame(
             for a in snap.axes
         ]
         channel = snap.channel.state.name
-        if snap.job_errors:
-            newest = snap.job_errors[-1]
-            error, code = newest.message, newest.code
+        if snap.job_errors:  # the first is the cause: a later "reset first" is not
+            first = min(snap.job_errors, key=lambda e: e.cycle)
+            error, code = first.message, first.code
         p = st.pacing
         mode = p.mode
         status_unix = p.t0_unix + p.cycle * p.cycle_s if p.mode == "run" else None
@@ -188,6 +188,9 @@ class ConsoleHub:
         frames = []
         for c in self.classes.all():
             if c.ended_unix is not None:
+                if c.id in wanted:  # ended elsewhere: its consoles hear it and close the grid
+                    ended = GridFrame(class_id=c.id, ended=True, t_unix=time.time(), seats=[])
+                    frames.append((c.id, ended.model_dump_json()))
                 continue
             for seat in c.seats:
                 m = self.classes.proxy(seat)

@@ -73,11 +73,13 @@ class AxisMotion:
         m: int | None = None,
         gear: int | None = None,
         line: int | None = None,
+        cause_kept: bool = False,
     ) -> Event:
         """Log a job error (of program `line`); with an axis it becomes that axis' active job
-        error."""
+        error, unless `cause_kept` and the axis has one: a command refused because the axis
+        is in error ("reset first") leaves the error that put it there as the one to read."""
         ev = self.log(code, ax.name if ax else "", detail, m=m, gear=gear, line=line)
-        if ax is not None:
+        if ax is not None and not (cause_kept and ax.error_event is not None):
             self.set_job_error(ax, ev)
         return ev
 
@@ -115,9 +117,10 @@ class AxisMotion:
     def drive_refusal(self, ax: Axis) -> Event | None:
         """Why the axis cannot move now (E-stop, error, enables, drive status), else None."""
         if self.ctx.estop:
-            return self.fail(ax, Code.CHANNEL_ERROR_STATE, "emergency stop active")
+            return self.fail(ax, Code.CHANNEL_ERROR_STATE, "emergency stop active", cause_kept=True)
         if ax.state is AxisState.ERROR:
-            return self.fail(ax, Code.CHANNEL_ERROR_STATE, f"{ax.name} in error state")
+            why = f"{ax.name} in error state"
+            return self.fail(ax, Code.CHANNEL_ERROR_STATE, why, cause_kept=True)
         if not ax.enables_ok():
             return self.fail(
                 ax, Code.NO_ENABLES, f"{ax.name} lacks {', '.join(ax.missing_enables())}"

@@ -461,7 +461,9 @@ def test_a_lag_spike_between_two_grid_frames_shows_in_the_peak(srv: Server) -> N
     """The sign-error seat, paused, jogs X and is then stepped 3000 cycles at once: X runs
     away and lag monitoring switches it off (90002) within one step, between two grid
     frames. The frame after carries X's peak lag of those cycles: beyond lag_max, 5 mm
-    beyond the expected lag (demo axis_1.lis), whatever the lag at the moment it shows."""
+    beyond the expected lag (demo axis_1.lis), whatever the lag at the moment it shows. A
+    jog held again is refused "reset first" and the tile keeps 90002, the cause; the class
+    ended elsewhere, the console is told."""
     t = trainer(srv)
     mid = new_class(t, "spike", 1, "sign-error")["info"]["seats"][0]["machine"]
     wait_for(lambda: t.get(f"/api/machines/{mid}/status").json()["plc"]["drives_powered"])
@@ -486,7 +488,19 @@ def test_a_lag_spike_between_two_grid_frames_shows_in_the_peak(srv: Server) -> N
                 x = next(a for a in seat["axes"] if a["name"] == "X")
                 peak = max(peak, abs(float(x["lag_peak"])))
                 if seat["error_code"] == 90002:
-                    return peak
+                    break
+            # the jog held again is refused "reset first" (90015): the tile keeps the cause
+            again = await asyncio.to_thread(t.post, f"/api/machines/{mid}/commands", json=jog)
+            assert again.status_code == 409 and "90015" in again.text, again.text
+            await asyncio.wait_for(ws.recv(), 10)  # a frame built after the refusal
+            frame = json.loads(await asyncio.wait_for(ws.recv(), 10))
+            assert frame["seats"][0]["error_code"] == 90002
+            # ended from elsewhere (another console, a script): this console is told
+            ended = await asyncio.to_thread(t.post, "/api/classes/spike/end")
+            assert ended.status_code == 200, ended.text
+            while not json.loads(await asyncio.wait_for(ws.recv(), 10))["ended"]:
+                pass
+            return peak
 
     expected_mm = 100 / 60 / 20  # v/kv: 100 mm/min at kv 20 1/s
     assert asyncio.run(peak_after_the_step()) >= 5.0 + expected_mm - 1e-9

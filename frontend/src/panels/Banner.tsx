@@ -1,7 +1,8 @@
 // Connection loss, a class seat frozen by the instructor (while it is), notices (a machine
 // rebuilt after its worker died or restored, the instructor's messages), an assistant running
 // live on the machine (outside the Commissioning workspace, which shows it itself) and the
-// newest job error still active, until dismissed (hidden only) or cleared by a reset.
+// first job error still active (the cause; later ones counted), until dismissed (hidden
+// only) or cleared by a reset.
 import type { NoticeMessage } from "../api/types";
 import { dismissBanner, bannerErrors } from "../state/events";
 import { http } from "../api/http";
@@ -38,7 +39,7 @@ export function Banner({ liveRun }: { liveRun: boolean }) {
         <div class="banner error" role="alert" data-testid="banner-error">
           <span>
             ✖ Job error <b>{err.code}</b> {err.axis ? `[${err.axis}]` : ""} at t = {qty(err.t_s, 3, "s")}: {err.message}
-            {more.length ? ` (+${more.length} more active)` : ""}
+            {more.length ? ` (+${more.length} later, still active)` : ""}
           </span>
           <span class="banner-detail"> Reset clears it.</span>
           <button onClick={acknowledge}

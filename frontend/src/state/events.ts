@@ -29,11 +29,11 @@ export function addEvents(list: JobError[]): void {
 }
 
 /** The job errors still active (the pushed status has one per axis, an emergency stop once)
- * and not dismissed, newest first: the banner shows them. Dismissing only hides them here
+ * and not dismissed, oldest first: the banner shows the first as the cause. Dismissing only hides them here
  * (the NC is not told: the axis stays in error); a reset clears them. The log (Events panel)
  * keeps their history. */
 export const bannerErrors = computed(() =>
-  (status.value?.job_errors ?? []).filter((e) => !dismissed.value.has(keyOf(e))).sort((a, b) => b.cycle - a.cycle),
+  (status.value?.job_errors ?? []).filter((e) => !dismissed.value.has(keyOf(e))).sort((a, b) => a.cycle - b.cycle),
 );
 
 /** Hide the banner's errors (they stay active until a reset). */

@@ -280,6 +280,8 @@ def test_emergency_stop_brakes_step_shaped_at_a_emergency() -> None:
     assert m.k.st[x.slot, L.S_P_CMD] - p == pytest.approx(v * v / (2 * a), rel=1e-6)
     m.submit(Mdi("G00 X10"))
     assert m.events[-1].code == Code.CHANNEL_ERROR_STATE
+    # refused "reset first", the motion leaves the emergency stop as X's error: the cause
+    assert x.error_event is not None and x.error_event.code == Code.EMERGENCY_STOP
     m.submit(Reset())
     record(sim, 0.02)  # the PLC switches the drives on again: their power-up (10 ms)
     mdi(m, "G00 X10")

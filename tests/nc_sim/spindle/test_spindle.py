@@ -200,6 +200,8 @@ def test_preferred_direction_refuses_the_other_with_60254_until_reset() -> None:
     assert m.events[-1].code == Code.CHANNEL_ERROR_STATE and m.events[-1].axis == S
     record(sim, 0.1)
     assert s.state is AxisState.ERROR
+    # the refusal is logged, the spindle's error stays the cause: 60254, not 90015
+    assert [e.code for e in m.snapshot().job_errors] == [Code.SPINDLE_PREFERRED_DIRECTION]
     m.submit(Reset())
     m.submit(Mdi("M3 S500"))
     record(sim, 2.0)
