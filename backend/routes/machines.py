@@ -37,8 +37,10 @@ router = APIRouter(prefix="/api/machines", tags=["machines"])
 
 @router.get("", dependencies=[permit(Action.OBSERVE)])
 def list_machines(services: ServicesDep, actor: ActorDep) -> list[MachineSummary]:
-    """The machines this user may see (a class's student: their seat's only)."""
-    return [machine_summary(m) for m in services.machines.proxies() if actor.sees(m.id)]
+    """The machines this user may see (a class's student: their seat's only), by id (a
+    class's seats in seat order, whichever was built first)."""
+    seen = sorted((m for m in services.machines.proxies() if actor.sees(m.id)), key=lambda m: m.id)
+    return [machine_summary(m) for m in seen]
 
 
 @router.post(

@@ -90,6 +90,11 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         for n in (1, 2)
     ]
     assert all("/auth/once?token=" in u for u in urls), urls
+    # the field is tall enough for its font's descenders (underscores): inner height ≥ 1.4 em
+    first = links.get_by_test_id("link-url").first
+    inner, em = first.evaluate("e => [e.clientHeight, parseFloat(getComputedStyle(e).fontSize)]")
+    assert inner >= 1.4 * em, (inner, em)
+    shot(c, "class-console-links")
     links.get_by_test_id("links-done").click()
     expect(links).to_be_hidden()  # shown once: gone for good
 
@@ -159,12 +164,19 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         c.get_by_test_id("open-classes").click()
         expect(tile(c, 1).get_by_test_id("seat-error")).to_contain_text(str(LAG_MONITORING))
 
-        # Bert's seat frozen: his control strip offers no control and says why
+        # Bert holds his seat, then it is frozen: his strip says so, offers no control, and
+        # what would only be refused is disabled, with the reason
+        strip = bert.get_by_test_id("control-strip")
+        strip.get_by_test_id("control-take").click()
+        expect(strip.get_by_test_id("control-holder")).to_have_text("You have control")
+        expect(bert.get_by_test_id("reset")).to_be_enabled()
         r = srv.http.post(f"/api/classes/{CLASS}/freeze", json={"seats": [2], "frozen": True})
         assert r.status_code == 200, r.text
-        strip = bert.get_by_test_id("control-strip")
         expect(strip.get_by_test_id("control-frozen")).to_contain_text("frozen by the instructor")
+        expect(strip.get_by_test_id("control-holder")).to_contain_text("frozen by the instructor")
         expect(strip.get_by_test_id("control-take")).to_have_count(0)
+        expect(bert.get_by_test_id("reset")).to_be_disabled()
+        expect(bert.get_by_test_id("reset")).to_have_attribute("title", re.compile("frozen"))
         shot(bert, "class-seat-frozen-control")
     finally:
         anna.close()

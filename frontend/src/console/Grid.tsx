@@ -14,7 +14,7 @@ function ClassBar(props: { c: ClassInfo }) {
   const [sent, setSent] = useState(""); // "sent to N seats", until the next message is typed
   const [ending, setEnding] = useState(false); // asking whether to end the class
   const picked = [...selected.value].sort((a, b) => a - b);
-  const target = picked.length ? `seats ${picked.join(", ")}` : "the whole class";
+  const target = picked.length ? `seat${picked.length > 1 ? "s" : ""} ${picked.join(", ")}` : "the whole class";
   return (
     <div class="class-bar" aria-label="actions on seats">
       <span class="hint" data-testid="grid-target">

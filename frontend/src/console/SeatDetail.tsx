@@ -102,8 +102,8 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
               <li key={f.id}>
                 <b>{f.text}</b>{" "}
                 <span class="hint">
-                  {f.active ? `active since ${fmt(f.active_since_s, 1)} s` : running ? "armed" : "armed, never took effect"}
-                  {f.injected_s > 0 ? ` · injected at ${fmt(f.injected_s, 1)} s` : " · from the start"}
+                  {f.active ? `active since machine t = ${fmt(f.active_since_s, 1)} s` : running ? "armed" : "armed, never took effect"}
+                  {f.injected_s > 0 ? ` · injected at machine t = ${fmt(f.injected_s, 1)} s` : " · from the start"}
                 </span>{" "}
                 {running ? (
                   <button type="button" class="link" data-testid={`fault-remove-${f.id}`} onClick={() => then(http.del(`/api/machines/${mid}/faults/${f.id}`))}>remove</button>
@@ -118,7 +118,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
               <ul class="plain" data-testid="detail-snapshots">
                 {data?.snapshots.map((s) => (
                   <li key={s.id}>
-                    {s.id}: {fmt(s.t_s, 1)} s {s.label ? `"${s.label}"` : ""} <span class="hint">by {s.by} at {time(s.created_unix)}</span>{" "}
+                    {s.id}: machine t = {fmt(s.t_s, 1)} s {s.label ? `"${s.label}"` : ""} <span class="hint">by {s.by} at {time(s.created_unix)}</span>{" "}
                     <button type="button" class="link" data-testid={`snapshot-restore-${s.id}`}
                       onClick={() => confirm(`Restore seat ${n}'s machine to ${fmt(s.t_s, 1)} s? What the student did since is lost.`) && then(http.post(`/api/machines/${mid}/snapshots/${s.id}/restore`, {}))}>
                       restore

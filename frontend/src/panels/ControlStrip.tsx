@@ -42,7 +42,9 @@ export function ControlStrip() {
         {!h
           ? "Free"
           : st === "mine"
-            ? "You have control"
+            ? waiting
+              ? "You have control, frozen by the instructor"
+              : "You have control"
             : st === "other-tab"
               ? "You have control in another tab"
               : `${who(h)} has control`}

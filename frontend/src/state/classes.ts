@@ -20,7 +20,7 @@ import type {
 } from "../api/types";
 import { loggedIn } from "./auth";
 import { may } from "./control";
-import { machines, selectMachine } from "./session";
+import { machineId, machines, selectMachine } from "./session";
 import type { MachineSummary } from "../api/types";
 
 export type View = "hmi" | "classes";
@@ -38,11 +38,14 @@ export function openConsole(): void {
 /** Back to the machine HMI, on `machine` when given (a seat's live view). The machine list
  * is read again: a class made since has new machines. */
 export async function openHmi(machine?: string): Promise<void> {
+  const list = await http.get<MachineSummary[]>("/api/machines");
+  machines.value = list;
   if (machine) {
-    machines.value = await http.get<MachineSummary[]>("/api/machines");
     selectMachine(machine);
   } else {
     history.replaceState(null, "", location.pathname);
+    // the machine shown before may have gone with a class that ended meanwhile
+    if (!list.some((m) => m.id === machineId.value)) selectMachine(list[0]?.id ?? "");
   }
   view.value = "hmi";
 }

@@ -7,7 +7,7 @@ import { clientId, http } from "../api/http";
 import type { Action, ControlAction, ControlParty, ControlState } from "../api/types";
 import { me } from "./auth";
 import { exercise } from "./exercise";
-import { machineUrl, status } from "./session";
+import { frozen, machineUrl, status } from "./session";
 
 /** The user's role allows `action` (api/auth.py ALLOWED, as /api/auth/me reports it). */
 export const may = (action: Action): boolean => !!me.value?.actions.includes(action);
@@ -42,6 +42,8 @@ export const requested = computed(() => !!control.value?.requests?.some(isMe));
 export function blockedWhy(action: Action = "command"): string {
   const role = me.value?.role ?? "";
   if (!may(action)) return `a user in the role ${role} may not ${action === "configure" ? "write parameters" : "command"}`;
+  // a class seat the instructor froze: its student waits, whoever holds it
+  if (frozen.value !== null && !may("take_control")) return "frozen by the instructor: the machine is paused until they resume it";
   const h = control.value?.holder;
   if (!h || standing.value === "mine") return "";
   if (standing.value === "other-tab") return "you have control in another tab: take over here to act";

@@ -152,6 +152,19 @@ export async function startSession(): Promise<void> {
   }
 }
 
+/** The machine on screen may have gone (deleted, its class ended): read the list again and,
+ * when it is not in it any more, show the first machine left instead of retrying it. */
+export async function checkMachineStill(mid: string): Promise<void> {
+  let list: MachineSummary[];
+  try {
+    list = await http.get<MachineSummary[]>("/api/machines");
+  } catch {
+    return; // the service is away: the socket keeps trying
+  }
+  machines.value = list;
+  if (machineId.value === mid && !list.some((m) => m.id === mid)) selectMachine(list[0]?.id ?? "");
+}
+
 /** Logged out: no machine, so the socket closes and nothing asks the service any more
  * (`#machine` stays, the same machine shows after the next login). */
 export function endSession(): void {

@@ -23,7 +23,7 @@ import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { addHistory } from "./history";
 import { Rings } from "./rings";
-import { machineId, noticeArrived, socket, statusArrived } from "./session";
+import { checkMachineStill, machineId, noticeArrived, socket, statusArrived } from "./session";
 
 const MAGIC = 0x54424e49; // "INBT" little-endian
 export const RING_SECONDS = 30;
@@ -155,6 +155,7 @@ async function connect(mid: string): Promise<void> {
     socket.value = "lost";
     // a refused handshake looks like any failed connect: a 401 from `me` says the session ended
     if (!opened || ev.code === SESSION_ENDED) void loadMe();
+    if (!opened) void checkMachineStill(mid); // refused: is it still there?
     setTimeout(() => ws === null && machineId.value === mid && void connect(mid), RECONNECT_MS);
   };
 }
