@@ -177,6 +177,9 @@ def once(token: str, request: Request, services: ServicesDep) -> Response:
     user = services.accounts.redeem_once(token[:200])
     address = request.client.host if request.client else "?"
     if user is None:
+        sid = request.cookies.get(SESSION_COOKIE)
+        if sid and services.accounts.session(sid) is not None:  # clicked again, still in
+            return RedirectResponse("/", status_code=SEE_OTHER)
         services.audit.record_later(
             Entry(
                 "", "", "login_failed", "one-time link", outcome="used or expired", address=address

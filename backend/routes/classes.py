@@ -234,10 +234,12 @@ def seat_audit(
 def seat_link(
     cid: ClassId, n: SeatNo, request: Request, services: ServicesDep, actor: ActorDep
 ) -> SeatLink:
-    """A new one-time login link of a seat (good once, within an hour)."""
+    """A new one-time login link of a seat (good once, within an hour). The seat's current
+    session and its earlier links end: whoever has them is logged out."""
     services.classes.running(cid)
     seat = services.classes.seat(cid, n)
     url = services.classes.link(seat, str(request.base_url))
+    services.sessions.poke()  # the old session's websockets close now
     services.audit.record(Classes.entry(actor, f"login link for seat {n} of class '{cid}'"))
     return SeatLink(n=n, url=url)
 

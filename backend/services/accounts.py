@@ -276,6 +276,12 @@ class Accounts:
     def end_session(self, sid: str) -> None:
         self.store.run("DELETE FROM sessions WHERE digest = ?", (digest(sid),))
 
+    def end_logins_of(self, name: str) -> None:
+        """End every session of the user and void its unused login links (its API tokens
+        stay): a login whose link leaked is taken back."""
+        self.store.run("DELETE FROM sessions WHERE user = ?", (name,))
+        self.store.run("DELETE FROM tokens WHERE user = ? AND kind = 'once'", (name,))
+
     # --- tickets: one URL, once, soon ------------------------------------------------------
     def issue_ticket(self, actor: Actor, path: str) -> str:
         """A ticket that lets one GET of `path` act as `actor` within TICKET_S (for a client

@@ -560,7 +560,9 @@ class Classes:
             self.accounts.remove_user(seat.user)
 
     def link(self, seat: Seat, base_url: str) -> str:
-        """A one-time login link of the seat's login (good once, within an hour)."""
+        """A one-time login link of the seat's login (good once, within an hour); the seat's
+        sessions and earlier links end with it (a leaked link is taken back this way)."""
+        self.accounts.end_logins_of(seat.user)
         token = self.accounts.new_token(seat.user, f"class {seat.class_id} seat {seat.n}", True)
         return f"{base_url.rstrip('/')}/auth/once?token={token}"
 

@@ -262,6 +262,27 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     assert t.post("/api/classes/end/end").status_code == 409
 
 
+def test_a_new_link_takes_the_seat_back_from_whoever_has_the_old_one(srv: Server) -> None:
+    """Clicked again by its student, a used link leads into the HMI (the session is still
+    theirs); elsewhere it opens nothing. A new link for the seat logs out the session the old
+    one started and voids links not used yet: a leaked seat is taken back."""
+    t = trainer(srv)
+    created = new_class(t, "leak", 1, "sign-error")
+    link = created["links"][0]["url"]
+    anna = student(srv, link)
+    again = anna.get(link.replace(srv.base, ""), follow_redirects=False)
+    assert again.status_code == 303 and again.headers["location"] == "/"
+    stranger = httpx.Client(base_url=srv.base, timeout=30)
+    OPEN.append(stranger)
+    used = stranger.get(link.replace(srv.base, ""), follow_redirects=False)
+    assert used.status_code == 401 and "ask your" in used.text and "<style>" in used.text
+    spare = t.post("/api/classes/leak/seats/1/link").json()["url"]  # handed out, not used
+    assert anna.get("/api/auth/me").status_code == 401  # the new link ended her session
+    fresh = t.post("/api/classes/leak/seats/1/link").json()["url"]
+    assert stranger.get(spare.replace(srv.base, ""), follow_redirects=False).status_code == 401
+    assert student(srv, fresh).get("/api/auth/me").json()["name"] == "leak-s01"
+
+
 def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:
     """An instructor watching a seat reads its exercise but takes no hint (it would cost the
     student's points): 403 saying whose hints they are, and the seat's score stays."""

@@ -243,7 +243,7 @@ export function SeatLinks(props: { created: ClassCreated; onDone: () => void }) 
                 <td><input readOnly value={l.url} aria-label={`login link of seat ${l.n}`} class="mono link-url" data-testid="link-url" onFocus={(e) => (e.target as HTMLInputElement).select()} /></td>
                 <td>
                   <button type="button" class="secondary" data-testid="link-copy" onClick={() => copy(l)}>{copied === l.n ? "Copied" : "Copy"}</button>{" "}
-                  <button type="button" class="link" onClick={() => void renew(l.n)} title="a new link (the old one stays good until used or an hour has passed)">new link</button>
+                  <button type="button" class="link" onClick={() => void renew(l.n)} title="a new link: the seat's old link and any session logged in with it end">new link</button>
                 </td>
               </tr>
             );

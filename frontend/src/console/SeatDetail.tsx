@@ -66,7 +66,10 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
           {running ? (
             <>
               {" "}·{" "}
-              <button type="button" class="link" onClick={() => void newLink(c.id, n).then(setLink, fail)}>new login link</button>
+              <button type="button" class="link" title="a new link: the seat's old link and whoever is logged in with it are logged out"
+                onClick={() => confirm(`A new login link for seat ${n}: whoever is logged in on it now is logged out. Go on?`) && void newLink(c.id, n).then(setLink, fail)}>
+                new login link
+              </button>
             </>
           ) : null}
         </p>
