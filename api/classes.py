@@ -98,6 +98,7 @@ class CheckState(BaseModel):
     id: str
     text: str
     points: float
+    earned: float = Field(0.0, description="its points × the time weight of its first pass")
     passed: bool = Field(description="holds now")
     first_passed_s: float | None = Field(description="seat time it first held, s")
     detail: str = Field(description="the measured figure, e.g. 'k = 19.96 1/s (−0.2 %)'")

@@ -8,7 +8,6 @@ from typing import Annotated
 from fastapi import APIRouter, Path, Query, Request, WebSocket, WebSocketDisconnect
 from fastapi.concurrency import run_in_threadpool
 
-from api.audit import AuditPage
 from api.auth import SESSION_COOKIE, Action
 from api.classes import (
     CLASS_ID,
@@ -25,7 +24,7 @@ from api.classes import (
     SeatLink,
     SeatResult,
 )
-from api.common import STORE_INT_MAX
+from api.history import HistoryPage
 from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import (
@@ -41,8 +40,8 @@ from backend.errors import (
     Why,
     responses,
 )
+from backend.routes.history import EntryId, FilterDep, Limit
 from backend.services import training
-from backend.services.audit import MAX_PAGE, AuditFilter
 from backend.services.classes import Classes
 from backend.services.exercises import hint_infos
 
@@ -142,9 +141,9 @@ def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) ->
     seats = services.classes.select(c, req.seats)
     services.classes.freeze(seats, req.frozen, actor.name)
     what = "froze" if req.frozen else "resumed"
-    services.audit.record(
-        Classes.entry(actor, f"{what} seats {[s.n for s in seats]} of class '{cid}'")
-    )
+    for seat in seats:  # each in its seat's history, for the debrief
+        what_seat = f"{what} seat {seat.n} of class '{cid}'"
+        services.audit.record(Classes.entry(actor, what_seat, seat.machine))
     return services.classes.info(c)
 
 
@@ -157,8 +156,11 @@ def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) ->
 def broadcast(cid: ClassId, req: Broadcast, services: ServicesDep, actor: ActorDep) -> None:
     """A message every selected seat's HMI shows as a banner."""
     c = services.classes.running(cid)
-    services.classes.broadcast(services.classes.select(c, req.seats), req.text, actor.name)
-    services.audit.record(Classes.entry(actor, f"message to class '{cid}': {req.text}"))
+    seats = services.classes.select(c, req.seats)
+    services.classes.broadcast(seats, req.text, actor.name)
+    for seat in seats:
+        said = f"message to seat {seat.n} of class '{cid}': {req.text}"
+        services.audit.record(Classes.entry(actor, said, seat.machine))
 
 
 @router.post(
@@ -209,21 +211,26 @@ def seat_result(request: Request, services: ServicesDep) -> SeatResult:
 
 
 @router.get(
-    "/classes/{cid}/seats/{n}/audit",
+    "/classes/{cid}/seats/{n}/history",
     dependencies=[permit(Action.TEACH)],
     responses=responses(Forbidden, NotFound),
 )
-def seat_audit(
+def seat_history(
     cid: ClassId,
     n: SeatNo,
     services: ServicesDep,
-    limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 200,
-    before_seq: Annotated[int | None, Query(ge=1, le=STORE_INT_MAX)] = None,
-) -> AuditPage:
-    """What was done on the seat's machine (commands, parameters, faults, hints), newest
-    first: for the debrief, also once the class has ended and its machine is gone."""
+    f: FilterDep,
+    limit: Limit = 200,
+    before_unix: Annotated[float | None, Query(ge=0, le=1e11)] = None,
+    before_id: EntryId = None,
+) -> HistoryPage:
+    """What happened on the seat's machine, newest first: job errors (with the command that
+    raised them), commands, parameters, faults, hints, freezes and messages, power-ons; for
+    the debrief, also once the class has ended and its machine is gone."""
     seat = services.classes.seat(cid, n)
-    return services.audit.page(AuditFilter(machine=seat.machine), limit, before_seq)
+    before = (before_unix, before_id) if before_unix is not None and before_id else None
+    rows, total = services.history.page(seat.machine, f, limit, before)
+    return HistoryPage(rows=rows, total=total)
 
 
 @router.post(

@@ -310,6 +310,7 @@ class Classes:
     # --- progress -----------------------------------------------------------------------------
     def checks(self, c: Class, seat: Seat) -> list[CheckState]:
         out = []
+        earned = {s.id: s.earned for s in exercise_score(c.exercise, seat.first_passed_s).checks}
         for k in c.exercise.checks:
             rule = findings.finding_of(k)
             given = seat.answers.get(k.id, [])
@@ -320,6 +321,7 @@ class Classes:
                     id=k.id,
                     text=k.text,
                     points=k.points,
+                    earned=earned[k.id],
                     passed=seat.passed.get(k.id, False),
                     first_passed_s=seat.first_passed_s.get(k.id),
                     detail=seat.detail.get(k.id, waiting),

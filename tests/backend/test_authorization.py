@@ -160,7 +160,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/classes/{cid}/broadcast"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/faults"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/seats/{n}"): ("instructor", FREE),
-    ("GET", "/api/classes/{cid}/seats/{n}/audit"): ("instructor", FREE),
+    ("GET", "/api/classes/{cid}/seats/{n}/history"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/seats/{n}/link"): ("instructor", FREE),
     ("GET", "/api/machines/{mid}/faults"): ("instructor", FREE),
     ("POST", "/api/machines/{mid}/faults"): ("instructor", FREE),

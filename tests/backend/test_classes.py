@@ -255,10 +255,9 @@ def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:
     after = t.get("/api/classes/end/seats/1").json()  # the record stays for the debrief
     assert after["info"]["hints_taken"] == 1 and len(after["checks"]) >= 1
     # and so does what was done on the seat (the student's hint here)
-    rows = t.get("/api/classes/end/seats/1/audit").json()["rows"]
-    assert [r["machine"] for r in rows] == [mid] * len(rows)
-    assert any(r["actor"] == seat_user and "took hint 1" in r["action"] for r in rows), rows
-    assert t.get("/api/classes/end/seats/3/audit").status_code == 404
+    rows = t.get("/api/classes/end/seats/1/history").json()["rows"]
+    assert any(r["actor"] == seat_user and "took hint 1" in r["text"] for r in rows), rows
+    assert t.get("/api/classes/end/seats/3/history").status_code == 404
     assert t.post("/api/classes/end/end").status_code == 409
 
 
@@ -378,8 +377,8 @@ def test_a_finding_is_answered_graded_and_counted(srv: Server) -> None:
     assert r.status_code == 409, r.text
     detail = t.get("/api/classes/play/seats/1").json()
     assert detail["checks"][0]["passed"] and detail["info"]["score"] == pytest.approx(100.0)
-    rows = t.get("/api/classes/play/seats/1/audit").json()["rows"]
-    assert any("answered finding 'play'" in r["action"] and "right" in r["action"] for r in rows)
+    rows = t.get("/api/classes/play/seats/1/history").json()["rows"]
+    assert any("answered finding 'play'" in r["text"] and "right" in r["text"] for r in rows)
 
 
 def test_the_student_sees_their_result_and_the_debrief_keeps_the_faults(srv: Server) -> None:
@@ -401,6 +400,22 @@ def test_the_student_sees_their_result_and_the_debrief_keeps_the_faults(srv: Ser
     )
     assert r.status_code == 201, r.text
     assert seat.post(f"/api/machines/{mid}/exercise/hints", json={"n": 1}).status_code == 200
+    # the student's runaway (90002) and power-cycle, then the instructor's freeze and message
+    assert seat.post(f"/api/machines/{mid}/control", json={"action": "take"}).status_code == 200
+    wait_for(lambda: seat.get(f"/api/machines/{mid}/status").json()["plc"]["drives_powered"])
+    move = {"type": "move", "axis": "X", "target": 60.0}
+    assert seat.post(f"/api/machines/{mid}/commands", json=move).status_code == 200
+    wait_for(
+        lambda: any(
+            e["code"] == 90002 for e in seat.get(f"/api/machines/{mid}/status").json()["job_errors"]
+        )
+    )
+    restarted = seat.post(f"/api/machines/{mid}/restart")  # a power-cycle wipes nothing
+    assert restarted.status_code == 200, restarted.text
+    frozen = t.post("/api/classes/fin/freeze", json={"seats": [1], "frozen": True})
+    assert frozen.status_code == 200, frozen.text
+    said = t.post("/api/classes/fin/broadcast", json={"seats": [1], "text": "look at the D/A"})
+    assert said.status_code == 204, said.text
     assert t.post("/api/classes/fin/end").status_code == 200
     assert seat.get("/api/machines").status_code == 401  # the login has gone
 
@@ -418,6 +433,18 @@ def test_the_student_sees_their_result_and_the_debrief_keeps_the_faults(srv: Ser
 
     debrief = t.get("/api/classes/fin/seats/1").json()
     assert debrief["ended"] is True
+    assert [(k["points"], k["earned"]) for k in debrief["checks"]] == [(40, 0), (20, 0), (40, 0)]
+    # what happened, after the machine has gone: the runaway with its cause, the rest
+    rows = t.get("/api/classes/fin/seats/1/history", params={"limit": 500}).json()["rows"]
+    runaway = next(r for r in rows if r["code"] == 90002)
+    assert runaway["kind"] == "job_error" and runaway["cause"].endswith("sent by fin-s01")
+    assert runaway["cause"].startswith("after 'move axis=X target=60.0")
+    texts = [r["text"] for r in rows]
+    for done in ("froze seat 1", "message to seat 1 of class 'fin': look at the D/A"):
+        assert any(x.startswith(done) for x in texts), texts
+    assert any(t.startswith("took hint 1") for t in texts), texts
+    powers = [r["text"] for r in rows if r["kind"] == "power"]
+    assert powers == ["powered on: power cycle by fin-s01", "powered on: created"]
     faults = [(f["fault"]["kind"], f["active"]) for f in debrief["faults"]]
     assert faults == [("motor_inverted", True), ("plc_slow_ack", False)], faults
     assert [f["fault"]["kind"] for f in t.get("/api/classes/fin/seats/2").json()["faults"]] == [

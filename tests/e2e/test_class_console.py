@@ -150,7 +150,7 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         tile(c, 1).get_by_test_id("seat-detail").click()
         detail = panel(c, "seat-detail")
         expect(detail.get_by_test_id("detail-faults")).to_contain_text("X: motor wired inverted")
-        expect(detail.get_by_test_id("detail-audit")).to_contain_text("inject fault")
+        expect(detail.get_by_test_id("detail-history")).to_contain_text("inject fault")
         shot(c, "class-console-seat-detail")
 
         mid = f"{CLASS}-s01"
@@ -319,7 +319,7 @@ def test_watching_a_seat_then_ending_the_class(
         c.get_by_test_id("open-classes").click()
         tile(c, 1).get_by_test_id("seat-detail").click()
         detail = panel(c, "seat-detail")
-        expect(detail.get_by_test_id("detail-audit")).to_contain_text("took hint 1")
+        expect(detail.get_by_test_id("detail-history")).to_contain_text("took hint 1")
         for size in ("desktop", "tablet"):
             resize(c, size)
             no_sideways_scroll(c)

@@ -1,10 +1,11 @@
 // One seat for the instructor and the debrief: the exercise's checks (measured figure, first
 // pass), hints taken, injected faults (remove one), snapshots (take, restore), the seat's
-// traces and what was done on its machine (audit). An ended class keeps all but the machine:
-// its checks' figures and faults as they stood at the end.
+// traces and what happened on its machine (its history: job errors with their cause,
+// commands, parameters, faults, hints, freezes and messages). An ended class keeps all but the
+// machine: its checks' figures and faults as they stood at the end.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
-import type { AuditPage, ClassInfo, Refusal, SeatDetail as Detail, SeatLink, SnapshotInfo, TraceInfo } from "../api/types";
+import type { ClassInfo, HistoryPage, Refusal, SeatDetail as Detail, SeatLink, SnapshotInfo, TraceInfo } from "../api/types";
 import { newLink } from "../state/classes";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
@@ -13,14 +14,14 @@ import { clock } from "./SeatTile";
 import { detailSeat } from "./uiState";
 
 const REFRESH_MS = 3000; // a running seat's checks and faults change as the student works
-const AUDIT_ROWS = 100;
+const HISTORY_ROWS = 200;
 const time = (unix: number) => new Date(unix * 1000).toLocaleTimeString();
 
 interface Loaded {
   detail: Detail;
   snapshots: SnapshotInfo[];
   traces: TraceInfo[];
-  audit: AuditPage;
+  history: HistoryPage;
 }
 
 export function SeatDetail(props: { c: ClassInfo; n: number }) {
@@ -37,13 +38,13 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
     if (!seat) return; // another class was just opened: its seats are not this one's
     let live = true;
     const load = async () => {
-      const [detail, traces, audit, snapshots] = await Promise.all([
+      const [detail, traces, history, snapshots] = await Promise.all([
         http.get<Detail>(`/api/classes/${c.id}/seats/${n}`),
         http.get<TraceInfo[]>(`/api/traces?machine=${encodeURIComponent(mid)}`),
-        http.get<AuditPage>(`/api/classes/${c.id}/seats/${n}/audit?limit=${AUDIT_ROWS}`),
+        http.get<HistoryPage>(`/api/classes/${c.id}/seats/${n}/history?limit=${HISTORY_ROWS}`),
         running ? http.get<SnapshotInfo[]>(`/api/machines/${mid}/snapshots`) : Promise.resolve([]),
       ]);
-      if (live) setData({ detail, traces, audit, snapshots });
+      if (live) setData({ detail, traces, history, snapshots });
     };
     load().catch(fail);
     const timer = running ? setInterval(() => void load().catch(fail), REFRESH_MS) : undefined;
@@ -79,16 +80,17 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
         <section>
           <h3>Checks</h3>
           <table class="dense" data-testid="detail-checks">
-            <thead><tr><th>check</th><th>{running ? "holds" : "held at the end"}</th><th>first passed</th>
+            <thead><tr><th>check</th><th>passed</th>{running ? <th>holds now</th> : null}
               <th>{running ? "measured" : "last measured, at the end"}</th><th class="num">points</th></tr></thead>
             <tbody>
               {d?.checks.map((k) => (
-                <tr key={k.id}>
+                <tr key={k.id} data-testid={`detail-check-${k.id}`}>
                   <td>{k.text}</td>
-                  <td class={k.passed ? "ok" : "bad"}>{k.passed ? "yes" : "no"}</td>
-                  <td class="num">{k.first_passed_s === null ? "—" : clock(k.first_passed_s)}</td>
+                  {/* a check counts once passed: when, in seat time */}
+                  <td class={k.first_passed_s !== null ? "ok" : "bad"}>{k.first_passed_s !== null ? `yes, at ${clock(k.first_passed_s)}` : "no"}</td>
+                  {running ? <td class={k.passed ? "ok" : ""}>{k.passed ? "yes" : "no"}</td> : null}
                   <td>{k.detail}</td>
-                  <td class="num">{fmt(k.points, 0)}</td>
+                  <td class="num" data-testid="detail-check-points">{fmt(k.earned, 1)} of {fmt(k.points, 0)}</td>
                 </tr>
               ))}
             </tbody>
@@ -146,15 +148,19 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
             ))}
             {data && !data.traces.length ? <li class="hint">none</li> : null}
           </ul>
-          <h3>Commands and changes ({data?.audit.total ?? 0})</h3>
-          <table class="dense" data-testid="detail-audit">
+          <h3>What happened ({data?.history.total ?? 0})</h3>
+          <table class="dense" data-testid="detail-history">
             <tbody>
-              {data?.audit.rows.map((r) => (
-                <tr key={r.seq}>
+              {data?.history.rows.map((r) => (
+                <tr key={r.id} class={r.severity === "error" ? "bad" : ""} data-kind={r.kind}>
                   <td class="num">{time(r.time_unix)}</td>
-                  <td>{r.actor}</td>
-                  <td>{r.action}</td>
-                  <td class={r.outcome === "ok" ? "" : "bad"}>{r.outcome}</td>
+                  <td>{r.actor || "NC"}</td>
+                  <td>
+                    {r.code !== null ? <b>{r.code} </b> : null}
+                    {r.text}
+                    {r.cause ? <div class="hint">{r.cause}</div> : null}
+                  </td>
+                  <td class={r.outcome && r.outcome !== "ok" ? "bad" : ""}>{r.outcome}</td>
                 </tr>
               ))}
             </tbody>
