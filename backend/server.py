@@ -92,5 +92,9 @@ def serve(host: str, port: int, overrides: Mapping[str, object], exposure: Expos
     )
     scheme = "https" if https else "http"
     print(f"Inbetrieb at {scheme}://{host}:{port}  (API docs at /docs)", flush=True)
-    uvicorn.Server(config).run(sockets=[sock])
+    try:
+        uvicorn.Server(config).run(sockets=[sock])
+    except KeyboardInterrupt:  # uvicorn raises Ctrl-C again once it has stopped in order
+        pass
+    print("Inbetrieb stopped", flush=True)
     return 0

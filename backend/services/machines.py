@@ -321,6 +321,8 @@ class MachineService:
         ).start()
 
     def _rebuild_from(self, dead: WorkerClient) -> None:
+        if self.pool.stopping:  # a worker ending with the service: nothing to rebuild
+            return
         lost = self.on_machine(dead)
         self.pool.replace(dead)  # first: the lost machines go to the least loaded, it among them
         why = f"its worker {dead.id} (pid {dead.pid}, node {dead.node}) stopped"
@@ -335,6 +337,10 @@ class MachineService:
                     proxy.cfg = self._config(sm)
                     proxy.pending.clear()
                     self._place(proxy, f"rebuilt: {why}", failure=True)
+            except ApiError as e:  # no live worker (the service stops, or none could start)
+                if not self.pool.stopping:
+                    log.warning("machine %s could not be rebuilt: %s", proxy.id, e)
+                continue
             except Exception:
                 log.exception("machine %s could not be rebuilt", proxy.id)
                 continue

@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import multiprocessing as mp
+import signal
 import socket
 import threading
 import time
@@ -64,6 +65,10 @@ def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) 
     from backend.workers.worker import Worker, realtime_priority
 
     logging.basicConfig(level=logging.WARNING, format="worker %(process)d: %(message)s")
+    # Ctrl-C reaches the whole process group, systemd's stop the whole unit: the gateway
+    # stops its workers in order (its socket closing ends this one), so they wait for it
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     realtime_priority()
     warm_up()
     wire = Wire(sock, write_behind=True)

@@ -78,6 +78,11 @@ class WorkerPool:
         self._stopping = False
 
     @property
+    def stopping(self) -> bool:
+        """The service stops: a worker lost now is not replaced, its machines not rebuilt."""
+        return self._stopping
+
+    @property
     def _on_cluster(self) -> bool:
         return self.factory is None and self.cluster is not None
 

@@ -10,6 +10,8 @@ import itertools
 import json
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -21,7 +23,7 @@ import pytest
 from websockets.asyncio.client import connect
 
 from api.telemetry import FrameHeader, decode_frame
-from tests.backend.server import Server
+from tests.backend.server import ROOT, Server, free_port
 from tests.backend.test_parameters import lag_at_feed, write
 
 ESTOP_WITHIN_MS = 2.0  # the issue's bound, from the command reaching its worker
@@ -242,3 +244,47 @@ def test_worker_processes_run_one_blas_thread(srv: Server) -> None:
         assert env.get(b"OPENBLAS_NUM_THREADS") == b"1", w
         threads = os.listdir(f"/proc/{w['pid']}/task")
         assert len(threads) < 8, threads  # the loop, the log and a few of Python's: no pool
+
+
+def test_ctrl_c_stops_the_service_and_its_workers_quietly(tmp_path: Path) -> None:
+    """Ctrl-C in a terminal reaches the whole process group (as systemd's stop reaches the
+    whole unit): the service stops its workers in order, nothing is rebuilt, nothing prints
+    a traceback, and no process of the group is left behind."""
+    port = free_port()
+    log = tmp_path / "service.log"
+    cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(port)]
+    with log.open("w") as out:
+        proc = subprocess.Popen(
+            [*cmd, "--db", str(tmp_path / "db.sqlite")],
+            cwd=ROOT,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,  # its own group, as a terminal's foreground job
+        )
+        try:
+            deadline = time.monotonic() + 60  # a safety net, no measure
+            while True:
+                try:
+                    if httpx.get(f"http://127.0.0.1:{port}/api/health").status_code == 200:
+                        break
+                except httpx.TransportError:
+                    pass
+                assert time.monotonic() < deadline, log.read_text()
+                time.sleep(0.1)
+            os.killpg(proc.pid, signal.SIGINT)
+            proc.wait(timeout=30)
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+    deadline = time.monotonic() + 10
+    while True:  # its workers end with it (their socket closed)
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        assert time.monotonic() < deadline, "a process of the service outlived it"
+        time.sleep(0.1)
+    text = log.read_text()
+    assert "Traceback" not in text and "is gone" not in text and "rebuilt" not in text, text
