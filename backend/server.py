@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import sys
 from collections.abc import Mapping
@@ -92,9 +93,8 @@ def serve(host: str, port: int, overrides: Mapping[str, object], exposure: Expos
     )
     scheme = "https" if https else "http"
     print(f"Inbetrieb at {scheme}://{host}:{port}  (API docs at /docs)", flush=True)
-    try:
+    # uvicorn raises Ctrl-C again once it has stopped in order: that is the end, no error
+    with contextlib.suppress(KeyboardInterrupt):
         uvicorn.Server(config).run(sockets=[sock])
-    except KeyboardInterrupt:  # uvicorn raises Ctrl-C again once it has stopped in order
-        pass
     print("Inbetrieb stopped", flush=True)
     return 0
