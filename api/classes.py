@@ -130,6 +130,9 @@ class SeatInfo(BaseModel):
     score: float
     hints_taken: int
     seat_time_s: float = Field(description="simulated time the seat has run, s")
+    joined_unix: float | None = Field(
+        None, description="its student's first login (None: nobody yet; its clock stands)"
+    )
 
 
 class ClassResumed(BaseModel):
@@ -300,6 +303,10 @@ class SeatFrame(BaseModel):
     score: float
     faults: int = Field(description="injected faults (active or armed)")
     seat_time_s: float
+    joined: bool = Field(True, description="its student has logged in (its clock runs since)")
+    idle_s: float | None = Field(
+        None, description="since its student's last command (None: none yet)"
+    )
     status_unix: float | None = Field(
         description="wall time the status shown was pushed by its worker (grid latency)"
     )

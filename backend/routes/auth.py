@@ -188,6 +188,7 @@ def once(token: str, request: Request, services: ServicesDep) -> Response:
         return HTMLResponse(_LINK_USED, status_code=http_status(NotLoggedIn))
     response = RedirectResponse("/", status_code=SEE_OTHER)
     actor = _start_session(response, request, services, user)
+    services.classes.joined(user.name)  # a seat's first login starts its clock
     services.audit.record_later(
         Entry(actor.name, actor.session, "login", "login with a one-time link", address=address)
     )

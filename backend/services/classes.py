@@ -106,6 +106,7 @@ class Seat:
     epoch_start_s: float | None = None  # machine time the current build was first seen at
     last_t_s: float = 0.0
     frozen: bool = False
+    joined_unix: float | None = None  # the student's first login: seat time runs from there
     faults: list[FaultInfo] = field(default_factory=list)  # as they stood at the class's end
     answers: findings.Answers = field(default_factory=dict)  # to the finding checks
 
@@ -122,6 +123,7 @@ class Seat:
                 "detail": self.detail,
                 "seat_time_s": self.seat_time_s,
                 "frozen": self.frozen,
+                "joined_unix": self.joined_unix,
                 "faults": [f.model_dump(mode="json") for f in self.faults],
                 "answers": {
                     k: [a.model_dump(mode="json") for a in given]
@@ -138,6 +140,7 @@ class Seat:
         self.detail = dict(p.get("detail", {}))
         self.time_base_s = float(p.get("seat_time_s", 0.0))
         self.frozen = bool(p.get("frozen", False))
+        self.joined_unix = p.get("joined_unix")
         self.faults = [FaultInfo.model_validate(f) for f in p.get("faults", [])]
         self.answers = {
             k: [AnswerGiven.model_validate(a) for a in given]
@@ -412,6 +415,7 @@ class Classes:
             score=score,
             hints_taken=len(seat.hints),
             seat_time_s=seat.seat_time_s,
+            joined_unix=seat.joined_unix,
         )
 
     # --- changing -----------------------------------------------------------------------------
@@ -532,6 +536,7 @@ class Classes:
                 values=[(v.scope.value, v.target, v.name, v.value) for v in c.exercise.start],
                 faults=[(f.fault, f.trigger) for f in c.exercise.faults],
                 exercise=c.exercise,
+                mode="pause",  # an empty seat's clock stands: it runs from its student's login
             )
             changes = [
                 StoredChange(v.scope.value, v.target, v.name, None, v.value, "now")
@@ -635,7 +640,8 @@ class Classes:
         self.store.run("DELETE FROM ended_sessions WHERE digest = ?", (digest(sid),))
 
     def freeze(self, seats: list[Seat], frozen: bool, by: str) -> None:
-        """Pause (or run again) the seats' machines, each with a banner on its HMI."""
+        """Pause (or run again) the seats' machines, each with a banner on its HMI (resumed
+        by the instructor, a seat nobody has joined yet runs: the instructor's start)."""
         for seat in seats:
             m = self.machines.get(seat.machine)
             m.link.call(Pace(m.id, "pause" if frozen else "run"))
@@ -646,14 +652,33 @@ class Classes:
             m.notices.add("frozen" if frozen else "resumed", f"{by} {word} the machine")
 
     def refreeze(self) -> None:
-        """After the machines are built at start-up: the seats frozen before pause again."""
+        """After the machines are built at start-up: the seats frozen before pause again, and
+        so do those nobody has joined yet (their clock stands)."""
         for c in self.all():
             if c.ended_unix is None:
-                frozen = [s for s in c.seats if s.frozen and self.proxy(s) is not None]
-                for seat in frozen:
+                waiting = [
+                    s
+                    for s in c.seats
+                    if (s.frozen or s.joined_unix is None) and self.proxy(s) is not None
+                ]
+                for seat in waiting:
                     m = self.machines.get(seat.machine)
                     m.link.call(Pace(m.id, "pause"))
-                    m.control.frozen_by = c.instructor
+                    if seat.frozen:
+                        m.control.frozen_by = c.instructor
+
+    def joined(self, user: str) -> None:
+        """A login of a seat's student: the first one starts the seat's clock (its machine
+        runs, unless the instructor froze it)."""
+        with self._lock:
+            seat = self._seat_of.get(user)
+            if seat is None or seat.joined_unix is not None:
+                return
+            seat.joined_unix = time.time()
+            self.save(seat)
+        m = self.proxy(seat)
+        if m is not None and not seat.frozen:
+            m.link.call(Pace(m.id, "run"))
 
     def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
         """A message as a banner on every one of the seats' HMIs."""

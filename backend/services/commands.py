@@ -174,6 +174,7 @@ async def execute(
     outcome = "ok"
     # when it was sent: a job error it raises at once is logged at the cycle it runs in, after
     sent_unix, sent_at = time.time(), (m.link.epoch, m.link.cycle * m.link.cycle_s)
+    m.last_command[actor.name] = sent_unix  # who works on it (a class seat's idle time)
     text = cmd.block if isinstance(cmd, MdiCommand) else _describe(cmd)
     axis = str(getattr(cmd, "axis", None) or getattr(cmd, "spindle", None) or "")
     # who sent what runs now, for the job errors it raises (at once, or later)

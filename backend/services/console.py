@@ -96,8 +96,18 @@ def seat_frame(
         score=score,
         faults=len(m.link.faults) if m is not None else 0,
         seat_time_s=seat.seat_time_s,
+        joined=seat.joined_unix is not None,
+        idle_s=_idle_s(seat, m),
         status_unix=status_unix,
     )
+
+
+def _idle_s(seat: Seat, m: MachineProxy | None) -> float | None:
+    """Seconds since the seat's student last sent a command (since they joined when none)."""
+    if seat.joined_unix is None:
+        return None
+    last = m.last_command.get(seat.user) if m is not None else None
+    return max(0.0, time.time() - (last if last is not None else seat.joined_unix))
 
 
 class ConsoleHub:

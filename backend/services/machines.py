@@ -71,6 +71,7 @@ class MachineProxy:
         self.control = MachineControl()  # who holds it (backend/services/control.py)
         self.exercise: object | None = None  # a class seat's checks: go with every rebuild
         self.deleted = False  # telemetry closes its subscribers
+        self.last_command: dict[str, float] = {}  # user → wall time of their last command
 
 
 class MachineService:
@@ -222,6 +223,7 @@ class MachineService:
         values: Values | None = None,
         faults: list[tuple[Fault, Trigger]] | None = None,
         exercise: object | None = None,
+        mode: Mode = "run",
     ) -> MachineProxy:
         """A new machine placed on a worker; a class's seat gets its exercise's starting
         `values` (written into its lists: the caller stores them), `faults` and checks."""
@@ -246,7 +248,7 @@ class MachineService:
         proxy = MachineProxy(sm, cfg)
         proxy.exercise = exercise
         try:
-            self._place(proxy, "created", faults=faults)
+            self._place(proxy, "created", faults=faults, mode=mode)
         except (WorkerGone, WorkerRefused) as e:
             raise Unavailable(f"no worker could build the machine: {e}") from None
         self.store.add_machine(sm)

@@ -282,6 +282,37 @@ def test_a_new_link_takes_the_seat_back_from_whoever_has_the_old_one(srv: Server
     assert student(srv, fresh).get("/api/auth/me").json()["name"] == "leak-s01"
 
 
+def test_a_seat_s_clock_runs_from_its_students_first_login(srv: Server) -> None:
+    """Seat time is fair: an empty seat's machine stands (its clock at 0, 'not yet joined'
+    on the grid) until its student's first login; then it runs, and the grid shows how
+    long the student has not commanded anything."""
+    t = trainer(srv)
+    created = new_class(t, "fair", 2, "sign-error")
+    time.sleep(1.0)  # a second of class: nobody has joined
+    seats = t.get("/api/classes/fair").json()["seats"]
+    assert [(x["seat_time_s"], x["joined_unix"]) for x in seats] == [(0.0, None), (0.0, None)]
+    assert t.get("/api/machines/fair-s01/status").json()["simulation"]["mode"] == "pause"
+    before = time.time()
+    student(srv, created["links"][0]["url"])
+    joined = t.get("/api/classes/fair").json()["seats"]
+    assert joined[0]["joined_unix"] >= before and joined[1]["joined_unix"] is None
+    assert t.get("/api/machines/fair-s01/status").json()["simulation"]["mode"] == "run"
+    tokens: dict[str, str] = srv.tokens  # type: ignore[attr-defined]
+
+    async def frame() -> dict[str, Any]:
+        url = f"{srv.ws_base}/api/classes/fair/grid"
+        async with connect(url, additional_headers=bearer(tokens["trainer"])) as ws:
+            while True:  # until seat 1's clock has run
+                got: dict[str, Any] = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                if got["seats"][0]["seat_time_s"] > 0:
+                    return got
+
+    one, two = asyncio.run(frame())["seats"]
+    assert one["joined"] and one["idle_s"] is not None and one["idle_s"] >= 0
+    assert not two["joined"] and two["idle_s"] is None and two["seat_time_s"] == 0.0
+    assert t.post("/api/classes/fair/end").status_code == 200
+
+
 def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:
     """An instructor watching a seat reads its exercise but takes no hint (it would cost the
     student's points): 403 saying whose hints they are, and the seat's score stays."""
@@ -332,6 +363,7 @@ def test_the_margins_check_runs_on_the_seats_worker(srv: Server) -> None:
     t = trainer(srv)
     created = new_class(t, "soft", 1, "soft-coupling")
     mid = created["info"]["seats"][0]["machine"]
+    student(srv, created["links"][0]["url"])  # joined: the seat runs
 
     def stable() -> dict[str, Any] | None:
         checks = t.get(f"/api/machines/{mid}/exercise").json()["checks"]
@@ -513,7 +545,9 @@ def test_a_lag_spike_between_two_grid_frames_shows_in_the_peak(srv: Server) -> N
     jog held again is refused "reset first" and the tile keeps 90002, the cause; the class
     ended elsewhere, the console is told."""
     t = trainer(srv)
-    mid = new_class(t, "spike", 1, "sign-error")["info"]["seats"][0]["machine"]
+    created = new_class(t, "spike", 1, "sign-error")
+    mid = created["info"]["seats"][0]["machine"]
+    student(srv, created["links"][0]["url"])  # joined: the seat runs
     wait_for(lambda: t.get(f"/api/machines/{mid}/status").json()["plc"]["drives_powered"])
     assert t.post(f"/api/machines/{mid}/simulation", json={"mode": "pause"}).status_code == 200
     jog = {"type": "jog", "axis": "X", "action": "start", "direction": 1, "feed_mm_min": 100}
@@ -641,6 +675,7 @@ def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
         r = t.post("/api/classes", json=body)
         assert r.status_code == 201, r.text
         assert r.json()["info"]["template"] == "lists"
+        student(s, r.json()["links"][0]["url"])  # seat 1 joined, seat 2 not yet
         for seat in r.json()["info"]["seats"]:
             kv = t.get(
                 f"/api/machines/{seat['machine']}/parameters",

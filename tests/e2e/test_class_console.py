@@ -98,8 +98,19 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
     links.get_by_test_id("links-done").click()
     expect(links).to_be_hidden()  # shown once: gone for good
 
-    anna, bert = (student(browser, u) for u in urls)
+    # nobody has joined: the seats wait, their clocks stand
+    grid = panel(c, "grid")
+    expect(grid.get_by_test_id("grid-joined")).to_have_text("0")
+    expect(tile(c, 2).get_by_test_id("seat-mode")).to_have_text("not joined")
+    anna = student(browser, urls[0])
+    expect(grid.get_by_test_id("grid-joined")).to_have_text("1")
+    grid.get_by_test_id("grid-show-waiting").click()  # the counter filters: Bert's seat only
+    expect(grid.locator(".seat-tile")).to_have_count(1)
+    expect(tile(c, 2)).to_be_visible()
+    grid.get_by_test_id("grid-show-all").click()
+    bert = student(browser, urls[1])
     try:
+        expect(grid.get_by_test_id("grid-joined")).to_have_text("2")
         expect(tile(c, 1).get_by_test_id("seat-student")).to_have_text("Anna")
         expect(tile(c, 2).get_by_test_id("seat-student")).to_have_text("Bert")
         expect(panel(c, "grid").get_by_test_id("grid-link")).to_have_text("live")

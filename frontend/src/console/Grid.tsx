@@ -1,11 +1,12 @@
-// The open class live: a bar of actions on the selected seats (or the whole class) and one
-// tile per seat, fed by the grid websocket.
+// The open class live: a bar of actions on the selected seats (or the whole class), counters
+// (joined, in error, not joined, idle, done) that filter, an order, and one tile per seat,
+// fed by the grid websocket.
 import { useState } from "preact/hooks";
-import type { ClassInfo } from "../api/types";
+import type { ClassInfo, SeatFrame } from "../api/types";
 import { broadcast, endClass, freeze, gridLink, seats, selected } from "../state/classes";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
-import { SeatTile } from "./SeatTile";
+import { IDLE_S, SeatTile } from "./SeatTile";
 import { act, actionRefusal, faultFor } from "./uiState";
 
 function ClassBar(props: { c: ClassInfo }) {
@@ -62,19 +63,75 @@ function ClassBar(props: { c: ClassInfo }) {
   );
 }
 
+type Show = "all" | "error" | "waiting" | "idle" | "done";
+type Order = "seat" | "error" | "score";
+const SHOW_WORDS: Record<Show, string> = { all: "all", error: "in error", waiting: "not joined", idle: "idle", done: "done" };
+
+/** What a seat is, for the counters and the filter. */
+function standing(f: SeatFrame): Exclude<Show, "all">[] {
+  const out: Exclude<Show, "all">[] = [];
+  if (f.error_code !== null) out.push("error");
+  if (!f.joined) out.push("waiting");
+  if (f.idle_s !== null && f.idle_s !== undefined && f.idle_s >= IDLE_S) out.push("idle");
+  if (f.progress >= 1) out.push("done");
+  return out;
+}
+
+/** Counters over the class, each a filter; and the order of the tiles (errors first keeps
+ * them above the fold in a class of fifty). */
+function GridHead(props: { show: Show; setShow: (s: Show) => void; order: Order; setOrder: (o: Order) => void }) {
+  const frames = seats.value.map((s) => s.frame.value);
+  const count = (k: Exclude<Show, "all">) => frames.filter((f) => standing(f).includes(k)).length;
+  const joined = frames.filter((f) => f.joined).length;
+  return (
+    <div class="grid-head" data-testid="grid-head">
+      <span class="hint">
+        joined <b data-testid="grid-joined">{joined}</b> of {frames.length}
+      </span>
+      {(["all", "error", "waiting", "idle", "done"] as Show[]).map((k) => (
+        <button key={k} type="button" class={`chip${props.show === k ? " on" : ""}${k === "error" && count("error") ? " bad" : ""}`}
+          aria-pressed={props.show === k} data-testid={`grid-show-${k}`} onClick={() => props.setShow(k)}>
+          {SHOW_WORDS[k]}{k === "all" ? "" : ` ${count(k)}`}
+        </button>
+      ))}
+      <label class="hint">
+        order{" "}
+        <select value={props.order} data-testid="grid-order" onChange={(e) => props.setOrder((e.target as HTMLSelectElement).value as Order)}>
+          <option value="seat">by seat</option>
+          <option value="error">errors first</option>
+          <option value="score">lowest score first</option>
+        </select>
+      </label>
+    </div>
+  );
+}
+
 export function Grid(props: { c: ClassInfo }) {
   const { c } = props;
   const link = gridLink.value;
+  const [show, setShow] = useState<Show>("all");
+  const [order, setOrder] = useState<Order>("seat");
+  const shown = seats.value
+    .filter((s) => show === "all" || standing(s.frame.value).includes(show))
+    .sort((a, b) => {
+      const fa = a.frame.value;
+      const fb = b.frame.value;
+      if (order === "error") return Number(fb.error_code !== null) - Number(fa.error_code !== null) || fa.n - fb.n;
+      if (order === "score") return fa.score - fb.score || fa.n - fb.n;
+      return fa.n - fb.n;
+    });
   return (
     <Panel id="grid" title={`${c.title || c.id} · ${c.exercise}`}
       actions={<span class={`grid-link ${link}`} data-testid="grid-link" title="the grid's live connection">{link === "online" ? "live" : link}</span>}>
       <ClassBar c={c} />
+      <GridHead show={show} setShow={setShow} order={order} setOrder={setOrder} />
       <RefusalLine refusal={actionRefusal.value} id="console-refusal" />
       <div class="seat-grid">
-        {seats.value.map((s) => (
+        {shown.map((s) => (
           <SeatTile key={s.n} seat={s} cid={c.id} user={c.seats.find((k) => k.n === s.n)?.user ?? ""} />
         ))}
         {!seats.value.length ? <p class="hint">waiting for the seats' status…</p> : null}
+        {seats.value.length && !shown.length ? <p class="hint">No seat is {SHOW_WORDS[show]}.</p> : null}
       </div>
     </Panel>
   );

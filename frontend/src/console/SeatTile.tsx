@@ -10,6 +10,8 @@ import { act, detailSeat, faultFor } from "./uiState";
 const UNIT = { linear: "mm", rotary: "°", spindle: "rpm" } as const;
 const FLOOR = { linear: 0.01, rotary: 0.01, spindle: 10 } as const; // scale floors: lag mm | °, speed rpm
 const MAX_LINES = 3; // sparklines per tile (the lathe: X, Z, S1)
+/** A joined seat whose student sent nothing for this long is idle (maybe stuck). */
+export const IDLE_S = 120;
 
 /** Seat time as m:ss (h:mm:ss past an hour). */
 export function clock(s: number): string {
@@ -41,7 +43,9 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
   const { seat, cid, user } = props;
   const f = seat.frame.value;
   const now = gridTime.value;
-  const mode = f.frozen ? "frozen" : f.mode;
+  // an empty seat's clock stands until its student logs in: "not joined", not "pause"
+  const mode = !f.joined ? "not joined" : f.frozen ? "frozen" : f.mode;
+  const idle = f.idle_s !== null && f.idle_s !== undefined && f.idle_s >= IDLE_S;
   const picked = selected.value.has(f.n);
   const cls = ["seat-tile", f.error_code ? "in-error" : "", f.frozen ? "frozen" : "", picked ? "picked" : ""].join(" ");
   return (
@@ -50,7 +54,12 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
         <input type="checkbox" checked={picked} onChange={() => toggleSeat(f.n)} data-testid="seat-select" aria-label={`select seat ${f.n}`} />
         <b class="seat-n">{String(f.n).padStart(2, "0")}</b>
         <span class="seat-student" title={`${f.student} · ${f.machine}`} data-testid="seat-student">{f.student}</span>
-        <span class={`seat-mode mode-${mode}`} data-testid="seat-mode">{mode}</span>
+        <span class={`seat-mode mode-${mode.replace(" ", "-")}`} data-testid="seat-mode">{mode}</span>
+        {idle ? (
+          <span class="seat-idle" data-testid="seat-idle" title="no command from the student for this long">
+            idle {clock(f.idle_s ?? 0)}
+          </span>
+        ) : null}
       </header>
       <div class="seat-line">
         <span data-testid="seat-channel" title="channel state">{f.channel}</span>
