@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import asyncio
-from typing import Annotated
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Query, Request, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, Path, Query, Request, Response, WebSocket, WebSocketDisconnect
 from fastapi.concurrency import run_in_threadpool
 
 from api.auth import SESSION_COOKIE, Action
@@ -23,13 +23,15 @@ from api.classes import (
     SeatFaults,
     SeatLink,
     SeatResult,
+    SnapshotInfo,
 )
 from api.history import HistoryPage
-from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES
+from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES, dated_download, text_answer
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import (
     CREATED,
     NO_CONTENT,
+    OK,
     WORKER_GONE,
     ApiError,
     Conflict,
@@ -37,11 +39,14 @@ from backend.errors import (
     Invalid,
     NotFound,
     TooLarge,
+    Unavailable,
     Why,
     responses,
 )
+from backend.report import grades
+from backend.report.pdf import html_to_pdf
 from backend.routes.history import EntryId, FilterDep, Limit
-from backend.services import training
+from backend.services import class_results, training
 from backend.services.classes import Classes
 from backend.services.exercises import hint_infos
 
@@ -231,6 +236,59 @@ def seat_history(
     before = (before_unix, before_id) if before_unix is not None and before_id else None
     rows, total = services.history.page(seat.machine, f, limit, before)
     return HistoryPage(rows=rows, total=total)
+
+
+@router.post(
+    "/classes/{cid}/seats/{n}/reset",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(Forbidden, NotFound, why=_RUNNING | WORKER_GONE),
+)
+def reset_seat(cid: ClassId, n: SeatNo, services: ServicesDep, actor: ActorDep) -> SnapshotInfo:
+    """Put the seat's machine back to the exercise's start (the snapshot taken when it was
+    built): its lists, state and faults as then. Its record (checks passed, hints, seat
+    time) stays; the reset is in its history."""
+    services.classes.running(cid)
+    seat = services.classes.seat(cid, n)
+    m = services.machines.get(seat.machine)
+    info = services.snapshots.restore(actor, m, services.snapshots.start_of(m.id))
+    what = f"reset seat {n} of class '{cid}' to the exercise's start"
+    services.audit.record(Classes.entry(actor, what, m.id))
+    return info
+
+
+@router.get(
+    "/classes/{cid}/results.csv",
+    response_class=Response,
+    dependencies=[permit(Action.TEACH)],
+    responses=text_answer("text/csv", "one line per seat") | responses(Forbidden, NotFound),
+)
+def results_csv(cid: ClassId, services: ServicesDep) -> Response:
+    """The class's results: per seat who, when they joined, seat time, each check's points
+    earned and first pass, hints, score of the maximum."""
+    c = services.classes.get(cid)
+    return dated_download(
+        grades.to_csv(class_results.results(c)), "text/csv", f"class-{cid}", "results", "csv"
+    )
+
+
+_GRADE_LIST: dict[int | str, Any] = {
+    OK: {"content": {"application/pdf": {}}, "description": "the grade list"}
+}
+
+
+@router.get(
+    "/classes/{cid}/results.pdf",
+    response_class=Response,
+    dependencies=[permit(Action.TEACH)],
+    responses=_GRADE_LIST
+    | responses(Forbidden, NotFound, why={Unavailable: "Chromium is missing or failed to print"}),
+)
+async def results_pdf(cid: ClassId, services: ServicesDep) -> Response:
+    """The grade list to print (A4): every seat's points per check, hints, score; a line for
+    the instructor's signature."""
+    c = await run_in_threadpool(services.classes.get, cid)
+    pdf = await html_to_pdf(grades.to_html(class_results.results(c)), services.settings.chromium)
+    return dated_download(pdf, "application/pdf", f"class-{cid}", "grade-list", "pdf")
 
 
 @router.post(

@@ -19,7 +19,8 @@ SnapshotId = Annotated[int, Path(ge=1, le=2**53, description="a snapshot's id")]
 
 @router.get("", dependencies=[permit(Action.SIMULATE)], responses=responses(Forbidden, NotFound))
 def list_snapshots(machine: MachineDep, services: ServicesDep) -> list[SnapshotInfo]:
-    """The machine's snapshots, oldest first (the newest 8 are kept, in memory)."""
+    """The machine's snapshots, oldest first (the newest 8 are kept in the store, and a class
+    seat's start)."""
     return services.snapshots.list(machine.id)
 
 

@@ -538,6 +538,8 @@ class Classes:
                 exercise=c.exercise,
                 mode="pause",  # an empty seat's clock stands: it runs from its student's login
             )
+            # the exercise's start, kept: the instructor can put the seat back to it
+            self.snapshots.take(actor, proxy, "exercise start", pinned=True)
             changes = [
                 StoredChange(v.scope.value, v.target, v.name, None, v.value, "now")
                 for v in c.exercise.start

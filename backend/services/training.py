@@ -140,7 +140,8 @@ CREATE TABLE IF NOT EXISTS snapshots (
     cycle INTEGER NOT NULL,
     t_s REAL NOT NULL,
     data BLOB NOT NULL,    -- the machine's state as nc_sim pickled it
-    params TEXT NOT NULL   -- JSON: [[scope, target, {name: value}], ...]
+    params TEXT NOT NULL,  -- JSON: [[scope, target, {name: value}], ...]
+    pinned INTEGER NOT NULL DEFAULT 0  -- a class seat's start: never pruned
 );
 CREATE INDEX IF NOT EXISTS snapshots_machine ON snapshots (machine, id);
 """
@@ -224,14 +225,16 @@ class Snapshots:
         """How many snapshots the machine has."""
         return len(self.list(mid))
 
-    def take(self, actor: Actor, m: MachineProxy, label: str) -> SnapshotInfo:
+    def take(self, actor: Actor, m: MachineProxy, label: str, pinned: bool = False) -> SnapshotInfo:
+        """The machine's state now, kept; the oldest beyond SNAPSHOTS_PER_MACHINE goes (a
+        `pinned` one, a class seat's start, never does)."""
         snap = m.link.call(TakeSnapshot(m.id))
         assert isinstance(snap, Snapshot)
         with self._lock:  # its id is the row's: one insert at a time
             self.store.run(
-                "INSERT INTO snapshots (machine, info, cycle, t_s, data, params) "
-                "VALUES (?, '', ?, ?, ?, ?)",
-                (m.id, snap.cycle, snap.t_s, snap.data, _params_json(snap.params)),
+                "INSERT INTO snapshots (machine, info, cycle, t_s, data, params, pinned) "
+                "VALUES (?, '', ?, ?, ?, ?, ?)",
+                (m.id, snap.cycle, snap.t_s, snap.data, _params_json(snap.params), int(pinned)),
             )
             sid = int(self.store.query("SELECT max(id) AS id FROM snapshots")[0]["id"])
             info = SnapshotInfo(
@@ -248,8 +251,9 @@ class Snapshots:
                 "UPDATE snapshots SET info = ? WHERE id = ?", (info.model_dump_json(), sid)
             )
             self.store.run(
-                "DELETE FROM snapshots WHERE machine = ? AND id NOT IN "
-                "(SELECT id FROM snapshots WHERE machine = ? ORDER BY id DESC LIMIT ?)",
+                "DELETE FROM snapshots WHERE machine = ? AND pinned = 0 AND id NOT IN "
+                "(SELECT id FROM snapshots WHERE machine = ? AND pinned = 0 "
+                "ORDER BY id DESC LIMIT ?)",
                 (m.id, m.id, SNAPSHOTS_PER_MACHINE),
             )
         return info
@@ -284,6 +288,15 @@ class Snapshots:
         self.machines.restore(m.id, kept.snap.data, kept.snap.params, actor.name)
         self.faults.keep(m)
         return kept.info
+
+    def start_of(self, mid: str) -> int:
+        """The id of the machine's pinned start snapshot; 404 when it has none."""
+        rows = self.store.query(
+            "SELECT id FROM snapshots WHERE machine = ? AND pinned = 1 ORDER BY id LIMIT 1", (mid,)
+        )
+        if not rows:
+            raise not_found(f"start snapshot of machine '{mid}'")
+        return int(rows[0]["id"])
 
     def forget(self, mid: str) -> None:
         self.store.run("DELETE FROM snapshots WHERE machine = ?", (mid,))

@@ -4,6 +4,8 @@ faults in the plant (not in the parameters), freezing, hints, the live checks, t
 from __future__ import annotations
 
 import asyncio
+import csv
+import io
 import json
 import time
 from collections.abc import Iterator
@@ -213,6 +215,30 @@ def test_the_gain_check_passes_only_on_the_seat_that_fixed_multi_gain(srv: Serve
     mine = fixed.get(f"/api/machines/{mids[0]}/exercise").json()
     assert mine["progress"] == 1.0 and mine["score"] > 0
     assert unfixed.get(f"/api/machines/{mids[1]}/exercise").json()["progress"] == 0.0
+
+    # the results: seat 1 earned the check's 100 points in par time (900 s), seat 2 took
+    # hint 1 (15 points, exercises/multi-gain.toml) and has nothing to pay it from
+    hint = unfixed.post(f"/api/machines/{mids[1]}/exercise/hints", json={"n": 1})
+    assert hint.status_code == 200, hint.text
+    r = t.get("/api/classes/gain/results.csv")
+    assert r.status_code == 200 and r.headers["content-type"].startswith("text/csv")
+    assert 'filename="class-gain_results_' in r.headers["content-disposition"]
+    rows = list(csv.DictReader(io.StringIO(r.text)))
+    assert [x["seat"] for x in rows] == ["1", "2"]
+    one, two = rows
+    assert float(one["gain_points"]) == 100.0 and float(one["score"]) == 100.0
+    assert 0 < float(one["gain_first_passed_s"]) <= float(one["seat_time_s"]) < 900
+    assert (one["hints_taken"], one["max_points"]) == ("0", "100")
+    assert float(two["gain_points"]) == 0.0 and two["gain_first_passed_s"] == ""
+    assert (two["hints_taken"], two["hint_cost"], float(two["score"])) == ("1", "15", 0.0)
+    pdf = t.get("/api/classes/gain/results.pdf")
+    assert pdf.status_code == 200 and pdf.content.startswith(b"%PDF") and len(pdf.content) > 2000
+    # put back to the exercise's start: its lists as then, its record kept
+    reset = t.post("/api/classes/gain/seats/1/reset")
+    assert reset.status_code == 200 and reset.json()["label"] == "exercise start", reset.text
+    params = t.get(f"/api/machines/{mids[0]}/parameters", params={"scope": "axis", "target": "X"})
+    assert {p["name"]: p["value"] for p in params.json()}["getriebe[0].multi_gain_z"] == 10000
+    assert t.get("/api/classes/gain").json()["seats"][0]["score"] == 100.0
 
 
 def test_freeze_hint_and_the_end_of_a_class(srv: Server) -> None:

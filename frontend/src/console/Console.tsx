@@ -13,6 +13,7 @@ import { ClassList } from "./ClassList";
 import { CreateClass, SeatLinks } from "./CreateClass";
 import { FaultForm } from "./FaultForm";
 import { Grid } from "./Grid";
+import { ResultLinks } from "./ResultLinks";
 import { SeatDetail } from "./SeatDetail";
 import { clock } from "./SeatTile";
 import { detailSeat, faultFor } from "./uiState";
@@ -21,7 +22,7 @@ import "./console.css";
 /** An ended class's seats: results as they stood at the end, each seat's debrief. */
 function EndedSeats(props: { c: ClassInfo }) {
   return (
-    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercise} (ended)`}>
+    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercise} (ended)`} actions={<ResultLinks cid={props.c.id} />}>
       <table class="dense">
         <thead><tr><th class="num">seat</th><th>student</th><th class="num">progress</th><th class="num">score</th><th class="num">hints</th><th class="num">seat time</th><th /></tr></thead>
         <tbody>

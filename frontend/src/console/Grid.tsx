@@ -6,6 +6,7 @@ import type { ClassInfo, SeatFrame } from "../api/types";
 import { broadcast, endClass, freeze, gridLink, seats, selected } from "../state/classes";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
+import { ResultLinks } from "./ResultLinks";
 import { IDLE_S, SeatTile } from "./SeatTile";
 import { act, actionRefusal, faultFor } from "./uiState";
 
@@ -122,7 +123,12 @@ export function Grid(props: { c: ClassInfo }) {
     });
   return (
     <Panel id="grid" title={`${c.title || c.id} · ${c.exercise}`}
-      actions={<span class={`grid-link ${link}`} data-testid="grid-link" title="the grid's live connection">{link === "online" ? "live" : link}</span>}>
+      actions={
+        <span class="grid-actions">
+          <ResultLinks cid={c.id} />{" "}
+          <span class={`grid-link ${link}`} data-testid="grid-link" title="the grid's live connection">{link === "online" ? "live" : link}</span>
+        </span>
+      }>
       <ClassBar c={c} />
       <GridHead show={show} setShow={setShow} order={order} setOrder={setOrder} />
       <RefusalLine refusal={actionRefusal.value} id="console-refusal" />

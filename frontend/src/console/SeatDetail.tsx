@@ -134,6 +134,10 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
               </ul>
               <button type="button" class="secondary" data-testid="snapshot-take" onClick={() => then(http.post(`/api/machines/${mid}/snapshots`, { label: "" }))}>
                 Take snapshot
+              </button>{" "}
+              <button type="button" class="secondary" data-testid="seat-reset" title="its lists, state and faults as when the class began; its record (checks, hints, seat time) stays"
+                onClick={() => confirm(`Put seat ${n}'s machine back to the exercise's start? What the student changed since is lost; what they earned stays.`) && then(http.post(`/api/classes/${c.id}/seats/${n}/reset`, {}))}>
+                Reset to the exercise's start
               </button>
             </>
           ) : null}
