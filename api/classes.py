@@ -241,6 +241,21 @@ class Exercise(BaseModel):
     progress: float
     seat_time_s: float
     frozen: bool = Field(description="paused by the instructor (the student cannot resume)")
+    hand: RaisedHand | None = Field(None, description="the student's raised hand (None: down)")
+
+
+class RaisedHand(BaseModel):
+    """A student asking their instructor for help."""
+
+    since_unix: float
+    text: str = Field("", description="what they wrote with it")
+
+
+class HandRequest(BaseModel):
+    """Raise the seat's hand (its student) or lower it (its student or an instructor)."""
+
+    raised: bool
+    text: str = Field("", max_length=200, description="what the student wants, optional")
 
 
 class SeatResult(BaseModel):
@@ -303,6 +318,7 @@ class SeatFrame(BaseModel):
     score: float
     faults: int = Field(description="injected faults (active or armed)")
     seat_time_s: float
+    hand: RaisedHand | None = Field(None, description="its student asks for help")
     joined: bool = Field(True, description="its student has logged in (its clock runs since)")
     idle_s: float | None = Field(
         None, description="since its student's last command (None: none yet)"

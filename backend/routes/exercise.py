@@ -5,7 +5,15 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from api.auth import Action
-from api.classes import AnswerGiven, Exercise, FindingAnswer, HintInfo, HintTake
+from api.classes import (
+    AnswerGiven,
+    Exercise,
+    FindingAnswer,
+    HandRequest,
+    HintInfo,
+    HintTake,
+    RaisedHand,
+)
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import Conflict, Forbidden, Invalid, NotFound, responses
 from backend.services.classes import Classes
@@ -36,7 +44,30 @@ def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> 
         progress=progress,
         seat_time_s=seat.seat_time_s,
         frozen=seat.frozen,
+        hand=seat.hand,
     )
+
+
+@router.post(
+    "/hand",
+    dependencies=[permit(Action.EXERCISE)],
+    responses=responses(
+        Forbidden,
+        NotFound,
+        Conflict,
+        why={Forbidden: "raised by another than the seat's student", Conflict: "the class ended"},
+    ),
+)
+def hand(
+    req: HandRequest, machine: MachineDep, services: ServicesDep, actor: ActorDep
+) -> RaisedHand | None:
+    """The student raises their hand (the instructor's grid shows it, with its words) or
+    lowers it; an instructor lowers it once seen to. Both are in the seat's history."""
+    c, seat = services.classes.seat_by_machine(machine.id)
+    raised = services.classes.hand(actor, seat, c, req)
+    what = f"raised hand: {req.text}" if req.raised else "lowered hand"
+    services.audit.record(Classes.entry(actor, what.rstrip(": "), machine.id))
+    return raised
 
 
 @router.post(

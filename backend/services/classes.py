@@ -19,7 +19,7 @@ import time
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 
-from api.auth import Role
+from api.auth import ALLOWED, Action, Role
 from api.classes import (
     AnswerGiven,
     CheckState,
@@ -28,6 +28,8 @@ from api.classes import (
     ClassInfo,
     ClassResumed,
     FindingAnswer,
+    HandRequest,
+    RaisedHand,
     SeatFaults,
     SeatInfo,
     SeatLink,
@@ -107,6 +109,7 @@ class Seat:
     last_t_s: float = 0.0
     frozen: bool = False
     joined_unix: float | None = None  # the student's first login: seat time runs from there
+    hand: RaisedHand | None = None  # the student asks for help
     faults: list[FaultInfo] = field(default_factory=list)  # as they stood at the class's end
     answers: findings.Answers = field(default_factory=dict)  # to the finding checks
 
@@ -124,6 +127,7 @@ class Seat:
                 "seat_time_s": self.seat_time_s,
                 "frozen": self.frozen,
                 "joined_unix": self.joined_unix,
+                "hand": self.hand.model_dump() if self.hand else None,
                 "faults": [f.model_dump(mode="json") for f in self.faults],
                 "answers": {
                     k: [a.model_dump(mode="json") for a in given]
@@ -141,6 +145,7 @@ class Seat:
         self.time_base_s = float(p.get("seat_time_s", 0.0))
         self.frozen = bool(p.get("frozen", False))
         self.joined_unix = p.get("joined_unix")
+        self.hand = RaisedHand.model_validate(p["hand"]) if p.get("hand") else None
         self.faults = [FaultInfo.model_validate(f) for f in p.get("faults", [])]
         self.answers = {
             k: [AnswerGiven.model_validate(a) for a in given]
@@ -698,6 +703,21 @@ class Classes:
             self.audit.record(self.entry(actor, f"inject fault: {what}", m.id, **req.model_dump()))
             out.append(SeatFaults(n=seat.n, faults=self.faults.keep(m)))
         return out
+
+    def hand(self, actor: Actor, seat: Seat, c: Class, req: HandRequest) -> RaisedHand | None:
+        """The seat's student raises or lowers their hand; an instructor lowers it (seen to).
+        403 for anyone else, 409 once the class has ended."""
+        teacher = Action.TEACH in ALLOWED[actor.role]
+        if actor.name != seat.user and (req.raised or not teacher):
+            raise Forbidden(
+                f"only seat {seat.n}'s student raises its hand; an instructor lowers it"
+            )
+        if c.ended_unix is not None:
+            raise Conflict(f"class '{c.id}' has ended")
+        with self._lock:
+            seat.hand = RaisedHand(since_unix=time.time(), text=req.text) if req.raised else None
+            self.save(seat)
+        return seat.hand
 
     def take_hint(self, actor: Actor, seat: Seat, c: Class, n: int) -> str:
         """A hint's text; taken once, it costs its points. Only the seat's own student takes

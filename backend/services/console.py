@@ -96,6 +96,7 @@ def seat_frame(
         score=score,
         faults=len(m.link.faults) if m is not None else 0,
         seat_time_s=seat.seat_time_s,
+        hand=seat.hand,
         joined=seat.joined_unix is not None,
         idle_s=_idle_s(seat, m),
         status_unix=status_unix,

@@ -174,6 +174,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/machines/{mid}/exercise"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/exercise/hints"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/exercise/findings"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/exercise/hand"): ("operator", FREE),
     ("GET", "/api/users"): ("admin", FREE),
     ("POST", "/api/users"): ("admin", FREE),
     ("PATCH", "/api/users/{name}"): ("admin", FREE),

@@ -339,6 +339,35 @@ def test_a_seat_s_clock_runs_from_its_students_first_login(srv: Server) -> None:
     assert t.post("/api/classes/fair/end").status_code == 200
 
 
+def test_a_student_raises_a_hand_and_the_instructor_sees_it(srv: Server) -> None:
+    """Anna raises her hand with a word; the grid shows it on her seat only, Bert cannot
+    raise hers, the instructor lowers it once seen to; both are in her seat's history."""
+    t = trainer(srv)
+    created = new_class(t, "hand", 2, "sign-error")
+    anna, bert = (student(srv, link["url"]) for link in created["links"])
+    up = anna.post("/api/machines/hand-s01/exercise/hand", json={"raised": True, "text": "X?"})
+    assert up.status_code == 200 and up.json()["text"] == "X?", up.text
+    other = bert.post("/api/machines/hand-s01/exercise/hand", json={"raised": False})
+    assert other.status_code in (403, 404), other.text  # not his seat (he does not see it)
+    assert anna.get("/api/machines/hand-s01/exercise").json()["hand"]["text"] == "X?"
+    tokens: dict[str, str] = srv.tokens  # type: ignore[attr-defined]
+
+    async def hands() -> list[Any]:
+        url = f"{srv.ws_base}/api/classes/hand/grid"
+        async with connect(url, additional_headers=bearer(tokens["trainer"])) as ws:
+            frame = json.loads(await asyncio.wait_for(ws.recv(), 10))
+            return [x["hand"] for x in frame["seats"]]
+
+    one, two = asyncio.run(hands())
+    assert one["text"] == "X?" and two is None
+    down = t.post("/api/machines/hand-s01/exercise/hand", json={"raised": False})
+    assert down.status_code == 200 and down.json() is None, down.text
+    assert t.post("/api/machines/hand-s01/exercise/hand", json={"raised": True}).status_code == 403
+    texts = [r["text"] for r in t.get("/api/classes/hand/seats/1/history").json()["rows"]]
+    assert "raised hand: X?" in texts and "lowered hand" in texts, texts
+    assert t.post("/api/classes/hand/end").status_code == 200
+
+
 def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:
     """An instructor watching a seat reads its exercise but takes no hint (it would cost the
     student's points): 403 saying whose hints they are, and the seat's score stays."""

@@ -124,6 +124,7 @@ export type FindingState = S["FindingState"];
 export type AnswerGiven = S["AnswerGiven"];
 export type GridFrame = S["GridFrame"];
 export type SeatFrame = S["SeatFrame"];
+export type RaisedHand = S["RaisedHand"];
 export type AxisLine = S["AxisLine"];
 export type FaultInject = S["FaultInject"];
 export type FaultInfo = S["FaultInfo"];

@@ -64,13 +64,14 @@ function ClassBar(props: { c: ClassInfo }) {
   );
 }
 
-type Show = "all" | "error" | "waiting" | "idle" | "done";
+type Show = "all" | "hand" | "error" | "waiting" | "idle" | "done";
 type Order = "seat" | "error" | "score";
-const SHOW_WORDS: Record<Show, string> = { all: "all", error: "in error", waiting: "not joined", idle: "idle", done: "done" };
+const SHOW_WORDS: Record<Show, string> = { all: "all", hand: "✋ need help", error: "in error", waiting: "not joined", idle: "idle", done: "done" };
 
 /** What a seat is, for the counters and the filter. */
 function standing(f: SeatFrame): Exclude<Show, "all">[] {
   const out: Exclude<Show, "all">[] = [];
+  if (f.hand) out.push("hand");
   if (f.error_code !== null) out.push("error");
   if (!f.joined) out.push("waiting");
   if (f.idle_s !== null && f.idle_s !== undefined && f.idle_s >= IDLE_S) out.push("idle");
@@ -89,8 +90,8 @@ function GridHead(props: { show: Show; setShow: (s: Show) => void; order: Order;
       <span class="hint">
         joined <b data-testid="grid-joined">{joined}</b> of {frames.length}
       </span>
-      {(["all", "error", "waiting", "idle", "done"] as Show[]).map((k) => (
-        <button key={k} type="button" class={`chip${props.show === k ? " on" : ""}${k === "error" && count("error") ? " bad" : ""}`}
+      {(["all", "hand", "error", "waiting", "idle", "done"] as Show[]).map((k) => (
+        <button key={k} type="button" class={`chip${props.show === k ? " on" : ""}${(k === "error" || k === "hand") && count(k) ? " bad" : ""}`}
           aria-pressed={props.show === k} data-testid={`grid-show-${k}`} onClick={() => props.setShow(k)}>
           {SHOW_WORDS[k]}{k === "all" ? "" : ` ${count(k)}`}
         </button>
@@ -99,7 +100,7 @@ function GridHead(props: { show: Show; setShow: (s: Show) => void; order: Order;
         order{" "}
         <select value={props.order} data-testid="grid-order" onChange={(e) => props.setOrder((e.target as HTMLSelectElement).value as Order)}>
           <option value="seat">by seat</option>
-          <option value="error">errors first</option>
+          <option value="error">hands and errors first</option>
           <option value="score">lowest score first</option>
         </select>
       </label>
@@ -117,7 +118,8 @@ export function Grid(props: { c: ClassInfo }) {
     .sort((a, b) => {
       const fa = a.frame.value;
       const fb = b.frame.value;
-      if (order === "error") return Number(fb.error_code !== null) - Number(fa.error_code !== null) || fa.n - fb.n;
+      if (order === "error")
+        return Number(!!fb.hand) - Number(!!fa.hand) || Number(fb.error_code !== null) - Number(fa.error_code !== null) || fa.n - fb.n;
       if (order === "score") return fa.score - fb.score || fa.n - fb.n;
       return fa.n - fb.n;
     });

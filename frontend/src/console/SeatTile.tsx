@@ -2,7 +2,7 @@
 // lag and speed over the last minute, progress and score, faults, seat time, and what the
 // instructor can do with it. Fixed size and fixed rows: numbers change, the layout does not.
 import type { AxisLine } from "../api/types";
-import { freeze, gridTime, openHmi, selected, toggleSeat, type SeatLive } from "../state/classes";
+import { freeze, gridTime, lowerHand, openHmi, selected, toggleSeat, type SeatLive } from "../state/classes";
 import { fmt } from "../ui/format";
 import { Sparkline } from "./Sparkline";
 import { act, detailSeat, faultFor } from "./uiState";
@@ -55,6 +55,12 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
         <b class="seat-n">{String(f.n).padStart(2, "0")}</b>
         <span class="seat-student" title={`${f.student} · ${f.machine}`} data-testid="seat-student">{f.student}</span>
         <span class={`seat-mode mode-${mode.replace(" ", "-")}`} data-testid="seat-mode">{mode}</span>
+        {f.hand ? (
+          <button type="button" class="seat-hand" data-testid="seat-hand" title={`asks for help${f.hand.text ? `: ${f.hand.text}` : ""} (click when seen to: lowers it)`}
+            onClick={() => void act(() => lowerHand(f.machine))}>
+            ✋
+          </button>
+        ) : null}
         {idle ? (
           <span class="seat-idle" data-testid="seat-idle" title="no command from the student for this long">
             idle {clock(f.idle_s ?? 0)}

@@ -8,7 +8,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { CheckState, Exercise, FindingState, HintInfo } from "../api/types";
-import { answerFinding, exercise, refreshExercise, takeHint } from "../state/exercise";
+import { answerFinding, exercise, raiseHand, refreshExercise, takeHint } from "../state/exercise";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 
@@ -57,6 +57,7 @@ export function ExercisePanel() {
         <Panel title="Progress and score" id="exercise-score">
           <Standing ex={ex} />
         </Panel>
+        {ex.takes_hints ? <Hand ex={ex} /> : null}
         <Panel title="Checks" id="exercise-checks">
           <ul class="checklist" data-testid="check-list">
             {ex.checks.map((c) => (
@@ -78,6 +79,34 @@ export function ExercisePanel() {
         </Panel>
       </div>
     </div>
+  );
+}
+
+/** The student's raised hand: a word for the instructor, shown on their grid until lowered. */
+function Hand({ ex }: { ex: Exercise }) {
+  const [text, setText] = useState("");
+  const [error, setError] = useState("");
+  const run = (raised: boolean) =>
+    raiseHand(raised, text).then(
+      () => { setError(""); setText(""); },
+      (e: unknown) => setError(e instanceof ApiError ? e.refusal.message : String(e)),
+    );
+  return (
+    <Panel title="Help" id="exercise-hand">
+      {ex.hand ? (
+        <p data-testid="hand-raised">
+          ✋ Your hand is up{ex.hand.text ? <> (“{ex.hand.text}”)</> : null}: your instructor sees it.{" "}
+          <button type="button" class="secondary" data-testid="hand-lower" onClick={() => void run(false)}>Lower it</button>
+        </p>
+      ) : (
+        <form class="row" onSubmit={(e) => { e.preventDefault(); void run(true); }}>
+          <input value={text} maxLength={200} placeholder="what you need (optional)" aria-label="what you need" data-testid="hand-text"
+            onInput={(e) => setText((e.target as HTMLInputElement).value)} />
+          <button type="submit" class="secondary" data-testid="hand-raise">✋ Raise hand</button>
+        </form>
+      )}
+      {error ? <p class="refusal" role="alert">{error}</p> : null}
+    </Panel>
   );
 }
 

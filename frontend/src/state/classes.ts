@@ -100,6 +100,8 @@ export const freeze = (cid: string, seats: number[], frozen: boolean) =>
   http.post<ClassInfo>(`/api/classes/${cid}/freeze`, { seats, frozen });
 export const broadcast = (cid: string, seats: number[], text: string) =>
   http.post<null>(`/api/classes/${cid}/broadcast`, { seats, text });
+/** An instructor lowers a seat's raised hand (seen to). */
+export const lowerHand = (mid: string) => http.post<null>(`/api/machines/${mid}/exercise/hand`, { raised: false, text: "" });
 export const injectSeat = (mid: string, inject: FaultInject) => http.post<FaultInfo>(`/api/machines/${mid}/faults`, inject);
 export const injectClass = (cid: string, seats: number[], inject: FaultInject) =>
   http.post<SeatFaults[]>(`/api/classes/${cid}/faults`, { seats, inject });

@@ -3,7 +3,7 @@
 // hints are taken from here. The service hides the exercise's faults from the student.
 import { effect, signal, untracked } from "@preact/signals";
 import { ApiError, http } from "../api/http";
-import type { AnswerGiven, Exercise, HintInfo } from "../api/types";
+import type { AnswerGiven, Exercise, HintInfo, RaisedHand } from "../api/types";
 import { freezeNoticeCount, machineId, machines, machineUrl, seatFrozen } from "./session";
 
 const SEAT_KEY = "inbetrieb.seat"; // this browser was a class seat's student's (the class id)
@@ -33,6 +33,12 @@ export async function refreshExercise(): Promise<void> {
     // no seat (404), or a role that reads no exercise: no tab; a lost connection keeps it
     if (machineId.value === mid && e instanceof ApiError && e.status !== 0) exercise.value = null;
   }
+}
+
+/** Raise the seat's hand (with a word for the instructor) or lower it. */
+export async function raiseHand(raised: boolean, text = ""): Promise<void> {
+  await http.post<RaisedHand | null>(machineUrl("/exercise/hand"), { raised, text });
+  await refreshExercise();
 }
 
 /** Take hint n: its text (its cost comes off the score once). */
