@@ -50,6 +50,9 @@ class ExerciseUpload(BaseModel):
     text: str = Field(min_length=1, max_length=100_000)
 
 
+LINK_HOURS_MAX = 72.0  # a seat's login link is good for at most three days
+
+
 class ClassCreate(BaseModel):
     """A class: every seat gets its own machine, the demo lathe or one built from uploaded
     parameter lists (as POST /api/machines takes them), the exercise's starting values and
@@ -70,6 +73,12 @@ class ClassCreate(BaseModel):
         None,
         description="the seats' machine template: these parameter lists; null for the demo "
         "lathe. The exercise's axes, spindles and gear stages must be in them (else 422)",
+    )
+    link_hours: float = Field(
+        1.0,
+        ge=0.25,
+        le=LINK_HOURS_MAX,
+        description="how long the seats' login links stay good, h (prepared the day before: 24)",
     )
 
 
@@ -161,10 +170,11 @@ class ClassInfo(BaseModel):
 
 
 class SeatLink(BaseModel):
-    """A one-time login link of a seat (good once, within an hour)."""
+    """A one-time login link of a seat (good once, until it expires)."""
 
     n: int
     url: str
+    expires_unix: float = Field(0.0, description="when it stops working if unused")
 
 
 class ClassCreated(BaseModel):

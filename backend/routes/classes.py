@@ -11,6 +11,7 @@ from fastapi.concurrency import run_in_threadpool
 from api.auth import SESSION_COOKIE, Action
 from api.classes import (
     CLASS_ID,
+    LINK_HOURS_MAX,
     Broadcast,
     ClassCreate,
     ClassCreated,
@@ -297,16 +298,21 @@ async def results_pdf(cid: ClassId, services: ServicesDep) -> Response:
     responses=responses(Forbidden, NotFound, why=_RUNNING),
 )
 def seat_link(
-    cid: ClassId, n: SeatNo, request: Request, services: ServicesDep, actor: ActorDep
+    cid: ClassId,
+    n: SeatNo,
+    request: Request,
+    services: ServicesDep,
+    actor: ActorDep,
+    hours: Annotated[float, Query(ge=0.25, le=LINK_HOURS_MAX, description="good for, h")] = 1.0,
 ) -> SeatLink:
-    """A new one-time login link of a seat (good once, within an hour). The seat's current
+    """A new one-time login link of a seat (good once, for `hours`). The seat's current
     session and its earlier links end: whoever has them is logged out."""
     services.classes.running(cid)
     seat = services.classes.seat(cid, n)
-    url = services.classes.link(seat, str(request.base_url))
+    link = services.classes.link(seat, str(request.base_url), hours)
     services.sessions.poke()  # the old session's websockets close now
     services.audit.record(Classes.entry(actor, f"login link for seat {n} of class '{cid}'"))
-    return SeatLink(n=n, url=url)
+    return link
 
 
 @router.websocket("/classes/{cid}/grid", dependencies=[permit(Action.TEACH)])

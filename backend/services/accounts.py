@@ -332,8 +332,11 @@ class Accounts:
         return {r["id"]: r["user"] for r in rows}
 
     # --- tokens and one-time links ----------------------------------------------------------
-    def new_token(self, name: str, label: str = "", once: bool = False) -> str:
-        """An API token for scripts, or a one-time login link's token (good for ONCE_S)."""
+    def new_token(
+        self, name: str, label: str = "", once: bool = False, lifetime_s: float = ONCE_S
+    ) -> str:
+        """An API token for scripts, or a one-time login link's token (good for
+        `lifetime_s`, an hour unless told)."""
         if self._user(name) is None:
             raise NoSuchAccount(f"no user {name!r}")
         token = secrets.token_urlsafe(32)
@@ -346,7 +349,7 @@ class Accounts:
                 "once" if once else "api",
                 label,
                 now,
-                now + ONCE_S if once else None,
+                now + lifetime_s if once else None,
             ),
         )
         return token

@@ -462,7 +462,8 @@ class Classes:
             )
         with self._lock:
             self._index(c)
-        links = [SeatLink(n=s.n, url=self.link(s, base_url)) for s in c.seats]
+        hours = req.link_hours
+        links = [self.link(s, base_url, hours) for s in c.seats]
         return ClassCreated(info=self.info(c), links=links)
 
     @staticmethod
@@ -573,12 +574,14 @@ class Classes:
         if any(u.name == seat.user for u in self.accounts.users()):
             self.accounts.remove_user(seat.user)
 
-    def link(self, seat: Seat, base_url: str) -> str:
-        """A one-time login link of the seat's login (good once, within an hour); the seat's
+    def link(self, seat: Seat, base_url: str, hours: float = 1.0) -> SeatLink:
+        """A one-time login link of the seat's login (good once, for `hours`); the seat's
         sessions and earlier links end with it (a leaked link is taken back this way)."""
         self.accounts.end_logins_of(seat.user)
-        token = self.accounts.new_token(seat.user, f"class {seat.class_id} seat {seat.n}", True)
-        return f"{base_url.rstrip('/')}/auth/once?token={token}"
+        label = f"class {seat.class_id} seat {seat.n}"
+        token = self.accounts.new_token(seat.user, label, True, hours * 3600.0)
+        url = f"{base_url.rstrip('/')}/auth/once?token={token}"
+        return SeatLink(n=seat.n, url=url, expires_unix=time.time() + hours * 3600.0)
 
     def end(self, c: Class) -> None:
         """The class ends: its machines and logins go, its record stays with each seat's

@@ -301,6 +301,11 @@ def test_a_new_link_takes_the_seat_back_from_whoever_has_the_old_one(srv: Server
     OPEN.append(stranger)
     used = stranger.get(link.replace(srv.base, ""), follow_redirects=False)
     assert used.status_code == 401 and "ask your" in used.text and "<style>" in used.text
+    # a link for the next day, at most three days
+    day = t.post("/api/classes/leak/seats/1/link", params={"hours": 24}).json()
+    assert day["expires_unix"] == pytest.approx(time.time() + 24 * 3600, abs=60)
+    too_long = t.post("/api/classes/leak/seats/1/link", params={"hours": 100})
+    assert too_long.status_code == 422 and "hours" in too_long.text
     spare = t.post("/api/classes/leak/seats/1/link").json()["url"]  # handed out, not used
     assert anna.get("/api/auth/me").status_code == 401  # the new link ended her session
     fresh = t.post("/api/classes/leak/seats/1/link").json()["url"]

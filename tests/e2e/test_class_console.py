@@ -5,10 +5,13 @@ only, and the instructor opens the seat's live view."""
 
 from __future__ import annotations
 
+import io
 import re
 from collections.abc import Iterator
 
 import pytest
+import zxingcpp
+from PIL import Image
 from playwright.sync_api import Browser, FilePayload, Locator, Page, expect
 
 from api.auth import Role
@@ -79,6 +82,7 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
     form.get_by_test_id("class-exercise").select_option(EXERCISE)
     expect(form.get_by_test_id("exercise-info")).to_contain_text("1 fault at start")
     form.get_by_test_id("class-id").fill(CLASS)
+    form.get_by_test_id("class-link-hours").select_option("24")  # prepared the day before
     form.get_by_test_id("class-seats").fill("2")
     form.get_by_test_id("class-students").fill("Anna\nBert")
     form.get_by_test_id("class-create").click()
@@ -95,6 +99,17 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
     inner, em = first.evaluate("e => [e.clientHeight, parseFloat(getComputedStyle(e).fontSize)]")
     assert inner >= 1.4 * em, (inner, em)
     shot(c, "class-console-links")
+    # the printed sheet: a card per seat with the student's name and a QR code that reads
+    # back as the seat's link (decoded by zxing-cpp from the page as printed)
+    c.emulate_media(media="print")
+    for n, name in ((1, "Anna"), (2, "Bert")):
+        card = links.get_by_test_id(f"link-card-{n}")
+        expect(card.locator("h2")).to_have_text(name)
+        qr = Image.open(io.BytesIO(card.locator("svg.qr").screenshot()))
+        assert [r.text for r in zxingcpp.read_barcodes(qr)] == [urls[n - 1]]
+    shot(c, "class-console-link-sheet")
+    c.emulate_media(media="screen")
+    expect(links.get_by_test_id("link-sheet")).to_be_hidden()
     links.get_by_test_id("links-done").click()
     expect(links).to_be_hidden()  # shown once: gone for good
 

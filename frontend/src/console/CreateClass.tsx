@@ -6,6 +6,7 @@ import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ClassCreated, MachineLists, Refusal, SeatLink } from "../api/types";
 import { chooseClass, createClass, exercises, newLink } from "../state/classes";
+import { LinkSheet } from "./LinkSheet";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 
@@ -131,6 +132,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   const [tools, setTools] = useState<{ name: string; text: string } | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [busy, setBusy] = useState(false);
+  const [linkHours, setLinkHours] = useState(1); // prepared the day before: 24 h
   const ex = exercises.value.find((e) => e.id === exercise) ?? exercises.value[0];
   const names = students.split("\n").map((s) => s.trim()).filter(Boolean);
   async function submit(e: Event) {
@@ -142,7 +144,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
     }
     setBusy(true);
     try {
-      const created = await createClass({ id, title, exercise: ex?.id ?? "", seats, students: names, lists });
+      const created = await createClass({ id, title, exercise: ex?.id ?? "", seats, students: names, lists, link_hours: linkHours });
       setRefusal(null);
       chooseClass(created.info.id);
       props.onCreated(created);
@@ -190,6 +192,15 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
             onInput={(e) => setSeats(Number((e.target as HTMLInputElement).value))} />
           <span class="hint">1 … {MAX_SEATS}</span>
         </label>
+        <label>
+          Login links good for
+          <select value={linkHours} data-testid="class-link-hours" onChange={(e) => setLinkHours(Number((e.target as HTMLSelectElement).value))}>
+            <option value={1}>1 hour (hand them out now)</option>
+            <option value={8}>8 hours (a day's class)</option>
+            <option value={24}>24 hours (prepared the day before)</option>
+            <option value={72}>3 days</option>
+          </select>
+        </label>
         <label class="wide">
           Students (optional, one name a line, seat by seat)
           <textarea rows={4} value={students} data-testid="class-students" onInput={str(setStudents)} />
@@ -212,11 +223,16 @@ export function SeatLinks(props: { created: ClassCreated; onDone: () => void }) 
   const [links, setLinks] = useState<SeatLink[]>(props.created.links);
   const [copied, setCopied] = useState<number | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
-  const copy = (l: SeatLink) =>
-    void navigator.clipboard.writeText(l.url).then(
-      () => setCopied(l.n),
+  const clip = (text: string, n: number) =>
+    void navigator.clipboard.writeText(text).then(
+      () => setCopied(n),
       () => setRefusal({ message: "the browser refused the clipboard: select the link and copy it", problems: [] }),
     );
+  const copy = (l: SeatLink) => clip(l.url, l.n);
+  // every seat a line: seat, student, link (tab-separated: pastes into a spreadsheet)
+  const copyAll = () =>
+    clip(links.map((l) => `${l.n}\t${info.seats.find((s) => s.n === l.n)?.student ?? ""}\t${l.url}`).join("\n"), 0);
+  const until = links.length ? new Date(Math.min(...links.map((l) => l.expires_unix)) * 1000).toLocaleString() : "";
   const renew = async (n: number) => {
     try {
       const l = await newLink(info.id, n);
@@ -227,11 +243,18 @@ export function SeatLinks(props: { created: ClassCreated; onDone: () => void }) 
   };
   return (
     <Panel id="seat-links" title={`Login links of class '${info.id}'`}
-      actions={<button type="button" data-testid="links-done" onClick={props.onDone}>I have them</button>}>
+      actions={
+        <span class="link-actions">
+          <button type="button" class="secondary" data-testid="links-copy-all" onClick={copyAll}>{copied === 0 ? "Copied all" : "Copy all"}</button>{" "}
+          <button type="button" class="secondary" data-testid="links-print" onClick={() => window.print()}>Print the sheet (QR codes)</button>{" "}
+          <button type="button" data-testid="links-done" onClick={props.onDone}>I have them</button>
+        </span>
+      }>
       <p class="once-note" role="note">
-        <b>Shown this once.</b> Each link logs one student into their seat, once, within an hour. Hand them out now;
-        a lost link: make a new one for that seat.
+        <b>Shown this once.</b> Each link logs one student into their seat, once, until {until}. Hand them out, print the sheet
+        or copy them all; a lost link: make a new one for that seat (it logs out whoever used the old one).
       </p>
+      <LinkSheet info={info} links={links} />
       <table class="links">
         <tbody>
           {links.map((l) => {

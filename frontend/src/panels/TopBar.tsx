@@ -7,6 +7,7 @@ import type { Refusal } from "../api/types";
 import { logout, me } from "../state/auth";
 import { may } from "../state/control";
 import { openConsole, openHmi, view } from "../state/classes";
+import { exercise } from "../state/exercise";
 import { connection, emergencyStop, machineId, machines, online, selectMachine, status } from "../state/session";
 import { machinesOpen } from "../state/machines";
 import { AccountDialog, accountOpen } from "./Account";
@@ -154,7 +155,11 @@ function UserBox() {
       <RefusalLine refusal={refusal} id="logout-error" />
       <button type="button" class="secondary account-open" data-testid="account-open" title={`your account (${user.role}): API tokens (and users)`}
         onClick={() => (accountOpen.value = true)}>
-        <b data-testid="user-name">{user.name}</b> <span data-testid="user-role" class="wide-only">{user.role}</span>
+        {/* a class seat's student by their name, not the seat's login */}
+        <b data-testid="user-name" title={user.name}>
+          {exercise.value?.user === user.name ? `${exercise.value.student} (seat ${exercise.value.seat})` : user.name}
+        </b>{" "}
+        <span data-testid="user-role" class="wide-only">{user.role}</span>
       </button>
       <button type="button" class="secondary" data-testid="logout" onClick={() => void leave()}>
         Log out
