@@ -69,7 +69,8 @@ export function Console() {
         ) : null}
         {/* keyed: a second class made before the first one's links were taken shows its own */}
         {created ? <SeatLinks key={created.info.id} created={created} onDone={() => setCreated(null)} /> : null}
-        {c?.resumed && c.ended_unix === null && dismissed !== `${c.id}@${c.resumed.at_unix}` ? (
+        {/* told for the hour after the restart, until seen */}
+        {c?.resumed && c.ended_unix === null && Date.now() / 1000 - c.resumed.at_unix < 3600 && dismissed !== `${c.id}@${c.resumed.at_unix}` ? (
           <p class="notice" role="status" data-testid="class-resumed">
             The service restarted at {new Date(c.resumed.at_unix * 1000).toLocaleTimeString()}; the class went on where it was:{" "}
             {c.resumed.seats} seats built again with their {c.resumed.faults} faults and {c.resumed.snapshots} snapshots, seat times,
