@@ -363,6 +363,10 @@ def test_watching_a_seat_then_ending_the_class(
         for size in ("desktop", "tablet"):
             resize(anna, size)
             shot(anna, f"class-ended-student-{size}")
+        with anna.expect_download() as kept:  # hers to keep after Done
+            ended.get_by_test_id("class-result-save").click()
+        page = kept.value.path().read_text(encoding="utf-8")
+        assert "Hints taken</th><td>1</td>" in page and "Checks passed</th><td>0 of 3" in page
         ended.get_by_test_id("class-ended-done").click()
         help_line = panel(anna, "login").get_by_test_id("login-help")
         expect(help_line).to_contain_text("instructor")

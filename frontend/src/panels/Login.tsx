@@ -48,6 +48,27 @@ function ShareEnded() {
   );
 }
 
+/** The student's result as a page of its own to keep (their login is gone after "Done"). */
+function resultFile(r: SeatResult): string {
+  const esc = (v: unknown) => String(v).replace(/[&<>"]/g, (ch) => `&#${ch.charCodeAt(0)};`);
+  const rows: [string, string][] = [
+    ["Student", r.student],
+    ["Class", `${r.title} (${r.class_id}), seat ${r.seat}`],
+    ["Exercise", r.exercise],
+    ["Ended", new Date(r.ended_unix * 1000).toLocaleString()],
+    ["Score", `${fmt(r.score, 0)} of ${fmt(r.max_points, 0)} points`],
+    ["Checks passed", `${r.checks_passed} of ${r.checks_total}`],
+    ["Hints taken", String(r.hints_taken)],
+    ["Seat time", clock(r.seat_time_s)],
+  ];
+  const html =
+    `<!doctype html><meta charset="utf-8"><title>Result: ${esc(r.student)}</title>` +
+    `<body style="font:15px/1.5 sans-serif;max-width:40em;margin:2em auto"><h1>Inbetrieb: class result</h1><table>` +
+    rows.map(([k, v]) => `<tr><th style="text-align:left;padding-right:1em">${esc(k)}</th><td>${esc(v)}</td></tr>`).join("") +
+    "</table></body>";
+  return `data:text/html;charset=utf-8,${encodeURIComponent(html)}`;
+}
+
 /** The end of a class for its student: the seat's final result; "Done" ends the old session
  * (the service forgets the result) and shows the login. */
 function ClassEnded(props: { result: SeatResult; onDone: () => void }) {
@@ -81,6 +102,12 @@ function ClassEnded(props: { result: SeatResult; onDone: () => void }) {
             </tbody>
           </table>
           <p class="hint">Your instructor has your checks, traces and commands for the debrief.</p>
+          <p>
+            <a class="button secondary" data-testid="class-result-save" href={resultFile(r)}
+              download={`result-${r.class_id}-seat-${r.seat}.html`}>
+              Keep my result (a page to save or print)
+            </a>
+          </p>
           <button type="button" data-testid="class-ended-done" onClick={done}>
             Done
           </button>
