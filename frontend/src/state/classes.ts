@@ -206,13 +206,19 @@ const gridClass = computed(() => {
   return loggedIn.value && view.value === "classes" && may("teach") && running ? cid : "";
 });
 
+let seatsOf = ""; // the class the seats' tiles and sparklines belong to
+
 effect(() => {
   const wanted = gridClass.value;
   const old = ws;
   ws = null;
   old?.close();
   attempt++;
-  seats.value = [];
   gridLink.value = "closed";
+  // back from a seat's live view to the same class: its tiles keep their last minute
+  if (wanted && wanted !== seatsOf) {
+    seats.value = [];
+    seatsOf = wanted;
+  }
   if (wanted) void connect(wanted);
 });
