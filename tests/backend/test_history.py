@@ -85,6 +85,7 @@ def test_a_job_error_names_the_block_that_raised_it_and_survives_a_restart(
         _mdi(srv, "demo", f"M3 S{3 * TOP_STAGE_RPM - 1000}")
         srv.pace("demo", mode="fast")
         rows = _until(srv, "demo", "dropped by job error 90017", kind=["job_error", "command"])
+        srv.pace("demo", mode="run")  # the arc's flight window at real pace (fast may lap it)
         arc = srv.command("demo", {"type": "mdi", "block": "G18 G03 X0 Z12 I-10 F100"})
         assert arc.status_code == 422 and arc.json()["detail"]["code"] == 90026
     finally:
@@ -261,9 +262,11 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     while srv.status(lathe)["simulation"]["cycle"] < 9000:
         assert time.monotonic() < deadline
         time.sleep(0.05)
+    srv.pace(lathe, mode="pause")  # the note and the stop at one moment, then fast again
     note = {"text": "checking the X slide"}  # a logbook entry just before: on the timeline
     srv.http.post(f"/api/machines/{lathe}/history/notes", json=note).raise_for_status()
     assert srv.emergency_stop(lathe).status_code == 200
+    srv.pace(lathe, mode="fast")
     deadline = time.monotonic() + 30
     while not (rows := _history(srv, lathe, kind=["job_error"])) or rows[0]["trace"] is None:
         assert time.monotonic() < deadline, rows
