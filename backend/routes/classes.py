@@ -129,11 +129,23 @@ def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo
     c = services.classes.get(cid)
     services.classes.end(c)
     services.sessions.poke()  # the students' websockets close now
-    services.console.unwatch(c)
-    for seat in c.seats:
-        services.snapshots.forget(seat.machine)
+    services.console.unwatch(c)  # its machines' snapshots and faults went with them
     services.audit.record(Classes.entry(actor, f"ended class '{cid}'"))
     return services.classes.info(c)
+
+
+@router.delete(
+    "/classes/{cid}",
+    status_code=NO_CONTENT,
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(Forbidden, NotFound, Conflict, why={Conflict: "the class still runs"}),
+)
+def delete_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> None:
+    """Forget an ended class: its record, results and its students' result pages go, and its
+    id can be used again. Its seats' histories and traces stay until their retention ends
+    them; the audit keeps that it was deleted. 409 while it runs (end it first)."""
+    services.classes.delete(services.classes.get(cid))
+    services.audit.record(Classes.entry(actor, f"deleted class '{cid}'"))
 
 
 @router.post(

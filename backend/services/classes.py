@@ -574,6 +574,16 @@ class Classes:
         if any(u.name == seat.user for u in self.accounts.users()):
             self.accounts.remove_user(seat.user)
 
+    def delete(self, c: Class) -> None:
+        """Forget an ended class (409 while it runs): its rows go, its id is free again."""
+        with self._lock:
+            if c.ended_unix is None:
+                raise Conflict(f"class '{c.id}' still runs: end it first")
+            for table in ("seats", "ended_sessions", "class_lists"):
+                self.store.run(f"DELETE FROM {table} WHERE class = ?", (c.id,))
+            self.store.run("DELETE FROM classes WHERE id = ?", (c.id,))
+            del self._classes[c.id]
+
     def link(self, seat: Seat, base_url: str, hours: float = 1.0) -> SeatLink:
         """A one-time login link of the seat's login (good once, for `hours`); the seat's
         sessions and earlier links end with it (a leaked link is taken back this way)."""

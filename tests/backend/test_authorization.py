@@ -163,6 +163,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/classes/{cid}/seats/{n}/history"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/seats/{n}/link"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/seats/{n}/reset"): ("instructor", FREE),
+    ("DELETE", "/api/classes/{cid}"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/results.csv"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/results.pdf"): ("instructor", FREE),
     ("GET", "/api/machines/{mid}/faults"): ("instructor", FREE),

@@ -371,6 +371,13 @@ def test_a_student_raises_a_hand_and_the_instructor_sees_it(srv: Server) -> None
     texts = [r["text"] for r in t.get("/api/classes/hand/seats/1/history").json()["rows"]]
     assert "raised hand: X?" in texts and "lowered hand" in texts, texts
     assert t.post("/api/classes/hand/end").status_code == 200
+    # an ended class can be forgotten, and its id used again; a running one cannot
+    assert t.delete("/api/classes/hand").status_code == 204
+    assert t.get("/api/classes/hand").status_code == 404
+    again = new_class(t, "hand", 1, "sign-error")
+    assert again["info"]["seats"][0]["student"] == "Seat 1"
+    assert t.delete("/api/classes/hand").status_code == 409
+    assert t.post("/api/classes/hand/end").status_code == 200
 
 
 def test_only_the_seats_student_takes_its_hints(srv: Server) -> None:

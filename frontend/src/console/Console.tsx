@@ -4,7 +4,7 @@
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ClassCreated, ClassInfo, Refusal } from "../api/types";
-import { classes, loadClasses, loadExercises, openClass } from "../state/classes";
+import { classes, deleteClass, loadClasses, loadExercises, openClass } from "../state/classes";
 import { faultCatalogue } from "./faultCatalogue";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
@@ -16,13 +16,22 @@ import { Grid } from "./Grid";
 import { ResultLinks } from "./ResultLinks";
 import { SeatDetail } from "./SeatDetail";
 import { clock } from "./SeatTile";
-import { detailSeat, faultFor } from "./uiState";
+import { act, detailSeat, faultFor } from "./uiState";
 import "./console.css";
 
 /** An ended class's seats: results as they stood at the end, each seat's debrief. */
 function EndedSeats(props: { c: ClassInfo }) {
   return (
-    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercise} (ended)`} actions={<ResultLinks cid={props.c.id} />}>
+    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercise} (ended)`}
+      actions={
+        <span>
+          <ResultLinks cid={props.c.id} />{" "}
+          <button type="button" class="danger" data-testid="class-delete"
+            onClick={() => confirm(`Delete class '${props.c.id}'? Its results and debrief go (download them first); its id is free again.`) && void act(() => deleteClass(props.c.id))}>
+            Delete
+          </button>
+        </span>
+      }>
       <table class="dense">
         <thead><tr><th class="num">seat</th><th>student</th><th class="num">progress</th><th class="num">score</th><th class="num">hints</th><th class="num">seat time</th><th /></tr></thead>
         <tbody>

@@ -64,6 +64,13 @@ export async function loadExercises(): Promise<void> {
   exercises.value = await http.get<ExerciseInfo[]>("/api/exercises");
 }
 
+/** Forget an ended class (its id can be used again); the console shows none then. */
+export async function deleteClass(cid: string): Promise<void> {
+  await http.del<void>(`/api/classes/${cid}`);
+  chooseClass("");
+  await loadClasses();
+}
+
 export function chooseClass(cid: string): void {
   openClass.value = cid;
   selected.value = new Set();
