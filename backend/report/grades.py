@@ -100,7 +100,9 @@ def to_html(r: ClassResults) -> str:
     rows = []
     for s in r.seats:
         cells = [f'<td class="num">{s.n}</td>', f"<td>{e(s.student)}</td>"]
-        seat_time = "not joined" if s.joined_unix is None else _clock(s.seat_time_s)
+        seat_time = _clock(s.seat_time_s) if s.joined_unix is not None else "not joined"
+        if s.joined_unix is None and s.seat_time_s > 0:  # started by the instructor
+            seat_time = f"{_clock(s.seat_time_s)} (no login)"
         cells.append(f'<td class="num">{seat_time}</td>')
         for c in s.checks:
             mark = "" if c.first_passed_s is None else " ✓"
@@ -123,7 +125,7 @@ def to_html(r: ClassResults) -> str:
         + f'<h3>Checks</h3><ol class="notes">{legend}</ol>'
         + '<p class="meta">A check earns its points × a time weight of its first pass (1 up to '
         "the par time, falling to 0.5 at three times par); ✓ passed. Hints taken cost their "
-        "points. Seat time runs from the student's first login.</p>"
+        "points. Seat time runs from the student's first login (or the instructor's start).</p>"
         + '<div class="sigs"><div class="sig"><div class="line"></div><span>Instructor, date'
         "</span></div></div></section></body></html>"
     )

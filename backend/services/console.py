@@ -108,7 +108,9 @@ def _idle_s(seat: Seat, m: MachineProxy | None) -> float | None:
     if seat.joined_unix is None:
         return None
     last = m.last_command.get(seat.user) if m is not None else None
-    return max(0.0, time.time() - (last if last is not None else seat.joined_unix))
+    if last is None:  # none heard since they joined, or since the service started
+        last = max(seat.joined_unix, m.since_unix if m is not None else 0.0)
+    return max(0.0, time.time() - last)
 
 
 class ConsoleHub:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
+import time
 from collections.abc import Callable
 
 from api.machines import MachineCreate
@@ -72,6 +73,7 @@ class MachineProxy:
         self.exercise: object | None = None  # a class seat's checks: go with every rebuild
         self.deleted = False  # telemetry closes its subscribers
         self.last_command: dict[str, float] = {}  # user → wall time of their last command
+        self.since_unix = time.time()  # this gateway has known it since (its last_command)
 
 
 class MachineService:

@@ -774,9 +774,10 @@ def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
         assert {p["name"]: p["value"] for p in kv.json()}["getriebe[0].kv"] == 3300
         info = t.get("/api/classes/lis").json()
         assert info["template"] == "lists"
-        # the instructor is told the class went on with what it had: 3 + 0 faults, 1 snapshot
+        # the instructor is told the class went on with what it had: 3 + 0 faults, and the
+        # instructor's snapshot beside each seat's start
         resumed = {k: info["resumed"][k] for k in ("seats", "faults", "snapshots")}
-        assert resumed == {"seats": 2, "faults": 3, "snapshots": 1}
+        assert resumed == {"seats": 2, "faults": 3, "snapshots": 1 + 2}
         # the exercise's fault is in the rebuilt seat, with the instructor's (the armed one
         # armed again), and the one taken out stays out
         faults = t.get("/api/machines/lis-s01/faults").json()
@@ -787,7 +788,8 @@ def test_a_class_from_uploaded_lists_survives_a_restart(tmp_path: Any) -> None:
         ]
         assert t.get("/api/machines/lis-s02/faults").json() == []
         snaps = t.get("/api/machines/lis-s01/snapshots").json()
-        assert [(x["id"], x["label"]) for x in snaps] == [(snap.json()["id"], "before the fix")]
+        assert [x["label"] for x in snaps] == ["exercise start", "before the fix"]
+        assert snaps[1]["id"] == snap.json()["id"]
         pause = t.post("/api/machines/lis-s01/simulation", json={"mode": "pause"})
         assert pause.status_code == 200, pause.text
         r = t.post(f"/api/machines/lis-s01/snapshots/{snap.json()['id']}/restore")

@@ -121,7 +121,8 @@ function listsOf(
 }
 
 export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCancel: () => void }) {
-  const [id, setId] = useState("");
+  // a class id to start from: the day (an instructor's own is welcome)
+  const [id, setId] = useState(() => `class-${new Date().toISOString().slice(5, 10).replace("-", "")}`);
   const [title, setTitle] = useState("");
   const [exercise, setExercise] = useState(exercises.value[0]?.id ?? "");
   const [seats, setSeats] = useState(2);
@@ -181,6 +182,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
           Class id
           <input value={id} required pattern="[a-z0-9][a-z0-9\-]{0,23}" maxLength={24} data-testid="class-id" onInput={str(setId)}
             title="lower-case letters, digits and -, up to 24; the seats' machines are <id>-s01 …" />
+          <span class="hint">a-z, 0-9 and -; the seats are {id || "<id>"}-s01 …</span>
         </label>
         <label>
           Title
@@ -195,9 +197,9 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
         <label>
           Login links good for
           <select value={linkHours} data-testid="class-link-hours" onChange={(e) => setLinkHours(Number((e.target as HTMLSelectElement).value))}>
-            <option value={1}>1 hour (hand them out now)</option>
-            <option value={8}>8 hours (a day's class)</option>
-            <option value={24}>24 hours (prepared the day before)</option>
+            <option value={1}>1 hour</option>
+            <option value={8}>8 hours</option>
+            <option value={24}>24 hours (the day before)</option>
             <option value={72}>3 days</option>
           </select>
         </label>

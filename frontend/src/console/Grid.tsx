@@ -66,7 +66,7 @@ function ClassBar(props: { c: ClassInfo }) {
 
 type Show = "all" | "hand" | "error" | "waiting" | "idle" | "done";
 type Order = "seat" | "error" | "score";
-const SHOW_WORDS: Record<Show, string> = { all: "all", hand: "✋ need help", error: "in error", waiting: "not joined", idle: "idle", done: "done" };
+const SHOW_WORDS: Record<Show, string> = { all: "all", hand: "need help", error: "in error", waiting: "not joined", idle: "idle", done: "done" };
 
 /** What a seat is, for the counters and the filter. */
 function standing(f: SeatFrame): Exclude<Show, "all">[] {

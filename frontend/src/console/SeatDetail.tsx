@@ -44,7 +44,10 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
         http.get<HistoryPage>(`/api/classes/${c.id}/seats/${n}/history?limit=${HISTORY_ROWS}`),
         running ? http.get<SnapshotInfo[]>(`/api/machines/${mid}/snapshots`) : Promise.resolve([]),
       ]);
-      if (live) setData({ detail, traces, history, snapshots });
+      if (live) {
+        setData({ detail, traces, history, snapshots });
+        setRefusal(null); // the service answers again (after a restart, say)
+      }
     };
     load().catch(fail);
     const timer = running ? setInterval(() => void load().catch(fail), REFRESH_MS) : undefined;
@@ -108,7 +111,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
                 <b>{f.text}</b>{" "}
                 <span class="hint">
                   {f.active ? `active since machine t = ${fmt(f.active_since_s, 1)} s` : running ? "armed" : "armed, never took effect"}
-                  {f.injected_s > 0 ? ` · injected at machine t = ${fmt(f.injected_s, 1)} s` : " · from the start"}
+                  {f.injected_s > 0 ? ` · injected at machine t = ${fmt(f.injected_s, 1)} s` : " · since the machine's start (the exercise's, or kept across a power-on)"}
                 </span>{" "}
                 {running ? (
                   <button type="button" class="link" data-testid={`fault-remove-${f.id}`} onClick={() => then(http.del(`/api/machines/${mid}/faults/${f.id}`))}>remove</button>

@@ -58,7 +58,7 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
         {f.hand ? (
           <button type="button" class="seat-hand" data-testid="seat-hand" title={`asks for help${f.hand.text ? `: ${f.hand.text}` : ""} (click when seen to: lowers it)`}
             onClick={() => void act(() => lowerHand(f.machine))}>
-            ✋
+            help
           </button>
         ) : null}
         {idle ? (

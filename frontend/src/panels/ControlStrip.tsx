@@ -37,7 +37,7 @@ export function ControlStrip() {
   const waiting = frozen.value !== null && !may("take_control");
   const lapseS = c.release_at_unix != null ? Math.max(0, Math.ceil(c.release_at_unix - Date.now() / 1000)) : null;
   return (
-    <div class={`control-strip ${st}`} data-testid="control-strip" role="status" aria-label="control of the machine">
+    <div class={`control-strip ${st}${waiting ? " frozen" : ""}`} data-testid="control-strip" role="status" aria-label="control of the machine">
       <span class="control-holder" data-testid="control-holder">
         {!h
           ? "Free"

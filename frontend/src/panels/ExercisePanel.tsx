@@ -95,14 +95,14 @@ function Hand({ ex }: { ex: Exercise }) {
     <Panel title="Help" id="exercise-hand">
       {ex.hand ? (
         <p data-testid="hand-raised">
-          ✋ Your hand is up{ex.hand.text ? <> (“{ex.hand.text}”)</> : null}: your instructor sees it.{" "}
+          Your hand is up{ex.hand.text ? <> (“{ex.hand.text}”)</> : null}: your instructor sees it.{" "}
           <button type="button" class="secondary" data-testid="hand-lower" onClick={() => void run(false)}>Lower it</button>
         </p>
       ) : (
         <form class="row" onSubmit={(e) => { e.preventDefault(); void run(true); }}>
           <input value={text} maxLength={200} placeholder="what you need (optional)" aria-label="what you need" data-testid="hand-text"
             onInput={(e) => setText((e.target as HTMLInputElement).value)} />
-          <button type="submit" class="secondary" data-testid="hand-raise">✋ Raise hand</button>
+          <button type="submit" class="secondary" data-testid="hand-raise">Raise hand</button>
         </form>
       )}
       {error ? <p class="refusal" role="alert">{error}</p> : null}

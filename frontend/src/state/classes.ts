@@ -174,6 +174,7 @@ const RECONNECT_MS = 1000;
 const NOT_FOUND = 4404;
 let ws: WebSocket | null = null;
 let attempt = 0;
+let wasLost = false; // the grid's socket broke: its next frame reads the classes again
 
 async function connect(cid: string): Promise<void> {
   const mine = ++attempt;
@@ -190,7 +191,8 @@ async function connect(cid: string): Promise<void> {
   const sock = new WebSocket(`${proto}://${location.host}/api/classes/${cid}/grid?ticket=${encodeURIComponent(ticket.ticket)}`);
   ws = sock;
   sock.onmessage = (ev) => {
-    const back = gridLink.peek() === "lost"; // the service may have restarted meanwhile
+    const back = wasLost; // the service may have restarted meanwhile
+    wasLost = false;
     gridLink.value = "online";
     const frame = JSON.parse(ev.data as string) as GridFrame;
     // ended elsewhere, or back after a restart: the class list says what changed (an ended
@@ -202,6 +204,7 @@ async function connect(cid: string): Promise<void> {
     if (ws !== sock) return; // replaced on purpose
     ws = null;
     gridLink.value = "lost";
+    wasLost = true;
     if (ev.code !== NOT_FOUND) setTimeout(() => mine === attempt && void connect(cid), RECONNECT_MS);
   };
 }
