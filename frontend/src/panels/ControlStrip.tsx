@@ -62,7 +62,7 @@ export function ControlStrip() {
         </>
       ) : waiting ? (
         <span class="hint" data-testid="control-frozen">
-          frozen by the instructor: you can take control once they resume the machine
+          {st === "mine" ? "your commands wait until the instructor resumes the machine" : "frozen by the instructor: you can take control once they resume the machine"}
         </span>
       ) : !h ? (
         <span class="hint">the first command takes control</span>
