@@ -198,7 +198,9 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
         expect(bert.get_by_test_id("reset")).to_be_enabled()
         r = srv.http.post(f"/api/classes/{CLASS}/freeze", json={"seats": [2], "frozen": True})
         assert r.status_code == 200, r.text
-        expect(strip.get_by_test_id("control-frozen")).to_contain_text("wait until the instructor resumes")
+        expect(strip.get_by_test_id("control-frozen")).to_contain_text(
+            "wait until the instructor resumes"
+        )
         expect(strip.get_by_test_id("control-holder")).to_contain_text("frozen by the instructor")
         expect(strip.get_by_test_id("control-take")).to_have_count(0)
         expect(bert.get_by_test_id("reset")).to_be_disabled()
