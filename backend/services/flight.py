@@ -42,7 +42,8 @@ from nc_sim.signals import CHANNEL, Signal
 log = logging.getLogger(__name__)
 
 PERIOD_S = 0.25  # how often the long tier is fed and pending saves are looked at
-# while a window is open: a fast simulation runs through the ring's 16 s in a quarter second
+# while a window is open (a fast simulation runs through the ring's 16 s in a quarter
+# second): the machines with one, and they alone, are looked at this often
 PENDING_PERIOD_S = 0.02
 BY = "flight recorder"  # whom its traces count for in the library
 RING_MARGIN = 500  # cycles of the ring left alone: the worker may be writing them
@@ -200,12 +201,19 @@ class FlightRecorder:
 
     # --- the thread --------------------------------------------------------------------------
     def _run(self) -> None:
+        last_full = 0.0
         while True:
             self._wake.wait(PENDING_PERIOD_S if any(self._pending.values()) else PERIOD_S)
             self._wake.clear()
             if self._stop.is_set():
                 return
             proxies = self.machines.proxies()
+            if time.monotonic() - last_full < PERIOD_S:  # a quick look: open windows only
+                for proxy in [p for p in proxies if self._pending.get(p.id)]:
+                    with contextlib.suppress(Exception):  # the full look says what fails
+                        self._due(proxy)
+                continue
+            last_full = time.monotonic()
             with self._lock:  # a deleted machine's tier goes with it
                 live = {p.id for p in proxies}
                 for mid in [mid for mid in self._tapes if mid not in live]:
