@@ -20,6 +20,7 @@ from backend.services.classes import Classes
 from backend.services.exercises import Exercises
 from backend.services.store import Store
 from backend.services.training import Snapshots, StandingFaults
+from backend.workers.protocol import Snapshot
 
 TRAINER = Actor("trainer", Role.INSTRUCTOR, "s1")
 
@@ -50,7 +51,10 @@ class Machines:
             if req.id == self.fail:
                 raise Unavailable(f"no worker could build '{req.id}'")
             control = type("Control", (), {"holder": None})()
-            proxy = type("Proxy", (), {"id": req.id, "control": control})()
+            # its state as a snapshot: the seat's start the class keeps
+            start = Snapshot(0, 0.0, b"state", {})
+            link = type("Link", (), {"call": staticmethod(lambda _req: start)})()
+            proxy = type("Proxy", (), {"id": req.id, "control": control, "link": link})()
             with self.lock:
                 self.made[req.id] = proxy
             return proxy

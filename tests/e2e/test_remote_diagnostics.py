@@ -156,7 +156,7 @@ def test_a_bundle_opens_on_another_service_as_the_offline_machine(
     srv.pace(mid, mode="pause")  # queued behind M3 S1500, M3 S20000 raises 90017 on S1
     for block in ("M3 S1500", "M3 S20000"):
         srv.http.post(f"/api/machines/{mid}/commands", json={"type": "mdi", "block": block})
-    srv.pace(mid, mode="fast")
+    srv.pace(mid, mode="run")  # real pace: fast, a loaded machine may lap the window
     _until_traced(srv, mid, {90017})
     a = open_hmi(browser, srv.base, f"{mid}/history")
     try:
