@@ -7,10 +7,13 @@ speed; the channel's state and path feed), one sample in `decimation` cycles, fo
 Its memory: channels × minutes·60 / (decimation · cycle_s) × 8 bytes per machine, 17 × 30 000
 × 8 B = 4.1 MB for the demo lathe at the defaults (5 min at 100 Hz).
 
-On every job error the recorder waits until `after_s` have passed, then saves `before_s` +
-`after_s` of the main signals at full rate from the ring as a trace of the library (source
-'flight', the error as its trigger, the events of the window with it) and links the job
-error's history entry to it. Errors within a window already being saved share its trace. Each
+On every job error the recorder copies `before_s` of the main signals at full rate from the
+ring when it hears of the error, the `after_s` that follow as they are written (every 20 ms
+while a window is open: a fast simulation laps the ring in well under a second), then saves
+the window as a trace of the library (source 'flight', the error as its trigger, the events
+of the window with it) and links the job error's history entry to it. Where the ring was
+lapped before the error was heard (fast, on a loaded machine), the history says it was not
+saved. Errors within a window already being saved share its trace. Each
 machine keeps its newest `keep` such traces; older ones are deleted. On demand it saves the
 last seconds: from the ring at full rate while they fit in it, from the long tier beyond.
 """
