@@ -71,8 +71,9 @@ def test_an_observer_finds_the_errors_of_before_a_restart_and_their_traces(
         for code, entry in before.items():
             row = history.locator(f'tr[data-id="{entry["id"]}"]')
             expect(row).to_contain_text(str(code))
-            wall = time.strftime("%H:%M:%S", time.localtime(entry["time_unix"]))
-            expect(row).to_contain_text(re.sub(r"^0", "", wall))  # the wall clock it happened
+            # the wall clock it happened, as the browser's locale (en-US: 12 hours) writes it
+            wall = time.strftime("%I:%M:%S", time.localtime(entry["time_unix"]))
+            expect(row).to_contain_text(re.sub(r"^0", "", wall))
         cause = rows.filter(has_text="90017").get_by_test_id("history-cause")
         expect(cause).to_have_text("raised by MDI block 'M3 S20000' sent by ana")
         for mark in ("service stopping", "powered on: the service started"):
