@@ -1,5 +1,5 @@
-// A class's results to take away, running or ended.
-/** The class's results to take away: CSV for a spreadsheet, the grade list to print. */
+// A class's results to take away, running or ended: CSV for a spreadsheet, the grade list
+// to print.
 export function ResultLinks(props: { cid: string }) {
   const base = `/api/classes/${encodeURIComponent(props.cid)}`;
   return (
