@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from api.faults import FaultInfo, FaultInject
 from api.machines import MachineLists
@@ -42,6 +42,11 @@ class ExerciseInfo(BaseModel):
     hints: list[HintInfo]
     faults: int = Field(description="faults it injects (shown to instructors only)")
     source: str = Field(description="shipped file or 'uploaded by <user>'")
+    locked_assistants: list[str] = Field(description="assistants its student may not use")
+    varied: list[str] = Field(
+        description="the numbers each seat gets its own of, e.g. 'faults[0].factor' (seeded "
+        "per class and seat: neighbours cannot copy)",
+    )
 
 
 class ExerciseUpload(BaseModel):
@@ -51,6 +56,7 @@ class ExerciseUpload(BaseModel):
 
 
 LINK_HOURS_MAX = 72.0  # a seat's login link is good for at most three days
+MAX_PLAN = 8  # exercises in one lesson plan
 
 
 class ClassCreate(BaseModel):
@@ -62,7 +68,11 @@ class ClassCreate(BaseModel):
 
     id: str = Field(pattern=CLASS_ID, description="URL name; seat machines are <id>-s01 …")
     title: str = Field("", max_length=80)
-    exercise: str = Field(min_length=1, max_length=64, description="exercise id")
+    exercises: list[Annotated[str, Field(min_length=1, max_length=64)]] = Field(
+        min_length=1,
+        max_length=MAX_PLAN,
+        description="the lesson plan: exercise ids in the order the seats work through them",
+    )
     seats: int = Field(ge=1, le=MAX_SEATS)
     students: list[str] = Field(
         default_factory=list,
@@ -80,6 +90,14 @@ class ClassCreate(BaseModel):
         le=LINK_HOURS_MAX,
         description="how long the seats' login links stay good, h (prepared the day before: 24)",
     )
+
+    @field_validator("exercises")
+    @classmethod
+    def _once_each(cls, v: list[str]) -> list[str]:
+        twice = sorted({e for e in v if v.count(e) > 1})
+        if twice:
+            raise ValueError(f"each exercise once in a plan: {', '.join(twice)} is named twice")
+        return v
 
 
 class AnswerGiven(BaseModel):
@@ -126,6 +144,22 @@ class FindingAnswer(BaseModel):
     value: float = Field(gt=0.0, le=1e6, description="the size in the axis' unit (mm | °)")
 
 
+class StageResult(BaseModel):
+    """One exercise of the lesson plan as a seat left it (moved on to the next)."""
+
+    exercise: str = Field(description="exercise id")
+    title: str
+    score: float
+    max_points: float
+    checks: list[CheckState] = Field(description="as they stood when the seat moved on")
+    hints_taken: int
+    hint_cost: float
+    seat_time_s: float = Field(description="the exercise's own clock, s")
+    values: dict[str, float] = Field(description="the seat's own numbers in it")
+    moved_on_by: str = Field(description="who moved the seat on (its student or an instructor)")
+    moved_on_unix: float
+
+
 class SeatInfo(BaseModel):
     """One seat of a class."""
 
@@ -136,12 +170,15 @@ class SeatInfo(BaseModel):
     frozen: bool
     control: str | None = Field(description="who holds control of the seat's machine")
     progress: float = Field(description="share of the checks that hold or held, 0..1")
-    score: float
+    score: float = Field(description="in the exercise it is at")
     hints_taken: int
-    seat_time_s: float = Field(description="simulated time the seat has run, s")
+    seat_time_s: float = Field(description="simulated time the seat has run in its exercise, s")
     joined_unix: float | None = Field(
         None, description="its student's first login (None: nobody yet; its clock stands)"
     )
+    stage: int = Field(description="the exercise it is at: index into the class's exercises")
+    done: list[StageResult] = Field(description="the exercises of the plan it has moved on from")
+    total_score: float = Field(description="its score over the plan so far")
 
 
 class ClassResumed(BaseModel):
@@ -156,7 +193,7 @@ class ClassResumed(BaseModel):
 class ClassInfo(BaseModel):
     id: str
     title: str
-    exercise: str
+    exercises: list[str] = Field(description="the lesson plan: exercise ids in order")
     template: Literal["demo", "lists"] = Field(
         description="the seats' machines: the demo lathe or the class's uploaded lists"
     )
@@ -230,6 +267,7 @@ class SeatDetail(BaseModel):
     ended: bool = Field(
         description="the class has ended: checks' details and faults are their last state"
     )
+    values: dict[str, float] = Field(description="the seat's own numbers in its exercise")
 
 
 class Exercise(BaseModel):
@@ -252,6 +290,13 @@ class Exercise(BaseModel):
     seat_time_s: float
     frozen: bool = Field(description="paused by the instructor (the student cannot resume)")
     hand: RaisedHand | None = Field(None, description="the student's raised hand (None: down)")
+    stage: int = Field(description="the exercise's place in the lesson plan, from 0")
+    plan: list[str] = Field(description="the plan's exercise titles")
+    done: list[StageResult] = Field(description="the plan's exercises the seat has moved on from")
+    may_move_on: bool = Field(
+        description="the asker may move the seat on now: an instructor while a next exercise "
+        "exists, its student once every check has passed",
+    )
 
 
 class RaisedHand(BaseModel):
@@ -278,12 +323,13 @@ class SeatResult(BaseModel):
     seat: int
     student: str
     ended_unix: float
-    score: float
-    max_points: float = Field(description="the sum of the checks' points")
+    score: float = Field(description="over the lesson plan's exercises")
+    max_points: float = Field(description="the sum of the checks' points, over the plan")
     checks_passed: int = Field(description="checks that held at some time")
     checks_total: int
     hints_taken: int
     seat_time_s: float
+    stages: list[StageResult] = Field(description="each exercise of the plan the seat reached")
 
 
 class HintTake(BaseModel):
@@ -328,6 +374,7 @@ class SeatFrame(BaseModel):
     score: float
     faults: int = Field(description="injected faults (active or armed)")
     seat_time_s: float
+    stage: int = Field(description="the exercise it is at (index into the plan)")
     hand: RaisedHand | None = Field(None, description="its student asks for help")
     joined: bool = Field(True, description="its student has logged in (its clock runs since)")
     idle_s: float | None = Field(

@@ -85,7 +85,7 @@ class StatusMessage(BaseModel):
     status: MachineStatus
 
 
-NoticeKind = Literal["rebuilt", "restored", "restarted", "message", "frozen", "resumed"]
+NoticeKind = Literal["rebuilt", "restored", "restarted", "message", "frozen", "resumed", "exercise"]
 
 
 class NoticeMessage(BaseModel):
@@ -97,7 +97,8 @@ class NoticeMessage(BaseModel):
     kind: NoticeKind = Field(
         description="rebuilt after its worker died; restored from a snapshot; the service "
         "restarted (the machine powered on again); a message from the instructor; frozen or "
-        "resumed by the instructor"
+        "resumed by the instructor; a class seat moved on to its next exercise (powered on "
+        "afresh for it)"
     )
     message: str
     time_unix: float

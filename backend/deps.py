@@ -30,6 +30,7 @@ from backend.services.flight import FlightRecorder
 from backend.services.history import History
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
+from backend.services.replay import SeatRecorder
 from backend.services.report import Reports
 from backend.services.sessions import SessionWatch
 from backend.services.shares import Shares
@@ -132,7 +133,7 @@ class Services:
         sessions.start()
         assist_runs = AssistRuns(store)
         versions = Versions(store, machines)
-        console = ConsoleHub(classes)
+        console = ConsoleHub(classes, SeatRecorder(store, history))
         console.start()
         services = cls(
             settings,

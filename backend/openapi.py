@@ -24,7 +24,8 @@ from api.telemetry import (
     Subscribe,
     Subscribed,
 )
-from backend.errors import STATUS, BadRequest
+from backend.errors import STATUS, URI_TOO_LONG, BadRequest
+from backend.http_limits import MAX_URL_BYTES
 
 WEBSOCKET_MODELS: tuple[type[BaseModel], ...] = (
     Subscribe,
@@ -67,14 +68,21 @@ def install(app: FastAPI) -> None:
 def _one_error_body(doc: dict[str, Any]) -> None:
     """FastAPI documents request validation as its `HTTPValidationError`; the service answers
     every error with `ErrorBody` (backend/errors.py), so the schema says that. FastAPI also
-    answers 400 to a JSON body it cannot decode, which every operation with a body documents."""
+    answers 400 to a JSON body it cannot decode, which every operation with a body documents;
+    every operation documents the server's 414 for a URL over its limit."""
     content = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
+    too_long = {
+        "description": f"the URL is longer than {MAX_URL_BYTES} bytes (answered as text)",
+        "content": {"text/plain": {"schema": {"type": "string"}}},
+    }
     for operations in doc.get("paths", {}).values():
         for op in operations.values():
             answers = op.setdefault("responses", {})
             answer = answers.get("422")
             if answer and "HTTPValidationError" in str(answer.get("content")):
                 answer["content"] = content
+            # the server's own limit, before any route: a plain-text answer (http_limits.py)
+            answers.setdefault(str(URI_TOO_LONG), too_long)
             if "application/json" in op.get("requestBody", {}).get("content", {}):
                 answers.setdefault(
                     str(STATUS[BadRequest][0]),

@@ -273,7 +273,7 @@ def class_run(
         assert srv.proc is not None
         try:
             t0 = time.monotonic()
-            body = {"id": CLASS_ID, "exercise": exercise, "seats": seats}
+            body = {"id": CLASS_ID, "exercises": [exercise], "seats": seats}
             r = srv.http.post("/api/classes", json=body, headers=instructor, timeout=300)
             if r.status_code != 201:
                 raise RuntimeError(f"class not created: {r.status_code} {r.text[:300]}")

@@ -26,23 +26,51 @@ class CheckResultRow:
 
 
 @dataclass(frozen=True)
-class SeatResultRow:
-    """One seat's result."""
+class StageRow:
+    """One seat in one exercise of the lesson plan."""
 
-    n: int
-    student: str
-    login: str
-    joined_unix: float | None
+    exercise: str
     seat_time_s: float
     checks: tuple[CheckResultRow, ...]
     hints_taken: int
     hint_cost: float
     score: float
-    max_points: float
 
     @property
     def passed(self) -> int:
         return sum(1 for c in self.checks if c.first_passed_s is not None)
+
+
+@dataclass(frozen=True)
+class SeatResultRow:
+    """One seat's result: a row per exercise of the plan it reached."""
+
+    n: int
+    student: str
+    login: str
+    joined_unix: float | None
+    stages: tuple[StageRow, ...]
+
+    def stage(self, exercise: str) -> StageRow | None:
+        return next((r for r in self.stages if r.exercise == exercise), None)
+
+    @property
+    def score(self) -> float:
+        return sum(r.score for r in self.stages)
+
+    @property
+    def seat_time_s(self) -> float:
+        return sum(r.seat_time_s for r in self.stages)
+
+
+@dataclass(frozen=True)
+class ExerciseColumns:
+    """One exercise of the plan: its checks (id, text) in order and its maximum."""
+
+    id: str
+    title: str
+    max_points: float
+    checks: tuple[tuple[str, str], ...]
 
 
 @dataclass(frozen=True)
@@ -51,13 +79,15 @@ class ClassResults:
 
     id: str
     title: str
-    exercise: str
-    exercise_title: str
     instructor: str
     created_unix: float
     ended_unix: float | None
-    checks: tuple[tuple[str, str], ...]  # (id, text) in the exercise's order
+    exercises: tuple[ExerciseColumns, ...]  # the lesson plan
     seats: tuple[SeatResultRow, ...]
+
+    @property
+    def max_points(self) -> float:
+        return sum(x.max_points for x in self.exercises)
 
 
 def _clock(s: float) -> str:
@@ -65,67 +95,112 @@ def _clock(s: float) -> str:
     return f"{t // 3600}:{t // 60 % 60:02d}:{t % 60:02d}"
 
 
+def _utc(t: float | None) -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(t)) if t else ""
+
+
 def to_csv(r: ClassResults) -> str:
-    """One line per seat: who, when they joined, seat time, per check the points earned and
-    the seat time of its first pass, hints, score of the maximum."""
+    """One line per seat and exercise it reached: who, when they joined, the exercise's
+    seat time, per check (`<exercise>.<check>`) the points earned and the seat time of its
+    first pass (empty for another exercise's checks), hints, score of the maximum."""
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
     head = ["class", "exercise", "seat", "student", "login", "joined_utc", "seat_time_s"]
-    for cid, _text in r.checks:
-        head += [f"{cid}_points", f"{cid}_first_passed_s"]
-    w.writerow([*head, "hints_taken", "hint_cost", "score", "max_points"])
+    for x in r.exercises:
+        for cid, _text in x.checks:
+            head += [f"{x.id}.{cid}_points", f"{x.id}.{cid}_first_passed_s"]
+    w.writerow([*head, "checks_passed", "hints_taken", "hint_cost", "score", "max_points"])
     for s in r.seats:
-        joined = (
-            time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(s.joined_unix)) if s.joined_unix else ""
-        )
-        row: list[object] = [r.id, r.exercise, s.n, s.student, s.login, joined]
-        row.append(f"{s.seat_time_s:.1f}")
-        for c in s.checks:
-            row += [
-                f"{c.earned:.2f}",
-                "" if c.first_passed_s is None else f"{c.first_passed_s:.1f}",
-            ]
-        w.writerow([*row, s.hints_taken, f"{s.hint_cost:g}", f"{s.score:.2f}", f"{s.max_points:g}"])
+        for x in r.exercises:
+            st = s.stage(x.id)
+            if st is None:  # not reached
+                continue
+            row: list[object] = [r.id, x.id, s.n, s.student, s.login, _utc(s.joined_unix)]
+            row.append(f"{st.seat_time_s:.1f}")
+            for other in r.exercises:
+                if other is not x:
+                    row += [""] * (2 * len(other.checks))
+                    continue
+                for c in st.checks:
+                    passed = "" if c.first_passed_s is None else f"{c.first_passed_s:.1f}"
+                    row += [f"{c.earned:.2f}", passed]
+            row += [st.passed, st.hints_taken, f"{st.hint_cost:g}", f"{st.score:.2f}"]
+            w.writerow([*row, f"{x.max_points:g}"])
     return out.getvalue()
 
 
-def to_html(r: ClassResults) -> str:
-    """The grade list: the class, then a table of the seats (each check's points earned of
-    its maximum), the check texts below it, and a line for the instructor's signature."""
-    title = f"Results of class {r.title or r.id}"
-    ended = f"ended {when(r.ended_unix)}" if r.ended_unix is not None else "still running"
+def _exercise_table(r: ClassResults, k: int, x: ExerciseColumns) -> str:
+    """One exercise of the plan: a row per seat (each check's points earned of its maximum),
+    its checks' texts below."""
     head = ["Seat", "Student", "Seat time"]
-    head += [f"{i + 1}" for i in range(len(r.checks))]
+    head += [f"{i + 1}" for i in range(len(x.checks))]
     head += ["Hints", "Score"]
     rows = []
     for s in r.seats:
         cells = [f'<td class="num">{s.n}</td>', f"<td>{e(s.student)}</td>"]
-        seat_time = _clock(s.seat_time_s) if s.joined_unix is not None else "not joined"
-        if s.joined_unix is None and s.seat_time_s > 0:  # started by the instructor
-            seat_time = f"{_clock(s.seat_time_s)} (no login)"
+        st = s.stage(x.id)
+        if st is None:
+            span = len(x.checks) + 3
+            rows.append("<tr>" + "".join(cells) + f'<td colspan="{span}">not reached</td></tr>')
+            continue
+        seat_time = _clock(st.seat_time_s) if s.joined_unix is not None else "not joined"
+        if s.joined_unix is None and st.seat_time_s > 0:  # started by the instructor
+            seat_time = f"{_clock(st.seat_time_s)} (no login)"
         cells.append(f'<td class="num">{seat_time}</td>')
-        for c in s.checks:
+        for c in st.checks:
             mark = "" if c.first_passed_s is None else " ✓"
             cells.append(f'<td class="num">{c.earned:.1f}/{c.points:g}{mark}</td>')
-        cost = f"−{s.hint_cost:g}" if s.hint_cost else "—"
-        cells.append(f'<td class="num">{s.hints_taken} ({cost})</td>')
-        cells.append(f'<td class="num"><b>{s.score:.1f}</b> of {s.max_points:g}</td>')
+        cost = f"−{st.hint_cost:g}" if st.hint_cost else "—"
+        cells.append(f'<td class="num">{st.hints_taken} ({cost})</td>')
+        cells.append(f'<td class="num"><b>{st.score:.1f}</b> of {x.max_points:g}</td>')
         rows.append("<tr>" + "".join(cells) + "</tr>")
-    legend = "".join(f"<li>{e(text)}</li>" for _cid, text in r.checks)
+    legend = "".join(f"<li>{e(text)}</li>" for _cid, text in x.checks)
+    which = f"Exercise {k + 1}: " if len(r.exercises) > 1 else ""
+    return (
+        f"<h3>{which}{e(x.title)} <code>{e(x.id)}</code></h3>"
+        + table(head, rows)
+        + f'<ol class="notes">{legend}</ol>'
+    )
+
+
+def _totals(r: ClassResults) -> str:
+    """Each seat's score per exercise and over the plan."""
+    head = ["Seat", "Student", *[f"{k + 1}" for k in range(len(r.exercises))], "Total"]
+    rows = []
+    for s in r.seats:
+        cells = [f'<td class="num">{s.n}</td>', f"<td>{e(s.student)}</td>"]
+        for x in r.exercises:
+            st = s.stage(x.id)
+            cells.append(f'<td class="num">{"—" if st is None else f"{st.score:.1f}"}</td>')
+        cells.append(f'<td class="num"><b>{s.score:.1f}</b> of {r.max_points:g}</td>')
+        rows.append("<tr>" + "".join(cells) + "</tr>")
+    return "<h3>Over the lesson plan</h3>" + table(head, rows)
+
+
+def to_html(r: ClassResults) -> str:
+    """The grade list: the class, a table per exercise of the lesson plan (each check's
+    points earned of its maximum, the check texts below), the totals over the plan, and a
+    line for the instructor's signature."""
+    title = f"Results of class {r.title or r.id}"
+    ended = f"ended {when(r.ended_unix)}" if r.ended_unix is not None else "still running"
+    plan = " → ".join(x.title for x in r.exercises)
+    body = "".join(_exercise_table(r, k, x) for k, x in enumerate(r.exercises))
+    if len(r.exercises) > 1:
+        body += _totals(r)
     footer = f":root {{ --machine: {css_string(title)}; }}"
     return (
         '<!doctype html><html lang="en"><head><meta charset="utf-8">'
         f"<title>{e(title)}</title><style>{CSS.replace('Commissioning report · ', '')}{footer}"
         "</style></head><body><section>"
         f"<h1>{e(title)}</h1>"
-        f'<p class="subtitle">{e(r.exercise_title)} <code>{e(r.exercise)}</code></p>'
+        f'<p class="subtitle">{e(plan)}</p>'
         f'<p class="meta">Instructor {e(r.instructor)} · began {when(r.created_unix)} · {ended} · '
         f"{len(r.seats)} seats</p>"
-        + table(head, rows)
-        + f'<h3>Checks</h3><ol class="notes">{legend}</ol>'
+        + body
         + '<p class="meta">A check earns its points × a time weight of its first pass (1 up to '
         "the par time, falling to 0.5 at three times par); ✓ passed. Hints taken cost their "
-        "points. Seat time runs from the student's first login (or the instructor's start).</p>"
+        "points. Seat time runs from the student's first login (or the instructor's start); "
+        "each exercise has its own clock.</p>"
         + '<div class="sigs"><div class="sig"><div class="line"></div><span>Instructor, date'
         "</span></div></div></section></body></html>"
     )

@@ -48,6 +48,7 @@ _WHY: Why = {
 _CALC_WHY: Why = {
     Invalid: "the inputs do not fit together (which one, and why) or the axis is unknown"
 }
+_LOCKED: Why = {Forbidden: "a class seat's exercise locks the assistant for its student"}
 _LIVE_WHY: Why = {
     Conflict: "another assistant runs, the run was cancelled (E-stop, cancel) or the machine "
     "rebuilt",
@@ -64,6 +65,7 @@ def _on_copy(a: Assistant, model: type[BaseModel]) -> Callable[..., Awaitable[As
     async def route(
         body: Any, machine: MachineDep, services: ServicesDep, actor: ActorDep
     ) -> AssistResult:
+        services.classes.check_unlocked(machine.id, a.name, actor)
         if a.kind is Kind.CALCULATOR:
             return await asyncio.to_thread(calculate, machine.cfg, a.name, body)
         # the copy carries the faults in force on the machine, as the machine's plant has them
@@ -82,6 +84,7 @@ def _live(a: Assistant, model: type[BaseModel]) -> Callable[..., Awaitable[Assis
     async def route(
         body: Any, machine: MachineDep, actor: ActorDep, services: ServicesDep
     ) -> AssistResult:
+        services.classes.check_unlocked(machine.id, a.name, actor)
         result = await run_live(machine, a.name, body, actor, services.audit)
         run_id = await services.assist_runs.record(machine.id, actor.name, result, live=True)
         return result.model_copy(update={"run_id": run_id})
@@ -111,7 +114,10 @@ for _a in ASSISTANTS:
         description=f"{_a.text}\n\n{_COPY[_a.kind]}",
         dependencies=[permit(Action.ASSIST)],
         responses=responses(
-            NotFound, Invalid, why=_CALC_WHY if _a.kind is Kind.CALCULATOR else _WHY
+            Forbidden,
+            NotFound,
+            Invalid,
+            why=(_CALC_WHY if _a.kind is Kind.CALCULATOR else _WHY) | _LOCKED,
         ),
     )
     if _a.live:

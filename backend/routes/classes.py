@@ -12,6 +12,7 @@ from api.auth import SESSION_COOKIE, Action
 from api.classes import (
     CLASS_ID,
     LINK_HOURS_MAX,
+    MAX_PLAN,
     Broadcast,
     ClassCreate,
     ClassCreated,
@@ -24,9 +25,11 @@ from api.classes import (
     SeatFaults,
     SeatLink,
     SeatResult,
+    SeatSelection,
     SnapshotInfo,
 )
 from api.history import HistoryPage
+from api.replay import SeatReplay
 from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES, dated_download, text_answer
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import (
@@ -42,6 +45,7 @@ from backend.errors import (
     TooLarge,
     Unavailable,
     Why,
+    not_found,
     responses,
 )
 from backend.report import grades
@@ -95,16 +99,18 @@ def list_classes(services: ServicesDep) -> list[ClassInfo]:
 def create_class(
     req: ClassCreate, request: Request, services: ServicesDep, actor: ActorDep
 ) -> ClassCreated:
-    """A class of seats: a login and a machine each (the exercise's template, starting
-    values and faults; its checks running). The answer has each seat's one-time login link
-    (shown this once; a new one: POST .../seats/{n}/link)."""
+    """A class of seats: a login and a machine each at the lesson plan's first exercise
+    (its template, starting values and faults with each seat's own numbers; its checks
+    running). The answer has each seat's one-time login link (shown this once; a new one:
+    POST .../seats/{n}/link)."""
     created = services.classes.create(actor, req, str(request.base_url))
+    plan = ", ".join(f"'{e}'" for e in req.exercises)
     services.audit.record(
         Classes.entry(
             actor,
-            f"created class '{req.id}' ({req.seats} seats, exercise '{req.exercise}')",
+            f"created class '{req.id}' ({req.seats} seats, exercises {plan})",
             seats=req.seats,
-            exercise=req.exercise,
+            exercises=req.exercises,
         )
     )
     return created
@@ -128,6 +134,7 @@ def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo
     (GET /api/auth/seat-result)."""
     c = services.classes.get(cid)
     services.classes.end(c)
+    services.console.recorder.flush(cid)
     services.sessions.poke()  # the students' websockets close now
     services.console.unwatch(c)  # its machines' snapshots and faults went with them
     services.audit.record(Classes.entry(actor, f"ended class '{cid}'"))
@@ -145,6 +152,7 @@ def delete_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> None:
     id can be used again. Its seats' histories and traces stay until their retention ends
     them; the audit keeps that it was deleted. 409 while it runs (end it first)."""
     services.classes.delete(services.classes.get(cid))
+    services.console.recorder.forget(cid)
     services.audit.record(Classes.entry(actor, f"deleted class '{cid}'"))
 
 
@@ -162,6 +170,25 @@ def freeze(cid: ClassId, req: Freeze, services: ServicesDep, actor: ActorDep) ->
     for seat in seats:  # each in its seat's history, for the debrief
         what_seat = f"{what} seat {seat.n} of class '{cid}'"
         services.audit.record(Classes.entry(actor, what_seat, seat.machine))
+    return services.classes.info(c)
+
+
+@router.post(
+    "/classes/{cid}/next",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(
+        Forbidden,
+        NotFound,
+        why=WORKER_GONE
+        | {Conflict: "the class ended, or a seat is at the plan's last exercise (none moves)"},
+    ),
+)
+def move_on(cid: ClassId, req: SeatSelection, services: ServicesDep, actor: ActorDep) -> ClassInfo:
+    """Move the selected seats (all when none are named) on to the lesson plan's next
+    exercise: each one's result in its exercise kept, its machine powered on afresh for the
+    next one, its clock from 0."""
+    c = services.classes.running(cid)
+    services.classes.move_on(actor, c, services.classes.select(c, req.seats))
     return services.classes.info(c)
 
 
@@ -210,9 +237,10 @@ def seat_detail(cid: ClassId, n: SeatNo, services: ServicesDep) -> SeatDetail:
     return SeatDetail(
         info=services.classes.seat_info(c, seat),
         checks=services.classes.checks(c, seat),
-        hints=hint_infos(c.exercise, seat.hints),
+        hints=hint_infos(seat.exercise, seat.hints),
         faults=seat.faults if ended else training.faults_of(m) if m is not None else [],
         ended=ended,
+        values=seat.values,
     )
 
 
@@ -251,6 +279,30 @@ def seat_history(
     return HistoryPage(rows=rows, total=total)
 
 
+@router.get(
+    "/classes/{cid}/seats/{n}/replay",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(Forbidden, NotFound),
+)
+def seat_replay(
+    cid: ClassId,
+    n: SeatNo,
+    services: ServicesDep,
+    stage: Annotated[int | None, Query(ge=0, lt=MAX_PLAN)] = None,
+) -> SeatReplay:
+    """The seat's session in one exercise of the plan (its current one by default): its
+    machine's main signals once a second of its clock, and what happened (commands, job
+    errors, parameters, hints, faults, freezes, messages) placed on the same clock, to play
+    back in the debrief."""
+    c = services.classes.get(cid)
+    seat = services.classes.seat(cid, n)
+    k = seat.stage if stage is None else stage
+    if k > seat.stage:
+        raise not_found(f"exercise {k + 1} of seat {n} (it reached {seat.stage + 1})")
+    title = c.plan[k].title
+    return services.console.recorder.replay(cid, n, k, title, seat.machine)
+
+
 @router.post(
     "/classes/{cid}/seats/{n}/reset",
     dependencies=[permit(Action.TEACH)],
@@ -280,7 +332,11 @@ def results_csv(cid: ClassId, services: ServicesDep) -> Response:
     earned and first pass, hints, score of the maximum."""
     c = services.classes.get(cid)
     return dated_download(
-        grades.to_csv(class_results.results(c)), "text/csv", f"class-{cid}", "results", "csv"
+        grades.to_csv(class_results.results(services.classes, c)),
+        "text/csv",
+        f"class-{cid}",
+        "results",
+        "csv",
     )
 
 
@@ -300,7 +356,9 @@ async def results_pdf(cid: ClassId, services: ServicesDep) -> Response:
     """The grade list to print (A4): every seat's points per check, hints, score; a line for
     the instructor's signature."""
     c = await run_in_threadpool(services.classes.get, cid)
-    pdf = await html_to_pdf(grades.to_html(class_results.results(c)), services.settings.chromium)
+    pdf = await html_to_pdf(
+        grades.to_html(class_results.results(services.classes, c)), services.settings.chromium
+    )
     return dated_download(pdf, "application/pdf", f"class-{cid}", "grade-list", "pdf")
 
 

@@ -29,8 +29,8 @@ def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> 
     check as it stands on the live machine, the hints (their text once taken), the score;
     whether the asker may take hints (the seat's student only)."""
     c, seat = services.classes.seat_by_machine(machine.id)
-    progress, score = services.classes.score(c, seat)
-    info = exercise_info(c.exercise, "class", seat.hints)
+    progress, score = services.classes.score(seat)
+    info = exercise_info(seat.exercise, "class", seat.hints)
     return Exercise(
         class_id=c.id,
         seat=seat.n,
@@ -39,13 +39,40 @@ def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> 
         takes_hints=actor.name == seat.user,
         exercise=info.model_copy(update={"faults": 0}),  # the student's to find
         checks=services.classes.checks(c, seat),
-        hints=hint_infos(c.exercise, seat.hints),
+        hints=hint_infos(seat.exercise, seat.hints),
         score=score,
         progress=progress,
         seat_time_s=seat.seat_time_s,
         frozen=seat.frozen,
         hand=seat.hand,
+        stage=seat.stage,
+        plan=[ex.title for ex in c.plan],
+        done=seat.done,
+        may_move_on=services.classes.may_move_on(actor, c, seat) is None,
     )
+
+
+@router.post(
+    "/next",
+    dependencies=[permit(Action.EXERCISE)],
+    responses=responses(
+        Forbidden,
+        NotFound,
+        Conflict,
+        why={
+            Forbidden: "neither the seat's student nor an instructor",
+            Conflict: "a check has not passed yet (a student), the last exercise of the plan, "
+            "or the class ended",
+        },
+    ),
+)
+def move_on(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Exercise:
+    """Move the seat on to its lesson plan's next exercise: its student once every check has
+    passed (the instructor at any time). Its result in this one is kept; the machine powers
+    on afresh for the next (its starting values, faults and checks), its clock from 0."""
+    c, seat = services.classes.seat_by_machine(machine.id)
+    services.classes.move_on(actor, c, [seat])
+    return my_exercise(machine, services, actor)
 
 
 @router.post(
@@ -82,10 +109,11 @@ def take_hint(
     student takes its hints (anyone else: 403)."""
     c, seat = services.classes.seat_by_machine(machine.id)
     text = services.classes.take_hint(actor, seat, c, req.n)
+    ex = seat.exercise
     services.audit.record(
-        Classes.entry(actor, f"took hint {req.n} of exercise '{c.exercise.id}'", machine.id)
+        Classes.entry(actor, f"took hint {req.n} of exercise '{ex.id}'", machine.id)
     )
-    return HintInfo(n=req.n, cost=c.exercise.hints[req.n - 1].cost, text=text)
+    return HintInfo(n=req.n, cost=ex.hints[req.n - 1].cost, text=text)
 
 
 @router.post(
@@ -113,8 +141,8 @@ def answer_finding(
     services.audit.record(
         Classes.entry(
             actor,
-            f"answered finding '{req.check}' of exercise '{c.exercise.id}':"
-            f" {req.axis} {say(req.value, unit_of(c.seat_machine, req.axis))}"
+            f"answered finding '{req.check}' of exercise '{seat.exercise.id}':"
+            f" {req.axis} {say(req.value, unit_of(c.seat_machine(seat), req.axis))}"
             f" ({'right' if given.passed else 'wrong'})",
             machine.id,
         )

@@ -1,41 +1,44 @@
-"""A class's results for its grade list: each seat's score, check by check, as
-nc_sim/training/score.py weighs them (the rendering: backend/report/grades.py)."""
+"""A class's results for its grade list: each seat's score in each exercise of the lesson
+plan, check by check, as nc_sim/training/score.py weighs them (the rendering:
+backend/report/grades.py)."""
 
 from __future__ import annotations
 
-from backend.report.grades import CheckResultRow, ClassResults, SeatResultRow
-from backend.services.classes import Class
-from nc_sim.training.score import score as exercise_score
+from api.classes import StageResult
+from backend.report.grades import (
+    CheckResultRow,
+    ClassResults,
+    ExerciseColumns,
+    SeatResultRow,
+    StageRow,
+)
+from backend.services.classes import Class, Classes
 
 
-def results(c: Class) -> ClassResults:
-    """The class's results as its seats stand now (an ended class's: at its end)."""
+def _row(d: StageResult) -> StageRow:
+    checks = tuple(CheckResultRow(k.id, k.points, k.earned, k.first_passed_s) for k in d.checks)
+    return StageRow(d.exercise, d.seat_time_s, checks, d.hints_taken, d.hint_cost, d.score)
+
+
+def results(classes: Classes, c: Class) -> ClassResults:
+    """The class's results as its seats stand now (an ended class's: at its end); an
+    exercise a seat has not reached yet has no row."""
     seats = []
     for seat in c.seats:
-        s = exercise_score(c.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
-        checks = tuple(CheckResultRow(k.id, k.points, k.earned, k.passed_after_s) for k in s.checks)
-        seats.append(
-            SeatResultRow(
-                seat.n,
-                seat.student,
-                seat.user,
-                seat.joined_unix,
-                seat.seat_time_s,
-                checks,
-                len(seat.hints),
-                s.hint_cost,
-                s.points,
-                s.max_points,
-            )
-        )
+        now = classes.stage_result(c, seat, "", c.ended_unix or 0.0)
+        stages = tuple(_row(d) for d in [*seat.done, now])
+        seats.append(SeatResultRow(seat.n, seat.student, seat.user, seat.joined_unix, stages))
     return ClassResults(
         c.id,
         c.title,
-        c.exercise.id,
-        c.exercise.title,
         c.instructor,
         c.created_unix,
         c.ended_unix,
-        tuple((k.id, k.text) for k in c.exercise.checks),
+        tuple(
+            ExerciseColumns(
+                ex.id, ex.title, ex.max_points, tuple((k.id, k.text) for k in ex.checks)
+            )
+            for ex in c.plan
+        ),
         tuple(seats),
     )

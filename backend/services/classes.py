@@ -1,18 +1,19 @@
 """Classes: an instructor's class of seats, each a student's login and a machine of its own
-built from the exercise (its starting values, its faults, its checks evaluated by the
-machine's worker).
+built from the exercise it is at (its starting values, its faults with this seat's own
+numbers, its checks evaluated by the machine's worker). A class runs a lesson plan: its
+exercises in order, each seat moving on by itself (its student, once every check passed) or
+by the instructor; each exercise has its own clock and score.
 
 The seats' progress lives here: a check counts from the seat time it first held (the time
 weighting of the score), hints taken cost points. Seat time is the simulated time the seat's
-machine ran, summed over its builds (a restart starts the machine's clock again, not the
-seat's). A class that ends takes its machines and logins away; its record, the seats'
+machine ran in its exercise, summed over its builds (a restart starts the machine's clock
+again, not the seat's). A class that ends takes its machines and logins away; its record, the seats'
 results and injected faults, their traces and the audit stay for the debrief. A student's
 session that the end took away still names their seat, so their page can show the result.
 """
 
 from __future__ import annotations
 
-import functools
 import json
 import threading
 import time
@@ -34,6 +35,7 @@ from api.classes import (
     SeatInfo,
     SeatLink,
     SeatResult,
+    StageResult,
 )
 from api.faults import FaultInfo, FaultInject
 from api.machines import MachineCreate, MachineLists
@@ -46,7 +48,7 @@ from backend.services.auth import Actor
 from backend.services.exercises import Exercises
 from backend.services.machines import MachineProxy, MachineService, lists_rejected
 from backend.services.store import Store, StoredChange, parameter_entry
-from backend.workers.protocol import Pace
+from backend.workers.protocol import Mode, Pace
 from nc_sim.config import MachineConfig, machine_from_lists
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
@@ -54,6 +56,7 @@ from nc_sim.training.checks import CheckResult
 from nc_sim.training.exercise import Exercise, ExerciseError, parse_exercise
 from nc_sim.training.score import score as exercise_score
 from nc_sim.training.template import check_fits
+from nc_sim.training.variation import seat_seed
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS classes (  -- backend/services/classes.py
@@ -81,6 +84,13 @@ CREATE TABLE IF NOT EXISTS ended_sessions (  -- a seat's sessions the class's en
     n INTEGER NOT NULL,
     expires REAL NOT NULL          -- the session's own expiry: its result shows until then
 );
+CREATE TABLE IF NOT EXISTS class_plan (  -- a class's lesson plan (none: classes.exercise alone)
+    class TEXT NOT NULL,
+    k INTEGER NOT NULL,            -- its place in the plan, from 0
+    exercise TEXT NOT NULL,
+    text TEXT NOT NULL,            -- the exercise file as the class runs it
+    PRIMARY KEY (class, k)
+);
 CREATE TABLE IF NOT EXISTS class_lists (  -- a class's uploaded machine template (none: demo)
     class TEXT PRIMARY KEY,
     channel_list TEXT NOT NULL,
@@ -99,6 +109,10 @@ class Seat:
     student: str
     user: str
     machine: str
+    exercise: Exercise  # the one it is at, with the seat's own numbers
+    stage: int = 0  # its place in the lesson plan
+    values: dict[str, float] = field(default_factory=dict)  # the seat's numbers in it
+    done: list[StageResult] = field(default_factory=list)  # the exercises moved on from
     hints: set[int] = field(default_factory=set)
     first_passed_s: dict[str, float] = field(default_factory=dict)  # check id -> seat time
     passed: dict[str, bool] = field(default_factory=dict)  # holds now
@@ -133,11 +147,19 @@ class Seat:
                     k: [a.model_dump(mode="json") for a in given]
                     for k, given in self.answers.items()
                 },
+                "stage": self.stage,
+                "values": self.values,
+                "done": [d.model_dump(mode="json") for d in self.done],
             }
         )
 
-    def load_progress(self, text: str) -> None:
+    def load_progress(self, text: str, plan: list[Exercise]) -> None:
+        """Its progress as saved; its exercise from `plan` with its numbers."""
         p = json.loads(text)
+        self.stage = min(int(p.get("stage", 0)), len(plan) - 1)
+        self.values = {k: float(v) for k, v in p.get("values", {}).items()}
+        self.exercise = plan[self.stage].with_values(self.values)
+        self.done = [StageResult.model_validate(d) for d in p.get("done", [])]
         self.hints = set(p.get("hints", []))
         self.first_passed_s = dict(p.get("first_passed_s", {}))
         self.passed = dict(p.get("passed", {}))
@@ -157,19 +179,28 @@ class Seat:
 class Class:
     id: str
     title: str
-    exercise: Exercise
-    exercise_text: str
+    plan: list[Exercise]  # the lesson plan, each exercise as its file says
+    plan_texts: list[str]  # the files
     instructor: str
     created_unix: float
     ended_unix: float | None
     seats: list[Seat]
     lists: MachineLists | None = None  # the seats' machine template; None: the demo lathe
     resumed: ClassResumed | None = None  # built again by a restart of the service
+    _machines: dict[tuple[int, int], MachineConfig] = field(default_factory=dict)
 
-    @functools.cached_property
-    def seat_machine(self) -> MachineConfig:
-        """A seat's machine as the exercise starts it (what its findings are graded on)."""
-        return findings.seat_machine(self.exercise, self.lists)
+    def seat_machine(self, seat: Seat) -> MachineConfig:
+        """A seat's machine as its exercise starts it (what its findings are graded on)."""
+        key = (seat.n, seat.stage)
+        if key not in self._machines:
+            self._machines[key] = findings.seat_machine(seat.exercise, self.lists)
+        return self._machines[key]
+
+    def enter(self, seat: Seat, stage: int) -> None:
+        """The seat is at the plan's exercise `stage`, with its own numbers in it."""
+        ex = self.plan[stage]
+        seat.stage = stage
+        seat.exercise, seat.values = ex.for_seat(seat_seed(self.id, ex.id), seat.n)
 
 
 def seat_name(class_id: str, n: int) -> str:
@@ -219,22 +250,26 @@ class Classes:
                 "SELECT class, channel_list, axis_lists, tool_list FROM class_lists"
             )
         }
+        plans: dict[str, list[str]] = {}
+        for p in self.store.query("SELECT class, text FROM class_plan ORDER BY class, k"):
+            plans.setdefault(p["class"], []).append(p["text"])
         for r in rows:
-            cid, text = r["id"], r["exercise_text"]
+            cid = r["id"]
+            texts = plans.get(cid) or [r["exercise_text"]]  # a class from before plans
+            plan = [parse_exercise(text, f"class {cid}") for text in texts]
             seats = []
             for s in self.store.query(
                 "SELECT n, student, user, machine, progress FROM seats WHERE class = ? ORDER BY n",
                 (cid,),
             ):
-                seat = Seat(cid, s["n"], s["student"], s["user"], s["machine"])
-                seat.load_progress(s["progress"])
+                seat = Seat(cid, s["n"], s["student"], s["user"], s["machine"], plan[0])
+                seat.load_progress(s["progress"], plan)
                 seats.append(seat)
-            ex = parse_exercise(text, f"class {cid}")
             c = Class(
                 cid,
                 r["title"],
-                ex,
-                text,
+                plan,
+                texts,
                 r["instructor"],
                 r["created"],
                 r["ended"],
@@ -246,10 +281,10 @@ class Classes:
                 self._index(c)
                 # the machines are built after this (MachineService.load): with the checks
                 # and the exercise's faults, unless faults were kept as they stood
-                faults = [(f.fault, f.trigger) for f in ex.faults]
                 in_force = 0
                 for seat in seats:
-                    self.machines.seats[seat.machine] = (ex, faults)
+                    faults = [(f.fault, f.trigger) for f in seat.exercise.faults]
+                    self.machines.seats[seat.machine] = (seat.exercise, faults)
                     kept = self.faults.kept(seat.machine)
                     in_force += len(faults if kept is None else kept)
                 c.resumed = ClassResumed(
@@ -318,11 +353,12 @@ class Classes:
     # --- progress -----------------------------------------------------------------------------
     def checks(self, c: Class, seat: Seat) -> list[CheckState]:
         out = []
-        earned = {s.id: s.earned for s in exercise_score(c.exercise, seat.first_passed_s).checks}
-        for k in c.exercise.checks:
+        ex = seat.exercise
+        earned = {s.id: s.earned for s in exercise_score(ex, seat.first_passed_s).checks}
+        for k in ex.checks:
             rule = findings.finding_of(k)
             given = seat.answers.get(k.id, [])
-            state = None if rule is None else findings.state(rule, c.seat_machine, given)
+            state = None if rule is None else findings.state(rule, c.seat_machine(seat), given)
             waiting = "not answered yet" if rule is not None else "not evaluated yet"
             out.append(
                 CheckState(
@@ -350,7 +386,7 @@ class Classes:
         if c.ended_unix is not None:
             raise Conflict(f"class '{c.id}' has ended")
         with self._lock:
-            given = findings.answer(c.exercise, c.seat_machine, seat.answers, req)
+            given = findings.answer(seat.exercise, c.seat_machine(seat), seat.answers, req)
             seat.passed[req.check], seat.detail[req.check] = given.passed, given.detail
             if given.passed:
                 seat.first_passed_s.setdefault(req.check, seat.seat_time_s)
@@ -358,10 +394,10 @@ class Classes:
         return given
 
     @staticmethod
-    def score(c: Class, seat: Seat) -> tuple[float, float]:
-        """(progress 0..1, score) of a seat, by nc_sim.training.score's rule over the seat
-        times (s) of the checks' first passes."""
-        s = exercise_score(c.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
+    def score(seat: Seat) -> tuple[float, float]:
+        """(progress 0..1, score) of a seat in its exercise, by nc_sim.training.score's rule
+        over the seat times (s) of the checks' first passes."""
+        s = exercise_score(seat.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
         return s.passed / max(1, s.total), s.points
 
     def update(self, seat: Seat, proxy: MachineProxy) -> bool:
@@ -396,7 +432,7 @@ class Classes:
         return ClassInfo(
             id=c.id,
             title=c.title,
-            exercise=c.exercise.id,
+            exercises=[ex.id for ex in c.plan],
             template="demo" if c.lists is None else "lists",
             instructor=c.instructor,
             created_unix=c.created_unix,
@@ -408,7 +444,7 @@ class Classes:
     def seat_info(self, c: Class, seat: Seat) -> SeatInfo:
         proxy = self.proxy(seat) if c.ended_unix is None else None
         holder = proxy.control.holder if proxy is not None else None
-        progress, score = self.score(c, seat)
+        progress, score = self.score(seat)
         return SeatInfo(
             n=seat.n,
             student=seat.student,
@@ -421,14 +457,21 @@ class Classes:
             hints_taken=len(seat.hints),
             seat_time_s=seat.seat_time_s,
             joined_unix=seat.joined_unix,
+            stage=seat.stage,
+            done=seat.done,
+            total_score=score + sum(d.score for d in seat.done),
         )
 
     # --- changing -----------------------------------------------------------------------------
     def create(self, actor: Actor, req: ClassCreate, base_url: str) -> ClassCreated:
-        """Seats with their logins and machines (the exercise's starting values written as
-        the instructor's, its faults injected, its checks running); a link per seat."""
-        ex, text = self.exercises.get(req.exercise)
-        self._check_template(ex, req.lists)
+        """Seats with their logins and machines at the plan's first exercise (its starting
+        values written as the instructor's, its faults injected with each seat's own
+        numbers, its checks running); a link per seat. Every exercise of the plan must fit
+        the machine (422 naming the one that does not)."""
+        found = [self.exercises.get(eid) for eid in req.exercises]
+        plan, texts = [ex for ex, _ in found], [text for _, text in found]
+        for ex in plan:
+            self._check_template(ex, req.lists)
         with self._lock:
             if req.id in self._classes:
                 raise Conflict(f"class '{req.id}' exists (ended or not)")
@@ -438,13 +481,16 @@ class Classes:
             if clash:
                 raise Conflict(f"'{clash[0]}' is taken (a user or machine)")
             now = time.time()
-            c = Class(req.id, req.title or ex.title, ex, text, actor.name, now, None, [], req.lists)
+            title = req.title or " → ".join(ex.title for ex in plan)[:80]
+            c = Class(req.id, title, plan, texts, actor.name, now, None, [], req.lists)
             self._classes[c.id] = c  # reserved while the seats are built
         self._build_seats(actor, c, names, req.students)
-        self.store.run(
+        self.store.run(  # its first exercise here too (a store from before plans reads it)
             "INSERT INTO classes VALUES (?, ?, ?, ?, ?, ?, NULL)",
-            (c.id, c.title, ex.id, text, c.instructor, c.created_unix),
+            (c.id, c.title, plan[0].id, texts[0], c.instructor, c.created_unix),
         )
+        for k, (ex, text) in enumerate(zip(plan, texts, strict=True)):
+            self.store.run("INSERT INTO class_plan VALUES (?, ?, ?, ?)", (c.id, k, ex.id, text))
         if c.lists is not None:
             self.store.run(
                 "INSERT INTO class_lists VALUES (?, ?, ?, ?)",
@@ -529,7 +575,9 @@ class Classes:
         """A seat's login (no password: only its one-time links log in) and machine; what
         of it was made is taken away again when it fails."""
         self.accounts.add_user(name, Role.OPERATOR, None)
-        seat = Seat(c.id, n, student, name, name)
+        seat = Seat(c.id, n, student, name, name, c.plan[0])
+        c.enter(seat, 0)
+        ex = seat.exercise
         try:
             title = f"{c.title} · seat {n}"
             proxy = self.machines.create(
@@ -539,27 +587,31 @@ class Classes:
                     demo=c.lists is None,
                     **(c.lists.model_dump() if c.lists is not None else {}),
                 ),
-                values=[(v.scope.value, v.target, v.name, v.value) for v in c.exercise.start],
-                faults=[(f.fault, f.trigger) for f in c.exercise.faults],
-                exercise=c.exercise,
+                values=[(v.scope.value, v.target, v.name, v.value) for v in ex.start],
+                faults=[(f.fault, f.trigger) for f in ex.faults],
+                exercise=ex,
                 mode="pause",  # an empty seat's clock stands: it runs from its student's login
             )
             # the exercise's start, kept: the instructor can put the seat back to it
             self.snapshots.take(actor, proxy, "exercise start", pinned=True)
-            changes = [
-                StoredChange(v.scope.value, v.target, v.name, None, v.value, "now")
-                for v in c.exercise.start
-            ]
+            changes, entries = self._start_values(actor, proxy.id, ex)
             if changes:
-                why = f"exercise '{c.exercise.id}' starts so"
-                entries = [
-                    parameter_entry(proxy.id, actor.name, actor.session, ch, why) for ch in changes
-                ]
                 self.store.write(proxy.id, changes, entries)
         except BaseException:
             self._remove_seat(seat)
             raise
         return seat
+
+    @staticmethod
+    def _start_values(
+        actor: Actor, mid: str, ex: Exercise
+    ) -> tuple[list[StoredChange], list[Entry]]:
+        """An exercise's starting values as stored changes, each with its audit row."""
+        changes = [
+            StoredChange(v.scope.value, v.target, v.name, None, v.value, "now") for v in ex.start
+        ]
+        why = f"exercise '{ex.id}' starts so"
+        return changes, [parameter_entry(mid, actor.name, actor.session, ch, why) for ch in changes]
 
     def _discard(self, c: Class) -> None:
         """Undo a class whose seats could not all be built."""
@@ -579,7 +631,7 @@ class Classes:
         with self._lock:
             if c.ended_unix is None:
                 raise Conflict(f"class '{c.id}' still runs: end it first")
-            for table in ("seats", "ended_sessions", "class_lists"):
+            for table in ("seats", "ended_sessions", "class_lists", "class_plan"):
                 self.store.run(f"DELETE FROM {table} WHERE class = ?", (c.id,))
             self.store.run("DELETE FROM classes WHERE id = ?", (c.id,))
             del self._classes[c.id]
@@ -639,20 +691,39 @@ class Classes:
         if c is None or c.ended_unix is None:
             return None
         seat = self.seat(c.id, rows[0]["n"])
-        s = exercise_score(c.exercise, seat.first_passed_s, [n - 1 for n in seat.hints])
+        stages = [*seat.done, self.stage_result(c, seat, "the class's end", c.ended_unix)]
         return SeatResult(
             class_id=c.id,
             title=c.title,
-            exercise=c.exercise.title,
+            exercise=" → ".join(d.title for d in stages),
             seat=seat.n,
             student=seat.student,
             ended_unix=c.ended_unix,
+            score=sum(d.score for d in stages),
+            max_points=sum(d.max_points for d in stages),
+            checks_passed=sum(1 for d in stages for k in d.checks if k.first_passed_s is not None),
+            checks_total=sum(len(d.checks) for d in stages),
+            hints_taken=sum(d.hints_taken for d in stages),
+            seat_time_s=sum(d.seat_time_s for d in stages),
+            stages=stages,
+        )
+
+    def stage_result(self, c: Class, seat: Seat, by: str, at_unix: float) -> StageResult:
+        """The seat's exercise as it stands now, as a result of the plan."""
+        ex = seat.exercise
+        s = exercise_score(ex, seat.first_passed_s, [n - 1 for n in seat.hints])
+        return StageResult(
+            exercise=ex.id,
+            title=ex.title,
             score=s.points,
-            max_points=sum(k.points for k in c.exercise.checks),
-            checks_passed=s.passed,
-            checks_total=s.total,
+            max_points=s.max_points,
+            checks=self.checks(c, seat),
             hints_taken=len(seat.hints),
+            hint_cost=s.hint_cost,
             seat_time_s=seat.seat_time_s,
+            values=seat.values,
+            moved_on_by=by,
+            moved_on_unix=at_unix,
         )
 
     def forget_result(self, sid: str) -> None:
@@ -700,6 +771,77 @@ class Classes:
         if m is not None and not seat.frozen:
             m.link.call(Pace(m.id, "run"))
 
+    def check_unlocked(self, mid: str, assistant: str, actor: Actor) -> None:
+        """403 when the machine is a running class's seat, the asker its student, and the
+        seat's exercise locks the assistant (an instructor may use it there)."""
+        seat = self._by_machine.get(mid)
+        if seat is not None and actor.name == seat.user and assistant in seat.exercise.locked:
+            raise Forbidden(
+                f"the exercise '{seat.exercise.title}' locks the {assistant} assistant: "
+                "work it out by hand"
+            )
+
+    def may_move_on(self, actor: Actor, c: Class, seat: Seat) -> ApiError | None:
+        """Why the asker may not move the seat on to the plan's next exercise now (None: they
+        may): an instructor at any time, its student once every check has passed."""
+        if c.ended_unix is not None:
+            return Conflict(f"class '{c.id}' has ended")
+        if seat.stage + 1 >= len(c.plan):
+            return Conflict(f"seat {seat.n} is at the plan's last exercise")
+        if Action.TEACH in ALLOWED[actor.role]:
+            return None
+        if actor.name != seat.user:
+            return Forbidden(f"only seat {seat.n}'s student or an instructor moves it on")
+        missing = [k.id for k in seat.exercise.checks if k.id not in seat.first_passed_s]
+        if missing:
+            return Conflict(
+                f"check{'s' if len(missing) > 1 else ''} {', '.join(missing)} not passed yet: "
+                "the instructor can move you on"
+            )
+        return None
+
+    def move_on(self, actor: Actor, c: Class, seats: list[Seat]) -> None:
+        """Each seat to the plan's next exercise (none when one of them may not: its error):
+        its result in the exercise kept, its machine powered on afresh with the next one's
+        starting values (its parameters as the template has them otherwise), faults with the
+        seat's own numbers and checks, a new start snapshot, a clock from 0."""
+        for seat in seats:
+            refusal = self.may_move_on(actor, c, seat)
+            if refusal is not None:
+                raise refusal
+        for seat in seats:
+            self._move_on(actor, c, seat)
+
+    def _move_on(self, actor: Actor, c: Class, seat: Seat) -> None:
+        proxy = self.machines.get(seat.machine)
+        self.update(seat, proxy)
+        done = self.stage_result(c, seat, actor.name, time.time())
+        stage = seat.stage + 1
+        plan_ex = c.plan[stage]
+        ex, values = plan_ex.for_seat(seat_seed(c.id, plan_ex.id), seat.n)
+        changes, entries = self._start_values(actor, seat.machine, ex)
+        self.store.replace_values(seat.machine, changes, entries)
+        self.faults.forget(seat.machine)
+        what = f"exercise {stage + 1} of {len(c.plan)}, '{ex.title}'"
+        mode: Mode = "pause" if seat.frozen or seat.joined_unix is None else "run"
+        faults = [(f.fault, f.trigger) for f in ex.faults]
+        proxy = self.machines.restage(seat.machine, ex, faults, f"{what}: {actor.name}", mode)
+        with self._lock:  # from here on the new build's status counts, from its time 0
+            seat.done.append(done)
+            seat.stage, seat.exercise, seat.values = stage, ex, values
+            seat.hints, seat.answers, seat.hand = set(), {}, None
+            seat.first_passed_s, seat.passed, seat.detail = {}, {}, {}
+            seat.time_base_s, seat.last_t_s = 0.0, 0.0
+            seat.epoch, seat.epoch_start_s = proxy.link.epoch, 0.0
+        self.save(seat)
+        self.faults.keep(proxy)
+        self.snapshots.forget(seat.machine)  # the last exercise's: restored, they would mix
+        self.snapshots.take(actor, proxy, f"start of exercise {stage + 1}", pinned=True)
+        proxy.notices.add("exercise", f"{actor.name} moved the seat on to {what}")
+        self.audit.record(
+            self.entry(actor, f"moved seat {seat.n} on to {what}", seat.machine, score=done.score)
+        )
+
     def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
         """A message as a banner on every one of the seats' HMIs."""
         for seat in seats:
@@ -740,12 +882,13 @@ class Classes:
                 f"only seat {seat.n}'s student ({seat.student}, login "
                 f"{seat.user}) takes its hints: a hint costs the student's points"
             )
-        if not 1 <= n <= len(c.exercise.hints):
-            raise not_found(f"hint {n} (hints 1..{len(c.exercise.hints)})")
+        hints = seat.exercise.hints
+        if not 1 <= n <= len(hints):
+            raise not_found(f"hint {n} (hints 1..{len(hints)})")
         with self._lock:
             seat.hints.add(n)
         self.save(seat)
-        return c.exercise.hints[n - 1].text
+        return hints[n - 1].text
 
     @staticmethod
     def entry(actor: Actor, action: str, machine: str = "", **detail: object) -> Entry:

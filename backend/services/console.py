@@ -21,18 +21,14 @@ from dataclasses import dataclass, field
 from api.classes import AxisLine, GridFrame, SeatFrame
 from backend.services.classes import Class, Classes, Seat
 from backend.services.machines import MachineProxy
+from backend.services.peaks import PeakReader, Peaks
+from backend.services.replay import SeatRecorder
 from backend.services.status import AXIS_KIND
-from nc_sim.signals import Signal
 
 log = logging.getLogger(__name__)
 
 GRID_S = 0.25  # a frame every quarter second: the grid's sparklines move smoothly
 SAVE_S = 10.0  # seat time saved this often (first passes at once)
-# an axis' lag and speed signals (nc_sim/signals.py), by the axis' kind
-LAG_SIGNALS = ("lag_mm", "lag_deg")
-SPEED_SIGNALS = ("speed_act_rpm", "vel_act_mm_min", "vel_act_deg_min")
-
-Peaks = dict[str, tuple[float, float]]  # axis -> (lag, speed) of the largest magnitude
 
 
 @dataclass(eq=False)  # each open console is itself (kept in a set)
@@ -54,7 +50,7 @@ def seat_frame(
 ) -> SeatFrame:
     """One seat now, from its machine's newest pushed status, with the `peaks` of its axes
     since the previous frame (an axis without: its status values)."""
-    progress, score = classes.score(c, seat)
+    progress, score = classes.score(seat)
     st = m.link.status if m is not None else None
     holder = m.control.holder if m is not None else None
     axes: list[AxisLine] = []
@@ -96,6 +92,7 @@ def seat_frame(
         score=score,
         faults=len(m.link.faults) if m is not None else 0,
         seat_time_s=seat.seat_time_s,
+        stage=seat.stage,
         hand=seat.hand,
         joined=seat.joined_unix is not None,
         idle_s=_idle_s(seat, m),
@@ -116,15 +113,16 @@ def _idle_s(seat: Seat, m: MachineProxy | None) -> float | None:
 class ConsoleHub:
     """Builds every running class's frame and hands it to its open consoles."""
 
-    def __init__(self, classes: Classes) -> None:
+    def __init__(self, classes: Classes, recorder: SeatRecorder) -> None:
         self.classes = classes
+        self.recorder = recorder  # the debrief's replay: samples every running seat
         self.consoles: set[Console] = set()
         self._task: asyncio.Task[None] | None = None
         self._saved = time.monotonic()
         self.frames = 0
         self.restarts = 0
         self._watched: set[str] = set()
-        self._peaks_from: dict[str, tuple[int, int]] = {}  # machine -> (epoch, next cycle)
+        self._peaks = PeakReader(GRID_S)
 
     def open(self, class_id: str) -> Console:
         console = Console(class_id)
@@ -154,42 +152,11 @@ class ConsoleHub:
         seats = []
         for s in c.seats:
             m = self.classes.proxy(s)
-            peaks = self.peaks(m) if m is not None else {}
+            peaks = self._peaks.peaks(m) if m is not None else {}
             seats.append(seat_frame(c, s, m, self.classes, peaks))
         return GridFrame(
             class_id=c.id, ended=c.ended_unix is not None, t_unix=time.time(), seats=seats
         )
-
-    def peaks(self, m: MachineProxy) -> Peaks:
-        """Each axis' lag and speed of the largest magnitude in the cycles since the last
-        frame (as far back as the ring holds them: a machine run fast between two frames;
-        a frame period back for the first frame; the newest cycle's while it stands paused),
-        from the machine's sample ring."""
-        ring, epoch = m.link.ring, m.link.epoch
-        if ring is None:
-            return {}
-        head = ring.head
-        known, first = self._peaks_from.get(m.id, (-1, 0))
-        if known != epoch:
-            first = head - round(GRID_S / m.link.cycle_s) + 1
-        first = min(max(first, 1), head)
-        lines = [
-            (a, lag, speed)
-            for a in m.link.axes
-            if (lag := _signal(m, a, LAG_SIGNALS)) and (speed := _signal(m, a, SPEED_SIGNALS))
-        ]
-        if first < 1 or not lines:
-            return {}
-        try:
-            peak = ring.peaks([s for _a, lag, speed in lines for s in (lag, speed)], first, head)
-        except IndexError:  # the machine was rebuilt meanwhile: its old ring is closed
-            return {}
-        self._peaks_from[m.id] = (epoch, head + 1)
-        if peak is None:
-            return {}
-        return {
-            a: (float(peak[2 * i]), float(peak[2 * i + 1])) for i, (a, _l, _s) in enumerate(lines)
-        }
 
     def tick(self, wanted: set[str]) -> list[tuple[str, str]]:
         """Take every seat's status in, then build the frames of the classes `wanted`:
@@ -207,8 +174,12 @@ class ConsoleHub:
                 continue
             for seat in c.seats:
                 m = self.classes.proxy(seat)
-                if m is not None and (self.classes.update(seat, m) or due):
+                if m is None:
+                    continue
+                if self.classes.update(seat, m) or due:
                     self.classes.save(seat)
+                if seat.joined_unix is not None or seat.seat_time_s > 0:
+                    self.recorder.sample(c.id, seat.n, seat.stage, seat.seat_time_s, m)
             if c.id in wanted:
                 frames.append((c.id, self.frame(c).model_dump_json()))
         return frames
@@ -219,6 +190,7 @@ class ConsoleHub:
     async def stop(self) -> None:
         if self._task is not None:
             self._task.cancel()
+        self.recorder.flush()
 
     async def _supervise(self) -> None:
         while True:
@@ -234,10 +206,3 @@ class ConsoleHub:
             except Exception:
                 self.restarts += 1
                 log.exception("instructor console failed; restarting it")
-
-
-def _signal(m: MachineProxy, axis: str, names: tuple[str, ...]) -> Signal | None:
-    """The axis' first signal of these names that the machine records."""
-    return next(
-        (s for n in names if (s := m.link.signal_by_name.get(f"{axis}.{n}")) is not None), None
-    )

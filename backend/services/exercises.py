@@ -41,6 +41,8 @@ def exercise_info(ex: Exercise, source: str, hints_taken: set[int] | None = None
         hints=hint_infos(ex, hints_taken),
         faults=len(ex.faults),
         source=source,
+        locked_assistants=list(ex.locked),
+        varied=[v.key for v in ex.vary],
     )
 
 

@@ -272,6 +272,29 @@ class MachineService:
                 raise Unavailable(f"machine '{mid}': {e}") from None
         return proxy
 
+    def restage(
+        self,
+        mid: str,
+        exercise: object,
+        faults: list[tuple[Fault, Trigger]],
+        why: str,
+        mode: Mode,
+    ) -> MachineProxy:
+        """Power the machine on afresh for another exercise: its stored values (the caller
+        wrote the exercise's start), these faults and checks, simulated time from 0."""
+        proxy = self.get(mid)
+        sm = next(s for s in self.store.machines() if s.id == mid)
+        with proxy.lock:
+            proxy.cfg = self._config(sm)
+            proxy.pending.clear()
+            proxy.exercise = exercise
+            self.seats[mid] = (exercise, faults)
+            try:
+                self._place(proxy, why, proxy.link.live_worker, faults=faults, mode=mode)
+            except (WorkerGone, WorkerRefused) as e:
+                raise Unavailable(f"machine '{mid}': {e}") from None
+        return proxy
+
     def restore(self, mid: str, state: bytes, params: ParamSnapshot, by: str) -> MachineProxy:
         """Rebuild the machine from a snapshot (a new epoch continuing at the snapshot's
         cycle); `params` are its lists then, which the gateway's copy takes over."""

@@ -356,6 +356,23 @@ class Store:
 
         return self.transaction(work)
 
+    def replace_values(
+        self, mid: str, changes: list[StoredChange], entries: list[audit_log.Entry]
+    ) -> None:
+        """Every accepted value of a machine goes; `changes` (with their audit rows) are its
+        values from now on, in one transaction (a class seat starting its next exercise)."""
+
+        def work(db: sqlite3.Connection) -> None:
+            db.execute("DELETE FROM param_values WHERE machine = ?", (mid,))
+            seqs = self.append_audit(db, entries)
+            for c, seq in zip(changes, seqs, strict=True):
+                db.execute(
+                    "INSERT INTO param_values VALUES (?, ?, ?, ?, ?, ?)",
+                    (mid, c.scope, c.target, c.name, json.dumps(c.new), seq),
+                )
+
+        self.transaction(work)
+
     def versions(self, mid: str) -> dict[tuple[str, str, str], int]:
         """(scope, target, name) → version of every written value of a machine."""
         rows = self.query(

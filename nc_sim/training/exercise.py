@@ -30,6 +30,14 @@
     axis = "X"
     within_pct = 1.0
 
+    locked_assistants = ["multi-gain"]   # optional: assistants the student may not use
+
+    [[vary]]                          # optional: numbers drawn per seat (variation.py)
+    key = "faults[0].factor"
+    min = 0.35
+    max = 0.6
+    step = 0.005
+
 Every error is an `ExerciseError` naming the file, the key path (`checks[2].axis`), the value
 and what is allowed; a TOML syntax error keeps tomllib's line and column. Axis names are
 checked only for their form here: the machine is not known until a seat starts.
@@ -45,12 +53,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from nc_sim.assist.registry import ASSISTANTS
 from nc_sim.errors import Code
 from nc_sim.faults import CATALOGUE, NOW, Fault, Trigger
 from nc_sim.params import ParamError, Scope, Value, resolve
 from nc_sim.plant.tuning import TEMPLATES
 from nc_sim.training.checks import RULES, Check, FindingCheck, Rule
 from nc_sim.training.findings import FINDABLE
+from nc_sim.training.variation import KEY_RE, MAX_STEPS, Vary, draw
 
 MACHINES = ("demo",)  # machine templates a seat can start from
 MAX_FILE_CHARS = 200_000
@@ -116,6 +126,38 @@ class Exercise:
     faults: tuple[FaultSpec, ...]
     hints: tuple[Hint, ...]
     checks: tuple[Check, ...]
+    locked: tuple[str, ...] = ()  # assistants the student may not use
+    vary: tuple[Vary, ...] = ()  # numbers drawn per seat
+
+    def with_values(self, values: Mapping[str, float]) -> Exercise:
+        """The exercise with its varied numbers set (key -> value; those not named keep the
+        file's)."""
+        faults, start = list(self.faults), list(self.start)
+        for v in self.vary:
+            if v.key not in values:
+                continue
+            x = values[v.key]
+            if v.section == "faults":
+                f = faults[v.index]
+                changed = dataclasses.replace(typing.cast(Any, f.fault), **{v.field: x})
+                faults[v.index] = FaultSpec(changed, f.trigger)
+            else:
+                start[v.index] = dataclasses.replace(start[v.index], value=x)
+        return dataclasses.replace(self, faults=tuple(faults), start=tuple(start))
+
+    def for_seat(self, seed: int, seat: int) -> tuple[Exercise, dict[str, float]]:
+        """Seat `seat`'s exercise: its numbers drawn from the class's `seed`
+        (variation.seat_seed), and them."""
+        values = draw(self.vary, seed, seat)
+        return self.with_values(values), values
+
+    def extremes(self) -> tuple[Exercise, Exercise]:
+        """The exercise with every varied number at its minimum, and at its maximum (what a
+        machine must take: both are checked against it)."""
+        return (
+            self.with_values({v.key: v.lo for v in self.vary}),
+            self.with_values({v.key: v.hi for v in self.vary}),
+        )
 
     @property
     def max_points(self) -> float:
@@ -210,7 +252,7 @@ class _Reader:
         raise self.fail(name, v, "an event or job error name (e.g. EV_GEAR_CHANGED) or number")
 
 
-_LISTS = ("start", "faults", "hints", "checks")
+_LISTS = ("start", "faults", "hints", "checks", "vary")
 
 
 def parse_exercise(text: str, source: str) -> Exercise:
@@ -222,7 +264,8 @@ def parse_exercise(text: str, source: str) -> Exercise:
     except tomllib.TOMLDecodeError as e:  # its message carries the line and column
         raise ExerciseError(source, "", None, f"TOML syntax: {e}") from None
     r = _Reader(source, doc, "")
-    r.only(("id", "title", "summary", "task", "par_time_s", "machine", *_LISTS))
+    top = ("id", "title", "summary", "task", "par_time_s", "machine", "locked_assistants")
+    r.only((*top, *_LISTS))
     machine = r.text("machine", 32)
     if machine not in MACHINES:
         raise r.fail("machine", machine, f"one of {', '.join(MACHINES)}")
@@ -239,6 +282,7 @@ def parse_exercise(text: str, source: str) -> Exercise:
     for i, c in enumerate(checks):
         if isinstance(c.rule, FindingCheck):
             _findable(source, f"checks[{i}].fault", c.rule, faults)
+    start = tuple(_start_value(s) for s in r.items("start"))
     return Exercise(
         id=r.text("id", 64, ID_RE),
         title=r.text("title", MAX_TITLE),
@@ -246,11 +290,72 @@ def parse_exercise(text: str, source: str) -> Exercise:
         task=r.text("task", MAX_TASK),
         par_time_s=r.number("par_time_s", 0.0, MAX_PAR_TIME_S, lo_open=True),
         machine=machine,
-        start=tuple(_start_value(s) for s in r.items("start")),
+        start=start,
         faults=faults,
         hints=tuple(_hint(h) for h in r.items("hints")),
         checks=checks,
+        locked=_locked(r),
+        vary=_variation(r, faults, start),
     )
+
+
+_ASSISTANT_NAMES = tuple(sorted(a.name for a in ASSISTANTS))
+
+
+def _locked(r: _Reader) -> tuple[str, ...]:
+    """The assistants the exercise locks: each one of the service's."""
+    if not r.has("locked_assistants"):
+        return ()
+    v = r.raw("locked_assistants")
+    allowed = f"a list of assistants: {', '.join(_ASSISTANT_NAMES)}"
+    if not isinstance(v, list) or len(v) > len(_ASSISTANT_NAMES):
+        raise r.fail("locked_assistants", v, allowed)
+    for i, name in enumerate(v):
+        if name not in _ASSISTANT_NAMES:
+            raise r.fail(f"locked_assistants[{i}]", name, f"one of {', '.join(_ASSISTANT_NAMES)}")
+    return tuple(dict.fromkeys(v))
+
+
+def _variation(
+    r: _Reader, faults: tuple[FaultSpec, ...], start: tuple[StartValue, ...]
+) -> tuple[Vary, ...]:
+    """The numbers drawn per seat: each a number of a fault or a starting value, its range
+    within what the field takes (checked at both ends), once each."""
+    out: list[Vary] = []
+    for t in r.items("vary"):
+        t.only(("key", "min", "max", "step"))
+        key = t.text("key", 64)
+        m = KEY_RE.fullmatch(key)
+        if m is None:
+            raise t.fail("key", key, "faults[i].<field> or start[i].value")
+        section, index, name = m.group(1), int(m.group(2)), m.group(3)
+        items: tuple[object, ...] = faults if section == "faults" else start
+        if index >= len(items):
+            raise t.fail("key", key, f"an entry of [[{section}]] (it has {len(items)})")
+        lo = t.number("min", -1e9, 1e9)
+        hi = t.number("max", lo, 1e9, lo_open=True)
+        step = t.number("step", 0.0, hi - lo, lo_open=True)
+        if (hi - lo) / step > MAX_STEPS:
+            raise t.fail("step", step, f"at least (max − min)/{MAX_STEPS}")
+        if section == "faults":
+            fault = faults[index].fault
+            fields = _fields(type(fault))
+            if name == "axis" or name not in fields or isinstance(getattr(fault, name), str):
+                numbers = [f for f in fields if f != "axis" and f not in ("gear", "code", "codes")]
+                raise t.fail("key", key, f"a number of {fault.kind}: {', '.join(numbers)}")
+            typ, optional = fields[name]
+            for end, which in ((lo, "min"), (hi, "max")):  # both within what the field takes
+                try:
+                    _field(_Reader(r.source, {name: end}, ""), name, typ, optional)
+                except ExerciseError as e:
+                    raise t.fail(which, end, f"{name}: {e.allowed}") from None
+        elif name != "value" or not isinstance(start[index].value, int | float):
+            raise t.fail("key", key, "start[i].value of a numeric starting value")
+        if any(v.key == key for v in out):
+            raise t.fail("key", key, "each number varied once")
+        kind: typing.Literal["faults", "start"] = "faults" if section == "faults" else "start"
+        out.append(Vary(key, kind, index, name, lo, hi, step))
+    return tuple(out)
 
 
 def _start_value(r: _Reader) -> StartValue:

@@ -4,6 +4,7 @@ stage the faults and checks name is there."""
 
 from __future__ import annotations
 
+import copy
 from collections import defaultdict
 
 from nc_sim.config import MachineConfig, apply_overrides, demo_machine
@@ -31,7 +32,11 @@ def check_fits(exercise: Exercise, source: str, template: MachineConfig | None =
     """Raise ExerciseError naming the first fault or check whose axis, spindle or gear stage
     the exercise's machine (`template`, changed in place, or the demo lathe) lacks (a main
     spindle's rotary-axis name, e.g. C, counts as the spindle); ParamListError for a starting
-    value out of range, NcUsageError for a starting value of an axis the machine lacks."""
+    value out of range, NcUsageError for a starting value of an axis the machine lacks.
+    Starting values varied per seat are checked at both ends of their range."""
+    if any(v.section == "start" for v in exercise.vary):
+        for variant in exercise.extremes():
+            seat_config(variant, copy.deepcopy(template) if template is not None else None)
     cfg = seat_config(exercise, template)
     spindles = {a.name for a in cfg.axes if a.is_spindle}
     names = {a.name for a in cfg.axes}

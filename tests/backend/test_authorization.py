@@ -157,6 +157,8 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/classes/{cid}"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/end"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/freeze"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/next"): ("instructor", FREE),
+    ("GET", "/api/classes/{cid}/seats/{n}/replay"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/broadcast"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/faults"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/seats/{n}"): ("instructor", FREE),
@@ -176,6 +178,7 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/machines/{mid}/exercise/hints"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/exercise/findings"): ("operator", FREE),
     ("POST", "/api/machines/{mid}/exercise/hand"): ("operator", FREE),
+    ("POST", "/api/machines/{mid}/exercise/next"): ("operator", FREE),
     ("GET", "/api/users"): ("admin", FREE),
     ("POST", "/api/users"): ("admin", FREE),
     ("PATCH", "/api/users/{name}"): ("admin", FREE),
@@ -442,7 +445,7 @@ def test_a_student_reaches_their_seats_recordings_only(
     s, tokens = srv
     ida = {"Authorization": f"Bearer {tokens['ida']}"}
     r = s.http.post(
-        "/api/classes", json={"id": "rec", "exercise": "sign-error", "seats": 2}, headers=ida
+        "/api/classes", json={"id": "rec", "exercises": ["sign-error"], "seats": 2}, headers=ida
     )
     assert r.status_code == 201, r.text
     link = r.json()["links"][0]["url"].replace(s.base, "")
@@ -478,7 +481,7 @@ def test_a_student_writes_and_deletes_only_their_seats_programs(
     shared = "%MAIN\nG01 X10 F100\nM30\n"
     assert s.http.put("/api/programs/CON", json={"text": shared}).status_code == 200
     r = s.http.post(
-        "/api/classes", json={"id": "prg", "exercise": "sign-error", "seats": 2}, headers=ida
+        "/api/classes", json={"id": "prg", "exercises": ["sign-error"], "seats": 2}, headers=ida
     )
     assert r.status_code == 201, r.text
     links = [link["url"].replace(s.base, "") for link in r.json()["links"]]

@@ -84,7 +84,7 @@ def classes(tmp_path: Path, machines: Machines) -> tuple[Classes, Accounts]:
 def test_seats_are_built_one_per_worker_at_a_time_in_seat_order(tmp_path: Path) -> None:
     machines = Machines(workers=2)
     cls, accounts = classes(tmp_path, machines)
-    req = ClassCreate(id="par", exercise="sign-error", seats=9, students=["Anna"])
+    req = ClassCreate(id="par", exercises=["sign-error"], seats=9, students=["Anna"])
     created = cls.create(TRAINER, req, "http://x")
     assert machines.most_at_once == 2
     seats = created.info.seats
@@ -98,7 +98,7 @@ def test_a_seat_that_cannot_be_built_takes_the_whole_class_away(tmp_path: Path) 
     machines = Machines(workers=2, fail="bad-s05")
     cls, accounts = classes(tmp_path, machines)
     with pytest.raises(ApiError) as e:
-        cls.create(TRAINER, ClassCreate(id="bad", exercise="sign-error", seats=9), "http://x")
+        cls.create(TRAINER, ClassCreate(id="bad", exercises=["sign-error"], seats=9), "http://x")
     assert e.value.status == 503
     assert machines.made == {}
     assert not [u.name for u in accounts.users() if u.name.startswith("bad-")]

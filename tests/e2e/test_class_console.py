@@ -80,7 +80,7 @@ def test_a_sign_fault_in_one_seat_shows_on_its_tile_and_in_its_live_view(
     c.get_by_test_id("class-new").click()
     form = panel(c, "class-create")
     form.get_by_test_id("class-exercise").select_option(EXERCISE)
-    expect(form.get_by_test_id("exercise-info")).to_contain_text("1 fault at start")
+    expect(form.get_by_test_id("exercise-info-0")).to_contain_text("1 fault at start")
     form.get_by_test_id("class-id").fill(CLASS)
     form.get_by_test_id("class-link-hours").select_option("24")  # prepared the day before
     form.get_by_test_id("class-seats").fill("2")
@@ -294,7 +294,7 @@ def test_watching_a_seat_then_ending_the_class(
     c = console
     r = srv.http.post(
         "/api/classes",
-        json={"id": "watch", "exercise": "sign-error", "seats": 1, "students": ["Anna"]},
+        json={"id": "watch", "exercises": ["sign-error"], "seats": 1, "students": ["Anna"]},
     )
     assert r.status_code == 201, r.text
     anna = student(browser, r.json()["links"][0]["url"])

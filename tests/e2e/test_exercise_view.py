@@ -40,7 +40,7 @@ def trainer(srv: Server) -> Iterator[httpx.Client]:
 def seat(trainer: httpx.Client) -> Iterator[dict[str, Any]]:
     """A class of one seat on the multi-gain exercise: its id, machine and login link."""
     cid = f"ex{next(_classes)}"
-    r = trainer.post("/api/classes", json={"id": cid, "exercise": "multi-gain", "seats": 1})
+    r = trainer.post("/api/classes", json={"id": cid, "exercises": ["multi-gain"], "seats": 1})
     assert r.status_code == 201, r.text
     created = r.json()
     yield {
@@ -179,12 +179,14 @@ def test_a_machine_that_is_no_seat_has_no_exercise_tab(
 def test_the_student_answers_a_finding_in_the_panel(
     browser: Browser, trainer: httpx.Client
 ) -> None:
-    """find-backlash (25 µm of play on X): the answer is typed in µm; a wrong axis is graded
-    wrong at once with an attempt gone, the right axis and size passes the check with its
-    points, and the form goes."""
+    """find-backlash (the seat's own 15..45 µm of play on X): the answer is typed in µm; a
+    wrong axis is graded wrong at once with an attempt gone, the right axis and size passes
+    the check with its points, and the form goes."""
     cid = f"ex{next(_classes)}"
-    r = trainer.post("/api/classes", json={"id": cid, "exercise": "find-backlash", "seats": 1})
+    r = trainer.post("/api/classes", json={"id": cid, "exercises": ["find-backlash"], "seats": 1})
     assert r.status_code == 201, r.text
+    play_um = trainer.get(f"/api/classes/{cid}/seats/1").json()["values"]["faults[0].width"] * 1e3
+    answer_um = round(play_um * 0.96, 1)
     w, h = SIZES["desktop"]
     context = browser.new_context(viewport={"width": w, "height": h})
     p = context.new_page()
@@ -205,10 +207,10 @@ def test_the_student_answers_a_finding_in_the_panel(
         expect(row).to_have_attribute("data-state", "open")
         shot(p, "exercise-finding-desktop")
         finding.get_by_test_id("finding-axis").select_option("X")
-        finding.get_by_test_id("finding-value").fill("24")
+        finding.get_by_test_id("finding-value").fill(f"{answer_um}")
         submit.click()
-        expect(answers).to_contain_text("✓ X 24.0 µm")
-        expect(answers).to_contain_text("X has 25.0 µm of backlash")
+        expect(answers).to_contain_text(f"✓ X {answer_um:.1f} µm")
+        expect(answers).to_contain_text(f"X has {play_um:.1f} µm of backlash")
         expect(row).to_have_attribute("data-state", "passed")
         expect(finding.get_by_test_id("finding-submit")).to_have_count(0)
         score = panel(p, "exercise-score")

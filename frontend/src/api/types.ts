@@ -136,3 +136,5 @@ export type ServiceAxes = S["ServiceAxes"];
 export type AxisService = S["AxisService"];
 export type LimitInForce = S["LimitInForce"];
 export type SeatResult = S["SeatResult"];
+export type SeatReplay = S["SeatReplay"];
+export type StageResult = S["StageResult"];

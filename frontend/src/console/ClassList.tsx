@@ -13,7 +13,7 @@ export function ClassList(props: { onNew: () => void }) {
         aria-pressed={c.id === openClass.value} onClick={() => chooseClass(c.id)}>
         <b>{c.title || c.id}</b>
         <span class="hint">
-          {c.exercise} · {c.seats.length} {c.seats.length === 1 ? "seat" : "seats"} · {c.ended_unix === null ? `since ${when(c.created_unix)}` : `ended ${when(c.ended_unix)}`}
+          {c.exercises.join(" → ")} · {c.seats.length} {c.seats.length === 1 ? "seat" : "seats"} · {c.ended_unix === null ? `since ${when(c.created_unix)}` : `ended ${when(c.ended_unix)}`}
         </span>
       </button>
     </li>

@@ -22,7 +22,7 @@ import "./console.css";
 /** An ended class's seats: results as they stood at the end, each seat's debrief. */
 function EndedSeats(props: { c: ClassInfo }) {
   return (
-    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercise} (ended)`}
+    <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercises.join(" → ")} (ended)`}
       actions={
         <span>
           <ResultLinks cid={props.c.id} />{" "}

@@ -1,16 +1,34 @@
-// A new class: the exercise (what it asks, its checks and hints, how many faults it injects),
+// A new class: its lesson plan, one exercise or several in order (what each asks, its checks
+// and hints, how many faults it injects, what varies per seat, which assistants it locks),
 // the seats' machine (the demo lathe or uploaded parameter lists: a channel list, one axis list
 // per axis with its logical axis number, optionally a tool list), how many seats, the
 // students' names; then each seat's one-time login link, shown this once.
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
-import type { ClassCreated, MachineLists, Refusal, SeatLink } from "../api/types";
+import type { ClassCreated, ExerciseInfo, MachineLists, Refusal, SeatLink } from "../api/types";
 import { chooseClass, createClass, exercises, newLink } from "../state/classes";
 import { LinkSheet } from "./LinkSheet";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 
 const MAX_SEATS = 60; // api/classes.py MAX_SEATS
+const MAX_PLAN = 8; // api/classes.py MAX_PLAN
+
+/** What an exercise of the plan brings, in a line. */
+function ExerciseLine(props: { ex: ExerciseInfo; k: number; plan: number }) {
+  const { ex } = props;
+  return (
+    <div class="exercise-info" data-testid={`exercise-info-${props.k}`}>
+      <p>{props.plan > 1 ? <b>{props.k + 1}. {ex.title}: </b> : null}{ex.summary}</p>
+      <p class="hint">
+        {ex.checks.length} checks ({ex.checks.map((c) => c.text).join("; ")}) · {ex.hints.length} hints ·{" "}
+        <b>{ex.faults} fault{ex.faults === 1 ? "" : "s"} at start</b> · par time {ex.par_time_s} s · {ex.source}
+        {ex.varied.length ? <> · <b>each seat its own numbers</b> ({ex.varied.join(", ")})</> : null}
+        {ex.locked_assistants.length ? <> · locks the assistants {ex.locked_assistants.join(", ")}</> : null}
+      </p>
+    </div>
+  );
+}
 
 /** An uploaded axis list and its logical axis number (log_achs_nr), which the channel list's
  * achse[i].log_achs_nr / spindel[i].log_achs_nr refer to. */
@@ -124,7 +142,9 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   // a class id to start from: the day (an instructor's own is welcome)
   const [id, setId] = useState(() => `class-${new Date().toISOString().slice(5, 10).replace("-", "")}`);
   const [title, setTitle] = useState("");
-  const [exercise, setExercise] = useState(exercises.value[0]?.id ?? "");
+  const [picked, setPlan] = useState<string[]>([]);
+  // the first exercise until one is picked (the list may come after the form)
+  const plan = picked.length ? picked : exercises.value[0] ? [exercises.value[0].id] : [];
   const [seats, setSeats] = useState(2);
   const [students, setStudents] = useState("");
   const [upload, setUpload] = useState(false);
@@ -134,7 +154,10 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [busy, setBusy] = useState(false);
   const [linkHours, setLinkHours] = useState(1); // prepared the day before: 24 h
-  const ex = exercises.value.find((e) => e.id === exercise) ?? exercises.value[0];
+  const byId = (eid: string) => exercises.value.find((e) => e.id === eid);
+  const chosen = plan.map(byId).filter((e): e is ExerciseInfo => e !== undefined);
+  const setAt = (k: number, eid: string) => setPlan(plan.map((x, j) => (j === k ? eid : x)));
+  const unused = exercises.value.filter((e) => !plan.includes(e.id));
   const names = students.split("\n").map((s) => s.trim()).filter(Boolean);
   async function submit(e: Event) {
     e.preventDefault();
@@ -145,7 +168,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
     }
     setBusy(true);
     try {
-      const created = await createClass({ id, title, exercise: ex?.id ?? "", seats, students: names, lists, link_hours: linkHours });
+      const created = await createClass({ id, title, exercises: plan, seats, students: names, lists, link_hours: linkHours });
       setRefusal(null);
       chooseClass(created.info.id);
       props.onCreated(created);
@@ -159,23 +182,36 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   return (
     <Panel id="class-create" title="New class">
       <form class="class-form" onSubmit={(e) => void submit(e)}>
-        <label class="wide">
-          Exercise
-          <select value={ex?.id} data-testid="class-exercise" onChange={str(setExercise)}>
-            {exercises.value.map((x) => (
-              <option key={x.id} value={x.id}>{x.title} ({x.id})</option>
-            ))}
-          </select>
-        </label>
-        {ex ? (
-          <div class="exercise-info" data-testid="exercise-info">
-            <p>{ex.summary}</p>
+        <fieldset class="wide plan" data-testid="class-plan">
+          <legend>Lesson plan: the exercises in order</legend>
+          {plan.map((eid, k) => (
+            <div class="plan-row" key={k}>
+              <label>
+                {k === 0 ? "Exercise" : `then ${k + 1}.`}
+                <select value={eid} data-testid={k === 0 ? "class-exercise" : `class-plan-${k}`} onChange={(e) => setAt(k, (e.target as HTMLSelectElement).value)}>
+                  {exercises.value.filter((x) => x.id === eid || !plan.includes(x.id)).map((x) => (
+                    <option key={x.id} value={x.id}>{x.title} ({x.id})</option>
+                  ))}
+                </select>
+              </label>
+              {k > 0 ? (
+                <button type="button" class="link" data-testid={`class-plan-remove-${k}`} onClick={() => setPlan(plan.filter((_, j) => j !== k))}>remove</button>
+              ) : null}
+            </div>
+          ))}
+          {plan.length < MAX_PLAN && unused.length ? (
+            <button type="button" class="secondary" data-testid="class-plan-add" onClick={() => setPlan([...plan, unused[0].id])}>
+              + Then another exercise
+            </button>
+          ) : null}
+          {chosen.map((x, k) => <ExerciseLine key={x.id} ex={x} k={k} plan={chosen.length} />)}
+          {chosen.length > 1 ? (
             <p class="hint">
-              {ex.checks.length} checks ({ex.checks.map((c) => c.text).join("; ")}) · {ex.hints.length} hints ·{" "}
-              <b>{ex.faults} fault{ex.faults === 1 ? "" : "s"} at start</b> · par time {ex.par_time_s} s · {ex.source}
+              Each exercise has its own clock and score. A student moves on once every check has passed; you can move seats on at
+              any time (console: Next exercise).
             </p>
-          </div>
-        ) : null}
+          ) : null}
+        </fieldset>
         <TemplateChoice upload={upload} setUpload={setUpload} channel={channel} setChannel={setChannel} axes={axes} setAxes={setAxes}
           tools={tools} setTools={setTools} />
         <label>
@@ -209,7 +245,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
           {names.length > seats ? <span class="refusal">{names.length} names for {seats} seats</span> : null}
         </label>
         <div class="form-buttons">
-          <button type="submit" disabled={busy || !ex} data-testid="class-create">Create class</button>
+          <button type="submit" disabled={busy || !chosen.length} data-testid="class-create">Create class</button>
           <button type="button" class="secondary" onClick={props.onCancel}>Cancel</button>
         </div>
         <RefusalLine refusal={refusal} id="class-create-refusal" />

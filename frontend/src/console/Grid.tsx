@@ -3,7 +3,7 @@
 // fed by the grid websocket.
 import { useState } from "preact/hooks";
 import type { ClassInfo, SeatFrame } from "../api/types";
-import { broadcast, endClass, freeze, gridLink, seats, selected } from "../state/classes";
+import { broadcast, endClass, freeze, gridLink, moveSeatsOn, seats, selected } from "../state/classes";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { ResultLinks } from "./ResultLinks";
@@ -15,6 +15,7 @@ function ClassBar(props: { c: ClassInfo }) {
   const [text, setText] = useState("");
   const [sent, setSent] = useState(""); // "sent to N seats", until the next message is typed
   const [ending, setEnding] = useState(false); // asking whether to end the class
+  const [moving, setMoving] = useState(false); // asking whether to move seats on
   const picked = [...selected.value].sort((a, b) => a - b);
   const target = picked.length ? `seat${picked.length > 1 ? "s" : ""} ${picked.join(", ")}` : "the whole class";
   return (
@@ -33,6 +34,22 @@ function ClassBar(props: { c: ClassInfo }) {
       <button type="button" class="secondary" data-testid="grid-fault" onClick={() => (faultFor.value = picked)}>
         Inject fault…
       </button>
+      {c.exercises.length > 1 ? (
+        moving ? (
+          <span class="confirm" role="group" aria-label="confirm moving seats on">
+            <span>Move {target} on to the next exercise? Each seat's score so far is kept; its machine powers on afresh.</span>
+            <button type="button" data-testid="grid-next-confirm" onClick={() => { setMoving(false); void act(() => moveSeatsOn(c.id, picked)); }}>
+              Yes, move on
+            </button>
+            <button type="button" class="secondary" onClick={() => setMoving(false)}>Cancel</button>
+          </span>
+        ) : (
+          <button type="button" class="secondary" data-testid="grid-next" onClick={() => setMoving(true)}
+            title="the lesson plan's next exercise for the seats (a student moves on by themselves once every check passed)">
+            Next exercise ▸
+          </button>
+        )
+      ) : null}
       <form class="broadcast" onSubmit={(e) => {
         e.preventDefault();
         const n = picked.length || c.seats.length;
@@ -124,7 +141,7 @@ export function Grid(props: { c: ClassInfo }) {
       return fa.n - fb.n;
     });
   return (
-    <Panel id="grid" title={`${c.title || c.id} · ${c.exercise}`}
+    <Panel id="grid" title={`${c.title || c.id} · ${c.exercises.join(" → ")}`}
       actions={
         <span class="grid-actions">
           <ResultLinks cid={c.id} />{" "}
@@ -136,7 +153,7 @@ export function Grid(props: { c: ClassInfo }) {
       <RefusalLine refusal={actionRefusal.value} id="console-refusal" />
       <div class="seat-grid">
         {shown.map((s) => (
-          <SeatTile key={s.n} seat={s} cid={c.id} user={c.seats.find((k) => k.n === s.n)?.user ?? ""} />
+          <SeatTile key={s.n} seat={s} cid={c.id} user={c.seats.find((k) => k.n === s.n)?.user ?? ""} plan={c.exercises.length} />
         ))}
         {!seats.value.length ? <p class="hint">waiting for the seats' status…</p> : null}
         {seats.value.length && !shown.length ? <p class="hint">No seat is {SHOW_WORDS[show]}.</p> : null}

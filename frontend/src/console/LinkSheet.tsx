@@ -32,7 +32,7 @@ export function LinkSheet(props: { info: ClassInfo; links: SeatLink[] }) {
           <section class="link-card" key={l.n} data-testid={`link-card-${l.n}`}>
             <h2>{seat?.student || `Seat ${l.n}`}</h2>
             <p>
-              Seat {l.n} · class <b>{info.title || info.id}</b> · {info.exercise}
+              Seat {l.n} · class <b>{info.title || info.id}</b> · {info.exercises.join(" → ")}
             </p>
             <QrCode text={l.url} size_mm={45} />
             <p class="mono link-text">{l.url}</p>

@@ -1,7 +1,8 @@
 // One seat for the instructor and the debrief: the exercise's checks (measured figure, first
 // pass), hints taken, injected faults (remove one), snapshots (take, restore), the seat's
 // traces and what happened on its machine (its history: job errors with their cause,
-// commands, parameters, faults, hints, freezes and messages). An ended class keeps all but the
+// commands, parameters, faults, hints, freezes and messages) and its replay (the signals and
+// that history on the seat's clock, played back). An ended class keeps all but the
 // machine: its checks' figures and faults as they stood at the end.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError, http } from "../api/http";
@@ -10,6 +11,7 @@ import { newLink } from "../state/classes";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
+import { Replay } from "./Replay";
 import { clock } from "./SeatTile";
 import { detailSeat } from "./uiState";
 
@@ -79,9 +81,37 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
         </p>
       ) : <p class="hint">loading…</p>}
       {link ? <p class="once-note">Shown this once: <input readOnly aria-label="login link" class="mono link-url" value={link.url} /></p> : null}
+      {d && c.exercises.length > 1 ? (
+        <p data-testid="detail-stage">
+          Exercise <b>{d.info.stage + 1}</b> of {c.exercises.length} (<code>{c.exercises[d.info.stage]}</code>) · over the plan{" "}
+          <b>{fmt(d.info.total_score, 1)}</b> points
+        </p>
+      ) : null}
+      {d && Object.keys(d.values).length ? (
+        <p class="hint" data-testid="detail-values">
+          This seat's own numbers: {Object.entries(d.values).map(([k, v]) => `${k} = ${fmt(v, 4)}`).join(" · ")}
+        </p>
+      ) : null}
+      {d?.info.done.length ? (
+        <table class="dense" data-testid="detail-done">
+          <thead><tr><th>exercise done</th><th class="num">score</th><th class="num">checks</th><th class="num">hints</th><th class="num">seat time</th><th>moved on</th></tr></thead>
+          <tbody>
+            {d.info.done.map((r) => (
+              <tr key={r.exercise}>
+                <td>{r.title}</td>
+                <td class="num">{fmt(r.score, 1)} of {fmt(r.max_points, 0)}</td>
+                <td class="num">{r.checks.filter((k) => k.first_passed_s !== null).length} of {r.checks.length}</td>
+                <td class="num">{r.hints_taken}</td>
+                <td class="num">{clock(r.seat_time_s)}</td>
+                <td>by {r.moved_on_by} at {time(r.moved_on_unix)}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+      ) : null}
       <div class="detail-cols">
         <section>
-          <h3>Checks</h3>
+          <h3>Checks{c.exercises.length > 1 && d ? ` (exercise ${d.info.stage + 1})` : ""}</h3>
           <table class="dense" data-testid="detail-checks">
             <thead><tr><th>check</th><th>passed</th>{running ? <th>holds now</th> : null}
               <th>{running ? "measured" : "last measured, at the end"}</th><th class="num">points</th></tr></thead>
@@ -174,6 +204,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
           </table>
         </section>
       </div>
+      {d ? <Replay c={c} n={n} stage={d.info.stage} /> : null}
     </Panel>
   );
 }

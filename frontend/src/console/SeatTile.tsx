@@ -39,8 +39,8 @@ function AxisRow(props: { a: AxisLine; seat: SeatLive; now: number }) {
 }
 
 /** `user`: the seat's login, so its control reads as the student's name. */
-export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
-  const { seat, cid, user } = props;
+export function SeatTile(props: { seat: SeatLive; cid: string; user: string; plan: number }) {
+  const { seat, cid, user, plan } = props;
   const f = seat.frame.value;
   const now = gridTime.value;
   // an empty seat's clock stands until its student logs in: "not joined", not "pause"
@@ -91,7 +91,12 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string }) {
         <span class="seat-progress" title={`checks that hold or held: ${Math.round(f.progress * 100)} %`}>
           <span class="bar" style={{ width: `${Math.round(f.progress * 100)}%` }} />
         </span>
-        <span class="num" data-testid="seat-score" title="score">{fmt(f.score, 0)}&nbsp;pt</span>
+        {plan > 1 ? (
+          <span class="num seat-stage" data-testid="seat-stage" title={`at exercise ${f.stage + 1} of the plan's ${plan}`}>
+            {f.stage + 1}/{plan}
+          </span>
+        ) : null}
+        <span class="num" data-testid="seat-score" title="score in this exercise">{fmt(f.score, 0)}&nbsp;pt</span>
         <span class={f.faults ? "seat-faults has" : "seat-faults"} data-testid="seat-faults" title="injected faults (active or armed)">
           ⚡{f.faults}
         </span>

@@ -8,6 +8,7 @@ import type { AssistResult, AxisStatus, Refusal } from "../api/types";
 import type { AssistantInfo } from "../api/types";
 import { catalogue, loadCatalogue, runAssistant } from "../state/assist";
 import { type CalculatorBodies, calculate } from "../state/calculators";
+import { lockedAssistants } from "../state/exercise";
 import { may } from "../state/control";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
@@ -41,15 +42,21 @@ export function Calculators() {
           <button type="button" role="tab" key={t.name} aria-selected={t.name === tool} class={t.name === tool ? "active" : ""}
             data-testid={`calc-pick-${t.name}`} onClick={() => setTool(t.name)}>
             {t.title} <span class="hint">({t.section})</span>
+            {lockedAssistants.value.includes(t.name) ? <span class="locked" title="your exercise locks it: work it out by hand"> 🔒</span> : null}
           </button>
         ))}
       </div>
+      {lockedAssistants.value.includes(tool) ? (
+        <p class="assist-readonly" role="status" data-testid="calc-locked">
+          🔒 Your exercise locks this calculator: work it out by hand.
+        </p>
+      ) : null}
       {!mayAssist ? (
         <p class="assist-readonly" role="status" data-testid="calc-readonly">
           Read-only: the calculators need the role operator.
         </p>
       ) : null}
-      {tool === "curve-fit" ? (
+      {lockedAssistants.value.includes(tool) ? null : tool === "curve-fit" ? (
         <CurveFitPanel />
       ) : tool === "gear-ranges" ? (
         <GearRanges />

@@ -10,6 +10,7 @@ import { type Where, applyProposal, catalogue, liveRun, loadCatalogue, restartMa
 import { commandBlocked, configureBlocked, may } from "../state/control";
 import { numbers, paramsVersion, trial } from "../state/params";
 import { me } from "../state/auth";
+import { lockedAssistants } from "../state/exercise";
 import { machineId, online, status } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
@@ -72,6 +73,7 @@ export function Commissioning(props: { drive?: boolean }) {
   const assistants = catalogue.value.filter((a) => a.kind === "experiment" && DRIVE_ASSISTANTS.includes(a.name) === drive);
   const [name, setName] = useState<string>(drive ? DRIVE_ASSISTANTS[0] : "multi-gain");
   const info = assistants.find((a) => a.name === name);
+  const locked = lockedAssistants.value.includes(name);
   const fields = info ? formFields(info.request) : [];
   const [texts, setTexts] = useState<Record<string, string>>({});
   const guided = GUIDED.has(name);
@@ -219,6 +221,11 @@ export function Commissioning(props: { drive?: boolean }) {
           Read-only: running an assistant needs the role operator (you are {me.value?.role ?? "not logged in"}).
         </p>
       ) : null}
+      {locked ? (
+        <p class="assist-readonly" role="status" data-testid="assist-locked">
+          🔒 Your exercise locks the {info?.title ?? name} assistant: work it out by hand (the scope and the parameters are yours).
+        </p>
+      ) : null}
       <div class="assist">
         <div class="assist-setup">
           <fieldset class="assist-choice" disabled={busy}>
@@ -228,6 +235,7 @@ export function Commissioning(props: { drive?: boolean }) {
                 <input type="radio" name="assistant" data-testid={`assist-pick-${a.name}`} checked={a.name === name}
                   onChange={() => setName(a.name)} />
                 {a.title} <span class="hint">({a.section})</span>
+                {lockedAssistants.value.includes(a.name) ? <span class="locked" title="your exercise locks it: work it out by hand"> 🔒</span> : null}
               </label>
             ))}
           </fieldset>
@@ -282,13 +290,13 @@ export function Commissioning(props: { drive?: boolean }) {
           {ax ? <p class="assist-what" data-testid="assist-what">{!guided ? codeSpans(info?.text ?? "") : name === "loop-gain" ? describeLoopGain(ax, lgValues, axNow) : describe(name as Guided, ax, inp, values, kv, busy ? where : confirming ? "machine" : "copy")}</p> : null}
           {ax && drive ? <DrivePlan name={name} axis={ax} body={form.body} /> : null}
           <div class="row">
-            <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist}
+            <button type="button" data-testid="assist-run" disabled={!online.value || !ax || busy || errors.length > 0 || !mayAssist || locked}
               title={mayAssist ? "a copy of the machine, in simulated time: nothing moves" : `a user in the role ${me.value?.role ?? ""} may not run assistants`}
               onClick={() => void run("copy")}>
               {busy && where === "copy" ? "Running…" : applied && name === "multi-gain" ? "Preview again to check" : result ? "Preview again" : "Preview on a copy"}
             </button>
             <button type="button" class="secondary" data-testid="assist-run-live"
-              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming || !info?.live}
+              disabled={!online.value || !ax || busy || errors.length > 0 || !!liveBlocked || confirming || !info?.live || locked}
               title={!info?.live ? "it runs on copies of the machine only" : liveBlocked || "the machine itself moves: you confirm the motion first"} onClick={() => setConfirming(true)}>
               Run on the machine…
             </button>

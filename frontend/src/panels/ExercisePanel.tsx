@@ -3,12 +3,15 @@
 // Refreshed every 2 s while it shows. Faults are the instructor's: the service never sends them.
 // Only the seat's own student takes hints; an instructor watching the seat reads which were
 // taken (and their texts), with no button (a hint costs the student's points).
+// A lesson plan runs its exercises in order: the panel says which one of how many, lists
+// those done with their scores, and offers "Next exercise" once every check has passed (the
+// instructor moves a seat on at any time).
 // A finding check is answered, not measured: the student names the axis and the size (µm on
 // a linear axis) in a few attempts; the answers given stay listed with their grades.
 import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { CheckState, Exercise, FindingState, HintInfo } from "../api/types";
-import { answerFinding, exercise, raiseHand, refreshExercise, takeHint } from "../state/exercise";
+import { answerFinding, exercise, moveOn, raiseHand, refreshExercise, takeHint } from "../state/exercise";
 import { Panel } from "../ui/Panel";
 import { fmt } from "../ui/format";
 
@@ -43,9 +46,10 @@ export function ExercisePanel() {
   const ex = exercise.value;
   if (!ex) return <p class="hint">This machine is no class seat.</p>;
   const info = ex.exercise;
+  const of = ex.plan.length > 1 ? ` ${ex.stage + 1} of ${ex.plan.length}` : "";
   return (
     <div class="exercise">
-      <Panel title={`Exercise: ${info.title}`} id="exercise">
+      <Panel title={`Exercise${of}: ${info.title}`} id="exercise">
         <p class="exercise-summary" data-testid="exercise-summary">{info.summary}</p>
         <div class="exercise-task" data-testid="exercise-task">
           {paragraphs(info.task).map((p, i) => (
@@ -57,6 +61,7 @@ export function ExercisePanel() {
         <Panel title="Progress and score" id="exercise-score">
           <Standing ex={ex} />
         </Panel>
+        {ex.plan.length > 1 ? <Plan ex={ex} /> : null}
         {ex.takes_hints ? <Hand ex={ex} /> : null}
         <Panel title="Checks" id="exercise-checks">
           <ul class="checklist" data-testid="check-list">
@@ -79,6 +84,53 @@ export function ExercisePanel() {
         </Panel>
       </div>
     </div>
+  );
+}
+
+/** The lesson plan: the exercises done (with their scores), this one, those to come; the
+ * way on once every check has passed (asked first: there is no way back). */
+function Plan({ ex }: { ex: Exercise }) {
+  const [asking, setAsking] = useState(false);
+  const [error, setError] = useState("");
+  const last = ex.stage + 1 >= ex.plan.length;
+  const allPassed = ex.checks.every((c) => c.first_passed_s !== null);
+  const go = () =>
+    moveOn().then(
+      () => { setAsking(false); setError(""); },
+      (e: unknown) => setError(e instanceof ApiError ? e.refusal.message : String(e)),
+    );
+  return (
+    <Panel title="Lesson plan" id="exercise-plan">
+      <ol class="plan-list" data-testid="plan-list">
+        {ex.plan.map((title, k) => {
+          const done = ex.done[k];
+          const state = k < ex.stage ? "done" : k === ex.stage ? "now" : "later";
+          return (
+            <li key={k} class={`plan-${state}`} data-state={state}>
+              {title}
+              {done ? <span class="num"> · {fmt(done.score, 0)} of {fmt(done.max_points, 0)} points in {clock(done.seat_time_s)}</span> : null}
+              {state === "now" ? <span class="hint"> · now</span> : null}
+            </li>
+          );
+        })}
+      </ol>
+      {last ? (
+        <p class="hint">This is the plan's last exercise.</p>
+      ) : !ex.may_move_on ? (
+        <p class="hint" data-testid="plan-wait">
+          {allPassed ? "Your instructor moves you on." : "Once every check has passed you can move on to the next exercise (or your instructor moves you on)."}
+        </p>
+      ) : asking ? (
+        <p role="alert" data-testid="plan-confirm">
+          On to <b>{ex.plan[ex.stage + 1]}</b>? Your score here is kept; there is no way back. The machine powers on afresh.{" "}
+          <button type="button" data-testid="plan-next-confirm" onClick={() => void go()}>Yes, next exercise</button>{" "}
+          <button type="button" class="secondary" onClick={() => setAsking(false)}>Not yet</button>
+        </p>
+      ) : (
+        <button type="button" data-testid="plan-next" onClick={() => setAsking(true)}>Next exercise ▸ {ex.plan[ex.stage + 1]}</button>
+      )}
+      {error ? <p class="refusal" role="alert">{error}</p> : null}
+    </Panel>
   );
 }
 

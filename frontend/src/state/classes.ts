@@ -105,6 +105,8 @@ export function toggleSeat(n: number): void {
 
 export const freeze = (cid: string, seats: number[], frozen: boolean) =>
   http.post<ClassInfo>(`/api/classes/${cid}/freeze`, { seats, frozen });
+/** The seats (all for none) on to the lesson plan's next exercise. */
+export const moveSeatsOn = (cid: string, seats: number[]) => http.post<ClassInfo>(`/api/classes/${cid}/next`, { seats });
 export const broadcast = (cid: string, seats: number[], text: string) =>
   http.post<null>(`/api/classes/${cid}/broadcast`, { seats, text });
 /** An instructor lowers a seat's raised hand (seen to). */

@@ -1,7 +1,7 @@
 // The exercise of the chosen machine when it is a class seat (the machine list says which
 // are): asked for when the machine changes, refreshed while the Exercise tab shows it;
 // hints are taken from here. The service hides the exercise's faults from the student.
-import { effect, signal, untracked } from "@preact/signals";
+import { computed, effect, signal, untracked } from "@preact/signals";
 import { ApiError, http } from "../api/http";
 import type { AnswerGiven, Exercise, HintInfo, RaisedHand } from "../api/types";
 import { freezeNoticeCount, machineId, machines, machineUrl, seatFrozen } from "./session";
@@ -16,6 +16,19 @@ export const forgetSeat = (): void => localStorage.removeItem(SEAT_KEY);
 
 /** The seat's exercise as it stands; null while the machine is no class seat (or unknown). */
 export const exercise = signal<Exercise | null>(null);
+
+/** The assistants the seat's exercise locks for this browser's user (its student; an
+ * instructor watching may use them). */
+export const lockedAssistants = computed<readonly string[]>(() => {
+  const ex = exercise.value;
+  return ex?.takes_hints ? ex.exercise.locked_assistants : [];
+});
+
+/** Move the seat on to its lesson plan's next exercise (its student once every check has
+ * passed; an instructor at any time): the machine powers on afresh for it. */
+export async function moveOn(): Promise<void> {
+  exercise.value = await http.post<Exercise>(machineUrl("/exercise/next"), {});
+}
 
 /** Ask the service for the seat's exercise again (checks, score, hints, frozen). */
 export async function refreshExercise(): Promise<void> {
