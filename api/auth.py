@@ -138,6 +138,9 @@ class Me(BaseModel):
     actions: list[Action] = Field(description="what this user may do (api/auth.py ALLOWED)")
     guest: bool = Field(False, description="through a share link: watching one machine only")
     share: SharedMachine | None = Field(None, description="a guest's link (None: no guest)")
+    watches: str | None = Field(
+        None, description="a class's student: the machine their instructor presents, to watch"
+    )
 
 
 MIN_PASSWORD = 8  # characters (the CLI asks the same)

@@ -84,6 +84,11 @@ class ClassCreate(BaseModel):
         description="the seats' machine template: these parameter lists; null for the demo "
         "lathe. The exercise's axes, spindles and gear stages must be in them (else 422)",
     )
+    roster: bool = Field(
+        False,
+        description="the students' names are people of the roster: each found by name or "
+        "added, their results gathered across classes (the logins stay per seat)",
+    )
     link_hours: float = Field(
         1.0,
         ge=0.25,
@@ -204,6 +209,9 @@ class ClassInfo(BaseModel):
     resumed: ClassResumed | None = Field(
         None, description="the service restarted while it ran, and what the class kept"
     )
+    presenting: str | None = Field(
+        None, description="the machine the instructor presents to every seat (watch only)"
+    )
 
 
 class SeatLink(BaseModel):
@@ -241,6 +249,14 @@ class Broadcast(SeatSelection):
     """A message every selected seat sees as a banner."""
 
     text: str = Field(min_length=1, max_length=500)
+
+
+class Present(BaseModel):
+    """Show a machine to every seat of the class, read-only (None: stop)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    machine: str | None = Field(None, min_length=1, max_length=64)
 
 
 class ClassFault(SeatSelection):

@@ -85,7 +85,9 @@ class StatusMessage(BaseModel):
     status: MachineStatus
 
 
-NoticeKind = Literal["rebuilt", "restored", "restarted", "message", "frozen", "resumed", "exercise"]
+NoticeKind = Literal[
+    "rebuilt", "restored", "restarted", "message", "frozen", "resumed", "exercise", "present"
+]
 
 
 class NoticeMessage(BaseModel):
@@ -98,7 +100,7 @@ class NoticeMessage(BaseModel):
         description="rebuilt after its worker died; restored from a snapshot; the service "
         "restarted (the machine powered on again); a message from the instructor; frozen or "
         "resumed by the instructor; a class seat moved on to its next exercise (powered on "
-        "afresh for it)"
+        "afresh for it); the instructor presents a machine to the class, or stops"
     )
     message: str
     time_unix: float

@@ -93,7 +93,9 @@ class Authentication:
                 found = NotLoggedIn("the share link has expired or was revoked")
         if isinstance(found, Actor):
             seat = services.classes.seat_of(found.name)  # a student sees their seat only
-            scope.setdefault("state", {})["actor"] = replace(found, seat=seat) if seat else found
+            if seat:  # and the machine their instructor presents, watching
+                found = replace(found, seat=seat, watches=services.classes.presented_to(seat))
+            scope.setdefault("state", {})["actor"] = found
             await self.app(scope, receive, send)
             return
         if scope["type"] == "websocket":  # closed before the accept: an HTTP 403 for the client

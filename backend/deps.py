@@ -32,6 +32,7 @@ from backend.services.machines import MachineProxy, MachineService
 from backend.services.recorder import Recorders
 from backend.services.replay import SeatRecorder
 from backend.services.report import Reports
+from backend.services.roster import Roster
 from backend.services.sessions import SessionWatch
 from backend.services.shares import Shares
 from backend.services.store import Store
@@ -76,6 +77,7 @@ class Services:
     flight: FlightRecorder
     bundles: Bundles
     shares: Shares
+    roster: Roster
 
     @classmethod
     async def start(cls, settings: Settings) -> Services:
@@ -162,6 +164,7 @@ class Services:
             flight,
             Bundles(store, tdir / "bundles", traces),
             shares,
+            Roster(store, classes),
         )
         services.print_login_link()
         return services

@@ -21,6 +21,7 @@ from api.classes import (
     ExerciseInfo,
     ExerciseUpload,
     Freeze,
+    Present,
     SeatDetail,
     SeatFaults,
     SeatLink,
@@ -104,6 +105,8 @@ def create_class(
     running). The answer has each seat's one-time login link (shown this once; a new one:
     POST .../seats/{n}/link)."""
     created = services.classes.create(actor, req, str(request.base_url))
+    if req.roster:
+        services.roster.enrol(services.classes.get(req.id), actor.name)
     plan = ", ".join(f"'{e}'" for e in req.exercises)
     services.audit.record(
         Classes.entry(
@@ -133,6 +136,8 @@ def end_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> ClassInfo
     traces and audit stay for the debrief. Each student's page shows their result
     (GET /api/auth/seat-result)."""
     c = services.classes.get(cid)
+    if c.ended_unix is None:
+        services.console.record_last(c, c.seats)
     services.classes.end(c)
     services.console.recorder.flush(cid)
     services.sessions.poke()  # the students' websockets close now
@@ -153,6 +158,7 @@ def delete_class(cid: ClassId, services: ServicesDep, actor: ActorDep) -> None:
     them; the audit keeps that it was deleted. 409 while it runs (end it first)."""
     services.classes.delete(services.classes.get(cid))
     services.console.recorder.forget(cid)
+    services.roster.drop_class(cid)
     services.audit.record(Classes.entry(actor, f"deleted class '{cid}'"))
 
 
@@ -188,7 +194,25 @@ def move_on(cid: ClassId, req: SeatSelection, services: ServicesDep, actor: Acto
     exercise: each one's result in its exercise kept, its machine powered on afresh for the
     next one, its clock from 0."""
     c = services.classes.running(cid)
-    services.classes.move_on(actor, c, services.classes.select(c, req.seats))
+    seats = services.classes.select(c, req.seats)
+    services.console.record_last(c, seats)
+    services.classes.move_on(actor, c, seats)
+    return services.classes.info(c)
+
+
+@router.post(
+    "/classes/{cid}/present",
+    dependencies=[permit(Action.TEACH)],
+    responses=responses(Forbidden, NotFound, why=_RUNNING),
+)
+def present(cid: ClassId, req: Present, services: ServicesDep, actor: ActorDep) -> ClassInfo:
+    """Show a machine (the instructor's, say) to every seat of the class: its students see
+    it in their machine list and watch it read-only (no control, no command, no parameter
+    write) until it stops (`machine`: null). Each seat is told."""
+    c = services.classes.running(cid)
+    services.classes.present(actor, c, req.machine)
+    what = f"presents {req.machine} to" if req.machine else "stopped presenting to"
+    services.audit.record(Classes.entry(actor, f"{what} class '{cid}'", req.machine or ""))
     return services.classes.info(c)
 
 

@@ -71,6 +71,8 @@ def move_on(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Exer
     passed (the instructor at any time). Its result in this one is kept; the machine powers
     on afresh for the next (its starting values, faults and checks), its clock from 0."""
     c, seat = services.classes.seat_by_machine(machine.id)
+    if services.classes.may_move_on(actor, c, seat) is None:
+        services.console.record_last(c, [seat])
     services.classes.move_on(actor, c, [seat])
     return my_exercise(machine, services, actor)
 

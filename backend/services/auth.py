@@ -25,10 +25,12 @@ class Actor:
     client: str = ""
     seat: str | None = None
     guest: bool = False  # through a share link: watching `seat` only (OBSERVE)
+    watches: str | None = None  # a student's: the machine their instructor presents (OBSERVE)
 
     def sees(self, machine: str) -> bool:
-        """Whether this actor may know the machine exists (a student: only their seat's)."""
-        return self.seat is None or machine == self.seat
+        """Whether this actor may know the machine exists (a student: only their seat's, and
+        the machine their instructor presents)."""
+        return self.seat is None or machine in (self.seat, self.watches)
 
     @property
     def me(self) -> Me:
@@ -38,6 +40,7 @@ class Actor:
             session=self.session,
             actions=[Action.OBSERVE] if self.guest else sorted(ALLOWED[self.role]),
             guest=self.guest,
+            watches=self.watches,
         )
 
 
@@ -48,6 +51,12 @@ def authorize(actor: Actor, action: Action, machine: str | None = None) -> None:
         raise not_found(f"machine '{machine}'")
     if actor.guest and action is not Action.OBSERVE:
         raise Forbidden(f"a share link only watches: it may not {ACTION_WORDS[action]}")
+    watched = machine is not None and machine == actor.watches and machine != actor.seat
+    if watched and action is not Action.OBSERVE:
+        raise Forbidden(
+            f"your instructor presents {machine}: you watch it, you may not "
+            f"{ACTION_WORDS[action]} there"
+        )
     if action not in ALLOWED[actor.role]:
         where = f" on {machine}" if machine else ""
         need = lowest_role(action).value

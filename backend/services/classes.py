@@ -91,6 +91,10 @@ CREATE TABLE IF NOT EXISTS class_plan (  -- a class's lesson plan (none: classes
     text TEXT NOT NULL,            -- the exercise file as the class runs it
     PRIMARY KEY (class, k)
 );
+CREATE TABLE IF NOT EXISTS class_present (  -- the machine a class's instructor presents
+    class TEXT PRIMARY KEY,
+    machine TEXT NOT NULL
+);
 CREATE TABLE IF NOT EXISTS class_lists (  -- a class's uploaded machine template (none: demo)
     class TEXT PRIMARY KEY,
     channel_list TEXT NOT NULL,
@@ -187,6 +191,7 @@ class Class:
     seats: list[Seat]
     lists: MachineLists | None = None  # the seats' machine template; None: the demo lathe
     resumed: ClassResumed | None = None  # built again by a restart of the service
+    presenting: str | None = None  # a machine every seat watches, read-only
     _machines: dict[tuple[int, int], MachineConfig] = field(default_factory=dict)
 
     def seat_machine(self, seat: Seat) -> MachineConfig:
@@ -250,6 +255,10 @@ class Classes:
                 "SELECT class, channel_list, axis_lists, tool_list FROM class_lists"
             )
         }
+        presenting = {
+            p["class"]: p["machine"]
+            for p in self.store.query("SELECT class, machine FROM class_present")
+        }
         plans: dict[str, list[str]] = {}
         for p in self.store.query("SELECT class, text FROM class_plan ORDER BY class, k"):
             plans.setdefault(p["class"], []).append(p["text"])
@@ -275,6 +284,7 @@ class Classes:
                 r["ended"],
                 seats,
                 templates.get(cid),
+                presenting=presenting.get(cid),
             )
             self._classes[cid] = c
             if r["ended"] is None:
@@ -303,6 +313,31 @@ class Classes:
         """The machine a login may see when it is a running class's student, else None."""
         seat = self._seat_of.get(user)
         return seat.machine if seat is not None else None
+
+    def presented_to(self, seat_machine: str) -> str | None:
+        """The machine a seat's class presents to it (None: none)."""
+        seat = self._by_machine.get(seat_machine)
+        return self._classes[seat.class_id].presenting if seat is not None else None
+
+    def present(self, actor: Actor, c: Class, machine: str | None) -> None:
+        """Show a machine to every seat, read-only (None: stop); each seat hears it."""
+        if machine is not None:
+            self.machines.get(machine)  # 404 for none such
+        if c.ended_unix is not None:
+            raise Conflict(f"class '{c.id}' has ended")
+        if machine == c.presenting:
+            return
+        c.presenting = machine
+        if machine is None:
+            self.store.run("DELETE FROM class_present WHERE class = ?", (c.id,))
+            text = f"{actor.name} stopped presenting"
+        else:
+            self.store.run("INSERT OR REPLACE INTO class_present VALUES (?, ?)", (c.id, machine))
+            text = f"{actor.name} presents machine {machine}: watch it (read-only)"
+        for seat in c.seats:
+            m = self.proxy(seat)
+            if m is not None:
+                m.notices.add("present", text)
 
     def seat_by_machine(self, mid: str) -> tuple[Class, Seat]:
         """The running class and seat of a machine; 404 when it is no seat."""
@@ -439,6 +474,7 @@ class Classes:
             ended_unix=c.ended_unix,
             seats=[self.seat_info(c, s) for s in c.seats],
             resumed=c.resumed if c.ended_unix is None else None,
+            presenting=c.presenting,
         )
 
     def seat_info(self, c: Class, seat: Seat) -> SeatInfo:
@@ -631,7 +667,7 @@ class Classes:
         with self._lock:
             if c.ended_unix is None:
                 raise Conflict(f"class '{c.id}' still runs: end it first")
-            for table in ("seats", "ended_sessions", "class_lists", "class_plan"):
+            for table in ("seats", "ended_sessions", "class_lists", "class_plan", "class_present"):
                 self.store.run(f"DELETE FROM {table} WHERE class = ?", (c.id,))
             self.store.run("DELETE FROM classes WHERE id = ?", (c.id,))
             del self._classes[c.id]
@@ -660,6 +696,7 @@ class Classes:
                 self._seat_of.pop(seat.user, None)
                 self._by_machine.pop(seat.machine, None)
             c.ended_unix = time.time()
+            c.presenting = None
         for seat in c.seats:
             self.save(seat)
             for key, expires in self.accounts.sessions_of(seat.user):
@@ -669,6 +706,7 @@ class Classes:
                 )
             self._remove_seat(seat)
         self.store.run("UPDATE classes SET ended = ? WHERE id = ?", (c.ended_unix, c.id))
+        self.store.run("DELETE FROM class_present WHERE class = ?", (c.id,))
 
     @staticmethod
     def _last_faults(proxy: MachineProxy) -> list[FaultInfo]:
@@ -837,7 +875,8 @@ class Classes:
         self.faults.keep(proxy)
         self.snapshots.forget(seat.machine)  # the last exercise's: restored, they would mix
         self.snapshots.take(actor, proxy, f"start of exercise {stage + 1}", pinned=True)
-        proxy.notices.add("exercise", f"{actor.name} moved the seat on to {what}")
+        by = seat.student if actor.name == seat.user else actor.name  # a name, not a login
+        proxy.notices.add("exercise", f"{by} moved the seat on to {what}")
         self.audit.record(
             self.entry(actor, f"moved seat {seat.n} on to {what}", seat.machine, score=done.score)
         )

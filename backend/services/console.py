@@ -148,6 +148,15 @@ class ConsoleHub:
         for seat in c.seats:
             self._watched.discard(seat.machine)
 
+    def record_last(self, c: Class, seats: list[Seat]) -> None:
+        """The seats' last samples before their machines go or power on afresh (the class
+        ends, a seat moves on): what happened since the newest sample stays in the replay."""
+        for seat in seats:
+            m = self.classes.proxy(seat)
+            if m is not None:
+                self.classes.update(seat, m)
+                self.recorder.sample(c.id, seat.n, seat.stage, seat.seat_time_s, m, last=True)
+
     def frame(self, c: Class) -> GridFrame:
         seats = []
         for s in c.seats:

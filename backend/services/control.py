@@ -155,7 +155,8 @@ class Control:
         mine = c.holder is not None and _key(c.holder) == _key(actor)
         if req.action in ("take", "request"):
             self._not_frozen(actor, m)
-        if req.action not in ("request", "cancel") or actor.guest:  # observers ask, never hold
+        # observers ask, never hold; a guest or a student watching a presentation neither
+        if req.action not in ("request", "cancel") or actor.guest or actor.watches == m.id:
             authorize(actor, Action.CONTROL, m.id)
         match req.action:
             case "take":

@@ -86,16 +86,26 @@ class SeatRecorder:
         self._tapes: dict[tuple[str, int], _Tape] = {}
         self._peaks = PeakReader(SAMPLE_S)
 
-    def sample(self, class_id: str, n: int, stage: int, seat_t_s: float, m: MachineProxy) -> None:
-        """A sample of the seat's machine when a second has passed and its clock ran."""
+    def sample(
+        self,
+        class_id: str,
+        n: int,
+        stage: int,
+        seat_t_s: float,
+        m: MachineProxy,
+        last: bool = False,
+    ) -> None:
+        """A sample of the seat's machine when a second has passed and its clock ran (`last`:
+        now, whenever the one before was: its machine is about to go or power on afresh)."""
         now = time.time()
         key = (class_id, n)
         with self._lock:
             tape = self._tapes.get(key)
+            same = tape is not None and tape.stage == stage
             if (
-                tape is not None
-                and (now - tape.last_wall < SAMPLE_S or seat_t_s <= tape.last_seat_s)
-                and tape.stage == stage
+                same
+                and tape is not None
+                and (seat_t_s <= tape.last_seat_s or (not last and now - tape.last_wall < SAMPLE_S))
             ):
                 return
             got = _signals(m, self._peaks.peaks(m))

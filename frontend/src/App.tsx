@@ -20,6 +20,8 @@ import { MachineView } from "./panels/MachineView";
 import { MachinesDialog } from "./panels/MachinesDialog";
 import { MdiPanel } from "./panels/MdiPanel";
 import { PendingStrip } from "./panels/PendingStrip";
+import { watching } from "./state/presenting";
+import { PresentStrip } from "./panels/PresentStrip";
 import { Parameters } from "./panels/Parameters";
 import { Plots } from "./panels/Plots";
 import { ProgramPanel } from "./panels/ProgramPanel";
@@ -116,7 +118,7 @@ function ConsoleScreen() {
 }
 
 function Hmi() {
-  const guest = !!me.value?.guest;
+  const guest = !!me.value?.guest || watching.value; // a presentation is watched as a guest would
   const tab = guest && !GUEST_TABS.has(routeTab.value) ? "Operate" : routeTab.value;
   const setTab = (t: Tab) => (routeTab.value = t);
   const seat = !!exercise.value;
@@ -147,6 +149,7 @@ function Hmi() {
           their own space (sticky, not fixed), and scrolling to a control keeps it below them */}
       <div class="head" ref={head}>
         <TopBar />
+        <PresentStrip />
         <ControlStrip />
         <PendingStrip />
         <Banner liveRun={tab !== "Commissioning" && tab !== "Drive tuning"} />

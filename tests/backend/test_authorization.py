@@ -158,7 +158,11 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/classes/{cid}/end"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/freeze"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/next"): ("instructor", FREE),
+    ("POST", "/api/classes/{cid}/present"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/seats/{n}/replay"): ("instructor", FREE),
+    ("GET", "/api/roster"): ("instructor", FREE),
+    ("GET", "/api/roster/{pid}"): ("instructor", FREE),
+    ("DELETE", "/api/roster/{pid}"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/broadcast"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/faults"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/seats/{n}"): ("instructor", FREE),
@@ -235,6 +239,7 @@ def _filled(path: str, mid: str) -> str:
         .replace("{n}", "1")
         .replace("{fid}", "1")
         .replace("{sid}", "1")
+        .replace("{pid}", "999")
         .replace("{bid}", "0123456789ab")
         .replace("{lid}", "0123456789ab")
     )

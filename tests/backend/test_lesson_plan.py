@@ -9,6 +9,7 @@ import csv
 import io
 import itertools
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -194,3 +195,79 @@ def test_a_class_runs_its_lesson_plan(tmp_path: Path) -> None:
         assert (res["checks_passed"], res["checks_total"]) == (1, 2)
     finally:
         s.close()
+
+
+@pytest.fixture(scope="module")
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """A service for the tests that need no restart of their own."""
+    db = tmp_path_factory.mktemp("training") / "training.sqlite"
+    s = Server(db)
+    s.tokens = add_users(db, {"trainer": Role.INSTRUCTOR})  # type: ignore[attr-defined]
+    s.start()
+    yield s
+    s.close()
+
+
+def test_the_roster_keeps_a_student_across_classes(srv: Server) -> None:
+    """Two classes with the roster on: 'Anna' and 'anna' are one student with both classes
+    (newest first, their exercise in each), an unnamed seat is nobody's; a class without the
+    roster adds nobody; deleting an ended class takes it from her record."""
+    s = srv
+    t = trainer(s)
+    for cid, names, keep in (
+        ("r1", ["Anna", "Ben"], True),
+        ("r2", ["anna", "Carl"], True),
+        ("r3", ["Dora"], False),
+    ):
+        body = {"id": cid, "exercises": ["sign-error"], "seats": 3, "students": names}
+        r = t.post("/api/classes", json=body | {"roster": keep})
+        assert r.status_code == 201, r.text
+    people = t.get("/api/roster").json()
+    assert [(p["name"], p["classes"]) for p in people] == [("Anna", 2), ("Ben", 1), ("Carl", 1)]
+    anna = people[0]["id"]
+    record = t.get(f"/api/roster/{anna}").json()
+    assert [(x["class_id"], x["seat"]) for x in record["sessions"]] == [("r2", 1), ("r1", 1)]
+    assert record["sessions"][0]["stages"][0]["exercise"] == "sign-error"
+    assert record["sessions"][0]["max_points"] == 100  # 40 + 20 + 40 (sign-error.toml)
+    ben = people[1]["id"]
+    assert t.delete(f"/api/roster/{ben}").status_code == 204
+    assert t.get(f"/api/roster/{ben}").status_code == 404
+    assert t.post("/api/classes/r1/end").status_code == 200
+    assert t.delete("/api/classes/r1").status_code == 204
+    record = t.get(f"/api/roster/{anna}").json()
+    assert [x["class_id"] for x in record["sessions"]] == ["r2"]
+
+
+def test_the_instructor_presents_a_machine_every_seat_watches(srv: Server) -> None:
+    """While the instructor presents the demo lathe, a student sees it and reads its status,
+    and is refused every change there (command, control, parameters); their own seat stays
+    theirs. After the stop the lathe is hidden from them again."""
+    t = trainer(srv)
+    r = t.post("/api/classes", json={"id": "pres", "exercises": ["sign-error"], "seats": 2})
+    assert r.status_code == 201, r.text
+    anna = student(srv, r.json()["links"][0]["url"])
+    seat = r.json()["info"]["seats"][0]["machine"]
+    assert [m["id"] for m in anna.get("/api/machines").json()] == [seat]
+    assert anna.get("/api/machines/demo/status").status_code == 404
+    r = t.post("/api/classes/pres/present", json={"machine": "nope"})
+    assert r.status_code == 404, r.text
+    r = t.post("/api/classes/pres/present", json={"machine": "demo"})
+    assert r.status_code == 200 and r.json()["presenting"] == "demo", r.text
+    assert anna.get("/api/auth/me").json()["watches"] == "demo"
+    assert sorted(m["id"] for m in anna.get("/api/machines").json()) == ["demo", seat]
+    assert anna.get("/api/machines/demo/status").status_code == 200
+    move = {"type": "move", "axis": "X", "target": 10.0}
+    for method, path, body in (
+        ("POST", "/api/machines/demo/commands", move),
+        ("POST", "/api/machines/demo/control", {"action": "take"}),
+        ("POST", "/api/machines/demo/control", {"action": "request"}),
+        ("PATCH", "/api/machines/demo/parameters", {"changes": []}),
+    ):
+        r = anna.request(method, path, json=body)
+        assert r.status_code == 403 and "presents demo" in r.text, (path, r.text)
+    assert anna.post(f"/api/machines/{seat}/control", json={"action": "take"}).status_code == 200
+    r = t.post("/api/classes/pres/present", json={"machine": None})
+    assert r.status_code == 200 and r.json()["presenting"] is None, r.text
+    assert anna.get("/api/auth/me").json()["watches"] is None
+    assert anna.get("/api/machines/demo/status").status_code == 404
+    assert t.post("/api/classes/pres/end").status_code == 200

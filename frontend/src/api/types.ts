@@ -138,3 +138,5 @@ export type LimitInForce = S["LimitInForce"];
 export type SeatResult = S["SeatResult"];
 export type SeatReplay = S["SeatReplay"];
 export type StageResult = S["StageResult"];
+export type RosterStudent = S["RosterStudent"];
+export type StudentRecord = S["StudentRecord"];

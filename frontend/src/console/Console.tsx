@@ -14,13 +14,15 @@ import { CreateClass, SeatLinks } from "./CreateClass";
 import { FaultForm } from "./FaultForm";
 import { Grid } from "./Grid";
 import { ResultLinks } from "./ResultLinks";
+import { RosterPanel } from "./RosterPanel";
 import { SeatDetail } from "./SeatDetail";
 import { clock } from "./SeatTile";
-import { act, detailSeat, faultFor } from "./uiState";
+import { act, detailSeat, faultFor, rosterOpen } from "./uiState";
 import "./console.css";
 
 /** An ended class's seats: results as they stood at the end, each seat's debrief. */
 function EndedSeats(props: { c: ClassInfo }) {
+  const plan = props.c.exercises.length;
   return (
     <Panel id="ended-seats" title={`${props.c.title || props.c.id} · ${props.c.exercises.join(" → ")} (ended)`}
       actions={
@@ -33,16 +35,22 @@ function EndedSeats(props: { c: ClassInfo }) {
         </span>
       }>
       <table class="dense">
-        <thead><tr><th class="num">seat</th><th>student</th><th class="num">progress</th><th class="num">score</th><th class="num">hints</th><th class="num">seat time</th><th /></tr></thead>
+        <thead>
+          <tr>
+            <th class="num">seat</th><th>student</th>{plan > 1 ? <th>reached</th> : null}<th class="num">progress</th>
+            <th class="num">score{plan > 1 ? " (plan)" : ""}</th><th class="num">hints</th><th class="num">seat time</th><th />
+          </tr>
+        </thead>
         <tbody>
           {props.c.seats.map((s) => (
             <tr key={s.n} data-testid={`ended-seat-${s.n}`}>
               <td class="num">{s.n}</td>
               <td>{s.student}</td>
-              <td class="num">{Math.round(s.progress * 100)} %</td>
-              <td class="num">{fmt(s.score, 1)}</td>
-              <td class="num">{s.hints_taken}</td>
-              <td class="num">{clock(s.seat_time_s)}</td>
+              {plan > 1 ? <td>exercise {s.stage + 1} of {plan}</td> : null}
+              <td class="num" title="checks passed in the exercise reached">{Math.round(s.progress * 100)} %</td>
+              <td class="num" data-testid="ended-score">{fmt(s.total_score, 1)}</td>
+              <td class="num">{s.hints_taken + s.done.reduce((sum, d) => sum + d.hints_taken, 0)}</td>
+              <td class="num">{clock(s.seat_time_s + s.done.reduce((sum, d) => sum + d.seat_time_s, 0))}</td>
               <td><button type="button" class="secondary" data-testid="seat-detail" onClick={() => (detailSeat.value = s.n)}>Debrief</button></td>
             </tr>
           ))}
@@ -89,9 +97,10 @@ export function Console() {
             </button>
           </p>
         ) : null}
-        {c ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
-        {!c && !creating && !created ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
-        {c && n !== null ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}
+        {rosterOpen.value ? <RosterPanel /> : null}
+        {c && !rosterOpen.value ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
+        {!c && !creating && !created && !rosterOpen.value ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
+        {c && n !== null && !rosterOpen.value ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}
         {c && faultFor.value !== null ? <FaultForm c={c} target={faultFor.value} /> : null}
       </main>
     </div>

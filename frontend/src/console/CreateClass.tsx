@@ -3,10 +3,11 @@
 // the seats' machine (the demo lathe or uploaded parameter lists: a channel list, one axis list
 // per axis with its logical axis number, optionally a tool list), how many seats, the
 // students' names; then each seat's one-time login link, shown this once.
-import { useState } from "preact/hooks";
+import { useEffect, useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ClassCreated, ExerciseInfo, MachineLists, Refusal, SeatLink } from "../api/types";
 import { chooseClass, createClass, exercises, newLink } from "../state/classes";
+import { loadRoster, roster } from "../state/roster";
 import { LinkSheet } from "./LinkSheet";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
@@ -154,6 +155,8 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [busy, setBusy] = useState(false);
   const [linkHours, setLinkHours] = useState(1); // prepared the day before: 24 h
+  const [keep, setKeep] = useState(false); // the students are people of the roster
+  useEffect(() => void loadRoster().catch(() => undefined), []);
   const byId = (eid: string) => exercises.value.find((e) => e.id === eid);
   const chosen = plan.map(byId).filter((e): e is ExerciseInfo => e !== undefined);
   const setAt = (k: number, eid: string) => setPlan(plan.map((x, j) => (j === k ? eid : x)));
@@ -168,7 +171,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
     }
     setBusy(true);
     try {
-      const created = await createClass({ id, title, exercises: plan, seats, students: names, lists, link_hours: linkHours });
+      const created = await createClass({ id, title, exercises: plan, seats, students: names, lists, link_hours: linkHours, roster: keep });
       setRefusal(null);
       chooseClass(created.info.id);
       props.onCreated(created);
@@ -244,6 +247,24 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
           <textarea rows={4} value={students} data-testid="class-students" onInput={str(setStudents)} />
           {names.length > seats ? <span class="refusal">{names.length} names for {seats} seats</span> : null}
         </label>
+        <div class="wide roster-pick">
+          <label class="inline">
+            <input type="checkbox" checked={keep} data-testid="class-roster" onChange={(e) => setKeep((e.target as HTMLInputElement).checked)} />{" "}
+            Keep them on the roster (each name one student across classes, with their results; logins stay per seat)
+          </label>
+          {roster.value.length ? (
+            <select value="" aria-label="add a student of the roster" data-testid="class-roster-add"
+              onChange={(e) => {
+                const name = (e.target as HTMLSelectElement).value;
+                if (name) { setStudents([...names, name].join("\n")); setKeep(true); }
+              }}>
+              <option value="">Add from the roster…</option>
+              {roster.value.filter((s) => !names.includes(s.name)).map((s) => (
+                <option key={s.id} value={s.name}>{s.name}</option>
+              ))}
+            </select>
+          ) : null}
+        </div>
         <div class="form-buttons">
           <button type="submit" disabled={busy || !chosen.length} data-testid="class-create">Create class</button>
           <button type="button" class="secondary" onClick={props.onCancel}>Cancel</button>

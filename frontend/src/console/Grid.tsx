@@ -3,12 +3,41 @@
 // fed by the grid websocket.
 import { useState } from "preact/hooks";
 import type { ClassInfo, SeatFrame } from "../api/types";
-import { broadcast, endClass, freeze, gridLink, moveSeatsOn, seats, selected } from "../state/classes";
+import { broadcast, endClass, freeze, gridLink, moveSeatsOn, present, seats, selected } from "../state/classes";
+import { machines } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { ResultLinks } from "./ResultLinks";
 import { IDLE_S, SeatTile } from "./SeatTile";
 import { act, actionRefusal, faultFor } from "./uiState";
+
+/** Show one of the instructor's machines to every seat (watch only), or stop. */
+function Presenting(props: { c: ClassInfo }) {
+  const { c } = props;
+  const own = machines.value.filter((m) => !c.seats.some((s) => s.machine === m.id));
+  const [pick, setPick] = useState("");
+  const chosen = pick || own[0]?.id || "";
+  if (c.presenting) {
+    return (
+      <span class="presenting" data-testid="grid-presenting">
+        📽 presenting <b>{c.presenting}</b>{" "}
+        <button type="button" class="secondary" data-testid="grid-present-stop" onClick={() => void act(() => present(c.id, null))}>Stop</button>
+      </span>
+    );
+  }
+  if (!own.length) return null;
+  return (
+    <span class="presenting">
+      <select value={chosen} aria-label="machine to present" data-testid="grid-present-machine" onChange={(e) => setPick((e.target as HTMLSelectElement).value)}>
+        {own.map((m) => <option key={m.id} value={m.id}>{m.id}</option>)}
+      </select>{" "}
+      <button type="button" class="secondary" data-testid="grid-present" title="every seat may watch it, read-only, until you stop"
+        onClick={() => void act(() => present(c.id, chosen))}>
+        Present to all
+      </button>
+    </span>
+  );
+}
 
 function ClassBar(props: { c: ClassInfo }) {
   const { c } = props;
@@ -50,6 +79,7 @@ function ClassBar(props: { c: ClassInfo }) {
           </button>
         )
       ) : null}
+      <Presenting c={c} />
       <form class="broadcast" onSubmit={(e) => {
         e.preventDefault();
         const n = picked.length || c.seats.length;

@@ -66,6 +66,10 @@ function noticeText(n: NoticeMessage): string {
       return `✉ ${at}: Message from ${n.message}`; // the service writes "<name>: <text>"
     case "resumed":
       return `▶ ${at}: ${n.message}`;
+    case "present":
+      return `📽 ${at}: ${n.message}`;
+    case "exercise":
+      return `▸ ${at}: ${n.message}`;
     default:
       return `⚠ ${at}: ${n.message}`;
   }

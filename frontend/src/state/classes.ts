@@ -105,8 +105,13 @@ export function toggleSeat(n: number): void {
 
 export const freeze = (cid: string, seats: number[], frozen: boolean) =>
   http.post<ClassInfo>(`/api/classes/${cid}/freeze`, { seats, frozen });
+/** A class as an action's answer has it, in place of the one listed. */
+const took = (info: ClassInfo) => void (classes.value = classes.value.map((c) => (c.id === info.id ? info : c)));
+/** Show a machine to every seat, read-only (null: stop). */
+export const present = (cid: string, machine: string | null) =>
+  http.post<ClassInfo>(`/api/classes/${cid}/present`, { machine }).then(took);
 /** The seats (all for none) on to the lesson plan's next exercise. */
-export const moveSeatsOn = (cid: string, seats: number[]) => http.post<ClassInfo>(`/api/classes/${cid}/next`, { seats });
+export const moveSeatsOn = (cid: string, seats: number[]) => http.post<ClassInfo>(`/api/classes/${cid}/next`, { seats }).then(took);
 export const broadcast = (cid: string, seats: number[], text: string) =>
   http.post<null>(`/api/classes/${cid}/broadcast`, { seats, text });
 /** An instructor lowers a seat's raised hand (seen to). */

@@ -7,10 +7,12 @@ import { clientId, http } from "../api/http";
 import type { Action, ControlAction, ControlParty, ControlState } from "../api/types";
 import { me } from "./auth";
 import { exercise } from "./exercise";
+import { watching } from "./presenting";
 import { frozen, machineUrl, status } from "./session";
 
 /** The user's role allows `action` (api/auth.py ALLOWED, as /api/auth/me reports it). */
-export const may = (action: Action): boolean => !!me.value?.actions.includes(action);
+export const may = (action: Action): boolean =>
+  !!me.value?.actions.includes(action) && (action === "observe" || !watching.value);
 
 export const control = computed<ControlState | null>(() => status.value?.control ?? null);
 
@@ -41,6 +43,7 @@ export const requested = computed(() => !!control.value?.requests?.some(isMe));
  * machine is taken by the first command). Buttons show it as their title. */
 export function blockedWhy(action: Action = "command"): string {
   const role = me.value?.role ?? "";
+  if (watching.value) return "you are watching your instructor's machine: read-only";
   if (!may(action)) return `a user in the role ${role} may not ${action === "configure" ? "write parameters" : "command"}`;
   // a class seat the instructor froze: its student waits, whoever holds it
   if (frozen.value !== null && !may("take_control")) return "frozen by the instructor: the machine is paused until they resume it";

@@ -143,7 +143,9 @@ export async function startSession(): Promise<void> {
       if (!loggedIn.value) return; // logged out while the list was on its way
       machines.value = list;
       const wanted = decodeURIComponent(location.hash.slice(1)).split("/")[0];
-      machineId.value = machines.value.find((m) => m.id === wanted)?.id ?? machines.value[0]?.id ?? "";
+      // a student's own seat first (the list also names a machine their instructor presents)
+      const first = machines.value.find((m) => m.seat) ?? machines.value[0];
+      machineId.value = machines.value.find((m) => m.id === wanted)?.id ?? first?.id ?? "";
       return;
     } catch {
       socket.value = "lost";

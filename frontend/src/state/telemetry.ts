@@ -22,6 +22,7 @@ import { clientId, http } from "../api/http";
 import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { addHistory } from "./history";
+import { presentationChanged } from "./presenting";
 import { Rings } from "./rings";
 import { checkMachineStill, machineId, noticeArrived, socket, statusArrived } from "./session";
 
@@ -118,8 +119,11 @@ function onMessage(text: string): void {
       break;
     case "notice":
       // the machine's time starts again (rebuilt, the service restarted) or goes back
-      // (restored): so does the event log (the history keeps what came before)
-      if (noticeArrived(msg) && msg.kind !== "message" && msg.kind !== "frozen" && msg.kind !== "resumed") restartLog();
+      // (restored): so does the event log (the history keeps what came before); a class's
+      // presentation began or ended: who may see which machine changed
+      if (!noticeArrived(msg)) break;
+      if (msg.kind === "present") void presentationChanged().catch(() => undefined);
+      else if (msg.kind !== "message" && msg.kind !== "frozen" && msg.kind !== "resumed") restartLog();
       break;
     case "error":
       console.warn("telemetry:", msg.message);
