@@ -1,4 +1,4 @@
-"""Training: exercises, classes and their seats, the instructor's console (grid websocket)."""
+"""Training: classes and their seats, the instructor's console (grid websocket)."""
 
 from __future__ import annotations
 
@@ -18,8 +18,6 @@ from api.classes import (
     ClassCreated,
     ClassFault,
     ClassInfo,
-    ExerciseInfo,
-    ExerciseUpload,
     Freeze,
     Present,
     SeatDetail,
@@ -31,7 +29,7 @@ from api.classes import (
 )
 from api.history import HistoryPage
 from api.replay import SeatReplay
-from backend.bodies import EXERCISE_BODY_BYTES, LISTS_BODY_BYTES, dated_download, text_answer
+from backend.bodies import LISTS_BODY_BYTES, dated_download, text_answer
 from backend.deps import ActorDep, ServicesDep, permit
 from backend.errors import (
     CREATED,
@@ -61,27 +59,6 @@ router = APIRouter(prefix="/api", tags=["training"])
 ClassId = Annotated[str, Path(pattern=CLASS_ID, description="a class's id")]
 SeatNo = Annotated[int, Path(ge=1, le=60, description="seat number from 1")]
 _RUNNING: Why = {Conflict: "the class has ended"}
-
-
-@router.get("/exercises", dependencies=[permit(Action.TEACH)], responses=responses(Forbidden))
-def list_exercises(services: ServicesDep) -> list[ExerciseInfo]:
-    """Shipped and uploaded exercises, with every hint's text (instructors)."""
-    return services.exercises.list()
-
-
-@router.post(
-    "/exercises",
-    status_code=CREATED,
-    dependencies=[permit(Action.TEACH)],
-    responses=responses(Forbidden, Conflict, TooLarge, Invalid),
-    max_body_size=EXERCISE_BODY_BYTES,
-)
-def upload_exercise(req: ExerciseUpload, services: ServicesDep, actor: ActorDep) -> ExerciseInfo:
-    """Add an exercise file (TOML, the format of `exercises/`); a wrong file is refused with
-    the key, value or line and column that is wrong."""
-    info = services.exercises.upload(req.text, actor.name)
-    services.audit.record(Classes.entry(actor, f"uploaded exercise '{info.id}'"))
-    return info
 
 
 @router.get("/classes", dependencies=[permit(Action.TEACH)], responses=responses(Forbidden))

@@ -27,6 +27,8 @@ from nc_sim.assist.result import ExperimentError
 from nc_sim.assist.run import run
 from nc_sim.config import MachineConfig
 from nc_sim.faults import Fault
+from nc_sim.training.dry_run import DryRun, dry_run
+from nc_sim.training.exercise import Exercise
 
 RUN_TIMEOUT_S = 120.0  # an experiment ends in simulated time long before this
 
@@ -58,8 +60,14 @@ def calculate(cfg: MachineConfig, name: str, req: BaseModel) -> AssistResult:
         raise Invalid(str(e)) from None  # the route names the calculator
 
 
+def _dry(exercise: Exercise, seconds: float) -> DryRun:
+    """In the assistants' process: an exercise's seat run untouched (the kernel loads there)."""
+    return dry_run(exercise, seconds)
+
+
 class Assistants:
-    """One process for the assistants' runs, started on the first and kept (a queue of one)."""
+    """One process for the assistants' runs, started on the first and kept (a queue of one);
+    an exercise's dry run goes there too."""
 
     def __init__(self) -> None:
         self._pool: ProcessPoolExecutor | None = None
@@ -88,6 +96,15 @@ class Assistants:
         except ExperimentRefused as e:
             raise Invalid(f"{name}: {e}") from None
         return AssistResult.model_validate(answer)
+
+    async def dry_run(self, exercise: Exercise, seconds: float) -> DryRun:
+        """`exercise`'s seat run untouched for `seconds` of simulated time on a copy."""
+        loop = asyncio.get_running_loop()
+        fut = loop.run_in_executor(self._executor(), _dry, exercise, seconds)
+        try:
+            return await asyncio.wait_for(fut, RUN_TIMEOUT_S)
+        except TimeoutError:
+            raise TimedOut(f"the dry run did not end within {RUN_TIMEOUT_S:g} s") from None
 
     def stop(self) -> None:
         if self._pool is not None:

@@ -95,14 +95,35 @@ class Exercises:
             raise not_found(f"exercise '{eid}'")
         return exercise_info(found[0], found[1])
 
-    def upload(self, text: str, user: str) -> ExerciseInfo:
-        """Parse and keep an exercise file; 422 with the file's own words when it is wrong,
-        409 for a shipped id."""
+    @staticmethod
+    def check(text: str) -> Exercise:
+        """Parse an exercise file and check it against its machine; 422 with the file's own
+        words (the key, the value, what is allowed; a TOML error's line and column)."""
         try:
             ex = parse_exercise(text, "upload")
             check_fits(ex, "upload")  # its axes and values fit its machine template
         except (ExerciseError, ParamListError, NcUsageError) as e:
             raise Invalid(str(e)) from None
+        return ex
+
+    def text(self, eid: str) -> str:
+        """An exercise's file as it was shipped or uploaded; 404 when there is none."""
+        return self.get(eid)[1]
+
+    def remove(self, eid: str) -> None:
+        """Forget an uploaded exercise (classes that ran it keep their copy); 409 for a
+        shipped one, 404 for none."""
+        with self._lock:
+            if eid in self._shipped:
+                raise Conflict(f"exercise '{eid}' is shipped: it stays")
+            if self._by_id.pop(eid, None) is None:
+                raise not_found(f"exercise '{eid}'")
+        self.store.run("DELETE FROM exercises WHERE id = ?", (eid,))
+
+    def upload(self, text: str, user: str) -> ExerciseInfo:
+        """Parse and keep an exercise file; 422 with the file's own words when it is wrong,
+        409 for a shipped id."""
+        ex = self.check(text)
         with self._lock:
             if ex.id in self._shipped:
                 raise Conflict(f"exercise '{ex.id}' is shipped: choose an id")

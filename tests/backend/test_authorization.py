@@ -161,6 +161,9 @@ RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("POST", "/api/classes/{cid}/present"): ("instructor", FREE),
     ("GET", "/api/classes/{cid}/seats/{n}/replay"): ("instructor", FREE),
     ("GET", "/api/roster"): ("instructor", FREE),
+    ("POST", "/api/exercises/dry-run"): ("instructor", FREE),
+    ("GET", "/api/exercises/{eid}/text"): ("instructor", FREE),
+    ("DELETE", "/api/exercises/{eid}"): ("instructor", FREE),
     ("GET", "/api/roster/{pid}"): ("instructor", FREE),
     ("DELETE", "/api/roster/{pid}"): ("instructor", FREE),
     ("POST", "/api/classes/{cid}/broadcast"): ("instructor", FREE),
@@ -240,6 +243,7 @@ def _filled(path: str, mid: str) -> str:
         .replace("{fid}", "1")
         .replace("{sid}", "1")
         .replace("{pid}", "999")
+        .replace("{eid}", "nope")
         .replace("{bid}", "0123456789ab")
         .replace("{lid}", "0123456789ab")
     )

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -201,3 +202,79 @@ def _line_of(text: str, name: str) -> str:
     lines: list[Any] = [line for line in text.splitlines() if name in line]
     assert lines, text
     return str(lines[-1])
+
+
+def test_a_student_watches_the_machine_the_instructor_presents(
+    browser: Browser, srv: Server, api: httpx.Client
+) -> None:
+    """The instructor presents the demo lathe from the grid: the student's strip offers it,
+    they watch it with every command control off and go back to their seat; when the
+    presentation stops the strip goes."""
+    r = api.post("/api/classes", json={"id": "show", "exercises": ["sign-error"], "seats": 1})
+    assert r.status_code == 201, r.text
+    seat = r.json()["info"]["seats"][0]["machine"]
+    c = _console(browser, srv)
+    anna = student(browser, r.json()["links"][0]["url"])
+    try:
+        c.get_by_test_id("class-show").click()
+        grid = panel(c, "grid")
+        grid.get_by_test_id("grid-present-machine").select_option("demo")
+        grid.get_by_test_id("grid-present").click()
+        expect(grid.get_by_test_id("grid-presenting")).to_contain_text("presenting demo")
+        strip = anna.get_by_test_id("present-strip")
+        expect(strip).to_contain_text("Your instructor presents machine demo")
+        strip.get_by_test_id("present-watch").click()
+        expect(strip).to_contain_text("You are watching your instructor's machine demo")
+        expect(anna.locator(".machine-select select")).to_have_value("demo")
+        expect(anna.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+        expect(anna.get_by_test_id("tab-Exercise")).to_have_count(0)  # the lathe is no seat
+        mdi = panel(anna, "mdi")
+        expect(mdi.get_by_test_id("mdi-input")).to_be_disabled()
+        expect(mdi.get_by_test_id("mdi-input")).to_have_attribute("title", re.compile("watching"))
+        shot(anna, "graded-watching")
+        strip.get_by_test_id("present-back").click()
+        expect(anna.locator(".machine-select select")).to_have_value(seat)
+        grid.get_by_test_id("grid-present-stop").click()
+        expect(strip).to_have_count(0)
+    finally:
+        anna.close()
+        c.close()
+        api.post("/api/classes/show/end")
+
+
+def test_an_instructor_writes_an_exercise_tries_it_and_saves_it(
+    browser: Browser, srv: Server, api: httpx.Client
+) -> None:
+    """Exercises in the console: a shipped one opened as the start of a new one, its fault and
+    mistuned start left out by mistake; the try-out on a copy says its 'stable' check passes
+    with nobody at the machine; saved under its own id it is in the class form's list."""
+    c = _console(browser, srv)
+    try:
+        c.get_by_test_id("exercises-open").click()
+        ex = panel(c, "exercises")
+        ex.get_by_test_id("exercise-open-soft-coupling").click()
+        editor = ex.get_by_test_id("exercise-text")
+        expect(editor).to_have_value(re.compile('id = "soft-coupling"'))
+        text = editor.input_value()
+        cut = text[: text.index("# what the autotune set")] + text[text.index("[[hints]]") :]
+        editor.fill(cut.replace('id = "soft-coupling"', 'id = "soft-mine"'))
+        ex.get_by_test_id("exercise-try-seconds").select_option("5")
+        ex.get_by_test_id("exercise-try").click()
+        dry = ex.get_by_test_id("exercise-dry-run")
+        warnings = dry.get_by_test_id("dry-warnings")
+        expect(warnings).to_contain_text("check 'stable' passes with nobody at the machine")
+        expect(warnings).to_contain_text("no fault")
+        shot(c, "exercise-authoring")
+        ex.get_by_test_id("exercise-save").click()
+        expect(ex.get_by_test_id("exercise-saved")).to_contain_text("saved as 'soft-mine'")
+        expect(ex.get_by_test_id("exercise-open-soft-mine")).to_be_visible()
+        # a wrong file: the refusal names the key
+        editor.fill(cut.replace("points = 60", "pts = 60"))
+        ex.get_by_test_id("exercise-try").click()
+        expect(ex.get_by_test_id("exercise-refusal")).to_contain_text("checks[0].pts")
+        c.get_by_test_id("class-new").click()
+        form = panel(c, "class-create")
+        form.get_by_test_id("class-exercise").select_option("soft-mine")
+    finally:
+        c.close()
+        api.delete("/api/exercises/soft-mine")

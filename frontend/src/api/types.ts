@@ -140,3 +140,4 @@ export type SeatReplay = S["SeatReplay"];
 export type StageResult = S["StageResult"];
 export type RosterStudent = S["RosterStudent"];
 export type StudentRecord = S["StudentRecord"];
+export type ExerciseDryRun = S["ExerciseDryRun"];

@@ -14,10 +14,11 @@ import { CreateClass, SeatLinks } from "./CreateClass";
 import { FaultForm } from "./FaultForm";
 import { Grid } from "./Grid";
 import { ResultLinks } from "./ResultLinks";
+import { ExercisesPanel } from "./ExercisesPanel";
 import { RosterPanel } from "./RosterPanel";
 import { SeatDetail } from "./SeatDetail";
 import { clock } from "./SeatTile";
-import { act, detailSeat, faultFor, rosterOpen } from "./uiState";
+import { act, consoleView, detailSeat, faultFor } from "./uiState";
 import "./console.css";
 
 /** An ended class's seats: results as they stood at the end, each seat's debrief. */
@@ -74,6 +75,7 @@ export function Console() {
   const c = classes.value.find((k) => k.id === openClass.value);
   useEffect(() => void (detailSeat.value = null), [c?.id]);
   const n = detailSeat.value;
+  const classShown = consoleView.value === "class";
   return (
     <div class="console" data-testid="console">
       <aside class="console-side">
@@ -97,10 +99,11 @@ export function Console() {
             </button>
           </p>
         ) : null}
-        {rosterOpen.value ? <RosterPanel /> : null}
-        {c && !rosterOpen.value ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
-        {!c && !creating && !created && !rosterOpen.value ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
-        {c && n !== null && !rosterOpen.value ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}
+        {consoleView.value === "roster" ? <RosterPanel /> : null}
+        {consoleView.value === "exercises" ? <ExercisesPanel /> : null}
+        {c && classShown ? c.ended_unix === null ? <Grid c={c} /> : <EndedSeats c={c} /> : null}
+        {!c && !creating && !created && classShown ? <p class="hint">Open a class on the left, or make a new one.</p> : null}
+        {c && n !== null && classShown ? <SeatDetail key={`${c.id}/${n}`} c={c} n={n} /> : null}
         {c && faultFor.value !== null ? <FaultForm c={c} target={faultFor.value} /> : null}
       </main>
     </div>

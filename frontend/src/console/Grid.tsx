@@ -20,7 +20,7 @@ function Presenting(props: { c: ClassInfo }) {
   if (c.presenting) {
     return (
       <span class="presenting" data-testid="grid-presenting">
-        📽 presenting <b>{c.presenting}</b>{" "}
+        ▣ presenting <b>{c.presenting}</b>{" "}
         <button type="button" class="secondary" data-testid="grid-present-stop" onClick={() => void act(() => present(c.id, null))}>Stop</button>
       </span>
     );

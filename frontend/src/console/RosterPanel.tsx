@@ -10,7 +10,7 @@ import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
 import { clock } from "./SeatTile";
-import { detailSeat, rosterOpen } from "./uiState";
+import { consoleView, detailSeat } from "./uiState";
 
 const day = (unix: number | null) => (unix === null ? "—" : new Date(unix * 1000).toLocaleDateString());
 
@@ -24,7 +24,7 @@ export function RosterPanel() {
   const open = (pid: number) => void studentRecord(pid).then(setRecord, fail);
   return (
     <Panel id="roster" title={`Roster (${roster.value.length} students)`}
-      actions={<button type="button" class="secondary" data-testid="roster-close" onClick={() => (rosterOpen.value = false)}>Close</button>}>
+      actions={<button type="button" class="secondary" data-testid="roster-close" onClick={() => (consoleView.value = "class")}>Close</button>}>
       <RefusalLine refusal={refusal} />
       <div class="roster-cols">
         <section>
@@ -69,7 +69,7 @@ export function RosterPanel() {
                     </td>
                     <td class="num"><b>{fmt(x.score, 1)}</b> of {fmt(x.max_points, 0)}</td>
                     <td>
-                      <button type="button" class="link" onClick={() => { chooseClass(x.class_id); rosterOpen.value = false; detailSeat.value = x.seat; }}>
+                      <button type="button" class="link" onClick={() => { chooseClass(x.class_id); consoleView.value = "class"; detailSeat.value = x.seat; }}>
                         debrief
                       </button>
                     </td>

@@ -6,8 +6,8 @@ import type { Refusal } from "../api/types";
 /** The seat whose detail shows (its number), or null. */
 export const detailSeat = signal<number | null>(null);
 
-/** The roster shows instead of a class. */
-export const rosterOpen = signal(false);
+/** What the console's main area shows: the open class, the roster, or the exercises. */
+export const consoleView = signal<"class" | "roster" | "exercises">("class");
 
 /** The fault form, open for these seats (an empty list: the whole class), or null. */
 export const faultFor = signal<number[] | null>(null);

@@ -67,7 +67,7 @@ function noticeText(n: NoticeMessage): string {
     case "resumed":
       return `▶ ${at}: ${n.message}`;
     case "present":
-      return `📽 ${at}: ${n.message}`;
+      return `▣ ${at}: ${n.message}`;
     case "exercise":
       return `▸ ${at}: ${n.message}`;
     default:

@@ -4,6 +4,7 @@
 // happened to this tab's control or request meanwhile (refused, taken, lapsed). A request
 // carries a word to the holder; observers may ask too (to be heard: they cannot be granted
 // control). A student of a frozen class seat is offered nothing: the strip says why.
+import { watching } from "../state/presenting";
 import { useState } from "preact/hooks";
 import { ApiError } from "../api/http";
 import type { ControlParty, Refusal } from "../api/types";
@@ -52,7 +53,7 @@ export function ControlStrip() {
       {!may("command") ? (
         <>
           <span class="hint" data-testid="control-view-only">
-            view only ({me.value?.guest ? "share link" : me.value?.role})
+            view only ({me.value?.guest ? "share link" : watching.value ? "watching the instructor's machine" : me.value?.role})
           </span>
           {!h && may("ask") ? (
             <span class="hint" data-testid="control-nobody">

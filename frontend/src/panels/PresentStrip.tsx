@@ -11,12 +11,12 @@ export function PresentStrip() {
     <div class="present-strip" role="status" data-testid="present-strip">
       {watching.value ? (
         <>
-          📽 You are watching your instructor's machine <b>{w}</b> (read-only).{" "}
+          ▣ You are watching your instructor's machine <b>{w}</b> (read-only).{" "}
           <button type="button" data-testid="present-back" onClick={() => selectMachine(ownSeat.value)}>Back to my seat</button>
         </>
       ) : (
         <>
-          📽 Your instructor presents machine <b>{w}</b>.{" "}
+          ▣ Your instructor presents machine <b>{w}</b>.{" "}
           <button type="button" data-testid="present-watch" onClick={() => selectMachine(w)}>Watch it</button>
         </>
       )}

@@ -7,7 +7,7 @@ import type { Refusal } from "../api/types";
 import { logout, me } from "../state/auth";
 import { may } from "../state/control";
 import { openConsole, openHmi, view } from "../state/classes";
-import { exercise } from "../state/exercise";
+import { seatStudent } from "../state/exercise";
 import { connection, emergencyStop, machineId, machines, online, selectMachine, status } from "../state/session";
 import { machinesOpen } from "../state/machines";
 import { AccountDialog, accountOpen } from "./Account";
@@ -157,7 +157,7 @@ function UserBox() {
         onClick={() => (accountOpen.value = true)}>
         {/* a class seat's student by their name, not the seat's login */}
         <b data-testid="user-name" title={user.name}>
-          {exercise.value?.user === user.name ? `${exercise.value.student} (seat ${exercise.value.seat})` : user.name}
+          {seatStudent.value?.user === user.name ? `${seatStudent.value.student} (seat ${seatStudent.value.seat})` : user.name}
         </b>{" "}
         <span data-testid="user-role" class="wide-only">{user.role}</span>
       </button>

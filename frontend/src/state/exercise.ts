@@ -17,6 +17,10 @@ export const forgetSeat = (): void => localStorage.removeItem(SEAT_KEY);
 /** The seat's exercise as it stands; null while the machine is no class seat (or unknown). */
 export const exercise = signal<Exercise | null>(null);
 
+/** This browser's student as their seat's exercise names them (kept while they watch a
+ * machine their instructor presents): their name in the top bar. */
+export const seatStudent = signal<{ user: string; student: string; seat: number } | null>(null);
+
 /** The assistants the seat's exercise locks for this browser's user (its student; an
  * instructor watching may use them). */
 export const lockedAssistants = computed<readonly string[]>(() => {
@@ -40,7 +44,10 @@ export async function refreshExercise(): Promise<void> {
     const ex = await http.get<Exercise>(machineUrl("/exercise"));
     if (machineId.value !== mid) return; // an answer about the machine before
     exercise.value = ex;
-    if (ex.takes_hints) localStorage.setItem(SEAT_KEY, ex.class_id); // the login page's help
+    if (ex.takes_hints) {
+      localStorage.setItem(SEAT_KEY, ex.class_id); // the login page's help
+      seatStudent.value = { user: ex.user, student: ex.student, seat: ex.seat };
+    }
     seatFrozen(ex.frozen, asked);
   } catch (e) {
     // no seat (404), or a role that reads no exercise: no tab; a lost connection keeps it
