@@ -123,6 +123,7 @@ class ConsoleHub:
         self.restarts = 0
         self._watched: set[str] = set()
         self._peaks = PeakReader(GRID_S)
+        self._seat_peaks: dict[str, Peaks] = {}  # machine -> its peaks of the newest tick
 
     def open(self, class_id: str) -> Console:
         console = Console(class_id)
@@ -147,6 +148,7 @@ class ConsoleHub:
     def unwatch(self, c: Class) -> None:
         for seat in c.seats:
             self._watched.discard(seat.machine)
+            self._seat_peaks.pop(seat.machine, None)
 
     def record_last(self, c: Class, seats: list[Seat]) -> None:
         """The seats' last samples before their machines go or power on afresh (the class
@@ -155,13 +157,14 @@ class ConsoleHub:
             m = self.classes.proxy(seat)
             if m is not None:
                 self.classes.update(seat, m)
+                self.recorder.take(c.id, seat.n, self._peaks.peaks(m))
                 self.recorder.sample(c.id, seat.n, seat.stage, seat.seat_time_s, m, last=True)
 
     def frame(self, c: Class) -> GridFrame:
         seats = []
         for s in c.seats:
             m = self.classes.proxy(s)
-            peaks = self._peaks.peaks(m) if m is not None else {}
+            peaks = self._seat_peaks.get(m.id, {}) if m is not None else {}
             seats.append(seat_frame(c, s, m, self.classes, peaks))
         return GridFrame(
             class_id=c.id, ended=c.ended_unix is not None, t_unix=time.time(), seats=seats
@@ -187,6 +190,9 @@ class ConsoleHub:
                     continue
                 if self.classes.update(seat, m) or due:
                     self.classes.save(seat)
+                # one read of the ring a tick serves the grid and the replay alike
+                peaks = self._seat_peaks[m.id] = self._peaks.peaks(m)
+                self.recorder.take(c.id, seat.n, peaks)
                 if seat.joined_unix is not None or seat.seat_time_s > 0:
                     self.recorder.sample(c.id, seat.n, seat.stage, seat.seat_time_s, m)
             if c.id in wanted:
@@ -202,10 +208,13 @@ class ConsoleHub:
         self.recorder.flush()
 
     async def _supervise(self) -> None:
+        next_at = time.monotonic()
         while True:
             try:
                 while True:
-                    await asyncio.sleep(GRID_S)
+                    # a frame every GRID_S whatever building one took (not GRID_S between)
+                    next_at = max(next_at + GRID_S, time.monotonic())
+                    await asyncio.sleep(next_at - time.monotonic())
                     # SQLite writes and 50 seats' frames: off the event loop
                     wanted = {k.class_id for k in self.consoles}
                     for cid, frame in await asyncio.to_thread(self.tick, wanted):

@@ -17,7 +17,7 @@ from api.replay import ReplayMark, SeatReplay
 from backend.services.history import History
 from backend.services.machine_log import HistoryFilter
 from backend.services.machines import MachineProxy
-from backend.services.peaks import PeakReader, Peaks
+from backend.services.peaks import Peaks
 from backend.services.status import AXIS_KIND
 from backend.services.store import Store
 
@@ -84,7 +84,19 @@ class SeatRecorder:
         store.script(SCHEMA)
         self._lock = threading.Lock()
         self._tapes: dict[tuple[str, int], _Tape] = {}
-        self._peaks = PeakReader(SAMPLE_S)
+        self._peaks: dict[tuple[str, int], Peaks] = {}  # since the seat's last sample
+
+    def take(self, class_id: str, n: int, peaks: Peaks) -> None:
+        """A seat's peaks since the last look (the console reads the ring for the grid and
+        passes them here): the next sample has the largest of them."""
+        with self._lock:
+            have = self._peaks.setdefault((class_id, n), {})
+            for axis, (lag, speed) in peaks.items():
+                old_lag, old_speed = have.get(axis, (0.0, 0.0))
+                have[axis] = (
+                    lag if abs(lag) >= abs(old_lag) else old_lag,
+                    speed if abs(speed) >= abs(old_speed) else old_speed,
+                )
 
     def sample(
         self,
@@ -108,7 +120,7 @@ class SeatRecorder:
                 and (seat_t_s <= tape.last_seat_s or (not last and now - tape.last_wall < SAMPLE_S))
             ):
                 return
-            got = _signals(m, self._peaks.peaks(m))
+            got = _signals(m, self._peaks.pop(key, {}))
             if got is None:
                 return
             names, units, values = got

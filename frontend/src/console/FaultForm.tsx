@@ -45,7 +45,11 @@ export function FaultForm(props: { c: ClassInfo; target: number[] }) {
     const fault: Record<string, string | number> = { kind: spec.kind };
     for (const f of spec.fields) {
       const v = value(f.name, f.type === "axis" ? axes[0] ?? "" : f.default?.toString() ?? "");
-      if (v === "" && !f.required) continue;
+      if (v.trim() === "" && !f.required) continue;
+      if (v.trim() === "" || (f.type !== "axis" && !Number.isFinite(Number(v)))) {
+        setRefusal({ message: `${f.name}: give ${f.type === "axis" ? "an axis" : "a number"}`, problems: [] });
+        return;
+      }
       fault[f.name] = f.type === "axis" ? v : Number(v);
     }
     const inject = {
@@ -67,7 +71,7 @@ export function FaultForm(props: { c: ClassInfo; target: number[] }) {
     <div class="console-dialog" role="dialog" aria-modal="true" aria-label="Inject a fault">
       <Panel id="fault-form" title={`Inject a fault: ${who}`}
         actions={<button type="button" class="secondary" data-testid="fault-cancel" onClick={() => (faultFor.value = null)}>Close</button>}>
-        <form class="fault-form" onSubmit={(e) => void submit(e)}>
+        <form class="fault-form" noValidate onSubmit={(e) => void submit(e)}>
           <label>
             Fault
             <select value={kind} data-testid="fault-kind" onChange={(e) => { setKind((e.target as HTMLSelectElement).value); setValues({}); }}>

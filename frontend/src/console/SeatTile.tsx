@@ -61,6 +61,9 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string; pla
             help
           </button>
         ) : null}
+        {f.progress >= 1 ? (
+          <span class="seat-done" data-testid="seat-done" title="every check of its exercise has passed">done</span>
+        ) : null}
         {idle ? (
           <span class="seat-idle" data-testid="seat-idle" title="no command from the student for this long">
             idle {clock(f.idle_s ?? 0)}

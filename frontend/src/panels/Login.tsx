@@ -61,11 +61,19 @@ function resultFile(r: SeatResult): string {
     ["Hints taken", String(r.hints_taken)],
     ["Seat time", clock(r.seat_time_s)],
   ];
+  const checks = r.stages
+    .map(
+      (st) =>
+        `<h2>${esc(st.title)}: ${esc(fmt(st.score, 1))} of ${esc(fmt(st.max_points, 0))} points</h2><ul>` +
+        st.checks.map((k) => `<li>${k.first_passed_s !== null ? "✓" : "✗"} ${esc(k.text)} (${esc(fmt(k.earned, 1))} of ${esc(fmt(k.points, 0))})</li>`).join("") +
+        "</ul>",
+    )
+    .join("");
   const html =
     `<!doctype html><meta charset="utf-8"><title>Result: ${esc(r.student)}</title>` +
     `<body style="font:15px/1.5 sans-serif;max-width:40em;margin:2em auto"><h1>Inbetrieb: class result</h1><table>` +
     rows.map(([k, v]) => `<tr><th style="text-align:left;padding-right:1em">${esc(k)}</th><td>${esc(v)}</td></tr>`).join("") +
-    "</table></body>";
+    `</table>${checks}</body>`;
   return `data:text/html;charset=utf-8,${encodeURIComponent(html)}`;
 }
 
@@ -101,6 +109,20 @@ function ClassEnded(props: { result: SeatResult; onDone: () => void }) {
               </tr>
             </tbody>
           </table>
+          <div data-testid="result-checks-list">
+            {r.stages.map((st) => (
+              <div key={st.exercise}>
+                {r.stages.length > 1 ? <h3>{st.title}: {fmt(st.score, 1)} of {fmt(st.max_points, 0)} points</h3> : null}
+                <ul class="plain">
+                  {st.checks.map((k) => (
+                    <li key={k.id} class={k.first_passed_s !== null ? "ok" : ""}>
+                      {k.first_passed_s !== null ? "✓" : "✗"} {k.text} <span class="hint">({fmt(k.earned, 1)} of {fmt(k.points, 0)})</span>
+                    </li>
+                  ))}
+                </ul>
+              </div>
+            ))}
+          </div>
           <p class="hint">Your instructor has your checks, traces and commands for the debrief.</p>
           <p>
             <a class="button secondary" data-testid="class-result-save" href={resultFile(r)}
