@@ -44,7 +44,9 @@ from nc_sim.signals import CHANNEL, Signal
 
 log = logging.getLogger(__name__)
 
-PERIOD_S = 0.25  # how often the long tier is fed and pending saves are looked at
+# how often the long tier is fed and pending saves are looked at: the ring holds 16 s, and
+# fewer, longer reads cost the gateway less (an open window is looked at every 20 ms)
+PERIOD_S = 1.0
 # while a window is open (a fast simulation runs through the ring's 16 s in a quarter
 # second): the machines with one, and they alone, are looked at this often
 PENDING_PERIOD_S = 0.02

@@ -268,6 +268,8 @@ class History:
         """The live entries after `cursor`, oldest first, and the next cursor."""
         with self._lock:
             m = self._of(mid)
+            if m.tail_seq <= cursor:  # nothing new: every viewer asks every frame
+                return [], m.tail_seq
             return [e for s, e in m.tail if s > cursor], m.tail_seq
 
     # --- reading ---------------------------------------------------------------------------
