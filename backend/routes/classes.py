@@ -50,7 +50,7 @@ from backend.errors import (
 from backend.report import grades
 from backend.report.pdf import html_to_pdf
 from backend.routes.history import EntryId, FilterDep, Limit
-from backend.services import class_results, training
+from backend.services import class_results, lesson_plan, training
 from backend.services.classes import Classes
 from backend.services.exercises import hint_infos
 
@@ -173,7 +173,7 @@ def move_on(cid: ClassId, req: SeatSelection, services: ServicesDep, actor: Acto
     c = services.classes.running(cid)
     seats = services.classes.select(c, req.seats)
     services.console.record_last(c, seats)
-    services.classes.move_on(actor, c, seats)
+    lesson_plan.move_on(services.classes, actor, c, seats)
     return services.classes.info(c)
 
 

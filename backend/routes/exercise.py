@@ -16,6 +16,7 @@ from api.classes import (
 )
 from backend.deps import ActorDep, MachineDep, ServicesDep, permit
 from backend.errors import Conflict, Forbidden, Invalid, NotFound, responses
+from backend.services import lesson_plan
 from backend.services.classes import Classes
 from backend.services.exercises import exercise_info, hint_infos
 from nc_sim.training.findings import say, unit_of
@@ -48,7 +49,7 @@ def my_exercise(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> 
         stage=seat.stage,
         plan=[ex.title for ex in c.plan],
         done=seat.done,
-        may_move_on=services.classes.may_move_on(actor, c, seat) is None,
+        may_move_on=lesson_plan.may_move_on(actor, c, seat) is None,
     )
 
 
@@ -71,9 +72,9 @@ def move_on(machine: MachineDep, services: ServicesDep, actor: ActorDep) -> Exer
     passed (the instructor at any time). Its result in this one is kept; the machine powers
     on afresh for the next (its starting values, faults and checks), its clock from 0."""
     c, seat = services.classes.seat_by_machine(machine.id)
-    if services.classes.may_move_on(actor, c, seat) is None:
+    if lesson_plan.may_move_on(actor, c, seat) is None:
         services.console.record_last(c, [seat])
-    services.classes.move_on(actor, c, [seat])
+    lesson_plan.move_on(services.classes, actor, c, [seat])
     return my_exercise(machine, services, actor)
 
 

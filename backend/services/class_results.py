@@ -12,7 +12,8 @@ from backend.report.grades import (
     SeatResultRow,
     StageRow,
 )
-from backend.services.classes import Class, Classes
+from backend.services.classes import Classes
+from backend.services.seats import Class
 
 
 def _row(d: StageResult) -> StageRow:

@@ -18,7 +18,6 @@ import json
 import threading
 import time
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
-from dataclasses import dataclass, field
 
 from api.auth import ALLOWED, Action, Role
 from api.classes import (
@@ -47,16 +46,16 @@ from backend.services.audit_log import Entry
 from backend.services.auth import Actor
 from backend.services.exercises import Exercises
 from backend.services.machines import MachineProxy, MachineService, lists_rejected
-from backend.services.store import Store, StoredChange, parameter_entry
-from backend.workers.protocol import Mode, Pace
-from nc_sim.config import MachineConfig, machine_from_lists
+from backend.services.seats import Class, Seat, seat_name, start_values
+from backend.services.store import Store
+from backend.workers.protocol import Pace
+from nc_sim.config import machine_from_lists
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 from nc_sim.training.checks import CheckResult
 from nc_sim.training.exercise import Exercise, ExerciseError, parse_exercise
 from nc_sim.training.score import score as exercise_score
 from nc_sim.training.template import check_fits
-from nc_sim.training.variation import seat_seed
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS classes (  -- backend/services/classes.py
@@ -104,115 +103,6 @@ CREATE TABLE IF NOT EXISTS class_lists (  -- a class's uploaded machine template
 """
 
 
-@dataclass
-class Seat:
-    """One seat's progress (the gateway's: it survives rebuilds of the seat's machine)."""
-
-    class_id: str
-    n: int
-    student: str
-    user: str
-    machine: str
-    exercise: Exercise  # the one it is at, with the seat's own numbers
-    stage: int = 0  # its place in the lesson plan
-    values: dict[str, float] = field(default_factory=dict)  # the seat's numbers in it
-    done: list[StageResult] = field(default_factory=list)  # the exercises moved on from
-    hints: set[int] = field(default_factory=set)
-    first_passed_s: dict[str, float] = field(default_factory=dict)  # check id -> seat time
-    passed: dict[str, bool] = field(default_factory=dict)  # holds now
-    detail: dict[str, str] = field(default_factory=dict)
-    time_base_s: float = 0.0  # seat time of the machine's earlier builds
-    epoch: int = 0
-    epoch_start_s: float | None = None  # machine time the current build was first seen at
-    last_t_s: float = 0.0
-    frozen: bool = False
-    joined_unix: float | None = None  # the student's first login: seat time runs from there
-    hand: RaisedHand | None = None  # the student asks for help
-    faults: list[FaultInfo] = field(default_factory=list)  # as they stood at the class's end
-    answers: findings.Answers = field(default_factory=dict)  # to the finding checks
-
-    @property
-    def seat_time_s(self) -> float:
-        return self.time_base_s + self.last_t_s - (self.epoch_start_s or 0.0)
-
-    def progress_json(self) -> str:
-        return json.dumps(
-            {
-                "hints": sorted(self.hints),
-                "first_passed_s": self.first_passed_s,
-                "passed": self.passed,
-                "detail": self.detail,
-                "seat_time_s": self.seat_time_s,
-                "frozen": self.frozen,
-                "joined_unix": self.joined_unix,
-                "hand": self.hand.model_dump() if self.hand else None,
-                "faults": [f.model_dump(mode="json") for f in self.faults],
-                "answers": {
-                    k: [a.model_dump(mode="json") for a in given]
-                    for k, given in self.answers.items()
-                },
-                "stage": self.stage,
-                "values": self.values,
-                "done": [d.model_dump(mode="json") for d in self.done],
-            }
-        )
-
-    def load_progress(self, text: str, plan: list[Exercise]) -> None:
-        """Its progress as saved; its exercise from `plan` with its numbers."""
-        p = json.loads(text)
-        self.stage = min(int(p.get("stage", 0)), len(plan) - 1)
-        self.values = {k: float(v) for k, v in p.get("values", {}).items()}
-        self.exercise = plan[self.stage].with_values(self.values)
-        self.done = [StageResult.model_validate(d) for d in p.get("done", [])]
-        self.hints = set(p.get("hints", []))
-        self.first_passed_s = dict(p.get("first_passed_s", {}))
-        self.passed = dict(p.get("passed", {}))
-        self.detail = dict(p.get("detail", {}))
-        self.time_base_s = float(p.get("seat_time_s", 0.0))
-        self.frozen = bool(p.get("frozen", False))
-        self.joined_unix = p.get("joined_unix")
-        self.hand = RaisedHand.model_validate(p["hand"]) if p.get("hand") else None
-        self.faults = [FaultInfo.model_validate(f) for f in p.get("faults", [])]
-        self.answers = {
-            k: [AnswerGiven.model_validate(a) for a in given]
-            for k, given in p.get("answers", {}).items()
-        }
-
-
-@dataclass
-class Class:
-    id: str
-    title: str
-    plan: list[Exercise]  # the lesson plan, each exercise as its file says
-    plan_texts: list[str]  # the files
-    instructor: str
-    created_unix: float
-    ended_unix: float | None
-    seats: list[Seat]
-    lists: MachineLists | None = None  # the seats' machine template; None: the demo lathe
-    resumed: ClassResumed | None = None  # built again by a restart of the service
-    presenting: str | None = None  # a machine every seat watches, read-only
-    _machines: dict[tuple[int, int], MachineConfig] = field(default_factory=dict)
-
-    def seat_machine(self, seat: Seat) -> MachineConfig:
-        """A seat's machine as its exercise starts it (what its findings are graded on)."""
-        key = (seat.n, seat.stage)
-        if key not in self._machines:
-            self._machines[key] = findings.seat_machine(seat.exercise, self.lists)
-        return self._machines[key]
-
-    def enter(self, seat: Seat, stage: int) -> None:
-        """The seat is at the plan's exercise `stage`, with its own numbers in it."""
-        ex = self.plan[stage]
-        seat.stage = stage
-        seat.exercise, seat.values = ex.for_seat(seat_seed(self.id, ex.id), seat.n)
-
-
-def seat_name(class_id: str, n: int) -> str:
-    """A seat's login and machine id: `<class>-s01`."""
-    return f"{class_id}-s{n:02d}"
-
-
 class Classes:
     """Every class of the service; the running ones with their machines."""
 
@@ -235,6 +125,7 @@ class Classes:
         self.exercises = exercises
         store.script(SCHEMA)
         self._lock = threading.RLock()
+        self.lock = self._lock  # the lesson plan changes a seat under it too
         self._classes: dict[str, Class] = {}
         self._seat_of: dict[str, Seat] = {}  # login -> seat of a running class
         self._by_machine: dict[str, Seat] = {}
@@ -630,24 +521,13 @@ class Classes:
             )
             # the exercise's start, kept: the instructor can put the seat back to it
             self.snapshots.take(actor, proxy, "exercise start", pinned=True)
-            changes, entries = self._start_values(actor, proxy.id, ex)
+            changes, entries = start_values(actor, proxy.id, ex)
             if changes:
                 self.store.write(proxy.id, changes, entries)
         except BaseException:
             self._remove_seat(seat)
             raise
         return seat
-
-    @staticmethod
-    def _start_values(
-        actor: Actor, mid: str, ex: Exercise
-    ) -> tuple[list[StoredChange], list[Entry]]:
-        """An exercise's starting values as stored changes, each with its audit row."""
-        changes = [
-            StoredChange(v.scope.value, v.target, v.name, None, v.value, "now") for v in ex.start
-        ]
-        why = f"exercise '{ex.id}' starts so"
-        return changes, [parameter_entry(mid, actor.name, actor.session, ch, why) for ch in changes]
 
     def _discard(self, c: Class) -> None:
         """Undo a class whose seats could not all be built."""
@@ -818,68 +698,6 @@ class Classes:
                 f"the exercise '{seat.exercise.title}' locks the {assistant} assistant: "
                 "work it out by hand"
             )
-
-    def may_move_on(self, actor: Actor, c: Class, seat: Seat) -> ApiError | None:
-        """Why the asker may not move the seat on to the plan's next exercise now (None: they
-        may): an instructor at any time, its student once every check has passed."""
-        if c.ended_unix is not None:
-            return Conflict(f"class '{c.id}' has ended")
-        if seat.stage + 1 >= len(c.plan):
-            return Conflict(f"seat {seat.n} is at the plan's last exercise")
-        if Action.TEACH in ALLOWED[actor.role]:
-            return None
-        if actor.name != seat.user:
-            return Forbidden(f"only seat {seat.n}'s student or an instructor moves it on")
-        missing = [k.id for k in seat.exercise.checks if k.id not in seat.first_passed_s]
-        if missing:
-            return Conflict(
-                f"check{'s' if len(missing) > 1 else ''} {', '.join(missing)} not passed yet: "
-                "the instructor can move you on"
-            )
-        return None
-
-    def move_on(self, actor: Actor, c: Class, seats: list[Seat]) -> None:
-        """Each seat to the plan's next exercise (none when one of them may not: its error):
-        its result in the exercise kept, its machine powered on afresh with the next one's
-        starting values (its parameters as the template has them otherwise), faults with the
-        seat's own numbers and checks, a new start snapshot, a clock from 0."""
-        for seat in seats:
-            refusal = self.may_move_on(actor, c, seat)
-            if refusal is not None:
-                raise refusal
-        for seat in seats:
-            self._move_on(actor, c, seat)
-
-    def _move_on(self, actor: Actor, c: Class, seat: Seat) -> None:
-        proxy = self.machines.get(seat.machine)
-        self.update(seat, proxy)
-        done = self.stage_result(c, seat, actor.name, time.time())
-        stage = seat.stage + 1
-        plan_ex = c.plan[stage]
-        ex, values = plan_ex.for_seat(seat_seed(c.id, plan_ex.id), seat.n)
-        changes, entries = self._start_values(actor, seat.machine, ex)
-        self.store.replace_values(seat.machine, changes, entries)
-        self.faults.forget(seat.machine)
-        what = f"exercise {stage + 1} of {len(c.plan)}, '{ex.title}'"
-        mode: Mode = "pause" if seat.frozen or seat.joined_unix is None else "run"
-        faults = [(f.fault, f.trigger) for f in ex.faults]
-        proxy = self.machines.restage(seat.machine, ex, faults, f"{what}: {actor.name}", mode)
-        with self._lock:  # from here on the new build's status counts, from its time 0
-            seat.done.append(done)
-            seat.stage, seat.exercise, seat.values = stage, ex, values
-            seat.hints, seat.answers, seat.hand = set(), {}, None
-            seat.first_passed_s, seat.passed, seat.detail = {}, {}, {}
-            seat.time_base_s, seat.last_t_s = 0.0, 0.0
-            seat.epoch, seat.epoch_start_s = proxy.link.epoch, 0.0
-        self.save(seat)
-        self.faults.keep(proxy)
-        self.snapshots.forget(seat.machine)  # the last exercise's: restored, they would mix
-        self.snapshots.take(actor, proxy, f"start of exercise {stage + 1}", pinned=True)
-        by = seat.student if actor.name == seat.user else actor.name  # a name, not a login
-        proxy.notices.add("exercise", f"{by} moved the seat on to {what}")
-        self.audit.record(
-            self.entry(actor, f"moved seat {seat.n} on to {what}", seat.machine, score=done.score)
-        )
 
     def broadcast(self, seats: list[Seat], text: str, by: str) -> None:
         """A message as a banner on every one of the seats' HMIs."""

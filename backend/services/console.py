@@ -19,10 +19,11 @@ import time
 from dataclasses import dataclass, field
 
 from api.classes import AxisLine, GridFrame, SeatFrame
-from backend.services.classes import Class, Classes, Seat
+from backend.services.classes import Classes
 from backend.services.machines import MachineProxy
 from backend.services.peaks import PeakReader, Peaks
 from backend.services.replay import SeatRecorder
+from backend.services.seats import Class, Seat
 from backend.services.status import AXIS_KIND
 
 log = logging.getLogger(__name__)

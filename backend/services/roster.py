@@ -9,7 +9,8 @@ import time
 
 from api.roster import MAX_ROSTER, RosterStudent, StudentRecord, StudentSession
 from backend.errors import Conflict, not_found
-from backend.services.classes import Class, Classes
+from backend.services.classes import Classes
+from backend.services.seats import Class
 from backend.services.store import Row, Store
 
 SCHEMA = """

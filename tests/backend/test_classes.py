@@ -17,7 +17,8 @@ from websockets.asyncio.client import connect
 from websockets.exceptions import InvalidStatus
 
 from api.auth import CSRF_COOKIE, CSRF_HEADER, Role
-from backend.services.classes import Classes, Seat
+from backend.services.classes import Classes
+from backend.services.seats import Seat
 from nc_sim.config import demo_lists
 from nc_sim.training.exercise import parse_exercise
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
