@@ -328,7 +328,9 @@ class Classes:
 
     def update(self, seat: Seat, proxy: MachineProxy) -> bool:
         """Take the seat machine's newest pushed status in (its seat time and check
-        results); True when a check passed for the first time."""
+        results); True when a check passed for the first time. A rebuilt machine's checks
+        start again from "nothing measured yet": the figure measured before stays until the
+        new build measures one."""
         st = proxy.link.status
         if st is None:
             return False
@@ -337,16 +339,31 @@ class Classes:
             if seat.epoch_start_s is not None:
                 seat.time_base_s = seat.seat_time_s
             seat.epoch, seat.epoch_start_s = proxy.link.epoch, t_s
+            seat.first_detail = {}
         seat.last_t_s = t_s
         news = False
         for r in st.checks:
             assert isinstance(r, CheckResult)
             cid, passed = r.id, r.passed
-            seat.passed[cid], seat.detail[cid] = passed, r.detail
+            blank = seat.first_detail.setdefault(cid, r.detail) == r.detail and not passed
+            seat.passed[cid] = passed
+            if not blank or cid not in seat.detail:
+                seat.detail[cid] = r.detail
             if passed and cid not in seat.first_passed_s:
                 seat.first_passed_s[cid] = seat.seat_time_s
                 news = True
         return news
+
+    def save_running(self) -> None:
+        """Every running seat's progress as it stands now, stored (the service stops: what
+        was measured since the last save is kept)."""
+        for c in self.all():
+            if c.ended_unix is None:
+                for seat in c.seats:
+                    proxy = self.proxy(seat)
+                    if proxy is not None:
+                        self.update(seat, proxy)
+                    self.save(seat)
 
     def save(self, seat: Seat) -> None:
         self.store.run(

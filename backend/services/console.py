@@ -206,6 +206,7 @@ class ConsoleHub:
     async def stop(self) -> None:
         if self._task is not None:
             self._task.cancel()
+        self.classes.save_running()
         self.recorder.flush()
 
     async def _supervise(self) -> None:

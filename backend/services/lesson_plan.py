@@ -69,6 +69,7 @@ def _move_on(classes: Classes, actor: Actor, c: Class, seat: Seat) -> None:
         seat.stage, seat.exercise, seat.values = stage, ex, values
         seat.hints, seat.answers, seat.hand = set(), {}, None
         seat.first_passed_s, seat.passed, seat.detail = {}, {}, {}
+        seat.first_detail = {}
         seat.time_base_s, seat.last_t_s = 0.0, 0.0
         seat.epoch, seat.epoch_start_s = proxy.link.epoch, 0.0
     classes.save(seat)

@@ -36,6 +36,7 @@ class Seat:
     first_passed_s: dict[str, float] = field(default_factory=dict)  # check id -> seat time
     passed: dict[str, bool] = field(default_factory=dict)  # holds now
     detail: dict[str, str] = field(default_factory=dict)
+    first_detail: dict[str, str] = field(default_factory=dict)  # this build's first words
     time_base_s: float = 0.0  # seat time of the machine's earlier builds
     epoch: int = 0
     epoch_start_s: float | None = None  # machine time the current build was first seen at

@@ -184,6 +184,9 @@ def test_a_class_runs_its_lesson_plan(tmp_path: Path) -> None:
         ]
         detail = t.get("/api/classes/plan/seats/1").json()
         assert detail["info"]["done"][0]["score"] == pytest.approx(100.0)
+        # the rebuilt machine has measured nothing yet: the figure from before stays
+        kept = detail["checks"][0]["detail"]
+        assert _measured_k(kept) == pytest.approx(factor * KV, rel=0.01), kept
         assert detail["values"] == {"faults[0].factor": factor}
 
         # the end: the student's result over the plan
