@@ -27,7 +27,7 @@ from api.classes import (
     SeatSelection,
     SnapshotInfo,
 )
-from api.history import HistoryPage
+from api.history import HistoryEntry, HistoryPage
 from api.replay import SeatReplay
 from backend.bodies import LISTS_BODY_BYTES, dated_download, text_answer
 from backend.deps import ActorDep, ServicesDep, permit
@@ -53,6 +53,7 @@ from backend.routes.history import EntryId, FilterDep, Limit
 from backend.services import class_results, lesson_plan, training
 from backend.services.classes import Classes
 from backend.services.exercises import hint_infos
+from backend.services.seats import Seat
 
 router = APIRouter(prefix="/api", tags=["training"])
 
@@ -277,7 +278,12 @@ def seat_history(
     seat = services.classes.seat(cid, n)
     before = (before_unix, before_id) if before_unix is not None and before_id else None
     rows, total = services.history.page(seat.machine, f, limit, before)
-    return HistoryPage(rows=rows, total=total)
+    return HistoryPage(rows=[_named(seat, r) for r in rows], total=total)
+
+
+def _named(seat: Seat, e: HistoryEntry) -> HistoryEntry:
+    """An entry of the seat's student by their name, not the seat's login."""
+    return e.model_copy(update={"actor": seat.student}) if e.actor == seat.user else e
 
 
 @router.get(
@@ -301,7 +307,10 @@ def seat_replay(
     if k > seat.stage:
         raise not_found(f"exercise {k + 1} of seat {n} (it reached {seat.stage + 1})")
     title = c.plan[k].title
-    return services.console.recorder.replay(cid, n, k, title, seat.machine)
+    replay = services.console.recorder.replay(cid, n, k, title, seat.machine)
+    for mark in replay.marks:
+        mark.entry = _named(seat, mark.entry)
+    return replay
 
 
 @router.post(

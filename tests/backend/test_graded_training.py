@@ -114,7 +114,7 @@ def test_a_class_runs_its_lesson_plan(tmp_path: Path) -> None:
         speed = rec["values"][rec["signals"].index("X.speed")]
         assert max(v or 0.0 for v in speed) == pytest.approx(1000.0, rel=0.01)
         moved = next(m for m in rec["marks"] if m["entry"]["text"].startswith("move axis=X"))
-        assert moved["entry"]["actor"] == "plan-s01"
+        assert moved["entry"]["actor"] == "Seat 1"  # the student by name, not the login
         first_motion = next(t for t, v in zip(rec["t_s"], speed, strict=True) if v)
         assert moved["seat_t_s"] <= first_motion + 0.01
         assert all(a <= b for a, b in itertools.pairwise(rec["t_s"]))
