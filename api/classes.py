@@ -160,6 +160,9 @@ class StageResult(BaseModel):
     hints_taken: int
     hint_cost: float
     seat_time_s: float = Field(description="the exercise's own clock, s")
+    finished_s: float | None = Field(
+        None, description="its clock when every check had passed (None: not all have)"
+    )
     values: dict[str, float] = Field(description="the seat's own numbers in it")
     moved_on_by: str = Field(description="who moved the seat on (its student or an instructor)")
     moved_on_unix: float
@@ -391,6 +394,7 @@ class SeatFrame(BaseModel):
     faults: int = Field(description="injected faults (active or armed)")
     seat_time_s: float
     stage: int = Field(description="the exercise it is at (index into the plan)")
+    total_score: float = Field(description="its score over the lesson plan so far")
     hand: RaisedHand | None = Field(None, description="its student asks for help")
     joined: bool = Field(True, description="its student has logged in (its clock runs since)")
     idle_s: float | None = Field(

@@ -31,6 +31,7 @@ class StageRow:
 
     exercise: str
     seat_time_s: float
+    finished_s: float | None  # its clock when every check had passed
     checks: tuple[CheckResultRow, ...]
     hints_taken: int
     hint_cost: float
@@ -100,12 +101,15 @@ def _utc(t: float | None) -> str:
 
 
 def to_csv(r: ClassResults) -> str:
-    """One line per seat and exercise it reached: who, when they joined, the exercise's
-    seat time, per check (`<exercise>.<check>`) the points earned and the seat time of its
-    first pass (empty for another exercise's checks), hints, score of the maximum."""
+    """One line per seat and exercise of the plan (`reached` no: 0 of its maximum, so a
+    student's lines add up to the plan's maximum): who, when they joined, the exercise's seat
+    time and when every check had passed, per check (`<exercise>.<check>`) the points earned
+    and the seat time of its first pass (empty for another exercise's checks), hints, score
+    of the maximum."""
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
-    head = ["class", "exercise", "seat", "student", "login", "joined_utc", "seat_time_s"]
+    head = ["class", "exercise", "reached", "seat", "student", "login", "joined_utc"]
+    head += ["seat_time_s", "finished_s"]
     for x in r.exercises:
         for cid, _text in x.checks:
             head += [f"{x.id}.{cid}_points", f"{x.id}.{cid}_first_passed_s"]
@@ -113,10 +117,15 @@ def to_csv(r: ClassResults) -> str:
     for s in r.seats:
         for x in r.exercises:
             st = s.stage(x.id)
-            if st is None:  # not reached
+            who = [s.n, s.student, s.login, _utc(s.joined_unix)]
+            if st is None:  # not reached: nothing earned of its maximum
+                blank = [""] * sum(2 * len(o.checks) for o in r.exercises)
+                w.writerow(
+                    [r.id, x.id, "no", *who, "", "", *blank, 0, 0, 0, "0.00", f"{x.max_points:g}"]
+                )
                 continue
-            row: list[object] = [r.id, x.id, s.n, s.student, s.login, _utc(s.joined_unix)]
-            row.append(f"{st.seat_time_s:.1f}")
+            row: list[object] = [r.id, x.id, "yes", *who, f"{st.seat_time_s:.1f}"]
+            row.append("" if st.finished_s is None else f"{st.finished_s:.1f}")
             for other in r.exercises:
                 if other is not x:
                     row += [""] * (2 * len(other.checks))
@@ -146,6 +155,8 @@ def _exercise_table(r: ClassResults, k: int, x: ExerciseColumns) -> str:
         seat_time = _clock(st.seat_time_s) if s.joined_unix is not None else "not joined"
         if s.joined_unix is None and st.seat_time_s > 0:  # started by the instructor
             seat_time = f"{_clock(st.seat_time_s)} (no login)"
+        if st.finished_s is not None:
+            seat_time = f"done in {_clock(st.finished_s)}"
         cells.append(f'<td class="num">{seat_time}</td>')
         for c in st.checks:
             mark = "" if c.first_passed_s is None else " ✓"

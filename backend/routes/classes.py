@@ -344,7 +344,7 @@ def results_csv(cid: ClassId, services: ServicesDep) -> Response:
     return dated_download(
         grades.to_csv(class_results.results(services.classes, c)),
         "text/csv",
-        f"class-{cid}",
+        cid,
         "results",
         "csv",
     )
@@ -369,7 +369,7 @@ async def results_pdf(cid: ClassId, services: ServicesDep) -> Response:
     pdf = await html_to_pdf(
         grades.to_html(class_results.results(services.classes, c)), services.settings.chromium
     )
-    return dated_download(pdf, "application/pdf", f"class-{cid}", "grade-list", "pdf")
+    return dated_download(pdf, "application/pdf", cid, "grade-list", "pdf")
 
 
 @router.post(

@@ -76,7 +76,7 @@ async def dry_run(req: DryRunRequest, services: ServicesDep) -> ExerciseDryRun:
     drawn) untouched on a copy for `seconds` of simulated time, its checks judged as a
     seat's worker judges them. Nothing is saved. The warnings say what would make a poor
     exercise: a check that passes with nobody at the machine gives its points away."""
-    ex = services.exercises.check(req.text)
+    ex = services.exercises.check(req.text, "the file")
     seat, values = ex.for_seat(seat_seed(DRY_CLASS, ex.id), 1)
     ran = await services.assistants.dry_run(seat, req.seconds)
     return ExerciseDryRun(

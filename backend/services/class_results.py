@@ -18,7 +18,9 @@ from backend.services.seats import Class
 
 def _row(d: StageResult) -> StageRow:
     checks = tuple(CheckResultRow(k.id, k.points, k.earned, k.first_passed_s) for k in d.checks)
-    return StageRow(d.exercise, d.seat_time_s, checks, d.hints_taken, d.hint_cost, d.score)
+    return StageRow(
+        d.exercise, d.seat_time_s, d.finished_s, checks, d.hints_taken, d.hint_cost, d.score
+    )
 
 
 def results(classes: Classes, c: Class) -> ClassResults:

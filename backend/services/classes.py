@@ -647,6 +647,8 @@ class Classes:
         """The seat's exercise as it stands now, as a result of the plan."""
         ex = seat.exercise
         s = exercise_score(ex, seat.first_passed_s, [n - 1 for n in seat.hints])
+        passes = [seat.first_passed_s.get(k.id) for k in ex.checks]
+        finished = max(p for p in passes if p is not None) if None not in passes else None
         return StageResult(
             exercise=ex.id,
             title=ex.title,
@@ -656,6 +658,7 @@ class Classes:
             hints_taken=len(seat.hints),
             hint_cost=s.hint_cost,
             seat_time_s=seat.seat_time_s,
+            finished_s=finished,
             values=seat.values,
             moved_on_by=by,
             moved_on_unix=at_unix,

@@ -94,6 +94,7 @@ def seat_frame(
         faults=len(m.link.faults) if m is not None else 0,
         seat_time_s=seat.seat_time_s,
         stage=seat.stage,
+        total_score=score + sum(d.score for d in seat.done),
         hand=seat.hand,
         joined=seat.joined_unix is not None,
         idle_s=_idle_s(seat, m),

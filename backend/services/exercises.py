@@ -96,12 +96,12 @@ class Exercises:
         return exercise_info(found[0], found[1])
 
     @staticmethod
-    def check(text: str) -> Exercise:
+    def check(text: str, source: str = "upload") -> Exercise:
         """Parse an exercise file and check it against its machine; 422 with the file's own
         words (the key, the value, what is allowed; a TOML error's line and column)."""
         try:
-            ex = parse_exercise(text, "upload")
-            check_fits(ex, "upload")  # its axes and values fit its machine template
+            ex = parse_exercise(text, source)
+            check_fits(ex, source)  # its axes and values fit its machine template
         except (ExerciseError, ParamListError, NcUsageError) as e:
             raise Invalid(str(e)) from None
         return ex

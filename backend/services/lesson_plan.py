@@ -53,7 +53,8 @@ def move_on(classes: Classes, actor: Actor, c: Class, seats: list[Seat]) -> None
 def _move_on(classes: Classes, actor: Actor, c: Class, seat: Seat) -> None:
     proxy = classes.machines.get(seat.machine)
     classes.update(seat, proxy)
-    done = classes.stage_result(c, seat, actor.name, time.time())
+    by = seat.student if actor.name == seat.user else actor.name  # a name, not a login
+    done = classes.stage_result(c, seat, by, time.time())
     stage = seat.stage + 1
     plan_ex = c.plan[stage]
     ex, values = plan_ex.for_seat(seat_seed(c.id, plan_ex.id), seat.n)
@@ -67,7 +68,7 @@ def _move_on(classes: Classes, actor: Actor, c: Class, seat: Seat) -> None:
     with classes.lock:  # from here on the new build's status counts, from its time 0
         seat.done.append(done)
         seat.stage, seat.exercise, seat.values = stage, ex, values
-        seat.hints, seat.answers, seat.hand = set(), {}, None
+        seat.hints, seat.answers = set(), {}  # a raised hand stays up: not seen to yet
         seat.first_passed_s, seat.passed, seat.detail = {}, {}, {}
         seat.first_detail = {}
         seat.time_base_s, seat.last_t_s = 0.0, 0.0
@@ -76,7 +77,6 @@ def _move_on(classes: Classes, actor: Actor, c: Class, seat: Seat) -> None:
     classes.faults.keep(proxy)
     classes.snapshots.forget(seat.machine)  # the last exercise's: restored, they would mix
     classes.snapshots.take(actor, proxy, f"start of exercise {stage + 1}", pinned=True)
-    by = seat.student if actor.name == seat.user else actor.name  # a name, not a login
     proxy.notices.add("exercise", f"{by} moved the seat on to {what}")
     classes.audit.record(
         classes.entry(actor, f"moved seat {seat.n} on to {what}", seat.machine, score=done.score)

@@ -411,7 +411,9 @@ class _NoEvent:
         # the seconds of the window it moved in, of those after the last such event
         busy_s = sum(1 for b in self.busy if (b + 1) * self.per_s > max(since, after))
         need_s = int(np.ceil(self.rule.busy_pct / 100.0 * self.rule.window_s - 1e-9))
-        names = "/".join(Code(c).name for c in sorted(self.codes))
+        names = "/".join(
+            str(c) for c in sorted(self.codes)
+        )  # job error numbers, as the NC shows them
         quiet = self.last_event is None or self.last_event.cycle <= since
         long_enough = self.first_moved is not None and self.first_moved <= since
         moved_now = self.last_moved is not None and self.last_moved > since

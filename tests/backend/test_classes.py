@@ -225,7 +225,7 @@ def test_the_gain_check_passes_only_on_the_seat_that_fixed_multi_gain(srv: Serve
     assert hint.status_code == 200, hint.text
     r = t.get("/api/classes/gain/results.csv")
     assert r.status_code == 200 and r.headers["content-type"].startswith("text/csv")
-    assert 'filename="class-gain_results_' in r.headers["content-disposition"]
+    assert 'filename="gain_results_' in r.headers["content-disposition"]
     rows = list(csv.DictReader(io.StringIO(r.text)))
     assert [x["seat"] for x in rows] == ["1", "2"]
     one, two = rows

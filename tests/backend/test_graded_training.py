@@ -103,7 +103,7 @@ def test_a_class_runs_its_lesson_plan(tmp_path: Path) -> None:
         assert ex["seat_time_s"] < 5.0  # its own clock, from 0
         (done,) = ex["done"]
         assert done["exercise"] == "sound-x" and done["score"] == pytest.approx(100.0)
-        assert done["moved_on_by"] == "plan-s01"
+        assert done["moved_on_by"] == "Seat 1"  # the student by name (none given: the seat)
         assert 0 < done["checks"][0]["first_passed_s"] <= done["seat_time_s"]
         assert ex["checks"][0]["first_passed_s"] is None  # the new exercise's check: open
         # the replay of exercise 1: X ran at the commanded 1000 mm/min after the student's move
@@ -162,6 +162,11 @@ def test_a_class_runs_its_lesson_plan(tmp_path: Path) -> None:
             ("2", "multi-gain"),
         ]
         assert float(rows[0]["sound-x.gain_points"]) == pytest.approx(100.0)
+        # every check passed: when, on the exercise's clock
+        assert float(rows[0]["finished_s"]) == pytest.approx(
+            done["checks"][0]["first_passed_s"], abs=0.1
+        )
+        assert rows[1]["finished_s"] == "" and {x["reached"] for x in rows} == {"yes"}
         assert rows[0]["multi-gain.gain_points"] == ""  # another exercise's column
         assert float(rows[1]["multi-gain.gain_points"]) == 0.0
         assert float(rows[2]["score"]) == 0.0 and rows[2]["checks_passed"] == "0"

@@ -14,6 +14,7 @@ import { RefusalLine } from "../ui/useCommand";
 
 const MAX_SEATS = 60; // api/classes.py MAX_SEATS
 const MAX_PLAN = 8; // api/classes.py MAX_PLAN
+const LOOPBACK = /^(127\.|localhost$|\[::1\]$)/;
 
 /** What an exercise of the plan brings, in a line. */
 function ExerciseLine(props: { ex: ExerciseInfo; k: number; plan: number }) {
@@ -22,7 +23,7 @@ function ExerciseLine(props: { ex: ExerciseInfo; k: number; plan: number }) {
     <div class="exercise-info" data-testid={`exercise-info-${props.k}`}>
       <p>{props.plan > 1 ? <b>{props.k + 1}. {ex.title}: </b> : null}{ex.summary}</p>
       <p class="hint">
-        {ex.checks.length} checks ({ex.checks.map((c) => c.text).join("; ")}) · {ex.hints.length} hints ·{" "}
+        {ex.checks.length} check{ex.checks.length === 1 ? "" : "s"} ({ex.checks.map((c) => c.text).join("; ")}) · {ex.hints.length} hints ·{" "}
         <b>{ex.faults} fault{ex.faults === 1 ? "" : "s"} at start</b> · par time {ex.par_time_s} s · {ex.source}
         {ex.varied.length ? <> · <b>each seat its own numbers</b> ({ex.varied.join(", ")})</> : null}
         {ex.locked_assistants.length ? <> · locks the assistants {ex.locked_assistants.join(", ")}</> : null}
@@ -190,7 +191,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
           {plan.map((eid, k) => (
             <div class="plan-row" key={k}>
               <label>
-                {k === 0 ? "Exercise" : `then ${k + 1}.`}
+                {k === 0 ? (plan.length > 1 ? "1. Exercise" : "Exercise") : `${k + 1}. then`}
                 <select value={eid} data-testid={k === 0 ? "class-exercise" : `class-plan-${k}`} onChange={(e) => setAt(k, (e.target as HTMLSelectElement).value)}>
                   {exercises.value.filter((x) => x.id === eid || !plan.includes(x.id)).map((x) => (
                     <option key={x.id} value={x.id}>{x.title} ({x.id})</option>
@@ -238,7 +239,7 @@ export function CreateClass(props: { onCreated: (c: ClassCreated) => void; onCan
           <select value={linkHours} data-testid="class-link-hours" onChange={(e) => setLinkHours(Number((e.target as HTMLSelectElement).value))}>
             <option value={1}>1 hour</option>
             <option value={8}>8 hours</option>
-            <option value={24}>24 hours (the day before)</option>
+            <option value={24}>24 hours (links made the day before)</option>
             <option value={72}>3 days</option>
           </select>
         </label>
@@ -301,7 +302,7 @@ export function SeatLinks(props: { created: ClassCreated; onDone: () => void }) 
     }
   };
   return (
-    <Panel id="seat-links" title={`Login links of class '${info.id}'`}
+    <Panel id="seat-links" title={`Login links of class ${info.title || info.id} (${info.id})`}
       actions={
         <span class="link-actions">
           <button type="button" class="secondary" data-testid="links-copy-all" onClick={copyAll}>{copied === 0 ? "Copied all" : "Copy all"}</button>{" "}
@@ -309,6 +310,13 @@ export function SeatLinks(props: { created: ClassCreated; onDone: () => void }) 
           <button type="button" data-testid="links-done" onClick={props.onDone}>I have them</button>
         </span>
       }>
+      {links.some((l) => LOOPBACK.test(new URL(l.url).hostname)) ? (
+        <p class="refusal" role="alert" data-testid="links-loopback">
+          These links point to {new URL(links[0].url).host}: only this computer can open them. For students on other PCs or
+          phones, open the console by the service's network name (the service listening there, e.g. behind the reverse proxy
+          with --behind-proxy) and make the links again.
+        </p>
+      ) : null}
       <p class="once-note" role="note">
         <b>Shown this once.</b> Each link logs one student into their seat, once, until {until}. Hand them out, print the sheet
         or copy them all; a lost link: make a new one for that seat (it logs out whoever used the old one).

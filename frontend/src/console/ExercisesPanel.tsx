@@ -102,7 +102,7 @@ export function ExercisesPanel() {
             New exercise
           </button>
           <ul class="plain exercise-list" data-testid="exercise-list">
-            {exercises.value.map((x) => (
+            {[...exercises.value].sort((a, b) => a.title.localeCompare(b.title)).map((x) => (
               <li key={x.id} class={opened?.id === x.id ? "picked" : ""}>
                 <button type="button" class="link" data-testid={`exercise-open-${x.id}`} onClick={() => open(x)}>{x.title}</button>
                 <div class="hint">{x.id} · {x.source}</div>
@@ -117,7 +117,7 @@ export function ExercisesPanel() {
             <code>locked_assistants</code>, <code>[[hints]]</code> and <code>[[checks]]</code>.
           </p>
           <textarea class="mono exercise-text" rows={26} spellcheck={false} value={text} aria-label="exercise file" data-testid="exercise-text"
-            onInput={(e) => { setText((e.target as HTMLTextAreaElement).value); setSaved(""); }} />
+            onInput={(e) => { setText((e.target as HTMLTextAreaElement).value); setSaved(""); setRefusal(null); }} />
           <div class="row">
             <button type="button" data-testid="exercise-try" disabled={busy} onClick={() => void tryIt()}>
               {busy ? "Trying…" : "Try it on a copy"}

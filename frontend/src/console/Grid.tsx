@@ -46,6 +46,10 @@ function ClassBar(props: { c: ClassInfo }) {
   const [ending, setEnding] = useState(false); // asking whether to end the class
   const [moving, setMoving] = useState(false); // asking whether to move seats on
   const picked = [...selected.value].sort((a, b) => a - b);
+  const notDone = seats.value
+    .map((s) => s.frame.value)
+    .filter((f) => (!picked.length || picked.includes(f.n)) && f.progress < 1)
+    .map((f) => f.n);
   const target = picked.length ? `seat${picked.length > 1 ? "s" : ""} ${picked.join(", ")}` : "the whole class";
   return (
     <div class="class-bar" aria-label="actions on seats">
@@ -66,7 +70,10 @@ function ClassBar(props: { c: ClassInfo }) {
       {c.exercises.length > 1 ? (
         moving ? (
           <span class="confirm" role="group" aria-label="confirm moving seats on">
-            <span>Move {target} on to the next exercise? Each seat's score so far is kept; its machine powers on afresh.</span>
+            <span>
+              Move {target} on to the next exercise? Each seat's score so far is kept; its machine powers on afresh.
+              {notDone.length ? <b> Not every check passed yet: seat{notDone.length > 1 ? "s" : ""} {notDone.join(", ")}.</b> : null}
+            </span>
             <button type="button" data-testid="grid-next-confirm" onClick={() => { setMoving(false); void act(() => moveSeatsOn(c.id, picked)); }}>
               Yes, move on
             </button>

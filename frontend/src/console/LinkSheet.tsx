@@ -1,6 +1,7 @@
 // The seats' login links on paper: a card per seat (student, seat, class, a QR code of the
 // link and the link itself, until when it works), printed with the browser's print dialog.
 // Only the sheet prints (console.css @media print); on screen it stays hidden.
+import { exercises } from "../state/classes";
 import qrcode from "qrcode-generator";
 import type { ClassInfo, SeatLink } from "../api/types";
 
@@ -24,6 +25,7 @@ export function QrCode(props: { text: string; size_mm: number }) {
 
 export function LinkSheet(props: { info: ClassInfo; links: SeatLink[] }) {
   const { info, links } = props;
+  const plan = info.exercises.map((id) => exercises.value.find((e) => e.id === id)?.title ?? id).join(" → ");
   return (
     <div class="print-sheet" data-testid="link-sheet" aria-hidden="true">
       {links.map((l) => {
@@ -32,7 +34,7 @@ export function LinkSheet(props: { info: ClassInfo; links: SeatLink[] }) {
           <section class="link-card" key={l.n} data-testid={`link-card-${l.n}`}>
             <h2>{seat?.student || `Seat ${l.n}`}</h2>
             <p>
-              Seat {l.n} · class <b>{info.title || info.id}</b> · {info.exercises.join(" → ")}
+              Seat {l.n} · class <b>{info.title || info.id}</b>{plan !== info.title ? ` · ${plan}` : ""}
             </p>
             <QrCode text={l.url} size_mm={45} />
             <p class="mono link-text">{l.url}</p>

@@ -50,7 +50,7 @@ export function RosterPanel() {
           <section data-testid="roster-record">
             <h3>{record.student.name}</h3>
             <p class="hint">
-              on the roster since {day(record.student.created_unix)} (by {record.student.by}) · {record.sessions.length} classes
+              on the roster since {day(record.student.created_unix)} (by {record.student.by}) · {record.sessions.length} class{record.sessions.length === 1 ? "" : "es"}
             </p>
             <table class="dense">
               <thead><tr><th>class</th><th>day</th><th class="num">seat</th><th>exercises</th><th class="num">score</th><th /></tr></thead>

@@ -67,7 +67,7 @@ export function SeatDetail(props: { c: ClassInfo; n: number }) {
       <RefusalLine refusal={refusal} id="detail-refusal" />
       {d ? (
         <p class="hint">
-          {mid} · login {d.info.user} · seat time {clock(d.info.seat_time_s)} · progress {Math.round(d.info.progress * 100)} % · score{" "}
+          {mid} · login {d.info.user} · {c.exercises.length > 1 ? "in this exercise: " : ""}seat time {clock(d.info.seat_time_s)} · progress {Math.round(d.info.progress * 100)} % · score{" "}
           <b>{fmt(d.info.score, 1)}</b> · hints taken {d.info.hints_taken}
           {running ? (
             <>

@@ -61,12 +61,13 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string; pla
             help
           </button>
         ) : null}
+        {f.hand?.text ? <span class="seat-hand-text" data-testid="seat-hand-text" title={f.hand.text}>“{f.hand.text}”</span> : null}
         {f.progress >= 1 ? (
           <span class="seat-done" data-testid="seat-done" title="every check of its exercise has passed">done</span>
         ) : null}
         {idle ? (
           <span class="seat-idle" data-testid="seat-idle" title="no command from the student for this long">
-            idle {clock(f.idle_s ?? 0)}
+            no input {clock(f.idle_s ?? 0)}
           </span>
         ) : null}
       </header>
@@ -95,11 +96,13 @@ export function SeatTile(props: { seat: SeatLive; cid: string; user: string; pla
           <span class="bar" style={{ width: `${Math.round(f.progress * 100)}%` }} />
         </span>
         {plan > 1 ? (
-          <span class="num seat-stage" data-testid="seat-stage" title={`at exercise ${f.stage + 1} of the plan's ${plan}`}>
-            {f.stage + 1}/{plan}
+          <span class="num seat-stage" title={`at exercise ${f.stage + 1} of the plan's ${plan}`}>
+            ex&nbsp;<span data-testid="seat-stage">{f.stage + 1}/{plan}</span>
           </span>
         ) : null}
-        <span class="num" data-testid="seat-score" title="score in this exercise">{fmt(f.score, 0)}&nbsp;pt</span>
+        <span class="num" data-testid="seat-score" title={plan > 1 ? `${fmt(f.score, 0)} in this exercise, ${fmt(f.total_score, 0)} over the plan` : "score"}>
+          {fmt(plan > 1 ? f.total_score : f.score, 0)}&nbsp;pt
+        </span>
         <span class={f.faults ? "seat-faults has" : "seat-faults"} data-testid="seat-faults" title="injected faults (active or armed)">
           ⚡{f.faults}
         </span>

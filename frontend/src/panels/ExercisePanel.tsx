@@ -77,7 +77,7 @@ export function ExercisePanel() {
             </p>
           ) : null}
           {ex.hints.length ? (
-            ex.hints.map((h) => <HintRow key={h.n} hint={h} mine={ex.takes_hints} />)
+            ex.hints.map((h) => <HintRow key={h.n} hint={h} mine={ex.takes_hints} done={ex.checks.every((c) => c.first_passed_s !== null)} />)
           ) : (
             <p class="hint">This exercise has no hints.</p>
           )}
@@ -299,7 +299,7 @@ function Finding(props: { check: string; finding: FindingState; mine: boolean; p
 }
 
 /** `mine`: the seat's own student, who may take it (anyone else reads it, taken or not). */
-function HintRow({ hint: h, mine }: { hint: HintInfo; mine: boolean }) {
+function HintRow({ hint: h, mine, done }: { hint: HintInfo; mine: boolean; done: boolean }) {
   const [asking, setAsking] = useState(false);
   const [busy, setBusy] = useState(false);
   const [error, setError] = useState("");
@@ -324,6 +324,8 @@ function HintRow({ hint: h, mine }: { hint: HintInfo; mine: boolean }) {
           <span class="hint">taken: −{cost} points</span>
         ) : !mine ? (
           <span class="hint" data-testid="hint-not-taken">not taken ({cost} points)</span>
+        ) : done ? (
+          <span class="hint" data-testid="hint-not-needed">not needed: every check has passed</span>
         ) : asking ? (
           <span class="confirm" role="group" aria-label={`confirm hint ${h.n}`}>
             <span>

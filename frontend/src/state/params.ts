@@ -121,6 +121,14 @@ export async function writeAll(changes: ParameterChange[], comment: string): Pro
   return r;
 }
 
+/** A class seat moved on to its next exercise: its machine powered on afresh with that
+ * exercise's parameters, so the values on trial of the last one went with it. */
+export function dropTrialOf(machine: string): void {
+  if (trial.peek()?.machine !== machine) return;
+  trial.value = null;
+  trialMessage.value = "The next exercise began: the values on trial of the last one went with it.";
+}
+
 export function keepTrial(): void {
   const t = trial.peek();
   trial.value = null;

@@ -22,6 +22,7 @@ import { clientId, http } from "../api/http";
 import { loadMe } from "./auth";
 import { addEvents, restartLog } from "./events";
 import { addHistory } from "./history";
+import { dropTrialOf } from "./params";
 import { presentationChanged } from "./presenting";
 import { Rings } from "./rings";
 import { checkMachineStill, machineId, noticeArrived, socket, statusArrived } from "./session";
@@ -123,7 +124,10 @@ function onMessage(text: string): void {
       // presentation began or ended: who may see which machine changed
       if (!noticeArrived(msg)) break;
       if (msg.kind === "present") void presentationChanged().catch(() => undefined);
-      else if (msg.kind !== "message" && msg.kind !== "frozen" && msg.kind !== "resumed") restartLog();
+      else if (msg.kind === "exercise") {
+        dropTrialOf(machineId.value);
+        restartLog();
+      } else if (msg.kind !== "message" && msg.kind !== "frozen" && msg.kind !== "resumed") restartLog();
       break;
     case "error":
       console.warn("telemetry:", msg.message);

@@ -241,7 +241,7 @@ def test_sign_error_fixed_but_x_moved_only_a_moment_ago_is_not_a_minute_of_use()
     assert seat.result("no-trip").detail == "X has not moved"
     seat.x_back_and_forth(4.0)
     assert not seat.passed("no-trip")
-    assert "X in use without LAG_MONITORING: 4 of 60 s" in seat.result("no-trip").detail
+    assert "X in use without 90002: 4 of 60 s" in seat.result("no-trip").detail
     seat.x_back_and_forth(60.0)
     assert seat.passed("no-trip"), seat.result("no-trip")
 

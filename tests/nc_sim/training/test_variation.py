@@ -20,7 +20,7 @@ VARY["step"] = "step = 0.005"  # the lines of multi-gain.toml's [[vary]]
 
 def test_every_seat_of_a_class_gets_its_own_factor_on_the_grid() -> None:
     ex = parse_exercise(MULTI_GAIN, "multi-gain.toml")
-    assert ex.locked == ("multi-gain", "multi-gain-calc")
+    assert ex.locked == ("multi-gain", "multi-gain-calc", "loop-gain")
     seed = seat_seed("class-1", ex.id)
     drawn = [ex.for_seat(seed, n)[1]["faults[0].factor"] for n in range(1, 51)]
     grid = {round(0.35 + 0.005 * k, 12) for k in range(51)}
@@ -58,7 +58,7 @@ def test_a_wrong_variation_is_refused_naming_its_key(change: str, key: str, says
 
 
 def test_a_locked_assistant_must_be_one_of_the_service() -> None:
-    text = MULTI_GAIN.replace('"multi-gain-calc"]', '"multi-gain-calculator"]')
+    text = MULTI_GAIN.replace('"multi-gain-calc",', '"multi-gain-calculator",')
     with pytest.raises(ExerciseError) as e:
         parse_exercise(text, "x.toml")
     assert e.value.key == "locked_assistants[1]" and "multi-gain-calc" in e.value.allowed
