@@ -32,7 +32,7 @@ from backend.services.shares import PREFIX as GUEST_PREFIX
 OPEN_PATHS = frozenset(
     {"/api/health", "/api/auth/login", "/api/auth/logout", "/api/auth/seat-result"}
 )
-GUARDED_PREFIXES = ("/api/", "/rerun")
+GUARDED_PREFIXES = ("/api/", "/rerun", "/metrics")
 
 
 def guarded(path: str) -> bool:

@@ -29,6 +29,7 @@ from backend.services.exercises import Exercises
 from backend.services.flight import FlightRecorder
 from backend.services.history import History
 from backend.services.machines import MachineProxy, MachineService
+from backend.services.metrics import Metrics, Sources
 from backend.services.recorder import Recorders
 from backend.services.replay import SeatRecorder
 from backend.services.report import Reports
@@ -78,6 +79,7 @@ class Services:
     bundles: Bundles
     shares: Shares
     roster: Roster
+    metrics: Metrics
 
     @classmethod
     async def start(cls, settings: Settings) -> Services:
@@ -165,7 +167,11 @@ class Services:
             Bundles(store, tdir / "bundles", traces),
             shares,
             Roster(store, classes),
+            Metrics(),
         )
+        transport = "ray" if settings.cluster else "local"
+        sources = Sources(transport, services.started, machines, hub, console, audit)
+        services.metrics.attach(sources)
         services.print_login_link()
         return services
 

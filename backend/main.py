@@ -28,6 +28,7 @@ from backend.routes import (
     flight,
     history,
     machines,
+    metrics,
     parameters,
     programs,
     report,
@@ -101,6 +102,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         users,
         versions,
         viewer,
+        metrics,
     ):
         app.include_router(
             module.router,

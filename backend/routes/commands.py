@@ -38,14 +38,18 @@ async def command(
     single block, program stop, spindle, gear, homing, jog, move, override, HLI, PLC, reset
     (only while holding control of the machine: the first command takes a free one)."""
     store = services.store
-    return await execute(
-        actor,
-        machine,
-        cmd,
-        services.audit,
-        services.history,
-        lambda name: programs.stored_text(store, actor, name),
-    )
+    answered = services.metrics.observe_command(cmd.type)  # refused ones too: the NC answered
+    try:
+        return await execute(
+            actor,
+            machine,
+            cmd,
+            services.audit,
+            services.history,
+            lambda name: programs.stored_text(store, actor, name),
+        )
+    finally:
+        answered()
 
 
 @router.post(

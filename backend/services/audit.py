@@ -126,6 +126,10 @@ class Audit:
             self.record_later(replace(entry, outcome=f"refused ({e.status}): {e}"))
             raise
 
+    def queue_depth(self) -> int:
+        """Entries waiting for the writer thread."""
+        return self._later.qsize()
+
     def record_later(self, entry: Entry, written: _Written | None = None) -> None:
         """Append one row soon, in order, without waiting (`written` is told its seq, or the
         error, on the writer's thread once the row is committed)."""

@@ -59,6 +59,12 @@ class WorkerClient(ABC):
         self._on_push: PushHandler = lambda _c, _p: None
         self._on_death: DeathHandler = lambda _c: None
 
+    @property
+    def pending_calls(self) -> int:
+        """Requests sent and waiting for their reply (a queue that grows: a slow worker)."""
+        with self._lock:
+            return len(self._waiting)
+
     def start(self, on_push: PushHandler, on_death: DeathHandler) -> None:
         """Start the worker; pushes and its death are reported to these handlers."""
         self._on_push, self._on_death = on_push, on_death

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 from nc_sim.config import MachineConfig
 from nc_sim.errors import is_error
-from nc_sim.sim import Simulation
 from nc_sim.training.checks import CheckResult, ExerciseMonitor
 from nc_sim.training.exercise import Exercise
 from nc_sim.training.template import seat_config
@@ -34,6 +33,8 @@ def dry_run(exercise: Exercise, seconds: float, template: MachineConfig | None =
     """Run a seat of `exercise` (as given: pass a seat's, numbers drawn) untouched for
     `seconds` (at most MAX_DRY_S) of simulated time on `template` (changed in place) or the
     demo lathe. Raises ValueError for a check naming an axis the machine lacks."""
+    from nc_sim.sim import Simulation  # the kernel: here, not when the gateway imports DryRun
+
     sim = Simulation()
     m = sim.add(seat_config(exercise, template))
     for f in exercise.faults:

@@ -32,6 +32,7 @@ FREE = "free"
 RULES: dict[tuple[str, str], tuple[str, str]] = {
     ("GET", "/api/auth/me"): ("observer", FREE),
     ("GET", "/api/service/status"): ("observer", FREE),
+    ("GET", "/metrics"): ("observer", FREE),
     ("GET", "/api/machines"): ("observer", FREE),
     ("GET", "/api/assistants"): ("observer", FREE),
     ("POST", "/api/machines"): ("admin", FREE),
