@@ -75,6 +75,15 @@ def _signals(
     return names, units, values
 
 
+@dataclass
+class Sample:
+    """One sample of a seat as read back: when, on its clock, and each signal's value."""
+
+    wall_unix: float
+    seat_t_s: float
+    values: list[float | None]
+
+
 class SeatRecorder:
     """Samples running seats (ConsoleHub's tick calls `sample`), stores them in chunks."""
 
@@ -161,28 +170,28 @@ class SeatRecorder:
     def replay(self, class_id: str, n: int, stage: int, exercise: str, machine: str) -> SeatReplay:
         """The seat's recording in one exercise with its history on the same clock."""
         self.flush(class_id)
-        rows: list[list[float | None]] = []
+        samples: list[Sample] = []
         signals: list[str] = []
         units: list[str] = []
-        for r in self.store.query(
+        for stored in self.store.query(
             "SELECT data FROM seat_recordings WHERE class = ? AND n = ? AND stage = ? "
             "ORDER BY t0_s, rowid",
             (class_id, n, stage),
         ):
-            chunk = json.loads(zlib.decompress(r["data"]))
+            chunk = json.loads(zlib.decompress(stored["data"]))
             for name, unit in zip(chunk["signals"], chunk["units"], strict=True):
                 if name not in signals:
                     signals.append(name)
                     units.append(unit)
             index = [signals.index(name) for name in chunk["signals"]]
-            for row in chunk["rows"]:
+            for wall, seat_t, *got in chunk["rows"]:
                 values: list[float | None] = [None] * len(signals)
-                for i, v in zip(index, row[2:], strict=True):
+                for i, v in zip(index, got, strict=True):
                     values[i] = v
-                rows.append([row[0], row[1], *values])
-        for row in rows:  # signals named in later chunks only: their earlier rows are short
-            row.extend([None] * (2 + len(signals) - len(row)))
-        marks = self._marks(machine, rows)
+                samples.append(Sample(wall, seat_t, values))
+        for sample in samples:  # signals named in later chunks only: earlier samples lack them
+            sample.values.extend([None] * (len(signals) - len(sample.values)))
+        marks = self._marks(machine, samples)
         return SeatReplay(
             class_id=class_id,
             seat=n,
@@ -191,18 +200,18 @@ class SeatRecorder:
             sample_s=SAMPLE_S,
             signals=signals,
             units=units,
-            t_s=[float(r[1] or 0.0) for r in rows],
-            values=[[r[2 + i] for r in rows] for i in range(len(signals))],
+            t_s=[x.seat_t_s for x in samples],
+            values=[[x.values[i] for x in samples] for i in range(len(signals))],
             marks=marks,
         )
 
-    def _marks(self, machine: str, rows: list[list[float | None]]) -> list[ReplayMark]:
+    def _marks(self, machine: str, samples: list[Sample]) -> list[ReplayMark]:
         """The machine's history between the first and the last sample (a sample's span
         either side), each at the seat time its wall time falls on."""
-        if not rows:
+        if not samples:
             return []
-        walls = [float(r[0] or 0.0) for r in rows]
-        seats = [float(r[1] or 0.0) for r in rows]
+        walls = [x.wall_unix for x in samples]
+        seats = [x.seat_t_s for x in samples]
         f = HistoryFilter(since_unix=walls[0] - SAMPLE_S, until_unix=walls[-1] + SAMPLE_S)
         entries, _total = self.history.page(machine, f, MAX_MARKS)
         return [
