@@ -15,7 +15,7 @@ from nc_sim.params import ParamListError
 def main(argv: list[str] | None = None) -> int:
     # here, not at the top: a local worker process (multiprocessing "spawn") imports this
     # module again as its main module, and needs none of the accounts' or assistants' code
-    from backend import cli_accounts, cli_assist
+    from backend import cli_accounts, cli_assist, cli_backup
 
     parser = argparse.ArgumentParser(prog="inbetrieb", description=__doc__)
     sub = parser.add_subparsers(dest="cmd", required=True)
@@ -61,9 +61,12 @@ def main(argv: list[str] | None = None) -> int:
     p_api.add_argument("--out", type=Path, default=Path("var/openapi.json"))
     cli_accounts.add_parsers(sub)
     cli_assist.add_parsers(sub)
+    cli_backup.add_parsers(sub)
     args = parser.parse_args(argv)
     if args.cmd in ("user", "token"):
         return cli_accounts.run(args)
+    if args.cmd in ("backup", "restore"):
+        return cli_backup.run(args)
     if args.cmd == "assist":
         return cli_assist.run(args)
     if args.cmd == "openapi":
