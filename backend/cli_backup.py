@@ -4,6 +4,7 @@ the traces in one archive; a backup while the service runs, a restore while it i
 from __future__ import annotations
 
 import argparse
+import sqlite3
 import sys
 from pathlib import Path
 
@@ -36,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
             _say(f"backed up to {args.file}", backup(settings.db_path, traces, args.file))
         else:
             _say(f"restored from {args.file}", restore(args.file, settings.db_path, traces))
-    except BackupError as e:
+    except (BackupError, OSError, sqlite3.Error) as e:  # a full disk, a folder not there
         print(f"inbetrieb {args.cmd}: {e}", file=sys.stderr)
         return 2
     return 0
