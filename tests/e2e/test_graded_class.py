@@ -20,6 +20,7 @@ from pypdf import PdfReader
 
 from api.auth import Role
 from tests.backend.server import OTHERS_PASSWORD, Server, add_users, bearer
+from tests.backend.test_graded_training import SOUND_X  # exercise 1: X follows its kv
 from tests.e2e.browser import panel, shot, signed_in_page
 from tests.e2e.test_class_console import student, tile
 
@@ -27,23 +28,6 @@ OWN_SERVICE = True  # restarts the service in the middle of the class
 
 TRAINER = "trainer"
 CLASS = "graded"
-# exercise 1: X follows its kv on a sound machine (a move at constant feed passes it)
-SOUND_X = """
-id = "sound-x"
-title = "X follows"
-summary = "Move X at constant feed and watch its lag."
-task = "Move X with G01 at 1 m/min for a few seconds."
-par_time_s = 900
-machine = "demo"
-
-[[checks]]
-id = "gain"
-text = "X's measured gain is within 1 % of kv"
-points = 100
-kind = "gain"
-axis = "X"
-within_pct = 1.0
-"""
 
 
 @pytest.fixture(scope="module")
