@@ -41,6 +41,10 @@ class AuditRecord(BaseModel):
     detail: dict[str, Any] = Field(description="the request as data (a command, a change)")
     outcome: str = Field(description="'ok', or why it was refused")
     hash: str = Field(description="SHA-256 over the row before's hash and this row")
+    request_id: str = Field(
+        description="the request that made it, as the service's log and the answer's "
+        "X-Request-ID name it ('' for rows of earlier versions and of the service itself)"
+    )
 
 
 class AuditPage(BaseModel):

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from backend import VERSION
+from backend.services import migrations
+from backend.services.store import STEPS
 
 ROOT = "inbetrieb"  # the archive's top folder
 STORE = f"{ROOT}/store.sqlite"
@@ -113,6 +115,10 @@ def restore(archive: Path, db: Path, traces: Path) -> Summary:
         if not store.exists() or not (root / MANIFEST).exists():
             raise BackupError(f"{archive}: not an Inbetrieb backup (no {STORE} or manifest)")
         _integrity(store)
+        try:  # a newer release's store would be refused at start: leave what is there
+            migrations.check_file(store, STEPS)
+        except migrations.StoreTooNew as e:
+            raise BackupError(f"{archive}: {e}") from None
         summary = Summary(**json.loads((root / MANIFEST).read_text()))
         stamp = time.strftime("%Y%m%d-%H%M%S")
         db.parent.mkdir(parents=True, exist_ok=True)

@@ -8,6 +8,11 @@ import argparse
 import sys
 from pathlib import Path
 
+from pydantic import ValidationError
+
+from backend.services import migrations
+from backend.services.store import STEPS
+from backend.settings import Settings
 from nc_sim.errors import NcUsageError
 from nc_sim.params import ParamListError
 
@@ -23,8 +28,8 @@ def main(argv: list[str] | None = None) -> int:
     p_sim.add_argument("scenario", type=Path)
     p_sim.add_argument("--out", type=Path, default=Path("out"))
     p_srv = sub.add_parser("serve", help="start the web service")
-    p_srv.add_argument("--host", default="127.0.0.1")
-    p_srv.add_argument("--port", type=int, default=8000)
+    p_srv.add_argument("--host", help="the address to bind (default 127.0.0.1)")
+    p_srv.add_argument("--port", type=int, help="its port (default 8000)")
     p_srv.add_argument("--db", type=Path, help="SQLite file (default var/inbetrieb.sqlite)")
     p_srv.add_argument("--no-demo", action="store_true", help="no demo machine in a new store")
     p_srv.add_argument("--workers", type=int, help="worker processes (default: one per core)")
@@ -89,23 +94,35 @@ def main(argv: list[str] | None = None) -> int:
         rows = len(next(iter(result.columns.values())))
         print(f"{rows} cycles, {len(result.events)} events ({len(errors)} errors) -> {args.out}")
         return 0
-    from backend.server import Exposure, serve
+    # an option given wins over its INBETRIEB_* variable (a container's or a unit's settings)
+    given = {
+        "host": args.host,
+        "port": args.port,
+        "db_path": args.db,
+        "demo": False if args.no_demo else None,
+        "workers": args.workers,
+        "cluster": args.cluster,
+        "recordings_quota_mb": args.recordings_quota_mb,
+        "allowed_hosts": args.allowed_host or None,
+        "tls_cert": args.tls_cert,
+        "tls_key": args.tls_key,
+        "behind_proxy": args.behind_proxy,
+    }
+    try:
+        settings = Settings.model_validate({k: v for k, v in given.items() if v is not None})
+    except ValidationError as e:
+        for err in e.errors():
+            where = ".".join(str(x) for x in err["loc"])
+            print(f"inbetrieb serve: {where}: {err['msg']}", file=sys.stderr)
+        return 2
+    try:  # before anything starts: a store of a newer release is left as it is
+        migrations.check_file(settings.db_path, STEPS)
+    except migrations.StoreTooNew as e:
+        print(f"inbetrieb serve: {e}", file=sys.stderr)
+        return 2
+    from backend.server import serve  # the app, once the settings are known to be good
 
-    overrides: dict[str, object] = {}
-    if args.db:
-        overrides["db_path"] = args.db
-    if args.no_demo:
-        overrides["demo"] = False
-    if args.workers is not None:
-        overrides["workers"] = args.workers
-    if args.cluster:
-        overrides["cluster"] = args.cluster
-    if args.recordings_quota_mb is not None:
-        overrides["recordings_quota_mb"] = args.recordings_quota_mb
-    if args.allowed_host:
-        overrides["allowed_hosts"] = args.allowed_host
-    exposure = Exposure(args.tls_cert, args.tls_key, args.behind_proxy)
-    return serve(args.host, args.port, overrides, exposure)
+    return serve(settings)
 
 
 if __name__ == "__main__":

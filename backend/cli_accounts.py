@@ -1,4 +1,4 @@
-"""`inbetrieb user add|list|remove|passwd` and `inbetrieb token create|list|revoke`: people
+"""`inbetrieb user add|list|remove|passwd|link` and `inbetrieb token create|list|revoke`: people
 on the command line, straight in the store (the service need not run; a running one closes
 the websockets of what ended here within seconds)."""
 
@@ -28,6 +28,15 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p_rm.add_argument("name")
     p_pw = users.add_parser("passwd", help="set a user's password (their sessions end)")
     p_pw.add_argument("name")
+    p_link = users.add_parser(
+        "link", help="print a one-time login link of a user (good once, within an hour)"
+    )
+    p_link.add_argument("name")
+    p_link.add_argument(
+        "--url",
+        default="http://127.0.0.1:8000",
+        help="the address browsers reach the service by (default http://127.0.0.1:8000)",
+    )
     p_tok = sub.add_parser("token", help="API tokens for scripts")
     tokens = p_tok.add_subparsers(dest="action", required=True)
     p_new = tokens.add_parser("create", help="print a new API token of a user")
@@ -37,7 +46,7 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     p_tlist.add_argument("--user", help="only this user's")
     p_revoke = tokens.add_parser("revoke", help="revoke an API token by its public id")
     p_revoke.add_argument("id", help="as `token list` shows it (token-...)")
-    for p in (p_add, p_list, p_rm, p_pw, p_new, p_tlist, p_revoke):
+    for p in (p_add, p_list, p_rm, p_pw, p_link, p_new, p_tlist, p_revoke):
         p.add_argument("--db", type=Path, help=db_help)
     for p in (p_add, p_pw):
         p.add_argument("--password-stdin", action="store_true", help="read the password from stdin")
@@ -86,6 +95,10 @@ def run(args: argparse.Namespace) -> int:
             accounts.remove_user(args.name)
         elif args.action == "passwd":
             accounts.set_password(args.name, _password(args))
+        elif args.action == "link":
+            # the first login on a server, where the service prints no link (not on loopback)
+            token = accounts.new_token(args.name, "printed by `inbetrieb user link`", once=True)
+            print(f"{args.url.rstrip('/')}/auth/once?token={token}")
     except AccountError as e:
         print(f"inbetrieb {args.cmd}: {e}", file=sys.stderr)
         return 2

@@ -13,6 +13,7 @@ from backend.authn import Authentication, guarded
 from backend.bodies import DEFAULT_BODY_BYTES, OPEN_BODY_BYTES, BodyLimitAnswer
 from backend.deps import Services, rule_of
 from backend.errors import Forbidden, NotLoggedIn, responses
+from backend.logs import RequestLog
 from backend.routes import (
     assist,
     audit,
@@ -69,7 +70,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     )
     app.add_middleware(Authentication)
     app.add_middleware(BodyLimitAnswer)
-    app.add_middleware(Perimeter, hosts=host_names(cfg.host, cfg.allowed_hosts))  # outermost
+    app.add_middleware(Perimeter, hosts=host_names(cfg.host, cfg.allowed_hosts))
+    app.add_middleware(RequestLog)  # outermost: a refused request is logged with its id too
 
     errors.install(app)
     app.include_router(auth.router, max_body_size=OPEN_BODY_BYTES)

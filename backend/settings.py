@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import ipaddress
 from pathlib import Path
+from typing import Annotated, Literal
 
-from pydantic import Field
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from api.control import GRACE_S
 
@@ -94,11 +96,26 @@ class Settings(BaseSettings):
         Path("/usr/bin/chromium"), description="Chromium, to print the report as PDF"
     )
     host: str = Field("127.0.0.1", description="the address the service binds")
-    port: int = Field(8000, ge=0, le=65535, description="its port (for the login link)")
-    https: bool = Field(False, description="it serves HTTPS itself (for the login link)")
-    allowed_hosts: list[str] = Field(
+    port: int = Field(8000, ge=0, le=65535, description="its port")
+    # a list from the environment as a container or a systemd unit sets it: comma-separated
+    allowed_hosts: Annotated[list[str], NoDecode] = Field(
         default_factory=list,
-        description="Host names clients reach the service by, besides loopback and `host`",
+        description="Host names clients reach the service by, besides loopback and `host` "
+        "(INBETRIEB_ALLOWED_HOSTS=a.example,b.example)",
+    )
+    log_format: Literal["text", "json"] = Field(
+        "text", description="the log on stderr: lines of text, or one JSON object per line"
+    )
+    log_level: Literal["debug", "info", "warning", "error"] = Field(
+        "warning", description="info adds an access line per request (and websocket)"
+    )
+    tls_cert: Path | None = Field(None, description="TLS certificate (PEM): it serves HTTPS")
+    tls_key: Path | None = Field(None, description="the certificate's private key (PEM)")
+    behind_proxy: str | None = Field(
+        None,
+        description="served through the reverse proxy at this address (or these, comma-"
+        "separated, or a network such as 10.42.0.0/16) that terminates TLS: only its "
+        "X-Forwarded-For/-Proto headers count",
     )
 
     control_grace_s: float = Field(
@@ -107,6 +124,31 @@ class Settings(BaseSettings):
         le=3600,
         description="a machine's control outlives its holder's last connection this long, s",
     )
+
+    @field_validator("allowed_hosts", mode="before")
+    @classmethod
+    def _comma_separated(cls, v: object) -> object:
+        return [h.strip() for h in v.split(",") if h.strip()] if isinstance(v, str) else v
+
+    @field_validator("behind_proxy")
+    @classmethod
+    def _addresses(cls, v: str | None) -> str | None:
+        if not v:  # an empty variable: no proxy
+            return None
+        # uvicorn would take a name or "*" too: trusting anyone's forwarded headers is refused
+        for part in v.split(","):
+            try:
+                ipaddress.ip_network(part.strip(), strict=False)
+            except ValueError:
+                raise ValueError(
+                    f"the proxy is an IP address or network (10.0.0.5, 10.42.0.0/16), not {part!r}"
+                ) from None
+        return v
+
+    @property
+    def https(self) -> bool:
+        """It serves HTTPS itself (for the login link)."""
+        return self.tls_cert is not None
 
     @property
     def traces_path(self) -> Path:

@@ -96,6 +96,7 @@ def _record(r: Row) -> AuditRecord:
         detail=json.loads(r["detail"]),
         outcome=r["outcome"],
         hash=r["hash"],
+        request_id=r["request_id"],
     )
 
 
@@ -196,7 +197,7 @@ class Audit:
             where += (" AND" if where else " WHERE") + " seq < ?"
             args += (before_seq,)
         rows = self.store.query(
-            f"SELECT {COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
+            f"SELECT {COLUMNS}, request_id FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
             (*args, min(limit, MAX_PAGE)),
         )
         return AuditPage(rows=[_record(r) for r in rows], total=total)
@@ -206,7 +207,7 @@ class Audit:
         self.flush()
         where, args = f.where()
         rows = self.store.query(
-            f"SELECT {COLUMNS} FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
+            f"SELECT {COLUMNS}, request_id FROM audit_log{where} ORDER BY seq DESC LIMIT ?",
             (*args, CSV_ROWS),
         )
         out = io.StringIO()

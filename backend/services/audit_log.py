@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from api.audit import AuditKind
+from backend.logs import request_id
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS audit_log (
@@ -28,9 +29,11 @@ CREATE TABLE IF NOT EXISTS audit_log (
     prev TEXT NOT NULL,            -- the row before's hash ('' before the first)
     hash TEXT NOT NULL,
     sim_t_s REAL,                  -- the machine's simulated time then (not hashed: a stamp)
-    epoch INTEGER                  -- the machine's build then
+    epoch INTEGER,                 -- the machine's build then
+    request_id TEXT NOT NULL DEFAULT ''  -- the request that made it (the log's; not hashed)
 );
 CREATE INDEX IF NOT EXISTS audit_log_machine ON audit_log (machine, kind);
+CREATE INDEX IF NOT EXISTS audit_log_machine_time ON audit_log (machine, time);
 CREATE TRIGGER IF NOT EXISTS audit_log_no_update BEFORE UPDATE ON audit_log
 BEGIN SELECT RAISE(ABORT, 'the audit trail is append-only'); END;
 CREATE TRIGGER IF NOT EXISTS audit_log_no_delete BEFORE DELETE ON audit_log
@@ -56,6 +59,7 @@ class Entry:
     time: float | None = None
     # the machine's build and simulated time it happened at (None: when it is written)
     stamp: tuple[int, float] | None = None
+    request_id: str = field(default_factory=request_id)  # the request being served, if any
 
 
 def who_and_when(
@@ -107,8 +111,9 @@ def append(db: sqlite3.Connection, entries: list[Entry], clock: Clock | None = N
         digest = row_hash(prev, fields)
         stamp = e.stamp or (clock(e.machine) if clock is not None and e.machine else None)
         db.execute(
-            f"INSERT INTO audit_log ({COLUMNS}, epoch, sim_t_s) VALUES ({', '.join('?' * 14)})",
-            (*fields, prev, digest, *(stamp or (None, None))),
+            f"INSERT INTO audit_log ({COLUMNS}, epoch, sim_t_s, request_id) "
+            f"VALUES ({', '.join('?' * 15)})",
+            (*fields, prev, digest, *(stamp or (None, None)), e.request_id),
         )
         prev = digest
         seqs.append(seq)

@@ -16,7 +16,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
-from backend.services import audit_log
+from backend import VERSION
+from backend.services import audit_log, migrations
+from backend.services.migrations import Step, add_column, has_table
 from nc_sim.params import Value
 
 T = TypeVar("T")
@@ -35,6 +37,10 @@ CREATE TABLE IF NOT EXISTS programs (
     updated_by TEXT NOT NULL,
     PRIMARY KEY (owner, name)
 )"""
+# after the steps: a store of the first versions has programs without owners until step 1
+_PROGRAMS_INDEX = (
+    "CREATE UNIQUE INDEX IF NOT EXISTS programs_owner_name ON programs (owner, name COLLATE NOCASE)"
+)
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS machines (
     id TEXT PRIMARY KEY,
@@ -181,6 +187,7 @@ class Store:
         self._db.row_factory = Row  # every row, in `query` and in a transaction's work
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=NORMAL")  # WAL stays consistent; no sync per row
+        new = migrations.is_new(self._db)
         self._db.executescript(_SCHEMA)
         self._db.execute(_PROGRAMS)
         self._db.executescript(audit_log.SCHEMA)
@@ -190,64 +197,12 @@ class Store:
         # told each transaction's new audit rows once committed (the history's live view)
         self.on_audited: Callable[[list[tuple[int, audit_log.Entry]]], None] | None = None
         self._audited: list[tuple[int, audit_log.Entry]] = []  # in the running transaction
-        self._migrate()
-
-    def _migrate(self) -> None:
-        """Files of earlier versions: parameter values get versions, and the parameter audit
-        table becomes the start of the chained trail."""
-        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(param_values)")]
-        if "version" not in columns:
-            self._db.execute(
-                "ALTER TABLE param_values ADD COLUMN version INTEGER NOT NULL DEFAULT 0"
-            )
-        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(audit_log)")]
-        if "epoch" not in columns:  # rows of earlier versions have no simulated time
-            self._db.execute("ALTER TABLE audit_log ADD COLUMN sim_t_s REAL")
-            self._db.execute("ALTER TABLE audit_log ADD COLUMN epoch INTEGER")
-        self._db.execute(
-            "CREATE INDEX IF NOT EXISTS audit_log_machine_time ON audit_log (machine, time)"
-        )
-        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(traces)")]
-        if "created_by" not in columns:  # traces of earlier versions count for nobody
-            self._db.execute("ALTER TABLE traces ADD COLUMN created_by TEXT NOT NULL DEFAULT ''")
-        columns = [r["name"] for r in self._db.execute("PRAGMA table_info(programs)")]
-        if "owner" not in columns:  # programs were service-wide only: all of them stay so
-            self.transaction(_programs_get_owners)
-        self._db.execute(
-            "CREATE UNIQUE INDEX IF NOT EXISTS programs_owner_name "
-            "ON programs (owner, name COLLATE NOCASE)"
-        )
-        old = self._db.execute(
-            "SELECT name FROM sqlite_master WHERE type = 'table' AND name = 'audit'"
-        ).fetchone()
-        if old is None:
-            return
-        rows = self._db.execute(
-            "SELECT time, machine, actor, scope, target, name, old, new, effect, comment "
-            "FROM audit ORDER BY seq"
-        ).fetchall()
-        entries = [
-            parameter_entry(
-                r["machine"],
-                r["actor"],
-                "",
-                StoredChange(
-                    r["scope"],
-                    r["target"],
-                    r["name"],
-                    None if r["old"] is None else json.loads(r["old"]),
-                    json.loads(r["new"]),
-                    r["effect"],
-                ),
-                r["comment"],
-                r["time"],
-            )
-            for r in rows
-        ]
-        with self._db:
-            self._db.execute("BEGIN")
-            audit_log.append(self._db, entries)
-            self._db.execute("DROP TABLE audit")
+        try:
+            self.steps_taken = migrations.upgrade(self._db, STEPS, VERSION, new, str(path))
+        except migrations.StoreTooNew:
+            self._db.close()
+            raise
+        self._db.execute(_PROGRAMS_INDEX)
 
     def transaction(self, work: Callable[[sqlite3.Connection], T]) -> T:
         """Run `work` on the connection in one transaction (the audit trail's chain)."""
@@ -269,7 +224,9 @@ class Store:
         return seqs
 
     def close(self) -> None:
+        """Close the file, its write-ahead log folded in (a stopped service leaves one file)."""
         with self._lock:
+            self._db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
             self._db.close()
 
     # --- for the services with tables of their own (accounts) -------------------------------
@@ -526,6 +483,57 @@ def _program(r: Row) -> StoredProgram:
 def _lines(text: str) -> int:
     """Lines as an editor counts them (a last line without its newline counts)."""
     return len(text.splitlines())
+
+
+def _before_versions(db: sqlite3.Connection) -> None:
+    """Step 1: a store made before the version table, of any age, gets what was added since
+    the first ones; the parameter audit table of the first files becomes the start of the
+    chained trail."""
+    add_column(db, "param_values", "version", "INTEGER NOT NULL DEFAULT 0")
+    add_column(db, "audit_log", "sim_t_s", "REAL")  # earlier rows have no simulated time
+    add_column(db, "audit_log", "epoch", "INTEGER")
+    add_column(db, "traces", "created_by", "TEXT NOT NULL DEFAULT ''")  # nobody's: service-wide
+    programs = [c["name"] for c in db.execute("PRAGMA table_info(programs)")]
+    if "owner" not in programs:  # programs were service-wide only: all of them stay so
+        _programs_get_owners(db)
+    if not has_table(db, "audit"):
+        return
+    carried = db.execute(
+        "SELECT time, machine, actor, scope, target, name, old, new, effect, comment "
+        "FROM audit ORDER BY seq"
+    ).fetchall()
+    entries = [
+        parameter_entry(
+            a["machine"],
+            a["actor"],
+            "",
+            StoredChange(
+                a["scope"],
+                a["target"],
+                a["name"],
+                None if a["old"] is None else json.loads(a["old"]),
+                json.loads(a["new"]),
+                a["effect"],
+            ),
+            a["comment"],
+            a["time"],
+        )
+        for a in carried
+    ]
+    audit_log.append(db, entries)
+    db.execute("DROP TABLE audit")
+
+
+def _request_ids(db: sqlite3.Connection) -> None:
+    """Step 2: audit rows name the request that made them (the JSON log's `request_id`)."""
+    add_column(db, "audit_log", "request_id", "TEXT NOT NULL DEFAULT ''")
+
+
+# the schema's history (backend/services/migrations.py): append, never change a step taken
+STEPS = (
+    Step(1, "the schema of the stores before the version table", _before_versions),
+    Step(2, "audit rows name their request", _request_ids),
+)
 
 
 def _programs_get_owners(db: sqlite3.Connection) -> None:

@@ -61,10 +61,11 @@ class WireChannel:
 def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) -> None:
     """The worker process: load the compiled kernel, then pace until the gateway goes."""
     # imported here: the gateway process never loads the kernel
+    from backend.logs import configure_worker
     from backend.workers.warmup import warm_up
     from backend.workers.worker import Worker, realtime_priority
 
-    logging.basicConfig(level=logging.WARNING, format="worker %(process)d: %(message)s")
+    configure_worker()
     # Ctrl-C reaches the whole process group, systemd's stop the whole unit: the gateway
     # stops its workers in order (its socket closing ends this one), so they wait for it
     signal.signal(signal.SIGINT, signal.SIG_IGN)

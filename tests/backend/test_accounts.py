@@ -176,6 +176,17 @@ def test_users_and_tokens_on_the_command_line(tmp_path: Path) -> None:
             )
             assert c.get("/api/auth/me").status_code == 401  # a new password ends sessions
             assert login(c, "ute", "battery staple").status_code == 200
+        # the first login on a server, where nothing is printed at start
+        link = cli(db, "user", "link", "ute", "--url", s.base + "/").stdout.strip()
+        assert link.startswith(f"{s.base}/auth/once?token="), link
+        path = link.removeprefix(s.base)
+        with browser_like(s) as c:
+            assert c.get(path, follow_redirects=False).status_code == 303
+            assert c.get("/api/auth/me").json()["name"] == "ute"
+        with browser_like(s) as c:
+            assert c.get(path, follow_redirects=False).status_code == 401  # good once
+        with browser_like(s) as c:
+            assert login(c, "ute", "battery staple").status_code == 200
             assert cli(db, "user", "remove", "ute").returncode == 0
             gone = c.get("/api/auth/me", headers={"Authorization": f"Bearer {token}"})
             assert gone.status_code == 401  # their token went with them

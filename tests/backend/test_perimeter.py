@@ -7,6 +7,7 @@ read (answer pings) and send UTF-8 text."""
 from __future__ import annotations
 
 import asyncio
+import os
 import re
 import socket
 import ssl
@@ -182,10 +183,12 @@ def test_the_api_docs_load_only_from_this_service(srv: Server) -> None:
     assert srv.http.get("/openapi.json").json()["info"]["title"] == "Inbetrieb"
 
 
-def _serve(*args: str) -> subprocess.CompletedProcess[str]:
+def _serve(*args: str, **env: str) -> subprocess.CompletedProcess[str]:
     """`inbetrieb serve` that must refuse: it exits without serving."""
     cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(free_port()), *args]
-    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=60)
+    return subprocess.run(
+        cmd, cwd=ROOT, capture_output=True, text=True, timeout=60, env={**os.environ, **env}
+    )
 
 
 def test_serving_beyond_loopback_needs_tls_or_a_proxy(tmp_path: Path) -> None:
@@ -197,6 +200,19 @@ def test_serving_beyond_loopback_needs_tls_or_a_proxy(tmp_path: Path) -> None:
     assert anywhere.returncode == 2 and "--allowed-host" in anywhere.stderr
     half = _serve("--tls-cert", str(tmp_path / "c.pem"), *db)
     assert half.returncode == 2 and "go together" in half.stderr
+    # the same from the environment, as a container or a systemd unit sets it
+    plain = _serve(*db, INBETRIEB_HOST="0.0.0.0")
+    assert plain.returncode == 2 and "refusing to serve on 0.0.0.0 without TLS" in plain.stderr
+    anyone = _serve(*db, INBETRIEB_HOST="0.0.0.0", INBETRIEB_BEHIND_PROXY="*")
+    assert anyone.returncode == 2 and "behind_proxy" in anyone.stderr, anyone.stderr
+    assert "Traceback" not in anyone.stderr
+    named = _serve(
+        *db,
+        INBETRIEB_HOST="0.0.0.0",
+        INBETRIEB_BEHIND_PROXY="10.42.0.0/16",
+        INBETRIEB_TLS_CERT=str(tmp_path / "c.pem"),
+    )
+    assert named.returncode == 2 and "go together" in named.stderr
     assert not (tmp_path / "x.sqlite").exists()  # nothing started
 
 
