@@ -88,7 +88,7 @@ _RAY = _RayCluster()
 
 def _uses_ray(item: pytest.Item) -> bool:
     callspec = getattr(item, "callspec", None)
-    return item.path.name == "test_cluster.py" or (
+    return item.path.name in ("test_cluster.py", "test_cluster_restart.py") or (
         callspec is not None and callspec.params.get("transport") == "ray"
     )
 

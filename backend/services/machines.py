@@ -359,17 +359,7 @@ class MachineService:
             sm = next((s for s in self.store.machines() if s.id == proxy.id), None)
             if sm is None:
                 continue
-            try:
-                with proxy.lock:
-                    proxy.cfg = self._config(sm)
-                    proxy.pending.clear()
-                    self._place(proxy, f"rebuilt: {why}", failure=True)
-            except ApiError as e:  # no live worker (the service stops, or none could start)
-                if not self.pool.stopping:
-                    log.warning("machine %s could not be rebuilt: %s", proxy.id, e)
-                continue
-            except Exception:
-                log.exception("machine %s could not be rebuilt", proxy.id)
+            if not self._rebuild(proxy, sm, why):
                 continue
             self.rebuilt += 1
             proxy.notices.add(
@@ -378,6 +368,29 @@ class MachineService:
                 "starts as after power-on: simulated time from 0, axes at their start "
                 "positions, spindle stopped, earlier events and pending values gone",
             )
+
+    def _rebuild(self, proxy: MachineProxy, sm: StoredMachine, why: str) -> bool:
+        """Build a lost machine on a live worker; with none left (a Ray head restarting
+        took every one), once the first successor runs. False if it could not be."""
+        while True:
+            try:
+                with proxy.lock:
+                    proxy.cfg = self._config(sm)
+                    proxy.pending.clear()
+                    self._place(proxy, f"rebuilt: {why}", failure=True)
+                return True
+            except ApiError as e:  # no live worker (the service stops, or none could start)
+                if self.pool.stopping:
+                    return False
+                if self.pool.alive():
+                    log.warning("machine %s could not be rebuilt: %s", proxy.id, e)
+                    return False
+                log.warning("machine %s waits for a worker to be rebuilt on", proxy.id)
+                if not self.pool.wait_for_live():
+                    return False
+            except Exception:
+                log.exception("machine %s could not be rebuilt", proxy.id)
+                return False
 
 
 def lists_rejected(e: ParamListError | NcUsageError) -> ApiError:

@@ -7,6 +7,7 @@ actors spread over the cluster's nodes. The rest of the gateway sees only `Worke
 from __future__ import annotations
 
 import asyncio
+import itertools
 import logging
 import os
 import shutil
@@ -24,6 +25,9 @@ log = logging.getLogger(__name__)
 
 Factory = Callable[[str, float, Path], WorkerClient]  # (id, loop period, ring folder)
 REPLACEMENT_WAIT_S = 10.0  # a dead worker's machines wait this long at most for its successor
+# waits between tries to start a successor that failed to start (a Ray head restarting takes
+# seconds to a minute): tried again until it runs or the service stops
+RETRY_S = (1.0, 2.0, 4.0, 8.0, 15.0, 30.0)
 
 
 def default_count() -> int:
@@ -76,6 +80,8 @@ class WorkerPool:
         self.replaced = 0
         self._replacing: list[threading.Thread] = []  # replacements being started
         self._stopping = False
+        self._stopped = threading.Event()  # ends a replacement's wait before its next try
+        self._joined = threading.Condition()  # told when a worker joins (or the pool stops)
 
     @property
     def stopping(self) -> bool:
@@ -134,19 +140,31 @@ class WorkerPool:
         up = threading.Event()
 
         def start() -> None:
-            w = self._new()
-            try:
-                w.start(self._on_push, self._on_death)
-            except BaseException:  # Ray ends a call with SystemExit when it shuts down
-                if not self._stopping:
-                    log.exception("the replacement for worker %s did not start", dead.id)
-                return
+            for attempt in itertools.count():
+                w = self._new()
+                try:
+                    w.start(self._on_push, self._on_death)
+                    break
+                except BaseException as e:  # Ray ends a call with SystemExit when it shuts down
+                    if self._stopping:
+                        return
+                    wait_s = RETRY_S[min(attempt, len(RETRY_S) - 1)]
+                    log.warning(
+                        "the successor of worker %s did not start (%s): again in %g s",
+                        dead.id,
+                        str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__,
+                        wait_s,
+                    )
+                    if self._stopped.wait(wait_s):
+                        return
             if self._stopping:  # came up while the service stops: it goes too
                 w.stop()
                 return
             with self._lock:
                 self.workers = [x for x in self.workers if x is not dead] + [w]
             up.set()
+            with self._joined:
+                self._joined.notify_all()
 
         if not self.alive():
             start()  # nothing left to rebuild on: wait for the new one
@@ -156,8 +174,17 @@ class WorkerPool:
         t.start()
         up.wait(REPLACEMENT_WAIT_S)
 
+    def wait_for_live(self) -> bool:
+        """Wait until a worker runs (True) or the pool stops (False)."""
+        with self._joined:
+            self._joined.wait_for(lambda: bool(self.alive()) or self._stopping)
+        return not self._stopping
+
     def stop(self) -> None:
         self._stopping = True  # a replacement starting now stops once it is up
+        self._stopped.set()
+        with self._joined:
+            self._joined.notify_all()
         for w in self.workers:
             try:
                 w.stop()

@@ -28,6 +28,10 @@ import os
 
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # before ray loads: no usage reports
 os.environ.setdefault("RAY_ENABLE_AUTO_CONNECT", "0")  # a call after leaving must not rejoin
+# a Ray Client rides out a network blip to the same head this long (Ray's default 30 s); a
+# head that restarted is a new cluster: the workers are started afresh on it (backend/
+# workers/pool.py tries until it is up), the machines rebuilt from the store
+os.environ.setdefault("RAY_CLIENT_RECONNECT_GRACE_PERIOD", "10")
 
 import contextlib
 import importlib.util
@@ -65,18 +69,21 @@ CONNECT_TRIES = 3  # joining through a Ray Client server, which may fail to star
 
 _connect_lock = threading.Lock()
 _homes: dict[int, str] = {}  # id(RayWorker) -> node id, live workers of this gateway
+_joined = 0  # how many times this gateway joined: a lost connection is left once, not a new one
 
 
 SHIPPED = ("nc_sim", "api", "backend")  # what the actors import: the gateway ships it to a client
 
 
-def connect(address: str) -> None:
-    """Join the cluster as a driver (once per process): `HOST:PORT` is the head's GCS
-    address (the gateway runs on a cluster node), `ray://HOST:PORT` a Ray Client server
-    (the gateway's packages go with the job)."""
+def connect(address: str) -> int:
+    """Join the cluster as a driver (once, or again after `lost`): `HOST:PORT` is the head's
+    GCS address (the gateway runs on a cluster node), `ray://HOST:PORT` a Ray Client server
+    (the gateway's packages go with the job). Which joining this is (for `lost`)."""
+    global _joined
     with _connect_lock:
         if ray.is_initialized():
-            return
+            return _joined
+        _joined += 1
         runtime_env = shipped_code() if address.startswith("ray://") else None
         # ray.init takes over SIGTERM (sys.exit); the server's own shutdown must keep it
         main = threading.current_thread() is threading.main_thread()
@@ -101,6 +108,16 @@ def connect(address: str) -> None:
                 time.sleep(attempt * 2.0)
         for sig, handler in kept.items():
             signal.signal(sig, handler)
+        return _joined
+
+
+def lost(joined: int) -> None:
+    """The connection of that joining is broken (the head went away): leave it, so the next
+    `connect` joins afresh. A worker of an older joining finding out late changes nothing."""
+    with _connect_lock:
+        if joined == _joined and ray.is_initialized():
+            with contextlib.suppress(Exception):  # a client whose server is gone
+                ray.shutdown()
 
 
 def shipped_code() -> dict[str, Any]:
@@ -229,10 +246,15 @@ class RayWorker(WorkerClient):
         self.actor: Any = None  # the actor handle
         self._stopping = False
         self._poller: threading.Thread | None = None
+        self._joined = 0  # the joining of the cluster its actor belongs to
 
     def _launch(self) -> None:
-        connect(self.cluster)
-        node = _choose_node(self)
+        self._joined = connect(self.cluster)
+        try:
+            node = _choose_node(self)
+        except Exception:
+            lost(self._joined)  # a connection whose head went away: the next try joins afresh
+            raise
         strategy = NodeAffinitySchedulingStrategy(node, soft=False)
         actor = WorkerActor.options(scheduling_strategy=strategy).remote(  # type: ignore[attr-defined]
             self.period_s
@@ -255,6 +277,7 @@ class RayWorker(WorkerClient):
         """Take the actor's pushes in batches until it is gone or stopped."""
         suspect = 0
         why = ""
+        broken = False  # the connection to the cluster, not only this actor
         while not self._stopping:
             try:
                 batch = ray.get(self.actor.poll.remote(POLL_S), timeout=POLL_S + POLL_TIMEOUT_S)
@@ -270,14 +293,20 @@ class RayWorker(WorkerClient):
             except (RayActorError, RayError) as e:  # the loop ended, or an actor error
                 why = f"{_first_line(e)}"
                 break
+            except Exception as e:  # a Ray Client whose head went away: ConnectionError
+                why, broken = f"the cluster connection broke ({_first_line(e)})", True
+                break
             suspect = 0
             for push in batch:
                 self._received(push)
         if self._stopping:
             return
         _release(self)
-        with contextlib.suppress(Exception):  # a hung or failed actor must not keep running
-            ray.kill(self.actor)
+        if broken:  # its replacement joins afresh (when the head is back)
+            lost(self._joined)
+        else:
+            with contextlib.suppress(Exception):  # a hung or failed actor must not keep running
+                ray.kill(self.actor)
         self._died(why)
 
     def stop(self) -> None:

@@ -76,6 +76,26 @@ class LocalCluster(Cluster):
     """A `Cluster` whose head also serves Ray Client."""
 
     client_address: str  # `ray://127.0.0.1:PORT`
+    head_args: dict[str, Any]  # how the head was started (its ports among them)
+
+    def restart_head(self) -> None:
+        """Stop every node, the head last (as a head machine that reboots takes its cluster
+        down), then start the head again on the same GCS and Ray Client ports and as many
+        worker nodes as there were."""
+        nodes = len(self.worker_nodes)
+        for node in list(self.worker_nodes):
+            self.remove_node(node)
+        assert self.head_node is not None
+        self.remove_node(self.head_node)
+        # this process' view of the cluster: the new head is another cluster (Ray aborts
+        # a process that asks the new head with the old cluster's id)
+        self.global_state.disconnect()
+        with warnings.catch_warnings():  # Ray drops its handles on the client server's logs
+            warnings.simplefilter("ignore", ResourceWarning)
+            self.add_node(**self.head_args)
+        for _ in range(nodes):
+            self.add_node(**NODE_ARGS)
+        self.wait_for_nodes()
 
 
 @contextmanager
@@ -101,6 +121,8 @@ def local_cluster(worker_nodes: int = 2) -> Iterator[LocalCluster]:
             warnings.simplefilter("ignore", ResourceWarning)
             cluster = LocalCluster(initialize_head=True, head_node_args=head)
         cluster.client_address = f"ray://{LOOPBACK}:{client_port}"
+        # the same GCS port when the head starts again (Ray chose it the first time)
+        cluster.head_args = {**head, "gcs_server_port": int(cluster.address.rsplit(":", 1)[1])}
         for _ in range(worker_nodes):
             cluster.add_node(**NODE_ARGS)
         cluster.wait_for_nodes()
