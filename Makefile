@@ -90,3 +90,95 @@ bench: $(DEV_STAMP) $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache *.egg-info frontend/node_modules \
 	       frontend/dist $(SCHEMA_TS) $(OPENAPI)
+
+# --- The container image (deploy/Containerfile) ----------------------------------------------
+# No container registry is reachable here and no container engine runs: the base is Debian
+# bookworm made by mmdebstrap from Debian's packages (its python3 is 3.11, as the wheels want),
+# and buildah builds on it without a daemon (chroot isolation). Elsewhere any engine builds the
+# same Containerfile on the official python:3.11-slim-bookworm (docs/operations-guide.md). The
+# build itself reads no network: its context holds the wheels and the HMI built here.
+# IMAGE_EXTRAS=cluster makes the Ray head/node image (Ray beside the service).
+.PHONY: image image-base image-context image-test image-clean
+IMAGE_VERSION := $(shell sed -n 's/^version = "\(.*\)"/\1/p' pyproject.toml)
+IMAGE_EXTRAS ?=
+IMAGE        ?= localhost/inbetrieb:$(IMAGE_VERSION)$(if $(IMAGE_EXTRAS),-$(IMAGE_EXTRAS))
+IMAGE_BASE   ?= localhost/inbetrieb-base:bookworm
+IMAGE_DIR    := var/image
+IMAGE_CTX    := $(IMAGE_DIR)/context
+WHEELS       := $(IMAGE_DIR)/wheels-$(or $(IMAGE_EXTRAS),runtime)
+BUILDAH      := /usr/bin/buildah
+DEBIAN       := http://deb.debian.org/debian
+
+/usr/bin/buildah /usr/bin/mmdebstrap &:
+	$(SUDO) apt-get update -q
+	$(SUDO) apt-get install -y -q --no-install-recommends buildah mmdebstrap
+
+# The base only when buildah's storage lacks it (`make image-clean` drops it, e.g. to take
+# Debian's newest security updates). Docs, manuals and translations are left out as in
+# Debian's slim images; the copyright files stay.
+image-base: /usr/bin/buildah /usr/bin/mmdebstrap
+	@$(BUILDAH) inspect --type image $(IMAGE_BASE) >/dev/null 2>&1 || { set -e; \
+	  mkdir -p $(IMAGE_DIR); rm -f $(IMAGE_DIR)/base.tar; \
+	  mmdebstrap --quiet --variant=minbase \
+	    --include=python3,python3-venv,ca-certificates,passwd \
+	    --dpkgopt='path-exclude=/usr/share/doc/*' \
+	    --dpkgopt='path-include=/usr/share/doc/*/copyright' \
+	    --dpkgopt='path-exclude=/usr/share/man/*' --dpkgopt='path-exclude=/usr/share/info/*' \
+	    --dpkgopt='path-exclude=/usr/share/locale/*' \
+	    bookworm $(IMAGE_DIR)/base.tar "deb $(DEBIAN) bookworm main" \
+	    "deb $(DEBIAN) bookworm-updates main" "deb $(DEBIAN)-security bookworm-security main"; \
+	  c=$$($(BUILDAH) from scratch); \
+	  $(BUILDAH) add --quiet $$c $(IMAGE_DIR)/base.tar /; \
+	  $(BUILDAH) config --env PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+	    --env LANG=C.UTF-8 --cmd /bin/bash $$c; \
+	  $(BUILDAH) commit --quiet --rm $$c $(IMAGE_BASE) >/dev/null; \
+	  rm $(IMAGE_DIR)/base.tar; echo "base image $(IMAGE_BASE) made"; }
+
+# The runtime dependencies' wheels as constraints.txt pins them (and IMAGE_EXTRAS'), binary
+# only: fetched again only when the pins change.
+$(WHEELS)/.complete: pyproject.toml constraints.txt | $(RUN_STAMP)
+	rm -rf $(WHEELS) && mkdir -p $(WHEELS)
+	$(PY) -c 'import sys, tomllib; p = tomllib.load(open("pyproject.toml", "rb"))["project"]; \
+	  print("\n".join(p["dependencies"] + [d for e in sys.argv[1:] \
+	  for d in p["optional-dependencies"][e]]))' $(IMAGE_EXTRAS) > $(WHEELS)/requirements.txt
+	$(PY) -m pip wheel --quiet --disable-pip-version-check --only-binary=:all: \
+	  -c constraints.txt -r $(WHEELS)/requirements.txt --wheel-dir $(WHEELS)
+	touch $@
+
+# The build context: those wheels and one of this checkout (built from a copy of its sources:
+# no build/ in the tree, no numba caches in the wheel), the HMI built here, the exercises.
+image-context: $(WHEELS)/.complete $(DIST)
+	rm -rf $(IMAGE_CTX) $(IMAGE_DIR)/src && mkdir -p $(IMAGE_CTX)/share $(IMAGE_DIR)/src
+	tar -c --exclude=__pycache__ --exclude='*.nbi' --exclude='*.nbc' \
+	  pyproject.toml README.md nc_sim api backend | tar -x -C $(IMAGE_DIR)/src
+	cp -al $(WHEELS) $(IMAGE_CTX)/wheelhouse
+	$(VENV)/bin/uv build --quiet --native-tls --wheel --out-dir $(IMAGE_CTX)/wheelhouse \
+	  $(IMAGE_DIR)/src
+	cp constraints.txt $(IMAGE_CTX)/wheelhouse/
+	cp -r frontend/dist $(IMAGE_CTX)/share/frontend
+	cp -r exercises $(IMAGE_CTX)/share/exercises
+	cp deploy/healthcheck.py $(IMAGE_CTX)/
+	rm -rf $(IMAGE_DIR)/src
+
+# The previous build of the same tag is removed once the new one has it.
+image: image-base image-context
+	@old=$$($(BUILDAH) images --quiet --no-trunc $(IMAGE) 2>/dev/null || true); \
+	start=$$(date +%s); \
+	$(BUILDAH) build --quiet --isolation chroot --format docker --layers=false \
+	  --build-arg BASE=$(IMAGE_BASE) --build-arg EXTRAS=$(IMAGE_EXTRAS) \
+	  --tag $(IMAGE) --file deploy/Containerfile $(IMAGE_CTX) >/dev/null && \
+	new=$$($(BUILDAH) images --quiet --no-trunc $(IMAGE)) && \
+	if [ -n "$$old" ] && [ "$$old" != "$$new" ]; then $(BUILDAH) rmi "$$old" >/dev/null || true; fi && \
+	echo "built $(IMAGE) in $$(( $$(date +%s) - start )) s: $$($(BUILDAH) images \
+	  --format '{{.Size}}' $(IMAGE)) ($(IMAGE_BASE) $$($(BUILDAH) images \
+	  --format '{{.Size}}' $(IMAGE_BASE)))"
+
+# The image's smoke test (deploy/smoke.py): the entrypoint in a working container, over
+# HTTP and a websocket; always on the image just built from this tree.
+image-test: image $(RUN_STAMP)
+	$(PY) deploy/smoke.py --image $(IMAGE)
+
+image-clean:
+	-$(BUILDAH) rmi $(IMAGE)
+	-$(BUILDAH) rmi $(IMAGE_BASE)
+	rm -rf $(IMAGE_DIR)

@@ -98,7 +98,7 @@ class Services:
         history.attach(machines)
         audit = Audit(store)
         control = Control(machines, audit, settings.control_grace_s)
-        exercises = Exercises(store)
+        exercises = Exercises(store, settings.exercises_dir)
         faults = StandingFaults(store, machines)
         snapshots = Snapshots(store, machines, faults)
         # before the machines load: the seats' exercises

@@ -92,6 +92,11 @@ class Settings(BaseSettings):
         Path(__file__).resolve().parents[1] / "frontend" / "dist",
         description="built browser HMI served at / (make builds it)",
     )
+    exercises_dir: Path = Field(
+        Path(__file__).resolve().parents[1] / "exercises",
+        description="the shipped training exercises (TOML files); an installed package, as "
+        "in the container image, has them elsewhere than a source checkout",
+    )
     chromium: Path = Field(
         Path("/usr/bin/chromium"), description="Chromium, to print the report as PDF"
     )
