@@ -33,6 +33,7 @@ class _Request:
 
     request_id: str
     state: dict[str, Any]
+    arrived: float  # perf_counter() when its first byte had been read (ASGI's call)
 
     @property
     def actor(self) -> str:
@@ -47,6 +48,12 @@ def request_id() -> str:
     """The id of the request being served here ('' outside a request)."""
     found = _current.get()
     return found.request_id if found is not None else ""
+
+
+def request_arrived() -> float:
+    """perf_counter() when the request being served arrived (now outside a request)."""
+    found = _current.get()
+    return found.arrived if found is not None else time.perf_counter()
 
 
 class _RequestFields(logging.Filter):
@@ -128,10 +135,9 @@ class RequestLog:
             return
         given = dict(scope["headers"]).get(b"x-request-id", b"").decode("latin-1")
         rid = given if _GIVEN_ID.fullmatch(given) else secrets.token_hex(8)
-        request = _Request(rid, scope.setdefault("state", {}))
-        token = _current.set(request)
-        status = 0
         t0 = time.perf_counter()
+        token = _current.set(_Request(rid, scope.setdefault("state", {}), t0))
+        status = 0
 
         async def sending(message: Message) -> None:
             nonlocal status
@@ -148,18 +154,23 @@ class RequestLog:
         try:
             await self.app(scope, receive, sending)
         finally:
-            client = scope.get("client")
-            access.info(
-                "%s %s %s",
-                scope.get("method", "WS"),
-                scope["path"],
-                status,
-                extra={
-                    "method": scope.get("method", "WEBSOCKET"),
-                    "path": scope["path"],
-                    "status": status,
-                    "duration_ms": round((time.perf_counter() - t0) * 1000, 1),
-                    "client": client[0] if client else "",
-                },
-            )
+            if access.isEnabledFor(logging.INFO):  # nothing built for a line not written
+                _access_line(scope, status, time.perf_counter() - t0)
             _current.reset(token)
+
+
+def _access_line(scope: Scope, status: int, duration_s: float) -> None:
+    client = scope.get("client")
+    access.info(
+        "%s %s %s",
+        scope.get("method", "WS"),
+        scope["path"],
+        status,
+        extra={
+            "method": scope.get("method", "WEBSOCKET"),
+            "path": scope["path"],
+            "status": status,
+            "duration_ms": round(duration_s * 1000, 1),
+            "client": client[0] if client else "",
+        },
+    )

@@ -4,7 +4,9 @@ request answered with its acknowledgement, while 50 websocket viewers (a separat
 process) stream a few signals of the same machine and read everything.
 
 Prints per command kind the round trip p50/p99/max and the `latency_ms` the service reports
-(gateway hand-over to the kernel on the worker) p50/p99/max; then what the viewers received
+(gateway hand-over to the kernel on the worker) p50/p99/max, and the buckets of the service's
+own command latency histogram (`GET /metrics`, scraped before and after the kind) that hold
+its p50 and p99, beside the buckets the round trip's fall in; then what the viewers received
 meanwhile, overruns summed over every worker and one line per worker.
 Bar: round trip p99 <= 5 ms and 0 overruns.
 """
@@ -18,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from prometheus_client.parser import text_string_to_metric_families
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -32,6 +35,40 @@ KINDS: dict[str, list[dict[str, object]]] = {
     "MDI": [{"type": "mdi", "block": "M3 S800"}, {"type": "mdi", "block": "M5"}],
 }
 SIGNALS = ["S1.speed_act_rpm", "S1.lag_deg", "Z.pos_act_mm", "Z.lag_mm"]
+
+
+def latency_buckets(srv: Server, command: str) -> dict[float, float]:
+    """The command latency histogram's cumulative counts by upper bound (s), as scraped."""
+    out: dict[float, float] = {}
+    for family in text_string_to_metric_families(srv.http.get("/metrics").text):
+        if family.name != "inbetrieb_command_latency_seconds":
+            continue
+        for sample in family.samples:
+            if sample.name.endswith("_bucket") and sample.labels["type"] == command:
+                out[float(sample.labels["le"])] = sample.value
+    return out
+
+
+def bucket_of(bounds: list[float], value_s: float) -> int:
+    """The index of the bucket (by upper bound) a value falls in."""
+    return next((i for i, le in enumerate(bounds) if value_s <= le), len(bounds) - 1)
+
+
+def histogram_line(before: dict[float, float], after: dict[float, float], rtt_s: np.ndarray) -> str:
+    """Where the histogram puts p50 and p99 of this kind's commands, and the round trip's."""
+    bounds = sorted(after)
+    counts = [after[le] - before.get(le, 0.0) for le in bounds]
+    total = counts[-1]
+    parts = []
+    for q in (50, 99):
+        mine = next(i for i, c in enumerate(counts) if c >= total * q / 100)
+        theirs = bucket_of(bounds, pct(rtt_s, q))
+        low = bounds[mine - 1] * 1e3 if mine else 0.0
+        parts.append(
+            f"p{q} in ({low:g}, {bounds[mine] * 1e3:g}] ms, "
+            f"round trip {'same bucket' if mine == theirs else f'{theirs - mine:+d} bucket(s)'}"
+        )
+    return f"/metrics ({total:.0f} commands): " + "; ".join(parts)
 
 
 def figures(ms: np.ndarray) -> str:
@@ -62,6 +99,8 @@ def main() -> None:
             meter.start()
             t0 = time.monotonic()
             for kind, bodies in KINDS.items():
+                command = str(bodies[0]["type"])
+                scraped = latency_buckets(srv, command)
                 rtt, handover = [], []
                 for i in range(args.requests):
                     t = time.perf_counter()
@@ -76,6 +115,8 @@ def main() -> None:
                         time.sleep(0.001)
                 print(f"  {kind:4s} round trip  {figures(np.array(rtt) * 1e3)}")
                 print(f"  {kind:4s} hand-over   {figures(np.array(handover))}  (latency_ms)")
+                after = latency_buckets(srv, command)
+                print(f"  {kind:4s} {histogram_line(scraped, after, np.array(rtt))}")
             seconds = time.monotonic() - t0
             received = viewers.stop()
             service = meter.stop()

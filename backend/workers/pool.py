@@ -12,6 +12,7 @@ import logging
 import os
 import shutil
 import threading
+import time
 import uuid
 from collections.abc import Callable, Sized
 from concurrent.futures import ThreadPoolExecutor
@@ -195,5 +196,6 @@ class WorkerPool:
             from backend.workers.ray_transport import disconnect
 
             disconnect()
-        for t in self._replacing:  # none outlives the pool
-            t.join(timeout=REPLACEMENT_WAIT_S)
+        deadline = time.monotonic() + REPLACEMENT_WAIT_S
+        for t in self._replacing:  # none outlives the pool (one joining an absent head may)
+            t.join(timeout=max(0.0, deadline - time.monotonic()))

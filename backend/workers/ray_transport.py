@@ -131,11 +131,21 @@ def shipped_code() -> dict[str, Any]:
     return {"py_modules": dirs, "excludes": ["__pycache__"]}
 
 
+LEAVE_WAIT_S = 5.0  # a stopping gateway waits this long for a join in progress to give up
+
+
 def disconnect() -> None:
-    """Leave the cluster (the actors this gateway owns end with it)."""
-    with _connect_lock:
+    """Leave the cluster (the actors this gateway owns end with it). While a successor is
+    still trying to join a head that does not answer (each try takes up to 30 s), the
+    service stops without waiting for it: there is nothing to leave."""
+    if not _connect_lock.acquire(timeout=LEAVE_WAIT_S):
+        log.warning("left the cluster while still joining it (the head does not answer)")
+        return
+    try:
         if ray.is_initialized():
             ray.shutdown()
+    finally:
+        _connect_lock.release()
 
 
 def _choose_node(worker: RayWorker) -> str:
