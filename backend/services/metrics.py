@@ -3,7 +3,8 @@ pacing, each worker's loop (alive, overruns, missed deadlines, work p99, CPU, ca
 its reply), telemetry clients and frames, the instructor consoles, classes and seats, the
 audit's write queue, and a histogram of command latency (a request's arrival to the
 worker's answer). The gauges and counters are read from the services when Prometheus asks;
-only the command latency is kept here. One registry per service (no global state: a test runs several)."""
+only the command latency is kept here. One registry per service (no global state: a test
+runs several)."""
 
 from __future__ import annotations
 
