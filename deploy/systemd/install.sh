@@ -3,7 +3,7 @@
 #   - a venv in /opt/inbetrieb with the package (pip; versions pinned by constraints.txt),
 #     the built HMI in /opt/inbetrieb/share/frontend, the exercises in .../share/exercises;
 #   - the system user `inbetrieb`, its store in /var/lib/inbetrieb;
-#   - /etc/inbetrieb/inbetrieb.env with every setting commented out (written once: an
+#   - /etc/inbetrieb/inbetrieb.env with the common settings commented out (written once: an
 #     upgrade never touches it);
 #   - the unit in /etc/systemd/system/inbetrieb.service, then `systemctl daemon-reload`.
 # An upgrade is the same command again (then `systemctl restart inbetrieb`).
