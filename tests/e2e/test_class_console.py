@@ -283,8 +283,12 @@ WIDER = """() => [...document.querySelectorAll('*')]
 def no_sideways_scroll(p: Page) -> None:
     """The page fits its viewport's width (nothing runs past the right edge) once its layout
     has followed the new size (its charts resize on the next animation frame)."""
+    # a function, not an expression: Playwright polls an expression by eval(), which the
+    # page's Content-Security-Policy refuses (only when the first look fails: a flaky error)
     try:
-        p.wait_for_function("document.documentElement.scrollWidth <= innerWidth", timeout=3000)
+        p.wait_for_function(
+            "() => document.documentElement.scrollWidth <= innerWidth", timeout=3000
+        )
     except PlaywrightTimeout:
         width = p.evaluate("document.documentElement.scrollWidth")
         raise AssertionError((width, p.evaluate(WIDER))) from None
