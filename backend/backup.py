@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from backend import VERSION
-from backend.services import migrations
+from backend.services import migrations, store_lock
 from backend.services.store import STEPS
 
 ROOT = "inbetrieb"  # the archive's top folder
@@ -104,6 +104,10 @@ def restore(archive: Path, db: Path, traces: Path) -> Summary:
     kept beside as `*.before-restore-<time>`; the restored store's integrity is checked."""
     if not archive.exists():
         raise BackupError(f"no archive at {archive}")
+    try:
+        store_lock.check_free(db)
+    except store_lock.StoreInUse as e:
+        raise BackupError(str(e)) from None
     with tempfile.TemporaryDirectory() as tmp:
         try:
             with tarfile.open(archive, "r:gz") as tar:

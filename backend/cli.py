@@ -10,7 +10,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from backend.services import migrations
+from backend.services import migrations, store_lock
 from backend.services.store import STEPS
 from backend.settings import Settings
 from nc_sim.errors import NcUsageError
@@ -115,14 +115,18 @@ def main(argv: list[str] | None = None) -> int:
             where = ".".join(str(x) for x in err["loc"])
             print(f"inbetrieb serve: {where}: {err['msg']}", file=sys.stderr)
         return 2
-    try:  # before anything starts: a store of a newer release is left as it is
+    try:  # before anything starts: a store of a newer release, or served already, is left
         migrations.check_file(settings.db_path, STEPS)
-    except migrations.StoreTooNew as e:
+        held = store_lock.hold(settings.db_path)  # for as long as this process serves
+    except (migrations.StoreTooNew, store_lock.StoreInUse) as e:
         print(f"inbetrieb serve: {e}", file=sys.stderr)
         return 2
     from backend.server import serve  # the app, once the settings are known to be good
 
-    return serve(settings)
+    try:
+        return serve(settings)
+    finally:
+        held.close()
 
 
 if __name__ == "__main__":

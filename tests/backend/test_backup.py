@@ -97,6 +97,12 @@ def test_a_backup_while_serving_restores_every_acknowledged_write(tmp_path: Path
         assert [v for v in acked if v <= kept] == [v for v in values if v <= kept]
         data = r.http.get(f"/api/traces/{tid}/data")
         assert data.status_code == 200, data.text
+        # while it is served, the store is nobody else's: no restore over it, no second service
+        busy = _cli("restore", str(archive), "--db", str(restored))
+        assert busy.returncode == 2 and "stop it first" in busy.stderr, busy.stderr
+        assert not any(".before-restore-" in p.name for p in restored.parent.iterdir())
+        twice = _cli("serve", "--port", "1", "--db", str(restored))
+        assert twice.returncode == 2 and "served by another process" in twice.stderr
     finally:
         r.close()
     # the restore kept what was in the way; a second one onto the same place works again
