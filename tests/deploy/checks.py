@@ -188,11 +188,12 @@ def environment(service: Doc) -> dict[str, str]:
 
 
 def env_file(path: Path) -> dict[str, str]:
-    """KEY=VALUE lines (a kustomize env file, a systemd EnvironmentFile): comments skipped."""
+    """KEY=VALUE lines (a kustomize env file, a systemd EnvironmentFile= as systemd reads it):
+    comments and blanks skipped, a value's surrounding quotes dropped."""
     out = {}
     for line in path.read_text().splitlines():
         line = line.strip()
-        if line and not line.startswith("#"):
+        if line and not line.startswith(("#", ";")):
             key, value = line.split("=", 1)
-            out[key] = value
+            out[key.strip()] = value.strip().strip('"')
     return out

@@ -33,6 +33,7 @@ import pytest
 
 from backend.settings import Settings
 from tests.backend.server import free_port
+from tests.deploy.checks import env_file
 
 ROOT = Path(__file__).resolve().parents[2]
 UNIT = ROOT / "deploy" / "systemd" / "inbetrieb.service"
@@ -61,17 +62,6 @@ def parse_unit(text: str) -> dict[str, list[tuple[str, str]]]:
 
 def values(unit: dict[str, list[tuple[str, str]]], section: str, key: str) -> list[str]:
     return [v for k, v in unit.get(section, []) if k == key]
-
-
-def env_lines(text: str) -> dict[str, str]:
-    """KEY=VALUE lines as systemd's EnvironmentFile= reads them (comments and blanks skipped)."""
-    out = {}
-    for line in text.splitlines():
-        line = line.strip()
-        if line and not line.startswith(("#", ";")):
-            key, value = line.split("=", 1)
-            out[key.strip()] = value.strip().strip('"')
-    return out
 
 
 def editable_wheel(dest: Path) -> Path:
@@ -169,7 +159,7 @@ def test_the_install_lays_out_venv_hmi_exercises_store_settings_and_unit(
     unit = installed.path("/etc/systemd/system/inbetrieb.service")
     assert unit.read_text() == UNIT.read_text()
     env = installed.path("/etc/inbetrieb/inbetrieb.env")
-    assert env_lines(env.read_text()) == {}, "every setting starts commented out"
+    assert env_file(env) == {}, "every setting starts commented out"
     assert oct(env.stat().st_mode & 0o777) == "0o640"
     assert "systemd not told" in installed.log  # no systemctl under a staging root
 
@@ -195,7 +185,7 @@ def test_an_upgrade_keeps_the_settings_and_replaces_the_hmi(installed: Install) 
     numba_stale = installed.path("/var/cache/inbetrieb/numba/old.nbi")
     numba_stale.write_text("old")
     installed.run()
-    assert env_lines(env.read_text()) == {"INBETRIEB_WORKERS": "3"}
+    assert env_file(env) == {"INBETRIEB_WORKERS": "3"}
     assert not stale.exists()
     assert not numba_stale.exists(), "an upgrade drops the compiled kernel (a changed callee)"
     assert os.access(installed.path("/opt/inbetrieb/bin/inbetrieb"), os.X_OK)
@@ -268,12 +258,12 @@ def started(installed: Install) -> Iterator[tuple[subprocess.Popen[bytes], int]]
     unit = parse_unit(installed.rebase(UNIT.read_text()))
     svc = dict(unit["Service"])
     port = free_port()
-    env_file = installed.path("/etc/inbetrieb/inbetrieb.env")
-    original = env_file.read_text()
+    settings = installed.path("/etc/inbetrieb/inbetrieb.env")
+    original = settings.read_text()
     # what an operator writes in the settings file; and, for this test, the checkout's own
     # numba cache (the editable install runs the checkout's kernel, which the other tests
     # compiled there: an empty NUMBA_CACHE_DIR is numba's default)
-    env_file.write_text(
+    settings.write_text(
         original + f"INBETRIEB_PORT={port}\nINBETRIEB_DEMO=false\nINBETRIEB_WORKERS=1\n"
         "NUMBA_CACHE_DIR=\n"
     )
@@ -283,7 +273,7 @@ def started(installed: Install) -> Iterator[tuple[subprocess.Popen[bytes], int]]
         key, value = assignment.split("=", 1)
         env[key] = value
     (path,) = (v.lstrip("-") for v in values(unit, "Service", "EnvironmentFile"))
-    env.update(env_lines(Path(path).read_text()))
+    env.update(env_file(Path(path)))
     proc = subprocess.Popen(
         svc["ExecStart"].split(),
         cwd=svc["WorkingDirectory"],
@@ -298,7 +288,7 @@ def started(installed: Install) -> Iterator[tuple[subprocess.Popen[bytes], int]]
         if proc.poll() is None:
             proc.kill()
             proc.wait(10)
-        env_file.write_text(original)
+        settings.write_text(original)
 
 
 def test_the_units_command_serves_and_stops_in_order_on_sigterm(
