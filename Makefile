@@ -18,10 +18,13 @@ UI_SRC    := $(shell find frontend/src -type f ! -name schema.d.ts) frontend/ind
 
 # numba caches each compiled function by its own file's time stamp only: a kernel function
 # that calls one from another file (the plant's drive step) would keep the old callee's code.
-# Any change to nc_sim drops every compiled cache, so no run uses a stale kernel.
+# Any change to nc_sim drops every compiled cache, so no run uses a stale kernel. The kernel
+# is then compiled once, here (side by side with the UI build): not by every service and test
+# worker that would otherwise start at the same time and each compile it.
 NUMBA_STAMP := var/.numba-sources
-$(NUMBA_STAMP): $(shell find nc_sim -name '*.py')
+$(NUMBA_STAMP): $(RUN_STAMP) $(shell find nc_sim -name '*.py')
 	find nc_sim -name '*.nbi' -delete -o -name '*.nbc' -delete
+	$(PY) -c "from backend.workers.warmup import warm_up; warm_up()"
 	mkdir -p var && touch $(NUMBA_STAMP)
 
 bootstrap: $(DEV_STAMP) $(NPM_STAMP)
@@ -75,9 +78,15 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 	$(VENV)/bin/lint-imports --no-cache
 	cd frontend && npx tsc --noEmit
 
+# pytest-xdist: the tests wait on machines running in real time as well as compute, so a
+# worker more than there are cores keeps both busy (each worker has its own shared service and
+# browser; a module's tests stay together, see tests/conftest.py). The Ray tests run after
+# them, alone: a local Ray cluster beside a loaded machine misses its own start-up deadlines.
+TEST_WORKERS ?= 3
 test:
 	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup -m 'not ray'
+	$(PY) -m pytest -q -m ray
 
 bench: $(DEV_STAMP) $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
 	$(PY) bench/kernel.py

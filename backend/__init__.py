@@ -8,5 +8,8 @@ import os
 # until the kernel's real-time throttling lets them run, and one expm took a second.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# We use no pydantic plugins; looking for them reads every installed package's metadata,
+# about a quarter of a second of each process' start (gateway, every worker, each CLI call).
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 VERSION = "0.2.0"

@@ -70,8 +70,8 @@ def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) 
     # stops its workers in order (its socket closing ends this one), so they wait for it
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    warm_up()  # at normal priority: a worker starting beside running ones must not starve them
     realtime_priority()
-    warm_up()
     wire = Wire(sock, write_behind=True)
     worker = Worker(WireChannel(wire), period_s, Path(ring_dir), node)
     wire.send(("ready",))

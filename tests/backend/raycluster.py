@@ -14,6 +14,11 @@ import os
 
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # before ray loads: no usage reports
 os.environ.setdefault("RAY_DEDUP_LOGS", "0")
+# a test cluster idles most of its life: no metrics gathered and exported every few seconds by
+# every node's agent, no idle worker processes started ahead (our actors get their own)
+os.environ.setdefault("RAY_enable_metrics_collection", "0")
+os.environ.setdefault("RAY_enable_worker_prestart", "0")
+os.environ.setdefault("RAY_prestart_worker_first_driver", "0")
 # Ray turns a loopback address given to ray.init into the host's outward address
 # (`ray._private.services.resolve_ip_for_localhost`) unless this says the cluster is
 # single-host (`ray_constants.ENABLE_RAY_CLUSTER`, read once when Ray loads)

@@ -289,7 +289,10 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     assert chunks[f"/{lathe}/notes"] == 1
 
     url = f"/api/machines/{lathe}/flight-recorder"
-    status = srv.http.get(url).json()
+    deadline = time.monotonic() + 10  # the long tier is fed (and first made) once a second
+    while (status := srv.http.get(url).json())["bytes"] == 0:
+        assert time.monotonic() < deadline, status
+        time.sleep(0.1)
     assert status["decimation"] == 10 and status["full_rate_s"] > 9.0
     assert status["bytes"] == len(names) * 5 * 60 * 100 * 8  # 5 min at 100 Hz, float64
     short = srv.http.post(f"{url}/save", json={"seconds": 5}).json()

@@ -6,10 +6,22 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
-from playwright.sync_api import Browser, Locator, Page, Request, expect, sync_playwright
+from playwright.sync_api import (
+    Browser,
+    Cookie,
+    Locator,
+    Page,
+    Request,
+    expect,
+    sync_playwright,
+)
 
 from tests.backend.server import PASSWORD, USER
+
+if TYPE_CHECKING:  # what add_cookies takes: a Cookie's fields (Playwright names it privately)
+    from playwright._impl._api_structures import SetCookieParam
 
 CHROMIUM = "/usr/bin/chromium"  # Debian's package; Playwright never downloads a browser here
 ARGS = [
@@ -63,6 +75,35 @@ def chromium() -> Iterator[Browser]:
             browser.close()
 
 
+class _Sessions:
+    """Login sessions kept for the next tests: a password login costs the service an argon2
+    hash, a third of opening a page. A test's first page of a user takes that user's kept
+    session (when it still works: a test may have logged it out); any further page of the
+    same user in the same test logs in anew, so a test's pages never share a session unless
+    it says so (one context)."""
+
+    def __init__(self) -> None:
+        self.kept: dict[tuple[str, str, str], list[Cookie]] = {}
+        self.taken: set[tuple[str, str, str]] = set()  # by the running test
+
+    def sign_in(self, page: Page, base: str, user: str, password: str) -> None:
+        key = (base, user, password)
+        cookies = self.kept.get(key) if key not in self.taken else None
+        self.taken.add(key)
+        if cookies:
+            page.context.add_cookies(cast("list[SetCookieParam]", cookies))
+            if page.request.get(f"{base}/api/auth/me").ok:
+                return
+            page.context.clear_cookies()
+        r = page.request.post(f"{base}/api/auth/login", data={"name": user, "password": password})
+        assert r.ok, r.text()
+        if cookies is not None or key not in self.kept:
+            self.kept[key] = page.context.cookies(base)
+
+
+SESSIONS = _Sessions()  # tests/e2e/conftest.py starts each test with none taken
+
+
 def signed_in_page(
     browser: Browser,
     base: str,
@@ -73,13 +114,13 @@ def signed_in_page(
 ) -> Page:
     """A fresh page (its own browser context) logged in as `user` (the test admin unless
     told): the session cookie is set through the context's request API, as the login form
-    would set it. Its live plots redraw `plot_rate` times a second."""
+    would set it, or is a session of the user kept from an earlier test (`_Sessions`). Its
+    live plots redraw `plot_rate` times a second."""
     w, h = SIZES[size]
     page = browser.new_page(viewport={"width": w, "height": h})
     page.add_init_script(_plot_rate(plot_rate))
     page.set_default_timeout(15_000)
-    r = page.request.post(f"{base}/api/auth/login", data={"name": user, "password": password})
-    assert r.ok, r.text()
+    SESSIONS.sign_in(page, base, user, password)
     return page
 
 

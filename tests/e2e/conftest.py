@@ -9,7 +9,7 @@ import pytest
 from playwright.sync_api import Browser, Page
 
 from tests.backend.server import Server
-from tests.e2e.browser import DIST, chromium, open_hmi
+from tests.e2e.browser import DIST, SESSIONS, chromium, open_hmi
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
@@ -19,6 +19,12 @@ def browser() -> Iterator[Browser]:
         pytest.fail("the frontend is not built: run `make test`, which builds it")
     with chromium() as b:
         yield b
+
+
+@pytest.fixture(autouse=True)
+def _own_sessions() -> None:
+    """No login session taken yet by this test (tests/e2e/browser.py `_Sessions`)."""
+    SESSIONS.taken.clear()
 
 
 @pytest.fixture

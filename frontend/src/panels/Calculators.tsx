@@ -4,6 +4,7 @@
 // typed (the service checks again); the result shows the figures with the manual's formula
 // and the proposed changes before → after, which Apply puts on trial (Keep / Revert).
 import { useEffect, useState } from "preact/hooks";
+import { useGear } from "../ui/useGear";
 import type { AssistResult, AxisStatus, Refusal } from "../api/types";
 import type { AssistantInfo } from "../api/types";
 import { catalogue, loadCatalogue, runAssistant } from "../state/assist";
@@ -142,7 +143,7 @@ function FormCalculator(props: { tool: FormTool; section: string }) {
   const axes = tool === "speed-scaling" ? all.filter((a) => a.kind === "spindle") : all;
   const [axisName, setAxisName] = useState("");
   const ax: AxisStatus | undefined = axes.find((a) => a.name === axisName) ?? axes[0];
-  const [gear, setGear] = useState(1);
+  const [gear, setGear] = useGear(ax);
   const [inp, setInp] = useState<Inputs>(START);
   const [result, setResult] = useState<AssistResult | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
@@ -155,7 +156,6 @@ function FormCalculator(props: { tool: FormTool; section: string }) {
     setResult(null);
     setRefusal(null);
   }, [machineId.value, ax?.name, gear]);
-  useEffect(() => setGear(Math.max(1, ax?.gear ?? 1)), [ax?.name]);
 
   function body(): CalculatorBodies[FormTool] {
     const c = checks as unknown as Record<string, number | string | null>;

@@ -3,6 +3,7 @@
 // machine in that gear. The points and the fitted curves of types 1, 2 and 3 in one chart;
 // the chosen type's coefficients proposed as the gear's beschl_kennlinie.
 import { useEffect, useState } from "preact/hooks";
+import { useGear } from "../ui/useGear";
 import type { AssistResult, AssistSeries, AxisStatus, CurveFitRequest, Refusal } from "../api/types";
 import { calculate } from "../state/calculators";
 import { may } from "../state/control";
@@ -56,7 +57,6 @@ export function CurveFitPanel() {
   const spindles = (status.value?.axes ?? []).filter((a) => a.kind === "spindle");
   const [name, setName] = useState("");
   const sp: AxisStatus | undefined = spindles.find((a) => a.name === name) ?? spindles[0];
-  const [gear, setGear] = useState(1);
   const [typ, setTyp] = useState<Typ>(2);
   const [source, setSource] = useState<"points" | "run-up">("points");
   const [rows, setRows] = useState<[string, string][]>(MANUAL);
@@ -65,7 +65,7 @@ export function CurveFitPanel() {
   const [fit, setFit] = useState<Fit | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
   const [busy, setBusy] = useState(false);
-  useEffect(() => setGear(Math.max(1, sp?.gear ?? 1)), [sp?.name]);
+  const [gear, setGear] = useGear(sp);
   useEffect(() => {
     setFit(null);
     setRefusal(null);
