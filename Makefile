@@ -1,5 +1,9 @@
 # Inbetrieb: two commands. `make run` and `make test` bootstrap everything they need.
 PY_SYS ?= python3
+# Python keeps the bytecode it compiles (in __pycache__, ignored by git), whatever the shell says:
+# with PYTHONDONTWRITEBYTECODE every process (a service, each of its workers, a CLI call, a
+# test worker) compiles all it imports from source again: seconds of a core each.
+unexport PYTHONDONTWRITEBYTECODE
 VENV   := .venv
 PY     := $(VENV)/bin/python
 RUN_STAMP := $(VENV)/.bootstrap-run
