@@ -24,6 +24,7 @@ MAX_SIGNALS = 256  # per subscription
 MAX_SIGNAL_NAME = 64  # characters
 MIN_RATE_HZ = 0.1  # one sample per 10 s: slower rates make no live plot
 MAX_RATE_HZ = 1e6  # beyond any cycle rate: every cycle
+MAX_FRAME_S = 1.0  # the longest frame period a client may ask for
 MAX_MESSAGE_BYTES = 65536  # a client message larger than this closes the connection (1009)
 
 
@@ -46,6 +47,14 @@ class Subscribe(BaseModel):
         ge=MIN_RATE_HZ,
         le=MAX_RATE_HZ,
         description="decimate to at most this many samples per second (none: every cycle)",
+    )
+    frame_s: float | None = Field(
+        None,
+        ge=0,
+        le=MAX_FRAME_S,
+        description="a frame at most this often, s: the client's redraw period (none, or "
+        "shorter than the service's frame period: every frame period); each frame still "
+        "carries every (decimated) sample since the last",
     )
 
 

@@ -9,7 +9,8 @@ One hub task builds frames; each subscriber has at most one send in flight. A su
 busy sending when its next frame is due is skipped for that period (it never holds up the loop
 or anyone else) and later gets the larger range, decimated when it exceeds
 `max_frame_samples`; cycles that left the ring meanwhile are reported as skipped. Subscribers
-with the same signals and range share one encoded frame.
+with the same signals and range share one encoded frame. A subscriber that redraws less often
+asks for frames less often (`frame_s`): fewer, larger frames, the same samples.
 
 Every client is bounded: at most `MAX_PENDING_REPLIES` control replies wait for it, and a send
 that has not finished within `stall_s` ends the connection (close code 1008), so a client that
@@ -77,6 +78,8 @@ class Subscriber:
     actor: Actor
     signals: list[Signal] = field(default_factory=list)
     min_stride: int = 1
+    frame_s: float = 0.0  # asked for: a frame at most this often (0: every hub period)
+    frame_due: float = 0.0  # event-loop time from which the next frame may go
     cursor: int = 0  # next cycle to send
     event_cursor: int = 0  # sequence number of the next event to send
     epoch: int = 0
@@ -89,21 +92,26 @@ class Subscriber:
     send_started: float = 0.0  # event-loop time the send in flight began
     busy_periods: int = 0
     closed: bool = False
+    dropped: bool = False  # closed by us, and counted
 
     def subscribe(self, req: Subscribe) -> None:
-        """Stream these signals from the current cycle (also after a reconnect); the reply,
-        `subscribed` or `error`, goes out before the next frame."""
+        """Stream these signals from the current cycle (also after a reconnect; the same
+        stream again at another frame period goes on where it was); the reply, `subscribed` or
+        `error`, goes out before the next frame."""
         m = self.machine
         unknown = [n for n in req.signals if n not in m.link.signal_by_name]
         if unknown:
             more = f" and {len(unknown) - 10} more" if len(unknown) > 10 else ""
             self.reply(ErrorMessage(message=f"unknown signals: {unknown[:10]}{more}"))
             return
-        self.signals = [m.link.signal_by_name[n] for n in req.signals]
+        signals = [m.link.signal_by_name[n] for n in req.signals]
         rate = req.max_rate_hz or math.inf  # bounded by the protocol (api/telemetry.py)
-        self.min_stride = max(1, math.ceil(1.0 / (m.link.cycle_s * rate)))
-        self.cursor = m.link.cycle + 1
-        self.epoch = m.link.epoch
+        min_stride = max(1, math.ceil(1.0 / (m.link.cycle_s * rate)))
+        self.frame_s, self.frame_due = req.frame_s or 0.0, 0.0
+        # the same stream at another frame period goes on without a gap; else from now
+        if (signals, min_stride, self.epoch) != (self.signals, self.min_stride, m.link.epoch):
+            self.cursor = m.link.cycle + 1
+        self.signals, self.min_stride, self.epoch = signals, min_stride, m.link.epoch
         self.reply(
             Subscribed(signals=req.signals, first_cycle=self.cursor - 1, stride=self.min_stride)
         )
@@ -169,6 +177,7 @@ class TelemetryHub:
         if sub.closed:
             return False
         self.remove(sub)
+        sub.dropped = True
         self.clients_dropped += 1
         if sub.sending is not None:
             sub.sending.cancel()
@@ -177,7 +186,8 @@ class TelemetryHub:
     def lost(self, sub: Subscriber, code: int) -> None:
         """The connection ended under us: by the server's keepalive (no pong in time: the
         client reads nothing, 1008) counts as dropped, as a client we close for not reading."""
-        if code == CLOSE_POLICY and not sub.closed:
+        if code == CLOSE_POLICY and not sub.dropped:  # a failed send may have closed it first
+            sub.dropped = True
             self.clients_dropped += 1
         self.remove(sub)
 
@@ -290,8 +300,11 @@ class TelemetryHub:
                 texts[key] = StatusMessage(status=status).model_dump_json()
             out.append(texts[key])
         head = m.link.cycle
-        if sub.signals and head >= sub.cursor:
+        now = asyncio.get_running_loop().time()
+        if sub.signals and head >= sub.cursor and now >= sub.frame_due:
             out.append(self._frame(sub, head, cache))
+            # half a hub period early: the tick that is nearest the client's period sends
+            sub.frame_due = now + sub.frame_s - self.frame_s / 2
         events, first_seq, sub.event_cursor, dropped = m.link.events_since(sub.event_cursor)
         for seq, e in enumerate(events, first_seq):
             missed = dropped if seq == first_seq else 0

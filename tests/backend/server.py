@@ -65,11 +65,19 @@ class Server:
     """One uvicorn process serving the app with its own SQLite file."""
 
     def __init__(
-        self, db: Path, *extra: str, env: dict[str, str] | None = None, seed: bool = True
+        self,
+        db: Path,
+        *extra: str,
+        env: dict[str, str] | None = None,
+        seed: bool = True,
+        workers: int = 1,
     ) -> None:
         self.seed = seed  # the test admin and a token of theirs in the store before start
         self.db = db
-        self.extra = extra
+        # one worker process unless the test is about several (`--workers` among `extra`
+        # wins): a test drives a machine or two, and a worker's start (its interpreter, numba,
+        # the kernel's warm-up) is the larger part of a service's
+        self.extra = extra if "--workers" in extra else (*extra, "--workers", str(workers))
         self.env = env or {}  # INBETRIEB_* settings
         self.port = free_port()
         self.base = f"http://127.0.0.1:{self.port}"
@@ -152,7 +160,7 @@ class Server:
         while not self.status(mid)["plc"]["drives_powered"]:
             if time.monotonic() > deadline:
                 raise AssertionError(f"{mid}: drives not powered")
-            time.sleep(0.02)
+            time.sleep(0.05)
 
     def pace(self, mid: str, **body: Any) -> dict[str, Any]:
         r = self.http.post(f"/api/machines/{mid}/simulation", json=body)

@@ -172,6 +172,49 @@ def test_max_rate_decimates_on_a_fixed_grid(srv: Server, mid: str) -> None:
     asyncio.run(run())
 
 
+def test_a_longer_frame_period_sends_fewer_frames_with_the_same_samples(
+    srv: Server, mid: str
+) -> None:
+    """A client that redraws twice a second asks for a frame every 0.5 s: it gets every
+    stepped cycle, as the one at the service's period (20 ms) does, in at most one frame per
+    half second; asking for the service's period again goes on without a gap."""
+    signal = "X.pos_cmd_mm"
+
+    async def watcher(frame_s: float | None) -> ClientConnection:
+        ws = await connect(f"{srv.ws_base}/api/machines/{mid}/telemetry", **srv.ws_auth)
+        await ws.send(json.dumps({"type": "subscribe", "signals": [signal], "frame_s": frame_s}))
+        await _json(ws, "subscribed")
+        return ws
+
+    async def run() -> None:
+        fast, slow = await watcher(None), await watcher(0.5)
+        loop = asyncio.get_running_loop()
+        t0 = loop.time()
+        last = 0
+        for _ in range(12):  # 12 steps of 10 cycles, each a hub period or more apart
+            last = await _step(srv, mid, 10)
+            await asyncio.sleep(0.05)
+        fast_frames, _ = await _until_cycle(fast, last)
+        slow_frames, _ = await _until_cycle(slow, last)
+        elapsed = loop.time() - t0
+        assert np.array_equal(_cycles(slow_frames), _cycles(fast_frames))
+        assert np.array_equal(
+            np.concatenate([d[0] for _, d in slow_frames]),
+            np.concatenate([d[0] for _, d in fast_frames]),
+        )
+        assert len(slow_frames) <= 1 + elapsed / 0.5
+        assert len(fast_frames) > len(slow_frames)
+        # the service's period again: the stream goes on from where it was
+        await slow.send(json.dumps({"type": "subscribe", "signals": [signal]}))
+        await _json(slow, "subscribed")
+        more, _ = await _until_cycle(slow, await _step(srv, mid, 10))
+        assert more[0][0].first_cycle == _end(slow_frames[-1][0])
+        await fast.close()
+        await slow.close()
+
+    asyncio.run(run())
+
+
 def test_unknown_signal_is_an_error_message(srv: Server) -> None:
     async def run() -> None:
         async with connect(f"{srv.ws_base}/api/machines/demo/telemetry", **srv.ws_auth) as ws:

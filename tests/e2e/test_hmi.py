@@ -47,29 +47,35 @@ def test_m3_speed_rises_to_s_and_m5_stops(page: Page) -> None:
     poll(lambda: number(page, "vact-S1") == 0.0, "S1 at rest")
 
 
-def _draws_per_frame(page: Page, frames: int = 100) -> float:
-    """Live-plot draws per telemetry frame over the next `frames` frames (about 2 s)."""
-    before = page.evaluate("[inbetrieb.fps.draws, inbetrieb.frames.received]")
+def _per_frame(page: Page, frames: int) -> tuple[float, float]:
+    """Live-plot draws and simulated seconds of samples per telemetry frame over the next
+    `frames` frames."""
+    now = "[inbetrieb.fps.draws, inbetrieb.frames.received, inbetrieb.rings().lastTime]"
+    before = page.evaluate(now)
     poll(
         lambda: page.evaluate("inbetrieb.frames.received") >= before[1] + frames,
         f"{frames} telemetry frames",
     )
-    after = page.evaluate("[inbetrieb.fps.draws, inbetrieb.frames.received]")
-    return float(after[0] - before[0]) / float(after[1] - before[1])
+    after = page.evaluate(now)
+    n = float(after[1] - before[1])
+    return (after[0] - before[0]) / n, (after[2] - before[2]) / n
 
 
 def test_the_plot_refresh_is_chosen_kept_and_draws_that_often(page: Page) -> None:
-    """50/s draws every telemetry frame (one every 20 ms); 10/s one in five or so, still
-    showing the newest samples; the choice survives a reload."""
+    """50/s draws every telemetry frame (one every 20 ms); at 10/s the page asks for a frame
+    every 100 ms, each with five times the samples, and draws each, still showing the newest
+    samples; the choice survives a reload."""
     plot = panel(page, "plot")
     rate = plot.get_by_test_id("plot-rate")
     rate.select_option("50")
     page.get_by_test_id("s-input").fill("600")
     page.get_by_test_id("m3").click()
-    every = _draws_per_frame(page)
+    draws_50, span_50 = _per_frame(page, 100)  # about 2 s
     rate.select_option("10")
-    fewer = _draws_per_frame(page)
-    assert every > 0.6 and fewer < every / 2, (every, fewer)
+    _per_frame(page, 2)  # the frames of the new period from here on
+    draws_10, span_10 = _per_frame(page, 20)  # about 2 s
+    assert draws_50 > 0.6 and draws_10 > 0.6, (draws_50, draws_10)
+    assert span_10 > 2.5 * span_50, (span_10, span_50)  # 0.1 s of samples a frame, not 0.02
     poll(lambda: abs(latest(page, "S1.speed_act_rpm") - 600) < 1.0, "plot at 600 rpm")
     page.reload()
     expect(panel(page, "plot").get_by_test_id("plot-rate")).to_have_value("10")

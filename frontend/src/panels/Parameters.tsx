@@ -18,7 +18,7 @@ import {
   trialMessage,
   writeChanges,
 } from "../state/params";
-import { machineId, online, status } from "../state/session";
+import { axisOutline, machineId, online } from "../state/session";
 import { Panel } from "../ui/Panel";
 import { engQty, multiGainText } from "../ui/format";
 import { paramView } from "../state/versions";
@@ -89,7 +89,7 @@ export function Parameters() {
 }
 
 function ParameterList() {
-  const axes = status.value?.axes ?? [];
+  const axes = axisOutline.value;
   const targets: Target[] = [
     ...axes.map((a) => ({ scope: "axis" as const, target: a.name, label: `Axis ${a.name}` })),
     { scope: "channel", target: null, label: "Channel" },

@@ -17,7 +17,7 @@ import {
 } from "../state/programs";
 import { type Draft, NEW_NAME, NEW_PROGRAM, readDraft, writeDraft } from "../state/programDraft";
 import { numbers, paramsVersion } from "../state/params";
-import { machineId, send, status } from "../state/session";
+import { axisOutline, machineId, send, status } from "../state/session";
 import { fmt } from "../ui/format";
 import { Panel } from "../ui/Panel";
 import { RefusalLine } from "../ui/useCommand";
@@ -208,7 +208,7 @@ const KV_APART = 1.02; // kv of the path axes further apart than this: the conto
  * the circularity test measures the effective gains and proposes matching them. */
 function KvMismatch() {
   const [kv, setKv] = useState<[string, number][]>([]);
-  const linear = (status.value?.axes ?? []).filter((a) => a.kind === "linear").map((a) => a.name);
+  const linear = axisOutline.value.filter((a) => a.kind === "linear").map((a) => a.name);
   const key = linear.join(",");
   useEffect(() => {
     let live = true;

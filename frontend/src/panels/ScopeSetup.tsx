@@ -16,7 +16,7 @@ import {
   stop,
   stopRecording,
 } from "../state/scope";
-import { online, status } from "../state/session";
+import { axisOutline, online } from "../state/session";
 import { catalogue } from "../state/telemetry";
 import { Panel } from "../ui/Panel";
 import { may, standing } from "../state/control";
@@ -60,7 +60,7 @@ export function ScopeSetup() {
       ? trig
       : { type: "level", signal: firstNc ?? catalogue.value[0]?.name ?? "", level: 0, edge: "rising", hysteresis: 0 };
   const event: EventTrigger = trig?.type === "event" ? trig : { type: "event", event: "m_start", axis: null, m: null };
-  const axes = status.value?.axes.map((a) => a.name) ?? [];
+  const axes = axisOutline.value.map((a) => a.name);
   const driveRate = draft.rate === "drive";
   const driveSignals = (st?.drive_channels ?? []).map((c) => ({ name: c.name, axis: c.name.split(".")[0] }));
 

@@ -5,7 +5,7 @@
 import { effect, signal } from "@preact/signals";
 import type { SignalInfo } from "../api/types";
 import { machineId } from "./session";
-import { catalogue, want } from "./telemetry";
+import { catalogue, setFramePeriod, want } from "./telemetry";
 
 export interface PlotConfig {
   id: string;
@@ -71,3 +71,5 @@ export function setPlotRate(perS: number): void {
   plotRate.value = perS;
   localStorage.setItem(RATE_KEY, String(perS));
 }
+
+effect(() => setFramePeriod(1 / plotRate.value));

@@ -2,7 +2,7 @@
 // the one way commands are sent.
 import { computed, signal } from "@preact/signals";
 import { http, reachListeners } from "../api/http";
-import type { Command, CommandResult, MachineStatus, MachineSummary, NoticeMessage } from "../api/types";
+import type { AxisStatus, Command, CommandResult, MachineStatus, MachineSummary, NoticeMessage } from "../api/types";
 import { loggedIn } from "./auth";
 
 export type Connection = "connecting" | "online" | "lost";
@@ -124,6 +124,22 @@ function forgetNotices(): void {
 }
 
 export const axis = (name: string) => status.value?.axes.find((a) => a.name === name) ?? null;
+
+export type AxisOutline = Pick<AxisStatus, "name" | "kind" | "gear">;
+let outlineKey = "";
+let outlineNow: readonly AxisOutline[] = [];
+/** The machine's axes by name, kind and gear in use, without their live values: a new value
+ * only when these change, so a panel that lists the axes (the parameter table) renders again
+ * when they change, not with every status push (20 a second). */
+export const axisOutline = computed<readonly AxisOutline[]>(() => {
+  const axes = status.value?.axes ?? [];
+  const key = axes.map((a) => `${a.name}:${a.kind}:${a.gear}`).join(",");
+  if (key !== outlineKey) {
+    outlineKey = key;
+    outlineNow = axes.map((a) => ({ name: a.name, kind: a.kind, gear: a.gear }));
+  }
+  return outlineNow;
+});
 
 /** A machine's route; throws while no machine is chosen (never `/api/machines//…`). */
 export function machineUrl(path = ""): string {

@@ -43,6 +43,14 @@ const wants = new Map<string, string[]>();
 let ws: WebSocket | null = null;
 let cycleS = 0.001;
 let subscribedKey = "";
+let frameS = 0.02; // how often frames are asked for: as often as the plots redraw
+
+/** Frames at most every `s` seconds (the plots' redraw period): at 10 draws a second, five
+ * frames a draw would only wake the page, and the service, for nothing. */
+export function setFramePeriod(s: number): void {
+  frameS = s;
+  resubscribe();
+}
 
 /** Ask for signals on behalf of `owner` (a plot); the socket streams the union. */
 export function want(owner: string, names: string[]): void {
@@ -64,10 +72,12 @@ function union(): string[] {
 
 function resubscribe(): void {
   const names = union();
-  const key = names.join(",");
+  const key = `${names.join(",")}@${frameS}`;
   if (!ws || ws.readyState !== WebSocket.OPEN || key === subscribedKey || !names.length) return;
+  const same = subscribedKey.split("@")[0] === names.join(",");
   subscribedKey = key;
-  ws.send(JSON.stringify({ type: "subscribe", signals: names }));
+  ws.send(JSON.stringify({ type: "subscribe", signals: names, frame_s: frameS }));
+  if (same) return; // a new frame period only: the rings go on
   // the signals that stay keep their history (a plot's, while another panel adds its own)
   rings.value = Rings.carry(rings.value, names, Math.round(RING_SECONDS / cycleS));
 }
