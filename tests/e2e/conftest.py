@@ -1,5 +1,6 @@
-"""Browser tests: one headless Chromium for the whole run (each page its own context); the
-service is the run's shared one unless a module asks for its own (tests/conftest.py)."""
+"""Browser tests: one headless Chromium for the whole run (each page its own context, but the
+`page` fixture's, one kept page made as good as new for each test); the service is the run's
+shared one unless a module asks for its own (tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import pytest
 from playwright.sync_api import Browser, Page
 
 from tests.backend.server import Server
-from tests.e2e.browser import DIST, SESSIONS, chromium, open_hmi
+from tests.e2e.browser import DIST, KEPT_PAGE, SESSIONS, chromium
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
@@ -29,10 +30,11 @@ def _own_sessions() -> None:
 
 @pytest.fixture
 def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
-    """The HMI at 1920×1080 on the test's own machine."""
-    p = open_hmi(browser, srv.base, mid)
+    """The HMI at 1920×1080 on the test's own machine, as the test admin: the worker's kept
+    page, made as good as new (tests/e2e/browser.py `_KeptPage`)."""
+    p = KEPT_PAGE.take(browser, srv.base, mid)
     yield p
-    p.close()
+    KEPT_PAGE.give_back(p)
 
 
 @pytest.fixture
