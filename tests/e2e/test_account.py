@@ -46,7 +46,12 @@ def test_an_admin_adds_a_user_in_the_ui(page: Page, srv: Server) -> None:
     users.get_by_test_id("user-add").click()
     row = users.locator('[data-testid="user-row"][data-user="uwe"]')
     expect(row.get_by_test_id("user-role-select")).to_have_value("instructor")
-    row.get_by_test_id("user-role-select").select_option("observer")
+    # the change is a request of its own: the login below waits for its answer
+    with page.expect_response(
+        lambda r: r.request.method == "PATCH" and r.url.endswith("/api/users/uwe")
+    ) as changed:
+        row.get_by_test_id("user-role-select").select_option("observer")
+    assert changed.value.ok
     login = httpx.post(
         f"{srv.base}/api/auth/login", json={"name": "uwe", "password": "uwe-password"}
     )
