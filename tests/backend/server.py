@@ -70,14 +70,13 @@ class Server:
         *extra: str,
         env: dict[str, str] | None = None,
         seed: bool = True,
-        workers: int = 1,
     ) -> None:
         self.seed = seed  # the test admin and a token of theirs in the store before start
         self.db = db
         # one worker process unless the test is about several (`--workers` among `extra`
         # wins): a test drives a machine or two, and a worker's start (its interpreter, numba,
         # the kernel's warm-up) is the larger part of a service's
-        self.extra = extra if "--workers" in extra else (*extra, "--workers", str(workers))
+        self.extra = extra if "--workers" in extra else (*extra, "--workers", "1")
         self.env = env or {}  # INBETRIEB_* settings
         self.port = free_port()
         self.base = f"http://127.0.0.1:{self.port}"

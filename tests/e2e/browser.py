@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import contextlib
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
@@ -138,9 +137,14 @@ def open_hmi(
     """A fresh page on the HMI showing `machine` (the test's own), connected to the service,
     logged in as `user` (the test admin unless told), its live plots at `plot_rate` per s."""
     page = signed_in_page(browser, base, size, user, password, plot_rate)
+    _show(page, base, machine)
+    return page
+
+
+def _show(page: Page, base: str, machine: str) -> None:
+    """The HMI on `machine`, connected to the service."""
     page.goto(f"{base}/#{machine}")
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
-    return page
 
 
 class _KeptPage:
@@ -162,15 +166,19 @@ class _KeptPage:
             try:
                 self._renew(page, base)
             except PlaywrightError:  # crashed or closed: a fresh one
-                with contextlib.suppress(PlaywrightError):
+                with suppress(PlaywrightError):
                     page.context.close()
                 page = None
         if page is None:
             page = self.page = signed_in_page(browser, base)
             self._track(page)
-        page.goto(f"{base}/#{machine}")
-        expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
+        _show(page, base, machine)
         return page
+
+    def forget(self) -> None:
+        """The browser is closing: the next test starts a fresh page."""
+        self.page = None
+        self.added.clear()
 
     def give_back(self, page: Page) -> None:
         for event, f in self.added:
@@ -179,7 +187,7 @@ class _KeptPage:
         try:
             page.goto("about:blank")  # the HMI's socket closes before the machine goes
         except PlaywrightError:  # closed by the test, or crashed
-            with contextlib.suppress(PlaywrightError):
+            with suppress(PlaywrightError):
                 page.context.close()
             self.page = None
 

@@ -1,10 +1,12 @@
-"""Browser tests: one headless Chromium for the whole run (each page its own context, but the
+"""Browser tests: one headless Chromium for a run of them (each page its own context, but the
 `page` fixture's, one kept page made as good as new for each test); the service is the run's
 shared one unless a module asks for its own (tests/conftest.py)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from contextlib import ExitStack
+from pathlib import Path
 
 import pytest
 from playwright.sync_api import Browser, Page
@@ -14,12 +16,45 @@ from tests.e2e.browser import DIST, KEPT_PAGE, SESSIONS, chromium
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
-@pytest.fixture(scope="session")
-def browser() -> Iterator[Browser]:
+class _Chromium:
+    """The worker's browser: started by the first browser test, closed after the last of a
+    run of them (`pytest_runtest_teardown`). While a browser is open, Playwright's sync API
+    holds an event loop on this thread, and `asyncio.run` in a later test on the same worker
+    (a backend test after the browser tests) would be refused."""
+
+    def __init__(self) -> None:
+        self.stack: ExitStack | None = None
+        self.browser: Browser | None = None
+
+    def start(self) -> Browser:
+        if self.browser is None:
+            self.stack = ExitStack()
+            self.browser = self.stack.enter_context(chromium())
+        return self.browser
+
+    def stop(self) -> None:
+        KEPT_PAGE.forget()
+        if self.stack is not None:
+            self.stack.close()
+        self.stack = self.browser = None
+
+
+_CHROMIUM = _Chromium()
+E2E = Path(__file__).resolve().parent
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> Iterator[None]:
+    yield  # the test's pages close first
+    if nextitem is None or E2E not in nextitem.path.parents:
+        _CHROMIUM.stop()
+
+
+@pytest.fixture
+def browser() -> Browser:
     if not DIST.is_file():
         pytest.fail("the frontend is not built: run `make test`, which builds it")
-    with chromium() as b:
-        yield b
+    return _CHROMIUM.start()
 
 
 @pytest.fixture(autouse=True)

@@ -42,7 +42,8 @@ export const frameListeners = new Set<(r: Rings) => void>();
 const wants = new Map<string, string[]>();
 let ws: WebSocket | null = null;
 let cycleS = 0.001;
-let subscribedKey = "";
+let subscribedNames = ""; // the subscription sent on this socket ("" none yet) ...
+let subscribedFrameS = 0; // ... and its frame period
 let frameS = 0.02; // how often frames are asked for: as often as the plots redraw
 
 /** Frames at most every `s` seconds (the plots' redraw period): at 10 draws a second, five
@@ -72,10 +73,12 @@ function union(): string[] {
 
 function resubscribe(): void {
   const names = union();
-  const key = `${names.join(",")}@${frameS}`;
-  if (!ws || ws.readyState !== WebSocket.OPEN || key === subscribedKey || !names.length) return;
-  const same = subscribedKey.split("@")[0] === names.join(",");
-  subscribedKey = key;
+  const joined = names.join(",");
+  if (!ws || ws.readyState !== WebSocket.OPEN || !names.length) return;
+  if (joined === subscribedNames && frameS === subscribedFrameS) return;
+  const same = joined === subscribedNames;
+  subscribedNames = joined;
+  subscribedFrameS = frameS;
   ws.send(JSON.stringify({ type: "subscribe", signals: names, frame_s: frameS }));
   if (same) return; // a new frame period only: the rings go on
   // the signals that stay keep their history (a plot's, while another panel adds its own)
@@ -116,7 +119,7 @@ function onMessage(text: string): void {
       cycleS = msg.cycle_s;
       catalogue.value = msg.signals;
       socket.value = "online";
-      subscribedKey = "";
+      subscribedNames = "";
       resubscribe();
       break;
     case "event":
@@ -183,7 +186,7 @@ effect(() => {
   const old = ws;
   ws = null;
   old?.close();
-  subscribedKey = "";
+  subscribedNames = "";
   rings.value = new Rings([], 1); // another machine's history is not this one's
   attempt++; // a ticket still on its way is for the machine before
   if (mid) void connect(mid);
