@@ -23,6 +23,14 @@ from backend.errors import ApiError, Conflict, Invalid, NotFound
 from backend.services.auth import Actor
 from backend.services.store import Row, Store
 
+# what a login of an unknown name (or of a user without a password) is checked against, so it
+# costs as much as a known name's: the hash of a random secret thrown away, with
+# PasswordHasher's parameters (a test keeps them equal). A constant, not hashed at start: an
+# argon2 hash costs a tenth of a second at every service start and command-line call.
+UNKNOWN_USER_HASH = (
+    "$argon2id$v=19$m=65536,t=3,p=4$LUsLXHDYj+EjqK6DGSh+tA"
+    "$59wDQPeZHLUrggxBimGj3sAVluQXePgBKkajFZuuxwg"
+)
 SESSION_S = 12 * 3600.0  # a shift; then log in again
 TICKET_S = 300.0  # a ticket for one URL (a viewer that cannot send the session) lives this long
 WS_TICKET_S = 30.0  # a websocket's ticket: fetched just before the connect
@@ -146,7 +154,6 @@ class Accounts:
         self.store = store
         store.script(_SCHEMA)
         self._hasher = PasswordHasher()
-        self._dummy = self._hasher.hash(secrets.token_hex(16))  # for unknown names: same cost
         self._failures: dict[str, deque[float]] = {}
         self._tickets: dict[str, Ticket] = {}
         self._used: dict[str, float] = {}  # token digest -> monotonic time last_used was written
@@ -222,7 +229,7 @@ class Accounts:
     def check_password(self, name: str, password: str) -> User | None:
         """The user if the password is theirs (as slow for an unknown name as for a known)."""
         user = self._user(name)
-        hashed = user["hash"] if user and user["hash"] else self._dummy
+        hashed = user["hash"] if user and user["hash"] else UNKNOWN_USER_HASH
         ok: bool
         try:
             ok = self._hasher.verify(hashed, password)

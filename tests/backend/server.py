@@ -1,12 +1,14 @@
-"""A real service for integration tests: `inbetrieb serve` in a subprocess on a free port."""
+"""A real service for integration tests: `inbetrieb serve` in a process of its own on a free
+port."""
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import signal
 import socket
-import subprocess
-import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import IO, Any
@@ -16,6 +18,7 @@ import httpx
 from api.auth import Role
 from backend.services.accounts import Accounts
 from backend.services.store import Store
+from tests.backend.forked import ForkedService
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -29,8 +32,31 @@ def free_port() -> int:
 USER, PASSWORD = "tester", "tester-password"  # an admin in every test store
 
 
+_template: Path | None = None
+
+
+def _store_with_the_admin() -> Path:
+    """A store with the test admin, made once per test process and copied for each new service:
+    hashing the password (argon2) costs a tenth of a second of a core, and a run starts
+    about 140 services."""
+    global _template
+    if _template is None:
+        folder = Path(tempfile.mkdtemp(prefix="inbetrieb-admin-"))
+        atexit.register(shutil.rmtree, folder, ignore_errors=True)
+        store = Store(folder / "admin.sqlite")
+        try:
+            Accounts(store).add_user(USER, Role.ADMIN, PASSWORD)
+        finally:
+            store.close()  # one file: its write-ahead log folded in
+        _template = folder / "admin.sqlite"
+    return _template
+
+
 def seed_user(db: Path) -> str:
     """The test admin in the store (added once) and a fresh API token of theirs."""
+    if not db.exists():
+        db.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(_store_with_the_admin(), db)
     store = Store(db)
     try:
         accounts = Accounts(store)
@@ -62,7 +88,8 @@ def bearer(token: str) -> dict[str, str]:
 
 
 class Server:
-    """One uvicorn process serving the app with its own SQLite file."""
+    """One `inbetrieb serve` process (tests/backend/forked.py) serving the app with its own
+    SQLite file."""
 
     def __init__(
         self,
@@ -81,7 +108,7 @@ class Server:
         self.port = free_port()
         self.base = f"http://127.0.0.1:{self.port}"
         self.ws_base = f"ws://127.0.0.1:{self.port}"
-        self.proc: subprocess.Popen[bytes] | None = None
+        self.proc: ForkedService | None = None
         self.token = ""
         self.http = httpx.Client(base_url=self.base, timeout=10)
 
@@ -106,14 +133,14 @@ class Server:
         if self.seed:
             self.token = seed_user(self.db)
             self.http.headers["Authorization"] = f"Bearer {self.token}"
-        cmd = [sys.executable, "-m", "backend.cli", "serve", "--port", str(self.port)]
-        cmd += ["--db", str(self.db), *self.extra]
-        self.proc = subprocess.Popen(
-            cmd,
-            cwd=ROOT,
+        argv = ["serve", "--port", str(self.port), "--db", str(self.db), *self.extra]
+        out = 1 if stdout is None else stdout.fileno()
+        self.proc = ForkedService(
+            argv,
             env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env},
-            stdout=stdout,
-            stderr=None if stdout is None else subprocess.STDOUT,  # the log with it
+            cwd=ROOT,
+            stdout=out,
+            stderr=2 if stdout is None else out,  # the log with it
         )
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:

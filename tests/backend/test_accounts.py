@@ -17,7 +17,11 @@ from urllib.parse import unquote
 import httpx
 import pytest
 import websockets
+from argon2 import PasswordHasher
 
+from api.auth import Role
+from backend.services.accounts import UNKNOWN_USER_HASH, Accounts
+from backend.services.store import Store
 from tests.backend.server import PASSWORD, ROOT, USER, Server
 
 SPIN = {"type": "mdi", "block": "M3 S500"}
@@ -98,6 +102,22 @@ def test_wrong_passwords_are_refused_and_then_rate_limited(tmp_path: Path) -> No
             assert login(c).status_code == 429  # even the right password, for a minute
     finally:
         s.close()
+
+
+def test_an_unknown_name_costs_a_login_as_much_as_a_known_one(tmp_path: Path) -> None:
+    """An unknown name (or a user without a password) is checked against a constant hash with
+    the hasher's own parameters: the same argon2 work, and it lets nobody in."""
+    assert not PasswordHasher().check_needs_rehash(UNKNOWN_USER_HASH)
+    store = Store(tmp_path / "a.sqlite")
+    try:
+        accounts = Accounts(store)
+        accounts.add_user("ada", Role.OPERATOR, "a long password")
+        accounts.add_user("nopass", Role.OBSERVER, None)
+        assert accounts.check_password("ada", "a long password") is not None
+        assert accounts.check_password("nobody", "a long password") is None
+        assert accounts.check_password("nopass", "") is None
+    finally:
+        store.close()
 
 
 def test_the_printed_login_link_works_once(tmp_path: Path) -> None:
