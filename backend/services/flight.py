@@ -143,6 +143,7 @@ class FlightRecorder:
         self._tapes: dict[str, _Tape] = {}
         self._pending: dict[str, list[_Pending]] = {}
         self._lock = threading.Lock()
+        self._feeding = threading.Lock()  # one feed at a time: the thread's, or a save's
         self._stop = threading.Event()
         self._wake = threading.Event()  # a window opened (or the recorder stops): look now
         self._thread = threading.Thread(target=self._run, name="flight-recorder", daemon=True)
@@ -233,6 +234,12 @@ class FlightRecorder:
                     log.exception("flight recorder of %s", proxy.id)
 
     def _feed(self, m: MachineProxy) -> None:
+        """Take the cycles the machine ran since the last feed into its long tier (those the
+        ring still holds)."""
+        with self._feeding:
+            self._feed_now(m)
+
+    def _feed_now(self, m: MachineProxy) -> None:
         link = m.link
         if link.ring is None or link.info is None:
             return
@@ -292,7 +299,9 @@ class FlightRecorder:
 
     def save_last(self, m: MachineProxy, seconds: float, by: str) -> TraceInfo:
         """The last `seconds` as a trace in the library: at full rate while the sample ring
-        holds them, decimated from the long tier beyond (422 while it holds nothing yet)."""
+        holds them, decimated from the long tier beyond, which first takes the cycles since
+        its last feed (a second ago at most, longer while a job error's window is saved), so
+        the trace ends now (422 while it holds nothing yet)."""
         link = m.link
         head, cycle_s = link.cycle, link.cycle_s
         span = round(seconds / cycle_s)
@@ -303,6 +312,7 @@ class FlightRecorder:
             data, first = link.samples(signals, max(1, head - span + 1), head, 1)
             trace = self._trace(m, signals, data, first, cycle_s, None, "on demand")
         else:
+            self._feed(m)
             with self._lock:
                 tape = self._tapes.get(m.id)
                 if tape is None or tape.epoch != link.epoch or not tape.count:

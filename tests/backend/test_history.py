@@ -303,6 +303,22 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     assert srv.http.post(f"{url}/save", json={"seconds": 0}).status_code == 422
 
 
+def test_a_saved_minute_ends_at_the_cycle_the_machine_stands_at(srv: Server, lathe: str) -> None:
+    """The long tier is fed once a second; a save from it takes the cycles since then first.
+    Stepped 20 s in one request and saved at once, the minute ends at the machine's cycle and
+    holds what the sample ring still held safely: its 16384 cycles less the 2000 a writer may
+    be writing, one in ten (backend/workers/ring.py)."""
+    srv.pace(lathe, mode="pause")
+    head = srv.step(lathe, 20_000)["cycle"]
+    long = srv.http.post(f"/api/machines/{lathe}/flight-recorder/save", json={"seconds": 60})
+    assert long.status_code == 201, long.text
+    trace = long.json()
+    assert trace["cycle_s"] == pytest.approx(0.01)
+    newest = (trace["first_cycle"] + trace["count"] - 1) * 10  # in the machine's 1 ms cycles
+    assert head - 10 < newest <= head
+    assert trace["count"] >= (16384 - 2000) // 10
+
+
 def test_the_scope_is_whoever_armed_it_and_never_silently_replaced(srv: Server, lathe: str) -> None:
     """Otto arms the scope: it is his while it waits. Olga (observer) cannot re-arm, force or
     stop it (409 asking her to ask him; taking over: 403); an admin takes it over, and its
