@@ -134,8 +134,11 @@ def open_hmi(
     password: str = PASSWORD,
     plot_rate: int = TEST_PLOT_RATE,
 ) -> Page:
-    """A fresh page on the HMI showing `machine` (the test's own), connected to the service,
-    logged in as `user` (the test admin unless told), its live plots at `plot_rate` per s."""
+    """A page on the HMI showing `machine` (the test's own), connected to the service, logged
+    in as `user` (the test admin unless told), its live plots at `plot_rate` per s: one of the
+    worker's kept pages made as good as new (`KEPT_PAGES`), or a fresh one at another rate."""
+    if plot_rate == TEST_PLOT_RATE:
+        return KEPT_PAGES.take(browser, base, machine, size, user, password)
     page = signed_in_page(browser, base, size, user, password, plot_rate)
     _show(page, base, machine)
     return page
@@ -147,78 +150,114 @@ def _show(page: Page, base: str, machine: str) -> None:
     expect(page.get_by_test_id("lamp-connection")).to_have_attribute("data-on", "1")
 
 
-class _KeptPage:
-    """Each test's `page` (the test admin's HMI at 1920×1080, tests/e2e/conftest.py) is one
-    page kept for the worker's run: a fresh context, page and HMI load cost Chromium about a
-    core-second, taking the kept page back a quarter of that. Between tests it is made as
-    good as new: the listeners the last test added removed, its other pages (pop-ups) closed,
-    the network, viewport and timeout as at the start, no cookies, the service's storage
-    (local and session) empty; then it signs in (`_Sessions`) and opens the test's machine.
-    Given back, it leaves the HMI (about:blank), so nothing runs between tests."""
+class _KeptPages:
+    """The HMI pages of a test (the `page` fixture's and `open_hmi`'s) are pages kept for the
+    worker's run: a fresh context, page and HMI load cost Chromium about a core-second, taking
+    a kept page back a quarter of that. Taken, a page is made as good as new: its other pages
+    (pop-ups) closed, the network, viewport, timeout and media as at the start, no cookies, the
+    service's storage (local and session) empty; then it signs in as the test's user
+    (`_Sessions`) and opens the test's machine. After the test (tests/e2e/conftest.py, before
+    its fixtures end), or when the test closes it, a page is given back: the listeners and
+    routes the test added (`on`, `once`, `route`) removed, it leaves the HMI (about:blank), so
+    nothing runs between tests and the HMI's socket closes before the test's machine goes."""
 
     def __init__(self) -> None:
-        self.page: Page | None = None
-        self.added: list[tuple[str, Callable[..., object]]] = []
+        self.idle: list[Page] = []
+        self.taken: list[Page] = []
+        self.added: dict[Page, list[tuple[str, Callable[..., object]]]] = {}
 
-    def take(self, browser: Browser, base: str, machine: str) -> Page:
-        page = self.page
-        if page is not None:
+    def take(
+        self,
+        browser: Browser,
+        base: str,
+        machine: str,
+        size: str = "desktop",
+        user: str = USER,
+        password: str = PASSWORD,
+    ) -> Page:
+        page: Page | None = None
+        while page is None and self.idle:
+            page = self.idle.pop()
             try:
-                self._renew(page, base)
-            except PlaywrightError:  # crashed or closed: a fresh one
-                with suppress(PlaywrightError):
-                    page.context.close()
+                self._renew(page, base, size, user, password)
+            except PlaywrightError:  # crashed: a fresh one
+                self._drop(page)
                 page = None
         if page is None:
-            page = self.page = signed_in_page(browser, base)
+            page = signed_in_page(browser, base, size, user, password)
             self._track(page)
+        self.taken.append(page)
         _show(page, base, machine)
         return page
 
+    def give_back_all(self) -> None:
+        """The test is over: every page it took comes back."""
+        for page in list(self.taken):
+            self.give_back(page)
+
     def forget(self) -> None:
-        """The browser is closing: the next test starts a fresh page."""
-        self.page = None
+        """The browser is closing: the next test starts with fresh pages."""
+        self.idle.clear()
+        self.taken.clear()
         self.added.clear()
 
     def give_back(self, page: Page) -> None:
-        for event, f in self.added:
+        if page not in self.taken:
+            return  # given back already (a test's fixture closing it after the test)
+        self.taken.remove(page)
+        for event, f in self.added.get(page, []):
             page.remove_listener(event, f)  # (a `once` that fired is gone already: no-op)
-        self.added.clear()
+        self.added[page] = []
         try:
-            page.goto("about:blank")  # the HMI's socket closes before the machine goes
-        except PlaywrightError:  # closed by the test, or crashed
-            with suppress(PlaywrightError):
-                page.context.close()
-            self.page = None
+            page.unroute_all(behavior="ignoreErrors")
+            page.context.unroute_all(behavior="ignoreErrors")
+            page.goto("about:blank")
+        except PlaywrightError:  # its context closed by the test, or crashed
+            self._drop(page)
+            return
+        self.idle.append(page)
 
-    def _renew(self, page: Page, base: str) -> None:
+    def _drop(self, page: Page) -> None:
+        self.added.pop(page, None)
+        with suppress(PlaywrightError):
+            page.context.close()
+
+    def _renew(self, page: Page, base: str, size: str, user: str, password: str) -> None:
         for other in page.context.pages:
             if other != page:
                 other.close()
         page.context.set_offline(False)
-        w, h = SIZES["desktop"]
+        w, h = SIZES[size]
         page.set_viewport_size({"width": w, "height": h})
         page.set_default_timeout(15_000)
+        page.emulate_media(media="screen")
         page.context.clear_cookies()
         page.goto(f"{base}/api/health")  # the service's origin, without the HMI
         page.evaluate("() => { localStorage.clear(); sessionStorage.clear(); }")
-        SESSIONS.sign_in(page, base, USER, PASSWORD)
+        SESSIONS.sign_in(page, base, user, password)
 
     def _track(self, page: Page) -> None:
-        """Keep what listeners a test adds (`on`, `once`), to remove them after it."""
+        """Keep what listeners a test adds (`on`, `once`), to remove them after it; a test's
+        `close` gives the page back (it leaves the HMI, as a closed tab does)."""
+        self.added[page] = []
         for name in ("on", "once"):
             add = getattr(page, name)
 
             def add_and_keep(
                 event: str, f: Callable[..., object], add: Callable[..., None] = add
             ) -> None:
-                self.added.append((event, f))
+                self.added[page].append((event, f))
                 add(event, f)
 
             setattr(page, name, add_and_keep)
 
+        def close_as_given_back(**_: object) -> None:
+            self.give_back(page)
 
-KEPT_PAGE = _KeptPage()
+        page.close = close_as_given_back  # type: ignore[method-assign]
+
+
+KEPT_PAGES = _KeptPages()
 
 
 def shot(page: Page, name: str) -> Path:

@@ -1,6 +1,6 @@
-"""Browser tests: one headless Chromium for a run of them (each page its own context, but the
-`page` fixture's, one kept page made as good as new for each test); the service is the run's
-shared one unless a module asks for its own (tests/conftest.py)."""
+"""Browser tests: one headless Chromium for a run of them (each page its own context; the HMI
+pages are kept pages made as good as new for each test); the service is the run's shared one
+unless a module asks for its own (tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 from playwright.sync_api import Browser, Page
 
 from tests.backend.server import Server
-from tests.e2e.browser import DIST, KEPT_PAGE, SESSIONS, chromium
+from tests.e2e.browser import DIST, KEPT_PAGES, SESSIONS, chromium
 from tests.e2e.plant import DRIVE_GAIN, KV_RAW, MULTI_GAIN, set_up
 
 
@@ -33,7 +33,7 @@ class _Chromium:
         return self.browser
 
     def stop(self) -> None:
-        KEPT_PAGE.forget()
+        KEPT_PAGES.forget()
         if self.stack is not None:
             self.stack.close()
         self.stack = self.browser = None
@@ -45,7 +45,8 @@ E2E = Path(__file__).resolve().parent
 
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> Iterator[None]:
-    yield  # the test's pages close first
+    KEPT_PAGES.give_back_all()  # before the test's fixtures end (its machine among them)
+    yield
     if nextitem is None or E2E not in nextitem.path.parents:
         _CHROMIUM.stop()
 
@@ -64,12 +65,10 @@ def _own_sessions() -> None:
 
 
 @pytest.fixture
-def page(browser: Browser, srv: Server, mid: str) -> Iterator[Page]:
-    """The HMI at 1920×1080 on the test's own machine, as the test admin: the worker's kept
-    page, made as good as new (tests/e2e/browser.py `_KeptPage`)."""
-    p = KEPT_PAGE.take(browser, srv.base, mid)
-    yield p
-    KEPT_PAGE.give_back(p)
+def page(browser: Browser, srv: Server, mid: str) -> Page:
+    """The HMI at 1920×1080 on the test's own machine, as the test admin: a kept page, made
+    as good as new (tests/e2e/browser.py `_KeptPages`)."""
+    return KEPT_PAGES.take(browser, srv.base, mid)
 
 
 @pytest.fixture

@@ -5,7 +5,7 @@ with a one-time ticket, never with the cookie alone."""
 from __future__ import annotations
 
 import httpx
-from playwright.sync_api import Page, expect
+from playwright.sync_api import APIResponse, Page, Route, expect
 
 from tests.backend.server import Server
 from tests.e2e.browser import panel, shot
@@ -35,6 +35,42 @@ def test_a_token_made_in_the_ui_works_until_revoked_there(page: Page, srv: Serve
     assert refused.status_code == 401
     account.get_by_test_id("account-close").click()
     expect(panel(page, "account")).to_have_count(0)
+
+
+def test_a_list_answered_late_never_hides_the_token_just_made(page: Page) -> None:
+    """The token list the dialog asks for as it opens is answered by the service at once
+    but handed to the page only after a token has been made and the list asked for after it
+    is shown: the late, older answer must not replace the newer list (the new token would
+    vanish from it)."""
+    held: list[tuple[Route, APIResponse]] = []
+
+    def hold_the_first_list(route: Route) -> None:
+        if route.request.method == "GET" and not held:
+            held.append((route, route.fetch()))  # the list as it is now, before the token
+        else:
+            route.fallback()
+
+    page.route("**/api/auth/tokens", hold_the_first_list)
+    page.get_by_test_id("account-open").click()
+    tokens = panel(page, "account").get_by_test_id("account-tokens")
+    for _ in range(250):  # Playwright calls the route handler while it waits
+        if held:
+            break
+        page.wait_for_timeout(20)
+    assert held, "the dialog asked for no token list"
+    tokens.get_by_test_id("token-label").fill("made meanwhile")
+    tokens.get_by_test_id("token-create").click()
+    row = tokens.get_by_test_id("token-row").filter(has_text="made meanwhile")
+    expect(row).to_have_count(1)
+    first, answer = held[0]
+    with page.expect_response(lambda r: r.request == first.request) as late:
+        first.fulfill(response=answer)
+    late.value.finished()
+    # the page handles the answer within a few tasks; two animation frames and a margin later
+    # a stale list would have been rendered
+    page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
+    page.wait_for_timeout(300)
+    expect(row).to_have_count(1)
 
 
 def test_an_admin_adds_a_user_in_the_ui(page: Page, srv: Server) -> None:

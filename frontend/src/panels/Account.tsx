@@ -6,6 +6,7 @@ import { ApiError, http } from "../api/http";
 import type { Refusal, Role, TokenCreated, TokenInfo, UserInfo } from "../api/types";
 import { loadMe, me } from "../state/auth";
 import { Panel } from "../ui/Panel";
+import { useNewest } from "../ui/useNewest";
 import { RefusalLine } from "../ui/useCommand";
 
 /** Whether the account dialog is open. */
@@ -58,11 +59,11 @@ export function AccountDialog() {
 }
 
 function Tokens() {
-  const [tokens, setTokens] = useState<TokenInfo[]>([]);
+  const [tokens, showTokens] = useNewest<TokenInfo[]>([]);
   const [label, setLabel] = useState("");
   const [created, setCreated] = useState<TokenCreated | null>(null);
   const [refusal, setRefusal] = useState<Refusal | null>(null);
-  const reload = () => void attempt(setRefusal, async () => setTokens(await http.get<TokenInfo[]>("/api/auth/tokens")), () => {});
+  const reload = () => void attempt(setRefusal, () => showTokens(http.get<TokenInfo[]>("/api/auth/tokens")), () => {});
   useEffect(reload, []);
   const create = (e: Event) => {
     e.preventDefault();
@@ -144,12 +145,12 @@ function Tokens() {
 }
 
 function Users(props: { self: string }) {
-  const [users, setUsers] = useState<UserInfo[]>([]);
+  const [users, showUsers] = useNewest<UserInfo[]>([]);
   const [name, setName] = useState("");
   const [role, setRole] = useState<Role>("operator");
   const [password, setPassword] = useState("");
   const [refusal, setRefusal] = useState<Refusal | null>(null);
-  const reload = () => void attempt(setRefusal, async () => setUsers(await http.get<UserInfo[]>("/api/users")), () => {});
+  const reload = () => void attempt(setRefusal, () => showUsers(http.get<UserInfo[]>("/api/users")), () => {});
   useEffect(reload, []);
   const path = (n: string) => `/api/users/${encodeURIComponent(n)}`;
   const add = (e: Event) => {

@@ -5,6 +5,7 @@ import { ApiError, http } from "../api/http";
 import type { ShareCreated, ShareLink } from "../api/types";
 import { machineId } from "../state/session";
 import { Panel } from "../ui/Panel";
+import { useNewest } from "../ui/useNewest";
 
 const VALIDITY: { label: string; hours: number }[] = [
   { label: "1 hour", hours: 1 },
@@ -21,9 +22,9 @@ export function SharePanel() {
   const [hours, setHours] = useState(8);
   const [label, setLabel] = useState("");
   const [made, setMade] = useState<ShareCreated | null>(null);
-  const [links, setLinks] = useState<ShareLink[]>([]);
+  const [links, showLinks] = useNewest<ShareLink[]>([]);
   const [error, setError] = useState("");
-  const load = () => http.get<ShareLink[]>(base()).then(setLinks, () => setLinks([]));
+  const load = () => showLinks(http.get<ShareLink[]>(base()).catch(() => []));
   useEffect(() => {
     void load();
     const t = setInterval(() => void load(), 5000); // who watches, expiries
