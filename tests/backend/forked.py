@@ -6,8 +6,8 @@ services. Each test process therefore keeps one fork server (multiprocessing's "
 a single-threaded process started once, that has imported `backend.cli` and `backend.main`)
 and forks every service from it: the same `inbetrieb serve` entry point with the same
 arguments, environment and output, in a process of its own that then runs its own workers as
-always. Tests about the command line itself (its exit, Ctrl-C, its printed link from a fresh
-start) still run `python -m backend.cli` as a subprocess."""
+always. Tests about the command line itself (Ctrl-C reaching the process group, the exit of
+a refused start) still run `python -m backend.cli` as a subprocess."""
 
 from __future__ import annotations
 
