@@ -84,12 +84,13 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 
 # pytest-xdist: the tests wait on machines running in real time as well as compute, so a
 # worker more than there are cores keeps both busy (each worker has its own shared service and
-# browser; a module's tests stay together, see tests/conftest.py). The Ray tests run after
-# them, alone: a local Ray cluster beside a loaded machine misses its own start-up deadlines.
+# browser). `loadscope`: a module's tests stay on one worker, so its module-scoped service
+# starts once (`loadgroup` cannot tag pytest 9.2's node ids: it grouped nothing). The Ray tests
+# run after them, alone: a local Ray cluster beside a loaded machine misses its own deadlines.
 TEST_WORKERS ?= 3
 test:
 	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup -m 'not ray'
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadscope -m 'not ray'
 	$(PY) -m pytest -q -m ray
 
 bench: $(DEV_STAMP) $(DIST) $(CHROMIUM) $(NUMBA_STAMP)

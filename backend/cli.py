@@ -18,8 +18,8 @@ from nc_sim.params import ParamListError
 
 
 def main(argv: list[str] | None = None) -> int:
-    # here, not at the top: a local worker process (multiprocessing "spawn") imports this
-    # module again as its main module, and needs none of the accounts' or assistants' code
+    # here, not at the top: a process that multiprocessing spawns (the assistants' pool)
+    # imports this module again as its main module, and needs none of their code
     from backend import cli_accounts, cli_assist, cli_backup
 
     parser = argparse.ArgumentParser(prog="inbetrieb", description=__doc__)
@@ -115,6 +115,12 @@ def main(argv: list[str] | None = None) -> int:
             where = ".".join(str(x) for x in err["loc"])
             print(f"inbetrieb serve: {where}: {err['msg']}", file=sys.stderr)
         return 2
+    if settings.cluster is None:
+        # the local workers' zygote, forked now: this process has one thread and has opened
+        # nothing yet (its store, its port) that the zygote would hold too
+        from backend.workers import zygote
+
+        zygote.get()
     try:  # before anything starts: a store of a newer release, or served already, is left
         migrations.check_file(settings.db_path, STEPS)
         held = store_lock.hold(settings.db_path)  # for as long as this process serves

@@ -98,7 +98,7 @@ LEVELS = ("debug", "info", "warning", "error")
 
 def configure(log_format: LogFormat, level: str) -> None:
     """Send the service's records (ours, uvicorn's) to stderr in the format asked for. The
-    worker processes, spawned afresh, take the same from the environment."""
+    worker processes take the same from the environment they start with."""
     os.environ["INBETRIEB_LOG_FORMAT"], os.environ["INBETRIEB_LOG_LEVEL"] = log_format, level
     _install(log_format, level)
 

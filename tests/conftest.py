@@ -93,21 +93,17 @@ def _uses_ray(item: pytest.Item) -> bool:
     )
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups
+@pytest.hookimpl(tryfirst=True)  # before `-m` selects by the mark
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The Ray tests together, where the first of them was collected. Under pytest-xdist
-    (`make test` runs `--dist loadgroup`) a module's tests stay on one worker, so its
-    module-scoped services start once, and the Ray tests on one, beside their one cluster."""
+    """The Ray tests marked `ray` and run one after the other, where the first of them was
+    collected: their one cluster stops after the last."""
     ray = [i for i in items if _uses_ray(i)]
     if ray:
         first = items.index(ray[0])
         rest = [i for i in items if not _uses_ray(i)]
         items[:] = rest[:first] + ray + rest[first:]
-    for item in items:
-        if _uses_ray(item):
-            item.add_marker(pytest.mark.ray)
-        group = "ray" if _uses_ray(item) else item.nodeid.split("::", 1)[0]
-        item.add_marker(pytest.mark.xdist_group(group))
+    for item in ray:
+        item.add_marker(pytest.mark.ray)
 
 
 @pytest.hookimpl(wrapper=True)

@@ -1,16 +1,17 @@
 """The local transport: a worker is a process on this server, reached through a socket pair; its
 sample rings are files in shared memory that the gateway maps.
 
-The process is started with "spawn" (a fresh interpreter: the gateway's threads and sockets
-are not copied into it) and dies with the gateway: the socket closes when the gateway ends,
-however it ends, and a worker whose socket closes stops.
+The process is forked from the worker zygote (backend/workers/zygote.py: a process with the
+kernel loaded, none of the gateway's threads or sockets) and dies with the gateway: the socket
+closes when the gateway ends, however it ends, and a worker whose socket closes stops.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
-import multiprocessing as mp
+import os
+import select
 import signal
 import socket
 import threading
@@ -19,6 +20,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from pathlib import Path
 
+from backend.workers import zygote
 from backend.workers.client import WorkerClient
 from backend.workers.protocol import Envelope, Push, Reply, Request
 from backend.workers.wire import Wire
@@ -59,10 +61,10 @@ class WireChannel:
 
 
 def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) -> None:
-    """The worker process: load the compiled kernel, then pace until the gateway goes."""
+    """The worker process (forked from the zygote, the kernel loaded): pace until the
+    gateway goes."""
     # imported here: the gateway process never loads the kernel
     from backend.logs import configure_worker
-    from backend.workers.warmup import warm_up
     from backend.workers.worker import Worker, realtime_priority
 
     configure_worker()
@@ -70,7 +72,6 @@ def worker_main(sock: socket.socket, period_s: float, ring_dir: str, node: str) 
     # stops its workers in order (its socket closing ends this one), so they wait for it
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    warm_up()  # at normal priority: a worker starting beside running ones must not starve them
     realtime_priority()
     wire = Wire(sock, write_behind=True)
     worker = Worker(WireChannel(wire), period_s, Path(ring_dir), node)
@@ -104,27 +105,28 @@ class LocalWorker(WorkerClient):
         self.start_timeout_s = start_timeout_s
         self._wire: Wire | None = None
         self._fd = -1
-        self._proc: mp.process.BaseProcess | None = None
+        self._pidfd = -1  # the worker process: readable once it ended
         self._send_lock = threading.Lock()
         self._stopping = False
 
     def _launch(self) -> None:
-        ctx = mp.get_context("spawn")
         ours, theirs = socket.socketpair()
-        proc = ctx.Process(
-            target=worker_main,
-            args=(theirs, self.period_s, str(self.ring_dir), "local"),
-            name=f"inbetrieb-worker-{self.id}",
-            daemon=True,
-        )
-        proc.start()
-        theirs.close()
+        args = (self.period_s, str(self.ring_dir), "local")
+        try:
+            pid = zygote.get().fork_worker(worker_main, theirs, args, self.start_timeout_s)
+            self._pidfd = os.pidfd_open(pid)
+        except (zygote.ZygoteGone, ProcessLookupError) as e:
+            ours.close()
+            raise RuntimeError(f"worker {self.id} did not start: {e}") from e
+        finally:
+            theirs.close()
         wire = Wire(ours)
         if not wire.wait(self.start_timeout_s) or wire.closed:
-            proc.kill()
+            self._end(0)
+            ours.close()
             raise RuntimeError(f"worker {self.id} did not start")
         wire.take(1)  # ("ready",)
-        self._wire, self._proc, self.pid, self._fd = wire, proc, proc.pid, ours.fileno()
+        self._wire, self.pid, self._fd = wire, pid, ours.fileno()
         loop = self.reads_on = self.reads_on or reader_loop()
         on_loop(loop, lambda: loop.add_reader(self._fd, self._readable))
 
@@ -155,11 +157,16 @@ class LocalWorker(WorkerClient):
         self.alive = False
         if self._wire is not None and self.reads_on is not None:
             on_loop(self.reads_on, self._close)
-        if self._proc is not None:
-            self._proc.join(timeout=5)
-            if self._proc.is_alive():
-                self._proc.kill()
-                self._proc.join(timeout=5)
+        if self._pidfd >= 0:
+            self._end(5)
+
+    def _end(self, wait_s: float) -> None:
+        """Wait `wait_s` for the process to end, then kill it; forget it."""
+        if not select.select([self._pidfd], [], [], wait_s)[0]:
+            signal.pidfd_send_signal(self._pidfd, signal.SIGKILL)
+            select.select([self._pidfd], [], [], 5)
+        os.close(self._pidfd)
+        self._pidfd = -1
 
 
 _readers: asyncio.AbstractEventLoop | None = None

@@ -39,9 +39,17 @@ _PROGRAM_SESSION = {
 }
 
 
+_warm = False
+
+
 def warm_up() -> None:
-    """Run the scratch sessions, then move every live object out of the GC's way."""
+    """Run the scratch sessions, then move every live object out of the GC's way (once in a
+    process, and not again in a process forked from one that did)."""
+    global _warm
+    if _warm:
+        return
     run_scenario(demo_machine(), _SESSION)
     run_scenario(demo_machine(), _PROGRAM_SESSION)
     gc.collect()
     gc.freeze()
+    _warm = True

@@ -3,11 +3,12 @@
 `inbetrieb serve` in a new interpreter spends about two thirds of a core-second importing
 FastAPI and building the app's 160 routes before it serves, and a run starts about 140
 services. Each test process therefore keeps one fork server (multiprocessing's "forkserver":
-a single-threaded process started once, that has imported `backend.cli` and `backend.main`)
-and forks every service from it: the same `inbetrieb serve` entry point with the same
-arguments, environment and output, in a process of its own that then runs its own workers as
-always. Tests about the command line itself (Ctrl-C reaching the process group, the exit of
-a refused start) still run `python -m backend.cli` as a subprocess."""
+a single-threaded process started once, that has imported `backend.cli` and `backend.main`
+and loaded the kernel) and forks every service from it: the same `inbetrieb serve` entry point
+with the same arguments, environment and output, in a process of its own that then runs its
+own workers as always (forked from its own zygote, which finds the kernel loaded). Tests about
+the command line itself (Ctrl-C reaching the process group, the exit of a refused start) still
+run `python -m backend.cli` as a subprocess."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ from typing import Any
 _FORKS = multiprocessing.get_context("forkserver")
 # "__main__": a script's main module (a bench's) is imported once, by the fork server, not
 # again in every service (pytest's is not imported at all)
-_FORKS.set_forkserver_preload(["__main__", "backend.cli", "backend.main", "tests.backend.forked"])
+_PRELOAD = ["__main__", "backend.cli", "backend.main", "tests.backend.forked"]
+_FORKS.set_forkserver_preload([*_PRELOAD, "tests.backend.kernel_loaded"])
 
 
 class _Fd:

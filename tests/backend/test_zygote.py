@@ -1,0 +1,71 @@
+"""Local workers are forked from the gateway's worker zygote (backend/workers/zygote.py): one
+process with the kernel loaded, the gateway's child, that forks each worker and each successor
+of a worker that died, is replaced when it is killed itself, and ends with the gateway
+however the gateway ends: nothing of a killed service is left running."""
+
+from __future__ import annotations
+
+import os
+import signal
+from collections.abc import Iterator
+
+import psutil
+import pytest
+
+from tests.backend.server import Server
+from tests.backend.test_workers import service, wait_for
+
+
+@pytest.fixture
+def srv(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    s = Server(tmp_path_factory.mktemp("zygote") / "z.sqlite", "--workers", "2").start()
+    yield s
+    s.close()
+
+
+def live_pids(srv: Server) -> set[int]:
+    return {w["pid"] for w in service(srv)["workers"] if w["alive"]}
+
+
+def parent(pid: int) -> int:
+    return psutil.Process(pid).ppid()
+
+
+def replaced(srv: Server, victim: int) -> int:
+    """Kill worker `victim`; its successor's pid once the pool has two live workers again."""
+    others = live_pids(srv) - {victim}
+    os.kill(victim, signal.SIGKILL)
+    wait_for(lambda: len(live_pids(srv) - others - {victim}) == 1, 30)
+    (successor,) = live_pids(srv) - others - {victim}
+    return successor
+
+
+def test_workers_and_their_successors_are_forked_from_one_zygote(srv: Server) -> None:
+    assert srv.proc is not None
+    workers = live_pids(srv)
+    assert len(workers) == 2
+    (zygote,) = {parent(w) for w in workers}  # both forked by the same process
+    assert zygote != srv.proc.pid and parent(zygote) == srv.proc.pid  # the gateway's child
+    successor = replaced(srv, min(workers))
+    assert parent(successor) == zygote  # the zygote forked it too: no new interpreter
+
+
+def test_a_killed_zygote_is_replaced_for_the_next_worker(srv: Server) -> None:
+    assert srv.proc is not None
+    workers = live_pids(srv)
+    zygote = parent(min(workers))
+    os.kill(zygote, signal.SIGKILL)
+    successor = replaced(srv, min(workers))
+    new = parent(successor)
+    assert new != zygote and parent(new) == srv.proc.pid
+    assert srv.command("demo", {"type": "mdi", "block": "M3 S500"}).status_code == 200
+
+
+def test_nothing_of_a_killed_gateway_is_left_running(srv: Server) -> None:
+    assert srv.proc is not None
+    workers = live_pids(srv)
+    family = [psutil.Process(p) for p in {*workers, parent(min(workers))}]
+    srv.proc.kill()  # SIGKILL: no orderly stop, only the sockets closing
+    srv.proc.wait()
+    _, alive = psutil.wait_procs(family, timeout=10)  # a safety net, no measure
+    assert not alive, f"left running: {alive}"
