@@ -17,7 +17,6 @@ ends. A worker is the zygote's child; the gateway watches it through a pidfd.
 from __future__ import annotations
 
 import atexit
-import contextlib
 import functools
 import os
 import pickle
@@ -85,9 +84,10 @@ class Zygote:
                 cause: Exception | None = e
             else:
                 cause = None
-            if len(reply) != 8:
+            if len(reply) != 8:  # ended, or too slow: left (it ends when its socket closes)
                 self.ended = True
-                self._reap()
+                self._ctrl.close()
+                self._ended()
                 raise ZygoteGone(f"the worker zygote (pid {self.pid}) ended") from cause
         return int.from_bytes(reply, "little")
 
@@ -102,28 +102,21 @@ class Zygote:
                 self._proc.kill()
                 self._proc.wait()
         else:
-            self._reap()
+            self._ended()
 
     def running(self) -> bool:
-        """Whether it still runs (its exit collected when it ended)."""
-        if self.ended:
-            return False
-        if self._proc is not None:
-            self.ended = self._proc.poll() is not None
-        else:
-            try:
-                self.ended = os.waitpid(self.pid, os.WNOHANG)[0] != 0
-            except ChildProcessError:
-                self.ended = True
+        """Whether it still runs."""
+        self.ended = self.ended or self._ended()
         return not self.ended
 
-    def _reap(self) -> None:
-        """Collect the ended zygote's exit (else it would stay a zombie)."""
+    def _ended(self) -> bool:
+        """Whether the process ended (its exit collected then: no zombie is left)."""
         if self._proc is not None:
-            self._proc.poll()
-        else:
-            with contextlib.suppress(ChildProcessError):
-                os.waitpid(self.pid, os.WNOHANG)
+            return self._proc.poll() is not None
+        try:
+            return os.waitpid(self.pid, os.WNOHANG)[0] != 0
+        except ChildProcessError:
+            return True
 
 
 _current: Zygote | None = None
