@@ -211,17 +211,20 @@ def test_a_long_program_never_stalls_its_neighbours(srv: Server) -> None:
     thread = threading.Thread(target=load)
     thread.start()
     latencies: list[float] = []
+    during = 0  # stops sent while the load was being interpreted (about a second)
     try:
-        while thread.is_alive() or len(latencies) < 3:
+        while thread.is_alive() or len(latencies) < 10:
+            loading = thread.is_alive()
             r = srv.emergency_stop(neighbour)
             assert r.status_code == 200, r.text
             latencies.append(r.json()["latency_ms"])
+            during += loading
             assert srv.command(neighbour, {"type": "reset"}).status_code == 200
-            time.sleep(0.05)
+            time.sleep(0.01)
     finally:
         thread.join(timeout=60)
     assert done["r"].status_code == 200, done["r"].text
-    assert len(latencies) >= 10  # stops were sent throughout the interpretation
+    assert during >= 3  # stops were sent throughout the interpretation, however fast it was
     assert sorted(latencies)[len(latencies) // 2] <= ESTOP_WITHIN_MS
     assert max(latencies) <= ESTOP_OUTLIER_MS, sorted(latencies)[-5:]
     # the loaded program runs: cycle start answers at once (interpreted from here already)
