@@ -86,16 +86,13 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 # worker more than there are cores keeps both busy (each worker has its own shared service and
 # browser). `loadscope`: a module's tests stay on one worker, so its module-scoped service
 # starts once (`loadgroup` cannot tag pytest 9.2's node ids: it grouped nothing). The Ray tests
-# run beside them in a pytest of their own, one after the other on their one local cluster:
-# they mostly wait (for nodes, for actors compiling the shipped kernel); their report follows.
+# run after them, alone: beside the rest they took four times as long, and the rest's browser
+# tests, short of CPU, missed their frames.
 TEST_WORKERS ?= 3
 test:
 	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
-	@ray_log=$$(mktemp); \
-	$(PY) -m pytest -q -p no:cacheprovider -m ray > $$ray_log 2>&1 & ray=$$!; \
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadscope -m 'not ray'; rest=$$?; \
-	wait $$ray; ray_rc=$$?; echo "--- the Ray tests (tests/conftest.py marks them)"; \
-	cat $$ray_log; rm -f $$ray_log; test $$rest = 0 && test $$ray_rc = 0
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadscope -m 'not ray'
+	$(PY) -m pytest -q -m ray
 
 bench: $(DEV_STAMP) $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
 	$(PY) bench/kernel.py

@@ -61,7 +61,9 @@ def _per_frame(page: Page, frames: int) -> tuple[float, float]:
     return (after[0] - before[0]) / n, (after[2] - before[2]) / n
 
 
-def test_the_plot_refresh_is_chosen_kept_and_draws_that_often(page: Page) -> None:
+def test_the_plot_refresh_is_chosen_kept_and_draws_that_often(
+    page: Page, srv: Server, mid: str
+) -> None:
     """50/s draws every telemetry frame (one every 20 ms); at 10/s the page asks for a frame
     every 100 ms, each with five times the samples, and draws each, still showing the newest
     samples; the choice survives a reload."""
@@ -74,9 +76,20 @@ def test_the_plot_refresh_is_chosen_kept_and_draws_that_often(page: Page) -> Non
     rate.select_option("10")
     _per_frame(page, 2)  # the frames of the new period from here on
     draws_10, span_10 = _per_frame(page, 20)  # about 2 s
-    assert draws_50 > 0.6 and draws_10 > 0.6, (draws_50, draws_10)
+    # a draw for (nearly) every frame: a page drawing at 10/s whatever was chosen would draw
+    # 0.2 per frame at 50/s; a Chromium sharing two cores with the rest of the suite skipped
+    # up to 45 % of the 20 ms frames (0.55), so more than 0.4 counts
+    assert draws_50 > 0.4 and draws_10 > 0.6, (draws_50, draws_10)
     assert span_10 > 2.5 * span_50, (span_10, span_50)  # 0.1 s of samples a frame, not 0.02
-    poll(lambda: abs(latest(page, "S1.speed_act_rpm") - 600) < 1.0, "plot at 600 rpm")
+    # still the newest samples: the speed the machine reports now (its status, over REST),
+    # about 600 rpm; the measured speed steps by 2.4 rpm there (598.1 or 600.6 for seconds)
+    poll(
+        lambda: (
+            abs((shown := latest(page, "S1.speed_act_rpm")) - srv.axis("S1", mid)["vel_act"]) < 1.0
+            and abs(shown - 600) < 2.5
+        ),
+        "the plot at the machine's speed",
+    )
     page.reload()
     expect(panel(page, "plot").get_by_test_id("plot-rate")).to_have_value("10")
 

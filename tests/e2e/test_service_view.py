@@ -9,6 +9,8 @@ lag of 0.83 mm against a 0.1 µm encoder increment, so 1 % holds with room to sp
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from playwright.sync_api import Browser, Locator, expect
 
@@ -37,9 +39,10 @@ def test_expected_lag_and_measured_gain_of_x(
         x = box.get_by_test_id("svc-X")
         expect(x.get_by_test_id("svc-X-kv")).to_contain_text("20.00")
         expect(x.get_by_test_id("svc-X-k")).to_have_text("—")  # at rest: no k
-        assert "standstill" in (
-            x.get_by_test_id("svc-X-k").locator("..").get_attribute("title") or ""
-        )
+        # once the page holds the half second of records k is judged from (a page just
+        # opened on a busy machine says it needs them first)
+        k_title = x.get_by_test_id("svc-X-k").locator("..")
+        expect(k_title).to_have_attribute("title", re.compile("standstill"))
         r = srv.command(mid, {"type": "mdi", "block": f"G01 G91 X150 F{FEED_MM_MIN:g}"})
         assert r.status_code in (200, 202), r.text
         poll(lambda: _value(x, "svc-X-k") == _value(x, "svc-X-k"), "a measured k")  # not nan
