@@ -92,6 +92,14 @@ def children(pid: int) -> list[int]:
     return found
 
 
+def parent(pid: int) -> int:
+    """The parent process' pid (0 once `pid` is gone)."""
+    try:
+        return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
 def cmdline(pid: int) -> list[str]:
     try:
         return Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")[:-1]
@@ -185,13 +193,14 @@ class Service:
         assert self.proc is not None
         entry = self.image.entrypoint[-1]
         # the console script runs as `python /opt/inbetrieb/bin/inbetrieb serve`, below
-        # buildah's own `buildah-chroot-exec /opt/inbetrieb/bin/inbetrieb serve`; its workers
-        # are multiprocessing children of it, with other command lines
-        found = [
+        # buildah's own `buildah-chroot-exec /opt/inbetrieb/bin/inbetrieb serve`; its worker
+        # zygote and the workers are forks of it, with its command line, below it
+        serving = [
             p
             for p in children(self.proc.pid)
             if (argv := cmdline(p))[1:3] == [entry, "serve"] and "buildah" not in argv[0]
         ]
+        found = [p for p in serving if parent(p) not in serving]
         if len(found) != 1:
             raise Failed(f"expected one server process below buildah run, found {found}")
         return found[0]
