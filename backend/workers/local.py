@@ -106,6 +106,7 @@ class LocalWorker(WorkerClient):
         self._wire: Wire | None = None
         self._fd = -1
         self._pidfd = -1  # the worker process: readable once it ended
+        self._pidfd_lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._stopping = False
 
@@ -139,6 +140,7 @@ class LocalWorker(WorkerClient):
         if wire.closed:
             self._close()
             if not self._stopping:
+                self._end(None)  # a dead worker is not stopped: its pidfd is closed here
                 self._died("its socket closed (the process ended)")
 
     def _close(self) -> None:
@@ -157,16 +159,18 @@ class LocalWorker(WorkerClient):
         self.alive = False
         if self._wire is not None and self.reads_on is not None:
             on_loop(self.reads_on, self._close)
-        if self._pidfd >= 0:
-            self._end(5)
+        self._end(5)
 
-    def _end(self, wait_s: float) -> None:
-        """Wait `wait_s` for the process to end, then kill it; forget it."""
-        if not select.select([self._pidfd], [], [], wait_s)[0]:
-            signal.pidfd_send_signal(self._pidfd, signal.SIGKILL)
-            select.select([self._pidfd], [], [], 5)
-        os.close(self._pidfd)
-        self._pidfd = -1
+    def _end(self, wait_s: float | None) -> None:
+        """Wait `wait_s` for the process to end, then kill it (None: it ended); forget it."""
+        with self._pidfd_lock:
+            if self._pidfd < 0:
+                return
+            if wait_s is not None and not select.select([self._pidfd], [], [], wait_s)[0]:
+                signal.pidfd_send_signal(self._pidfd, signal.SIGKILL)
+                select.select([self._pidfd], [], [], 5)
+            os.close(self._pidfd)
+            self._pidfd = -1
 
 
 _readers: asyncio.AbstractEventLoop | None = None

@@ -107,10 +107,13 @@ class SampleRing:
         """Samples of cycles first, first+stride, ... ≤ last as signals × count.
 
         Returns the data and the first cycle actually present (later than `first` when the
-        ring no longer holds the older cycles)."""
+        ring no longer holds the older cycles; nothing once it is closed)."""
+        rows = self.rows  # a close meanwhile (the machine rebuilt) leaves this view mapped
+        if not len(rows):
+            return np.zeros((len(signals), 0)), first
         first = self._skip_to(first, self.oldest(self.head), stride)
         idx = np.arange(first, last + 1, stride)
-        data = signal_rows(signals, self.rows, idx % self.cycles)
+        data = signal_rows(signals, rows, idx % self.cycles)
         safe = self._skip_to(first, self.oldest(self.head), stride)  # overwritten meanwhile?
         if safe > first:
             k = (safe - first) // stride
@@ -121,10 +124,11 @@ class SampleRing:
         """Per signal, its sample of the largest magnitude (sign kept) among cycles
         first..last, every cycle (None when the ring holds none of them): what a display
         that shows a value now and then must not miss in between."""
+        rows = self.rows  # as in `read`
         first = max(first, self.oldest(self.head))
-        if first > last:
+        if first > last or not len(rows):
             return None
-        data = signal_rows(signals, self.rows, np.arange(first, last + 1) % self.cycles)
+        data = signal_rows(signals, rows, np.arange(first, last + 1) % self.cycles)
         at = np.abs(data).argmax(axis=1)
         peak: np.ndarray = data[np.arange(len(signals)), at]
         return peak
@@ -136,5 +140,6 @@ class SampleRing:
         return first + math.ceil((oldest - first) / stride) * stride
 
     def close(self) -> None:
-        """Drop the mapping (the file stays until its owner removes it)."""
+        """Drop the mapping (the file stays until its owner removes it). A read from another
+        thread that began before keeps its view mapped; one after it reads nothing."""
         self.rows = self.rows[:0]

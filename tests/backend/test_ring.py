@@ -35,6 +35,23 @@ def test_the_gateway_reads_what_the_worker_wrote_through_the_file(tmp_path: Path
     np.testing.assert_array_equal(data[0], np.arange(10, 1001, 10, dtype=float))
 
 
+def test_a_ring_closed_by_a_rebuild_reads_nothing_and_a_read_under_way_finishes(
+    tmp_path: Path,
+) -> None:
+    """The gateway closes the old build's ring when the machine is rebuilt (another thread)
+    while telemetry may be reading it: a read that began keeps its view; a read after the
+    close reads no samples instead of failing (an IndexError closed the viewer's socket)."""
+    writer = SampleRing.create(tmp_path / "m.ring", slots=1, cycles=4096)
+    reader = SampleRing.attach(tmp_path / "m.ring")
+    write(writer, 1, 3000)
+    under_way = reader.rows  # what a read holds from its start
+    reader.close()
+    assert under_way[2999 % 4096, 0, 0] == 2999.0  # still mapped
+    data, first = reader.read([POS], 2000, 3000, 1)
+    assert data.shape == (1, 0) and first == 2000
+    assert reader.peaks([POS], 2000, 3000) is None
+
+
 def test_a_reader_that_fell_behind_skips_what_may_be_overwritten(tmp_path: Path) -> None:
     """With the writer at cycle h and writing up to MAX_WRITE more before it publishes, the
     oldest cycle safe to read is h - cycles + 1 + MAX_WRITE."""
