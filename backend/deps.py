@@ -93,7 +93,8 @@ class Services:
         shares.start()
         loop = asyncio.get_running_loop()  # reads the local workers' replies and pushes
         pool = WorkerPool(settings.workers, settings.loop_period_s, settings.cluster, loop=loop)
-        machines = MachineService(store, pool)
+        flight_s = (settings.flight_before_s, settings.flight_after_s)
+        machines = MachineService(store, pool, flight_s)
         history = History(store, settings.history_days, settings.history_rows)
         history.attach(machines)
         audit = Audit(store)
@@ -120,8 +121,6 @@ class Services:
             machines,
             traces,
             history,
-            settings.flight_before_s,
-            settings.flight_after_s,
             settings.flight_minutes,
             settings.flight_decimation,
             settings.flight_keep,

@@ -7,15 +7,16 @@ speed; the channel's state and path feed), one sample in `decimation` cycles, fo
 Its memory: channels × minutes·60 / (decimation · cycle_s) × 8 bytes per machine, 17 × 30 000
 × 8 B = 4.1 MB for the demo lathe at the defaults (5 min at 100 Hz).
 
-On every job error the recorder copies `before_s` of the main signals at full rate from the
-ring when it hears of the error, the `after_s` that follow as they are written (every 20 ms
-while a window is open: a fast simulation laps the ring in well under a second), then saves
-the window as a trace of the library (source 'flight', the error as its trigger, the events
-of the window with it) and links the job error's history entry to it. Where the ring was
-lapped before the error was heard (fast, on a loaded machine), the history says it was not
-saved. Errors within a window already being saved share its trace. Each
-machine keeps its newest `keep` such traces; older ones are deleted. On demand it saves the
-last seconds: from the ring at full rate while they fit in it, from the long tier beyond.
+On every job error the machine's worker copies `before_s` of the main signals at full rate
+from its ring in the cycle it steps past the error, then the `after_s` that follow as it
+steps them, and pushes the window once the machine has run past its end
+(backend/workers/flight.py): nothing of it is lost however fast the simulation runs or
+however long the gateway is short of CPU. The recorder saves the window as a trace of the
+library (source 'flight', the error as its trigger, the events of the window with it) and
+links the job error's history entry to it; where the library refuses it (full), the history
+says it was not saved. Errors within an open window share its trace. Each machine keeps
+its newest `keep` such traces; older ones are deleted. On demand it saves the last seconds:
+from the ring at full rate while they fit in it, from the long tier beyond.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import logging
 import threading
 import time
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -36,32 +37,17 @@ from backend.services.commands import job_error_model
 from backend.services.history import History
 from backend.services.machines import MachineProxy, MachineService
 from backend.services.traces import Trace, TraceService, param_diff
-from backend.workers.link import MachineLink
+from backend.workers.flight import FlightWindow, main_signals
 from backend.workers.protocol import param_snapshot
 from backend.workers.ring import RING_CYCLES
 from nc_sim.events import EVENT_LOG_LEN, Event
-from nc_sim.signals import CHANNEL, Signal
+from nc_sim.signals import Signal
 
 log = logging.getLogger(__name__)
 
-# how often the long tier is fed and pending saves are looked at: the ring holds 16 s, and
-# fewer, longer reads cost the gateway less (an open window is looked at every 20 ms)
-PERIOD_S = 1.0
-# while a window is open (a fast simulation runs through the ring's 16 s in a quarter
-# second): the machines with one, and they alone, are looked at this often
-PENDING_PERIOD_S = 0.02
+PERIOD_S = 1.0  # how often the long tier is fed (the ring holds 16 s: fewer, longer reads)
 BY = "flight recorder"  # whom its traces count for in the library
 RING_MARGIN = 500  # cycles of the ring left alone: the worker may be writing them
-_MAIN = ("speed_cmd_rpm", "speed_act_rpm", "pos_cmd_", "pos_act_", "lag_", "vel_cmd_", "vel_act_")
-_CHANNEL_MAIN = (f"{CHANNEL}.state", f"{CHANNEL}.path_feed_mm_min")
-
-
-def main_signals(signals: list[Signal]) -> list[Signal]:
-    """The signals the recorder keeps: per axis command, actual value, lag and velocity or
-    speed; the channel's state and path feed."""
-    return [
-        s for s in signals if s.name in _CHANNEL_MAIN or s.name.split(".", 1)[-1].startswith(_MAIN)
-    ]
 
 
 @dataclass
@@ -89,39 +75,6 @@ class _Tape:
         return self.data[:, at], n
 
 
-@dataclass
-class _Pending:
-    """A window to save once the machine has run past its end, and what of it is copied
-    already: a fast simulation runs through the ring in seconds, so the window is copied
-    as it comes (when the error is heard, then at each look), not only at its end."""
-
-    epoch: int
-    trigger: Event
-    first: int
-    last: int
-    errors: list[Event] = field(default_factory=list)
-    seen_unix: float = 0.0  # when the error was heard: its wall clock
-    parts: list[np.ndarray] = field(default_factory=list)  # copied samples, in order
-    got_first: int = 0  # the cycle of the first copied sample
-    next_cycle: int = 0  # the next cycle to copy (0: none copied yet)
-
-    def gather(self, link: MachineLink, signals: list[Signal]) -> None:
-        """Copy what the ring holds of the window and was not copied yet. Samples the ring
-        lost before they were copied leave the trace starting after them (never a gap)."""
-        head = link.cycle
-        lo = max(self.next_cycle or self.first, head - RING_CYCLES + RING_MARGIN)
-        hi = min(self.last, head)
-        if hi < lo:
-            return
-        block, got = link.samples(signals, lo, hi, 1)
-        if not block.shape[1]:
-            return
-        if got != self.next_cycle:  # the first copy, or older samples were lost: start here
-            self.parts, self.got_first = [], got
-        self.parts.append(block.copy())
-        self.next_cycle = got + block.shape[1]
-
-
 class FlightRecorder:
     """Every machine's flight recorder (one thread for all)."""
 
@@ -130,24 +83,25 @@ class FlightRecorder:
         machines: MachineService,
         traces: TraceService,
         history: History,
-        before_s: float,
-        after_s: float,
         minutes: float,
         decimation: int,
         keep: int,
     ) -> None:
+        """The windows around job errors as long as `machines.flight_s` says (its workers
+        copy them), the long tier `minutes` long, one sample in `decimation` cycles."""
         self.machines, self.traces, self.history = machines, traces, history
-        self.before_s, self.after_s = before_s, after_s
+        self.before_s, self.after_s = machines.flight_s or (0.0, 0.0)
         self.minutes, self.decimation, self.keep = minutes, decimation, keep
         self.saved = 0  # traces saved automatically
         self._tapes: dict[str, _Tape] = {}
-        self._pending: dict[str, list[_Pending]] = {}
+        # windows pushed, to save: (machine, its epoch then, the window, when it came)
+        self._windows: list[tuple[str, int, FlightWindow, float]] = []
         self._lock = threading.Lock()
         self._feeding = threading.Lock()  # one feed at a time: the thread's, or a save's
         self._stop = threading.Event()
-        self._wake = threading.Event()  # a window opened (or the recorder stops): look now
+        self._wake = threading.Event()  # a window came (or the recorder stops): save it now
         self._thread = threading.Thread(target=self._run, name="flight-recorder", daemon=True)
-        machines.event_takers.append(self.events)
+        machines.on_flights = self.windows
 
     def start(self) -> None:
         self._thread.start()
@@ -177,61 +131,45 @@ class FlightRecorder:
         )
 
     # --- job errors ----------------------------------------------------------------------
-    def events(self, mid: str, epoch: int, events: list[Event]) -> None:
-        """A machine's new events (its worker's push thread): each job error opens a window
-        to save, or joins the one still open."""
-        errors = [e for e in events if e.error]
-        if not errors:
-            return
-        proxy = self.machines.find(mid)
-        if proxy is None:
-            return
-        before = round(self.before_s / proxy.link.cycle_s)
-        after = round(self.after_s / proxy.link.cycle_s)
+    def windows(self, mid: str, epoch: int, windows: list[FlightWindow]) -> None:
+        """A machine's completed job error windows (its worker's push thread): saved on the
+        recorder's thread (a save writes files)."""
         now = time.time()
         with self._lock:
-            pending = self._pending.setdefault(mid, [])
-            for e in errors:
-                open_ = next((p for p in pending if p.epoch == epoch and e.cycle <= p.last), None)
-                if open_ is None:
-                    first = max(1, e.cycle - before)
-                    pending.append(_Pending(epoch, e, first, e.cycle + after, [e], now))
-                else:
-                    open_.errors.append(e)
-            if proxy.link.epoch == epoch and proxy.link.ring is not None:
-                signals = main_signals(proxy.link.signals)
-                for p in pending:  # the seconds before, while the ring still holds them
-                    if p.epoch == epoch:
-                        p.gather(proxy.link, signals)
+            self._windows += [(mid, epoch, w, now) for w in windows]
         self._wake.set()
 
     # --- the thread --------------------------------------------------------------------------
     def _run(self) -> None:
-        last_full = 0.0
-        while True:
-            self._wake.wait(PENDING_PERIOD_S if any(self._pending.values()) else PERIOD_S)
-            self._wake.clear()
-            if self._stop.is_set():
-                return
-            proxies = self.machines.proxies()
-            if time.monotonic() - last_full < PERIOD_S:  # a quick look: open windows only
-                for proxy in [p for p in proxies if self._pending.get(p.id)]:
-                    with contextlib.suppress(Exception):  # the full look says what fails
-                        self._due(proxy)
-                continue
-            last_full = time.monotonic()
-            with self._lock:  # a deleted machine's tier goes with it
-                live = {p.id for p in proxies}
-                for mid in [mid for mid in self._tapes if mid not in live]:
-                    del self._tapes[mid]
-                for mid in [mid for mid in self._pending if mid not in live]:
-                    del self._pending[mid]
-            for proxy in proxies:
+        next_feed = time.monotonic()
+        while not self._stop.is_set():
+            with self._lock:
+                windows, self._windows = self._windows, []
+            for mid, epoch, window, came_unix in windows:
+                proxy = self.machines.find(mid)
+                if proxy is None:  # deleted meanwhile
+                    continue
                 try:
-                    self._feed(proxy)
-                    self._due(proxy)
+                    self._keep(proxy, epoch, window, came_unix)
                 except Exception:  # one machine's failure must not stop the others' recorder
-                    log.exception("flight recorder of %s", proxy.id)
+                    log.exception("flight recorder of %s", mid)
+            if time.monotonic() >= next_feed:
+                next_feed = time.monotonic() + PERIOD_S
+                self._feed_all()
+            self._wake.wait(max(0.0, next_feed - time.monotonic()))
+            self._wake.clear()
+
+    def _feed_all(self) -> None:
+        proxies = self.machines.proxies()
+        with self._lock:  # a deleted machine's tier goes with it
+            live = {p.id for p in proxies}
+            for mid in [mid for mid in self._tapes if mid not in live]:
+                del self._tapes[mid]
+        for proxy in proxies:
+            try:
+                self._feed(proxy)
+            except Exception:  # one machine's failure must not stop the others' recorder
+                log.exception("flight recorder of %s", proxy.id)
 
     def _feed(self, m: MachineProxy) -> None:
         """Take the cycles the machine ran since the last feed into its long tier (those the
@@ -260,39 +198,26 @@ class FlightRecorder:
             if tape.epoch == link.epoch:
                 tape.take(block, got, self.decimation)
 
-    def _due(self, m: MachineProxy) -> None:
-        head, epoch = m.link.cycle, m.link.epoch
-        with self._lock:
-            pending = self._pending.get(m.id, [])
-            if m.link.ring is not None:
-                signals = main_signals(m.link.signals)
-                for p in pending:
-                    if p.epoch == epoch:
-                        p.gather(m.link, signals)
-            due = [p for p in pending if p.epoch != epoch or p.last <= head]
-            self._pending[m.id] = [p for p in pending if p not in due]
-        for p in due:
-            if p.epoch != epoch:  # powered on again before its window ended: lost with it
-                continue
-            try:
-                info = self._save(m, p)
-            except ApiError as e:  # the library is full: say so in the history
-                self.history.flight_failed(m, p.trigger, str(e))
-                continue
-            self.saved += 1
-            self.history.link_trace(m.id, epoch, p.errors, info.id)
-            self._forget_old(m.id)
+    def _keep(self, m: MachineProxy, epoch: int, w: FlightWindow, came_unix: float) -> None:
+        """Save a window and link its errors' history entries to it."""
+        try:
+            info = self._save(m, w, came_unix)
+        except ApiError as e:  # the library is full: say so in the history
+            self.history.flight_failed(m, w.trigger, str(e))
+            return
+        self.saved += 1
+        self.history.link_trace(m.id, epoch, w.errors, info.id)
+        self._forget_old(m.id)
 
     # --- saving --------------------------------------------------------------------------------
-    def _save(self, m: MachineProxy, p: _Pending) -> TraceInfo:
-        e = p.trigger
-        signals = main_signals(m.link.signals)
-        if not p.parts:
-            raise Invalid("the sample ring had run past the error before it could be copied")
-        data = np.concatenate(p.parts, axis=1)
+    def _save(self, m: MachineProxy, w: FlightWindow, came_unix: float) -> TraceInfo:
+        e = w.trigger
         what = f"job error {e.code}{' ' + e.axis if e.axis else ''}"
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(p.seen_unix))
-        trace = self._trace(m, signals, data, p.got_first, m.link.cycle_s, e.cycle, what)
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(came_unix))
+        data = np.asarray(w.data)
+        trace = self._trace(
+            m, w.signals, data, w.first_cycle, m.link.cycle_s, e.cycle, what, w.events
+        )
         trace.detail.name = f"{what} at {stamp}"
         trace.detail.notes = f"saved by the flight recorder: {e.message}"
         return self.traces.add(trace, BY)
@@ -300,8 +225,8 @@ class FlightRecorder:
     def save_last(self, m: MachineProxy, seconds: float, by: str) -> TraceInfo:
         """The last `seconds` as a trace in the library: at full rate while the sample ring
         holds them, decimated from the long tier beyond, which first takes the cycles since
-        its last feed (a second ago at most, longer while a job error's window is saved), so
-        the trace ends now (422 while it holds nothing yet)."""
+        its last feed (about a second ago), so the trace ends now (422 while it holds
+        nothing yet)."""
         link = m.link
         head, cycle_s = link.cycle, link.cycle_s
         span = round(seconds / cycle_s)
@@ -337,14 +262,19 @@ class FlightRecorder:
         cycle_s: float,
         trigger_cycle: int | None,
         trigger: str,
+        events: list[Event] | None = None,
     ) -> Trace:
         """A trace of samples `first`.. in cycles of `cycle_s` (the machine's, or a multiple
-        of it for decimated samples: the events' cycles are counted in the same)."""
+        of it for decimated samples: the events' cycles are counted in the same), with the
+        `events` of its span (None: those the gateway's copy of the machine's log holds)."""
         per = max(1, round(cycle_s / m.link.cycle_s))
         last = first + data.shape[1] - 1
-        events = [
-            e for e in m.link.recent_events(EVENT_LOG_LEN) if first * per <= e.cycle <= last * per
-        ]
+        if events is None:
+            events = [
+                e
+                for e in m.link.recent_events(EVENT_LOG_LEN)
+                if first * per <= e.cycle <= last * per
+            ]
         with m.lock:
             params = param_diff(param_snapshot(m.cfg))
         detail = TraceDetail(

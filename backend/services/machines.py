@@ -24,7 +24,8 @@ from backend.services.notices import Notices
 from backend.services.pending import PendingValues
 from backend.services.store import Store, StoredMachine
 from backend.workers.client import WorkerClient, WorkerGone, WorkerRefused
-from backend.workers.link import EventsTaken, MachineLink
+from backend.workers.flight import FlightWindow
+from backend.workers.link import EventsTaken, FlightsTaken, MachineLink
 from backend.workers.pool import NoLiveWorker, WorkerPool
 from backend.workers.protocol import (
     AddMachine,
@@ -79,9 +80,14 @@ class MachineProxy:
 class MachineService:
     """Owns the proxies; places machines on workers and rebuilds them when a worker dies."""
 
-    def __init__(self, store: Store, pool: WorkerPool) -> None:
+    def __init__(
+        self, store: Store, pool: WorkerPool, flight_s: tuple[float, float] | None = None
+    ) -> None:
+        """`flight_s`: the seconds before and after each job error that every machine's
+        worker copies for the flight recorder (None: none)."""
         self.store = store
         self.pool = pool
+        self.flight_s = flight_s
         self._proxies: dict[str, MachineProxy] = {}
         # machines being built and where: their pushes may come before the reply, and they
         # count as load, so machines created at once spread over the workers
@@ -94,6 +100,7 @@ class MachineService:
         self.on_power: PoweredOn | None = None  # the history: every build is a power-on
         # the history, the flight recorder: every machine's new events (a push thread's)
         self.event_takers: list[EventsTaken] = []
+        self.on_flights: FlightsTaken | None = None  # the flight recorder: job error windows
         self.on_deleted: list[Callable[[str], None]] = []  # what keeps something per machine
         # a machine's training faults as they stood before the service stopped (None: none
         # kept, a seat starts with its exercise's)
@@ -114,6 +121,10 @@ class MachineService:
     def _took_events(self, mid: str, epoch: int, events: list[Event]) -> None:
         for take in self.event_takers:
             take(mid, epoch, events)
+
+    def _took_flights(self, mid: str, epoch: int, windows: list[FlightWindow]) -> None:
+        if self.on_flights is not None:
+            self.on_flights(mid, epoch, windows)
 
     def building(self, mid: str) -> bool:
         """The machine is being built (placed, or rebuilt after its worker died)."""
@@ -183,6 +194,7 @@ class MachineService:
             faults=faults,
             exercise=proxy.exercise,
             mode=mode,
+            flight_s=self.flight_s,
         )
         try:
             info = worker.call(build)
@@ -193,6 +205,7 @@ class MachineService:
         if self.on_power is not None:  # first: the build's own first events come after it
             self.on_power(proxy, info.epoch, why, failure)
         proxy.link.on_events = self._took_events
+        proxy.link.on_flights = self._took_flights
         proxy.link.attach(worker, info)
         if proxy.id in self._proxies:  # a new machine counts as building until it is listed
             self._built(proxy.id)

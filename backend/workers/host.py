@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from backend.workers.flight import FlightTaker, FlightWindow
 from backend.workers.protocol import (
     AddMachine,
     AssistRunning,
@@ -98,6 +99,11 @@ class MachineHost:
         self.scope = Scope(self.sim.kernel.cycle_s)
         self.drive_scope: DriveScope | None = None  # a drive-rate capture's ring
         self.captures: list[tuple[Record, ParamSnapshot]] = []  # completed, not yet pushed
+        self.flight: FlightTaker | None = None  # the flight recorder's job error windows
+        if r.flight_s is not None:
+            before, after = (round(s / self.cycle_s) for s in r.flight_s)
+            cursor = self.machine.events.cursor  # errors of a restored log are not this ring's
+            self.flight = FlightTaker(self.signals, before, after, cursor, self.cycle + 1)
         self.jog_leases: dict[str, int] = {}  # axis -> cycle at which a held jog stops
         self.pacing = PacingState(anchor_mono=time.monotonic())
         self.clock: Callable[[], float] = time.monotonic  # wall time (a test's own clock)
@@ -152,6 +158,8 @@ class MachineHost:
                 part = min(part, live.want())
             self.sim.run(part, rows[start : start + part])
             self.ring.publish(self.sim.cycle)
+            if self.flight is not None:  # before the next part can lap what it must copy
+                self.flight.step(self.machine.events, rows, self.sim.cycle)
             if live is not None:
                 live.feed(rows[start : start + part])
             if self.monitor is not None and self.sim.cycle - self.monitor_fed >= CHECK_CYCLES:
@@ -162,6 +170,13 @@ class MachineHost:
                     self._take_captures()
             n -= part
         self._expire_jogs()
+
+    def flights(self) -> list[FlightWindow]:
+        """The job error windows completed since the last call."""
+        if self.flight is None or not self.flight.done:
+            return []
+        done, self.flight.done = self.flight.done, []
+        return done
 
     def params_now(self) -> ParamSnapshot:
         """The parameter lists as written now (cheap copies)."""

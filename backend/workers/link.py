@@ -16,6 +16,7 @@ import numpy as np
 
 from backend.errors import WORKER_FAILURE, ApiError, Unavailable
 from backend.workers.client import CALL_TIMEOUT_S, WorkerClient, WorkerGone, WorkerRefused
+from backend.workers.flight import FlightWindow
 from backend.workers.protocol import (
     MachineInfo,
     MachineNews,
@@ -37,6 +38,8 @@ EARLY_PUSHES = 64  # pushes of a build kept until its AddMachine reply is throug
 Captured = Callable[[list[tuple[Record, ParamSnapshot]]], None]
 # a machine's new events as its worker pushed them: (machine, epoch, events)
 EventsTaken = Callable[[str, int, list[Event]], None]
+# its job error windows, complete (backend/workers/flight.py): (machine, epoch, windows)
+FlightsTaken = Callable[[str, int, list[FlightWindow]], None]
 
 
 class MachineLink:
@@ -66,6 +69,7 @@ class MachineLink:
         self._cycle_s = cycle_s  # until a build says its own
         self._captured = captured
         self.on_events: EventsTaken | None = None  # the machine's history takes them too
+        self.on_flights: FlightsTaken | None = None  # the flight recorder's windows
 
     def watch(self, on: bool) -> None:
         """One more (or one fewer) watcher: the worker pushes the status while there is any.
@@ -194,6 +198,8 @@ class MachineLink:
             self.on_events(self.mid, n.epoch, list(n.events))
         if n.captures:
             self._captured(list(n.captures))
+        if n.flights and self.on_flights is not None:
+            self.on_flights(self.mid, n.epoch, list(n.flights))
 
     def recent_events(self, n: int) -> list[Event]:
         """The newest n events of the gateway's copy, oldest first."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
+from backend.workers.flight import FlightWindow
 from nc_sim import commands as nc
 from nc_sim.commands import Outcome
 from nc_sim.config import MachineConfig, ValueWrite
@@ -48,6 +49,8 @@ class AddMachine:
     state: bytes | None = None  # a snapshot to restore instead of powering on (TakeSnapshot)
     faults: list[tuple[Fault, Trigger]] = field(default_factory=list)  # injected when built
     exercise: object | None = None  # nc_sim.training Exercise whose checks the worker evaluates
+    # the flight recorder's seconds before and after each job error (None: no windows)
+    flight_s: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -324,7 +327,7 @@ class Reply:
 @dataclass(frozen=True)
 class MachineNews:
     """What changed in one machine since the last push: new events always, the status when
-    somebody watches, completed scope captures."""
+    somebody watches, completed scope captures and job error windows."""
 
     mid: str
     epoch: int
@@ -332,6 +335,7 @@ class MachineNews:
     first_seq: int  # sequence number of events[0]
     status: StatusRead | None  # while watched
     captures: list[tuple[Record, ParamSnapshot]]
+    flights: list[FlightWindow] = field(default_factory=list)
 
 
 @dataclass(frozen=True)

@@ -222,7 +222,10 @@ class Worker:
         if time.monotonic() < self.awake_until:
             return False
         return all(
-            h.pacing.mode == "pause" and h.pacing.step_to is None and not h.captures
+            h.pacing.mode == "pause"
+            and h.pacing.step_to is None
+            and not h.captures
+            and not (h.flight and h.flight.done)
             for h in self.hosts.values()
         )
 
@@ -270,7 +273,8 @@ class Worker:
         events = host.machine.events
         fresh = events.cursor != host.pushed_events
         status_due = host.watched and now >= host.status_due and self.status_budget > 0
-        if not (fresh or host.captures or status_due):
+        flights = host.flights()
+        if not (fresh or host.captures or flights or status_due):
             return
         read = events.since(host.pushed_events)
         host.pushed_events = read.cursor
@@ -284,7 +288,7 @@ class Worker:
             host.status_due = now + sp if late else host.status_due + sp
         caps, host.captures = host.captures, []
         self.channel.send(
-            MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps)
+            MachineNews(host.id, host.epoch, read.entries, read.first_seq, status, caps, flights)
         )
 
     def _finish_steps(self) -> None:

@@ -9,6 +9,8 @@ import asyncio
 import csv
 import io
 import json
+import os
+import signal
 import time
 import zipfile
 from collections.abc import Iterator
@@ -301,6 +303,43 @@ def test_the_flight_recorder_saves_the_seconds_around_a_job_error(
     assert long["cycle_s"] == pytest.approx(0.01) and "1 in 10 cycles" in long["name"]
     assert 900 <= long["count"] <= 6000  # what the tier holds of the lathe's life, ≤ 60 s
     assert srv.http.post(f"{url}/save", json={"seconds": 0}).status_code == 422
+
+
+def test_a_job_error_while_the_gateway_gets_no_cpu_is_saved_whole(srv: Server, lathe: str) -> None:
+    """X's drive drops its ready signals 20 s into a 30 s move (DriveNotReady, triggered 20 s
+    after its injection): job error 90008. The simulation runs fast (it laps the sample
+    ring's 16 s in a fraction of a second), and the gateway gets no CPU (SIGSTOP) from about
+    when the run starts until a second later: long after the error and its 2 s. The trace is
+    whole all the same: the 8 s before and the 2 s after at full rate, the command ramping
+    at the programmed 200 mm/min before the error."""
+    srv.pace(lathe, mode="pause")
+    start = srv.status(lathe)["simulation"]["cycle"]
+    fault = {"fault": {"kind": "drive_not_ready", "axis": "X"}, "trigger": {"after_s": 20}}
+    assert srv.http.post(f"/api/machines/{lathe}/faults", json=fault).status_code == 201
+    _mdi(srv, lathe, "G01 X150 F200")  # from X50: 100 mm at 200 mm/min, 30 s
+    srv.pace(lathe, mode="fast")
+    assert srv.proc is not None
+    os.kill(srv.proc.pid, signal.SIGSTOP)
+    try:
+        time.sleep(1.0)
+    finally:
+        os.kill(srv.proc.pid, signal.SIGCONT)
+    deadline = time.monotonic() + 30
+    while not (rows := _history(srv, lathe, kind=["job_error"])) or rows[0]["trace"] is None:
+        assert time.monotonic() < deadline, rows
+        time.sleep(0.1)
+    error = rows[0]
+    at = round(error["sim_t_s"] / 0.001)
+    assert error["code"] == 90008 and at == start + 20_000
+    detail = srv.http.get(f"/api/traces/{error['trace']}").json()
+    assert detail["trigger_cycle"] == at and detail["first_cycle"] == at - 8000
+    assert detail["count"] == 10_001
+    csv_text = srv.http.get(f"/api/traces/{error['trace']}/csv").text
+    lines = [line for line in csv_text.splitlines() if not line.startswith("#")]
+    rows_csv = list(csv.DictReader(lines))
+    assert [int(r["cycle"]) for r in rows_csv] == list(range(at - 8000, at + 2001))
+    cmd = [float(r["X.pos_cmd_mm [mm]"]) for r in rows_csv]
+    assert cmd[7000] - cmd[6000] == pytest.approx(200 / 60, abs=1e-6)  # mm in 1 s at F200
 
 
 def test_a_saved_minute_ends_at_the_cycle_the_machine_stands_at(srv: Server, lathe: str) -> None:
