@@ -94,8 +94,8 @@ class FlightRecorder:
         self.minutes, self.decimation, self.keep = minutes, decimation, keep
         self.saved = 0  # traces saved automatically
         self._tapes: dict[str, _Tape] = {}
-        # windows pushed, to save: (machine, its epoch then, the window, when it came)
-        self._windows: list[tuple[str, int, FlightWindow, float]] = []
+        # windows pushed, to save: (machine, its epoch then, the window)
+        self._windows: list[tuple[str, int, FlightWindow]] = []
         self._lock = threading.Lock()
         self._feeding = threading.Lock()  # one feed at a time: the thread's, or a save's
         self._stop = threading.Event()
@@ -134,9 +134,8 @@ class FlightRecorder:
     def windows(self, mid: str, epoch: int, windows: list[FlightWindow]) -> None:
         """A machine's completed job error windows (its worker's push thread): saved on the
         recorder's thread (a save writes files)."""
-        now = time.time()
         with self._lock:
-            self._windows += [(mid, epoch, w, now) for w in windows]
+            self._windows += [(mid, epoch, w) for w in windows]
         self._wake.set()
 
     # --- the thread --------------------------------------------------------------------------
@@ -145,12 +144,12 @@ class FlightRecorder:
         while not self._stop.is_set():
             with self._lock:
                 windows, self._windows = self._windows, []
-            for mid, epoch, window, came_unix in windows:
+            for mid, epoch, window in windows:
                 proxy = self.machines.find(mid)
                 if proxy is None:  # deleted meanwhile
                     continue
                 try:
-                    self._keep(proxy, epoch, window, came_unix)
+                    self._keep(proxy, epoch, window)
                 except Exception:  # one machine's failure must not stop the others' recorder
                     log.exception("flight recorder of %s", mid)
             if time.monotonic() >= next_feed:
@@ -198,10 +197,10 @@ class FlightRecorder:
             if tape.epoch == link.epoch:
                 tape.take(block, got, self.decimation)
 
-    def _keep(self, m: MachineProxy, epoch: int, w: FlightWindow, came_unix: float) -> None:
+    def _keep(self, m: MachineProxy, epoch: int, w: FlightWindow) -> None:
         """Save a window and link its errors' history entries to it."""
         try:
-            info = self._save(m, w, came_unix)
+            info = self._save(m, w)
         except ApiError as e:  # the library is full: say so in the history
             self.history.flight_failed(m, w.trigger, str(e))
             return
@@ -210,10 +209,10 @@ class FlightRecorder:
         self._forget_old(m.id)
 
     # --- saving --------------------------------------------------------------------------------
-    def _save(self, m: MachineProxy, w: FlightWindow, came_unix: float) -> TraceInfo:
+    def _save(self, m: MachineProxy, w: FlightWindow) -> TraceInfo:
         e = w.trigger
         what = f"job error {e.code}{' ' + e.axis if e.axis else ''}"
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(came_unix))
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(w.seen_unix))
         data = np.asarray(w.data)
         trace = self._trace(
             m, w.signals, data, w.first_cycle, m.link.cycle_s, e.cycle, what, w.events

@@ -11,6 +11,7 @@ windows (backend/services/flight.py).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +39,7 @@ class FlightWindow:
     trigger: Event
     errors: list[Event]
     events: list[Event]
+    seen_unix: float  # the wall clock of the tick that stepped past the error
     first_cycle: int
     signals: list[Signal]  # the rows of `data`, in order
     data: object  # np.ndarray signals × cycles
@@ -49,6 +51,7 @@ class _Open:
     first: int
     last: int
     errors: list[Event]
+    seen_unix: float
     parts: list[np.ndarray] = field(default_factory=list)
     next_cycle: int = 0  # the next cycle to copy
 
@@ -93,7 +96,9 @@ class FlightTaker:
                     continue
                 oldest = max(self.from_cycle, head - len(rows) + 1)
                 first = max(oldest, e.cycle - self.before)
-                self.open.append(_Open(e, first, e.cycle + self.after, [e], next_cycle=first))
+                self.open.append(
+                    _Open(e, first, e.cycle + self.after, [e], time.time(), next_cycle=first)
+                )
         if not self.open:
             return
         for w in self.open:
@@ -102,5 +107,7 @@ class FlightTaker:
             self.open.remove(w)
             events = [x for x in log if w.first <= x.cycle <= w.last]
             data = np.concatenate(w.parts, axis=1)
-            window = FlightWindow(w.trigger, w.errors, events, w.first, self.signals, data)
+            window = FlightWindow(
+                w.trigger, w.errors, events, w.seen_unix, w.first, self.signals, data
+            )
             self.done.append(window)
