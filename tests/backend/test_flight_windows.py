@@ -39,6 +39,12 @@ class _Twins:
         self.host.machine.submit(cmd)
         self.twin_machine.submit(cmd)
 
+    def stop_again(self) -> None:
+        """A reset, and 10 cycles later another emergency stop."""
+        self.submit(Reset())
+        self.run(10)
+        self.submit(EmergencyStop())
+
     def twin_samples(self, w: FlightWindow) -> np.ndarray:
         """The twin's record of the window's cycles, its signals in its order."""
         n = np.asarray(w.data).shape[1]
@@ -58,9 +64,7 @@ def test_a_window_is_whole_however_far_the_machine_runs_on_errors_within_it_shar
     t.run(8000)
     t.submit(EmergencyStop())
     t.run(1500)
-    t.submit(Reset())
-    t.run(10)
-    t.submit(EmergencyStop())
+    t.stop_again()
     t.run(RUN_ON)
     [w] = t.host.flights()
     assert (w.trigger.cycle, w.trigger.code) == (9000, Code.EMERGENCY_STOP)
@@ -83,9 +87,7 @@ def test_a_window_starts_at_the_first_cycle_and_an_error_after_its_end_opens_ano
     t.run(3000)
     t.submit(EmergencyStop())
     t.run(2990)
-    t.submit(Reset())
-    t.run(10)
-    t.submit(EmergencyStop())
+    t.stop_again()
     t.run(RUN_ON)
     first, second = t.host.flights()
     assert (first.first_cycle, np.asarray(first.data).shape[1]) == (1, 5000)
