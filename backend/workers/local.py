@@ -114,7 +114,7 @@ class LocalWorker(WorkerClient):
         ours, theirs = socket.socketpair()
         args = (self.period_s, str(self.ring_dir), "local")
         try:
-            pid = zygote.get().fork_worker(worker_main, theirs, args, self.start_timeout_s)
+            pid = zygote.fork_worker(worker_main, theirs, args, self.start_timeout_s)
             self._pidfd = os.pidfd_open(pid)
         except (zygote.ZygoteGone, ProcessLookupError) as e:
             ours.close()

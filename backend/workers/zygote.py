@@ -134,6 +134,19 @@ def get() -> Zygote:
         return _current
 
 
+def fork_worker(
+    main: Callable[..., None], sock: socket.socket, args: tuple[Any, ...], timeout_s: float
+) -> int:
+    """Fork a worker from this process' zygote (`Zygote.fork_worker`). A zygote found ended
+    (killed after the last look) is replaced at once, once; one too slow is not tried again."""
+    try:
+        return get().fork_worker(main, sock, args, timeout_s)
+    except ZygoteGone as e:
+        if isinstance(e.__cause__, TimeoutError):
+            raise
+        return get().fork_worker(main, sock, args, timeout_s)
+
+
 def _close() -> None:
     with _current_lock:
         if _current is not None:
