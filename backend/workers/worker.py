@@ -174,17 +174,8 @@ class Worker:
                     if period > self.base_period_s and self.resting:  # step with it now
                         self.resting = False
                         deadline = time.monotonic()
-            wake = checked = time.monotonic()
-            self.status_budget = self._statuses_per_tick(period)
-            for host in list(self.hosts.values()):
-                self._tick(host, deadline, period)
-                # between machines, look for requests (an E-stop) every SERVE_CHECK_S
-                now = time.monotonic()
-                if now - checked >= SERVE_CHECK_S or self.backlog:
-                    checked = now
-                    if self.channel.ready() or self.backlog:
-                        self._serve_timed()
-                self._push_news(host, wake)
+            wake = time.monotonic()
+            self.tick_machines(deadline, period, wake)
             self._finish_steps()
             self._finish_assists()
             self._finish_interpreting()
@@ -200,6 +191,24 @@ class Worker:
                 self.news_due = False
                 next_news = done + NEWS_PERIOD_S
                 self.channel.send(self.news())
+
+    def tick_machines(self, deadline: float, period: float, wake: float) -> None:
+        """Step each machine due at `deadline` and push its news, looking for requests (an
+        E-stop) between machines every SERVE_CHECK_S. A machine a request served meanwhile
+        rebuilt or removed is left: its ring is closed, and the new build ticks next pass."""
+        checked = wake
+        self.status_budget = self._statuses_per_tick(period)
+        for host in list(self.hosts.values()):
+            if self.hosts.get(host.id) is not host:
+                continue
+            self._tick(host, deadline, period)
+            now = time.monotonic()
+            if now - checked >= SERVE_CHECK_S or self.backlog:
+                checked = now
+                if self.channel.ready() or self.backlog:
+                    self._serve_timed()
+            if self.hosts.get(host.id) is host:
+                self._push_news(host, wake)
 
     def period(self) -> float:
         """The loop period for the machines held now: the configured one for a few
