@@ -125,6 +125,7 @@ class MachineHost:
             self.signals,
             self.sim.kernel.n,
             str(path) if path is not None else None,
+            self.pacing_now(),
             self.machine.faults(),
             self.drive_signals,
         )

@@ -95,7 +95,7 @@ class MachineLink:
             self.events = EventLog()
             self.signal_by_name = {s.name: s for s in info.signals}
             self.drive_signal_by_name = {s.name: s for s in info.drive_signals}
-            self.status, self.pacing = None, None
+            self.status, self.pacing = None, info.pacing
             # the build's faults with their ids, as the build answered: known from the
             # first moment (a first status may come much later, or never while unwatched)
             self.faults = {f.id: f for f in info.faults}

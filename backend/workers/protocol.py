@@ -234,6 +234,7 @@ class MachineInfo:
     signals: list[Signal]
     slots: int  # kernel slots (axes) per sample row
     ring_path: str | None  # the shared sample ring, None when samples are pushed
+    pacing: Pacing  # as built: the pacing it starts with, before its worker's next news
     faults: list[FaultState] = field(default_factory=list)
     drive_signals: list[Signal] = field(default_factory=list)  # at the drive's rate (scope)
 
