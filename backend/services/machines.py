@@ -206,7 +206,11 @@ class MachineService:
             self.on_power(proxy, info.epoch, why, failure)
         proxy.link.on_events = self._took_events
         proxy.link.on_flights = self._took_flights
-        proxy.link.attach(worker, info)
+        with self._placing:  # a death handler sees it attached, or this sees the death
+            if not worker.alive:
+                self._building.pop(proxy.id, None)
+                raise WorkerGone(f"worker {worker.id} stopped as it built machine {proxy.id}")
+            proxy.link.attach(worker, info)
         if proxy.id in self._proxies:  # a new machine counts as building until it is listed
             self._built(proxy.id)
         if proxy.link.watchers:
@@ -363,7 +367,8 @@ class MachineService:
     def _rebuild_from(self, dead: WorkerClient) -> None:
         if self.pool.stopping:  # a worker ending with the service: nothing to rebuild
             return
-        lost = self.on_machine(dead)
+        with self._placing:  # a build that attaches to `dead` after this is placed again
+            lost = self.on_machine(dead)
         self.pool.replace(dead)  # first: the lost machines go to the least loaded, it among them
         why = f"its worker {dead.id} (pid {dead.pid}, node {dead.node}) stopped"
         for proxy in lost:
@@ -392,6 +397,10 @@ class MachineService:
                     proxy.pending.clear()
                     self._place(proxy, f"rebuilt: {why}", failure=True)
                 return True
+            except WorkerGone as e:  # the worker chosen died too: the next live one
+                if self.pool.stopping:
+                    return False
+                log.warning("machine %s is rebuilt once more: %s", proxy.id, e)
             except ApiError as e:  # no live worker (the service stops, or none could start)
                 if self.pool.stopping:
                     return False
