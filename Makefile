@@ -87,12 +87,13 @@ lint: $(DEV_STAMP) $(SCHEMA_TS)
 # browser). `loadscope`: a module's tests stay on one worker, so its module-scoped service
 # starts once (`loadgroup` cannot tag pytest 9.2's node ids: it grouped nothing). The Ray tests
 # run after them, alone: beside the rest they took four times as long, and the rest's browser
-# tests, short of CPU, missed their frames.
+# tests, short of CPU, missed their frames. Each part prints its slowest tests: a run that
+# took longer says where.
 TEST_WORKERS ?= 3
 test:
 	$(MAKE) --no-print-directory -j2 lint $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadscope -m 'not ray'
-	$(PY) -m pytest -q -m ray
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadscope -m 'not ray' --durations=10
+	$(PY) -m pytest -q -m ray --durations=10
 
 bench: $(DEV_STAMP) $(DIST) $(CHROMIUM) $(NUMBA_STAMP)
 	$(PY) bench/kernel.py
