@@ -213,9 +213,8 @@ class FlightRecorder:
         e = w.trigger
         what = f"job error {e.code}{' ' + e.axis if e.axis else ''}"
         stamp = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(w.seen_unix))
-        data = np.asarray(w.data)
         trace = self._trace(
-            m, w.signals, data, w.first_cycle, m.link.cycle_s, e.cycle, what, w.events
+            m, w.signals, w.data, w.first_cycle, m.link.cycle_s, e.cycle, what, w.events
         )
         trace.detail.name = f"{what} at {stamp}"
         trace.detail.notes = f"saved by the flight recorder: {e.message}"

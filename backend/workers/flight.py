@@ -42,7 +42,7 @@ class FlightWindow:
     seen_unix: float  # the wall clock of the tick that stepped past the error
     first_cycle: int
     signals: list[Signal]  # the rows of `data`, in order
-    data: object  # np.ndarray signals × cycles
+    data: np.ndarray  # signals × cycles
 
 
 @dataclass

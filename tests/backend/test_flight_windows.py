@@ -47,7 +47,7 @@ class _Twins:
 
     def twin_samples(self, w: FlightWindow) -> np.ndarray:
         """The twin's record of the window's cycles, its signals in its order."""
-        n = np.asarray(w.data).shape[1]
+        n = w.data.shape[1]
         rows: np.ndarray = signal_rows(w.signals, self.record, np.arange(n) + w.first_cycle - 1)
         return rows
 
@@ -70,11 +70,11 @@ def test_a_window_is_whole_however_far_the_machine_runs_on_errors_within_it_shar
     assert (w.trigger.cycle, w.trigger.code) == (9000, Code.EMERGENCY_STOP)
     assert [(e.cycle, e.code) for e in w.errors] == [(9000, 90005), (10510, 90005)]
     assert all(1000 <= e.cycle <= 11000 for e in w.events) and w.errors[1] in w.events
-    assert w.first_cycle == 1000 and np.asarray(w.data).shape == (len(w.signals), 10_001)
+    assert w.first_cycle == 1000 and w.data.shape == (len(w.signals), 10_001)
     assert [s.name for s in w.signals] == [s.name for s in main_signals(t.host.signals)]
     kept = [k for k, s in enumerate(w.signals) if s.name != f"{CHANNEL}.state"]
-    assert np.array_equal(np.asarray(w.data)[kept], t.twin_samples(w)[kept])
-    x_cmd = np.asarray(w.data)[[s.name for s in w.signals].index("X.pos_cmd_mm")]
+    assert np.array_equal(w.data[kept], t.twin_samples(w)[kept])
+    x_cmd = w.data[[s.name for s in w.signals].index("X.pos_cmd_mm")]
     assert x_cmd[6000] - x_cmd[5000] == pytest.approx(200 / 60, abs=1e-9)  # 1 s at F200 (mm)
     assert t.host.flights() == []  # pushed once
 
@@ -90,7 +90,7 @@ def test_a_window_starts_at_the_first_cycle_and_an_error_after_its_end_opens_ano
     t.stop_again()
     t.run(RUN_ON)
     first, second = t.host.flights()
-    assert (first.first_cycle, np.asarray(first.data).shape[1]) == (1, 5000)
+    assert (first.first_cycle, first.data.shape[1]) == (1, 5000)
     assert [e.cycle for e in first.errors] == [3000]
-    assert (second.first_cycle, np.asarray(second.data).shape[1]) == (1, 8000)
+    assert (second.first_cycle, second.data.shape[1]) == (1, 8000)
     assert [e.cycle for e in second.errors] == [6000]
